@@ -1,0 +1,189 @@
+//! Colour: CIE 1931 2° colour matching functions, spectrum → XYZ, XYZ → linear sRGB (D65), XYZ → LMS
+//! (Hunt–Pointer–Estévez, D65-normalised).
+//!
+//! Absolute photometry (DESIGN.md): X, Y, Z = 683 lm/W · ∫ L(λ) x̄, ȳ, z̄(λ) dλ with L in W·m⁻²·sr⁻¹·nm⁻¹ and
+//! λ in nm, so Y is luminance in cd/m². The CMFs are the tabulated 1 nm values over 380–780 nm
+//! ([`cmf_table`], source named there), linear between samples and zero outside.
+//!
+//! Binned spectra are projected with the CMFs **integrated over each bin** ([`bin_weights`]), not sampled at
+//! the bin centre, so a narrow line keeps its energy whatever the bin width.
+
+pub mod cmf_table;
+
+use crate::constants::LUMINOUS_EFFICACY;
+use crate::spectrum::SpectralGrid;
+use cmf_table::{CMF, CMF_START_NM, CMF_STEP_NM};
+use glam::{DMat3, DVec3};
+
+/// XYZ → linear sRGB (D65), rows (IEC 61966-2-1 / Lindbloom).
+pub const XYZ_TO_SRGB_ROWS: [[f64; 3]; 3] = [
+    [3.2404542, -1.5371385, -0.4985314],
+    [-0.9692660, 1.8760108, 0.0415560],
+    [0.0556434, -0.2040259, 1.0572252],
+];
+/// XYZ → LMS, Hunt–Pointer–Estévez normalised to D65 (Hunt & Pointer 1985), rows.
+pub const XYZ_TO_LMS_HPE_ROWS: [[f64; 3]; 3] = [
+    [0.4002, 0.7076, -0.0808],
+    [-0.2263, 1.1653, 0.0457],
+    [0.0, 0.0, 0.9182],
+];
+
+fn from_rows(r: &[[f64; 3]; 3]) -> DMat3 {
+    DMat3::from_cols_array_2d(r).transpose()
+}
+
+/// The XYZ → linear sRGB matrix.
+pub fn xyz_to_srgb_matrix() -> DMat3 {
+    from_rows(&XYZ_TO_SRGB_ROWS)
+}
+/// The XYZ → HPE LMS matrix.
+pub fn xyz_to_lms_matrix() -> DMat3 {
+    from_rows(&XYZ_TO_LMS_HPE_ROWS)
+}
+/// Linear sRGB (D65) from XYZ (same units: cd/m² in, cd/m²-scaled RGB out).
+pub fn xyz_to_linear_srgb(xyz: DVec3) -> DVec3 {
+    xyz_to_srgb_matrix() * xyz
+}
+/// HPE cone responses from XYZ.
+pub fn xyz_to_lms(xyz: DVec3) -> DVec3 {
+    xyz_to_lms_matrix() * xyz
+}
+/// CIE 1931 chromaticity (x, y); (0, 0) for black.
+pub fn chromaticity(xyz: DVec3) -> (f64, f64) {
+    let s = xyz.x + xyz.y + xyz.z;
+    if s > 0.0 {
+        (xyz.x / s, xyz.y / s)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// (x̄, ȳ, z̄) at `lambda_nm`, linear between the 1 nm samples, zero outside 380–780 nm.
+pub fn cmf(lambda_nm: f64) -> DVec3 {
+    let u = (lambda_nm - CMF_START_NM) / CMF_STEP_NM;
+    if !(u >= 0.0 && u <= (CMF.len() - 1) as f64) {
+        return DVec3::ZERO;
+    }
+    let i = (u.floor() as usize).min(CMF.len() - 2);
+    let s = u - i as f64;
+    DVec3::from(CMF[i]).lerp(DVec3::from(CMF[i + 1]), s)
+}
+
+/// ∫ₐᵇ (x̄, ȳ, z̄) dλ of the piecewise-linear CMFs, exactly (nm).
+pub fn cmf_integral(a_nm: f64, b_nm: f64) -> DVec3 {
+    let lo = a_nm.max(CMF_START_NM);
+    let hi = b_nm.min(CMF_START_NM + (CMF.len() - 1) as f64 * CMF_STEP_NM);
+    if !(hi > lo) {
+        return DVec3::ZERO;
+    }
+    // Split at the sample points; the trapezoid rule is exact on each linear piece.
+    let mut sum = DVec3::ZERO;
+    let mut x = lo;
+    while x < hi {
+        let next_node = CMF_START_NM + ((x - CMF_START_NM) / CMF_STEP_NM).floor() * CMF_STEP_NM + CMF_STEP_NM;
+        let y = next_node.min(hi);
+        sum += 0.5 * (cmf(x) + cmf(y)) * (y - x);
+        x = y;
+    }
+    sum
+}
+
+/// Absolute XYZ (Y in cd/m²) of a continuous spectrum `radiance(λ)` in W·m⁻²·sr⁻¹·nm⁻¹: 683 · Σ L x̄ Δλ over
+/// the 1 nm table (CIE 15 summation).
+pub fn spectrum_to_xyz(radiance: impl Fn(f64) -> f64) -> DVec3 {
+    let sum: DVec3 = CMF
+        .iter()
+        .enumerate()
+        .map(|(i, c)| DVec3::from(*c) * radiance(CMF_START_NM + i as f64 * CMF_STEP_NM))
+        .sum();
+    LUMINOUS_EFFICACY * CMF_STEP_NM * sum
+}
+
+/// Per-bin weights 683 · ∫_bin (x̄, ȳ, z̄) dλ (lm·W⁻¹·nm): XYZ = Σᵢ Lᵢ wᵢ for a binned spectrum of mean
+/// radiances Lᵢ (W·m⁻²·sr⁻¹·nm⁻¹).
+pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
+    (0..grid.count())
+        .map(|i| {
+            let (a, b) = grid.edges(i);
+            LUMINOUS_EFFICACY * cmf_integral(a, b)
+        })
+        .collect()
+}
+
+/// XYZ of a binned spectrum with weights from [`bin_weights`].
+pub fn binned_to_xyz(values: &[f64], weights: &[DVec3]) -> DVec3 {
+    values.iter().zip(weights).map(|(v, w)| *v * *w).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blackbody::spectral_radiance;
+
+    #[test]
+    fn flat_spectrum_luminance() {
+        // 1 W·m⁻²·sr⁻¹·nm⁻¹ over 380–780 nm → Y = 683 × 106.856 = 72 983 cd/m² (shared/data: ∫ȳ = 106.856).
+        let y = spectrum_to_xyz(|_| 1.0).y;
+        assert!((y / 72_983.0 - 1.0).abs() < 0.005, "{y}");
+        // The binned path over the same range agrees to the trapezoid-vs-sum difference at the ends (≈1e-6).
+        let g = SpectralGrid::new(380.0, 780.0, 40).unwrap();
+        let yb = binned_to_xyz(&vec![1.0; 40], &bin_weights(&g)).y;
+        assert!((yb / y - 1.0).abs() < 1e-5, "{yb} vs {y}");
+    }
+
+    #[test]
+    fn planckian_locus_chromaticities() {
+        // CIE 1931 (x, y) of blackbodies (issue 2, from the Planckian locus).
+        for (t, x, y) in [
+            (1000.0, 0.6527, 0.3445),
+            (1500.0, 0.5857, 0.3931),
+            (2000.0, 0.5267, 0.4133),
+            (3000.0, 0.4369, 0.4041),
+            (6504.0, 0.3135, 0.3236),
+        ] {
+            let (cx, cy) = chromaticity(spectrum_to_xyz(|l| spectral_radiance(t, l)));
+            assert!((cx - x).abs() < 1e-3 && (cy - y).abs() < 1e-3, "T={t}: ({cx:.4}, {cy:.4}) vs ({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn a_line_keeps_its_energy_in_any_bin() {
+        // A line of radiance 1 W·m⁻²·sr⁻¹ at 589 nm, spread over its bin (φ = 1/Δλ), gives the luminance
+        // 683 · L · (mean ȳ over the bin) — for any bin width; as the bin shrinks this → 683 ȳ(589).
+        let exact = 683.0 * cmf(589.0).y;
+        let mut prev_err = f64::INFINITY;
+        for count in [30usize, 300, 3000] {
+            let g = SpectralGrid::new(400.0, 700.0, count).unwrap();
+            let mut v = vec![0.0; count];
+            let i = g.bin_of(589.0).unwrap();
+            v[i] = 1.0 / g.width_nm();
+            let y = binned_to_xyz(&v, &bin_weights(&g)).y;
+            let (a, b) = g.edges(i);
+            assert!((y - 683.0 * cmf_integral(a, b).y / (b - a)).abs() < 1e-9);
+            let err = (y - exact).abs();
+            assert!(err <= prev_err);
+            prev_err = err;
+        }
+        assert!(prev_err / exact < 1e-3);
+    }
+
+    #[test]
+    fn cmf_integral_is_additive_and_matches_sum() {
+        let whole = cmf_integral(380.0, 780.0);
+        let parts = cmf_integral(380.0, 512.3) + cmf_integral(512.3, 780.0);
+        assert!((whole - parts).abs().max_element() < 1e-10);
+        assert!((whole.y - 106.856).abs() < 0.01, "{}", whole.y);
+        assert_eq!(cmf_integral(100.0, 300.0), DVec3::ZERO);
+        assert_eq!(cmf(379.0), DVec3::ZERO);
+    }
+
+    #[test]
+    fn d65_white_maps_to_equal_rgb_and_lms() {
+        // D65 white point XYZ (0.95047, 1, 1.08883) → sRGB (1, 1, 1), HPE LMS ≈ (1, 1, 1) (D65-normalised).
+        let w = DVec3::new(0.95047, 1.0, 1.08883);
+        let rgb = xyz_to_linear_srgb(w);
+        assert!((rgb - DVec3::ONE).abs().max_element() < 1e-4, "{rgb}");
+        let lms = xyz_to_lms(w);
+        assert!((lms - DVec3::ONE).abs().max_element() < 2e-3, "{lms}");
+    }
+}
