@@ -105,8 +105,14 @@ mod tests {
                 let digits = if want == 8.40e1 { 3 } else { 4 };
                 let scale = 10f64.powi(got.log10().floor() as i32 - (digits - 1));
                 let rounded = (got / scale).round() * scale;
-                assert!(rel(rounded, want) < 1e-4, "T={t} λ={lambda_nm}: {got:e} (rounded {rounded:e}) vs {want:e}");
-                assert!(rel(got, want) < 0.5 * scale / want + 1e-12, "T={t} λ={lambda_nm}: {got:e} vs {want:e}");
+                assert!(
+                    rel(rounded, want) < 1e-4,
+                    "T={t} λ={lambda_nm}: {got:e} (rounded {rounded:e}) vs {want:e}"
+                );
+                assert!(
+                    rel(got, want) < 0.5 * scale / want + 1e-12,
+                    "T={t} λ={lambda_nm}: {got:e} vs {want:e}"
+                );
             }
         }
         // Per-nm API is the SI value / 1e9.
@@ -129,7 +135,8 @@ mod tests {
         let mut s = 0.0;
         for n in 1..=50 {
             let n = n as f64;
-            s += (-n * x).exp() / n * (x.powi(3) + 3.0 * x * x / n + 6.0 * x / (n * n) + 6.0 / n.powi(3));
+            s += (-n * x).exp() / n
+                * (x.powi(3) + 3.0 * x * x / n + 6.0 * x / (n * n) + 6.0 / n.powi(3));
         }
         15.0 / PI.powi(4) * s
     }
@@ -143,15 +150,27 @@ mod tests {
         for t in [500.0, 1500.0, 6000.0] {
             let (lo, hi) = (10e-9f64, 1e-3f64);
             // Substitute u = ln λ: ∫ B dλ = ∫ B(e^u) e^u du, 600 panels over 11.5 e-folds.
-            let band = gauss_legendre(|u| {
-                let l = u.exp();
-                spectral_radiance_si(t, l) * l
-            }, lo.ln(), hi.ln(), 600);
+            let band = gauss_legendre(
+                |u| {
+                    let l = u.exp();
+                    spectral_radiance_si(t, l) * l
+                },
+                lo.ln(),
+                hi.ln(),
+                600,
+            );
             let total = total_radiance(t);
-            let expected_band = total * (1.0 - long_tail_fraction(hi, t) - short_tail_fraction(lo, t));
-            assert!(rel(band, expected_band) < 1e-6, "T={t}: band {band} vs {expected_band}");
+            let expected_band =
+                total * (1.0 - long_tail_fraction(hi, t) - short_tail_fraction(lo, t));
+            assert!(
+                rel(band, expected_band) < 1e-6,
+                "T={t}: band {band} vs {expected_band}"
+            );
             let tol = if t == 500.0 { 1.3e-6 } else { 1e-6 };
-            assert!(rel(band, total) < tol, "T={t}: band {band} vs σT⁴/π {total}");
+            assert!(
+                rel(band, total) < tol,
+                "T={t}: band {band} vs σT⁴/π {total}"
+            );
         }
         // The quoted value at 1500 K.
         assert!(rel(total_radiance(1500.0), 9.137490e4) < 1e-6);
@@ -183,7 +202,9 @@ mod tests {
         assert_eq!(spectral_radiance(0.0, 550.0), 0.0);
         assert_eq!(spectral_radiance(-10.0, 550.0), 0.0);
         assert_eq!(spectral_radiance(f64::NAN, 550.0), 0.0);
-        for t in [1e-300, 1e-3, 1.0, 10.0, 100.0, 300.0, 1e3, 1e4, 1e5, 1e6, 1e9] {
+        for t in [
+            1e-300, 1e-3, 1.0, 10.0, 100.0, 300.0, 1e3, 1e4, 1e5, 1e6, 1e9,
+        ] {
             for l in [300.0, 380.0, 550.0, 780.0, 1000.0] {
                 let b = spectral_radiance(t, l);
                 assert!(b.is_finite() && b >= 0.0, "T={t} λ={l}: {b}");
@@ -207,7 +228,12 @@ mod tests {
     #[test]
     fn medium_index_scales_by_n_squared() {
         let b = spectral_radiance(1800.0, 600.0);
-        assert!(rel(spectral_radiance_in_medium(1800.0, 600.0, 1.000_3), 1.000_3f64.powi(2) * b) < 1e-15);
+        assert!(
+            rel(
+                spectral_radiance_in_medium(1800.0, 600.0, 1.000_3),
+                1.000_3f64.powi(2) * b
+            ) < 1e-15
+        );
         assert_eq!(spectral_radiance_in_medium(1800.0, 600.0, 1.0), b);
     }
 }

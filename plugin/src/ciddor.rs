@@ -80,7 +80,12 @@ impl Air {
 pub fn compressibility(t_k: f64, p: f64, xw: f64) -> f64 {
     let t = t_k - 273.15;
     let pt = p / t_k;
-    1.0 - pt * (k::A0 + k::A1 * t + k::A2 * t * t + (k::B0 + k::B1 * t) * xw + (k::C0 + k::C1 * t) * xw * xw)
+    1.0 - pt
+        * (k::A0
+            + k::A1 * t
+            + k::A2 * t * t
+            + (k::B0 + k::B1 * t) * xw
+            + (k::C0 + k::C1 * t) * xw * xw)
         + pt * pt * (k::D + k::E * xw * xw)
 }
 
@@ -127,7 +132,13 @@ pub fn refractivity(lambda_nm: f64, air: &Air) -> f64 {
     let t_e = air.temperature_k.clamp(FIT_RANGE_K.0, FIT_RANGE_K.1);
     let t_e = if t_e.is_nan() { FIT_RANGE_K.0 } else { t_e };
     let xw = water_mole_fraction(t_e, air.pressure_pa, air.relative_humidity).clamp(0.0, 1.0);
-    refractivity_mole_fraction(lambda_nm, air.temperature_k, air.pressure_pa, xw, air.co2_ppm)
+    refractivity_mole_fraction(
+        lambda_nm,
+        air.temperature_k,
+        air.pressure_pa,
+        xw,
+        air.co2_ppm,
+    )
 }
 
 /// The index n of air (1 + [`refractivity`]).
@@ -166,7 +177,10 @@ mod tests {
             (632.8, 15.0, 0.0, 2.765327e-4),
         ] {
             let got = refractivity(l, &air(t, rh));
-            assert!((got - want).abs() < 1e-9, "λ={l} t={t} RH={rh}: {got:e} vs {want:e}");
+            assert!(
+                (got - want).abs() < 1e-9,
+                "λ={l} t={t} RH={rh}: {got:e} vs {want:e}"
+            );
         }
     }
 
@@ -183,16 +197,26 @@ mod tests {
         let mut prev = f64::INFINITY;
         let mut t = 250.0;
         while t <= 4000.0 {
-            let a = Air { temperature_k: t, ..Air::STANDARD };
+            let a = Air {
+                temperature_k: t,
+                ..Air::STANDARD
+            };
             let r = refractivity(550.0, &a);
-            assert!(r.is_finite() && r > 0.0 && r < prev, "T={t}: {r} (prev {prev})");
+            assert!(
+                r.is_finite() && r > 0.0 && r < prev,
+                "T={t}: {r} (prev {prev})"
+            );
             prev = r;
             t += 5.0;
         }
         // And with humidity too.
         let mut prev = f64::INFINITY;
         for i in 0..=300 {
-            let a = Air { temperature_k: 250.0 + 12.5 * i as f64, relative_humidity: 0.5, ..Air::STANDARD };
+            let a = Air {
+                temperature_k: 250.0 + 12.5 * i as f64,
+                relative_humidity: 0.5,
+                ..Air::STANDARD
+            };
             let r = refractivity(550.0, &a);
             assert!(r.is_finite() && r > 0.0 && r < prev, "{a:?}: {r}");
             prev = r;
@@ -204,13 +228,31 @@ mod tests {
         // n − 1 at 1500 K ≈ (288/1500) of its 288 K value (ideal gas); the compressibility at 288 K and the
         // carry from 373 K differ from the pure ratio by less than 1e-3 relative.
         let cold = refractivity(550.0, &Air::STANDARD);
-        let hot = refractivity(550.0, &Air { temperature_k: 1500.0, ..Air::STANDARD });
+        let hot = refractivity(
+            550.0,
+            &Air {
+                temperature_k: 1500.0,
+                ..Air::STANDARD
+            },
+        );
         let ratio = hot / cold;
         assert!((ratio / (288.15 / 1500.0) - 1.0).abs() < 1e-3, "{ratio}");
         assert!((hot - 5.3e-5).abs() < 0.3e-5, "{hot:e}");
         // Continuous at the fit edge.
-        let below = refractivity(550.0, &Air { temperature_k: 373.15 - 1e-9, ..Air::STANDARD });
-        let above = refractivity(550.0, &Air { temperature_k: 373.15 + 1e-9, ..Air::STANDARD });
+        let below = refractivity(
+            550.0,
+            &Air {
+                temperature_k: 373.15 - 1e-9,
+                ..Air::STANDARD
+            },
+        );
+        let above = refractivity(
+            550.0,
+            &Air {
+                temperature_k: 373.15 + 1e-9,
+                ..Air::STANDARD
+            },
+        );
         // d(n−1)/dT ≈ −7e-7 K⁻¹, so 2e-9 K apart the values differ by ~1.5e-15.
         assert!((below - above).abs() < 1e-13);
     }
@@ -218,7 +260,13 @@ mod tests {
     #[test]
     fn degenerate_inputs_are_finite() {
         for t in [0.0, -5.0, f64::NAN, 1e-9, 1e6] {
-            let r = refractivity(550.0, &Air { temperature_k: t, ..Air::STANDARD });
+            let r = refractivity(
+                550.0,
+                &Air {
+                    temperature_k: t,
+                    ..Air::STANDARD
+                },
+            );
             assert!(r.is_finite() && r > 0.0, "T={t}: {r}");
         }
     }

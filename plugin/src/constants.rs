@@ -30,8 +30,8 @@ mod tests {
     #[test]
     fn stefan_boltzmann_follows_from_h_c_k() {
         // σ = 2π⁵k⁴ / (15 h³ c²): CODATA 2018 lists 5.670 374 419... × 10⁻⁸ as exact.
-        let sigma = 2.0 * PI.powi(5) * BOLTZMANN.powi(4)
-            / (15.0 * PLANCK.powi(3) * SPEED_OF_LIGHT.powi(2));
+        let sigma =
+            2.0 * PI.powi(5) * BOLTZMANN.powi(4) / (15.0 * PLANCK.powi(3) * SPEED_OF_LIGHT.powi(2));
         assert!((sigma / STEFAN_BOLTZMANN - 1.0).abs() < 1e-9, "{sigma}");
     }
 

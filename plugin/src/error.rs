@@ -43,7 +43,10 @@ impl fmt::Display for Error {
                 name,
                 value,
                 expected,
-            } => write!(f, "{component}: parameter '{name}' = {value}: expected {expected}"),
+            } => write!(
+                f,
+                "{component}: parameter '{name}' = {value}: expected {expected}"
+            ),
         }
     }
 }

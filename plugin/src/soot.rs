@@ -56,12 +56,16 @@ pub const FUELS: [&str; 2] = ["propane", "acetylene"];
 impl SootOptics {
     /// Propane soot (Dalzell & Sarofim 1969).
     pub fn propane() -> Self {
-        SootOptics { rows: PROPANE.to_vec() }
+        SootOptics {
+            rows: PROPANE.to_vec(),
+        }
     }
 
     /// Acetylene soot (Dalzell & Sarofim 1969).
     pub fn acetylene() -> Self {
-        SootOptics { rows: ACETYLENE.to_vec() }
+        SootOptics {
+            rows: ACETYLENE.to_vec(),
+        }
     }
 
     /// Built-in optical constants by fuel name (`propane`, `acetylene`; case-insensitive).
@@ -69,7 +73,12 @@ impl SootOptics {
         match name.to_ascii_lowercase().as_str() {
             "propane" => Ok(Self::propane()),
             "acetylene" => Ok(Self::acetylene()),
-            _ => Err(Error::invalid("soot", "fuel", format!("'{name}'"), format!("one of {}", FUELS.join(", ")))),
+            _ => Err(Error::invalid(
+                "soot",
+                "fuel",
+                format!("'{name}'"),
+                format!("one of {}", FUELS.join(", ")),
+            )),
         }
     }
 
@@ -77,28 +86,53 @@ impl SootOptics {
     /// n > 0 and k ≥ 0 finite.
     pub fn from_table(rows: &[[f64; 3]]) -> Result<Self, Error> {
         if rows.is_empty() {
-            return Err(Error::invalid("soot", "optics", "an empty table", "at least one (λ nm, n, k) row"));
+            return Err(Error::invalid(
+                "soot",
+                "optics",
+                "an empty table",
+                "at least one (λ nm, n, k) row",
+            ));
         }
         for (i, &[l, n, k]) in rows.iter().enumerate() {
             if !(l.is_finite() && l > 0.0) {
-                return Err(Error::invalid("soot", format!("optics row {i} wavelength"), l, "a finite wavelength > 0 nm"));
+                return Err(Error::invalid(
+                    "soot",
+                    format!("optics row {i} wavelength"),
+                    l,
+                    "a finite wavelength > 0 nm",
+                ));
             }
             if !(n.is_finite() && n > 0.0) {
-                return Err(Error::invalid("soot", format!("optics row {i} n"), n, "a finite real index n > 0"));
+                return Err(Error::invalid(
+                    "soot",
+                    format!("optics row {i} n"),
+                    n,
+                    "a finite real index n > 0",
+                ));
             }
             if !(k.is_finite() && k >= 0.0) {
-                return Err(Error::invalid("soot", format!("optics row {i} k"), k, "a finite absorption index k >= 0"));
+                return Err(Error::invalid(
+                    "soot",
+                    format!("optics row {i} k"),
+                    k,
+                    "a finite absorption index k >= 0",
+                ));
             }
             if i > 0 && l <= rows[i - 1][0] {
                 return Err(Error::invalid(
                     "soot",
                     format!("optics row {i} wavelength"),
                     l,
-                    format!("a wavelength above the previous row's {} nm (rows sorted, no repeats)", rows[i - 1][0]),
+                    format!(
+                        "a wavelength above the previous row's {} nm (rows sorted, no repeats)",
+                        rows[i - 1][0]
+                    ),
                 ));
             }
         }
-        Ok(SootOptics { rows: rows.to_vec() })
+        Ok(SootOptics {
+            rows: rows.to_vec(),
+        })
     }
 
     /// The table rows (λ nm, n, k).
@@ -160,7 +194,8 @@ mod tests {
         // Same number from the metre form written out.
         let (n, kk) = (1.57f64, 0.53f64);
         let a = n * n - kk * kk + 2.0;
-        let direct = 36.0 * std::f64::consts::PI * n * kk / (a * a + 4.0 * n * n * kk * kk) * 1e-6 / 550e-9;
+        let direct =
+            36.0 * std::f64::consts::PI * n * kk / (a * a + 4.0 * n * n * kk * kk) * 1e-6 / 550e-9;
         assert!((k / direct - 1.0).abs() < 1e-12);
     }
 
@@ -169,7 +204,8 @@ mod tests {
         // α = 1.39 with λ in µm: κ = 10⁶ · 36πE · f_v / 0.55^1.39 — 10.66 m⁻¹ for propane at 550 nm,
         // the same order as the Rayleigh 8.44 m⁻¹ (a λ in metres would give 10⁹ × too much).
         let k = SootOptics::propane().kappa(550.0, 1e-6, HOTTEL_ALPHA);
-        let want = 1e6 * SootOptics::propane().absorption_function(550.0) * 1e-6 / 0.55f64.powf(1.39);
+        let want =
+            1e6 * SootOptics::propane().absorption_function(550.0) * 1e-6 / 0.55f64.powf(1.39);
         assert!((k / want - 1.0).abs() < 1e-12);
         assert!((k - 10.66).abs() < 0.01, "{k}");
     }
@@ -212,14 +248,29 @@ mod tests {
         assert_eq!(one.nk(100.0), (1.6, 0.6));
         let e = SootOptics::from_table(&[]).unwrap_err().to_string();
         assert!(e.contains("empty"), "{e}");
-        let e = SootOptics::from_table(&[[500.0, 1.6, 0.6], [450.0, 1.6, 0.6]]).unwrap_err().to_string();
-        assert!(e.contains("row 1 wavelength") && e.contains("450") && e.contains("500"), "{e}");
-        let e = SootOptics::from_table(&[[500.0, f64::NAN, 0.6]]).unwrap_err().to_string();
+        let e = SootOptics::from_table(&[[500.0, 1.6, 0.6], [450.0, 1.6, 0.6]])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("row 1 wavelength") && e.contains("450") && e.contains("500"),
+            "{e}"
+        );
+        let e = SootOptics::from_table(&[[500.0, f64::NAN, 0.6]])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("row 0 n") && e.contains("NaN"), "{e}");
-        let e = SootOptics::from_table(&[[500.0, 1.5, -0.1]]).unwrap_err().to_string();
+        let e = SootOptics::from_table(&[[500.0, 1.5, -0.1]])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("row 0 k"), "{e}");
         let e = SootOptics::for_fuel("methane").unwrap_err().to_string();
-        assert!(e.contains("'methane'") && e.contains("propane, acetylene"), "{e}");
-        assert_eq!(SootOptics::for_fuel("Propane").unwrap(), SootOptics::propane());
+        assert!(
+            e.contains("'methane'") && e.contains("propane, acetylene"),
+            "{e}"
+        );
+        assert_eq!(
+            SootOptics::for_fuel("Propane").unwrap(),
+            SootOptics::propane()
+        );
     }
 }

@@ -40,7 +40,12 @@ impl SpectralGrid {
         let (lo, hi) = GRID_RANGE_NM;
         for (name, v) in [("lambdamin", min_nm), ("lambdamax", max_nm)] {
             if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(Error::invalid("spectrum", name, v, format!("a wavelength from {lo} to {hi} nm")));
+                return Err(Error::invalid(
+                    "spectrum",
+                    name,
+                    v,
+                    format!("a wavelength from {lo} to {hi} nm"),
+                ));
             }
         }
         if min_nm >= max_nm {
@@ -52,9 +57,18 @@ impl SpectralGrid {
             ));
         }
         if count == 0 || count > MAX_BINS {
-            return Err(Error::invalid("spectrum", "bins", count, format!("a bin count from 1 to {MAX_BINS}")));
+            return Err(Error::invalid(
+                "spectrum",
+                "bins",
+                count,
+                format!("a bin count from 1 to {MAX_BINS}"),
+            ));
         }
-        Ok(SpectralGrid { min_nm, max_nm, count })
+        Ok(SpectralGrid {
+            min_nm,
+            max_nm,
+            count,
+        })
     }
 
     /// Number of bins.
@@ -152,7 +166,10 @@ mod tests {
     #[test]
     fn invalid_grids_are_errors() {
         let e = SpectralGrid::new(700.0, 400.0, 30).unwrap_err().to_string();
-        assert!(e.contains("lambdamax") && e.contains("400") && e.contains("700"), "{e}");
+        assert!(
+            e.contains("lambdamax") && e.contains("400") && e.contains("700"),
+            "{e}"
+        );
         let e = SpectralGrid::new(400.0, 700.0, 0).unwrap_err().to_string();
         assert!(e.contains("bins") && e.contains("= 0"), "{e}");
         assert!(SpectralGrid::new(f64::NAN, 700.0, 3).is_err());

@@ -1,1 +1,69 @@
-fn main() {}
+//! `firemedium`: the command-line face of the project.
+//!
+//! Today: `firemedium physics …` prints the physical quantities of the fire's physics core (blackbody
+//! radiance, soot absorption, index of air, colour) so that anyone can check them against published values.
+//! The renderer (`firemedium render`) joins when the pbrt-v4 host lands.
+//!
+//! Exit status: 0 on success, 2 on bad arguments (one line on stderr, never a panic).
+
+mod physics;
+
+use clap::{Parser, Subcommand};
+use std::io::Write;
+use std::process::ExitCode;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "firemedium",
+    version,
+    about = "A physically based fire medium (Pegoraro & Parker 2006) for path tracers"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print blackbody radiance, soot absorption, the index of air and the blackbody's colour.
+    Physics(physics::PhysicsArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                print!("{e}");
+                return ExitCode::SUCCESS;
+            }
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                eprintln!(
+                    "firemedium: a subcommand is required (physics); see 'firemedium --help'"
+                );
+                return ExitCode::from(2);
+            }
+            // One line: clap's first line names the argument and the problem.
+            let text = e.render().to_string();
+            let line = text.lines().next().unwrap_or("error: invalid arguments");
+            eprintln!("firemedium: {}", line.trim_start_matches("error: "));
+            return ExitCode::from(2);
+        }
+    };
+    let result = match cli.command {
+        Command::Physics(args) => physics::run(&args),
+    };
+    match result {
+        Ok(text) => {
+            let mut out = std::io::stdout().lock();
+            // A closed pipe (`| head`) is not an error worth a panic.
+            let _ = out.write_all(text.as_bytes());
+            ExitCode::SUCCESS
+        }
+        Err(msg) => {
+            eprintln!("firemedium: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -80,7 +80,8 @@ pub fn cmf_integral(a_nm: f64, b_nm: f64) -> DVec3 {
     let mut sum = DVec3::ZERO;
     let mut x = lo;
     while x < hi {
-        let next_node = CMF_START_NM + ((x - CMF_START_NM) / CMF_STEP_NM).floor() * CMF_STEP_NM + CMF_STEP_NM;
+        let next_node =
+            CMF_START_NM + ((x - CMF_START_NM) / CMF_STEP_NM).floor() * CMF_STEP_NM + CMF_STEP_NM;
         let y = next_node.min(hi);
         sum += 0.5 * (cmf(x) + cmf(y)) * (y - x);
         x = y;
@@ -142,7 +143,10 @@ mod tests {
             (6504.0, 0.3135, 0.3236),
         ] {
             let (cx, cy) = chromaticity(spectrum_to_xyz(|l| spectral_radiance(t, l)));
-            assert!((cx - x).abs() < 1e-3 && (cy - y).abs() < 1e-3, "T={t}: ({cx:.4}, {cy:.4}) vs ({x}, {y})");
+            assert!(
+                (cx - x).abs() < 1e-3 && (cy - y).abs() < 1e-3,
+                "T={t}: ({cx:.4}, {cy:.4}) vs ({x}, {y})"
+            );
         }
     }
 

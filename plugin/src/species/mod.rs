@@ -29,7 +29,9 @@
 pub mod line_table;
 
 use crate::ciddor::air_to_vacuum_nm;
-use crate::constants::{BOLTZMANN, ELEMENTARY_CHARGE, JOULES_PER_WAVENUMBER, PLANCK, SPEED_OF_LIGHT};
+use crate::constants::{
+    BOLTZMANN, ELEMENTARY_CHARGE, JOULES_PER_WAVENUMBER, PLANCK, SPEED_OF_LIGHT,
+};
 use crate::spectrum::SpectralGrid;
 use crate::Error;
 use std::f64::consts::PI;
@@ -98,7 +100,12 @@ impl Element {
     pub fn by_symbol(symbol: &str) -> Result<Element, Error> {
         let Some(&(sym, g0, _ion)) = line_table::ELEMENTS.iter().find(|e| e.0 == symbol) else {
             let known: Vec<&str> = symbols().collect();
-            return Err(Error::invalid("species", "element", format!("'{symbol}'"), format!("one of {}", known.join(", "))));
+            return Err(Error::invalid(
+                "species",
+                "element",
+                format!("'{symbol}'"),
+                format!("one of {}", known.join(", ")),
+            ));
         };
         let lines: Vec<Line> = line_table::LINES
             .iter()
@@ -108,17 +115,34 @@ impl Element {
                 let e_k = l.e_k_ev * ELEMENTARY_CHARGE;
                 let photon = PLANCK * SPEED_OF_LIGHT / (lambda_nm * 1e-9);
                 let e_i = e_k - photon;
-                let e_i = if e_i.abs() < JOULES_PER_WAVENUMBER { 0.0 } else { e_i.max(0.0) };
+                let e_i = if e_i.abs() < JOULES_PER_WAVENUMBER {
+                    0.0
+                } else {
+                    e_i.max(0.0)
+                };
                 // E_k − E_i = h c₀/λ exactly, so that Kirchhoff's law holds to rounding (the snap moves E_k by
                 // less than 1 cm⁻¹).
-                Line { lambda_nm, a_ki: l.a_ki, e_k: e_i + photon, e_i, g_k: l.g_k, g_i: l.g_i }
+                Line {
+                    lambda_nm,
+                    a_ki: l.a_ki,
+                    e_k: e_i + photon,
+                    e_i,
+                    g_k: l.g_k,
+                    g_i: l.g_i,
+                }
             })
             .collect();
         let mut levels = vec![Level { energy: 0.0, g: g0 }];
         for l in &lines {
-            levels.push(Level { energy: l.e_k, g: l.g_k });
+            levels.push(Level {
+                energy: l.e_k,
+                g: l.g_k,
+            });
             if l.g_i > 0 && l.e_i > 0.0 {
-                levels.push(Level { energy: l.e_i, g: l.g_i });
+                levels.push(Level {
+                    energy: l.e_i,
+                    g: l.g_i,
+                });
             }
         }
         // One entry per level: the same level reached from several lines agrees to the table's precision
@@ -127,11 +151,20 @@ impl Element {
         let tol = 0.2 * JOULES_PER_WAVENUMBER;
         let mut unique: Vec<Level> = Vec::with_capacity(levels.len());
         for l in levels {
-            if !unique.iter().rev().take_while(|u| l.energy - u.energy < tol).any(|u| u.g == l.g) {
+            if !unique
+                .iter()
+                .rev()
+                .take_while(|u| l.energy - u.energy < tol)
+                .any(|u| u.g == l.g)
+            {
                 unique.push(l);
             }
         }
-        Ok(Element { symbol: sym, lines, levels: unique })
+        Ok(Element {
+            symbol: sym,
+            lines,
+            levels: unique,
+        })
     }
 
     /// Element symbol.
@@ -150,7 +183,10 @@ impl Element {
     /// ln Z(T), by log-sum-exp over [`Element::levels`]; finite for every T (T < 1 mK and NaN act as 1 mK).
     pub fn ln_partition_function(&self, t_k: f64) -> f64 {
         let kt = BOLTZMANN * t_k.max(T_MIN);
-        let terms = self.levels.iter().map(|l| (l.g as f64).ln() - l.energy / kt);
+        let terms = self
+            .levels
+            .iter()
+            .map(|l| (l.g as f64).ln() - l.energy / kt);
         let m = terms.clone().fold(f64::NEG_INFINITY, f64::max);
         m + terms.map(|x| (x - m).exp()).sum::<f64>().ln()
     }
@@ -165,13 +201,21 @@ impl Element {
     /// emission coefficient in W·m⁻³·sr⁻¹·nm⁻¹ divided by N in m⁻³), at temperature `t_k`, each line in the
     /// bin of `grid` holding its vacuum wavelength with φ = 1/Δλ. Multiply by N (m⁻³): both are exactly linear
     /// in N. T < 1 mK acts as 1 mK (only ground-level absorption remains, emission is 0).
-    pub fn add_binned_cross_sections(&self, t_k: f64, grid: &SpectralGrid, absorption: &mut [f64], emission: &mut [f64]) {
+    pub fn add_binned_cross_sections(
+        &self,
+        t_k: f64,
+        grid: &SpectralGrid,
+        absorption: &mut [f64],
+        emission: &mut [f64],
+    ) {
         let t = t_k.max(T_MIN);
         let kt = BOLTZMANN * t;
         let ln_z = self.ln_partition_function(t);
         let phi = 1.0 / (grid.width_nm() * 1e-9); // m⁻¹
         for line in &self.lines {
-            let Some(bin) = grid.bin_of(line.lambda_nm) else { continue };
+            let Some(bin) = grid.bin_of(line.lambda_nm) else {
+                continue;
+            };
             let (sa, j) = line_cross_sections(line, kt, ln_z, phi);
             absorption[bin] += sa;
             emission[bin] += j;
@@ -185,7 +229,8 @@ pub fn line_cross_sections(line: &Line, kt: f64, ln_z: f64, phi: f64) -> (f64, f
     let x = PLANCK * SPEED_OF_LIGHT / (lambda * kt);
     let ln_g = (line.g_k as f64).ln();
     // ln[(λ⁴ A φ / 8πc) g_k e^{−E_i/kT} (1 − e^{−x}) / Z]; ln(−expm1(−x)) → 0 for large x, ln x for small.
-    let ln_sa = (lambda.powi(4) * line.a_ki * phi / (8.0 * PI * SPEED_OF_LIGHT)).ln() + ln_g - line.e_i / kt
+    let ln_sa = (lambda.powi(4) * line.a_ki * phi / (8.0 * PI * SPEED_OF_LIGHT)).ln() + ln_g
+        - line.e_i / kt
         + (-(-x).exp_m1()).ln()
         - ln_z;
     // ln[(h c / 4πλ) A φ g_k e^{−E_k/kT} / Z], per metre of wavelength; × 1e-9 per nm.
@@ -215,7 +260,10 @@ mod tests {
             _ => unreachable!(),
         };
         let u = t / 1000.0;
-        a.iter().enumerate().map(|(i, c)| c * u.powi(i as i32)).sum()
+        a.iter()
+            .enumerate()
+            .map(|(i, c)| c * u.powi(i as i32))
+            .sum()
     }
 
     #[test]
@@ -234,9 +282,17 @@ mod tests {
         // so there the bound is the fits' 1.5 % spread.
         for s in ALL {
             let e = Element::by_symbol(s).unwrap();
-            for (t, tol) in [(1500.0, 0.015), (2000.0, 0.01), (2500.0, 0.01), (3000.0, 0.01)] {
+            for (t, tol) in [
+                (1500.0, 0.015),
+                (2000.0, 0.01),
+                (2500.0, 0.01),
+                (3000.0, 0.01),
+            ] {
                 let (z, want) = (e.partition_function(t), de_galan(s, t));
-                assert!((z / want - 1.0).abs() < tol, "{s} T={t}: Z = {z}, de Galan {want}");
+                assert!(
+                    (z / want - 1.0).abs() < tol,
+                    "{s} T={t}: Z = {z}, de Galan {want}"
+                );
             }
         }
         // Ba: 1.21 at 3000 K (shared/data/README.md). At 2000 K the README rounds to 1.01; the sum over NIST's
@@ -258,7 +314,10 @@ mod tests {
             let bound: f64 = e.levels().iter().map(|l| l.g as f64).sum();
             for t in [1e4, 1e5, 1e9, f64::INFINITY] {
                 let z = e.partition_function(t);
-                assert!(z.is_finite() && z > g0 && z <= bound * (1.0 + 1e-12), "{s} T={t}: {z}");
+                assert!(
+                    z.is_finite() && z > g0 && z <= bound * (1.0 + 1e-12),
+                    "{s} T={t}: {z}"
+                );
             }
         }
     }
@@ -275,9 +334,15 @@ mod tests {
         // The D doublet dominates: > 99 % of the visible line emission at 2000 K.
         let total: f64 = j.iter().sum();
         assert!(j[bin] / total > 0.99, "{}", j[bin] / total);
-        let d: Vec<&Line> = na.lines().iter().filter(|l| (l.lambda_nm - 589.4).abs() < 0.5).collect();
+        let d: Vec<&Line> = na
+            .lines()
+            .iter()
+            .filter(|l| (l.lambda_nm - 589.4).abs() < 0.5)
+            .collect();
         assert_eq!(d.len(), 2);
-        assert!(d.iter().all(|l| l.e_i == 0.0 && grid.bin_of(l.lambda_nm) == Some(bin)));
+        assert!(d
+            .iter()
+            .all(|l| l.e_i == 0.0 && grid.bin_of(l.lambda_nm) == Some(bin)));
     }
 
     #[test]
@@ -286,19 +351,32 @@ mod tests {
         let phi = 1.0 / 10e-9;
         for s in ALL {
             let e = Element::by_symbol(s).unwrap();
-            for t in [1.0, 10.0, 100.0, 300.0, 1000.0, 1500.0, 2000.0, 3000.0, 1e4, 1e5] {
+            for t in [
+                1.0, 10.0, 100.0, 300.0, 1000.0, 1500.0, 2000.0, 3000.0, 1e4, 1e5,
+            ] {
                 let kt = BOLTZMANN * t;
                 let ln_z = e.ln_partition_function(t);
                 for line in e.lines() {
                     let (sa, j) = line_cross_sections(line, kt, ln_z, phi);
-                    assert!(sa.is_finite() && j.is_finite() && sa >= 0.0 && j >= 0.0, "{s} T={t} {line:?}");
+                    assert!(
+                        sa.is_finite() && j.is_finite() && sa >= 0.0 && j >= 0.0,
+                        "{s} T={t} {line:?}"
+                    );
                     let b = spectral_radiance(t, line.lambda_nm);
                     if sa > 0.0 && b > 0.0 && j > 0.0 {
                         let rel = (j / (sa * b) - 1.0).abs();
-                        assert!(rel < 1e-6, "{s} T={t} λ={}: j={j:e} σB={:e}", line.lambda_nm, sa * b);
+                        assert!(
+                            rel < 1e-6,
+                            "{s} T={t} λ={}: j={j:e} σB={:e}",
+                            line.lambda_nm,
+                            sa * b
+                        );
                     } else {
                         // Underflow: either both sides are below f64's range or σ_a B is.
-                        assert!(j < 1e-290 || sa * b < 1e-290, "{s} T={t}: j={j:e} σ={sa:e} B={b:e}");
+                        assert!(
+                            j < 1e-290 || sa * b < 1e-290,
+                            "{s} T={t}: j={j:e} σ={sa:e} B={b:e}"
+                        );
                     }
                 }
             }
@@ -314,7 +392,12 @@ mod tests {
                 let (mut sa, mut j) = (vec![0.0; 70], vec![0.0; 70]);
                 e.add_binned_cross_sections(t, &grid, &mut sa, &mut j);
                 for n in [0.0, 1e-30, 1.0, 1e20, 1e30] {
-                    assert!(sa.iter().chain(&j).all(|v| (v * n).is_finite() && *v >= 0.0), "{s} T={t} N={n}");
+                    assert!(
+                        sa.iter()
+                            .chain(&j)
+                            .all(|v| (v * n).is_finite() && *v >= 0.0),
+                        "{s} T={t} N={n}"
+                    );
                 }
                 if !(t > 1.0) {
                     // At (or below) 1 K no upper level is populated; ground-level absorption remains.
@@ -324,7 +407,11 @@ mod tests {
         }
         // T → 0: the resonance line absorbs with the ground population N g_k/g₀ … (1 − e^{−x}) → 1.
         let na = Element::by_symbol("Na").unwrap();
-        let d2 = na.lines().iter().find(|l| l.g_k == 4 && l.e_i == 0.0 && (l.lambda_nm - 589.158).abs() < 0.01).unwrap();
+        let d2 = na
+            .lines()
+            .iter()
+            .find(|l| l.g_k == 4 && l.e_i == 0.0 && (l.lambda_nm - 589.158).abs() < 0.01)
+            .unwrap();
         let (sa, j) = line_cross_sections(d2, BOLTZMANN * 1e-3, na.ln_partition_function(0.0), 1e8);
         let lam = d2.lambda_nm * 1e-9;
         let want = lam.powi(4) * d2.a_ki * 1e8 / (8.0 * PI * SPEED_OF_LIGHT) * 4.0 / 2.0;
@@ -357,7 +444,11 @@ mod tests {
                 PLANCK * SPEED_OF_LIGHT / (4.0 * PI * lam) * nk * l.a_ki / 10e-9 * 1e-9
             })
             .sum();
-        assert!((j[bin] * 1e17 / manual - 1.0).abs() < 1e-12, "{} vs {manual}", j[bin] * 1e17);
+        assert!(
+            (j[bin] * 1e17 / manual - 1.0).abs() < 1e-12,
+            "{} vs {manual}",
+            j[bin] * 1e17
+        );
     }
 
     #[test]
@@ -376,20 +467,33 @@ mod tests {
             ("Cu", 515.324, 6.0e7),
             ("Cu", 521.820, 7.5e7),
         ] {
-            let found = line_table::LINES
-                .iter()
-                .any(|l| l.element == s && (l.lambda_air_nm - lair).abs() < 2e-3 && (l.a_ki / a - 1.0).abs() < 0.01);
+            let found = line_table::LINES.iter().any(|l| {
+                l.element == s
+                    && (l.lambda_air_nm - lair).abs() < 2e-3
+                    && (l.a_ki / a - 1.0).abs() < 0.01
+            });
             assert!(found, "{s} {lair} nm");
         }
         // Cu 510.554 nm: lower level 3d⁹4s² ²D₅/₂ at 11202.62 cm⁻¹.
         let cu = Element::by_symbol("Cu").unwrap();
-        let l = cu.lines().iter().find(|l| (l.lambda_nm - 510.696).abs() < 0.01).unwrap();
-        assert!((l.e_i / JOULES_PER_WAVENUMBER - 11202.62).abs() < 0.5, "{}", l.e_i / JOULES_PER_WAVENUMBER);
+        let l = cu
+            .lines()
+            .iter()
+            .find(|l| (l.lambda_nm - 510.696).abs() < 0.01)
+            .unwrap();
+        assert!(
+            (l.e_i / JOULES_PER_WAVENUMBER - 11202.62).abs() < 0.5,
+            "{}",
+            l.e_i / JOULES_PER_WAVENUMBER
+        );
     }
 
     #[test]
     fn unknown_element_is_an_error_naming_the_choices() {
         let e = Element::by_symbol("Xx").unwrap_err().to_string();
-        assert!(e.contains("'Xx'") && e.contains("Na") && e.contains("Cu"), "{e}");
+        assert!(
+            e.contains("'Xx'") && e.contains("Na") && e.contains("Cu"),
+            "{e}"
+        );
     }
 }
