@@ -17,6 +17,45 @@ pub enum Error {
         /// What was expected instead.
         expected: String,
     },
+    /// A file's content is not what its format says: names the file, the position (byte offset, line and
+    /// column, or grid), what was expected and what was found.
+    Format {
+        /// The file.
+        file: String,
+        /// Where in the file: `byte 1234`, `line 3, column 5`, `grid 'density'`.
+        at: String,
+        /// What the format requires there.
+        expected: String,
+        /// What the file holds.
+        found: String,
+    },
+    /// The file could not be read at all (missing, permissions, …).
+    Io {
+        /// The file.
+        file: String,
+        /// The operating system's message.
+        message: String,
+    },
+    /// A valid file uses something this build does not read (a compression whose feature is off, a map type).
+    Unsupported {
+        /// The file.
+        file: String,
+        /// What is unsupported.
+        what: String,
+        /// How to get it (the cargo feature, an alternative).
+        hint: String,
+    },
+    /// Loading would allocate more than the configured memory cap (checked before allocating).
+    TooLarge {
+        /// The file.
+        file: String,
+        /// What would be allocated.
+        what: String,
+        /// Bytes requested (saturating).
+        bytes: u64,
+        /// The cap, bytes.
+        cap: u64,
+    },
 }
 
 impl Error {
@@ -47,8 +86,34 @@ impl fmt::Display for Error {
                 f,
                 "{component}: parameter '{name}' = {value}: expected {expected}"
             ),
+            Error::Format { file, at, expected, found } => {
+                write!(f, "{file}: {at}: expected {expected}, found {found}")
+            }
+            Error::Io { file, message } => write!(f, "{file}: cannot read: {message}"),
+            Error::Unsupported { file, what, hint } => write!(f, "{file}: unsupported: {what} ({hint})"),
+            Error::TooLarge { file, what, bytes, cap } => write!(
+                f,
+                "{file}: {what} needs {bytes} bytes, above the memory cap of {cap} bytes (raise 'maxbytes' if intended)"
+            ),
         }
     }
 }
 
 impl std::error::Error for Error {}
+
+impl Error {
+    /// A format error at `at` in `file`.
+    pub(crate) fn format(
+        file: &str,
+        at: impl Into<String>,
+        expected: impl Into<String>,
+        found: impl fmt::Display,
+    ) -> Self {
+        Error::Format {
+            file: file.to_string(),
+            at: at.into(),
+            expected: expected.into(),
+            found: found.to_string(),
+        }
+    }
+}

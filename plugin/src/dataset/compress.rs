@@ -1,0 +1,302 @@
+//! Decoders for the compressed blocks of OpenVDB and NanoVDB files: blosc1 frames (LZ4, byte shuffle),
+//! zlib streams, and IEEE binary16 half floats. Every size is checked against the caller's expectation before
+//! anything is allocated; malformed input is an error, never a panic.
+
+use crate::Error;
+
+/// A decoder's complaint: what it expected and what it found, or a feature this build lacks.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum DecodeError {
+    /// Malformed data.
+    Bad { expected: String, found: String },
+    /// Valid data this build cannot decode (only built without the `blosc` or `zip` feature).
+    #[cfg_attr(all(feature = "blosc", feature = "zip"), allow(dead_code))]
+    Feature(&'static str),
+}
+
+impl DecodeError {
+    fn bad(expected: impl Into<String>, found: impl std::fmt::Display) -> Self {
+        DecodeError::Bad {
+            expected: expected.into(),
+            found: found.to_string(),
+        }
+    }
+    /// The crate error at position `at` of `file`.
+    pub fn at(self, file: &str, at: String) -> Error {
+        match self {
+            DecodeError::Bad { expected, found } => Error::format(file, at, expected, found),
+            DecodeError::Feature(hint) => Error::Unsupported {
+                file: file.to_string(),
+                what: format!("{at}: compressed data"),
+                hint: hint.to_string(),
+            },
+        }
+    }
+}
+
+/// Decodes one blosc1 frame expected to hold `expected` bytes (OpenVDB pads buffers under 48 bytes to 128
+/// before compressing, so a frame may hold up to 128 bytes for a smaller expectation; the prefix is returned).
+pub(crate) fn blosc(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
+    if src.len() < 16 {
+        return Err(DecodeError::bad(
+            "a 16-byte blosc header",
+            format!("{} bytes", src.len()),
+        ));
+    }
+    let (flags, typesize) = (src[2], src[3].max(1) as usize);
+    let rd = |o: usize| u32::from_le_bytes([src[o], src[o + 1], src[o + 2], src[o + 3]]) as usize;
+    let (nbytes, blocksize, cbytes) = (rd(4), rd(8), rd(12));
+    if nbytes < expected || nbytes > expected.max(128) {
+        return Err(DecodeError::bad(
+            format!("a blosc frame of {expected} bytes"),
+            format!("one of {nbytes}"),
+        ));
+    }
+    if cbytes > src.len() {
+        return Err(DecodeError::bad(
+            format!("a blosc frame of {cbytes} bytes"),
+            format!("only {} (truncated)", src.len()),
+        ));
+    }
+    let mut out = vec![0u8; nbytes];
+    if flags & 0x2 != 0 {
+        // MEMCPYED: stored as is, no shuffle.
+        let body = src
+            .get(16..16 + nbytes)
+            .ok_or_else(|| DecodeError::bad("a stored blosc frame", "a truncated one"))?;
+        out.copy_from_slice(body);
+        out.truncate(expected);
+        return Ok(out);
+    }
+    if flags & 0x4 != 0 {
+        return Err(DecodeError::bad(
+            "byte-shuffled blosc data",
+            "bit-shuffle (unsupported)",
+        ));
+    }
+    let codec = flags >> 5;
+    if codec != 1 {
+        let name = ["blosclz", "lz4", "snappy", "zlib", "zstd"]
+            .get(codec as usize)
+            .copied()
+            .unwrap_or("unknown");
+        return Err(DecodeError::bad(
+            "blosc with LZ4 (OpenVDB's choice)",
+            format!("compressor '{name}' (unsupported)"),
+        ));
+    }
+    if nbytes == 0 {
+        return Ok(out);
+    }
+    if blocksize == 0 || blocksize > nbytes.max(1) {
+        return Err(DecodeError::bad(
+            format!("a blosc block size within 1..{nbytes}"),
+            blocksize,
+        ));
+    }
+    let dont_split = flags & 0x10 != 0;
+    let shuffle = flags & 0x1 != 0 && typesize > 1;
+    let nblocks = nbytes.div_ceil(blocksize);
+    let starts = src
+        .get(16..16 + 4 * nblocks)
+        .ok_or_else(|| DecodeError::bad("blosc block offsets", "a truncated frame"))?;
+    let mut tmp = vec![0u8; blocksize];
+    for j in 0..nblocks {
+        let leftover = j == nblocks - 1 && nbytes % blocksize != 0;
+        let bsize = if leftover {
+            nbytes % blocksize
+        } else {
+            blocksize
+        };
+        let mut pos = u32::from_le_bytes([
+            starts[4 * j],
+            starts[4 * j + 1],
+            starts[4 * j + 2],
+            starts[4 * j + 3],
+        ]) as usize;
+        let nsplits = if !dont_split && typesize <= 16 && bsize / typesize >= 128 && !leftover {
+            typesize
+        } else {
+            1
+        };
+        let neblock = bsize / nsplits;
+        let dest = if shuffle {
+            &mut tmp[..bsize]
+        } else {
+            &mut out[j * blocksize..j * blocksize + bsize]
+        };
+        for s in 0..nsplits {
+            let size_bytes = src
+                .get(pos..pos + 4)
+                .ok_or_else(|| DecodeError::bad("a blosc split size", "the end of the frame"))?;
+            let csize =
+                i32::from_le_bytes([size_bytes[0], size_bytes[1], size_bytes[2], size_bytes[3]]);
+            pos += 4;
+            if csize < 0 {
+                return Err(DecodeError::bad("a blosc split size >= 0", csize));
+            }
+            let data = src
+                .get(pos..pos + csize as usize)
+                .ok_or_else(|| DecodeError::bad("blosc split data", "the end of the frame"))?;
+            pos += csize as usize;
+            let target = &mut dest[s * neblock..(s + 1) * neblock];
+            if csize as usize == neblock {
+                target.copy_from_slice(data);
+            } else {
+                lz4(data, target)?;
+            }
+        }
+        if shuffle {
+            unshuffle(
+                typesize,
+                &tmp[..bsize],
+                &mut out[j * blocksize..j * blocksize + bsize],
+            );
+        }
+    }
+    out.truncate(expected);
+    Ok(out)
+}
+
+#[cfg(feature = "blosc")]
+fn lz4(src: &[u8], dest: &mut [u8]) -> Result<(), DecodeError> {
+    match lz4_flex::block::decompress_into(src, dest) {
+        Ok(n) if n == dest.len() => Ok(()),
+        Ok(n) => Err(DecodeError::bad(
+            format!("an LZ4 block of {} bytes", dest.len()),
+            n,
+        )),
+        Err(e) => Err(DecodeError::bad(
+            "a valid LZ4 block",
+            format!("corrupt data ({e})"),
+        )),
+    }
+}
+
+#[cfg(not(feature = "blosc"))]
+fn lz4(_src: &[u8], _dest: &mut [u8]) -> Result<(), DecodeError> {
+    Err(DecodeError::Feature(FEATURE_BLOSC))
+}
+
+/// The message for blosc data in a build without the `blosc` feature.
+#[allow(dead_code)]
+pub(crate) const FEATURE_BLOSC: &str = "blosc-compressed data, which this build cannot decode (rebuild the plugin with cargo feature 'blosc')";
+/// The message for zlib data in a build without the `zip` feature.
+#[allow(dead_code)]
+pub(crate) const FEATURE_ZIP: &str = "zip-compressed data, which this build cannot decode (rebuild the plugin with cargo feature 'zip')";
+
+/// Blosc's byte unshuffle: byte b of element i comes from src[b·n + i]; trailing bytes are copied.
+fn unshuffle(typesize: usize, src: &[u8], dest: &mut [u8]) {
+    let n = src.len() / typesize;
+    for i in 0..n {
+        for b in 0..typesize {
+            dest[i * typesize + b] = src[b * n + i];
+        }
+    }
+    let tail = n * typesize;
+    dest[tail..].copy_from_slice(&src[tail..]);
+}
+
+/// Inflates a zlib stream expected to hold exactly `expected` bytes.
+#[cfg(feature = "zip")]
+pub(crate) fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
+    match miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(src, expected) {
+        Ok(v) if v.len() == expected => Ok(v),
+        Ok(v) => Err(DecodeError::bad(
+            format!("a zlib stream of {expected} bytes"),
+            v.len(),
+        )),
+        Err(e) => Err(DecodeError::bad(
+            format!("a zlib stream of {expected} bytes"),
+            format!("corrupt or longer data ({:?})", e.status),
+        )),
+    }
+}
+
+#[cfg(not(feature = "zip"))]
+pub(crate) fn zlib(_src: &[u8], _expected: usize) -> Result<Vec<u8>, DecodeError> {
+    Err(DecodeError::Feature(FEATURE_ZIP))
+}
+
+/// IEEE 754 binary16 → f32 (exact: every half is an f32).
+pub(crate) fn half_to_f32(h: u16) -> f32 {
+    let sign = ((h & 0x8000) as u32) << 16;
+    let exp = ((h >> 10) & 0x1f) as u32;
+    let mant = (h & 0x3ff) as u32;
+    let bits = match exp {
+        0 if mant == 0 => sign,
+        0 => {
+            // Subnormal: mant · 2⁻²⁴, normalised for f32.
+            let shift = mant.leading_zeros() - 21; // bring the top bit to position 10
+            let m = (mant << shift) & 0x3ff;
+            sign | ((113 - shift) << 23) | (m << 13)
+        }
+        31 => sign | 0x7f80_0000 | (mant << 13),
+        _ => sign | ((exp + 112) << 23) | (mant << 13),
+    };
+    f32::from_bits(bits)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_values() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0x6800), 2048.0);
+        assert_eq!(half_to_f32(0x7bff), 65504.0);
+        assert_eq!(half_to_f32(0x0001), 2f32.powi(-24));
+        assert_eq!(half_to_f32(0x03ff), 1023.0 * 2f32.powi(-24));
+        assert_eq!(half_to_f32(0x0400), 2f32.powi(-14));
+        assert_eq!(half_to_f32(0x8000).to_bits(), 0x8000_0000);
+        assert!(half_to_f32(0x7c00).is_infinite() && half_to_f32(0x7e00).is_nan());
+        // Monotone over all positive finite halves.
+        let mut prev = -1.0f32;
+        for h in 0u16..0x7c00 {
+            let v = half_to_f32(h);
+            assert!(v > prev, "{h:#x}");
+            prev = v;
+        }
+    }
+
+    #[test]
+    fn unshuffle_inverts_shuffle() {
+        let src: Vec<u8> = (0..23u8).collect();
+        // Shuffle by hand: 5 elements of 4 bytes + 3 trailing bytes.
+        let mut sh = vec![0u8; 23];
+        for i in 0..5 {
+            for b in 0..4 {
+                sh[b * 5 + i] = src[i * 4 + b];
+            }
+        }
+        sh[20..].copy_from_slice(&src[20..]);
+        let mut back = vec![0u8; 23];
+        unshuffle(4, &sh, &mut back);
+        assert_eq!(back, src);
+    }
+
+    #[test]
+    fn blosc_rejects_garbage_without_panicking() {
+        assert!(blosc(&[0u8; 8], 16).is_err());
+        let mut h = [0u8; 16];
+        h[2] = 0x20; // lz4, no memcpy
+        h[3] = 4;
+        h[4..8].copy_from_slice(&64u32.to_le_bytes());
+        h[8..12].copy_from_slice(&64u32.to_le_bytes());
+        h[12..16].copy_from_slice(&16u32.to_le_bytes());
+        assert!(
+            matches!(blosc(&h, 64).unwrap_err(), DecodeError::Bad { found, .. } if found.contains("truncated"))
+        );
+        // Memcpyed frame round trip.
+        let mut m = h.to_vec();
+        m[2] = 0x02;
+        m[12..16].copy_from_slice(&80u32.to_le_bytes());
+        m.extend((0..64u8).collect::<Vec<_>>());
+        assert_eq!(blosc(&m, 64).unwrap(), (0..64u8).collect::<Vec<_>>());
+        assert!(
+            matches!(blosc(&m, 1000).unwrap_err(), DecodeError::Bad { expected, .. } if expected.contains("1000"))
+        );
+    }
+}

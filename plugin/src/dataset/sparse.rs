@@ -1,0 +1,158 @@
+//! Sparse VDB trees (OpenVDB and NanoVDB alike) made dense over the active region, so channels share one
+//! lattice and the fire samples a flat array.
+
+use super::{alloc_grid, Loaded};
+use crate::Error;
+use glam::DVec3;
+
+/// Axis-aligned index → medium map of a grid: p = scale ∘ ijk + translation (integer index = voxel centre).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transform {
+    /// Per-axis voxel size.
+    pub scale: DVec3,
+    /// Medium-space position of index (0, 0, 0).
+    pub translation: DVec3,
+}
+
+/// An 8³ leaf: origin, 512 values (z fastest within the leaf: offset x·64 + y·8 + z), active mask.
+pub(crate) struct Leaf {
+    pub origin: [i32; 3],
+    pub values: Vec<f32>,
+    pub mask: [u64; 8],
+}
+
+/// A constant cube of `size`³ voxels at `origin`.
+pub(crate) struct Tile {
+    pub origin: [i32; 3],
+    pub size: i32,
+    pub value: f32,
+    pub active: bool,
+}
+
+/// One grid: its map, background, tiles and leaves.
+pub(crate) struct Tree {
+    pub transform: Transform,
+    pub background: f32,
+    pub tiles: Vec<Tile>,
+    pub leaves: Vec<Leaf>,
+}
+
+pub(crate) fn bit(m: &[u64], i: usize) -> bool {
+    m[i >> 6] >> (i & 63) & 1 == 1
+}
+
+fn leaf_voxel(o: [i32; 3], i: usize) -> [i64; 3] {
+    [
+        o[0] as i64 + (i >> 6) as i64,
+        o[1] as i64 + ((i >> 3) & 7) as i64,
+        o[2] as i64 + (i & 7) as i64,
+    ]
+}
+
+/// Index box [min, max] of the active voxels and tiles, or `None` when nothing is active.
+fn active_bbox(t: &Tree) -> Option<([i64; 3], [i64; 3])> {
+    let mut lo = [i64::MAX; 3];
+    let mut hi = [i64::MIN; 3];
+    let mut grow = |a: [i64; 3], b: [i64; 3]| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(a[k]);
+            hi[k] = hi[k].max(b[k]);
+        }
+    };
+    for tile in t.tiles.iter().filter(|t| t.active) {
+        let o = tile.origin.map(|v| v as i64);
+        grow(o, o.map(|v| v + tile.size as i64 - 1));
+    }
+    for leaf in &t.leaves {
+        for i in (0..512).filter(|&i| bit(&leaf.mask, i)) {
+            let p = leaf_voxel(leaf.origin, i);
+            grow(p, p);
+        }
+    }
+    (lo[0] <= hi[0]).then_some((lo, hi))
+}
+
+/// Makes `trees` dense over the union of their active boxes; every voxel holds the tree's value there
+/// (leaf values, active or not, over tile values, over the background).
+pub(crate) fn densify(
+    file: &str,
+    trees: &[(&str, Tree)],
+    max_bytes: u64,
+) -> Result<Vec<Loaded>, Error> {
+    let (first_name, first) = (&trees[0].0, &trees[0].1);
+    for (name, t) in &trees[1..] {
+        if t.transform != first.transform {
+            return Err(Error::format(
+                file,
+                format!("grid '{name}'"),
+                format!(
+                    "the transform of grid '{first_name}' (channels share one lattice): {:?}",
+                    first.transform
+                ),
+                format!("{:?}", t.transform),
+            ));
+        }
+    }
+    let mut bbox: Option<([i64; 3], [i64; 3])> = None;
+    for (_, t) in trees {
+        if let Some((a, b)) = active_bbox(t) {
+            bbox = Some(match bbox {
+                None => (a, b),
+                Some((lo, hi)) => (
+                    [0, 1, 2].map(|k| lo[k].min(a[k])),
+                    [0, 1, 2].map(|k| hi[k].max(b[k])),
+                ),
+            });
+        }
+    }
+    let Some((lo, hi)) = bbox else {
+        let names: Vec<&str> = trees.iter().map(|t| t.0).collect();
+        return Err(Error::format(
+            file,
+            format!("grid '{}'", names.join("', '")),
+            "at least one active voxel",
+            "an empty grid",
+        ));
+    };
+    let extent = [0, 1, 2].map(|k| (hi[k] - lo[k] + 1) as u64);
+    let dims = extent.map(|e| usize::try_from(e).unwrap_or(usize::MAX));
+    let tr = first.transform;
+    let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
+    let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
+    let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
+    let mut out = Vec::new();
+    for (_, t) in trees {
+        let mut data = alloc_grid(file, dims, max_bytes, t.background)?;
+        let mut put = |p: [i64; 3], v: f32| {
+            let q = [0, 1, 2].map(|k| p[k] - lo[k]);
+            if (0..3).all(|k| q[k] >= 0 && (q[k] as usize) < dims[k]) {
+                data[q[0] as usize + dims[0] * (q[1] as usize + dims[1] * q[2] as usize)] = v;
+            }
+        };
+        let mut tiles: Vec<&Tile> = t.tiles.iter().collect();
+        tiles.sort_by_key(|t| -t.size);
+        for tile in tiles {
+            let o = tile.origin.map(|v| v as i64);
+            let a = [0, 1, 2].map(|k| o[k].max(lo[k]));
+            let b = [0, 1, 2].map(|k| (o[k] + tile.size as i64 - 1).min(hi[k]));
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        put([x, y, z], tile.value);
+                    }
+                }
+            }
+        }
+        for leaf in &t.leaves {
+            for (i, &v) in leaf.values.iter().enumerate() {
+                put(leaf_voxel(leaf.origin, i), v);
+            }
+        }
+        out.push(Loaded {
+            dims,
+            data,
+            bounds: Some([p0, p1]),
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,218 @@
+//! Dense scalar grids and their lookup, in pbrt-v4's convention.
+//!
+//! A [`Grid`] holds nx·ny·nz `f32` samples, x fastest (`x + nx·(y + ny·z)`), at the **cell centres** of an
+//! nx × ny × nz subdivision of the unit cube: sample (i, j, k) sits at ((i, j, k) + 0.5) / (nx, ny, nz).
+//! Lookups take a point in [0, 1]³ (the dataset maps medium space to it).
+//!
+//! - [`Interpolation::Trilinear`] (default): pbrt-v4's `SampledGrid::Lookup` — the eight samples around
+//!   p·n − 0.5, each sample outside the grid counting as **zero**. So within the last half voxel of every face
+//!   the value fades linearly from the edge sample toward zero, reaching half the edge sample exactly on the
+//!   bounds; beyond the bounds it is zero.
+//! - [`Interpolation::Nearest`]: the sample whose cell holds p; zero outside [0, 1]³.
+
+/// How a grid is sampled between its samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Interpolation {
+    /// Trilinear between cell centres, zero outside (pbrt-v4).
+    #[default]
+    Trilinear,
+    /// Value of the cell holding the point.
+    Nearest,
+}
+
+/// Summary statistics of a grid's samples.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GridStats {
+    /// Smallest sample.
+    pub min: f32,
+    /// Largest sample.
+    pub max: f32,
+    /// Mean over all samples (f64 accumulation).
+    pub mean: f64,
+    /// Fraction of samples that are non-zero.
+    pub nonzero_fraction: f64,
+}
+
+/// A dense scalar grid, x fastest, cell-centred.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    dims: [usize; 3],
+    data: Vec<f32>,
+}
+
+impl Grid {
+    /// A grid of `dims` from `data` (len must equal the product; the caller validated it, so a mismatch is a
+    /// logic error and returns `None`).
+    pub fn new(dims: [usize; 3], data: Vec<f32>) -> Option<Grid> {
+        let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d))?;
+        (n == data.len() && n > 0).then_some(Grid { dims, data })
+    }
+
+    /// (nx, ny, nz).
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    /// The samples, x fastest.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+    /// Mutable samples (for policies and mappings applied at load time).
+    pub(crate) fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+    /// Bytes held by the samples.
+    pub fn bytes(&self) -> usize {
+        self.data.len() * std::mem::size_of::<f32>()
+    }
+
+    /// Sample (i, j, k) with signed indices; zero outside the grid.
+    #[inline]
+    pub fn at(&self, i: i64, j: i64, k: i64) -> f32 {
+        let [nx, ny, nz] = self.dims;
+        if i < 0 || j < 0 || k < 0 || i >= nx as i64 || j >= ny as i64 || k >= nz as i64 {
+            return 0.0;
+        }
+        self.data[i as usize + nx * (j as usize + ny * k as usize)]
+    }
+
+    /// Value at `p` in [0, 1]³ (see the module docs for the convention at the bounds).
+    #[inline]
+    pub fn lookup(&self, p: [f64; 3], interp: Interpolation) -> f32 {
+        match interp {
+            Interpolation::Trilinear => self.trilinear(p),
+            Interpolation::Nearest => self.nearest(p),
+        }
+    }
+
+    fn nearest(&self, p: [f64; 3]) -> f32 {
+        if !(0.0..=1.0).contains(&p[0])
+            || !(0.0..=1.0).contains(&p[1])
+            || !(0.0..=1.0).contains(&p[2])
+        {
+            return 0.0;
+        }
+        let idx = |a: usize| ((p[a] * self.dims[a] as f64) as i64).min(self.dims[a] as i64 - 1);
+        self.at(idx(0), idx(1), idx(2))
+    }
+
+    fn trilinear(&self, p: [f64; 3]) -> f32 {
+        // Continuous sample coordinates; NaN or far-away points are outside.
+        let mut base = [0i64; 3];
+        let mut frac = [0f32; 3];
+        for a in 0..3 {
+            // Outside the bounds (and NaN): zero, as pbrt's rays are clipped to the medium's box.
+            if !(0.0..=1.0).contains(&p[a]) {
+                return 0.0;
+            }
+            let s = p[a] * self.dims[a] as f64 - 0.5;
+            let f = s.floor();
+            base[a] = f as i64;
+            frac[a] = (s - f) as f32;
+        }
+        let [i, j, k] = base;
+        let [fx, fy, fz] = frac;
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let c00 = lerp(self.at(i, j, k), self.at(i + 1, j, k), fx);
+        let c10 = lerp(self.at(i, j + 1, k), self.at(i + 1, j + 1, k), fx);
+        let c01 = lerp(self.at(i, j, k + 1), self.at(i + 1, j, k + 1), fx);
+        let c11 = lerp(self.at(i, j + 1, k + 1), self.at(i + 1, j + 1, k + 1), fx);
+        lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)
+    }
+
+    /// Min, max, mean and non-zero fraction of the samples.
+    pub fn stats(&self) -> GridStats {
+        let mut s = GridStats {
+            min: f32::INFINITY,
+            max: f32::NEG_INFINITY,
+            mean: 0.0,
+            nonzero_fraction: 0.0,
+        };
+        let mut sum = 0.0f64;
+        let mut nonzero = 0usize;
+        for &v in &self.data {
+            s.min = s.min.min(v);
+            s.max = s.max.max(v);
+            sum += v as f64;
+            nonzero += (v != 0.0) as usize;
+        }
+        let n = self.data.len() as f64;
+        s.mean = sum / n;
+        s.nonzero_fraction = nonzero as f64 / n;
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp() -> Grid {
+        // v = i + 10 j + 100 k on 4×3×2.
+        let mut d = Vec::new();
+        for k in 0..2 {
+            for j in 0..3 {
+                for i in 0..4 {
+                    d.push((i + 10 * j + 100 * k) as f32);
+                }
+            }
+        }
+        Grid::new([4, 3, 2], d).unwrap()
+    }
+
+    #[test]
+    fn x_fastest_layout() {
+        let g = ramp();
+        assert_eq!(g.at(3, 0, 0), 3.0);
+        assert_eq!(g.at(0, 2, 0), 20.0);
+        assert_eq!(g.at(1, 1, 1), 111.0);
+        assert_eq!(g.at(4, 0, 0), 0.0);
+        assert_eq!(g.at(-1, 0, 0), 0.0);
+        assert!(Grid::new([2, 2, 2], vec![0.0; 7]).is_none());
+        assert!(Grid::new([usize::MAX, 2, 2], vec![]).is_none());
+    }
+
+    #[test]
+    fn trilinear_reproduces_samples_and_linear_fields() {
+        let g = ramp();
+        // At cell centres the sample itself.
+        let c = |i: f64, j: f64, k: f64| [(i + 0.5) / 4.0, (j + 0.5) / 3.0, (k + 0.5) / 2.0];
+        assert_eq!(g.lookup(c(2.0, 1.0, 1.0), Interpolation::Trilinear), 112.0);
+        // Between centres, exactly linear (the field is linear).
+        let v = g.lookup(c(1.25, 0.5, 0.5), Interpolation::Trilinear);
+        assert!((v - (1.25 + 5.0 + 50.0)).abs() < 1e-4, "{v}");
+    }
+
+    #[test]
+    fn last_half_voxel_fades_to_half_at_the_bounds() {
+        // pbrt convention: on the face the value is half the edge sample; outside, zero.
+        let g = Grid::new([2, 1, 1], vec![4.0, 8.0]).unwrap();
+        let y = 0.5;
+        let z = 0.5;
+        // y, z at the single centre: the x profile.
+        assert_eq!(g.lookup([1.0, y, z], Interpolation::Trilinear), 4.0);
+        assert_eq!(g.lookup([0.0, y, z], Interpolation::Trilinear), 2.0);
+        assert_eq!(g.lookup([0.75, y, z], Interpolation::Trilinear), 8.0);
+        assert_eq!(g.lookup([1.0001, y, z], Interpolation::Trilinear), 0.0);
+        assert_eq!(g.lookup([f64::NAN, y, z], Interpolation::Trilinear), 0.0);
+        // Along y (one sample): at the centre 4, at the face 2 (x at sample 0's centre).
+        assert_eq!(g.lookup([0.25, 0.0, 0.5], Interpolation::Trilinear), 2.0);
+    }
+
+    #[test]
+    fn nearest_picks_the_cell() {
+        let g = ramp();
+        assert_eq!(g.lookup([0.99, 0.99, 0.99], Interpolation::Nearest), 123.0);
+        assert_eq!(g.lookup([1.0, 1.0, 1.0], Interpolation::Nearest), 123.0);
+        assert_eq!(g.lookup([0.0, 0.0, 0.0], Interpolation::Nearest), 0.0);
+        assert_eq!(g.lookup([0.26, 0.0, 0.0], Interpolation::Nearest), 1.0);
+        assert_eq!(g.lookup([1.1, 0.0, 0.0], Interpolation::Nearest), 0.0);
+    }
+
+    #[test]
+    fn stats() {
+        let s = ramp().stats();
+        assert_eq!((s.min, s.max), (0.0, 123.0));
+        assert!((s.mean - 61.5).abs() < 1e-12);
+        assert!((s.nonzero_fraction - 23.0 / 24.0).abs() < 1e-12);
+    }
+}
