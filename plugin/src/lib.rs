@@ -27,6 +27,7 @@ pub mod constants;
 pub mod dataset;
 pub mod error;
 pub mod grid;
+pub mod majorant;
 pub mod quadrature;
 pub mod soot;
 pub mod species;

@@ -4,8 +4,10 @@
 //! radiance, soot absorption, index of air, colour) so that anyone can check them against published values.
 //! The renderer (`firemedium render`) joins when the pbrt-v4 host lands.
 //!
-//! Exit status: 0 on success, 2 on bad arguments (one line on stderr, never a panic).
+//! Exit status: 0 on success, 1 when a file is refused, 2 on bad arguments (one line on stderr, never a
+//! panic).
 
+mod info;
 mod physics;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +29,8 @@ struct Cli {
 enum Command {
     /// Print blackbody radiance, soot absorption, the index of air and the blackbody's colour.
     Physics(physics::PhysicsArgs),
+    /// Describe a voxel dataset file: dims, bounds, channels with statistics, bytes, load time.
+    Info(info::InfoArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,7 +56,8 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Physics(args) => physics::run(&args),
+        Command::Physics(args) => physics::run(&args).map_err(|m| (2, m)),
+        Command::Info(args) => info::run(&args),
     };
     match result {
         Ok(text) => {
@@ -61,9 +66,10 @@ fn main() -> ExitCode {
             let _ = out.write_all(text.as_bytes());
             ExitCode::SUCCESS
         }
-        Err(msg) => {
-            eprintln!("firemedium: {msg}");
-            ExitCode::from(2)
+        Err((status, msg)) => {
+            // One line, whatever the message holds.
+            eprintln!("firemedium: {}", msg.replace('\n', " "));
+            ExitCode::from(status)
         }
     }
 }

@@ -19,8 +19,9 @@
 //! `temperaturescale` meaning T' = (T − offset) · scale.
 //!
 //! ## Bad data
-//! NaN or infinite values, and negative values, are errors naming the file, channel, voxel and value unless
-//! the [`Policy`] says `Zero`, which replaces them with 0 and counts them in the report. Dims whose product
+//! NaN or infinite values in any channel, and negative values in the physical channels (`density`,
+//! `temperature`, species), are errors naming the file, channel, voxel and value unless the [`Policy`] says
+//! `Zero`, which replaces them with 0 and counts them in the report. Other channels keep negative values. Dims whose product
 //! overflows or whose grid would exceed `max_bytes` are refused before anything is allocated.
 
 mod ascii;
@@ -376,7 +377,155 @@ fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {
     })
 }
 
+/// A grid inside a file, as listed by [`list_grids`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridEntry {
+    /// Its name (single-grid formats: `density`).
+    pub name: String,
+    /// Its value type as the file names it.
+    pub kind: String,
+    /// Whether this component can load it (float grids).
+    pub loadable: bool,
+}
+
+/// The format `opts` or the extension gives `path`.
+pub fn format_of(path: &Path, opts: &LoadOptions) -> Result<Format, Error> {
+    opts.format
+        .or_else(|| Format::from_extension(path))
+        .ok_or_else(|| {
+            Error::invalid(
+                "dataset",
+                "format",
+                format!("unset for '{}'", path.display()),
+                format!(
+                    "a known extension (.vdb .nvdb .raw .raw2 .txt) or 'format' one of {}",
+                    Format::NAMES.join(", ")
+                ),
+            )
+        })
+}
+
+/// The grids a file holds (after frame substitution). Single-grid formats hold one grid, `density`.
+pub fn list_grids(path: &Path, opts: &LoadOptions) -> Result<Vec<GridEntry>, Error> {
+    let path = frame_path(path, opts.frame)?;
+    let file = path.display().to_string();
+    Ok(match format_of(&path, opts)? {
+        Format::Vdb => vdb::read_header(&file, &read_file(&path)?)?
+            .grids
+            .into_iter()
+            .map(|g| GridEntry {
+                loadable: g.tree_type == "Tree_float_5_4_3" && g.instance_parent_is_empty(),
+                kind: g.tree_type.clone() + if g.half { " (half)" } else { "" },
+                name: g.name,
+            })
+            .collect(),
+        Format::NanoVdb => nanovdb::grid_names(&file, &read_file(&path)?)?
+            .into_iter()
+            .map(|(name, float)| GridEntry {
+                name,
+                kind: if float {
+                    "float".into()
+                } else {
+                    "other".into()
+                },
+                loadable: float,
+            })
+            .collect(),
+        _ => {
+            read_file(&path)?;
+            vec![GridEntry {
+                name: "density".into(),
+                kind: "float".into(),
+                loadable: true,
+            }]
+        }
+    })
+}
+
+/// Decodes `bytes` of `format` into the grids `names` (single-grid formats: exactly one name).
+fn decode(
+    format: Format,
+    file: &str,
+    bytes: &[u8],
+    names: &[&str],
+    opts: &LoadOptions,
+) -> Result<Vec<Loaded>, Error> {
+    if !matches!(format, Format::Vdb | Format::NanoVdb) && names.len() != 1 {
+        return Err(Error::invalid(
+            "dataset",
+            "channels",
+            format!("{} channels from '{file}'", names.len()),
+            format!(
+                "one channel per {} file (it holds a single grid)",
+                format.name()
+            ),
+        ));
+    }
+    Ok(match format {
+        Format::Vdb => vdb::read(file, bytes, names, opts.max_bytes)?,
+        Format::NanoVdb => nanovdb::read(file, bytes, names, opts.max_bytes)?,
+        Format::AsciiDense => vec![ascii::read_dense(
+            file,
+            as_text(file, bytes)?,
+            opts.order,
+            opts.max_bytes,
+        )?],
+        Format::AsciiSparse => vec![ascii::read_sparse(
+            file,
+            as_text(file, bytes)?,
+            opts.max_bytes,
+        )?],
+        Format::Raw | Format::Raw2 => vec![raw::read(
+            file,
+            bytes,
+            format == Format::Raw2,
+            opts.raw_dims,
+            opts.raw_coords,
+            opts.raw_value,
+            opts.max_bytes,
+        )?],
+        Format::Inline => {
+            return Err(Error::invalid(
+                "dataset",
+                "format",
+                "inline",
+                "a file format (inline grids come from Dataset::from_inline)",
+            ))
+        }
+    })
+}
+
 impl Dataset {
+    /// Decodes a file already in memory: channels `names` (grid names, also the channel names) of `format`;
+    /// `label` names the data in errors. Hosts that hold files in memory, and the fuzz targets, use this.
+    pub fn from_bytes(
+        format: Format,
+        label: &str,
+        bytes: &[u8],
+        names: &[&str],
+        opts: &LoadOptions,
+    ) -> Result<Dataset, Error> {
+        if names.is_empty() {
+            return Err(Error::invalid(
+                "dataset",
+                "channels",
+                "none",
+                "at least one channel to load",
+            ));
+        }
+        let start = Instant::now();
+        let grids = decode(format, label, bytes, names, opts)?;
+        let seconds = start.elapsed().as_secs_f64() / names.len() as f64;
+        let sources: Vec<ChannelSource> =
+            names.iter().map(|n| ChannelSource::new(n, label)).collect();
+        let loaded = grids
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| (i, g, label.to_string(), seconds, format))
+            .collect();
+        Self::assemble(&sources, loaded, opts)
+    }
+
     /// Loads the channels of `sources` (files grouped so each is read once).
     pub fn load(sources: &[ChannelSource], opts: &LoadOptions) -> Result<Dataset, Error> {
         if sources.is_empty() {
@@ -395,69 +544,15 @@ impl Dataset {
             }
             let path = frame_path(&src.file, opts.frame)?;
             let file = path.display().to_string();
-            let format =
-                match opts.format.or_else(|| Format::from_extension(&path)) {
-                    Some(f) => f,
-                    None => return Err(Error::invalid(
-                        "dataset",
-                        "format",
-                        format!("unset for '{file}'"),
-                        format!(
-                            "a known extension (.vdb .nvdb .raw .raw2 .txt) or 'format' one of {}",
-                            Format::NAMES.join(", ")
-                        ),
-                    )),
-                };
+            let format = format_of(&path, opts)?;
             // All channels from this same file.
             let group: Vec<usize> = (i..sources.len())
                 .filter(|&j| !done[j] && sources[j].file == src.file)
                 .collect();
             let start = Instant::now();
             let bytes = read_file(&path)?;
-            let grids: Vec<Loaded> = match format {
-                Format::Vdb | Format::NanoVdb => {
-                    let names: Vec<&str> = group.iter().map(|&j| sources[j].grid_name()).collect();
-                    if format == Format::Vdb {
-                        vdb::read(&file, &bytes, &names, opts.max_bytes)?
-                    } else {
-                        nanovdb::read(&file, &bytes, &names, opts.max_bytes)?
-                    }
-                }
-                _ => {
-                    if group.len() > 1 {
-                        return Err(Error::invalid(
-                            "dataset",
-                            "channels",
-                            format!("{} channels from '{file}'", group.len()),
-                            format!(
-                                "one channel per {} file (it holds a single grid)",
-                                format.name()
-                            ),
-                        ));
-                    }
-                    vec![match format {
-                        Format::AsciiDense => ascii::read_dense(
-                            &file,
-                            as_text(&file, &bytes)?,
-                            opts.order,
-                            opts.max_bytes,
-                        )?,
-                        Format::AsciiSparse => {
-                            ascii::read_sparse(&file, as_text(&file, &bytes)?, opts.max_bytes)?
-                        }
-                        Format::Raw | Format::Raw2 => raw::read(
-                            &file,
-                            &bytes,
-                            format == Format::Raw2,
-                            opts.raw_dims,
-                            opts.raw_coords,
-                            opts.raw_value,
-                            opts.max_bytes,
-                        )?,
-                        _ => unreachable!("grid formats handled above"),
-                    }]
-                }
-            };
+            let names: Vec<&str> = group.iter().map(|&j| sources[j].grid_name()).collect();
+            let grids = decode(format, &file, &bytes, &names, opts)?;
             let seconds = start.elapsed().as_secs_f64() / group.len() as f64;
             for (j, g) in group.into_iter().zip(grids) {
                 done[j] = true;
@@ -657,6 +752,10 @@ fn apply_policies(
         )
     };
     let identity = mapping.is_identity();
+    // Negative values are refused only where they are unphysical; other grids (Mantaflow's `shadow` is −1
+    // everywhere) keep what the file says.
+    let physical =
+        name == "density" || name == "temperature" || crate::species::symbols().any(|s| s == name);
     let (mut nonfinite, mut negative) = (0, 0);
     for (n, v) in grid.data_mut().iter_mut().enumerate() {
         if !v.is_finite() {
@@ -686,7 +785,7 @@ fn apply_policies(
                 ));
             }
         }
-        if *v < 0.0 {
+        if *v < 0.0 && physical {
             match opts.negative {
                 Policy::Error => {
                     let after = if identity { "" } else { " after the mapping" };
@@ -728,7 +827,10 @@ mod tests {
         assert_eq!(p("fire_%d.vdb", Some(42)).unwrap(), "fire_42.vdb");
         assert_eq!(p("fire.vdb", Some(42)).unwrap(), "fire.vdb");
         assert_eq!(p("100%.vdb", Some(1)).unwrap(), "100%.vdb");
-        assert!(p("fire_####.vdb", None).unwrap_err().to_string().contains("frame"));
+        assert!(p("fire_####.vdb", None)
+            .unwrap_err()
+            .to_string()
+            .contains("frame"));
     }
 
     #[test]

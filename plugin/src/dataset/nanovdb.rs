@@ -298,9 +298,9 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
             let entry = cc.i64("a node table entry")?;
             let ii = i as i32;
             let o = [
-                origin[0] + ((ii >> (2 * log2)) << child_total),
-                origin[1] + (((ii >> log2) & (dim - 1)) << child_total),
-                origin[2] + ((ii & (dim - 1)) << child_total),
+                origin[0].wrapping_add((ii >> (2 * log2)) << child_total),
+                origin[1].wrapping_add(((ii >> log2) & (dim - 1)) << child_total),
+                origin[2].wrapping_add((ii & (dim - 1)) << child_total),
             ];
             if bit(&child_mask, i) {
                 out.push((o, node(level - 1, start as i128 + entry as i128)?));

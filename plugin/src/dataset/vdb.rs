@@ -37,6 +37,13 @@ pub struct GridInfo {
     instance_parent: String,
 }
 
+impl GridInfo {
+    /// Whether the grid has its own tree (not an instance of another grid).
+    pub fn instance_parent_is_empty(&self) -> bool {
+        self.instance_parent.is_empty()
+    }
+}
+
 /// The file's header facts and grid table.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Header {
@@ -358,9 +365,9 @@ fn read_internal(
         let i = i as i32;
         let (x, y, z) = (i >> (2 * log2), (i >> log2) & (dim - 1), i & (dim - 1));
         [
-            origin[0] + (x << child_total),
-            origin[1] + (y << child_total),
-            origin[2] + (z << child_total),
+            origin[0].wrapping_add(x << child_total),
+            origin[1].wrapping_add(y << child_total),
+            origin[2].wrapping_add(z << child_total),
         ]
     };
     for (i, &v) in values.iter().enumerate() {

@@ -1,0 +1,272 @@
+//! `firemedium info FILE`: what a voxel dataset file holds, as the voxel dataset component loads it.
+//!
+//! Prints the format, dims, bounds, voxel size, every channel with min/max/mean, non-zero ("active") fraction,
+//! bytes and load time, the grids it could not load (vector grids, …), and with `--sample x,y,z` the trilinear
+//! value of each channel at that medium-space point. A file the loader refuses prints its error on one line and
+//! exits with status 1.
+
+use clap::Args;
+use firemedium_plugin::dataset::{
+    self, AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Policy, RawCoords, RawValue,
+};
+use glam::DVec3;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The dataset file (.vdb, .nvdb, .raw, .raw2, .txt; or name the format).
+    file: PathBuf,
+    /// Format: ascii, asciisparse, raw, raw2, vdb, nvdb (default: from the extension).
+    #[arg(long)]
+    format: Option<String>,
+    /// Grids to load (default: every float grid).
+    #[arg(long = "grid", value_name = "NAME")]
+    grids: Vec<String>,
+    /// Dense ASCII value order: x (x fastest, default) or z (z fastest, the thesis's shader code).
+    #[arg(long, default_value = "x")]
+    order: String,
+    /// Raw coordinates: thesis (1-based x z y, default) or xyz (0-based).
+    #[arg(long, default_value = "thesis")]
+    raw_coords: String,
+    /// Raw value: red (r/256, default) or maxrgb (max(r,g,b)/256).
+    #[arg(long, default_value = "red")]
+    raw_value: String,
+    /// NaN/infinite values: error (default) or zero.
+    #[arg(long, default_value = "error")]
+    nonfinite: String,
+    /// Negative values: error (default) or zero.
+    #[arg(long, default_value = "error")]
+    negative: String,
+    /// Frame number for a patterned file name (fire_####.vdb).
+    #[arg(long)]
+    frame: Option<i64>,
+    /// Medium-space point x,y,z at which to sample every channel (trilinear).
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    sample: Option<Vec<f64>>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    file: String,
+    format: &'static str,
+    dims: [usize; 3],
+    bounds: [[f64; 3]; 2],
+    voxel_size: [f64; 3],
+    channels: Vec<ChannelInfo>,
+    skipped_grids: Vec<Skipped>,
+    bytes: usize,
+    load_seconds: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sample: Option<SampleInfo>,
+}
+
+#[derive(Debug, Serialize)]
+struct ChannelInfo {
+    name: String,
+    min: f64,
+    max: f64,
+    mean: f64,
+    active_fraction: f64,
+    bytes: usize,
+    load_seconds: f64,
+    replaced_nonfinite: usize,
+    replaced_negative: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct Skipped {
+    name: String,
+    kind: String,
+}
+
+#[derive(Debug, Serialize)]
+struct SampleInfo {
+    point: [f64; 3],
+    values: Vec<(String, f64)>,
+}
+
+/// Runs `info`: `Ok(text)`, or `Err((exit status, message))`.
+pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
+    let bad_arg = |m: String| (2u8, m);
+    let bad_file = |e: firemedium_plugin::Error| (1u8, e.to_string());
+    let opts = LoadOptions {
+        format: args
+            .format
+            .as_deref()
+            .map(Format::from_name)
+            .transpose()
+            .map_err(|e| bad_arg(format!("--format: {e}")))?,
+        order: match args.order.as_str() {
+            "x" => AxisOrder::XFastest,
+            "z" => AxisOrder::ZFastest,
+            o => return Err(bad_arg(format!("--order {o}: expected x or z"))),
+        },
+        raw_coords: match args.raw_coords.as_str() {
+            "thesis" => RawCoords::Thesis,
+            "xyz" => RawCoords::Xyz,
+            o => return Err(bad_arg(format!("--raw-coords {o}: expected thesis or xyz"))),
+        },
+        raw_value: match args.raw_value.as_str() {
+            "red" => RawValue::Red,
+            "maxrgb" => RawValue::MaxRgb,
+            o => return Err(bad_arg(format!("--raw-value {o}: expected red or maxrgb"))),
+        },
+        nonfinite: Policy::from_name("nonfinite", &args.nonfinite)
+            .map_err(|e| bad_arg(format!("--nonfinite: {e}")))?,
+        negative: Policy::from_name("negative", &args.negative)
+            .map_err(|e| bad_arg(format!("--negative: {e}")))?,
+        frame: args.frame,
+        ..LoadOptions::default()
+    };
+    if let Some(s) = &args.sample {
+        if s.len() != 3 || s.iter().any(|v| !v.is_finite()) {
+            return Err(bad_arg(format!(
+                "--sample: expected three finite coordinates x,y,z, found {s:?}"
+            )));
+        }
+    }
+    let start = Instant::now();
+    let entries = dataset::list_grids(&args.file, &opts).map_err(bad_file)?;
+    let names: Vec<String> = if args.grids.is_empty() {
+        entries
+            .iter()
+            .filter(|g| g.loadable)
+            .map(|g| g.name.clone())
+            .collect()
+    } else {
+        args.grids.clone()
+    };
+    if names.is_empty() {
+        return Err((
+            1,
+            format!(
+                "{}: no float grid to load (grids: {})",
+                args.file.display(),
+                entries
+                    .iter()
+                    .map(|g| format!("{} {}", g.name, g.kind))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ));
+    }
+    let sources: Vec<ChannelSource> = names
+        .iter()
+        .map(|n| ChannelSource::new(n, &args.file))
+        .collect();
+    let ds = Dataset::load(&sources, &opts).map_err(bad_file)?;
+    let load_seconds = start.elapsed().as_secs_f64();
+    let [p0, p1] = ds.bounds();
+    let dims = ds.dims();
+    let voxel = (p1 - p0) / DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64);
+    let sample = args.sample.as_ref().map(|s| {
+        let p = DVec3::new(s[0], s[1], s[2]);
+        SampleInfo {
+            point: p.to_array(),
+            values: ds
+                .channels()
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (c.name.clone(), ds.sample(i, p) as f64))
+                .collect(),
+        }
+    });
+    let report = Report {
+        file: ds.channels()[0].report.file.clone(),
+        format: ds.format().name(),
+        dims,
+        bounds: [p0.to_array(), p1.to_array()],
+        voxel_size: voxel.to_array(),
+        channels: ds
+            .channels()
+            .iter()
+            .map(|c| ChannelInfo {
+                name: c.name.clone(),
+                min: c.stats.min as f64,
+                max: c.stats.max as f64,
+                mean: c.stats.mean,
+                active_fraction: c.stats.nonzero_fraction,
+                bytes: c.report.bytes,
+                load_seconds: c.report.load_seconds,
+                replaced_nonfinite: c.report.replaced_nonfinite,
+                replaced_negative: c.report.replaced_negative,
+            })
+            .collect(),
+        skipped_grids: entries
+            .iter()
+            .filter(|g| !names.contains(&g.name))
+            .map(|g| Skipped {
+                name: g.name.clone(),
+                kind: g.kind.clone(),
+            })
+            .collect(),
+        bytes: ds.bytes(),
+        load_seconds,
+        sample,
+    };
+    if args.json {
+        return serde_json::to_string_pretty(&report)
+            .map(|s| s + "\n")
+            .map_err(|e| (1, format!("JSON output failed: {e}")));
+    }
+    let mut s = format!("{} ({})\n", report.file, report.format);
+    s += &format!("dims      {} × {} × {}\n", dims[0], dims[1], dims[2]);
+    s += &format!(
+        "bounds    ({:.6}, {:.6}, {:.6}) .. ({:.6}, {:.6}, {:.6})\n",
+        p0.x, p0.y, p0.z, p1.x, p1.y, p1.z
+    );
+    s += &format!(
+        "voxel     {:.6} × {:.6} × {:.6}\n",
+        voxel.x, voxel.y, voxel.z
+    );
+    s += &format!(
+        "{:<14} {:>12} {:>12} {:>12} {:>8} {:>12} {:>9}\n",
+        "channel", "min", "max", "mean", "active", "bytes", "load (s)"
+    );
+    for c in &report.channels {
+        s += &format!(
+            "{:<14} {:>12.6} {:>12.6} {:>12.6} {:>7.2}% {:>12} {:>9.4}\n",
+            c.name,
+            c.min,
+            c.max,
+            c.mean,
+            100.0 * c.active_fraction,
+            c.bytes,
+            c.load_seconds
+        );
+        if c.replaced_nonfinite + c.replaced_negative > 0 {
+            s += &format!(
+                "{:<14} replaced {} non-finite and {} negative values by 0\n",
+                "", c.replaced_nonfinite, c.replaced_negative
+            );
+        }
+    }
+    for g in &report.skipped_grids {
+        s += &format!("skipped   {} ({})\n", g.name, g.kind);
+    }
+    s += &format!(
+        "total     {} bytes, loaded in {:.4} s\n",
+        report.bytes, report.load_seconds
+    );
+    if let Some(smp) = &report.sample {
+        s += &format!(
+            "sample at ({}, {}, {}):",
+            smp.point[0], smp.point[1], smp.point[2]
+        );
+        for (n, v) in &smp.values {
+            s += &format!(" {n} = {v}");
+        }
+        s += "\n";
+    }
+    Ok(s)
+}

@@ -1,0 +1,465 @@
+//! Majorant grid and DDA: coarse bricks bounding every channel from above and below, walked along rays.
+//!
+//! The dataset's lattice is cut into bricks of `brick`³ voxels (16 by default; the last brick on an axis may
+//! be partial). Each brick stores, per channel, the max and min of the voxels it covers **widened by one
+//! voxel** on every side: a trilinear lookup anywhere inside the brick blends only those voxels, so the bound
+//! holds under interpolation; where the widened range leaves the grid, the zero that trilinear lookups use
+//! outside is included. [`MajorantGrid::segments`] walks a ray through the bricks (Amanatides & Woo) and yields
+//! (t₀, t₁, brick) pieces that exactly tile the ray's overlap with the bounds. A brick whose `density` max is
+//! zero is empty space ([`MajorantGrid::is_empty`]).
+
+use crate::dataset::Dataset;
+use glam::DVec3;
+
+/// Per-brick channel bounds over a dataset's lattice.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MajorantGrid {
+    brick: usize,
+    counts: [usize; 3],
+    dims: [usize; 3],
+    bounds: [DVec3; 2],
+    channels: usize,
+    /// `[brick][channel]` → (min, max).
+    ranges: Vec<(f32, f32)>,
+}
+
+/// One piece of a ray inside one brick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// Entry parameter.
+    pub t0: f64,
+    /// Exit parameter.
+    pub t1: f64,
+    /// Linear brick index (x fastest), for [`MajorantGrid::max`] and [`MajorantGrid::min`].
+    pub brick: usize,
+}
+
+impl MajorantGrid {
+    /// Builds the bricks of `brick`³ voxels (`brick` ≥ 1) over every channel of `ds`.
+    pub fn build(ds: &Dataset, brick: usize) -> MajorantGrid {
+        let brick = brick.max(1);
+        let dims = ds.dims();
+        let counts = dims.map(|n| n.div_ceil(brick));
+        let channels = ds.channels().len();
+        let nb = counts[0] * counts[1] * counts[2];
+        let mut ranges = vec![(f32::INFINITY, f32::NEG_INFINITY); nb * channels];
+        for (c, ch) in ds.channels().iter().enumerate() {
+            let g = &ch.grid;
+            for bz in 0..counts[2] {
+                for by in 0..counts[1] {
+                    for bx in 0..counts[0] {
+                        let b = [bx, by, bz];
+                        let lo = b.map(|v| (v * brick) as i64 - 1);
+                        let hi = [0, 1, 2].map(|a| ((b[a] + 1) * brick) as i64);
+                        let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
+                        let outside = (0..3).any(|a| lo[a] < 0 || hi[a] >= dims[a] as i64);
+                        if outside {
+                            (mn, mx) = (0.0, 0.0);
+                        }
+                        for z in lo[2].max(0)..=hi[2].min(dims[2] as i64 - 1) {
+                            for y in lo[1].max(0)..=hi[1].min(dims[1] as i64 - 1) {
+                                for x in lo[0].max(0)..=hi[0].min(dims[0] as i64 - 1) {
+                                    let v = g.at(x, y, z);
+                                    mn = mn.min(v);
+                                    mx = mx.max(v);
+                                }
+                            }
+                        }
+                        let i = bx + counts[0] * (by + counts[1] * bz);
+                        ranges[i * channels + c] = (mn, mx);
+                    }
+                }
+            }
+        }
+        MajorantGrid {
+            brick,
+            counts,
+            dims,
+            bounds: ds.bounds(),
+            channels,
+            ranges,
+        }
+    }
+
+    /// Bricks per axis.
+    pub fn counts(&self) -> [usize; 3] {
+        self.counts
+    }
+    /// Voxels per brick edge.
+    pub fn brick(&self) -> usize {
+        self.brick
+    }
+    /// Largest value of `channel` that a lookup inside `brick` can return.
+    pub fn max(&self, brick: usize, channel: usize) -> f32 {
+        self.ranges[brick * self.channels + channel].1
+    }
+    /// Smallest value of `channel` that a lookup inside `brick` can return.
+    pub fn min(&self, brick: usize, channel: usize) -> f32 {
+        self.ranges[brick * self.channels + channel].0
+    }
+    /// Whether `channel` is zero throughout `brick` (empty space to skip).
+    pub fn is_empty(&self, brick: usize, channel: usize) -> bool {
+        self.max(brick, channel) <= 0.0 && self.min(brick, channel) >= 0.0
+    }
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.ranges.len() * std::mem::size_of::<(f32, f32)>()
+    }
+
+    /// The brick holding medium-space point `p`, if inside the bounds.
+    pub fn brick_at(&self, p: DVec3) -> Option<usize> {
+        let u = (p - self.bounds[0]) / (self.bounds[1] - self.bounds[0]);
+        if !(u.cmpge(DVec3::ZERO).all() && u.cmple(DVec3::ONE).all()) {
+            return None;
+        }
+        let c = [0, 1, 2].map(|a| {
+            (((u[a] * self.dims[a] as f64) as usize) / self.brick).min(self.counts[a] - 1)
+        });
+        Some(c[0] + self.counts[0] * (c[1] + self.counts[1] * c[2]))
+    }
+
+    /// The pieces of the ray o + t·d, t ∈ [t0, t1], inside the bounds, one per brick crossed, in order; they
+    /// tile [max(t0, t_enter), min(t1, t_exit)] exactly (each piece starts where the previous ended).
+    pub fn segments(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Segments {
+        let [p0, p1] = self.bounds;
+        // Slab clip in medium space.
+        let (mut tmin, mut tmax) = (t0, t1);
+        if !(o.is_finite() && d.is_finite()) {
+            tmax = f64::NEG_INFINITY; // f64::max would skip a NaN; refuse such rays outright
+        }
+        for a in 0..3 {
+            if d[a] == 0.0 {
+                if !(o[a] >= p0[a] && o[a] <= p1[a]) {
+                    tmax = f64::NEG_INFINITY;
+                }
+                continue;
+            }
+            let (ta, tb) = ((p0[a] - o[a]) / d[a], (p1[a] - o[a]) / d[a]);
+            tmin = tmin.max(ta.min(tb));
+            tmax = tmax.min(ta.max(tb));
+        }
+        let mut s = Segments {
+            t: tmin,
+            tmax,
+            cell: [0; 3],
+            step: [0; 3],
+            next: [f64::INFINITY; 3],
+            delta: [0.0; 3],
+            counts: self.counts,
+            done: !(tmin < tmax),
+        };
+        if s.done {
+            return s;
+        }
+        // Brick coordinates: bricks per medium unit on each axis.
+        let scale = [0, 1, 2].map(|a| self.dims[a] as f64 / self.brick as f64 / (p1[a] - p0[a]));
+        for a in 0..3 {
+            let ob = (o[a] - p0[a]) * scale[a];
+            let db = d[a] * scale[a];
+            let pos = ob + db * tmin;
+            s.cell[a] = (pos.floor().max(0.0) as i64).min(self.counts[a] as i64 - 1);
+            if db > 0.0 {
+                s.step[a] = 1;
+                s.next[a] = (s.cell[a] as f64 + 1.0 - ob) / db;
+                s.delta[a] = 1.0 / db;
+            } else if db < 0.0 {
+                s.step[a] = -1;
+                s.next[a] = (s.cell[a] as f64 - ob) / db;
+                s.delta[a] = -1.0 / db;
+            }
+        }
+        s
+    }
+}
+
+/// Iterator over a ray's bricks (see [`MajorantGrid::segments`]).
+#[derive(Debug, Clone)]
+pub struct Segments {
+    t: f64,
+    tmax: f64,
+    cell: [i64; 3],
+    step: [i64; 3],
+    next: [f64; 3],
+    delta: [f64; 3],
+    counts: [usize; 3],
+    done: bool,
+}
+
+impl Iterator for Segments {
+    type Item = Segment;
+    fn next(&mut self) -> Option<Segment> {
+        while !self.done {
+            let a = if self.next[0] < self.next[1] {
+                if self.next[0] < self.next[2] {
+                    0
+                } else {
+                    2
+                }
+            } else if self.next[1] < self.next[2] {
+                1
+            } else {
+                2
+            };
+            let brick = self.cell[0] as usize
+                + self.counts[0] * (self.cell[1] as usize + self.counts[1] * self.cell[2] as usize);
+            let mut t_end = self.next[a].min(self.tmax);
+            let stepped = self.cell[a] + self.step[a];
+            let leaves = stepped < 0 || stepped >= self.counts[a] as i64;
+            if t_end >= self.tmax || leaves {
+                // Last brick: it runs to the exit, so the pieces tile the clipped ray exactly.
+                t_end = self.tmax;
+                self.done = true;
+            } else {
+                self.cell[a] = stepped;
+                self.next[a] += self.delta[a];
+            }
+            let t0 = self.t;
+            self.t = t_end;
+            if t_end > t0 {
+                return Some(Segment {
+                    t0,
+                    t1: t_end,
+                    brick,
+                });
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::{Dataset, LoadOptions};
+
+    /// A deterministic generator (SplitMix64) for property tests.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    fn blob(dims: [usize; 3]) -> Dataset {
+        // A bumpy field with sharp jumps, so widening matters.
+        let mut v = Vec::new();
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let x = (i as f32 * 0.37).sin() * (j as f32 * 0.21).cos()
+                        + ((k * 7 + i * 3) % 11) as f32 * 0.1;
+                    v.push(if (i + j + k) % 13 == 0 {
+                        5.0
+                    } else {
+                        x.max(0.0)
+                    });
+                }
+            }
+        }
+        let dens = v.clone();
+        let temp: Vec<f32> = v.iter().map(|x| 300.0 + 500.0 * x).collect();
+        Dataset::from_inline(
+            dims,
+            DVec3::new(-1.0, 0.0, 2.0),
+            DVec3::new(1.0, 1.5, 3.0),
+            &[("density", &dens), ("temperature", &temp)],
+            &LoadOptions::default(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn majorant_bounds_every_trilinear_sample() {
+        // 1e5 random points: min ≤ sample ≤ max of the brick holding the point (shared/data: property test).
+        let ds = blob([37, 20, 29]);
+        for brick in [1, 4, 16] {
+            let m = MajorantGrid::build(&ds, brick);
+            let mut rng = Rng(brick as u64);
+            let [p0, p1] = ds.bounds();
+            for _ in 0..100_000 / 3 {
+                let p = DVec3::new(
+                    rng.range(p0.x, p1.x),
+                    rng.range(p0.y, p1.y),
+                    rng.range(p0.z, p1.z),
+                );
+                let b = m.brick_at(p).unwrap();
+                for c in 0..2 {
+                    let v = ds.sample(c, p);
+                    assert!(
+                        v <= m.max(b, c) && v >= m.min(b, c),
+                        "brick {brick}: {v} not in [{}, {}] at {p}",
+                        m.min(b, c),
+                        m.max(b, c)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn segments_tile_the_clipped_ray_exactly() {
+        let ds = blob([37, 20, 29]);
+        let m = MajorantGrid::build(&ds, 8);
+        let [p0, p1] = ds.bounds();
+        let mut rng = Rng(7);
+        let mut crossed = 0;
+        for n in 0..20_000 {
+            let o = DVec3::new(
+                rng.range(-3.0, 3.0),
+                rng.range(-1.0, 2.5),
+                rng.range(1.0, 4.0),
+            );
+            let mut d = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            // Some rays parallel to axes or planes.
+            if n % 7 == 0 {
+                d.x = 0.0;
+            }
+            if n % 11 == 0 {
+                d.y = 0.0;
+                d.z = 0.0;
+                d.x = if d.x == 0.0 { 1.0 } else { d.x };
+            }
+            let (t0, t1) = (rng.range(-1.0, 1.0), rng.range(1.0, 10.0));
+            let segs: Vec<Segment> = m.segments(o, d, t0, t1).collect();
+            // The analytic clip.
+            let (mut a, mut b) = (t0, t1);
+            for k in 0..3 {
+                if d[k] == 0.0 {
+                    if !(o[k] >= p0[k] && o[k] <= p1[k]) {
+                        b = f64::NEG_INFINITY;
+                    }
+                } else {
+                    let (ta, tb) = ((p0[k] - o[k]) / d[k], (p1[k] - o[k]) / d[k]);
+                    a = a.max(ta.min(tb));
+                    b = b.min(ta.max(tb));
+                }
+            }
+            if !(a < b) {
+                assert!(segs.is_empty());
+                continue;
+            }
+            crossed += 1;
+            assert_eq!(segs.first().unwrap().t0, a);
+            assert_eq!(segs.last().unwrap().t1, b);
+            for w in segs.windows(2) {
+                assert_eq!(w[0].t1, w[1].t0);
+                assert_ne!(w[0].brick, w[1].brick);
+            }
+            for s in &segs {
+                assert!(s.t1 > s.t0);
+                // The midpoint lies in the claimed brick (or on its boundary within rounding).
+                let mid = o + d * (0.5 * (s.t0 + s.t1));
+                let b = m.brick_at(mid.clamp(p0, p1)).unwrap();
+                if b != s.brick {
+                    let len = (s.t1 - s.t0) * d.length();
+                    assert!(
+                        len < 1e-9,
+                        "ray {n}: midpoint in brick {b}, segment says {} (len {len})",
+                        s.brick
+                    );
+                }
+            }
+        }
+        assert!(crossed > 2000, "{crossed}");
+    }
+
+    #[test]
+    fn rays_inside_grazing_and_missing() {
+        let ds = blob([16, 16, 16]);
+        let m = MajorantGrid::build(&ds, 4);
+        // Starting inside, along +x: from t = 0 to the far face.
+        let segs: Vec<Segment> = m
+            .segments(DVec3::new(0.0, 0.75, 2.5), DVec3::X, 0.0, 100.0)
+            .collect();
+        assert_eq!(segs.first().unwrap().t0, 0.0);
+        assert_eq!(segs.last().unwrap().t1, 1.0);
+        assert_eq!(segs.len(), 2);
+        // Missing entirely.
+        assert_eq!(
+            m.segments(DVec3::new(5.0, 5.0, 5.0), DVec3::X, 0.0, 100.0)
+                .count(),
+            0
+        );
+        // Grazing the face y = 0 along x.
+        let g: Vec<Segment> = m
+            .segments(DVec3::new(-2.0, 0.0, 2.5), DVec3::X, 0.0, 100.0)
+            .collect();
+        assert_eq!((g.first().unwrap().t0, g.last().unwrap().t1), (1.0, 3.0));
+        // Along an edge.
+        assert_eq!(
+            m.segments(DVec3::new(-2.0, 0.0, 2.0), DVec3::X, 0.0, 100.0)
+                .count(),
+            4
+        );
+        // Zero direction, NaN direction: nothing, no panic.
+        assert_eq!(
+            m.segments(DVec3::new(0.0, 0.5, 2.5), DVec3::ZERO, 0.0, 1.0)
+                .count(),
+            1
+        );
+        assert_eq!(
+            m.segments(DVec3::new(0.0, 0.5, 2.5), DVec3::NAN, 0.0, 1.0)
+                .count(),
+            0
+        );
+    }
+
+    #[test]
+    fn empty_bricks_and_one_voxel_grids() {
+        let mut v = vec![0.0f32; 32 * 32 * 32];
+        v[5 + 32 * (5 + 32 * 5)] = 1.0;
+        let ds = Dataset::from_inline(
+            [32, 32, 32],
+            DVec3::ZERO,
+            DVec3::ONE,
+            &[("density", &v)],
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let m = MajorantGrid::build(&ds, 16);
+        assert_eq!(m.counts(), [2, 2, 2]);
+        assert!(!m.is_empty(0, 0));
+        assert!((1..8).all(|b| m.is_empty(b, 0)));
+        let one = Dataset::from_inline(
+            [1, 1, 1],
+            DVec3::ZERO,
+            DVec3::ONE,
+            &[("density", &[2.0])],
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let m = MajorantGrid::build(&one, 16);
+        assert_eq!((m.min(0, 0), m.max(0, 0)), (0.0, 2.0));
+        assert_eq!(
+            m.segments(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, 0.0, 10.0)
+                .count(),
+            1
+        );
+        let thin = Dataset::from_inline(
+            [1, 1, 40],
+            DVec3::ZERO,
+            DVec3::ONE,
+            &[("density", &[1.0; 40])],
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let m = MajorantGrid::build(&thin, 16);
+        assert_eq!(m.counts(), [1, 1, 3]);
+        let s: Vec<Segment> = m
+            .segments(DVec3::new(0.5, 0.5, -1.0), DVec3::Z, 0.0, 10.0)
+            .collect();
+        assert_eq!(s.len(), 3);
+        assert!((s[0].t1 - (1.0 + 16.0 / 40.0)).abs() < 1e-12);
+    }
+}

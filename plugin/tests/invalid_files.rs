@@ -1,0 +1,329 @@
+//! Bad input never panics and always says what is wrong: a replay of the invalid corpus in
+//! tests/data/invalid (each file with the error it must give), and deterministic mutations of every valid file
+//! (bit flips, overwrites, truncations, splices), each of which must load or fail with an error — never panic.
+
+use firemedium_plugin::dataset::{ChannelSource, Dataset, Format, LoadOptions};
+use std::path::PathBuf;
+
+fn path(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(rel)
+}
+
+#[test]
+fn invalid_corpus_gives_the_right_errors() {
+    // (file, channel, format, substrings the one-line error must contain)
+    let cases: &[(&str, &str, Option<Format>, &[&str])] = &[
+        (
+            "empty.vdb",
+            "density",
+            None,
+            &[
+                "empty.vdb: byte 0",
+                "8 bytes of the OpenVDB magic",
+                "truncated",
+            ],
+        ),
+        (
+            "bad_magic.vdb",
+            "density",
+            None,
+            &["byte 0", "magic number 0x56444220"],
+        ),
+        (
+            "bad_version.vdb",
+            "density",
+            None,
+            &["unsupported", "OpenVDB file version 100"],
+        ),
+        (
+            "truncated_header.vdb",
+            "density",
+            None,
+            &["grid 'density' descriptor", "within the file of 300 bytes"],
+        ),
+        (
+            "truncated_blocks.vdb",
+            "density",
+            None,
+            &["truncated_blocks.vdb", "within the file of 12000 bytes"],
+        ),
+        (
+            "corrupt_blosc.vdb",
+            "density",
+            None,
+            &["corrupt_blosc.vdb: byte"],
+        ),
+        (
+            "bad_magic.nvdb",
+            "density",
+            None,
+            &["byte 0", "NanoVDB magic", "NanoVDB9"],
+        ),
+        (
+            "truncated.nvdb",
+            "density",
+            None,
+            &["truncated.nvdb", "grid 'density'", "truncated"],
+        ),
+        (
+            "count_mismatch.raw2",
+            "density",
+            None,
+            &["byte 12", "104 bytes for 2 voxels", "60 bytes"],
+        ),
+        (
+            "coordinate_out_of_range.raw2",
+            "density",
+            None,
+            &["byte 16 (voxel 1 of 1)", "within 4×4×4", "(1, 5, 1)"],
+        ),
+        (
+            "huge_dims.raw2",
+            "density",
+            None,
+            &["memory cap", "1073741824×1073741824×8"],
+        ),
+        (
+            "negative_dims.raw2",
+            "density",
+            None,
+            &["byte 4", "positive height", "-4"],
+        ),
+        (
+            "overflow_dims.txt",
+            "density",
+            None,
+            &["line 1, column 1", "width", "'4294967296'"],
+        ),
+        (
+            "text_value.txt",
+            "density",
+            None,
+            &["line 3, column 6", "value 4 of 4", "'abc'"],
+        ),
+        (
+            "too_few_values.txt",
+            "density",
+            None,
+            &["line 3, column 1", "value 6 of 8", "end of the file"],
+        ),
+        (
+            "too_many_values.txt",
+            "density",
+            None,
+            &[
+                "line 2, column 5",
+                "end of the file after the 2 values",
+                "'3'",
+            ],
+        ),
+        (
+            "nan_density.txt",
+            "density",
+            None,
+            &["channel 'density', voxel (1, 0, 0)", "finite value", "NaN"],
+        ),
+        (
+            "inf_density.txt",
+            "density",
+            None,
+            &["voxel (0, 0, 0)", "inf"],
+        ),
+        (
+            "negative_density.txt",
+            "density",
+            None,
+            &["voxel (1, 0, 0)", ">= 0", "-0.25"],
+        ),
+        ("binary.txt", "density", None, &["byte 7", "ASCII text"]),
+        (
+            "sparse_out_of_range.txt",
+            "density",
+            Some(Format::AsciiSparse),
+            &[
+                "line 4, column 5",
+                "coordinate z of voxel 1 of 1 (0..3)",
+                "'7'",
+            ],
+        ),
+    ];
+    let listed: Vec<&str> = cases.iter().map(|c| c.0).collect();
+    let mut on_disk: Vec<String> = std::fs::read_dir(path("invalid"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    on_disk.sort();
+    for f in &on_disk {
+        assert!(
+            listed.contains(&f.as_str()),
+            "tests/data/invalid/{f} has no expected error in this table"
+        );
+    }
+    for (file, channel, format, want) in cases {
+        let opts = LoadOptions {
+            format: *format,
+            max_bytes: 1 << 30,
+            ..LoadOptions::default()
+        };
+        let r = Dataset::load(
+            &[ChannelSource::new(
+                channel,
+                path(&format!("invalid/{file}")),
+            )],
+            &opts,
+        );
+        let e = match r {
+            Ok(_) => panic!("{file}: loaded, expected an error"),
+            Err(e) => e.to_string(),
+        };
+        assert!(!e.contains('\n'), "{file}: multi-line error: {e}");
+        for w in *want {
+            assert!(e.contains(w), "{file}: error lacks '{w}': {e}");
+        }
+    }
+}
+
+/// SplitMix64.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+fn mutate(rng: &mut Rng, src: &[u8]) -> Vec<u8> {
+    let mut b = src.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let n = b.len().max(1);
+        match rng.below(6) {
+            0 => {
+                let i = rng.below(n);
+                if i < b.len() {
+                    b[i] ^= 1 << rng.below(8);
+                }
+            }
+            1 => {
+                // Overwrite 1–8 bytes with extreme values (sizes, counts, offsets).
+                let i = rng.below(n);
+                let v = [0x00u8, 0xff, 0x7f, 0x80][rng.below(4)];
+                for k in i..(i + 1 + rng.below(8)).min(b.len()) {
+                    b[k] = v;
+                }
+            }
+            2 => b.truncate(rng.below(n)),
+            3 => {
+                let (i, j) = (rng.below(n), rng.below(n));
+                let (i, j) = (i.min(j), i.max(j).min(b.len()));
+                b.drain(i..j.min(i + 64));
+            }
+            4 => {
+                let i = rng.below(n).min(b.len());
+                let junk: Vec<u8> = (0..1 + rng.below(16)).map(|_| rng.next() as u8).collect();
+                b.splice(i..i, junk);
+            }
+            _ => {
+                // Write a little-endian i32/i64 at a random place.
+                let i = rng.below(n);
+                let v: i64 = [-1, 0, 1, i32::MAX as i64, i64::MAX, 1 << 33][rng.below(6)];
+                for (k, byte) in v.to_le_bytes().iter().enumerate() {
+                    if i + k < b.len() {
+                        b[i + k] = *byte;
+                    }
+                }
+            }
+        }
+    }
+    b
+}
+
+#[test]
+fn mutated_files_never_panic() {
+    let raw2 = {
+        let mut v = Vec::new();
+        for d in [5i32, 4, 3] {
+            v.extend_from_slice(&d.to_le_bytes());
+        }
+        v.extend_from_slice(&2i32.to_le_bytes());
+        for (c, r) in [([1i32, 1, 1], 128.0), ([5, 3, 4], 64.0)] {
+            for x in c {
+                v.extend_from_slice(&x.to_le_bytes());
+            }
+            for x in [r, 0.0, 0.0, 1.0f64] {
+                v.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        v
+    };
+    let seeds: Vec<(Format, Vec<u8>, Vec<&str>)> = vec![
+        (
+            Format::Vdb,
+            std::fs::read(path("valid/vdb/ramp_16.vdb")).unwrap(),
+            vec!["density", "temperature"],
+        ),
+        (
+            Format::Vdb,
+            std::fs::read(path("valid/vdb/ramp_16_zip.vdb")).unwrap(),
+            vec!["density"],
+        ),
+        (
+            Format::Vdb,
+            std::fs::read(path("valid/vdb/two_grids_half.vdb")).unwrap(),
+            vec!["temperature"],
+        ),
+        (
+            Format::NanoVdb,
+            std::fs::read(path("valid/nvdb/ramp16_zip.nvdb")).unwrap(),
+            vec!["density", "temperature"],
+        ),
+        (Format::Raw2, raw2, vec!["density"]),
+        (
+            Format::AsciiDense,
+            b"3 2 2\n0 1 2 3 4 5\n6 7 8 9 10 11\n".to_vec(),
+            vec!["density"],
+        ),
+        (
+            Format::AsciiSparse,
+            b"3 2 2\n2\n0.5\n0 0 0 7\n2 1 1 9\n".to_vec(),
+            vec!["density"],
+        ),
+    ];
+    // A small cap: mutated sizes must be refused before allocating, not allocate gigabytes.
+    let opts = LoadOptions {
+        max_bytes: 64 << 20,
+        ..LoadOptions::default()
+    };
+    let mut rng = Rng(2026);
+    let (mut ok, mut err) = (0, 0);
+    for (format, seed, names) in &seeds {
+        let n = if *format == Format::Vdb { 400 } else { 600 };
+        for i in 0..n {
+            let m = mutate(&mut rng, seed);
+            let r = std::panic::catch_unwind(|| {
+                Dataset::from_bytes(*format, "mutant", &m, names, &opts)
+            });
+            match r {
+                Ok(Ok(_)) => ok += 1,
+                Ok(Err(e)) => {
+                    let s = e.to_string();
+                    assert!(
+                        s.starts_with("mutant") || s.starts_with("dataset:"),
+                        "{format:?} #{i}: {s}"
+                    );
+                    err += 1;
+                }
+                Err(_) => panic!("{format:?} mutation #{i} panicked"),
+            }
+        }
+    }
+    eprintln!("mutations: {ok} loaded, {err} refused with an error, 0 panics");
+    assert!(err > 1000 && ok > 100, "{ok} ok, {err} errors");
+}
