@@ -9,7 +9,7 @@ use crate::Error;
 pub(crate) enum DecodeError {
     /// Malformed data.
     Bad { expected: String, found: String },
-    /// Valid data this build cannot decode (only built without the `blosc` or `zip` feature).
+    /// Valid data this build cannot decode: the name of the cargo feature it lacks (`blosc`, `zip`).
     #[cfg_attr(all(feature = "blosc", feature = "zip"), allow(dead_code))]
     Feature(&'static str),
 }
@@ -25,10 +25,10 @@ impl DecodeError {
     pub fn at(self, file: &str, at: String) -> Error {
         match self {
             DecodeError::Bad { expected, found } => Error::format(file, at, expected, found),
-            DecodeError::Feature(hint) => Error::Unsupported {
+            DecodeError::Feature(feature) => Error::Unsupported {
                 file: file.to_string(),
-                what: format!("{at}: compressed data"),
-                hint: hint.to_string(),
+                what: format!("{at}: {feature}-compressed data in a build without it"),
+                hint: format!("rebuild the plugin with cargo feature '{feature}'"),
             },
         }
     }
@@ -175,15 +175,8 @@ fn lz4(src: &[u8], dest: &mut [u8]) -> Result<(), DecodeError> {
 
 #[cfg(not(feature = "blosc"))]
 fn lz4(_src: &[u8], _dest: &mut [u8]) -> Result<(), DecodeError> {
-    Err(DecodeError::Feature(FEATURE_BLOSC))
+    Err(DecodeError::Feature("blosc"))
 }
-
-/// The message for blosc data in a build without the `blosc` feature.
-#[allow(dead_code)]
-pub(crate) const FEATURE_BLOSC: &str = "blosc-compressed data, which this build cannot decode (rebuild the plugin with cargo feature 'blosc')";
-/// The message for zlib data in a build without the `zip` feature.
-#[allow(dead_code)]
-pub(crate) const FEATURE_ZIP: &str = "zip-compressed data, which this build cannot decode (rebuild the plugin with cargo feature 'zip')";
 
 /// Blosc's byte unshuffle: byte b of element i comes from src[b·n + i]; trailing bytes are copied.
 fn unshuffle(typesize: usize, src: &[u8], dest: &mut [u8]) {
@@ -215,7 +208,7 @@ pub(crate) fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> 
 
 #[cfg(not(feature = "zip"))]
 pub(crate) fn zlib(_src: &[u8], _expected: usize) -> Result<Vec<u8>, DecodeError> {
-    Err(DecodeError::Feature(FEATURE_ZIP))
+    Err(DecodeError::Feature("zip"))
 }
 
 /// IEEE 754 binary16 → f32 (exact: every half is an f32).

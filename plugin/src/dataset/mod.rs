@@ -994,6 +994,65 @@ mod tests {
     }
 
     #[test]
+    fn raw_files_through_the_public_loader() {
+        // raw2: dims 4×3×2; voxel (3, 2, 1) 0-based is stored 1-based x, z, y = (4, 2, 3).
+        let f = tmp(
+            "fire.raw2",
+            &raw::encode(Some([4, 3, 2]), &[([4, 2, 3], [64.0, 200.0, 0.0, 1.0])]),
+        );
+        let ds = Dataset::load(
+            &[ChannelSource::new("density", &f)],
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        assert_eq!((ds.format(), ds.dims()), (Format::Raw2, [4, 3, 2]));
+        assert_eq!(ds.channels()[0].grid.at(3, 2, 1), 0.25);
+        let opts = LoadOptions {
+            raw_value: RawValue::MaxRgb,
+            ..Default::default()
+        };
+        assert_eq!(
+            Dataset::load(&[ChannelSource::new("density", &f)], &opts)
+                .unwrap()
+                .channels()[0]
+                .grid
+                .at(3, 2, 1),
+            200.0 / 256.0
+        );
+        // Headerless raw: the grid is raw_dims (256³ by default).
+        let f = tmp(
+            "fire.raw",
+            &raw::encode(None, &[([1, 1, 1], [256.0, 0.0, 0.0, 1.0])]),
+        );
+        let opts = LoadOptions {
+            raw_dims: [8, 8, 8],
+            ..Default::default()
+        };
+        let ds = Dataset::load(&[ChannelSource::new("density", &f)], &opts).unwrap();
+        assert_eq!(
+            (ds.dims(), ds.channels()[0].grid.at(0, 0, 0)),
+            ([8, 8, 8], 1.0)
+        );
+        let ds = Dataset::load(
+            &[ChannelSource::new("density", &f)],
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(ds.dims(), [256, 256, 256]);
+        // Two channels from one single-grid file is an error.
+        let e = Dataset::load(
+            &[
+                ChannelSource::new("density", &f),
+                ChannelSource::new("temperature", &f),
+            ],
+            &LoadOptions::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("one channel per raw file"), "{e}");
+    }
+
+    #[test]
     fn missing_file_unknown_extension_and_binary_as_text() {
         let e = Dataset::load(
             &[ChannelSource::new("density", "/no/such/file.vdb")],
