@@ -33,6 +33,66 @@ pub struct GridStats {
     pub nonzero_fraction: f64,
 }
 
+/// Up to eight samples and weights that interpolate any grid of the same dims at one point (all channels of a
+/// dataset share their lattice, so the weights are computed once per point).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Stencil {
+    idx: [usize; 8],
+    w: [f32; 8],
+    n: usize,
+}
+
+impl Stencil {
+    /// The stencil of `p` in [0, 1]³ on a grid of `dims`; `None` outside the bounds (value zero).
+    pub fn new(dims: [usize; 3], p: [f64; 3], interp: Interpolation) -> Option<Stencil> {
+        for a in 0..3 {
+            if !(0.0..=1.0).contains(&p[a]) {
+                return None;
+            }
+        }
+        let [nx, ny, nz] = dims;
+        let mut st = Stencil::default();
+        match interp {
+            Interpolation::Nearest => {
+                let i = [0, 1, 2].map(|a| ((p[a] * dims[a] as f64) as usize).min(dims[a] - 1));
+                st.idx[0] = i[0] + nx * (i[1] + ny * i[2]);
+                st.w[0] = 1.0;
+                st.n = 1;
+            }
+            Interpolation::Trilinear => {
+                let mut base = [0i64; 3];
+                let mut frac = [0f32; 3];
+                for a in 0..3 {
+                    let s = p[a] * dims[a] as f64 - 0.5;
+                    let f = s.floor();
+                    base[a] = f as i64;
+                    frac[a] = (s - f) as f32;
+                }
+                for corner in 0..8 {
+                    let o = [corner & 1, (corner >> 1) & 1, corner >> 2];
+                    let q = [0, 1, 2].map(|a| base[a] + o[a] as i64);
+                    let w = (0..3)
+                        .map(|a| if o[a] == 1 { frac[a] } else { 1.0 - frac[a] })
+                        .product::<f32>();
+                    if w != 0.0
+                        && q[0] >= 0
+                        && q[1] >= 0
+                        && q[2] >= 0
+                        && q[0] < nx as i64
+                        && q[1] < ny as i64
+                        && q[2] < nz as i64
+                    {
+                        st.idx[st.n] = q[0] as usize + nx * (q[1] as usize + ny * q[2] as usize);
+                        st.w[st.n] = w;
+                        st.n += 1;
+                    }
+                }
+            }
+        }
+        Some(st)
+    }
+}
+
 /// A dense scalar grid, x fastest, cell-centred.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
@@ -117,6 +177,12 @@ impl Grid {
         let c01 = lerp(self.at(i, j, k + 1), self.at(i + 1, j, k + 1), fx);
         let c11 = lerp(self.at(i, j + 1, k + 1), self.at(i + 1, j + 1, k + 1), fx);
         lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)
+    }
+
+    /// The value a [`Stencil`] computed for this grid's dims interpolates.
+    #[inline]
+    pub fn eval(&self, st: &Stencil) -> f32 {
+        (0..st.n).map(|k| st.w[k] * self.data[st.idx[k]]).sum()
     }
 
     /// Min, max, mean and non-zero fraction of the samples.
@@ -206,6 +272,21 @@ mod tests {
         assert_eq!(g.lookup([0.0, 0.0, 0.0], Interpolation::Nearest), 0.0);
         assert_eq!(g.lookup([0.26, 0.0, 0.0], Interpolation::Nearest), 1.0);
         assert_eq!(g.lookup([1.1, 0.0, 0.0], Interpolation::Nearest), 0.0);
+    }
+
+    #[test]
+    fn stencil_agrees_with_lookup() {
+        let g = ramp();
+        let mut x = 0.013;
+        for _ in 0..2000 {
+            x = (x * 3.7 + 0.123) % 1.0;
+            let p = [x, (x * 7.1) % 1.0, (x * 13.3) % 1.0];
+            for interp in [Interpolation::Trilinear, Interpolation::Nearest] {
+                let st = Stencil::new(g.dims(), p, interp).unwrap();
+                assert!((g.eval(&st) - g.lookup(p, interp)).abs() < 1e-4, "{p:?}");
+            }
+        }
+        assert!(Stencil::new(g.dims(), [1.5, 0.5, 0.5], Interpolation::Trilinear).is_none());
     }
 
     #[test]

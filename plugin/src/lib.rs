@@ -28,9 +28,12 @@ pub mod dataset;
 pub mod error;
 pub mod grid;
 pub mod majorant;
+pub mod params;
 pub mod quadrature;
+pub mod rng;
 pub mod soot;
 pub mod species;
 pub mod spectrum;
+pub mod volume;
 
 pub use error::Error;

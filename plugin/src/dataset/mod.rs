@@ -724,6 +724,25 @@ impl Dataset {
         ((p - self.bounds[0]) / (self.bounds[1] - self.bounds[0])).to_array()
     }
 
+    /// The interpolation stencil of medium-space point `p`, shared by every channel (`None` outside).
+    #[inline]
+    pub fn stencil(&self, p: DVec3) -> Option<crate::grid::Stencil> {
+        crate::grid::Stencil::new(self.dims, self.to_unit(p), self.interpolation)
+    }
+    /// The interpolation used by [`Dataset::sample`].
+    pub fn interpolation(&self) -> Interpolation {
+        self.interpolation
+    }
+    /// Medium-space size of one voxel on each axis.
+    pub fn voxel_size(&self) -> DVec3 {
+        (self.bounds[1] - self.bounds[0])
+            / DVec3::new(
+                self.dims[0] as f64,
+                self.dims[1] as f64,
+                self.dims[2] as f64,
+            )
+    }
+
     /// Channel `index` at medium-space point `p` (zero outside the bounds).
     #[inline]
     pub fn sample(&self, index: usize, p: DVec3) -> f32 {

@@ -1,0 +1,105 @@
+//! The parameter tables of the voxel dataset and fire volume components (docs/params.md is generated from
+//! them).
+
+use crate::params::{Component, ParamSpec, ParamType as T, Range};
+
+const fn p(
+    name: &'static str,
+    ty: T,
+    default: &'static str,
+    unit: &'static str,
+    range: Range,
+    doc: &'static str,
+) -> ParamSpec {
+    ParamSpec {
+        name,
+        ty,
+        default,
+        unit,
+        range,
+        doc,
+    }
+}
+
+/// The voxel dataset component.
+pub static DATASET: Component = Component {
+    name: "dataset",
+    doc: "Voxel grids from files (OpenVDB, NanoVDB, the thesis's ASCII and raw formats) or inline arrays (pbrt-v4 `uniformgrid`). Only the grids the fire uses are loaded.",
+    params: &[
+        p("filename", T::String, "", "", Range::Any, "File holding the grids (.vdb, .nvdb; any format). A `####` or `%04d` in the name takes `frame`."),
+        p("densityfile", T::String, "", "", Range::Any, "File of the density grid, when grids come in separate files (thesis formats)."),
+        p("temperaturefile", T::String, "", "", Range::Any, "File of the temperature grid, when grids come in separate files."),
+        p("format", T::String, "", "", Range::Choices(&["", "ascii", "asciisparse", "raw", "raw2", "vdb", "nvdb"]), "File format; empty: from the extension."),
+        p("densitygrid", T::String, "density", "", Range::Any, "Name of the density grid in a VDB/NanoVDB file."),
+        p("temperaturegrid", T::String, "temperature", "", Range::Any, "Name of the temperature grid; empty for none (no emission from temperature)."),
+        p("species", T::String, "", "", Range::Any, "Element symbols of species grids (Na, Li, K, Ca, Sr, Ba, Cu); each grid is named by its symbol."),
+        p("speciesfiles", T::String, "", "", Range::Any, "Files of the species grids, one per symbol, when not in `filename`."),
+        p("speciesscale", T::Float, "1", "m⁻³ per unit", Range::Between(0.0, 1e40), "Multiplier turning species grid values into number densities (one value, or one per species)."),
+        p("order", T::String, "x", "", Range::Choices(&["x", "z"]), "Dense ASCII value order: x fastest (the thesis text) or z fastest (its shader code)."),
+        p("rawcoords", T::String, "thesis", "", Range::Choices(&["thesis", "xyz"]), "Raw coordinates: 1-based x z y (the thesis's shader) or 0-based x y z."),
+        p("rawvalue", T::String, "red", "", Range::Choices(&["red", "maxrgb"]), "Raw value: r/256 or max(r, g, b)/256."),
+        p("rawdims", T::Integer, "256 256 256", "voxels", Range::Between(1.0, 1048576.0), "Dims of a headerless raw file."),
+        p("nonfinite", T::String, "error", "", Range::Choices(&["error", "zero"]), "NaN or infinite values: refuse the file, or replace by 0 (counted)."),
+        p("negative", T::String, "error", "", Range::Choices(&["error", "zero"]), "Negative density, temperature or species values: refuse, or replace by 0."),
+        p("maxbytes", T::Float, "8589934592", "bytes", Range::Above(0.0), "Refuse any grid larger than this (checked before allocating)."),
+        p("frame", T::Integer, "", "", Range::Between(-1e9, 1e9), "Frame number substituted into a patterned file name."),
+        p("interpolation", T::String, "trilinear", "", Range::Choices(&["trilinear", "nearest"]), "Lookup between voxel centres."),
+        p("p0", T::Point3, "", "medium units", Range::Any, "Lower corner of the grid's box (inline grids, formats without a transform; default 0,0,0)."),
+        p("p1", T::Point3, "", "medium units", Range::Any, "Upper corner (default 1,1,1)."),
+        p("nx", T::Integer, "1", "voxels", Range::Between(1.0, 1048576.0), "Inline grid resolution along x (pbrt-v4 uniformgrid)."),
+        p("ny", T::Integer, "1", "voxels", Range::Between(1.0, 1048576.0), "Inline grid resolution along y."),
+        p("nz", T::Integer, "1", "voxels", Range::Between(1.0, 1048576.0), "Inline grid resolution along z."),
+        p("density", T::Float, "", "", Range::Any, "Inline density values, nx·ny·nz, x fastest (pbrt-v4 uniformgrid)."),
+        p("temperature", T::Float, "", "K before mapping", Range::Any, "Inline temperature values, nx·ny·nz."),
+        p("temperaturescale", T::Float, "1", "", Range::Between(0.0, 1e9), "T = (t − temperatureoffset) · temperaturescale (pbrt-v4)."),
+        p("temperatureoffset", T::Float, "0", "", Range::Between(-1e9, 1e9), "Subtracted from grid temperatures before scaling (pbrt-v4)."),
+        p("temperaturecutoff", T::Float, "", "", Range::Between(-1e9, 1e9), "pbrt-v4 nanovdb's name for temperatureoffset."),
+    ],
+};
+
+/// The fire volume component.
+pub static VOLUME: Component = Component {
+    name: "volume",
+    doc: "Soot absorption and blackbody emission (Pegoraro & Parker 2006 eq. 5–6), atomic lines (eq. 7–12), optional scattering, integrated along rays (eq. 1–3).",
+    params: &[
+        p("mode", T::String, "physical", "", Range::Choices(&["physical", "pbrt"]), "physical: the paper's fire; pbrt: pbrt-v4 uniformgrid/nanovdb semantics (σ spectra × density, peak-normalised blackbody × Lescale above 100 K)."),
+        p("fuel", T::String, "propane", "", Range::Choices(&["propane", "acetylene", "custom"]), "Soot optical constants (Dalzell & Sarofim 1969), or `fuelnk`."),
+        p("fuelnk", T::Float, "", "nm, 1, 1", Range::Any, "Custom soot optical constants: (λ nm, n, k) triples, λ increasing."),
+        p("alpha", T::Float, "1.39", "", Range::Between(0.1, 4.0), "Soot exponent: 1.39 (Hottel, λ in µm) or 1 (Rayleigh, λ in m)."),
+        p("sootscale", T::Float, "1", "volume fraction per unit density", Range::Between(0.0, 1.0), "Soot volume fraction f_v = sootscale · density."),
+        p("intensity", T::Float, "1", "", Range::Between(0.0, 1e12), "Artistic multiplier on emission; 1 is physical."),
+        p("sigma_a", T::Spectrum, "1", "m⁻¹ per unit density", Range::Any, "pbrt mode: absorption spectrum (× scale × density)."),
+        p("sigma_s", T::Spectrum, "0", "m⁻¹ per unit density", Range::Any, "Scattering: σ_s = sigma_s · density (pbrt mode: × scale). Default 0: the low-albedo fire of the paper."),
+        p("scale", T::Float, "1", "", Range::Between(0.0, 1e12), "pbrt mode: multiplier on sigma_a and sigma_s."),
+        p("g", T::Float, "0", "", Range::Between(-0.999, 0.999), "Henyey–Greenstein asymmetry (eq. 4)."),
+        p("Lescale", T::Float, "1", "", Range::Between(0.0, 1e30), "pbrt mode: emission scale (one value), or nx·ny·nz values for inline grids."),
+        p("Le", T::Spectrum, "", "", Range::Any, "pbrt mode: constant emission spectrum (uniformgrid without temperature)."),
+        p("colormode", T::String, "spectral", "", Range::Choices(&["spectral", "rgb"]), "spectral: bins of W·m⁻²·sr⁻¹·nm⁻¹; rgb: three CIE XYZ bands (Y in cd/m²), the thesis's speed path."),
+        p("bins", T::Integer, "30", "", Range::Between(1.0, 4096.0), "Spectral bins."),
+        p("lambdamin", T::Float, "400", "nm", Range::Between(200.0, 2000.0), "Lower end of the spectral bins."),
+        p("lambdamax", T::Float, "700", "nm", Range::Between(200.0, 2000.0), "Upper end of the spectral bins."),
+        p("stepsize", T::Float, "0.5", "voxels", Range::Above(0.0), "March step, in voxels (the paper's half voxel)."),
+        p("integrator", T::String, "march", "", Range::Choices(&["march", "ratio", "delta"]), "march: fixed steps, eq. 3; ratio/delta: unbiased tracking over the majorant bricks."),
+        p("brick", T::Integer, "16", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge."),
+        p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
+    ],
+};
+
+/// Test-only parameters (cargo feature `fault-injection`).
+pub static FAULTS: Component = Component {
+    name: "faults",
+    doc: "Test-only fault injection (built with the `fault-injection` feature).",
+    params: &[p(
+        "faultinjection",
+        T::String,
+        "",
+        "",
+        Range::Choices(&["", "create", "integrate"]),
+        "Panic inside creation or integration, to test that no panic crosses the ABI.",
+    )],
+};
+
+/// Every public component, in documentation order.
+pub fn components() -> [&'static Component; 2] {
+    [&DATASET, &VOLUME]
+}
