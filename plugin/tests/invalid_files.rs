@@ -67,6 +67,16 @@ fn invalid_corpus_gives_the_right_errors() {
             None,
             &["truncated.nvdb", "grid 'density'", "truncated"],
         ),
+        // Found by `cargo fuzz run nanovdb`: a zero-length read past the end used to panic.
+        (
+            "fuzz_nanovdb_record_past_end.nvdb",
+            "density",
+            None,
+            &[
+                "the grid name after its 176-byte record",
+                "offset 192 past its end (191 bytes)",
+            ],
+        ),
         (
             "count_mismatch.raw2",
             "density",

@@ -25,7 +25,8 @@ impl<'a> Cursor<'a> {
     }
 
     pub fn bytes(&mut self, n: usize, what: &str) -> Result<&'a [u8], Error> {
-        if n > self.remaining() {
+        // `pos` may have been set past the end by a caller skipping a record: refuse even empty reads then.
+        if self.pos > self.data.len() || n > self.remaining() {
             return Err(self.err(
                 format!("{n} bytes of {what}"),
                 format!(

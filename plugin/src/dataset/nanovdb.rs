@@ -71,7 +71,10 @@ fn table(file: &str, bytes: &[u8]) -> Result<Vec<GridEntry>, Error> {
             let grid_type = c.u32("the grid type")?;
             c.skip(4 + 48 + 24 + 24, "class and bounding boxes")?;
             let name_size = c.u32("the name size")? as usize;
-            c.pos = m + META_BYTES;
+            c.seek(
+                (m + META_BYTES) as u64,
+                "the grid name after its 176-byte record",
+            )?;
             let raw = c.bytes(name_size, "the grid name")?;
             let name = String::from_utf8_lossy(raw)
                 .trim_end_matches('\0')
