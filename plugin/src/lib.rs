@@ -26,6 +26,7 @@ pub mod cie;
 pub mod constants;
 pub mod dataset;
 pub mod error;
+pub mod export;
 pub mod grid;
 pub mod majorant;
 pub mod params;

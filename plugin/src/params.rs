@@ -189,11 +189,22 @@ pub enum Range {
 impl Range {
     /// Human-readable form, for errors and docs.
     pub fn describe(&self) -> String {
+        let num = |v: f64| {
+            if v != 0.0 && (v.abs() >= 1e6 || v.abs() < 1e-3) {
+                format!("{v:e}")
+            } else {
+                format!("{v}")
+            }
+        };
         match self {
             Range::Any => String::new(),
-            Range::Between(a, b) => format!("{a} to {b}"),
-            Range::Above(a) => format!("> {a}"),
-            Range::Choices(c) => c.join(" \\| "),
+            Range::Between(a, b) => format!("{} to {}", num(*a), num(*b)),
+            Range::Above(a) => format!("> {}", num(*a)),
+            Range::Choices(c) => c
+                .iter()
+                .map(|x| if x.is_empty() { "\"\"" } else { x })
+                .collect::<Vec<_>>()
+                .join(" \\| "),
         }
     }
 }
@@ -456,8 +467,36 @@ impl<'a> ParamReader<'a> {
         }
     }
 
+    /// Errors on the first parameter that no table knows, naming the closest valid name. Call it first, so a
+    /// typo is reported before the missing value it causes.
+    pub fn check_names(&self) -> Result<(), Error> {
+        for p in self.list {
+            if !self.specs.iter().any(|s| s.name == p.name) {
+                let best = self
+                    .specs
+                    .iter()
+                    .map(|s| {
+                        (
+                            levenshtein(&p.name.to_ascii_lowercase(), &s.name.to_ascii_lowercase()),
+                            s.name,
+                        )
+                    })
+                    .min();
+                let hint = match best {
+                    Some((d, n)) if d <= 3.max(p.name.len() / 3) => {
+                        format!("a known parameter (did you mean '{n}'?)")
+                    }
+                    _ => "a known parameter (see docs/params.md)".to_string(),
+                };
+                return Err(Error::invalid(self.component, &p.name, "unknown", hint));
+            }
+        }
+        Ok(())
+    }
+
     /// Errors on the first parameter no getter read, naming the closest valid name.
     pub fn finish(&self) -> Result<(), Error> {
+        self.check_names()?;
         let used = self.used.borrow();
         for (p, &u) in self.list.iter().zip(used.iter()) {
             if !u {

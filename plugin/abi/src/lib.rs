@@ -1,13 +1,26 @@
 //! # firemedium-abi: the contract between the fire plugin and its hosts
 //!
-//! This crate has no dependencies and holds only what both sides must agree on. Today that is the version of
-//! the contract and the name of the one exported entry symbol; the function table, the `#[repr(C)]` ray and
-//! parameter types and the status codes join it with the ABI itself (DESIGN.md, "The ABI").
+//! No dependencies, `no_std`: only what both sides must agree on. The plugin exports one symbol,
+//! [`ENTRY_SYMBOL`] (`firemedium_plugin_entry`), of type [`FmEntry`]; it returns a pointer to a static
+//! [`FmApi`] table that lives as long as the library is loaded. The C header `include/firemedium.h` declares the
+//! same types for hosts in other languages (a test compiles a C program against it and loads the plugin).
 //!
-//! Versioning: a host refuses a plugin whose [`ABI_MAJOR`] differs from its own, or whose [`ABI_MINOR`] is
-//! older than the minor the host needs, with a message naming both versions. Minor versions only add.
+//! ## Rules
+//! - Versioning: a host refuses a plugin whose [`FmApi::abi_major`] differs from its own, or whose
+//!   [`FmApi::abi_minor`] is older than the minor it needs, with a message naming both versions; it also
+//!   checks [`FmApi::struct_size`] covers the table it uses. Minor versions only append entries.
+//! - Every function returns an [`FmStatus`]; on failure [`FmApi::last_error`] gives the message for the calling
+//!   thread. No panic crosses the boundary ([`FM_PANIC`] is returned instead).
+//! - Handles are opaque; a volume is immutable after creation and may be queried from many threads at once.
+//!   Destroy it exactly once; never unload the library while handles live.
+//! - Batch queries take `n` rays and write `n × channels` floats (radiance, transmittance, weights), channel
+//!   fastest; `channels` comes from [`FmVolumeInfo`]. Optional outputs may be null.
+//! - Rays are in the medium's space (the host applies its transforms); distances are |direction| · Δt, in
+//!   metres when the medium's space is in metres.
 
 #![no_std]
+
+use core::ffi::{c_char, c_void};
 
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
@@ -20,6 +33,242 @@ pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 pub const fn compatible(major: u32, minor: u32, need_major: u32, need_minor: u32) -> bool {
     major == need_major && minor >= need_minor
 }
+
+/// Status of every call.
+pub type FmStatus = i32;
+/// Success.
+pub const FM_OK: FmStatus = 0;
+/// A null pointer, a bad count or an invalid handle was passed.
+pub const FM_INVALID_ARGUMENT: FmStatus = 1;
+/// A parameter is unknown, of the wrong type, or out of range.
+pub const FM_INVALID_PARAMETER: FmStatus = 2;
+/// A dataset file could not be read or is malformed (or too large for the memory cap).
+pub const FM_DATASET: FmStatus = 3;
+/// Something valid that this build does not support.
+pub const FM_UNSUPPORTED: FmStatus = 4;
+/// The plugin panicked; the call did nothing further and the host may continue.
+pub const FM_PANIC: FmStatus = 5;
+
+/// Parameter value types (pbrt-v4's).
+pub const FM_TYPE_FLOAT: u32 = 0;
+/// `integer` (values are `i64`).
+pub const FM_TYPE_INTEGER: u32 = 1;
+/// `bool` (values are `u8`, 0 or 1).
+pub const FM_TYPE_BOOL: u32 = 2;
+/// `string` (values are `const char*`, UTF-8, NUL-terminated).
+pub const FM_TYPE_STRING: u32 = 3;
+/// `point3` (values are `f64`, three per point).
+pub const FM_TYPE_POINT3: u32 = 4;
+/// `vector3` (`f64`).
+pub const FM_TYPE_VECTOR3: u32 = 5;
+/// `rgb` (`f64`).
+pub const FM_TYPE_RGB: u32 = 6;
+/// `spectrum` (`f64`: one constant or (λ nm, value) pairs).
+pub const FM_TYPE_SPECTRUM: u32 = 7;
+
+/// One parameter: `count` values of type `ty` at `values` (`f64`, `i64`, `u8` or `const char*` elements).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmParam {
+    /// NUL-terminated name.
+    pub name: *const c_char,
+    /// One of the `FM_TYPE_*` constants.
+    pub ty: u32,
+    /// Number of values.
+    pub count: u32,
+    /// The values.
+    pub values: *const c_void,
+}
+
+/// A ray segment in medium space: origin + t · direction for t in [tmin, tmax]; `seed` drives its random
+/// numbers, so results do not depend on threads or batching.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FmRay {
+    /// Origin.
+    pub origin: [f64; 3],
+    /// Direction (any length).
+    pub direction: [f64; 3],
+    /// Start parameter.
+    pub tmin: f64,
+    /// End parameter.
+    pub tmax: f64,
+    /// Random seed of this ray.
+    pub seed: u64,
+}
+
+/// Where the plugin stopped following a ray: the host continues from here (rays may bend inside the medium).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FmExit {
+    /// Point.
+    pub point: [f64; 3],
+    /// Direction there.
+    pub direction: [f64; 3],
+    /// Parameter along the input ray.
+    pub t: f64,
+}
+
+/// The ray left the medium (weights are its transmittance).
+pub const FM_EVENT_ESCAPED: u32 = 0;
+/// A real scattering event (weights multiply the in-scattered radiance).
+pub const FM_EVENT_SCATTERED: u32 = 1;
+/// Absorbed.
+pub const FM_EVENT_ABSORBED: u32 = 2;
+
+/// A sampled scattering event.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FmScatter {
+    /// One of the `FM_EVENT_*` constants.
+    pub event: u32,
+    /// Padding (zero).
+    pub reserved: u32,
+    /// Parameter of the event (tmax when escaped).
+    pub t: f64,
+    /// Point of the event.
+    pub point: [f64; 3],
+}
+
+/// Channels are spectral bins (radiance in W·m⁻²·sr⁻¹·nm⁻¹).
+pub const FM_SPACE_SPECTRAL: u32 = 0;
+/// Channels are CIE XYZ (Y in cd/m²).
+pub const FM_SPACE_XYZ: u32 = 1;
+
+/// Integrators.
+pub const FM_INTEGRATOR_MARCH: u32 = 0;
+/// Ratio tracking.
+pub const FM_INTEGRATOR_RATIO: u32 = 1;
+/// Delta tracking.
+pub const FM_INTEGRATOR_DELTA: u32 = 2;
+
+/// What a volume is.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FmVolumeInfo {
+    /// Lower corner of the medium-space bounds.
+    pub bounds_min: [f64; 3],
+    /// Upper corner.
+    pub bounds_max: [f64; 3],
+    /// Channels per radiance/transmittance value.
+    pub channels: u32,
+    /// `FM_SPACE_*`.
+    pub channel_space: u32,
+    /// Spectral range of the bins, nm (spectral space).
+    pub lambda_min: f64,
+    /// Upper end, nm.
+    pub lambda_max: f64,
+    /// Henyey–Greenstein g of the scattering.
+    pub g: f64,
+    /// 1 when σ_s > 0 anywhere.
+    pub scatters: u32,
+    /// `FM_INTEGRATOR_*`.
+    pub integrator: u32,
+    /// March step, medium units.
+    pub step: f64,
+    /// Bytes held (dataset and tables).
+    pub bytes: u64,
+    /// Seconds spent creating the volume.
+    pub build_seconds: f64,
+}
+
+/// A row of a component's parameter table (strings live as long as the library).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmParamInfo {
+    /// Component (`dataset`, `volume`).
+    pub component: *const c_char,
+    /// Parameter name.
+    pub name: *const c_char,
+    /// Type name (`float`, `string`, …).
+    pub ty: *const c_char,
+    /// Default, as text (empty when none).
+    pub default_value: *const c_char,
+    /// Unit (may be empty).
+    pub unit: *const c_char,
+    /// Accepted values, as text.
+    pub range: *const c_char,
+    /// One-line description.
+    pub doc: *const c_char,
+}
+
+/// An opaque volume handle.
+pub type FmVolume = c_void;
+
+/// The plugin's function table.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmApi {
+    /// [`ABI_MAJOR`] of the plugin.
+    pub abi_major: u32,
+    /// [`ABI_MINOR`] of the plugin.
+    pub abi_minor: u32,
+    /// `sizeof(FmApi)` as the plugin built it.
+    pub struct_size: u32,
+    /// Zero.
+    pub reserved: u32,
+    /// Copies the calling thread's last error message (UTF-8, NUL-terminated, truncated to `cap`) into `buf`;
+    /// returns its full length in bytes without the NUL. `buf` may be null to ask for the length.
+    pub last_error: unsafe extern "C" fn(buf: *mut c_char, cap: usize) -> usize,
+    /// Number of rows in the parameter tables of all components.
+    pub param_count: unsafe extern "C" fn() -> usize,
+    /// Row `index` of the parameter tables.
+    pub param_info: unsafe extern "C" fn(index: usize, out: *mut FmParamInfo) -> FmStatus,
+    /// Creates a fire volume (dataset + volume parameters); `*out` receives the handle.
+    pub volume_create: unsafe extern "C" fn(
+        params: *const FmParam,
+        count: usize,
+        out: *mut *mut FmVolume,
+    ) -> FmStatus,
+    /// Destroys a volume (null is ignored).
+    pub volume_destroy: unsafe extern "C" fn(volume: *mut FmVolume),
+    /// Describes a volume.
+    pub volume_info:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmVolumeInfo) -> FmStatus,
+    /// Writes 3 × channels f64: the XYZ of unit radiance in each channel (to turn channel radiance into XYZ).
+    pub volume_channel_xyz:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64, cap: usize) -> FmStatus,
+    /// Integrates emission–absorption along `n` rays: radiance (required) and transmittance (optional),
+    /// `n × channels` f32 each; exits (optional), `n` entries.
+    pub volume_integrate: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        n: usize,
+        radiance: *mut f32,
+        transmittance: *mut f32,
+        exits: *mut FmExit,
+    ) -> FmStatus,
+    /// Transmittance only (shadow rays): `n × channels` f32.
+    pub volume_transmittance: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        n: usize,
+        transmittance: *mut f32,
+    ) -> FmStatus,
+    /// Samples the first real scattering event per ray: events (`n`), weights and emitted radiance before the
+    /// event (`n × channels` f32 each; emitted may be null).
+    pub volume_sample_scatter: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        n: usize,
+        events: *mut FmScatter,
+        weights: *mut f32,
+        emitted: *mut f32,
+    ) -> FmStatus,
+    /// σ_a, σ_s (m⁻¹) and the emission coefficient j = σ_a L_e per channel at `n` points (3 f64 each); each
+    /// output `n × channels` f32, any may be null.
+    pub volume_coefficients: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        points: *const f64,
+        n: usize,
+        sigma_a: *mut f32,
+        sigma_s: *mut f32,
+        emission: *mut f32,
+    ) -> FmStatus,
+}
+
+/// The entry point's type.
+pub type FmEntry = unsafe extern "C" fn() -> *const FmApi;
 
 #[cfg(test)]
 mod tests {
@@ -37,5 +286,17 @@ mod tests {
         assert!(compatible(0, 3, 0, 1));
         assert!(!compatible(0, 1, 0, 2));
         assert!(!compatible(1, 1, 0, 1));
+    }
+
+    #[test]
+    fn layouts_are_stable() {
+        // The C header declares the same sizes (checked again by the C test against the built plugin).
+        assert_eq!(core::mem::size_of::<FmRay>(), 72);
+        assert_eq!(core::mem::size_of::<FmExit>(), 56);
+        assert_eq!(core::mem::size_of::<FmScatter>(), 40);
+        assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 112);
+        assert_eq!(core::mem::size_of::<FmParam>(), 24);
+        assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 11 * 8);
     }
 }

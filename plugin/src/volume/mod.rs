@@ -400,6 +400,7 @@ impl FireVolume {
         #[cfg(not(feature = "fault-injection"))]
         let comps: Vec<&'static crate::params::Component> = vec![&params::DATASET, &params::VOLUME];
         let r = ParamReader::new("volume", list, &comps);
+        r.check_names()?;
         #[cfg(feature = "fault-injection")]
         let fault = r.string("faultinjection")?;
         #[cfg(feature = "fault-injection")]

@@ -103,3 +103,52 @@ pub static FAULTS: Component = Component {
 pub fn components() -> [&'static Component; 2] {
     [&DATASET, &VOLUME]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_doc_is_current() {
+        // docs/params.md is generated from these tables; regenerate with FIREMEDIUM_BLESS=1.
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/params.md");
+        let want = crate::params::markdown(&components());
+        if std::env::var_os("FIREMEDIUM_BLESS").is_some() {
+            std::fs::write(path, &want).unwrap();
+        }
+        let have = std::fs::read_to_string(path).unwrap_or_default();
+        assert!(have == want, "docs/params.md is stale: run FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc");
+    }
+
+    #[test]
+    fn names_are_unique_and_defaults_parse() {
+        let mut seen = std::collections::HashSet::new();
+        for c in components().iter().chain([&&FAULTS]) {
+            for p in c.params {
+                assert!(seen.insert(p.name), "parameter '{}' declared twice", p.name);
+                if !p.default.is_empty() {
+                    match p.ty {
+                        T::Float => p
+                            .default
+                            .parse::<f64>()
+                            .map(|_| ())
+                            .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default)),
+                        T::Integer => p.default.split_whitespace().for_each(|v| {
+                            v.parse::<i64>()
+                                .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default));
+                        }),
+                        _ => {}
+                    }
+                }
+                if let Range::Choices(c) = p.range {
+                    assert!(
+                        c.contains(&p.default),
+                        "{}: default {:?} not among {c:?}",
+                        p.name,
+                        p.default
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,629 @@
+//! # firemedium-loader: the fire, for any Rust renderer
+//!
+//! Loads the firemedium plugin (a `cdylib`) at run time through its C ABI, checks the ABI version, keeps the
+//! library alive for as long as any handle lives, and turns status codes into a typed [`Error`].
+//!
+//! ```no_run
+//! use firemedium_loader::{Plugin, Param, Ray};
+//! let plugin = Plugin::from_env()?; // FIREMEDIUM_PLUGIN or FIREMEDIUM_PLUGIN_PATH
+//! let fire = plugin.create_volume(&[Param::string("filename", "fire.vdb"), Param::float("temperaturescale", 1000.0)])?;
+//! let c = fire.info().channels as usize;
+//! let rays = [Ray { origin: [0.0, -2.0, 1.0], direction: [0.0, 1.0, 0.0], tmin: 0.0, tmax: 10.0, seed: 1 }];
+//! let (mut radiance, mut transmittance) = (vec![0.0f32; c], vec![0.0f32; c]);
+//! fire.integrate(&rays, &mut radiance, Some(&mut transmittance), None)?;
+//! # Ok::<(), firemedium_loader::Error>(())
+//! ```
+//!
+//! Volumes are `Send + Sync`: query one from many threads at once.
+
+use firemedium_abi as abi;
+pub use firemedium_abi::{
+    FmExit as Exit, FmRay as Ray, FmScatter as Scatter, FmVolumeInfo as VolumeInfo,
+};
+use std::ffi::{c_char, c_void, CStr, CString};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// What went wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Error {
+    /// The library could not be opened.
+    Open {
+        /// Path tried.
+        path: PathBuf,
+        /// The loader's message.
+        message: String,
+    },
+    /// The library has no `firemedium_plugin_entry` symbol (not a firemedium plugin).
+    NoEntry {
+        /// Path.
+        path: PathBuf,
+    },
+    /// The plugin's ABI version is not one this host can use.
+    Abi {
+        /// Path.
+        path: PathBuf,
+        /// The plugin's (major, minor).
+        plugin: (u32, u32),
+        /// This host's (major, minor).
+        host: (u32, u32),
+    },
+    /// No plugin file was found.
+    NotFound {
+        /// Where we looked.
+        searched: Vec<PathBuf>,
+    },
+    /// A call returned a failure status.
+    Status {
+        /// The `FM_*` status.
+        code: i32,
+        /// The plugin's message.
+        message: String,
+    },
+    /// A buffer passed to a batch call is too small.
+    Buffer(String),
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Open { path, message } => write!(f, "cannot load the firemedium plugin {}: {message}", path.display()),
+            Error::NoEntry { path } => write!(f, "{} is not a firemedium plugin (no firemedium_plugin_entry symbol)", path.display()),
+            Error::Abi { path, plugin, host } => write!(
+                f,
+                "{} speaks firemedium ABI {}.{}, this host needs {}.{} (same major, minor at least {})",
+                path.display(),
+                plugin.0,
+                plugin.1,
+                host.0,
+                host.1,
+                host.1
+            ),
+            Error::NotFound { searched } => {
+                let s: Vec<String> = searched.iter().map(|p| p.display().to_string()).collect();
+                write!(f, "no firemedium plugin found (set FIREMEDIUM_PLUGIN to its file); looked in: {}", s.join(", "))
+            }
+            Error::Status { code, message } => write!(f, "{message} (status {code})"),
+            Error::Buffer(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// The plugin's file name on this platform (`libfiremedium_plugin.so`, `.dylib`, `firemedium_plugin.dll`).
+pub fn library_file_name() -> String {
+    format!(
+        "{}firemedium_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    )
+}
+
+struct Inner {
+    api: *const abi::FmApi,
+    path: PathBuf,
+    // Dropped last: every handle holds an Arc<Inner>, so the library outlives them all.
+    _lib: libloading::Library,
+}
+
+// SAFETY: `api` points to the plugin's immutable static table; the ABI guarantees every function is safe to call
+// from any thread, and the library stays loaded while `Inner` lives.
+unsafe impl Send for Inner {}
+// SAFETY: as above.
+unsafe impl Sync for Inner {}
+
+impl Inner {
+    fn api(&self) -> &abi::FmApi {
+        // SAFETY: checked non-null at load; static in the loaded library, which `self` keeps alive.
+        unsafe { &*self.api }
+    }
+    fn last_error(&self) -> String {
+        let api = self.api();
+        // SAFETY: a null buffer asks for the length only (ABI contract).
+        let n = unsafe { (api.last_error)(std::ptr::null_mut(), 0) };
+        let mut buf = vec![0u8; n + 1];
+        // SAFETY: buf has n + 1 writable bytes.
+        unsafe { (api.last_error)(buf.as_mut_ptr() as *mut c_char, buf.len()) };
+        buf.truncate(n);
+        String::from_utf8_lossy(&buf).into_owned()
+    }
+    fn check(&self, status: i32) -> Result<(), Error> {
+        if status == abi::FM_OK {
+            Ok(())
+        } else {
+            Err(Error::Status {
+                code: status,
+                message: self.last_error(),
+            })
+        }
+    }
+}
+
+/// A loaded plugin.
+#[derive(Clone)]
+pub struct Plugin {
+    inner: Arc<Inner>,
+}
+
+impl fmt::Debug for Plugin {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Plugin({}, ABI {}.{})",
+            self.inner.path.display(),
+            self.version().0,
+            self.version().1
+        )
+    }
+}
+
+/// A row of the plugin's parameter tables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamInfo {
+    /// Component.
+    pub component: String,
+    /// Name.
+    pub name: String,
+    /// Type name.
+    pub ty: String,
+    /// Default.
+    pub default: String,
+    /// Unit.
+    pub unit: String,
+    /// Accepted values.
+    pub range: String,
+    /// Description.
+    pub doc: String,
+}
+
+/// A parameter value (pbrt-v4's types).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    /// `float`
+    Float(Vec<f64>),
+    /// `integer`
+    Integer(Vec<i64>),
+    /// `bool`
+    Bool(Vec<bool>),
+    /// `string`
+    String(Vec<String>),
+    /// `point3`
+    Point3(Vec<f64>),
+    /// `vector3`
+    Vector3(Vec<f64>),
+    /// `rgb`
+    Rgb(Vec<f64>),
+    /// `spectrum` (constant or (λ, value) pairs)
+    Spectrum(Vec<f64>),
+}
+
+/// A named parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// Name.
+    pub name: String,
+    /// Value.
+    pub value: Value,
+}
+
+impl Param {
+    /// A float.
+    pub fn float(name: &str, v: f64) -> Param {
+        Param {
+            name: name.into(),
+            value: Value::Float(vec![v]),
+        }
+    }
+    /// An integer.
+    pub fn int(name: &str, v: i64) -> Param {
+        Param {
+            name: name.into(),
+            value: Value::Integer(vec![v]),
+        }
+    }
+    /// A string.
+    pub fn string(name: &str, v: &str) -> Param {
+        Param {
+            name: name.into(),
+            value: Value::String(vec![v.into()]),
+        }
+    }
+}
+
+impl Plugin {
+    /// Loads the plugin at `path` and checks its ABI.
+    pub fn load(path: impl AsRef<Path>) -> Result<Plugin, Error> {
+        let path = path.as_ref().to_path_buf();
+        // SAFETY: loading a library runs its initialisers; the plugin has none beyond Rust's runtime.
+        let lib = unsafe { libloading::Library::new(&path) }.map_err(|e| Error::Open {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        // SAFETY: the symbol has type FmEntry per the ABI; checked by name.
+        let entry: libloading::Symbol<abi::FmEntry> = unsafe { lib.get(abi::ENTRY_SYMBOL) }
+            .map_err(|_| Error::NoEntry { path: path.clone() })?;
+        // SAFETY: calling the entry point, which returns a pointer to a static table.
+        let api = unsafe { entry() };
+        if api.is_null() {
+            return Err(Error::NoEntry { path });
+        }
+        // SAFETY: non-null; read the version fields first (present in every ABI version).
+        let (major, minor, size) =
+            unsafe { ((*api).abi_major, (*api).abi_minor, (*api).struct_size) };
+        if !abi::compatible(major, minor, abi::ABI_MAJOR, abi::ABI_MINOR)
+            || (size as usize) < std::mem::size_of::<abi::FmApi>()
+        {
+            return Err(Error::Abi {
+                path,
+                plugin: (major, minor),
+                host: (abi::ABI_MAJOR, abi::ABI_MINOR),
+            });
+        }
+        Ok(Plugin {
+            inner: Arc::new(Inner {
+                api,
+                path,
+                _lib: lib,
+            }),
+        })
+    }
+
+    /// Finds the plugin: the file `FIREMEDIUM_PLUGIN` names, else the library file in each directory of
+    /// `FIREMEDIUM_PLUGIN_PATH` (`:`-separated; `;` on Windows), then beside the running executable.
+    pub fn from_env() -> Result<Plugin, Error> {
+        if let Some(f) = std::env::var_os("FIREMEDIUM_PLUGIN") {
+            return Plugin::load(PathBuf::from(f));
+        }
+        let mut dirs: Vec<PathBuf> = std::env::var_os("FIREMEDIUM_PLUGIN_PATH")
+            .map(|p| std::env::split_paths(&p).collect())
+            .unwrap_or_default();
+        if let Some(d) = std::env::current_exe()
+            .ok()
+            .and_then(|e| e.parent().map(Path::to_path_buf))
+        {
+            dirs.push(d.clone());
+            dirs.push(d.join("deps"));
+        }
+        Plugin::find(&dirs)
+    }
+
+    /// Loads the library file from the first of `dirs` that holds it.
+    pub fn find(dirs: &[PathBuf]) -> Result<Plugin, Error> {
+        let name = library_file_name();
+        let mut searched = Vec::new();
+        for d in dirs {
+            let p = d.join(&name);
+            if p.is_file() {
+                return Plugin::load(p);
+            }
+            searched.push(p);
+        }
+        Err(Error::NotFound { searched })
+    }
+
+    /// The plugin's ABI version.
+    pub fn version(&self) -> (u32, u32) {
+        let api = self.inner.api();
+        (api.abi_major, api.abi_minor)
+    }
+
+    /// The file it was loaded from.
+    pub fn path(&self) -> &Path {
+        &self.inner.path
+    }
+
+    /// Every parameter of every component.
+    pub fn parameters(&self) -> Vec<ParamInfo> {
+        let api = self.inner.api();
+        // SAFETY: plain call.
+        let n = unsafe { (api.param_count)() };
+        let s = |p: *const c_char| {
+            if p.is_null() {
+                String::new()
+            } else {
+                unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+            }
+        };
+        (0..n)
+            .filter_map(|i| {
+                let mut info = std::mem::MaybeUninit::<abi::FmParamInfo>::uninit();
+                // SAFETY: writes one FmParamInfo on success.
+                (unsafe { (api.param_info)(i, info.as_mut_ptr()) } == abi::FM_OK).then(|| {
+                    // SAFETY: initialised by the successful call; its strings are static in the library.
+                    let info = unsafe { info.assume_init() };
+                    ParamInfo {
+                        component: s(info.component),
+                        name: s(info.name),
+                        ty: s(info.ty),
+                        default: s(info.default_value),
+                        unit: s(info.unit),
+                        range: s(info.range),
+                        doc: s(info.doc),
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// Creates a fire volume from dataset and volume parameters.
+    pub fn create_volume(&self, params: &[Param]) -> Result<Volume, Error> {
+        // Keep every C string and value array alive until the call returns.
+        let mut names = Vec::new();
+        let mut strings: Vec<Vec<CString>> = Vec::new();
+        let mut string_ptrs: Vec<Vec<*const c_char>> = Vec::new();
+        let mut f64s: Vec<Vec<f64>> = Vec::new();
+        let mut i64s: Vec<Vec<i64>> = Vec::new();
+        let mut u8s: Vec<Vec<u8>> = Vec::new();
+        let to_c = |s: &str| {
+            CString::new(s)
+                .map_err(|_| Error::Buffer(format!("parameter text {s:?} holds a NUL byte")))
+        };
+        let mut raw = Vec::new();
+        for p in params {
+            names.push(to_c(&p.name)?);
+            let (ty, count, values): (u32, usize, *const c_void) = match &p.value {
+                Value::Integer(v) => {
+                    i64s.push(v.clone());
+                    (
+                        abi::FM_TYPE_INTEGER,
+                        v.len(),
+                        i64s.last()
+                            .map_or(std::ptr::null(), |v| v.as_ptr() as *const c_void),
+                    )
+                }
+                Value::Bool(v) => {
+                    u8s.push(v.iter().map(|&b| b as u8).collect());
+                    (
+                        abi::FM_TYPE_BOOL,
+                        v.len(),
+                        u8s.last()
+                            .map_or(std::ptr::null(), |v| v.as_ptr() as *const c_void),
+                    )
+                }
+                Value::String(v) => {
+                    strings.push(v.iter().map(|s| to_c(s)).collect::<Result<_, _>>()?);
+                    string_ptrs.push(
+                        strings
+                            .last()
+                            .map(|v| v.iter().map(|c| c.as_ptr()).collect())
+                            .unwrap_or_default(),
+                    );
+                    (
+                        abi::FM_TYPE_STRING,
+                        v.len(),
+                        string_ptrs
+                            .last()
+                            .map_or(std::ptr::null(), |v| v.as_ptr() as *const c_void),
+                    )
+                }
+                Value::Float(v)
+                | Value::Point3(v)
+                | Value::Vector3(v)
+                | Value::Rgb(v)
+                | Value::Spectrum(v) => {
+                    let ty = match &p.value {
+                        Value::Float(_) => abi::FM_TYPE_FLOAT,
+                        Value::Point3(_) => abi::FM_TYPE_POINT3,
+                        Value::Vector3(_) => abi::FM_TYPE_VECTOR3,
+                        Value::Rgb(_) => abi::FM_TYPE_RGB,
+                        _ => abi::FM_TYPE_SPECTRUM,
+                    };
+                    f64s.push(v.clone());
+                    (
+                        ty,
+                        v.len(),
+                        f64s.last()
+                            .map_or(std::ptr::null(), |v| v.as_ptr() as *const c_void),
+                    )
+                }
+            };
+            raw.push((ty, count, values));
+        }
+        let list: Vec<abi::FmParam> = names
+            .iter()
+            .zip(&raw)
+            .map(|(n, &(ty, count, values))| abi::FmParam {
+                name: n.as_ptr(),
+                ty,
+                count: count as u32,
+                values,
+            })
+            .collect();
+        let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
+        let api = self.inner.api();
+        // SAFETY: `list` and everything it points to live until after the call; `handle` is writable.
+        let status = unsafe { (api.volume_create)(list.as_ptr(), list.len(), &mut handle) };
+        self.inner.check(status)?;
+        let mut info = abi::FmVolumeInfo::default();
+        // SAFETY: a live handle and a writable info.
+        let s = unsafe { (api.volume_info)(handle, &mut info) };
+        let vol = Volume {
+            inner: self.inner.clone(),
+            handle,
+            info,
+        };
+        self.inner.check(s)?;
+        Ok(vol)
+    }
+}
+
+/// A fire volume living in the plugin. Immutable; `Send + Sync`.
+pub struct Volume {
+    inner: Arc<Inner>,
+    handle: *mut abi::FmVolume,
+    info: abi::FmVolumeInfo,
+}
+
+// SAFETY: the plugin guarantees volumes are immutable and safe to query from many threads (ABI contract), and
+// `inner` keeps the library loaded.
+unsafe impl Send for Volume {}
+// SAFETY: as above.
+unsafe impl Sync for Volume {}
+
+impl fmt::Debug for Volume {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Volume({:?})", self.info)
+    }
+}
+
+impl Drop for Volume {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from volume_create and is destroyed exactly once, here.
+        unsafe { (self.inner.api().volume_destroy)(self.handle) }
+    }
+}
+
+impl Volume {
+    /// What the volume is (bounds, channels, …).
+    pub fn info(&self) -> VolumeInfo {
+        self.info
+    }
+
+    /// The XYZ of unit radiance in each channel.
+    pub fn channel_xyz(&self) -> Result<Vec<[f64; 3]>, Error> {
+        let c = self.info.channels as usize;
+        let mut out = vec![0.0; 3 * c];
+        // SAFETY: room for 3·c doubles.
+        let s = unsafe {
+            (self.inner.api().volume_channel_xyz)(self.handle, out.as_mut_ptr(), out.len())
+        };
+        self.inner.check(s)?;
+        Ok(out.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    fn need(&self, what: &str, len: usize, n: usize) -> Result<(), Error> {
+        let want = n * self.info.channels as usize;
+        if len < want {
+            return Err(Error::Buffer(format!(
+                "{what}: {len} floats for {n} rays × {} channels = {want}",
+                self.info.channels
+            )));
+        }
+        Ok(())
+    }
+
+    /// Emitted radiance (and optionally transmittance and exit points) along `rays`; buffers hold
+    /// `rays.len() × channels` floats, channel fastest.
+    pub fn integrate(
+        &self,
+        rays: &[Ray],
+        radiance: &mut [f32],
+        transmittance: Option<&mut [f32]>,
+        exits: Option<&mut [Exit]>,
+    ) -> Result<(), Error> {
+        self.need("radiance", radiance.len(), rays.len())?;
+        let t_ptr = match transmittance {
+            Some(t) => {
+                self.need("transmittance", t.len(), rays.len())?;
+                t.as_mut_ptr()
+            }
+            None => std::ptr::null_mut(),
+        };
+        let e_ptr = match exits {
+            Some(e) if e.len() >= rays.len() => e.as_mut_ptr(),
+            Some(e) => {
+                return Err(Error::Buffer(format!(
+                    "exits: {} entries for {} rays",
+                    e.len(),
+                    rays.len()
+                )))
+            }
+            None => std::ptr::null_mut(),
+        };
+        // SAFETY: buffers sized above; rays.len() rays.
+        let s = unsafe {
+            (self.inner.api().volume_integrate)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                radiance.as_mut_ptr(),
+                t_ptr,
+                e_ptr,
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// Transmittance along `rays` (`rays.len() × channels` floats).
+    pub fn transmittance(&self, rays: &[Ray], transmittance: &mut [f32]) -> Result<(), Error> {
+        self.need("transmittance", transmittance.len(), rays.len())?;
+        // SAFETY: buffer sized above.
+        let s = unsafe {
+            (self.inner.api().volume_transmittance)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                transmittance.as_mut_ptr(),
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// The first real scattering event per ray, with weights and the emission before it.
+    pub fn sample_scatter(
+        &self,
+        rays: &[Ray],
+        events: &mut [Scatter],
+        weights: &mut [f32],
+        emitted: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        if events.len() < rays.len() {
+            return Err(Error::Buffer(format!(
+                "events: {} entries for {} rays",
+                events.len(),
+                rays.len()
+            )));
+        }
+        self.need("weights", weights.len(), rays.len())?;
+        let l_ptr = match emitted {
+            Some(l) => {
+                self.need("emitted", l.len(), rays.len())?;
+                l.as_mut_ptr()
+            }
+            None => std::ptr::null_mut(),
+        };
+        // SAFETY: buffers sized above.
+        let s = unsafe {
+            (self.inner.api().volume_sample_scatter)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                events.as_mut_ptr(),
+                weights.as_mut_ptr(),
+                l_ptr,
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// σ_a, σ_s and j per channel at medium-space points.
+    pub fn coefficients(
+        &self,
+        points: &[[f64; 3]],
+        sigma_a: &mut [f32],
+        sigma_s: &mut [f32],
+        emission: &mut [f32],
+    ) -> Result<(), Error> {
+        for (what, b) in [
+            ("sigma_a", &*sigma_a),
+            ("sigma_s", &*sigma_s),
+            ("emission", &*emission),
+        ] {
+            self.need(what, b.len(), points.len())?;
+        }
+        // SAFETY: buffers sized above; points are 3 contiguous f64 each.
+        let s = unsafe {
+            (self.inner.api().volume_coefficients)(
+                self.handle,
+                points.as_ptr() as *const f64,
+                points.len(),
+                sigma_a.as_mut_ptr(),
+                sigma_s.as_mut_ptr(),
+                emission.as_mut_ptr(),
+            )
+        };
+        self.inner.check(s)
+    }
+}

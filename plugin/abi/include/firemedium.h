@@ -1,0 +1,125 @@
+/*
+ * firemedium.h — the C ABI of the firemedium plugin (a physically based fire medium for path tracers).
+ *
+ * Hand-written to match the Rust crate firemedium-abi (plugin/abi/src/lib.rs); tests/c_header.rs compiles a C
+ * program against this header, checks every struct size against the Rust layout, loads the built plugin and
+ * renders a ray through it.
+ *
+ * Usage: dlopen the plugin, dlsym FIREMEDIUM_ENTRY_SYMBOL, call it, check abi_major == FM_ABI_MAJOR and
+ * abi_minor >= FM_ABI_MINOR and struct_size >= sizeof(FmApi), then use the table. Every call returns an FmStatus;
+ * on failure last_error() gives the message. Volumes are immutable and safe to query from many threads.
+ * Batch outputs hold n * channels floats, channel fastest. Rays are in the medium's space.
+ */
+#ifndef FIREMEDIUM_H
+#define FIREMEDIUM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FM_ABI_MAJOR 0u
+#define FM_ABI_MINOR 1u
+#define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
+
+typedef int32_t FmStatus;
+#define FM_OK 0
+#define FM_INVALID_ARGUMENT 1
+#define FM_INVALID_PARAMETER 2
+#define FM_DATASET 3
+#define FM_UNSUPPORTED 4
+#define FM_PANIC 5
+
+#define FM_TYPE_FLOAT 0u    /* values: double[count] */
+#define FM_TYPE_INTEGER 1u  /* int64_t[count] */
+#define FM_TYPE_BOOL 2u     /* uint8_t[count] */
+#define FM_TYPE_STRING 3u   /* const char*[count], UTF-8 */
+#define FM_TYPE_POINT3 4u   /* double[count] */
+#define FM_TYPE_VECTOR3 5u  /* double[count] */
+#define FM_TYPE_RGB 6u      /* double[count] */
+#define FM_TYPE_SPECTRUM 7u /* double[count]: one constant or (lambda nm, value) pairs */
+
+typedef struct FmParam {
+    const char *name;
+    uint32_t ty;
+    uint32_t count;
+    const void *values;
+} FmParam;
+
+typedef struct FmRay {
+    double origin[3];
+    double direction[3];
+    double tmin, tmax;
+    uint64_t seed;
+} FmRay;
+
+typedef struct FmExit {
+    double point[3];
+    double direction[3];
+    double t;
+} FmExit;
+
+#define FM_EVENT_ESCAPED 0u
+#define FM_EVENT_SCATTERED 1u
+#define FM_EVENT_ABSORBED 2u
+
+typedef struct FmScatter {
+    uint32_t event;
+    uint32_t reserved;
+    double t;
+    double point[3];
+} FmScatter;
+
+#define FM_SPACE_SPECTRAL 0u /* channels are bins, W m^-2 sr^-1 nm^-1 */
+#define FM_SPACE_XYZ 1u      /* channels are CIE XYZ, Y in cd/m^2 */
+
+#define FM_INTEGRATOR_MARCH 0u
+#define FM_INTEGRATOR_RATIO 1u
+#define FM_INTEGRATOR_DELTA 2u
+
+typedef struct FmVolumeInfo {
+    double bounds_min[3];
+    double bounds_max[3];
+    uint32_t channels;
+    uint32_t channel_space;
+    double lambda_min, lambda_max;
+    double g;
+    uint32_t scatters;
+    uint32_t integrator;
+    double step;
+    uint64_t bytes;
+    double build_seconds;
+} FmVolumeInfo;
+
+typedef struct FmParamInfo {
+    const char *component, *name, *ty, *default_value, *unit, *range, *doc;
+} FmParamInfo;
+
+typedef void FmVolume;
+
+typedef struct FmApi {
+    uint32_t abi_major, abi_minor, struct_size, reserved;
+    size_t (*last_error)(char *buf, size_t cap);
+    size_t (*param_count)(void);
+    FmStatus (*param_info)(size_t index, FmParamInfo *out);
+    FmStatus (*volume_create)(const FmParam *params, size_t count, FmVolume **out);
+    void (*volume_destroy)(FmVolume *volume);
+    FmStatus (*volume_info)(const FmVolume *volume, FmVolumeInfo *out);
+    FmStatus (*volume_channel_xyz)(const FmVolume *volume, double *out, size_t cap);
+    FmStatus (*volume_integrate)(const FmVolume *volume, const FmRay *rays, size_t n, float *radiance,
+                                 float *transmittance, FmExit *exits);
+    FmStatus (*volume_transmittance)(const FmVolume *volume, const FmRay *rays, size_t n, float *transmittance);
+    FmStatus (*volume_sample_scatter)(const FmVolume *volume, const FmRay *rays, size_t n, FmScatter *events,
+                                      float *weights, float *emitted);
+    FmStatus (*volume_coefficients)(const FmVolume *volume, const double *points, size_t n, float *sigma_a,
+                                    float *sigma_s, float *emission);
+} FmApi;
+
+typedef const FmApi *(*FmEntry)(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* FIREMEDIUM_H */

@@ -1,0 +1,560 @@
+//! The C ABI export: the one `unsafe` module of the plugin. Every exported function checks its pointers, runs
+//! under `catch_unwind`, and returns a status; messages go to a per-thread last-error slot. No Rust type
+//! crosses the boundary: the table and its types are `firemedium-abi`'s `#[repr(C)]` ones.
+
+use crate::params::{Param, ParamType, Values};
+use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
+use crate::Error;
+use firemedium_abi::*;
+use glam::DVec3;
+use std::cell::RefCell;
+use std::ffi::{c_char, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::OnceLock;
+
+thread_local! {
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+fn set_error(msg: String) {
+    LAST_ERROR.with(|e| *e.borrow_mut() = msg);
+}
+
+/// Runs `f`, mapping its error and any panic to a status and the last-error message.
+fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => FM_OK,
+        Ok(Err((status, msg))) => {
+            set_error(msg);
+            status
+        }
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            set_error(format!("firemedium: internal error (panic: {what}); the call did nothing, the host may continue"));
+            FM_PANIC
+        }
+    }
+}
+
+fn status_of(e: &Error) -> FmStatus {
+    match e {
+        Error::InvalidParameter { .. } => FM_INVALID_PARAMETER,
+        Error::Format { .. } | Error::Io { .. } | Error::TooLarge { .. } => FM_DATASET,
+        Error::Unsupported { .. } => FM_UNSUPPORTED,
+    }
+}
+
+fn fail(e: Error) -> (FmStatus, String) {
+    (status_of(&e), e.to_string())
+}
+
+fn bad(msg: impl Into<String>) -> (FmStatus, String) {
+    (FM_INVALID_ARGUMENT, msg.into())
+}
+
+unsafe extern "C" fn last_error(buf: *mut c_char, cap: usize) -> usize {
+    LAST_ERROR.with(|e| {
+        let e = e.borrow();
+        let bytes = e.as_bytes();
+        if !buf.is_null() && cap > 0 {
+            let n = bytes.len().min(cap - 1);
+            // SAFETY: the caller passes a writable buffer of `cap` bytes (ABI contract); we write n + 1 ≤ cap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+                *buf.add(n) = 0;
+            }
+        }
+        bytes.len()
+    })
+}
+
+/// Every row of the public parameter tables, as C strings that live as long as the library.
+fn param_rows() -> &'static [[CString; 7]] {
+    static ROWS: OnceLock<Vec<[CString; 7]>> = OnceLock::new();
+    ROWS.get_or_init(|| {
+        let c = |s: &str| CString::new(s.replace('\0', " ")).unwrap_or_default();
+        crate::volume::params::components()
+            .iter()
+            .flat_map(|comp| {
+                comp.params.iter().map(move |p| {
+                    [
+                        c(comp.name),
+                        c(p.name),
+                        c(p.ty.name()),
+                        c(p.default),
+                        c(p.unit),
+                        c(&p.range.describe().replace("\\|", "|")),
+                        c(p.doc),
+                    ]
+                })
+            })
+            .collect()
+    })
+}
+
+unsafe extern "C" fn param_count() -> usize {
+    catch_unwind(|| param_rows().len()).unwrap_or(0)
+}
+
+unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("param_info: out is null"));
+        }
+        let rows = param_rows();
+        let r = rows.get(index).ok_or_else(|| {
+            bad(format!(
+                "param_info: index {index} is not below the {} rows",
+                rows.len()
+            ))
+        })?;
+        // SAFETY: out is non-null and points to an FmParamInfo the caller owns (ABI contract).
+        unsafe {
+            *out = FmParamInfo {
+                component: r[0].as_ptr(),
+                name: r[1].as_ptr(),
+                ty: r[2].as_ptr(),
+                default_value: r[3].as_ptr(),
+                unit: r[4].as_ptr(),
+                range: r[5].as_ptr(),
+                doc: r[6].as_ptr(),
+            };
+        }
+        Ok(())
+    })
+}
+
+/// Copies C parameters into Rust ones.
+///
+/// # Safety
+/// `params` points to `count` valid `FmParam`s whose `values` hold `count` elements of their type.
+unsafe fn read_params(
+    params: *const FmParam,
+    count: usize,
+) -> Result<Vec<Param>, (FmStatus, String)> {
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    if params.is_null() || count > 1 << 20 {
+        return Err(bad(format!(
+            "volume_create: {count} parameters at a null or absurd list"
+        )));
+    }
+    // SAFETY: non-null, `count` entries (caller contract).
+    let list = unsafe { std::slice::from_raw_parts(params, count) };
+    let mut out = Vec::with_capacity(count);
+    for (i, p) in list.iter().enumerate() {
+        if p.name.is_null() {
+            return Err(bad(format!("volume_create: parameter {i} has a null name")));
+        }
+        // SAFETY: non-null, NUL-terminated (caller contract).
+        let name = unsafe { CStr::from_ptr(p.name) }
+            .to_str()
+            .map_err(|_| bad(format!("volume_create: parameter {i}'s name is not UTF-8")))?
+            .to_string();
+        let n = p.count as usize;
+        if n > 0 && p.values.is_null() {
+            return Err(bad(format!(
+                "volume_create: parameter '{name}' has {n} values at a null pointer"
+            )));
+        }
+        let ty = match p.ty {
+            FM_TYPE_FLOAT => ParamType::Float,
+            FM_TYPE_INTEGER => ParamType::Integer,
+            FM_TYPE_BOOL => ParamType::Bool,
+            FM_TYPE_STRING => ParamType::String,
+            FM_TYPE_POINT3 => ParamType::Point3,
+            FM_TYPE_VECTOR3 => ParamType::Vector3,
+            FM_TYPE_RGB => ParamType::Rgb,
+            FM_TYPE_SPECTRUM => ParamType::Spectrum,
+            t => {
+                return Err(bad(format!(
+                    "volume_create: parameter '{name}' has unknown type code {t}"
+                )))
+            }
+        };
+        // SAFETY (each arm): `values` holds `n` elements of the type `ty` names (caller contract); n > 0
+        // implies non-null, checked above; n == 0 reads nothing.
+        let values = match ty {
+            ParamType::Integer => Values::Integers(if n == 0 {
+                vec![]
+            } else {
+                unsafe { std::slice::from_raw_parts(p.values as *const i64, n) }.to_vec()
+            }),
+            ParamType::Bool => Values::Bools(if n == 0 {
+                vec![]
+            } else {
+                unsafe { std::slice::from_raw_parts(p.values as *const u8, n) }
+                    .iter()
+                    .map(|&b| b != 0)
+                    .collect()
+            }),
+            ParamType::String => {
+                let ptrs = if n == 0 {
+                    &[][..]
+                } else {
+                    unsafe { std::slice::from_raw_parts(p.values as *const *const c_char, n) }
+                };
+                let mut v = Vec::with_capacity(n);
+                for &s in ptrs {
+                    if s.is_null() {
+                        return Err(bad(format!(
+                            "volume_create: parameter '{name}' has a null string"
+                        )));
+                    }
+                    v.push(
+                        unsafe { CStr::from_ptr(s) }
+                            .to_str()
+                            .map_err(|_| {
+                                bad(format!("volume_create: parameter '{name}' is not UTF-8"))
+                            })?
+                            .to_string(),
+                    );
+                }
+                Values::Strings(v)
+            }
+            _ => Values::Numbers(if n == 0 {
+                vec![]
+            } else {
+                unsafe { std::slice::from_raw_parts(p.values as *const f64, n) }.to_vec()
+            }),
+        };
+        out.push(Param { name, ty, values });
+    }
+    Ok(out)
+}
+
+unsafe extern "C" fn volume_create(
+    params: *const FmParam,
+    count: usize,
+    out: *mut *mut FmVolume,
+) -> FmStatus {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("volume_create: out is null"));
+        }
+        // SAFETY: the caller's contract for `params`/`count` (documented in FmApi).
+        let list = unsafe { read_params(params, count) }?;
+        let v = FireVolume::new(&list).map_err(fail)?;
+        // SAFETY: out is non-null and writable (checked, contract).
+        unsafe { *out = Box::into_raw(Box::new(v)) as *mut FmVolume };
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_destroy(volume: *mut FmVolume) {
+    if !volume.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: a handle from volume_create, destroyed once (contract).
+            drop(unsafe { Box::from_raw(volume as *mut FireVolume) });
+        });
+    }
+}
+
+/// The volume behind a handle.
+///
+/// # Safety
+/// `v` is null or a live handle from `volume_create`.
+unsafe fn vol<'a>(v: *const FmVolume, what: &str) -> Result<&'a FireVolume, (FmStatus, String)> {
+    if v.is_null() {
+        return Err(bad(format!("{what}: volume is null")));
+    }
+    // SAFETY: live handle (contract); volumes are immutable and Sync.
+    Ok(unsafe { &*(v as *const FireVolume) })
+}
+
+/// `n × c` mutable f32 outputs at `p` (null → None).
+///
+/// # Safety
+/// `p` is null or points to `n × c` writable f32.
+unsafe fn out_f32<'a>(
+    p: *mut f32,
+    n: usize,
+    c: usize,
+) -> Result<Option<&'a mut [f32]>, (FmStatus, String)> {
+    if p.is_null() {
+        return Ok(None);
+    }
+    let len = n
+        .checked_mul(c)
+        .ok_or_else(|| bad(format!("{n} rays × {c} channels overflow")))?;
+    // SAFETY: caller provides n × c floats (contract).
+    Ok(Some(unsafe { std::slice::from_raw_parts_mut(p, len) }))
+}
+
+/// # Safety
+/// `rays` points to `n` rays.
+unsafe fn rays<'a>(rays: *const FmRay, n: usize) -> Result<&'a [FmRay], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if rays.is_null() {
+        return Err(bad(format!("{n} rays at a null pointer")));
+    }
+    // SAFETY: n rays (contract).
+    Ok(unsafe { std::slice::from_raw_parts(rays, n) })
+}
+
+fn ray_of(r: &FmRay) -> Ray {
+    Ray {
+        o: DVec3::from(r.origin),
+        d: DVec3::from(r.direction),
+        t0: r.tmin,
+        t1: r.tmax,
+        seed: r.seed,
+    }
+}
+
+unsafe extern "C" fn volume_info(volume: *const FmVolume, out: *mut FmVolumeInfo) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_info") }?;
+        if out.is_null() {
+            return Err(bad("volume_info: out is null"));
+        }
+        let [p0, p1] = v.bounds();
+        let (space, lo, hi) = match v.color_mode() {
+            ColorMode::Spectral(g) => (FM_SPACE_SPECTRAL, g.min_nm(), g.max_nm()),
+            ColorMode::Rgb => (FM_SPACE_XYZ, 380.0, 780.0),
+        };
+        let info = FmVolumeInfo {
+            bounds_min: p0.to_array(),
+            bounds_max: p1.to_array(),
+            channels: v.channels() as u32,
+            channel_space: space,
+            lambda_min: lo,
+            lambda_max: hi,
+            g: v.g(),
+            scatters: v.scatters() as u32,
+            integrator: match v.integrator() {
+                Integrator::March => FM_INTEGRATOR_MARCH,
+                Integrator::Ratio => FM_INTEGRATOR_RATIO,
+                Integrator::Delta => FM_INTEGRATOR_DELTA,
+            },
+            step: v.step_length(),
+            bytes: v.bytes() as u64,
+            build_seconds: v.build_seconds(),
+        };
+        // SAFETY: non-null, writable (contract).
+        unsafe { *out = info };
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_channel_xyz(
+    volume: *const FmVolume,
+    out: *mut f64,
+    cap: usize,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_channel_xyz") }?;
+        let w = v.channel_xyz();
+        if out.is_null() || cap < 3 * w.len() {
+            return Err(bad(format!(
+                "volume_channel_xyz: need room for {} doubles, have {cap}",
+                3 * w.len()
+            )));
+        }
+        // SAFETY: non-null with cap ≥ 3·channels doubles (checked, contract).
+        let o = unsafe { std::slice::from_raw_parts_mut(out, 3 * w.len()) };
+        for (i, x) in w.iter().enumerate() {
+            o[3 * i..3 * i + 3].copy_from_slice(&x.to_array());
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_integrate(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    radiance: *mut f32,
+    transmittance: *mut f32,
+    exits: *mut FmExit,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY (all four): the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_integrate") }?;
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        let l_out = unsafe { out_f32(radiance, n, c) }?
+            .ok_or_else(|| bad("volume_integrate: radiance is null"))?;
+        let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
+        let mut e_out = if exits.is_null() {
+            None
+        } else {
+            Some(unsafe { std::slice::from_raw_parts_mut(exits, n) })
+        };
+        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+        for (i, r) in rs.iter().enumerate() {
+            let ray = ray_of(r);
+            let t_exit = v.integrate(&ray, &mut l, &mut t);
+            for k in 0..c {
+                l_out[i * c + k] = l[k] as f32;
+            }
+            if let Some(to) = t_out.as_deref_mut() {
+                for k in 0..c {
+                    to[i * c + k] = t[k] as f32;
+                }
+            }
+            if let Some(eo) = e_out.as_deref_mut() {
+                eo[i] = FmExit {
+                    point: (ray.o + ray.d * t_exit).to_array(),
+                    direction: r.direction,
+                    t: t_exit,
+                };
+            }
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_transmittance(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    transmittance: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_transmittance") }?;
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        let out = unsafe { out_f32(transmittance, n, c) }?
+            .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
+        let mut t = vec![0.0; c];
+        for (i, r) in rs.iter().enumerate() {
+            v.transmittance(&ray_of(r), &mut t);
+            for k in 0..c {
+                out[i * c + k] = t[k] as f32;
+            }
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_sample_scatter(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    events: *mut FmScatter,
+    weights: *mut f32,
+    emitted: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_sample_scatter") }?;
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        if events.is_null() && n > 0 {
+            return Err(bad("volume_sample_scatter: events is null"));
+        }
+        let ev = if n == 0 {
+            &mut [][..]
+        } else {
+            unsafe { std::slice::from_raw_parts_mut(events, n) }
+        };
+        let w_out = unsafe { out_f32(weights, n, c) }?
+            .ok_or_else(|| bad("volume_sample_scatter: weights is null"))?;
+        let mut l_out = unsafe { out_f32(emitted, n, c) }?;
+        let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
+        for (i, r) in rs.iter().enumerate() {
+            let ray = ray_of(r);
+            let e = v.sample_scatter(&ray, &mut l, &mut w);
+            let (event, t) = match e {
+                Event::Escaped => (FM_EVENT_ESCAPED, ray.t1),
+                Event::Scattered(t) => (FM_EVENT_SCATTERED, t),
+                Event::Absorbed => (FM_EVENT_ABSORBED, ray.t1),
+            };
+            ev[i] = FmScatter {
+                event,
+                reserved: 0,
+                t,
+                point: (ray.o + ray.d * t).to_array(),
+            };
+            for k in 0..c {
+                w_out[i * c + k] = w[k] as f32;
+            }
+            if let Some(lo) = l_out.as_deref_mut() {
+                for k in 0..c {
+                    lo[i * c + k] = l[k] as f32;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn volume_coefficients(
+    volume: *const FmVolume,
+    points: *const f64,
+    n: usize,
+    sigma_a: *mut f32,
+    sigma_s: *mut f32,
+    emission: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_coefficients") }?;
+        if points.is_null() && n > 0 {
+            return Err(bad("volume_coefficients: points is null"));
+        }
+        let pts = if n == 0 {
+            &[][..]
+        } else {
+            unsafe { std::slice::from_raw_parts(points, 3 * n) }
+        };
+        let c = v.channels();
+        let mut outs = [
+            unsafe { out_f32(sigma_a, n, c) }?,
+            unsafe { out_f32(sigma_s, n, c) }?,
+            unsafe { out_f32(emission, n, c) }?,
+        ];
+        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        for i in 0..n {
+            v.coefficients(
+                DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]),
+                &mut a,
+                &mut s,
+                &mut j,
+            );
+            for (o, src) in outs.iter_mut().zip([&a, &s, &j]) {
+                if let Some(o) = o.as_deref_mut() {
+                    for k in 0..c {
+                        o[i * c + k] = src[k] as f32;
+                    }
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+static API: FmApi = FmApi {
+    abi_major: ABI_MAJOR,
+    abi_minor: ABI_MINOR,
+    struct_size: std::mem::size_of::<FmApi>() as u32,
+    reserved: 0,
+    last_error,
+    param_count,
+    param_info,
+    volume_create,
+    volume_destroy,
+    volume_info,
+    volume_channel_xyz,
+    volume_integrate,
+    volume_transmittance,
+    volume_sample_scatter,
+    volume_coefficients,
+};
+
+/// The plugin's entry point: the static function table.
+#[no_mangle]
+pub extern "C" fn firemedium_plugin_entry() -> *const FmApi {
+    &API
+}

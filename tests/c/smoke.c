@@ -1,0 +1,55 @@
+/* A C host: loads the firemedium plugin through firemedium.h, creates a fire volume and integrates one ray.
+ * Usage: smoke PLUGIN.so DATASET.vdb   — prints "key value" lines for tests/c_header.rs. */
+#include "firemedium.h"
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+int main(int argc, char **argv) {
+    if (argc != 3) { fprintf(stderr, "usage: smoke PLUGIN DATASET\n"); return 2; }
+    printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
+           sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
+    printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi));
+    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
+    FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
+    if (!entry) { fprintf(stderr, "no entry symbol\n"); return 1; }
+    const FmApi *api = entry();
+    printf("abi %u.%u\nstruct_size %u\n", api->abi_major, api->abi_minor, api->struct_size);
+    if (api->abi_major != FM_ABI_MAJOR || api->abi_minor < FM_ABI_MINOR || api->struct_size < sizeof(FmApi)) return 3;
+    printf("param_count %zu\n", api->param_count());
+
+    const char *file = argv[2];
+    double tscale = 1000.0, soot = 1e-6;
+    FmParam params[3] = {
+        {"filename", FM_TYPE_STRING, 1, &file},
+        {"temperaturescale", FM_TYPE_FLOAT, 1, &tscale},
+        {"sootscale", FM_TYPE_FLOAT, 1, &soot},
+    };
+    FmVolume *vol = NULL;
+    if (api->volume_create(params, 3, &vol) != FM_OK) {
+        char msg[512];
+        api->last_error(msg, sizeof msg);
+        fprintf(stderr, "volume_create: %s\n", msg);
+        return 1;
+    }
+    FmVolumeInfo info;
+    api->volume_info(vol, &info);
+    printf("channels %u\n", info.channels);
+    FmRay ray = {{1.0, -1.0, 0.5}, {0.0, 1.0, 0.0}, 0.0, 10.0, 7};
+    float *radiance = calloc(info.channels, sizeof(float)), *transmittance = calloc(info.channels, sizeof(float));
+    FmExit exit;
+    FmStatus s = api->volume_integrate(vol, &ray, 1, radiance, transmittance, &exit);
+    printf("integrate_status %d\nradiance_29 %.9g\ntransmittance_29 %.9g\nexit_y %.9g\n", s, radiance[29], transmittance[29], exit.point[1]);
+    /* A bad parameter comes back as a status and a message, not a crash. */
+    FmParam bad[1] = {{"stepsise", FM_TYPE_FLOAT, 1, &tscale}};
+    FmVolume *none = NULL;
+    FmStatus b = api->volume_create(bad, 1, &none);
+    char msg[512];
+    api->last_error(msg, sizeof msg);
+    printf("bad_status %d\nbad_message %s\n", b, msg);
+    api->volume_destroy(vol);
+    free(radiance);
+    free(transmittance);
+    return 0;
+}

@@ -1,0 +1,158 @@
+//! The C header `plugin/abi/include/firemedium.h`: a C program compiled against it (gcc, -Wall -Werror) loads
+//! the built plugin, checks every struct size against the Rust layout, and integrates a ray; a fake plugin
+//! claiming ABI 99.0 is refused by the loader with both versions named.
+
+use firemedium_loader::{library_file_name, Param, Plugin, Ray};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn plugin_path() -> PathBuf {
+    let deps = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let p = deps.join(library_file_name());
+    assert!(p.is_file(), "{} not built", p.display());
+    p
+}
+
+fn gcc(args: &[&str]) {
+    let out = Command::new("gcc")
+        .args(args)
+        .output()
+        .expect("gcc runs (the project's machines have it)");
+    assert!(
+        out.status.success(),
+        "gcc {args:?}:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-c-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+#[test]
+fn a_c_host_loads_the_plugin_through_the_header() {
+    let include = root().join("plugin/abi/include");
+    let exe = tmp("smoke");
+    gcc(&[
+        "-std=c99",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-I",
+        include.to_str().unwrap(),
+        root().join("tests/c/smoke.c").to_str().unwrap(),
+        "-ldl",
+        "-o",
+        exe.to_str().unwrap(),
+    ]);
+    let fire = root().join("tests/data/valid/vdb/mantaflow_fire_f060.vdb");
+    let out = Command::new(&exe)
+        .arg(plugin_path())
+        .arg(&fire)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let get = |k: &str| -> String {
+        text.lines()
+            .find_map(|l| l.strip_prefix(&format!("{k} ")))
+            .unwrap_or_else(|| panic!("{k} missing in\n{text}"))
+            .to_string()
+    };
+    use firemedium_abi::*;
+    for (k, n) in [
+        ("sizeof_FmRay", std::mem::size_of::<FmRay>()),
+        ("sizeof_FmExit", std::mem::size_of::<FmExit>()),
+        ("sizeof_FmScatter", std::mem::size_of::<FmScatter>()),
+        ("sizeof_FmVolumeInfo", std::mem::size_of::<FmVolumeInfo>()),
+        ("sizeof_FmParam", std::mem::size_of::<FmParam>()),
+        ("sizeof_FmParamInfo", std::mem::size_of::<FmParamInfo>()),
+        ("sizeof_FmApi", std::mem::size_of::<FmApi>()),
+    ] {
+        assert_eq!(
+            get(k).parse::<usize>().unwrap(),
+            n,
+            "{k}: C and Rust layouts differ"
+        );
+    }
+    assert_eq!(get("abi"), "0.1");
+    assert_eq!(get("channels"), "30");
+    assert_eq!(get("integrate_status"), "0");
+    // The same ray through the Rust loader gives the same numbers.
+    let p = Plugin::load(plugin_path()).unwrap();
+    let v = p
+        .create_volume(&[
+            Param::string("filename", fire.to_str().unwrap()),
+            Param::float("temperaturescale", 1000.0),
+            Param::float("sootscale", 1e-6),
+        ])
+        .unwrap();
+    let (mut l, mut t) = (vec![0f32; 30], vec![0f32; 30]);
+    v.integrate(
+        &[Ray {
+            origin: [1.0, -1.0, 0.5],
+            direction: [0.0, 1.0, 0.0],
+            tmin: 0.0,
+            tmax: 10.0,
+            seed: 7,
+        }],
+        &mut l,
+        Some(&mut t),
+        None,
+    )
+    .unwrap();
+    let c_l: f32 = get("radiance_29").parse().unwrap();
+    let c_t: f32 = get("transmittance_29").parse().unwrap();
+    assert_eq!((c_l, c_t), (l[29], t[29]));
+    assert!(
+        c_l > 0.0 && c_t < 1.0,
+        "the ray should cross the fire: L {c_l}, T {c_t}"
+    );
+    assert_eq!(get("bad_status"), "2");
+    assert!(get("bad_message").contains("did you mean 'stepsize'"));
+}
+
+#[test]
+fn an_abi_mismatch_names_both_versions() {
+    let include = root().join("plugin/abi/include");
+    let so = tmp(&format!(
+        "{}fake{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    gcc(&[
+        "-std=c99",
+        "-Wall",
+        "-Werror",
+        "-shared",
+        "-fPIC",
+        "-I",
+        include.to_str().unwrap(),
+        root().join("tests/c/fake_plugin.c").to_str().unwrap(),
+        "-o",
+        so.to_str().unwrap(),
+    ]);
+    let e = Plugin::load(&so).unwrap_err().to_string();
+    assert!(
+        e.contains("speaks firemedium ABI 99.0, this host needs 0.1"),
+        "{e}"
+    );
+    let e = Plugin::load(Path::new("/etc/hostname"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot load"), "{e}");
+}

@@ -1,0 +1,271 @@
+//! End-to-end through the C ABI: load the **built** plugin library (not the rlib) with the loader, create fire
+//! volumes, integrate from four threads at once, and check errors, panics and lifetimes.
+//!
+//! Declared as a test of `firemedium-loader`, whose dev-dependency on the plugin makes Cargo build the plugin's
+//! cdylib (with the test-only `fault-injection` feature) into the same target directory.
+
+use firemedium_loader::{library_file_name, Error, Param, Plugin, Ray, Value};
+use std::path::PathBuf;
+
+fn plugin() -> Plugin {
+    // The test executable lives in target/<profile>/deps, beside the cdylib Cargo built for this run.
+    let deps = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let dirs = [deps.clone(), deps.parent().unwrap().to_path_buf()];
+    Plugin::find(&dirs).unwrap_or_else(|e| {
+        panic!(
+            "{e} — the plugin cdylib ({}) should be built by `cargo test`",
+            library_file_name()
+        )
+    })
+}
+
+fn fire_file() -> String {
+    format!(
+        "{}/../../tests/data/valid/vdb/mantaflow_fire_f060.vdb",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+fn fire_params() -> Vec<Param> {
+    vec![
+        Param::string("filename", &fire_file()),
+        Param::float("temperaturescale", 1000.0),
+        Param::float("sootscale", 1e-6),
+    ]
+}
+
+fn rays(n: usize) -> Vec<Ray> {
+    // A fan of rays through the fire (medium space: the Mantaflow grid spans about [0, 2]² × [0, 3] m).
+    (0..n)
+        .map(|i| {
+            let f = i as f64 / n as f64;
+            Ray {
+                origin: [
+                    0.2 + 1.6 * f,
+                    -1.0,
+                    0.3 + 2.0 * ((i * 7) % n) as f64 / n as f64,
+                ],
+                direction: [0.05 * (f - 0.5), 1.0, 0.1 * (0.5 - f)],
+                tmin: 0.0,
+                tmax: 5.0,
+                seed: i as u64,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn loads_describes_and_integrates() {
+    let p = plugin();
+    assert_eq!(p.version(), (0, 1));
+    let params = p.parameters();
+    let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
+    for n in [
+        "filename",
+        "stepsize",
+        "colormode",
+        "temperaturescale",
+        "species",
+        "Lescale",
+    ] {
+        assert!(names.contains(&n), "{n} missing from the self-description");
+    }
+    let step = params.iter().find(|r| r.name == "stepsize").unwrap();
+    assert_eq!(
+        (
+            step.component.as_str(),
+            step.ty.as_str(),
+            step.default.as_str(),
+            step.unit.as_str()
+        ),
+        ("volume", "float", "0.5", "voxels")
+    );
+
+    let v = p.create_volume(&fire_params()).unwrap();
+    let info = v.info();
+    assert_eq!(info.channels, 30);
+    assert_eq!(info.channel_space, firemedium_abi::FM_SPACE_SPECTRAL);
+    assert!(info.bytes > 1_000_000 && info.build_seconds > 0.0);
+    let xyz = v.channel_xyz().unwrap();
+    assert!(
+        (xyz[15][1] - 683.0 * 10.0 * 0.995).abs() < 683.0 * 10.0 * 0.02,
+        "{:?}",
+        xyz[15]
+    ); // ȳ ≈ 1 at 555 nm
+
+    // Same rays through the rlib, in process: the cdylib gives the same numbers.
+    let rs = rays(64);
+    let c = 30;
+    let (mut l, mut t) = (vec![0f32; 64 * c], vec![0f32; 64 * c]);
+    let mut exits = vec![Default::default(); 64];
+    v.integrate(&rs, &mut l, Some(&mut t), Some(&mut exits))
+        .unwrap();
+    let list = vec![
+        firemedium_plugin::params::Param::string("filename", &fire_file()),
+        firemedium_plugin::params::Param::float("temperaturescale", 1000.0),
+        firemedium_plugin::params::Param::float("sootscale", 1e-6),
+    ];
+    let local = firemedium_plugin::volume::FireVolume::new(&list).unwrap();
+    let (mut ll, mut lt) = (vec![0.0; c], vec![0.0; c]);
+    let mut lit = 0;
+    for (i, r) in rs.iter().enumerate() {
+        let ray = firemedium_plugin::volume::Ray {
+            o: r.origin.into(),
+            d: r.direction.into(),
+            t0: r.tmin,
+            t1: r.tmax,
+            seed: r.seed,
+        };
+        local.integrate(&ray, &mut ll, &mut lt);
+        for k in 0..c {
+            assert_eq!(l[i * c + k], ll[k] as f32);
+            assert_eq!(t[i * c + k], lt[k] as f32);
+            assert!((0.0..=1.0).contains(&t[i * c + k]) && l[i * c + k].is_finite());
+        }
+        lit += (l[i * c + 29] > 0.0) as usize;
+        assert!(exits[i].t <= r.tmax);
+    }
+    assert!(lit > 10, "only {lit} of 64 rays saw the fire");
+}
+
+#[test]
+fn four_threads_give_the_single_thread_results() {
+    let p = plugin();
+    let v = p
+        .create_volume(&[fire_params(), vec![Param::string("integrator", "ratio")]].concat())
+        .unwrap();
+    let c = v.info().channels as usize;
+    let rs = rays(2000);
+    let mut single = vec![0f32; rs.len() * c];
+    v.integrate(&rs, &mut single, None, None).unwrap();
+    let chunks: Vec<&[Ray]> = rs.chunks(500).collect();
+    let results: Vec<Vec<f32>> = std::thread::scope(|s| {
+        let handles: Vec<_> = chunks
+            .iter()
+            .map(|chunk| {
+                let v = &v;
+                s.spawn(move || {
+                    let mut out = vec![0f32; chunk.len() * c];
+                    v.integrate(chunk, &mut out, None, None).unwrap();
+                    out
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(
+        results.concat(),
+        single,
+        "threaded results differ from single-threaded ones"
+    );
+}
+
+#[test]
+fn errors_come_back_typed() {
+    let p = plugin();
+    match p.create_volume(&[fire_params(), vec![Param::float("stepsise", 0.25)]].concat()) {
+        Err(Error::Status { code, message }) => {
+            assert_eq!(code, firemedium_abi::FM_INVALID_PARAMETER);
+            assert!(message.contains("did you mean 'stepsize'"), "{message}");
+        }
+        other => panic!("expected a parameter error, got {other:?}"),
+    }
+    match p.create_volume(&[Param::string("filename", "/no/such/fire.vdb")]) {
+        Err(Error::Status { code, message }) => {
+            assert_eq!(code, firemedium_abi::FM_DATASET);
+            assert!(
+                message.contains("/no/such/fire.vdb: cannot read"),
+                "{message}"
+            );
+        }
+        other => panic!("expected a dataset error, got {other:?}"),
+    }
+    let wrong_type = Param {
+        name: "stepsize".into(),
+        value: Value::String(vec!["fast".into()]),
+    };
+    let e = p
+        .create_volume(&[fire_params(), vec![wrong_type]].concat())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stepsize") && e.contains("float"), "{e}");
+    let v = p.create_volume(&fire_params()).unwrap();
+    let mut small = vec![0f32; 10];
+    assert!(matches!(
+        v.integrate(&rays(2), &mut small, None, None),
+        Err(Error::Buffer(_))
+    ));
+}
+
+#[test]
+fn a_panic_inside_the_plugin_is_a_status_and_the_host_lives_on() {
+    let p = plugin();
+    match p.create_volume(
+        &[
+            fire_params(),
+            vec![Param::string("faultinjection", "create")],
+        ]
+        .concat(),
+    ) {
+        Err(Error::Status { code, message }) => {
+            assert_eq!(code, firemedium_abi::FM_PANIC);
+            assert!(
+                message.contains("panic") && message.contains("fault injection"),
+                "{message}"
+            );
+        }
+        other => panic!("expected FM_PANIC, got {other:?}"),
+    }
+    let v = p
+        .create_volume(
+            &[
+                fire_params(),
+                vec![Param::string("faultinjection", "integrate")],
+            ]
+            .concat(),
+        )
+        .unwrap();
+    let c = v.info().channels as usize;
+    let mut out = vec![0f32; c];
+    match v.integrate(&rays(1), &mut out, None, None) {
+        Err(Error::Status { code, .. }) => assert_eq!(code, firemedium_abi::FM_PANIC),
+        other => panic!("expected FM_PANIC, got {other:?}"),
+    }
+    // The plugin still works afterwards.
+    let ok = p.create_volume(&fire_params()).unwrap();
+    ok.integrate(&rays(1), &mut out, None, None).unwrap();
+}
+
+#[test]
+fn volumes_keep_the_library_alive() {
+    let v = {
+        let p = plugin();
+        p.create_volume(&fire_params()).unwrap()
+    }; // the Plugin is dropped here; the volume holds the library.
+    let c = v.info().channels as usize;
+    let mut t = vec![0f32; 3 * c];
+    v.transmittance(&rays(3), &mut t).unwrap();
+    assert!(t.iter().all(|x| (0.0..=1.0).contains(x)));
+}
+
+#[test]
+fn not_found_and_not_a_plugin() {
+    let e = Plugin::find(&[PathBuf::from("/nonexistent-dir")])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no firemedium plugin found") && e.contains("/nonexistent-dir"),
+        "{e}"
+    );
+    let e = Plugin::load("/nonexistent-dir/libfoo.so")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cannot load the firemedium plugin /nonexistent-dir/libfoo.so"),
+        "{e}"
+    );
+}
