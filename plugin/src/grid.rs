@@ -45,11 +45,28 @@ pub struct Stencil {
 impl Stencil {
     /// The stencil of `p` in [0, 1]³ on a grid of `dims`; `None` outside the bounds (value zero).
     pub fn new(dims: [usize; 3], p: [f64; 3], interp: Interpolation) -> Option<Stencil> {
+        Stencil::with_margin(dims, p, interp, 0.0)
+    }
+
+    /// As [`Stencil::new`], but trilinear lookups continue `margin` voxels beyond the bounds, fading toward the
+    /// zero outside (NanoVDB's sampler does this up to the next voxel centre).
+    pub fn with_margin(
+        dims: [usize; 3],
+        p: [f64; 3],
+        interp: Interpolation,
+        margin: f64,
+    ) -> Option<Stencil> {
         for a in 0..3 {
-            if !(0.0..=1.0).contains(&p[a]) {
+            let m = margin / dims[a] as f64;
+            if !(p[a] >= -m && p[a] <= 1.0 + m) {
                 return None;
             }
         }
+        let p = if interp == Interpolation::Nearest {
+            p.map(|x| x.clamp(0.0, 1.0))
+        } else {
+            p
+        };
         let [nx, ny, nz] = dims;
         let mut st = Stencil::default();
         match interp {

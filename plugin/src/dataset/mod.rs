@@ -729,6 +729,11 @@ impl Dataset {
     pub fn stencil(&self, p: DVec3) -> Option<crate::grid::Stencil> {
         crate::grid::Stencil::new(self.dims, self.to_unit(p), self.interpolation)
     }
+    /// The stencil of `p`, continuing `margin` voxels beyond the bounds (see [`crate::grid::Stencil::with_margin`]).
+    #[inline]
+    pub fn stencil_with_margin(&self, p: DVec3, margin: f64) -> Option<crate::grid::Stencil> {
+        crate::grid::Stencil::with_margin(self.dims, self.to_unit(p), self.interpolation, margin)
+    }
     /// The interpolation used by [`Dataset::sample`].
     pub fn interpolation(&self) -> Interpolation {
         self.interpolation
