@@ -11,6 +11,27 @@
 use crate::dataset::Dataset;
 use glam::DVec3;
 
+/// The part [a, b] of the ray o + t·d, t ∈ [t0, t1], inside the box [p0, p1] (slab test); `None` when it
+/// misses, and for non-finite rays (`f64::max` would silently skip a NaN).
+pub fn clip_box(o: DVec3, d: DVec3, t0: f64, t1: f64, p0: DVec3, p1: DVec3) -> Option<(f64, f64)> {
+    if !(o.is_finite() && d.is_finite()) {
+        return None;
+    }
+    let (mut a, mut b) = (t0, t1);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if !(o[k] >= p0[k] && o[k] <= p1[k]) {
+                return None;
+            }
+        } else {
+            let (ta, tb) = ((p0[k] - o[k]) / d[k], (p1[k] - o[k]) / d[k]);
+            a = a.max(ta.min(tb));
+            b = b.min(ta.max(tb));
+        }
+    }
+    (a < b).then_some((a, b))
+}
+
 /// Per-brick channel bounds over a dataset's lattice.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MajorantGrid {
@@ -122,22 +143,7 @@ impl MajorantGrid {
     /// tile [max(t0, t_enter), min(t1, t_exit)] exactly (each piece starts where the previous ended).
     pub fn segments(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Segments {
         let [p0, p1] = self.bounds;
-        // Slab clip in medium space.
-        let (mut tmin, mut tmax) = (t0, t1);
-        if !(o.is_finite() && d.is_finite()) {
-            tmax = f64::NEG_INFINITY; // f64::max would skip a NaN; refuse such rays outright
-        }
-        for a in 0..3 {
-            if d[a] == 0.0 {
-                if !(o[a] >= p0[a] && o[a] <= p1[a]) {
-                    tmax = f64::NEG_INFINITY;
-                }
-                continue;
-            }
-            let (ta, tb) = ((p0[a] - o[a]) / d[a], (p1[a] - o[a]) / d[a]);
-            tmin = tmin.max(ta.min(tb));
-            tmax = tmax.min(ta.max(tb));
-        }
+        let (tmin, tmax) = clip_box(o, d, t0, t1, p0, p1).unwrap_or((0.0, f64::NEG_INFINITY));
         let mut s = Segments {
             t: tmin,
             tmax,

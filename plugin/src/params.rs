@@ -494,35 +494,10 @@ impl<'a> ParamReader<'a> {
         Ok(())
     }
 
-    /// Errors on the first parameter no getter read, naming the closest valid name.
+    /// Errors on any parameter no table knows (after reading: the same check as [`ParamReader::check_names`]).
+    /// Known parameters that this configuration does not use are accepted.
     pub fn finish(&self) -> Result<(), Error> {
-        self.check_names()?;
-        let used = self.used.borrow();
-        for (p, &u) in self.list.iter().zip(used.iter()) {
-            if !u {
-                if self.specs.iter().any(|s| s.name == p.name) {
-                    continue; // a known parameter that this configuration does not use
-                }
-                let best = self
-                    .specs
-                    .iter()
-                    .map(|s| {
-                        (
-                            levenshtein(&p.name.to_ascii_lowercase(), &s.name.to_ascii_lowercase()),
-                            s.name,
-                        )
-                    })
-                    .min();
-                let hint = match best {
-                    Some((d, n)) if d <= 3.max(p.name.len() / 3) => {
-                        format!("a known parameter (did you mean '{n}'?)")
-                    }
-                    _ => "a known parameter (see docs/params.md)".to_string(),
-                };
-                return Err(Error::invalid(self.component, &p.name, "unknown", hint));
-            }
-        }
-        Ok(())
+        self.check_names()
     }
 }
 

@@ -12,7 +12,7 @@
 
 use super::compress::zlib;
 use super::cursor::Cursor;
-use super::sparse::{bit, densify, Leaf, Tile, Transform, Tree};
+use super::sparse::{bit, densify, missing_grid, Leaf, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
 use glam::DVec3;
@@ -356,12 +356,10 @@ pub(crate) fn read(
     let mut trees = Vec::new();
     for &name in names {
         let Some(g) = entries.iter().find(|g| g.name == name) else {
-            let have: Vec<String> = entries.iter().map(|g| format!("'{}'", g.name)).collect();
-            return Err(Error::format(
+            return Err(missing_grid(
                 file,
-                "grid table",
-                format!("a grid named '{name}'"),
-                format!("grids {}", have.join(", ")),
+                name,
+                entries.iter().map(|g| g.name.as_str()),
             ));
         };
         if g.grid_type != 1 {

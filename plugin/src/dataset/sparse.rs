@@ -72,6 +72,21 @@ fn active_bbox(t: &Tree) -> Option<([i64; 3], [i64; 3])> {
     (lo[0] <= hi[0]).then_some((lo, hi))
 }
 
+/// The error for a grid name a file does not hold, listing the names it does.
+pub(crate) fn missing_grid<'a>(
+    file: &str,
+    name: &str,
+    have: impl Iterator<Item = &'a str>,
+) -> Error {
+    let have: Vec<String> = have.map(|g| format!("'{g}'")).collect();
+    Error::format(
+        file,
+        "grid table",
+        format!("a grid named '{name}'"),
+        format!("grids {}", have.join(", ")),
+    )
+}
+
 /// Makes `trees` dense over the union of their active boxes; every voxel holds the tree's value there
 /// (leaf values, active or not, over tile values, over the background).
 pub(crate) fn densify(

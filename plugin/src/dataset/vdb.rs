@@ -13,7 +13,7 @@
 
 use super::compress::{blosc, half_to_f32, zlib};
 use super::cursor::Cursor;
-use super::sparse::{bit, densify, Leaf, Tile, Transform, Tree};
+use super::sparse::{bit, densify, missing_grid, Leaf, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
 use glam::DVec3;
@@ -497,16 +497,10 @@ pub(crate) fn read(
     let mut trees = Vec::new();
     for &name in names {
         let Some(info) = header.grids.iter().find(|g| g.name == name) else {
-            let have: Vec<String> = header
-                .grids
-                .iter()
-                .map(|g| format!("'{}'", g.name))
-                .collect();
-            return Err(Error::format(
+            return Err(missing_grid(
                 file,
-                "grid table",
-                format!("a grid named '{name}'"),
-                format!("grids {}", have.join(", ")),
+                name,
+                header.grids.iter().map(|g| g.name.as_str()),
             ));
         };
         trees.push((name, read_tree(file, bytes, info)?));

@@ -789,23 +789,7 @@ impl FireVolume {
 
 impl Medium for FireVolume {
     fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        if !(o.is_finite() && d.is_finite()) {
-            return None;
-        }
-        let [p0, p1] = self.clip_box;
-        let (mut a, mut b) = (t0, t1);
-        for k in 0..3 {
-            if d[k] == 0.0 {
-                if !(o[k] >= p0[k] && o[k] <= p1[k]) {
-                    return None;
-                }
-            } else {
-                let (ta, tb) = ((p0[k] - o[k]) / d[k], (p1[k] - o[k]) / d[k]);
-                a = a.max(ta.min(tb));
-                b = b.min(ta.max(tb));
-            }
-        }
-        (a < b).then_some((a, b))
+        crate::majorant::clip_box(o, d, t0, t1, self.clip_box[0], self.clip_box[1])
     }
     fn step(&self) -> f64 {
         self.step
