@@ -9,6 +9,8 @@
 
 mod info;
 mod physics;
+mod render;
+mod render_cmd;
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -31,6 +33,8 @@ enum Command {
     Physics(physics::PhysicsArgs),
     /// Describe a voxel dataset file: dims, bounds, channels with statistics, bytes, load time.
     Info(info::InfoArgs),
+    /// Render a pbrt-v4 scene (fire media through the plugin) to EXR and a PNG preview.
+    Render(render_cmd::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -58,6 +62,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Physics(args) => physics::run(&args).map_err(|m| (2, m)),
         Command::Info(args) => info::run(&args),
+        Command::Render(args) => render_cmd::run(&args),
     };
     match result {
         Ok(text) => {

@@ -974,7 +974,23 @@ fn load_dataset(r: &ParamReader, mode: Mode) -> Result<(Dataset, Option<usize>),
         let li = les.as_ref().map(|_| arrays.len() - 1);
         (ds, li)
     } else {
-        let filename = r.string("filename")?;
+        let filename = match (r.string("filename")?, r.string("dataset")?) {
+            (f, d) if !f.is_empty() && !d.is_empty() => {
+                return Err(Error::invalid(
+                    "dataset",
+                    "dataset",
+                    format!("\"{d}\" with filename \"{f}\""),
+                    "one of filename or dataset",
+                ))
+            }
+            (f, d) => {
+                if f.is_empty() {
+                    d
+                } else {
+                    f
+                }
+            }
+        };
         let densityfile = r.string("densityfile")?;
         let temperaturefile = r.string("temperaturefile")?;
         let dfile = if !densityfile.is_empty() {

@@ -27,6 +27,7 @@ pub static DATASET: Component = Component {
     doc: "Voxel grids from files (OpenVDB, NanoVDB, the thesis's ASCII and raw formats) or inline arrays (pbrt-v4 `uniformgrid`). Only the grids the fire uses are loaded.",
     params: &[
         p("filename", T::String, "", "", Range::Any, "File holding the grids (.vdb, .nvdb; any format). A `####` or `%04d` in the name takes `frame`."),
+        p("dataset", T::String, "", "", Range::Any, "The fire scene's name for `filename` (`MakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"flame.vdb\"`)."),
         p("densityfile", T::String, "", "", Range::Any, "File of the density grid, when grids come in separate files (thesis formats)."),
         p("temperaturefile", T::String, "", "", Range::Any, "File of the temperature grid, when grids come in separate files."),
         p("format", T::String, "", "", Range::Choices(&["", "ascii", "asciisparse", "raw", "raw2", "vdb", "nvdb"]), "File format; empty: from the extension."),

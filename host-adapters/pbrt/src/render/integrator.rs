@@ -1,0 +1,477 @@
+//! `volpath`: unidirectional path tracing with next-event estimation to the scene's lights, media crossed at
+//! MediumInterface boundaries (and `interface` materials), emission–absorption of plugin media through the
+//! plugin's `integrate` call (or its scattering-event sampling when σ_s > 0, with Henyey–Greenstein phase
+//! sampling and NEE at the scattering point), and homogeneous media in closed form.
+//!
+//! Light is counted once: the fire's emission only where paths pass through it (the fire light, issue 6, adds
+//! sampling); area lights by NEE after diffuse bounces and by hitting them at depth 0 or after specular bounces.
+
+use super::scene::{Light, Material, Medium, Scene};
+use super::shapes::{sample_area, Hit};
+use super::spectrum::S;
+use firemedium_loader::Ray as FRay;
+use firemedium_plugin::rng::Rng;
+use glam::{DVec3, Vec3A};
+use std::f32::consts::PI;
+
+fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
+    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3A::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        Vec3A::new(b, s + n.y * n.y * a, -n.y),
+    )
+}
+
+fn cosine_dir(n: Vec3A, u: [f32; 2]) -> Vec3A {
+    let r = u[0].sqrt();
+    let phi = 2.0 * PI * u[1];
+    let (t, b) = frame(n);
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u[0]).max(0.0).sqrt())
+        .normalize_or_zero()
+}
+
+fn uniform_sphere(u: [f32; 2]) -> Vec3A {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Henyey–Greenstein phase function value (eq. 4) for cosθ between wo-reversed and wi (pbrt's convention).
+fn hg(cos: f32, g: f32) -> f32 {
+    let d = 1.0 + g * g + 2.0 * g * cos;
+    (1.0 - g * g) / (4.0 * PI * d * d.max(1e-12).sqrt())
+}
+
+/// Samples HG around the propagation direction `d`.
+fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
+    let cos = if g.abs() < 1e-3 {
+        1.0 - 2.0 * u[0]
+    } else {
+        let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u[0]);
+        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+    };
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    let (t, b) = frame(d);
+    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + d * cos).normalize_or_zero()
+}
+
+fn fresnel(cos_i: f32, eta: f32) -> f32 {
+    let cos_i = cos_i.clamp(-1.0, 1.0);
+    let (eta, cos_i) = if cos_i < 0.0 {
+        (1.0 / eta, -cos_i)
+    } else {
+        (eta, cos_i)
+    };
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    0.5 * (rp * rp + rs * rs)
+}
+
+/// Renders radiance along camera rays.
+pub struct Integrator<'a> {
+    pub scene: &'a Scene,
+    pub mask: S,
+}
+
+impl Integrator<'_> {
+    fn rng2(rng: &mut Rng) -> [f32; 2] {
+        [rng.next_f64() as f32, rng.next_f64() as f32]
+    }
+
+    /// Transmittance of medium `m` along o + t·d, t ∈ [0, t_end], and (optionally) the emission it adds.
+    fn medium_segment(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Rng,
+        emission: bool,
+    ) -> (S, S) {
+        let n = self.scene.bins.n();
+        match &self.scene.media[m] {
+            Medium::Plugin { vol, to_medium, .. } => {
+                let om = to_medium.transform_point3(DVec3::from(o.to_array().map(f64::from)));
+                let dm = to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
+                let ray = FRay {
+                    origin: om.to_array(),
+                    direction: dm.to_array(),
+                    tmin: 0.0,
+                    tmax: if t_end.is_finite() {
+                        t_end as f64
+                    } else {
+                        1e30
+                    },
+                    seed: rng.next_u64(),
+                };
+                let (mut l, mut t) = (
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                );
+                let ok = if emission {
+                    vol.integrate(
+                        std::slice::from_ref(&ray),
+                        &mut l[..n],
+                        Some(&mut t[..n]),
+                        None,
+                    )
+                    .is_ok()
+                } else {
+                    vol.transmittance(std::slice::from_ref(&ray), &mut t[..n])
+                        .is_ok()
+                };
+                if !ok {
+                    return (S::ZERO, S::ZERO);
+                }
+                (S(l), S(t))
+            }
+            Medium::Homogeneous { sa, ss, le } => {
+                let len = if t_end.is_finite() {
+                    t_end * d.length()
+                } else {
+                    f32::INFINITY
+                };
+                let st = *sa + *ss;
+                let mut tr = S::ZERO;
+                let mut l = S::ZERO;
+                for i in 0..n {
+                    let tau = st.0[i] * len;
+                    tr.0[i] = (-tau).exp();
+                    if emission && st.0[i] > 0.0 {
+                        l.0[i] = sa.0[i] * le.0[i] * -(-tau).exp_m1() / st.0[i];
+                    }
+                }
+                (l, tr)
+            }
+        }
+    }
+
+    /// Transmittance from `o` toward `d` over distance parameter `t_max` through surfaces that are only medium
+    /// boundaries; zero if an opaque surface is in the way.
+    fn shadow(
+        &self,
+        mut o: Vec3A,
+        d: Vec3A,
+        mut t_max: f32,
+        mut medium: Option<usize>,
+        rng: &mut Rng,
+    ) -> S {
+        let eps = self.scene.eps;
+        let mut tr = self.mask;
+        for _ in 0..64 {
+            let hit = self.scene.bvh.intersect(o, d, eps, t_max - eps);
+            let seg = hit.map(|h| h.t).unwrap_or(t_max);
+            if let Some(m) = medium {
+                tr *= self.medium_segment(m, o, d, seg, rng, false).1;
+                if tr.max() <= 0.0 {
+                    return S::ZERO;
+                }
+            }
+            let Some(h) = hit else { return tr };
+            let prim = &self.scene.bvh.prims[h.prim];
+            if prim.material.is_some() {
+                return S::ZERO;
+            }
+            if let Some((inside, outside)) = prim.media {
+                medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
+            }
+            o = h.p;
+            t_max -= h.t;
+        }
+        tr
+    }
+
+    /// Radiance from one light toward point `p` (NEE): (incident radiance × visibility, direction, pdf of the
+    /// direction in solid angle, is-delta).
+    fn sample_light(
+        &self,
+        li: usize,
+        p: Vec3A,
+        medium: Option<usize>,
+        rng: &mut Rng,
+    ) -> Option<(S, Vec3A)> {
+        let sc = self.scene;
+        let u = Self::rng2(rng);
+        let (wi, dist, le) = match &sc.lights[li] {
+            Light::Point { p: lp, i } => {
+                let v = *lp - p;
+                let d2 = v.length_squared();
+                (v.normalize_or_zero(), d2.sqrt(), *i / d2)
+            }
+            Light::Spot {
+                p: lp,
+                dir,
+                cos_total,
+                cos_falloff,
+                i,
+            } => {
+                let v = *lp - p;
+                let d2 = v.length_squared();
+                let w = v.normalize_or_zero();
+                let c = (-w).dot(*dir);
+                let f = if c < *cos_total {
+                    0.0
+                } else if c >= *cos_falloff {
+                    1.0
+                } else {
+                    ((c - cos_total) / (cos_falloff - cos_total)).powi(4)
+                };
+                (w, d2.sqrt(), *i * (f / d2))
+            }
+            Light::Distant { to_light, l } => (*to_light, f32::INFINITY, *l),
+            Light::Infinite { l } => {
+                let w = uniform_sphere(u);
+                (w, f32::INFINITY, *l * (4.0 * PI))
+            }
+            Light::Area { prim, l, twosided } => {
+                let (q, n, pdf_a) = sample_area(&sc.bvh.prims[*prim], u);
+                let v = q - p;
+                let d2 = v.length_squared();
+                let w = v.normalize_or_zero();
+                let cos_l = n.dot(-w);
+                if cos_l <= 0.0 && !twosided {
+                    return None;
+                }
+                (w, d2.sqrt(), *l * (cos_l.abs() / (d2 * pdf_a)))
+            }
+        };
+        if le.max() <= 0.0 || !wi.is_finite() {
+            return None;
+        }
+        let t_max = if dist.is_finite() {
+            dist * (1.0 - 1e-4)
+        } else {
+            1e30
+        };
+        let vis = self.shadow(p, wi, t_max, medium, rng);
+        let l = le * vis * sc.lights.len() as f32;
+        (!l.is_black()).then_some((l, wi))
+    }
+
+    fn diffuse_albedo(&self, m: &Material, h: &Hit) -> Option<S> {
+        match m {
+            Material::Diffuse(t) => Some(t.eval(h.uv)),
+            Material::CoatedDiffuse(t, _) => Some(t.eval(h.uv)),
+            _ => None,
+        }
+    }
+
+    /// Radiance along a camera ray.
+    pub fn li(&self, mut o: Vec3A, mut d: Vec3A, rng: &mut Rng) -> S {
+        let sc = self.scene;
+        let mut l = S::ZERO;
+        let mut beta = self.mask;
+        let mut medium = sc.camera.medium;
+        let mut specular = true;
+        let mut depth = 0;
+        for _ in 0..(4 * sc.maxdepth + 64) {
+            let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
+            let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
+            if let Some(m) = medium {
+                let scatters = matches!(&sc.media[m], Medium::Plugin { scatters: true, .. });
+                if scatters {
+                    if let Medium::Plugin {
+                        vol, to_medium, g, ..
+                    } = &sc.media[m]
+                    {
+                        let n = sc.bins.n();
+                        let om =
+                            to_medium.transform_point3(DVec3::from(o.to_array().map(f64::from)));
+                        let dm =
+                            to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
+                        let ray = FRay {
+                            origin: om.to_array(),
+                            direction: dm.to_array(),
+                            tmin: 0.0,
+                            tmax: if t_end.is_finite() {
+                                t_end as f64
+                            } else {
+                                1e30
+                            },
+                            seed: rng.next_u64(),
+                        };
+                        let mut ev = [firemedium_loader::Scatter::default()];
+                        let (mut w, mut e) = (
+                            [0f32; super::spectrum::MAX_CHANNELS],
+                            [0f32; super::spectrum::MAX_CHANNELS],
+                        );
+                        if vol
+                            .sample_scatter(
+                                std::slice::from_ref(&ray),
+                                &mut ev,
+                                &mut w[..n],
+                                Some(&mut e[..n]),
+                            )
+                            .is_err()
+                        {
+                            break;
+                        }
+                        l += beta * S(e);
+                        match ev[0].event {
+                            firemedium_abi::FM_EVENT_SCATTERED => {
+                                beta *= S(w);
+                                if depth >= sc.maxdepth {
+                                    break;
+                                }
+                                let p = o + d * ev[0].t as f32;
+                                // NEE from the scattering point with the phase function.
+                                if !sc.lights.is_empty() {
+                                    let li = (rng.next_f64() * sc.lights.len() as f64) as usize
+                                        % sc.lights.len();
+                                    if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
+                                        l += beta * le * hg((-d).dot(wi), *g as f32);
+                                    }
+                                }
+                                d = sample_hg(d, *g as f32, Self::rng2(rng));
+                                o = p;
+                                depth += 1;
+                                specular = false;
+                                continue;
+                            }
+                            firemedium_abi::FM_EVENT_ABSORBED => break,
+                            _ => beta *= S(w),
+                        }
+                    }
+                } else {
+                    let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
+                    l += beta * le;
+                    beta *= tr;
+                }
+                if beta.max() <= 0.0 {
+                    break;
+                }
+            }
+            let Some(h) = hit else {
+                for light in &sc.lights {
+                    if let Light::Infinite { l: le } = light {
+                        if specular || depth == 0 {
+                            l += beta * *le;
+                        }
+                    }
+                }
+                break;
+            };
+            let prim = &sc.bvh.prims[h.prim];
+            if let Some(li) = prim.area_light {
+                if specular {
+                    if let Light::Area {
+                        l: le, twosided, ..
+                    } = &sc.lights[li]
+                    {
+                        if *twosided || h.ng.dot(-d) > 0.0 {
+                            l += beta * *le;
+                        }
+                    }
+                }
+            }
+            let Some(mi) = prim.material else {
+                // Only a medium boundary: pass through.
+                if let Some((inside, outside)) = prim.media {
+                    medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
+                }
+                o = h.p;
+                continue;
+            };
+            if depth >= sc.maxdepth {
+                break;
+            }
+            let mat = &sc.materials[mi];
+            let wo = -d;
+            // Shading normal on the side of wo.
+            let n = if h.ns.dot(wo) < 0.0 { -h.ns } else { h.ns };
+            let ng = if h.ng.dot(wo) < 0.0 { -h.ng } else { h.ng };
+            let side_medium = |w: Vec3A| match prim.media {
+                Some((inside, outside)) => {
+                    if w.dot(h.ng) > 0.0 {
+                        outside
+                    } else {
+                        inside
+                    }
+                }
+                None => medium,
+            };
+            // NEE (diffuse part).
+            if let Some(albedo) = self.diffuse_albedo(mat, &h) {
+                if !sc.lights.is_empty() {
+                    let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
+                    let p = h.p + ng * sc.eps;
+                    if let Some((le, wi)) = self.sample_light(li, p, side_medium(ng), rng) {
+                        let cos = wi.dot(n);
+                        if cos > 0.0 && wi.dot(ng) > 0.0 {
+                            let coat = if let Material::CoatedDiffuse(_, eta) = mat {
+                                (1.0 - fresnel(wi.dot(n), *eta)) * (1.0 - fresnel(wo.dot(n), *eta))
+                            } else {
+                                1.0
+                            };
+                            l += beta * albedo * le * (cos / PI * coat);
+                        }
+                    }
+                }
+            }
+            // Sample the BSDF.
+            let u = Self::rng2(rng);
+            let (wi, weight, is_spec) = match mat {
+                Material::Diffuse(t) => (cosine_dir(n, u), t.eval(h.uv), false),
+                Material::Conductor(r) => (d - n * (2.0 * d.dot(n)), *r, true),
+                Material::CoatedDiffuse(t, eta) => {
+                    let f = fresnel(wo.dot(n), *eta);
+                    if rng.next_f64() < f as f64 {
+                        (d - n * (2.0 * d.dot(n)), self.mask, true)
+                    } else {
+                        (
+                            cosine_dir(n, u),
+                            t.eval(h.uv) * (1.0 - f) / (1.0 - f).max(1e-6),
+                            false,
+                        )
+                    }
+                }
+                Material::Dielectric(eta) => {
+                    let cos_o = wo.dot(h.ns);
+                    let f = fresnel(cos_o, *eta);
+                    if rng.next_f64() < f as f64 {
+                        (d - n * (2.0 * d.dot(n)), self.mask, true)
+                    } else {
+                        // Refract (entering when wo is on the outside of h.ns).
+                        let (etap, nn) = if cos_o > 0.0 {
+                            (*eta, h.ns)
+                        } else {
+                            (1.0 / *eta, -h.ns)
+                        };
+                        let ci = wo.dot(nn);
+                        let s2 = (1.0 - ci * ci).max(0.0) / (etap * etap);
+                        let ct = (1.0 - s2).max(0.0).sqrt();
+                        let wt = (-wo / etap + nn * (ci / etap - ct)).normalize_or_zero();
+                        (wt, self.mask * (1.0 / (etap * etap)), true)
+                    }
+                }
+            };
+            if !wi.is_finite() || wi == Vec3A::ZERO {
+                break;
+            }
+            beta *= weight;
+            specular = is_spec;
+            medium = side_medium(wi);
+            o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
+            d = wi;
+            depth += 1;
+            // Russian roulette after three bounces.
+            if depth > 3 {
+                let q = beta.max().min(0.95);
+                if (rng.next_f64() as f32) > q {
+                    break;
+                }
+                beta = beta / q;
+            }
+        }
+        l.finite_or_zero()
+    }
+}

@@ -1,0 +1,221 @@
+//! The pbrt-v4 host: a volumetric path tracer for fire scenes. `scene` builds a render scene from a pbrt-v4 file
+//! (media through the plugin), `integrator` is `volpath`, and `render` runs it over tiles in parallel and writes
+//! the film: EXR (linear sRGB, absolute units) and a PNG preview.
+
+pub mod integrator;
+pub mod ply;
+pub mod scene;
+pub mod shapes;
+pub mod spectrum;
+
+use firemedium_plugin::cie;
+use firemedium_plugin::rng::Rng;
+use glam::{DVec3, Vec3A};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Set by Ctrl-C: tiles not yet started are skipped and what is done is written.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// A rendered image: linear sRGB (absolute: Y in cd/m² when the scene is absolute), row-major.
+#[derive(Debug, Clone)]
+pub struct Image {
+    pub w: usize,
+    pub h: usize,
+    pub rgb: Vec<[f32; 3]>,
+    pub xyz: Vec<DVec3>,
+    pub complete: bool,
+}
+
+/// Render statistics.
+#[derive(Debug, Clone, Default)]
+pub struct Stats {
+    pub seconds: f64,
+    pub camera_rays: usize,
+}
+
+const TILE: usize = 16;
+
+fn hash(a: u64, b: u64, c: u64, d: u64) -> u64 {
+    let mut h = a ^ 0x9E37_79B9_7F4A_7C15;
+    for x in [b, c, d] {
+        h = (h ^ x)
+            .wrapping_mul(0x100_0000_01B3)
+            .rotate_left(29)
+            .wrapping_add(0x2545_F491_4F6C_DD1D);
+    }
+    h
+}
+
+/// Renders the scene with `spp` samples per pixel; `progress` is called with the tiles done.
+pub fn render(
+    scene: &scene::Scene,
+    seed: u64,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (Image, Stats) {
+    let start = std::time::Instant::now();
+    let (w, h) = scene.res;
+    let cam = &scene.camera;
+    let integ = integrator::Integrator {
+        scene,
+        mask: scene.bins.mask(),
+    };
+    let tiles: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
+        .collect();
+    let done = AtomicUsize::new(0);
+    let results: Vec<Option<Vec<(usize, DVec3)>>> = tiles
+        .par_iter()
+        .map(|&(tx, ty)| {
+            if INTERRUPTED.load(Ordering::Relaxed) {
+                return None;
+            }
+            let mut out = Vec::with_capacity(TILE * TILE);
+            for y in ty * TILE..((ty + 1) * TILE).min(h) {
+                for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                    let mut sum = DVec3::ZERO;
+                    for s in 0..scene.spp {
+                        let mut rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
+                        let (u, v) = (rng.next_f64(), rng.next_f64());
+                        let sx = cam.screen[0]
+                            + (x as f64 + u) / w as f64 * (cam.screen[1] - cam.screen[0]);
+                        let sy = cam.screen[3]
+                            - (y as f64 + v) / h as f64 * (cam.screen[3] - cam.screen[2]);
+                        let mut dir = DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0);
+                        let mut org = DVec3::ZERO;
+                        if cam.lens_radius > 0.0 {
+                            let (r, phi) = (
+                                rng.next_f64().sqrt() * cam.lens_radius,
+                                2.0 * std::f64::consts::PI * rng.next_f64(),
+                            );
+                            org = DVec3::new(r * phi.cos(), r * phi.sin(), 0.0);
+                            dir = dir * cam.focal_distance - org;
+                        }
+                        let o = cam.to_world.transform_point3(org);
+                        let d = cam.to_world.transform_vector3(dir).normalize();
+                        let l =
+                            integ.li(Vec3A::from(o.as_vec3()), Vec3A::from(d.as_vec3()), &mut rng);
+                        sum += scene.bins.to_xyz(&l);
+                    }
+                    out.push((x + w * y, sum / scene.spp as f64));
+                }
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(n, tiles.len());
+            Some(out)
+        })
+        .collect();
+    let mut xyz = vec![DVec3::ZERO; w * h];
+    let mut complete = true;
+    for r in results {
+        match r {
+            Some(px) => px.into_iter().for_each(|(i, v)| xyz[i] = v),
+            None => complete = false,
+        }
+    }
+    let rgb = xyz
+        .iter()
+        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
+        .collect();
+    let stats = Stats {
+        seconds: start.elapsed().as_secs_f64(),
+        camera_rays: w * h * scene.spp,
+    };
+    (
+        Image {
+            w,
+            h,
+            rgb,
+            xyz,
+            complete,
+        },
+        stats,
+    )
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
+fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let tmp = path.with_extension(format!(
+        "tmp-{}.{}",
+        std::process::id(),
+        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
+    ));
+    write(&tmp).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })?;
+    std::fs::rename(&tmp, path)
+        .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
+}
+
+/// Writes the image as a linear f32 RGB EXR (absolute units).
+pub fn write_exr(img: &Image, path: &Path) -> Result<(), String> {
+    write_atomic(path, |tmp| {
+        exr::prelude::write_rgb_file(tmp, img.w, img.h, |x, y| {
+            let p = img.rgb[x + img.w * y];
+            (p[0], p[1], p[2])
+        })
+        .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+    })
+}
+
+/// The preview's exposure: the 99th percentile of luminance maps to 1 (a plain exposure + sRGB curve; the
+/// visual-adaptation tone mapper replaces it).
+pub fn preview_scale(img: &Image) -> f64 {
+    let mut ys: Vec<f64> = img
+        .xyz
+        .iter()
+        .map(|v| v.y)
+        .filter(|y| *y > 0.0 && y.is_finite())
+        .collect();
+    if ys.is_empty() {
+        return 1.0;
+    }
+    ys.sort_by(|a, b| a.total_cmp(b));
+    1.0 / ys[((ys.len() - 1) as f64 * 0.99) as usize]
+}
+
+/// Writes an 8-bit sRGB PNG preview.
+pub fn write_png(img: &Image, path: &Path) -> Result<(), String> {
+    let k = preview_scale(img) as f32;
+    let enc = |c: f32| {
+        let c = (c * k).clamp(0.0, 1.0);
+        let s = if c <= 0.003_130_8 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    let data: Vec<u8> = img.rgb.iter().flat_map(|p| p.map(enc)).collect();
+    write_atomic(path, |tmp| {
+        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+        let mut e = png::Encoder::new(std::io::BufWriter::new(f), img.w as u32, img.h as u32);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(png::BitDepth::Eight);
+        let mut wr = e
+            .write_header()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        wr.write_image_data(&data)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+/// The output paths: `-o` or the film's filename (relative to the scene), and the PNG beside it.
+pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (PathBuf, PathBuf) {
+    let exr = match (out, film) {
+        (Some(o), _) => o.to_path_buf(),
+        (None, Some(f)) => scene_path.parent().unwrap_or(Path::new(".")).join(f),
+        (None, None) => scene_path.with_extension("exr"),
+    };
+    let exr = if exr.extension().is_some_and(|e| e == "exr") {
+        exr
+    } else {
+        exr.with_extension("exr")
+    };
+    let png = exr.with_extension("png");
+    (exr, png)
+}

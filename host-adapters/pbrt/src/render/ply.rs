@@ -1,0 +1,297 @@
+//! PLY meshes for `plymesh`: ascii, binary_little_endian and binary_big_endian; vertex `x y z` with optional
+//! `nx ny nz` and `u v` (or `s t`, `texture_u texture_v`); faces as index lists (triangles and quads, quads split).
+//! Errors name the file and what was expected.
+
+use std::path::Path;
+
+/// (positions xyz…, triangle indices, normals, uvs).
+pub type Mesh = (Vec<f64>, Vec<usize>, Option<Vec<f64>>, Option<Vec<f64>>);
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Ty {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+fn ty(s: &str) -> Option<Ty> {
+    Some(match s {
+        "char" | "int8" => Ty::I8,
+        "uchar" | "uint8" => Ty::U8,
+        "short" | "int16" => Ty::I16,
+        "ushort" | "uint16" => Ty::U16,
+        "int" | "int32" => Ty::I32,
+        "uint" | "uint32" => Ty::U32,
+        "float" | "float32" => Ty::F32,
+        "double" | "float64" => Ty::F64,
+        _ => return None,
+    })
+}
+
+fn size(t: Ty) -> usize {
+    match t {
+        Ty::I8 | Ty::U8 => 1,
+        Ty::I16 | Ty::U16 => 2,
+        Ty::I32 | Ty::U32 | Ty::F32 => 4,
+        Ty::F64 => 8,
+    }
+}
+
+enum Prop {
+    Scalar(String, Ty),
+    List(String, Ty, Ty),
+}
+
+struct Element {
+    name: String,
+    count: usize,
+    props: Vec<Prop>,
+}
+
+struct Reader<'a> {
+    data: &'a [u8],
+    pos: usize,
+    ascii: bool,
+    big: bool,
+    file: String,
+}
+
+impl Reader<'_> {
+    fn read(&mut self, t: Ty) -> Result<f64, String> {
+        if self.ascii {
+            while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
+                self.pos += 1;
+            }
+            let start = self.pos;
+            while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
+                self.pos += 1;
+            }
+            let s = std::str::from_utf8(&self.data[start..self.pos]).unwrap_or("");
+            return s.parse::<f64>().map_err(|_| {
+                format!(
+                    "{}: byte {start}: expected a number, found '{s}'",
+                    self.file
+                )
+            });
+        }
+        let n = size(t);
+        let b = self.data.get(self.pos..self.pos + n).ok_or_else(|| {
+            format!(
+                "{}: byte {}: expected {n} more bytes, found the end of the file",
+                self.file, self.pos
+            )
+        })?;
+        self.pos += n;
+        let mut a = [0u8; 8];
+        a[..n].copy_from_slice(b);
+        if self.big {
+            a[..n].reverse();
+        }
+        Ok(match t {
+            Ty::I8 => a[0] as i8 as f64,
+            Ty::U8 => a[0] as f64,
+            Ty::I16 => i16::from_le_bytes([a[0], a[1]]) as f64,
+            Ty::U16 => u16::from_le_bytes([a[0], a[1]]) as f64,
+            Ty::I32 => i32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Ty::U32 => u32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Ty::F32 => f32::from_le_bytes([a[0], a[1], a[2], a[3]]) as f64,
+            Ty::F64 => f64::from_le_bytes(a),
+        })
+    }
+}
+
+/// Reads a PLY mesh.
+pub fn read(path: &Path) -> Result<Mesh, String> {
+    let file = path.display().to_string();
+    let data = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let end = data
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or_else(|| format!("{file}: expected a PLY header ending in end_header"))?;
+    let header = std::str::from_utf8(&data[..end])
+        .map_err(|_| format!("{file}: the PLY header is not text"))?;
+    let mut lines = header.lines();
+    if lines.next().map(str::trim) != Some("ply") {
+        return Err(format!(
+            "{file}: expected the magic 'ply' on the first line"
+        ));
+    }
+    let (mut ascii, mut big) = (false, false);
+    let mut elements: Vec<Element> = Vec::new();
+    for (i, line) in lines.enumerate() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.as_slice() {
+            ["format", f, _] => match *f {
+                "ascii" => ascii = true,
+                "binary_little_endian" => {}
+                "binary_big_endian" => big = true,
+                other => {
+                    return Err(format!(
+                        "{file}: line {}: unknown PLY format '{other}'",
+                        i + 2
+                    ))
+                }
+            },
+            ["element", name, count] => elements.push(Element {
+                name: name.to_string(),
+                count: count
+                    .parse()
+                    .map_err(|_| format!("{file}: line {}: bad element count '{count}'", i + 2))?,
+                props: Vec::new(),
+            }),
+            ["property", "list", ct, it, name] => {
+                let (c, t) = (
+                    ty(ct).ok_or_else(|| format!("{file}: line {}: unknown type '{ct}'", i + 2))?,
+                    ty(it).ok_or_else(|| format!("{file}: line {}: unknown type '{it}'", i + 2))?,
+                );
+                elements
+                    .last_mut()
+                    .ok_or_else(|| format!("{file}: line {}: property before any element", i + 2))?
+                    .props
+                    .push(Prop::List(name.to_string(), c, t));
+            }
+            ["property", t, name] => {
+                let t =
+                    ty(t).ok_or_else(|| format!("{file}: line {}: unknown type '{t}'", i + 2))?;
+                elements
+                    .last_mut()
+                    .ok_or_else(|| format!("{file}: line {}: property before any element", i + 2))?
+                    .props
+                    .push(Prop::Scalar(name.to_string(), t));
+            }
+            ["comment", ..] | ["obj_info", ..] | [] => {}
+            _ => {
+                return Err(format!(
+                    "{file}: line {}: unexpected header line '{line}'",
+                    i + 2
+                ))
+            }
+        }
+    }
+    let mut body_start = end + "end_header".len();
+    while body_start < data.len() && (data[body_start] == b'\r' || data[body_start] == b'\n') {
+        body_start += 1;
+        if !ascii && data[body_start - 1] == b'\n' {
+            break;
+        }
+    }
+    let mut r = Reader {
+        data: &data,
+        pos: body_start,
+        ascii,
+        big,
+        file: file.clone(),
+    };
+    let (mut pos, mut normals, mut uvs, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for el in &elements {
+        if el.count > data.len() {
+            return Err(format!(
+                "{file}: element '{}' claims {} entries in a {}-byte file",
+                el.name,
+                el.count,
+                data.len()
+            ));
+        }
+        for _ in 0..el.count {
+            let mut v = [f64::NAN; 8]; // x y z nx ny nz u v
+            for p in &el.props {
+                match p {
+                    Prop::Scalar(name, t) => {
+                        let x = r.read(*t)?;
+                        let slot = match name.as_str() {
+                            "x" => 0,
+                            "y" => 1,
+                            "z" => 2,
+                            "nx" => 3,
+                            "ny" => 4,
+                            "nz" => 5,
+                            "u" | "s" | "texture_u" | "texture_s" => 6,
+                            "v" | "t" | "texture_v" | "texture_t" => 7,
+                            _ => continue,
+                        };
+                        v[slot] = x;
+                    }
+                    Prop::List(name, ct, it) => {
+                        let n = r.read(*ct)? as usize;
+                        if n > 64 {
+                            return Err(format!(
+                                "{file}: a face of {n} vertices (expected 3 or 4)"
+                            ));
+                        }
+                        let ids: Vec<usize> = (0..n)
+                            .map(|_| r.read(*it).map(|x| x as usize))
+                            .collect::<Result<_, _>>()?;
+                        if el.name == "face" && (name == "vertex_indices" || name == "vertex_index")
+                        {
+                            match ids.len() {
+                                3 => idx.extend_from_slice(&ids),
+                                4 => idx.extend_from_slice(&[
+                                    ids[0], ids[1], ids[2], ids[0], ids[2], ids[3],
+                                ]),
+                                k => {
+                                    return Err(format!(
+                                        "{file}: a face of {k} vertices (expected 3 or 4)"
+                                    ))
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            if el.name == "vertex" {
+                pos.extend_from_slice(&v[..3]);
+                normals.extend_from_slice(&v[3..6]);
+                uvs.extend_from_slice(&v[6..8]);
+            }
+        }
+    }
+    if pos.iter().any(|x| x.is_nan()) {
+        return Err(format!("{file}: vertices need x, y and z"));
+    }
+    let nv = pos.len() / 3;
+    if let Some(&bad) = idx.iter().find(|&&i| i >= nv) {
+        return Err(format!(
+            "{file}: face index {bad} is not below the {nv} vertices"
+        ));
+    }
+    let normals = (!normals.iter().any(|x| x.is_nan())).then_some(normals);
+    let uvs = (!uvs.iter().any(|x| x.is_nan())).then_some(uvs);
+    Ok((pos, idx, normals, uvs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ascii_and_binary_quads() {
+        let dir = std::env::temp_dir().join(format!("firemedium-ply-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let a = dir.join("a.ply");
+        std::fs::write(&a, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n").unwrap();
+        let (p, i, n, uv) = read(&a).unwrap();
+        assert_eq!(
+            (p.len(), i, n.is_none(), uv.is_none()),
+            (12, vec![0, 1, 2, 0, 2, 3], true, true)
+        );
+        let b = dir.join("b.ply");
+        let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n".to_vec();
+        for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        bytes.push(3);
+        for k in [0i32, 1, 2] {
+            bytes.extend_from_slice(&k.to_le_bytes());
+        }
+        std::fs::write(&b, &bytes).unwrap();
+        assert_eq!(read(&b).unwrap().1, vec![0, 1, 2]);
+        bytes.truncate(bytes.len() - 2);
+        std::fs::write(&b, &bytes).unwrap();
+        assert!(read(&b).unwrap_err().contains("end of the file"));
+    }
+}

@@ -1,0 +1,983 @@
+//! pbrt-v4 scene → render scene. Walks the parser's directives with pbrt's graphics state (CTM, attribute stack,
+//! named materials/textures/media, object instances). Everything a fire scene needs is built; anything else is
+//! reported by name: ignored with a warning when it cannot change the picture much, refused with an error when
+//! it would be misread.
+
+use super::shapes::{Bvh, Geom, Prim};
+use super::spectrum::{Bins, S};
+use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
+use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, Param};
+use firemedium_plugin::spectrum::SpectralGrid;
+use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// A scene error: where and what.
+pub type Error = String;
+
+fn err(loc: &Loc, m: impl std::fmt::Display) -> Error {
+    format!("{loc}: {m}")
+}
+
+/// A spectrum texture.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // constants are the common case; boxing them would cost a pointer chase per lookup
+pub enum Tex {
+    Const(S),
+    Checker {
+        a: Box<Tex>,
+        b: Box<Tex>,
+        su: f32,
+        sv: f32,
+    },
+}
+
+impl Tex {
+    pub fn eval(&self, uv: Vec2) -> S {
+        match self {
+            Tex::Const(s) => *s,
+            Tex::Checker { a, b, su, sv } => {
+                if ((uv.x * su).floor() as i64 + (uv.y * sv).floor() as i64) % 2 == 0 {
+                    a.eval(uv)
+                } else {
+                    b.eval(uv)
+                }
+            }
+        }
+    }
+}
+
+/// Surface materials.
+#[derive(Debug, Clone)]
+pub enum Material {
+    Diffuse(Tex),
+    /// Smooth mirror with this reflectance.
+    Conductor(S),
+    /// Smooth glass of this index.
+    Dielectric(f32),
+    /// Diffuse base under a smooth dielectric coat.
+    CoatedDiffuse(Tex, f32),
+}
+
+/// Lights (area lights live on primitives).
+#[derive(Debug, Clone)]
+pub enum Light {
+    Point {
+        p: Vec3A,
+        i: S,
+    },
+    Spot {
+        p: Vec3A,
+        dir: Vec3A,
+        cos_total: f32,
+        cos_falloff: f32,
+        i: S,
+    },
+    Distant {
+        to_light: Vec3A,
+        l: S,
+    },
+    Infinite {
+        l: S,
+    },
+    Area {
+        prim: usize,
+        l: S,
+        twosided: bool,
+    },
+}
+
+/// Participating media.
+#[allow(clippy::large_enum_variant)] // a handful per scene
+pub enum Medium {
+    /// A fire (or pbrt grid medium) living in the plugin; `to_medium` maps world to medium space.
+    Plugin {
+        vol: Volume,
+        to_medium: DAffine3,
+        scatters: bool,
+        g: f64,
+        name: String,
+    },
+    /// pbrt's homogeneous medium.
+    Homogeneous { sa: S, ss: S, le: S },
+}
+
+impl std::fmt::Debug for Medium {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Medium::Plugin { name, .. } => write!(f, "Plugin({name})"),
+            Medium::Homogeneous { .. } => write!(f, "Homogeneous"),
+        }
+    }
+}
+
+/// Perspective camera.
+#[derive(Debug, Clone)]
+pub struct Camera {
+    pub to_world: DAffine3,
+    pub tan_half: f64,
+    pub screen: [f64; 4],
+    pub lens_radius: f64,
+    pub focal_distance: f64,
+    pub medium: Option<usize>,
+}
+
+/// What the plugin built for one medium.
+#[derive(Debug, Clone)]
+pub struct MediumReport {
+    pub name: String,
+    pub bytes: u64,
+    pub seconds: f64,
+    pub channels: u32,
+}
+
+/// A render-ready scene.
+#[derive(Debug)]
+pub struct Scene {
+    pub bins: Bins,
+    pub bvh: Bvh,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub media: Vec<Medium>,
+    pub camera: Camera,
+    pub res: (usize, usize),
+    pub spp: usize,
+    pub maxdepth: usize,
+    pub film_name: Option<String>,
+    pub eps: f32,
+    pub warnings: Vec<String>,
+    pub media_reports: Vec<MediumReport>,
+}
+
+#[derive(Clone)]
+struct State {
+    ctm: DMat4,
+    reverse: bool,
+    material: Option<usize>,
+    area: Option<(S, bool)>,
+    inside: String,
+    outside: String,
+}
+
+struct Builder {
+    dir: PathBuf,
+    bins: Bins,
+    plugin_path: Option<PathBuf>,
+    plugin: Option<Plugin>,
+    st: State,
+    stack: Vec<State>,
+    named_coords: HashMap<String, DMat4>,
+    named_materials: HashMap<String, usize>,
+    textures: HashMap<String, Tex>,
+    named_media: HashMap<String, usize>,
+    materials: Vec<Material>,
+    prims: Vec<Prim>,
+    lights: Vec<Light>,
+    media: Vec<Medium>,
+    media_reports: Vec<MediumReport>,
+    /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
+    camera: Option<(Vec<Param>, DMat4, Option<usize>, Loc)>,
+    res: (usize, usize),
+    spp: usize,
+    maxdepth: usize,
+    film_name: Option<String>,
+    warnings: Vec<String>,
+    objects: HashMap<String, Vec<Prim>>,
+    current_object: Option<(String, Vec<Prim>)>,
+    bins_params: Vec<LParam>,
+}
+
+fn nums<'a>(p: &'a [Param], name: &str) -> Option<&'a [f64]> {
+    p.iter().find(|x| x.name == name).and_then(|x| x.numbers())
+}
+fn num(p: &[Param], name: &str, def: f64) -> f64 {
+    nums(p, name)
+        .and_then(|v| v.first().copied())
+        .unwrap_or(def)
+}
+fn string<'a>(p: &'a [Param], name: &str) -> Option<&'a str> {
+    p.iter()
+        .find(|x| x.name == name)
+        .and_then(|x| x.strings())
+        .and_then(|v| v.first())
+        .map(|s| s.as_str())
+}
+
+fn affine(m: &DMat4) -> DAffine3 {
+    DAffine3::from_mat4(*m)
+}
+
+fn affine_f32(m: &DMat4) -> Affine3A {
+    let a = DAffine3::from_mat4(*m);
+    Affine3A {
+        matrix3: Mat3A::from(a.matrix3.as_mat3()),
+        translation: a.translation.as_vec3().into(),
+    }
+}
+
+/// pbrt-v4's LookAt: the camera-from-world matrix (pbrt's left-handed camera space).
+fn look_at(v: &[f64; 9]) -> DMat4 {
+    let (pos, look, up) = (
+        DVec3::new(v[0], v[1], v[2]),
+        DVec3::new(v[3], v[4], v[5]),
+        DVec3::new(v[6], v[7], v[8]),
+    );
+    let dir = (look - pos).normalize_or_zero();
+    let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
+    let new_up = dir.cross(right);
+    let world_from_camera = DMat4::from_cols(
+        right.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        pos.extend(1.0),
+    );
+    world_from_camera.inverse()
+}
+
+impl Builder {
+    /// A spectrum-valued parameter: rgb, spectrum (pairs or constant), blackbody; or a texture reference.
+    fn spectrum(&self, params: &[Param], name: &str, def: Option<S>) -> Result<Option<Tex>, Error> {
+        let Some(p) = params.iter().find(|x| x.name == name) else {
+            return Ok(def.map(Tex::Const));
+        };
+        let s = match (p.ty.as_str(), &p.values) {
+            ("rgb", _) => {
+                let v = p.numbers().unwrap_or(&[]);
+                self.bins.uplift_rgb([v[0], v[1], v[2]])
+            }
+            ("spectrum", firemedium_pbrt_parser::Values::Numbers(v)) => self.bins.pairs(v),
+            ("blackbody", _) => self.bins.blackbody(p.numbers().unwrap_or(&[0.0])[0]),
+            ("float", _) => S::splat(p.numbers().unwrap_or(&[0.0])[0] as f32) * self.bins.mask(),
+            ("texture", _) => {
+                let n = p.strings().and_then(|v| v.first()).cloned().unwrap_or_default();
+                return self.textures.get(&n).cloned().map(Some).ok_or_else(|| err(&p.loc, format!("\"texture {name}\": no texture named \"{n}\"")));
+            }
+            (t, _) => return Err(err(&p.loc, format!("\"{t} {name}\": named spectra are not supported; give rgb, (λ, value) pairs or blackbody"))),
+        };
+        Ok(Some(Tex::Const(s)))
+    }
+
+    fn warn(&mut self, loc: &Loc, m: impl std::fmt::Display) {
+        self.warnings.push(format!("{loc}: warning: {m}"));
+    }
+
+    fn check_known(
+        &mut self,
+        what: &str,
+        params: &[Param],
+        known: &[&str],
+        loc: &Loc,
+        ignored: &[&str],
+    ) -> Result<(), Error> {
+        for p in params {
+            if ignored.contains(&p.name.as_str()) {
+                self.warn(
+                    &p.loc,
+                    format!(
+                        "{what}: \"{} {}\" is ignored by this renderer",
+                        p.ty, p.name
+                    ),
+                );
+            } else if !known.contains(&p.name.as_str()) {
+                return Err(err(
+                    &p.loc,
+                    format!(
+                        "{what}: unknown parameter \"{} {}\" (known: {})",
+                        p.ty,
+                        p.name,
+                        known.join(", ")
+                    ),
+                ));
+            }
+        }
+        let _ = loc;
+        Ok(())
+    }
+
+    fn add_prim(&mut self, geom: Geom) {
+        let light = self.st.area;
+        let media = if self.st.inside.is_empty() && self.st.outside.is_empty() {
+            None
+        } else {
+            let look = |n: &str| {
+                if n.is_empty() {
+                    None
+                } else {
+                    self.named_media.get(n).copied()
+                }
+            };
+            Some((look(&self.st.inside), look(&self.st.outside)))
+        };
+        let mut prim = Prim {
+            geom,
+            material: self.st.material,
+            area_light: None,
+            media,
+            reverse: self.st.reverse,
+        };
+        if let Some((_, objs)) = self.current_object.as_mut() {
+            objs.push(prim);
+            return;
+        }
+        if let Some((l, twosided)) = light {
+            prim.area_light = Some(self.lights.len());
+            self.lights.push(Light::Area {
+                prim: self.prims.len(),
+                l,
+                twosided,
+            });
+        }
+        self.prims.push(prim);
+    }
+
+    fn plugin(&mut self, loc: &Loc) -> Result<Plugin, Error> {
+        if let Some(p) = &self.plugin {
+            return Ok(p.clone());
+        }
+        let p = match &self.plugin_path {
+            Some(path) => Plugin::load(path),
+            None => Plugin::from_env(),
+        }
+        .map_err(|e| err(loc, e))?;
+        self.plugin = Some(p.clone());
+        Ok(p)
+    }
+
+    fn medium(&mut self, name: &str, params: &[Param], loc: &Loc) -> Result<(), Error> {
+        let ty = string(params, "type").unwrap_or("").to_string();
+        let to_medium = affine(&self.st.ctm.inverse());
+        let m = match ty.as_str() {
+            "homogeneous" => {
+                self.check_known("homogeneous medium", params, &["type", "sigma_a", "sigma_s", "scale", "g", "Le", "Lescale", "preset"], loc, &[])?;
+                let scale = num(params, "scale", 1.0) as f32;
+                let sa = self.spectrum(params, "sigma_a", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
+                let ss = self.spectrum(params, "sigma_s", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
+                let le = self.spectrum(params, "Le", Some(S::ZERO))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * num(params, "Lescale", 1.0) as f32;
+                if !ss.is_black() {
+                    self.warn(loc, format!("medium \"{name}\": homogeneous scattering is treated as extinction (single-scattering from homogeneous media is not implemented)"));
+                }
+                Medium::Homogeneous { sa, ss, le }
+            }
+            "fire" | "uniformgrid" | "nanovdb" => {
+                // Parameters pass to the plugin unchanged, but for the type, the plugin file, and relative paths.
+                if let Some(p) = string(params, "plugin") {
+                    self.plugin_path = Some(self.dir.join(p));
+                }
+                let plugin = self.plugin(loc)?;
+                let mut list: Vec<LParam> = Vec::new();
+                for p in params {
+                    if p.name == "type" || p.name == "plugin" {
+                        continue;
+                    }
+                    let value = match (&p.values, p.ty.as_str()) {
+                        (firemedium_pbrt_parser::Values::Strings(v), _) => {
+                            let files = ["filename", "dataset", "densityfile", "temperaturefile", "speciesfiles"];
+                            Value::String(v.iter().map(|s| if files.contains(&p.name.as_str()) && !Path::new(s).is_absolute() { self.dir.join(s).display().to_string() } else { s.clone() }).collect())
+                        }
+                        (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "integer") => Value::Integer(v.iter().map(|&x| x as i64).collect()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
+                    };
+                    list.push(LParam { name: p.name.clone(), value });
+                }
+                if ty != "fire" {
+                    list.push(LParam::string("mode", "pbrt"));
+                }
+                for b in &self.bins_params {
+                    if !list.iter().any(|p| p.name == b.name) {
+                        list.push(b.clone());
+                    }
+                }
+                let vol = plugin.create_volume(&list).map_err(|e| err(loc, format!("medium \"{name}\" ({ty}): {e}")))?;
+                let info = vol.info();
+                if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
+                    return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
+                }
+                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels });
+                Medium::Plugin { vol, to_medium, scatters: info.scatters != 0, g: info.g, name: name.to_string() }
+            }
+            "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
+            other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
+        };
+        self.named_media.insert(name.to_string(), self.media.len());
+        self.media.push(m);
+        Ok(())
+    }
+
+    fn shape(&mut self, ty: &str, p: &[Param], loc: &Loc) -> Result<(), Error> {
+        let to_world = affine_f32(&self.st.ctm);
+        let to_obj = to_world.inverse();
+        match ty {
+            "sphere" => {
+                self.check_known("sphere", p, &["radius", "zmin", "zmax", "phimax", "alpha"], loc, &["alpha"])?;
+                let r = num(p, "radius", 1.0) as f32;
+                if nums(p, "zmin").is_some() || nums(p, "zmax").is_some() || nums(p, "phimax").is_some() {
+                    self.warn(loc, "sphere: partial spheres (zmin, zmax, phimax) are rendered whole");
+                }
+                self.add_prim(Geom::Sphere { to_world, to_obj, r });
+            }
+            "disk" => {
+                self.check_known("disk", p, &["radius", "innerradius", "height", "phimax", "alpha"], loc, &["alpha", "phimax"])?;
+                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32 });
+            }
+            "cylinder" => {
+                self.check_known("cylinder", p, &["radius", "zmin", "zmax", "phimax", "alpha"], loc, &["alpha", "phimax"])?;
+                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: num(p, "zmin", -1.0) as f32, zmax: num(p, "zmax", 1.0) as f32 });
+            }
+            "trianglemesh" | "bilinearmesh" | "plymesh" => {
+                let (pos, idx, normals, uvs) = if ty == "plymesh" {
+                    self.check_known("plymesh", p, &["filename", "displacement", "edgelength", "alpha"], loc, &["displacement", "edgelength", "alpha"])?;
+                    let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
+                    super::ply::read(&self.dir.join(f)).map_err(|e| err(loc, e))?
+                } else {
+                    self.check_known(ty, p, &["P", "indices", "N", "uv", "S", "faceIndices", "alpha"], loc, &["S", "faceIndices", "alpha"])?;
+                    let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
+                    let idx: Vec<usize> = match nums(p, "indices") {
+                        Some(v) => v.iter().map(|&x| x as usize).collect(),
+                        None if ty == "trianglemesh" && pos.len() == 9 => vec![0, 1, 2],
+                        None if ty == "bilinearmesh" && pos.len() == 12 => vec![0, 1, 2, 3],
+                        None => return Err(err(loc, format!("{ty}: missing \"integer indices\""))),
+                    };
+                    (pos, idx, nums(p, "N").map(|v| v.to_vec()), nums(p, "uv").map(|v| v.to_vec()))
+                };
+                let nv = pos.len() / 3;
+                let per = if ty == "bilinearmesh" { 4 } else { 3 };
+                if idx.len() % per != 0 || idx.iter().any(|&i| i >= nv) {
+                    return Err(err(loc, format!("{ty}: indices must come in {per}s and be below the {nv} vertices")));
+                }
+                let m = self.st.ctm;
+                let vp = |i: usize| Vec3A::from(m.transform_point3(DVec3::new(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2])).as_vec3());
+                let nm = DMat3::from_mat4(m).inverse().transpose();
+                let vn = |i: usize| normals.as_ref().filter(|n| n.len() == pos.len()).map(|n| Vec3A::from((nm * DVec3::new(n[3 * i], n[3 * i + 1], n[3 * i + 2])).normalize_or_zero().as_vec3()));
+                let vt = |i: usize| uvs.as_ref().filter(|u| u.len() == 2 * nv).map(|u| Vec2::new(u[2 * i] as f32, u[2 * i + 1] as f32)).unwrap_or(Vec2::ZERO);
+                let tri = |b: &mut Builder, a: usize, c: usize, d: usize| {
+                    let n = match (vn(a), vn(c), vn(d)) {
+                        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+                        _ => None,
+                    };
+                    b.add_prim(Geom::Triangle { p: [vp(a), vp(c), vp(d)], n, uv: [vt(a), vt(c), vt(d)] });
+                };
+                for f in idx.chunks(per) {
+                    if per == 4 {
+                        // pbrt's bilinear patch vertex order: p00 p10 p01 p11 → two triangles.
+                        tri(self, f[0], f[1], f[3]);
+                        tri(self, f[0], f[3], f[2]);
+                    } else {
+                        tri(self, f[0], f[1], f[2]);
+                    }
+                }
+            }
+            other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh)"))),
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, ty: &str, p: &[Param], loc: &Loc) -> Result<Option<usize>, Error> {
+        let m = match ty {
+            "interface" | "" => return Ok(None),
+            "diffuse" => {
+                self.check_known("diffuse", p, &["reflectance", "type", "displacement", "normalmap"], loc, &["displacement", "normalmap"])?;
+                Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)))
+            }
+            "coateddiffuse" => {
+                self.check_known("coateddiffuse", p, &["reflectance", "eta", "roughness", "uroughness", "vroughness", "thickness", "albedo", "g", "maxdepth", "nsamples", "remaproughness", "type", "displacement", "normalmap"], loc, &["roughness", "uroughness", "vroughness", "thickness", "albedo", "g", "maxdepth", "nsamples", "remaproughness", "displacement", "normalmap"])?;
+                Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
+            }
+            "conductor" => {
+                self.check_known("conductor", p, &["reflectance", "eta", "k", "roughness", "uroughness", "vroughness", "remaproughness", "type", "displacement", "normalmap"], loc, &["eta", "k", "roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"])?;
+                let r = self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.9))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO);
+                Material::Conductor(r)
+            }
+            "dielectric" | "thindielectric" => {
+                self.check_known("dielectric", p, &["eta", "roughness", "uroughness", "vroughness", "remaproughness", "type", "displacement", "normalmap"], loc, &["roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"])?;
+                Material::Dielectric(num(p, "eta", 1.5) as f32)
+            }
+            other => return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, conductor, dielectric, interface)"))),
+        };
+        self.materials.push(m);
+        Ok(Some(self.materials.len() - 1))
+    }
+
+    fn directive(&mut self, d: Directive, loc: &Loc) -> Result<(), Error> {
+        let ctm = &mut self.st.ctm;
+        match d {
+            Directive::Identity => *ctm = DMat4::IDENTITY,
+            Directive::Translate(v) => *ctm *= DMat4::from_translation(DVec3::from(v)),
+            Directive::Scale(v) => *ctm *= DMat4::from_scale(DVec3::from(v)),
+            Directive::Rotate(a, axis) => {
+                *ctm *=
+                    DMat4::from_axis_angle(DVec3::from(axis).normalize_or_zero(), a.to_radians())
+            }
+            Directive::LookAt(v) => *ctm *= look_at(&v),
+            Directive::Transform(m) => *ctm = DMat4::from_cols_array(&m),
+            Directive::ConcatTransform(m) => *ctm *= DMat4::from_cols_array(&m),
+            Directive::CoordinateSystem(n) => {
+                self.named_coords.insert(n, *ctm);
+            }
+            Directive::CoordSysTransform(n) => match self.named_coords.get(&n) {
+                Some(m) => *ctm = *m,
+                None => {
+                    return Err(err(
+                        loc,
+                        format!("CoordSysTransform \"{n}\": no such coordinate system"),
+                    ))
+                }
+            },
+            Directive::TransformTimes(..) | Directive::ActiveTransform(_) => {
+                self.warn(loc, "motion blur transforms are ignored (one shutter time)")
+            }
+            Directive::ReverseOrientation => self.st.reverse = !self.st.reverse,
+            Directive::AttributeBegin | Directive::TransformBegin => {
+                self.stack.push(self.st.clone())
+            }
+            Directive::AttributeEnd | Directive::TransformEnd => match self.stack.pop() {
+                Some(s) => self.st = s,
+                None => return Err(err(loc, "AttributeEnd without AttributeBegin")),
+            },
+            Directive::Attribute(..) => self.warn(loc, "Attribute defaults are ignored"),
+            Directive::ObjectBegin(n) => {
+                self.stack.push(self.st.clone());
+                self.current_object = Some((n, Vec::new()));
+            }
+            Directive::ObjectEnd => {
+                if let Some((n, prims)) = self.current_object.take() {
+                    self.objects.insert(n, prims);
+                }
+                if let Some(s) = self.stack.pop() {
+                    self.st = s;
+                }
+            }
+            Directive::ObjectInstance(n) => {
+                let prims =
+                    self.objects.get(&n).cloned().ok_or_else(|| {
+                        err(loc, format!("ObjectInstance \"{n}\": no such object"))
+                    })?;
+                let m = affine_f32(&self.st.ctm);
+                for mut p in prims {
+                    p.geom = match p.geom {
+                        Geom::Triangle { p: v, n, uv } => Geom::Triangle {
+                            p: v.map(|x| m.transform_point3a(x)),
+                            n: n.map(|n| n.map(|x| m.transform_vector3a(x).normalize_or_zero())),
+                            uv,
+                        },
+                        Geom::Sphere { to_world, r, .. } => Geom::Sphere {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            r,
+                        },
+                        Geom::Disk {
+                            to_world, h, r, ri, ..
+                        } => Geom::Disk {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            h,
+                            r,
+                            ri,
+                        },
+                        Geom::Cylinder {
+                            to_world,
+                            r,
+                            zmin,
+                            zmax,
+                            ..
+                        } => Geom::Cylinder {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            r,
+                            zmin,
+                            zmax,
+                        },
+                    };
+                    self.prims.push(p);
+                }
+            }
+            Directive::Option(p) => self.warn(loc, format!("Option \"{}\" is ignored", p.name)),
+            Directive::ColorSpace(n) => {
+                if n != "srgb" {
+                    self.warn(
+                        loc,
+                        format!("ColorSpace \"{n}\": rgb values are read as sRGB"),
+                    );
+                }
+            }
+            Directive::Camera(ty, p) => {
+                if ty != "perspective" {
+                    return Err(err(
+                        loc,
+                        format!("camera \"{ty}\" is not supported (perspective)"),
+                    ));
+                }
+                self.check_known(
+                    "perspective camera",
+                    &p,
+                    &[
+                        "fov",
+                        "screenwindow",
+                        "lensradius",
+                        "focaldistance",
+                        "frameaspectratio",
+                        "shutteropen",
+                        "shutterclose",
+                    ],
+                    loc,
+                    &["shutteropen", "shutterclose"],
+                )?;
+                let medium = if self.st.outside.is_empty() {
+                    None
+                } else {
+                    self.named_media.get(&self.st.outside).copied()
+                };
+                self.named_coords
+                    .insert("camera".into(), self.st.ctm.inverse());
+                self.camera = Some((p, self.st.ctm, medium, loc.clone()));
+            }
+            Directive::Film(ty, p) => {
+                if ty != "rgb" && ty != "gbuffer" {
+                    self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
+                }
+                self.check_known(
+                    "film",
+                    &p,
+                    &[
+                        "xresolution",
+                        "yresolution",
+                        "filename",
+                        "sensor",
+                        "iso",
+                        "whitebalance",
+                        "exposuretime",
+                        "cropwindow",
+                        "pixelbounds",
+                        "diagonal",
+                        "maxcomponentvalue",
+                        "savefp16",
+                    ],
+                    loc,
+                    &[
+                        "sensor",
+                        "iso",
+                        "whitebalance",
+                        "exposuretime",
+                        "cropwindow",
+                        "pixelbounds",
+                        "diagonal",
+                        "maxcomponentvalue",
+                        "savefp16",
+                    ],
+                )?;
+                self.res = (
+                    num(&p, "xresolution", 1280.0).max(1.0) as usize,
+                    num(&p, "yresolution", 720.0).max(1.0) as usize,
+                );
+                self.film_name = string(&p, "filename").map(String::from);
+            }
+            Directive::Sampler(_, p) => self.spp = num(&p, "pixelsamples", 16.0).max(1.0) as usize,
+            Directive::Integrator(ty, p) => {
+                if ty != "volpath" && ty != "path" {
+                    self.warn(loc, format!("integrator \"{ty}\" is rendered with volpath"));
+                }
+                self.maxdepth = num(&p, "maxdepth", 5.0).max(0.0) as usize;
+            }
+            Directive::PixelFilter(ty, _) => {
+                if ty != "box" {
+                    self.warn(
+                        loc,
+                        format!("pixel filter \"{ty}\" is rendered as a box filter"),
+                    );
+                }
+            }
+            Directive::Accelerator(..) => {}
+            Directive::WorldBegin => {
+                self.st.ctm = DMat4::IDENTITY;
+                self.named_coords.insert("world".into(), DMat4::IDENTITY);
+            }
+            Directive::LightSource(ty, p) => {
+                let scale = num(&p, "scale", 1.0) as f32;
+                let m = self.st.ctm;
+                let pt = |v: Option<&[f64]>, def: [f64; 3]| {
+                    Vec3A::from(
+                        m.transform_point3(DVec3::from(
+                            v.map(|v| [v[0], v[1], v[2]]).unwrap_or(def),
+                        ))
+                        .as_vec3(),
+                    )
+                };
+                let l = match ty.as_str() {
+                    "point" => {
+                        self.check_known("point light", &p, &["I", "scale", "power", "from"], loc, &["power"])?;
+                        Light::Point { p: pt(nums(&p, "from"), [0.0; 3]), i: self.spectrum(&p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                    }
+                    "spot" => {
+                        self.check_known("spot light", &p, &["I", "scale", "power", "from", "to", "coneangle", "conedelta"], loc, &["power"])?;
+                        let (from, to) = (pt(nums(&p, "from"), [0.0; 3]), pt(nums(&p, "to"), [0.0, 0.0, 1.0]));
+                        let cone = num(&p, "coneangle", 30.0);
+                        Light::Spot {
+                            p: from,
+                            dir: (to - from).normalize_or_zero(),
+                            cos_total: cone.to_radians().cos() as f32,
+                            cos_falloff: (cone - num(&p, "conedelta", 5.0)).to_radians().cos() as f32,
+                            i: self.spectrum(&p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale,
+                        }
+                    }
+                    "distant" => {
+                        self.check_known("distant light", &p, &["L", "scale", "illuminance", "from", "to"], loc, &["illuminance"])?;
+                        let (from, to) = (pt(nums(&p, "from"), [0.0; 3]), pt(nums(&p, "to"), [0.0, 0.0, 1.0]));
+                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                    }
+                    "infinite" => {
+                        if string(&p, "filename").is_some() {
+                            return Err(err(loc, "infinite light: environment maps (\"string filename\") are not supported yet; give \"rgb L\""));
+                        }
+                        self.check_known("infinite light", &p, &["L", "scale", "illuminance", "portal"], loc, &["illuminance", "portal"])?;
+                        Light::Infinite { l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                    }
+                    other => return Err(err(loc, format!("light \"{other}\" is not supported (point, spot, distant, infinite, and area diffuse)"))),
+                };
+                self.lights.push(l);
+            }
+            Directive::AreaLightSource(ty, p) => {
+                if ty != "diffuse" {
+                    return Err(err(
+                        loc,
+                        format!("area light \"{ty}\" is not supported (diffuse)"),
+                    ));
+                }
+                self.check_known(
+                    "area light",
+                    &p,
+                    &["L", "scale", "twosided", "power", "filename"],
+                    loc,
+                    &["power", "filename"],
+                )?;
+                let l = self
+                    .spectrum(&p, "L", Some(self.bins.mask()))?
+                    .map(|t| t.eval(Vec2::ZERO))
+                    .unwrap_or(S::ZERO)
+                    * num(&p, "scale", 1.0) as f32;
+                let two = p
+                    .iter()
+                    .find(|x| x.name == "twosided")
+                    .and_then(|x| x.bools())
+                    .map(|b| b[0])
+                    .unwrap_or(false);
+                self.st.area = Some((l, two));
+            }
+            Directive::Material(ty, p) => self.st.material = self.material(&ty, &p, loc)?,
+            Directive::MakeNamedMaterial(name, p) => {
+                let ty = string(&p, "type").unwrap_or("").to_string();
+                if ty.is_empty() {
+                    return Err(err(
+                        loc,
+                        format!("MakeNamedMaterial \"{name}\": missing \"string type\""),
+                    ));
+                }
+                let m = self.material(&ty, &p, loc)?;
+                // Interface named materials are stored as usize::MAX.
+                self.named_materials.insert(name, m.unwrap_or(usize::MAX));
+            }
+            Directive::NamedMaterial(name) => match self.named_materials.get(&name) {
+                Some(&m) => self.st.material = (m != usize::MAX).then_some(m),
+                None => {
+                    return Err(err(
+                        loc,
+                        format!("NamedMaterial \"{name}\": no such material"),
+                    ))
+                }
+            },
+            Directive::Texture(name, _ty, class, p) => {
+                let t = match class.as_str() {
+                    "checkerboard" => {
+                        let a = self
+                            .spectrum(&p, "tex1", Some(self.bins.mask()))?
+                            .unwrap_or(Tex::Const(S::ZERO));
+                        let b = self
+                            .spectrum(&p, "tex2", Some(S::ZERO))?
+                            .unwrap_or(Tex::Const(S::ZERO));
+                        Tex::Checker {
+                            a: Box::new(a),
+                            b: Box::new(b),
+                            su: num(&p, "uscale", 1.0) as f32,
+                            sv: num(&p, "vscale", 1.0) as f32,
+                        }
+                    }
+                    "constant" => self
+                        .spectrum(&p, "value", Some(self.bins.mask()))?
+                        .unwrap_or(Tex::Const(S::ZERO)),
+                    other => return Err(err(
+                        loc,
+                        format!(
+                            "texture class \"{other}\" is not supported (checkerboard, constant)"
+                        ),
+                    )),
+                };
+                self.textures.insert(name, t);
+            }
+            Directive::Shape(ty, p) => self.shape(&ty, &p, loc)?,
+            Directive::MakeNamedMedium(name, p) => self.medium(&name, &p, loc)?,
+            Directive::MediumInterface(i, o) => {
+                for n in [&i, &o] {
+                    if !n.is_empty() && !self.named_media.contains_key(n) {
+                        return Err(err(
+                            loc,
+                            format!("MediumInterface: no medium named \"{n}\""),
+                        ));
+                    }
+                }
+                self.st.inside = i;
+                self.st.outside = o;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Settings the command line can override.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub spp: Option<usize>,
+    pub plugin: Option<PathBuf>,
+}
+
+/// Parses and builds the scene at `path`.
+pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
+    let mut c = Collect::default();
+    parse_file(path, &mut c).map_err(|e| e.to_string())?;
+    // Pre-scan: the render bins (from the media, or the plugin's defaults) and the photometric scale.
+    let mut bins_params: Vec<LParam> = Vec::new();
+    let (mut lo, mut hi, mut n) = (400.0, 700.0, 30usize);
+    let (mut fire, mut pbrt_media) = (false, false);
+    for (d, loc) in &c.0 {
+        if let Directive::MakeNamedMedium(_, p) = d {
+            match string(p, "type") {
+                Some("fire") => fire = true,
+                Some("uniformgrid" | "nanovdb") => pbrt_media = true,
+                _ => {}
+            }
+            for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
+                if let Some(x) = nums(p, k).and_then(|v| v.first()) {
+                    if bins_params
+                        .iter()
+                        .any(|b| b.name == k && b.value != Value::Float(vec![*x]))
+                    {
+                        return Err(err(loc, format!("media disagree on \"{k}\": all media share the scene's spectral bins")));
+                    }
+                    *v = *x;
+                    bins_params.push(LParam::float(k, *x));
+                }
+            }
+            if let Some(x) = nums(p, "bins").and_then(|v| v.first()) {
+                n = *x as usize;
+                bins_params.push(LParam::int("bins", *x as i64));
+            }
+        }
+    }
+    if n > super::spectrum::MAX_CHANNELS {
+        return Err(format!(
+            "{}: {n} spectral bins; the renderer supports at most {}",
+            path.display(),
+            super::spectrum::MAX_CHANNELS
+        ));
+    }
+    let grid = SpectralGrid::new(lo, hi, n).map_err(|e| format!("{}: {e}", path.display()))?;
+    // Absolute units (683 lm/W) with a fire; pbrt's relative units for scenes of pbrt grid media only.
+    let k = if pbrt_media && !fire {
+        1.0 / firemedium_plugin::volume::CIE_Y_INTEGRAL
+    } else {
+        683.0
+    };
+    let bins = Bins::new(grid, k);
+    bins_params.dedup_by(|a, b| a.name == b.name);
+    for (name, v) in [("bins", n as f64), ("lambdamin", lo), ("lambdamax", hi)] {
+        if !bins_params.iter().any(|p| p.name == name) {
+            bins_params.push(if name == "bins" {
+                LParam::int(name, v as i64)
+            } else {
+                LParam::float(name, v)
+            });
+        }
+    }
+    let mut b = Builder {
+        dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        bins: bins.clone(),
+        plugin_path: ov.plugin.clone(),
+        plugin: None,
+        st: State {
+            ctm: DMat4::IDENTITY,
+            reverse: false,
+            material: None,
+            area: None,
+            inside: String::new(),
+            outside: String::new(),
+        },
+        stack: Vec::new(),
+        named_coords: HashMap::new(),
+        named_materials: HashMap::new(),
+        textures: HashMap::new(),
+        named_media: HashMap::new(),
+        materials: Vec::new(),
+        prims: Vec::new(),
+        lights: Vec::new(),
+        media: Vec::new(),
+        media_reports: Vec::new(),
+        camera: None,
+        res: (1280, 720),
+        spp: 16,
+        maxdepth: 5,
+        film_name: None,
+        warnings: Vec::new(),
+        objects: HashMap::new(),
+        current_object: None,
+        bins_params,
+    };
+    // pbrt's default material: diffuse 0.5.
+    b.materials
+        .push(Material::Diffuse(Tex::Const(bins.mask() * 0.5)));
+    b.st.material = Some(0);
+    for (d, loc) in c.0 {
+        b.directive(d, &loc)?;
+    }
+    // The camera, now that the film resolution is known (pbrt allows Film after Camera).
+    let (cp, camera_from_world, medium, _) = b
+        .camera
+        .take()
+        .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
+    let (w, h) = (b.res.0 as f64, b.res.1 as f64);
+    let aspect = num(&cp, "frameaspectratio", w / h);
+    let screen = match nums(&cp, "screenwindow") {
+        Some(s) if s.len() == 4 => [s[0], s[1], s[2], s[3]],
+        _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
+        _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
+    };
+    let camera = Camera {
+        to_world: affine(&camera_from_world.inverse()),
+        tan_half: (num(&cp, "fov", 90.0).to_radians() / 2.0).tan(),
+        screen,
+        lens_radius: num(&cp, "lensradius", 0.0),
+        focal_distance: num(&cp, "focaldistance", 1e6),
+        medium,
+    };
+    let scale = b.prims.iter().map(|p| {
+        let bb = obvhs::Boundable::aabb(p);
+        (bb.max - bb.min).max_element().abs()
+    });
+    let extent = scale.fold(1.0f32, f32::max);
+    Ok(Scene {
+        bins,
+        bvh: Bvh::new(b.prims),
+        materials: b.materials,
+        lights: b.lights,
+        media: b.media,
+        camera,
+        res: b.res,
+        spp: ov.spp.unwrap_or(b.spp),
+        maxdepth: b.maxdepth,
+        film_name: b.film_name,
+        eps: (extent * 1e-5).max(1e-6),
+        warnings: b.warnings,
+        media_reports: b.media_reports,
+    })
+}

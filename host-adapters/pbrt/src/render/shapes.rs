@@ -1,0 +1,469 @@
+//! Shapes and their BVH: triangles (from `trianglemesh`, `bilinearmesh`, `plymesh`), and analytic `sphere`,
+//! `disk` and `cylinder` in their object space. The BVH is obvhs's BVH2 (PLOC build) over primitive boxes.
+
+use glam::{Affine3A, Vec2, Vec3A};
+use obvhs::{aabb::Aabb, bvh2::Bvh2, ray::Ray as BRay, ray::RayHit, Boundable, BvhBuildParams};
+use std::f32::consts::PI;
+
+/// Geometry of one primitive.
+#[derive(Debug, Clone)]
+pub enum Geom {
+    Triangle {
+        p: [Vec3A; 3],
+        n: Option<[Vec3A; 3]>,
+        uv: [Vec2; 3],
+    },
+    Sphere {
+        to_world: Affine3A,
+        to_obj: Affine3A,
+        r: f32,
+    },
+    Disk {
+        to_world: Affine3A,
+        to_obj: Affine3A,
+        h: f32,
+        r: f32,
+        ri: f32,
+    },
+    Cylinder {
+        to_world: Affine3A,
+        to_obj: Affine3A,
+        r: f32,
+        zmin: f32,
+        zmax: f32,
+    },
+}
+
+/// A primitive with what the renderer attaches to it.
+#[derive(Debug, Clone)]
+pub struct Prim {
+    pub geom: Geom,
+    /// Material index; `None` is pbrt's `interface` (no surface: only a medium boundary).
+    pub material: Option<usize>,
+    pub area_light: Option<usize>,
+    /// (inside, outside) media, when the shape carries a MediumInterface.
+    pub media: Option<(Option<usize>, Option<usize>)>,
+    /// ReverseOrientation: the normal points the other way.
+    pub reverse: bool,
+}
+
+/// A surface hit.
+#[derive(Debug, Clone, Copy)]
+pub struct Hit {
+    pub t: f32,
+    pub p: Vec3A,
+    /// Geometric normal (after ReverseOrientation): "outside" is where it points.
+    pub ng: Vec3A,
+    /// Shading normal, on the side of `ng`.
+    pub ns: Vec3A,
+    pub uv: Vec2,
+    pub prim: usize,
+}
+
+impl Boundable for Prim {
+    fn aabb(&self) -> Aabb {
+        match &self.geom {
+            Geom::Triangle { p, .. } => {
+                let mut b = Aabb::INVALID;
+                for v in p {
+                    b.extend(*v);
+                }
+                b
+            }
+            Geom::Sphere { to_world, r, .. } => {
+                box_of(to_world, Vec3A::splat(-*r), Vec3A::splat(*r))
+            }
+            Geom::Disk { to_world, h, r, .. } => {
+                box_of(to_world, Vec3A::new(-r, -r, *h), Vec3A::new(*r, *r, *h))
+            }
+            Geom::Cylinder {
+                to_world,
+                r,
+                zmin,
+                zmax,
+                ..
+            } => box_of(
+                to_world,
+                Vec3A::new(-r, -r, *zmin),
+                Vec3A::new(*r, *r, *zmax),
+            ),
+        }
+    }
+}
+
+fn box_of(m: &Affine3A, lo: Vec3A, hi: Vec3A) -> Aabb {
+    let mut b = Aabb::INVALID;
+    for i in 0..8 {
+        let c = Vec3A::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let _ = b.extend(m.transform_point3a(c));
+    }
+    // Padding keeps flat boxes (disks, axis-aligned triangles) traversable.
+    b.min -= Vec3A::splat(1e-6);
+    b.max += Vec3A::splat(1e-6);
+    b
+}
+
+/// The ray parameter of the nearest hit of `g` in (tmin, tmax), or infinity.
+pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
+    let ok = |t: f32| t > tmin && t < tmax;
+    match g {
+        Geom::Triangle { p, .. } => {
+            // Möller–Trumbore.
+            let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+            let pv = d.cross(e2);
+            let det = e1.dot(pv);
+            if det.abs() < 1e-12 {
+                return f32::INFINITY;
+            }
+            let inv = 1.0 / det;
+            let tv = o - p[0];
+            let u = tv.dot(pv) * inv;
+            if !(0.0..=1.0).contains(&u) {
+                return f32::INFINITY;
+            }
+            let qv = tv.cross(e1);
+            let v = d.dot(qv) * inv;
+            if v < 0.0 || u + v > 1.0 {
+                return f32::INFINITY;
+            }
+            let t = e2.dot(qv) * inv;
+            if ok(t) {
+                t
+            } else {
+                f32::INFINITY
+            }
+        }
+        Geom::Sphere { to_obj, r, .. } => {
+            let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+            let (a, b, c) = (dd.dot(dd), 2.0 * oo.dot(dd), oo.dot(oo) - r * r);
+            let disc = b * b - 4.0 * a * c;
+            if disc < 0.0 {
+                return f32::INFINITY;
+            }
+            let q = disc.sqrt();
+            let (t0, t1) = ((-b - q) / (2.0 * a), (-b + q) / (2.0 * a));
+            if ok(t0) {
+                t0
+            } else if ok(t1) {
+                t1
+            } else {
+                f32::INFINITY
+            }
+        }
+        Geom::Disk {
+            to_obj, h, r, ri, ..
+        } => {
+            let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+            if dd.z == 0.0 {
+                return f32::INFINITY;
+            }
+            let t = (h - oo.z) / dd.z;
+            let q = oo + dd * t;
+            let r2 = q.x * q.x + q.y * q.y;
+            if ok(t) && r2 <= r * r && r2 >= ri * ri {
+                t
+            } else {
+                f32::INFINITY
+            }
+        }
+        Geom::Cylinder {
+            to_obj,
+            r,
+            zmin,
+            zmax,
+            ..
+        } => {
+            let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+            let a = dd.x * dd.x + dd.y * dd.y;
+            if a == 0.0 {
+                return f32::INFINITY;
+            }
+            let b = 2.0 * (dd.x * oo.x + dd.y * oo.y);
+            let c = oo.x * oo.x + oo.y * oo.y - r * r;
+            let disc = b * b - 4.0 * a * c;
+            if disc < 0.0 {
+                return f32::INFINITY;
+            }
+            let q = disc.sqrt();
+            for t in [(-b - q) / (2.0 * a), (-b + q) / (2.0 * a)] {
+                let z = oo.z + dd.z * t;
+                if ok(t) && z >= *zmin && z <= *zmax {
+                    return t;
+                }
+            }
+            f32::INFINITY
+        }
+    }
+}
+
+/// Hit details at parameter t.
+pub fn hit_at(prims: &[Prim], id: usize, o: Vec3A, d: Vec3A, t: f32) -> Hit {
+    let pr = &prims[id];
+    let p = o + d * t;
+    let (mut ng, mut ns, uv) = match &pr.geom {
+        Geom::Triangle { p: v, n, uv } => {
+            let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            // Barycentrics of p.
+            let (e1, e2, ep) = (v[1] - v[0], v[2] - v[0], p - v[0]);
+            let (d00, d01, d11, d20, d21) =
+                (e1.dot(e1), e1.dot(e2), e2.dot(e2), ep.dot(e1), ep.dot(e2));
+            let den = (d00 * d11 - d01 * d01).max(1e-30);
+            let b1 = (d11 * d20 - d01 * d21) / den;
+            let b2 = (d00 * d21 - d01 * d20) / den;
+            let b0 = 1.0 - b1 - b2;
+            let ns = n
+                .map(|n| (n[0] * b0 + n[1] * b1 + n[2] * b2).normalize_or_zero())
+                .unwrap_or(ng);
+            let uv = uv[0] * b0 + uv[1] * b1 + uv[2] * b2;
+            // pbrt: the geometric normal follows the shading normal's side when normals are given.
+            let ng = if n.is_some() && ng.dot(ns) < 0.0 {
+                -ng
+            } else {
+                ng
+            };
+            (ng, ns, uv)
+        }
+        Geom::Sphere {
+            to_world, to_obj, ..
+        } => {
+            let q = to_obj.transform_point3a(p);
+            let n = normal_to_world(to_obj, q);
+            let phi = q.y.atan2(q.x).rem_euclid(2.0 * PI);
+            let _ = to_world;
+            (
+                n,
+                n,
+                Vec2::new(
+                    phi / (2.0 * PI),
+                    (q.z / q.length().max(1e-30)).clamp(-1.0, 1.0).acos() / PI,
+                ),
+            )
+        }
+        Geom::Disk { to_obj, r, .. } => {
+            let q = to_obj.transform_point3a(p);
+            let n = normal_to_world(to_obj, Vec3A::Z);
+            let rr = (q.x * q.x + q.y * q.y).sqrt();
+            (
+                n,
+                n,
+                Vec2::new(
+                    q.y.atan2(q.x).rem_euclid(2.0 * PI) / (2.0 * PI),
+                    1.0 - rr / r,
+                ),
+            )
+        }
+        Geom::Cylinder {
+            to_obj, zmin, zmax, ..
+        } => {
+            let q = to_obj.transform_point3a(p);
+            let n = normal_to_world(to_obj, Vec3A::new(q.x, q.y, 0.0));
+            (
+                n,
+                n,
+                Vec2::new(
+                    q.y.atan2(q.x).rem_euclid(2.0 * PI) / (2.0 * PI),
+                    (q.z - zmin) / (zmax - zmin),
+                ),
+            )
+        }
+    };
+    if pr.reverse {
+        ng = -ng;
+        ns = -ns;
+    }
+    Hit {
+        t,
+        p,
+        ng,
+        ns,
+        uv,
+        prim: id,
+    }
+}
+
+fn normal_to_world(to_obj: &Affine3A, n_obj: Vec3A) -> Vec3A {
+    // Normals transform by the inverse transpose of object→world, i.e. the transpose of world→object.
+    to_obj
+        .matrix3
+        .transpose()
+        .mul_vec3a(n_obj)
+        .normalize_or_zero()
+}
+
+/// A uniformly sampled point on the shape (by area), its normal, and the area pdf.
+pub fn sample_area(pr: &Prim, u: [f32; 2]) -> (Vec3A, Vec3A, f32) {
+    let flip = |n: Vec3A| if pr.reverse { -n } else { n };
+    match &pr.geom {
+        Geom::Triangle { p, .. } => {
+            let su = u[0].sqrt();
+            let (b0, b1) = (1.0 - su, u[1] * su);
+            let q = p[0] * b0 + p[1] * b1 + p[2] * (1.0 - b0 - b1);
+            let c = (p[1] - p[0]).cross(p[2] - p[0]);
+            (q, flip(c.normalize_or_zero()), 2.0 / c.length().max(1e-30))
+        }
+        Geom::Sphere {
+            to_world,
+            to_obj,
+            r,
+        } => {
+            let z = 1.0 - 2.0 * u[0];
+            let rr = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * PI * u[1];
+            let q = Vec3A::new(rr * phi.cos(), rr * phi.sin(), z) * *r;
+            let area = 4.0 * PI * r * r * area_scale(to_world);
+            (
+                to_world.transform_point3a(q),
+                flip(normal_to_world(to_obj, q)),
+                1.0 / area,
+            )
+        }
+        Geom::Disk {
+            to_world,
+            to_obj,
+            h,
+            r,
+            ri,
+        } => {
+            let rr = (ri * ri + u[0] * (r * r - ri * ri)).sqrt();
+            let phi = 2.0 * PI * u[1];
+            let q = Vec3A::new(rr * phi.cos(), rr * phi.sin(), *h);
+            let area = PI * (r * r - ri * ri) * area_scale(to_world);
+            (
+                to_world.transform_point3a(q),
+                flip(normal_to_world(to_obj, Vec3A::Z)),
+                1.0 / area,
+            )
+        }
+        Geom::Cylinder {
+            to_world,
+            to_obj,
+            r,
+            zmin,
+            zmax,
+        } => {
+            let phi = 2.0 * PI * u[1];
+            let q = Vec3A::new(r * phi.cos(), r * phi.sin(), zmin + u[0] * (zmax - zmin));
+            let area = 2.0 * PI * r * (zmax - zmin) * area_scale(to_world);
+            (
+                to_world.transform_point3a(q),
+                flip(normal_to_world(to_obj, Vec3A::new(q.x, q.y, 0.0))),
+                1.0 / area,
+            )
+        }
+    }
+}
+
+/// Area scale of a transform (exact for uniform scales; documented approximation otherwise).
+fn area_scale(m: &Affine3A) -> f32 {
+    m.matrix3.determinant().abs().powf(2.0 / 3.0)
+}
+
+/// Primitives with their BVH.
+pub struct Bvh {
+    pub prims: Vec<Prim>,
+    bvh: Option<Bvh2>,
+}
+
+impl std::fmt::Debug for Bvh {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Bvh({} primitives)", self.prims.len())
+    }
+}
+
+impl Bvh {
+    pub fn new(prims: Vec<Prim>) -> Bvh {
+        let bvh = (!prims.is_empty()).then(|| {
+            obvhs::bvh2::builder::build_bvh2(
+                &prims,
+                BvhBuildParams::medium_build(),
+                &mut std::time::Duration::default(),
+            )
+        });
+        Bvh { prims, bvh }
+    }
+
+    /// The nearest hit in (tmin, tmax).
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let mut hit = RayHit::none();
+        let ray = BRay::new(o, d, tmin, tmax);
+        let prims = &self.prims;
+        let found = bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let pid = bvh.primitive_indices[id] as usize;
+            intersect_t(&prims[pid].geom, o, d, tmin, r.tmax)
+        });
+        if !found || !hit.t.is_finite() {
+            return None;
+        }
+        let pid = bvh.primitive_indices[hit.primitive_id as usize] as usize;
+        Some(hit_at(prims, pid, o, d, hit.t))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere(r: f32, c: Vec3A) -> Prim {
+        let m = Affine3A::from_translation(c.into());
+        Prim {
+            geom: Geom::Sphere {
+                to_world: m,
+                to_obj: m.inverse(),
+                r,
+            },
+            material: Some(0),
+            area_light: None,
+            media: None,
+            reverse: false,
+        }
+    }
+
+    #[test]
+    fn hits_and_normals() {
+        let bvh = Bvh::new(vec![
+            sphere(1.0, Vec3A::new(0.0, 0.0, 5.0)),
+            Prim {
+                geom: Geom::Triangle {
+                    p: [
+                        Vec3A::new(-1.0, -1.0, 10.0),
+                        Vec3A::new(1.0, -1.0, 10.0),
+                        Vec3A::new(0.0, 1.0, 10.0),
+                    ],
+                    n: None,
+                    uv: [Vec2::ZERO; 3],
+                },
+                material: Some(0),
+                area_light: None,
+                media: None,
+                reverse: false,
+            },
+        ]);
+        let h = bvh
+            .intersect(Vec3A::ZERO, Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 4.0).abs() < 1e-5 && (h.ng - Vec3A::NEG_Z).length() < 1e-5);
+        let h = bvh
+            .intersect(Vec3A::new(0.0, -0.5, 0.0), Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert!(h.t < 5.0);
+        let h = bvh
+            .intersect(Vec3A::new(0.0, -0.5, 7.0), Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert!((h.t - 3.0).abs() < 1e-5 && h.prim == 1);
+        assert!(bvh
+            .intersect(Vec3A::new(5.0, 5.0, 0.0), Vec3A::Z, 1e-4, f32::INFINITY)
+            .is_none());
+    }
+
+    #[test]
+    fn area_sampling_pdf_integrates_to_one() {
+        let s = sphere(2.0, Vec3A::ZERO);
+        let (_, _, pdf) = sample_area(&s, [0.3, 0.7]);
+        assert!((pdf * 4.0 * PI * 4.0 - 1.0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,114 @@
+//! `firemedium render SCENE.pbrt [-o OUT.exr] [--spp N] [--threads N] [--seed S] [--stats]`.
+
+use crate::render::{self, scene};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The pbrt-v4 scene file.
+    scene: PathBuf,
+    /// Output EXR (default: the Film's filename, else SCENE.exr); a PNG preview is written beside it.
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Samples per pixel (default: the Sampler's pixelsamples).
+    #[arg(long)]
+    spp: Option<usize>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Seed of the pixel samples (same seed, same image, any thread count).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
+    #[arg(long)]
+    plugin: Option<PathBuf>,
+    /// Print time, rays/s, and what the plugin built.
+    #[arg(long)]
+    stats: bool,
+    /// No warnings or progress.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
+    if a.spp == Some(0) || a.threads == Some(0) {
+        return Err((2, "--spp and --threads must be at least 1".into()));
+    }
+    let ov = scene::Overrides {
+        spp: a.spp,
+        plugin: a.plugin.clone(),
+    };
+    let load_start = std::time::Instant::now();
+    let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
+    let load_seconds = load_start.elapsed().as_secs_f64();
+    if !a.quiet {
+        for w in &sc.warnings {
+            eprintln!("{w}");
+        }
+    }
+    let _ =
+        ctrlc::set_handler(|| render::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
+    let tiles = sc.res.0.div_ceil(16) * sc.res.1.div_ceil(16);
+    let bar = ProgressBar::new(tiles as u64);
+    let show = !a.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    bar.set_draw_target(if show {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    });
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} tiles {elapsed}/{eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| (1, format!("threads: {e}")))?;
+    let (img, st) =
+        pool.install(|| render::render(&sc, a.seed, &|n, _| bar.set_position(n as u64)));
+    bar.finish_and_clear();
+    let (exr, png) = render::outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
+    render::write_exr(&img, &exr).map_err(|e| (1, e))?;
+    render::write_png(&img, &png).map_err(|e| (1, e))?;
+    let mut out = format!(
+        "wrote {} and {} ({}×{}, {} spp)\n",
+        exr.display(),
+        png.display(),
+        img.w,
+        img.h,
+        sc.spp
+    );
+    if a.stats {
+        out += &format!("scene: {:.3} s to load and build, {} primitives, {} lights, {} media, {} bins over {}–{} nm\n", load_seconds, sc.bvh.prims.len(), sc.lights.len(), sc.media.len(), sc.bins.n(), sc.bins.grid.min_nm(), sc.bins.grid.max_nm());
+        for m in &sc.media_reports {
+            out += &format!(
+                "medium \"{}\": plugin built {:.1} MB in {:.3} s ({} channels)\n",
+                m.name,
+                m.bytes as f64 / 1e6,
+                m.seconds,
+                m.channels
+            );
+        }
+        out += &format!(
+            "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s\n",
+            st.seconds,
+            pool.current_num_threads(),
+            st.camera_rays,
+            st.camera_rays as f64 / st.seconds.max(1e-9)
+        );
+    }
+    if !img.complete {
+        return Err((
+            130,
+            format!(
+                "interrupted: wrote the finished tiles to {} and {}",
+                exr.display(),
+                png.display()
+            ),
+        ));
+    }
+    Ok(out)
+}

@@ -1,0 +1,247 @@
+//! End-to-end renders through the built `firemedium` binary and the built plugin cdylib: a furnace, a sphere
+//! of uniform fire against its closed form, a pbrt-v4 `uniformgrid` pixel against the plugin's own integration
+//! of that ray, and the default scene's EXR (finite everywhere, lit by the fire).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-render-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn render(scene: &Path, extra: &[&str]) -> PathBuf {
+    let out = scene.with_extension("exr");
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(&out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "render {}: {}\n{}",
+        scene.display(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// (width, height, linear sRGB pixels).
+fn read_exr(path: &Path) -> (usize, usize, Vec<[f32; 3]>) {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| {
+            (
+                res.width(),
+                res.height(),
+                vec![[0f32; 3]; res.width() * res.height()],
+            )
+        },
+        |(w, _, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.x() + *w * pos.y()] = [r, g, b]
+        },
+    )
+    .unwrap();
+    img.layer_data.channel_data.pixels
+}
+
+fn luminance(p: [f32; 3]) -> f64 {
+    // Y row of sRGB → XYZ (D65).
+    0.2126729 * p[0] as f64 + 0.7151522 * p[1] as f64 + 0.0721750 * p[2] as f64
+}
+
+fn mean_y(px: &[[f32; 3]]) -> f64 {
+    px.iter().map(|p| luminance(*p)).sum::<f64>() / px.len() as f64
+}
+
+#[test]
+fn furnace_closed_diffuse_sphere() {
+    // Inside a closed sphere that both emits L and reflects diffusely with ρ, every direction sees
+    // L (1 + ρ + ρ² + …) = L / (1 − ρ). Compared against the same sphere with ρ = 0.
+    let dir = tmp("furnace");
+    let scene = |rho: f64| {
+        format!(
+            "LookAt 0 0 0  0 1 0  0 0 1\nCamera \"perspective\" \"float fov\" 60\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 200\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nMaterial \"diffuse\" \"rgb reflectance\" [{rho} {rho} {rho}]\nShape \"sphere\" \"float radius\" 3\nAttributeEnd\n"
+        )
+    };
+    std::fs::write(dir.join("f0.pbrt"), scene(0.0)).unwrap();
+    std::fs::write(dir.join("f5.pbrt"), scene(0.5)).unwrap();
+    let (_, _, p0) = read_exr(&render(&dir.join("f0.pbrt"), &[]));
+    let (_, _, p5) = read_exr(&render(&dir.join("f5.pbrt"), &[]));
+    let (y0, y5) = (mean_y(&p0), mean_y(&p5));
+    assert!(y0 > 0.0);
+    // Emission only: every pixel is exactly L.
+    assert!(p0.iter().all(|p| (luminance(*p) / y0 - 1.0).abs() < 1e-5));
+    let ratio = y5 / y0;
+    eprintln!("furnace: L(ρ=0.5)/L(ρ=0) = {ratio:.5} (closed form 2)");
+    assert!(
+        (ratio - 2.0).abs() < 0.02,
+        "furnace: L(ρ=0.5)/L(ρ=0) = {ratio}, expected 2"
+    );
+}
+
+fn inline_grid(n: usize, density: f64, temperature: f64) -> String {
+    let d = vec![format!("{density}"); n * n * n].join(" ");
+    let t = vec![format!("{temperature}"); n * n * n].join(" ");
+    format!("\"integer nx\" {n} \"integer ny\" {n} \"integer nz\" {n} \"float density\" [{d}] \"float temperature\" [{t}]")
+}
+
+#[test]
+fn a_sphere_of_uniform_fire_matches_the_closed_form() {
+    // Soot at 1600 K filling a sphere of radius R: the centre pixel sees L = Σ_c (j_c/σ_c)(1 − e^{−2σ_c R}).
+    let dir = tmp("sphere");
+    let (r, fv, t) = (0.5, 2e-7, 1600.0);
+    let scene = format!(
+        "LookAt 0 -20 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.5\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 4\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"string interpolation\" \"nearest\" \"float alpha\" 1\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" {r}\nAttributeEnd\n",
+        inline_grid(4, fv, t)
+    );
+    std::fs::write(dir.join("s.pbrt"), &scene).unwrap();
+    let (w, h, px) = read_exr(&render(&dir.join("s.pbrt"), &[]));
+    let centre = luminance(px[w / 2 + w * (h / 2)]);
+    // The closed form, from the plugin's own coefficients (rlib) and the same bins.
+    use firemedium_plugin::params::Param;
+    let v = firemedium_plugin::volume::FireVolume::new(&[
+        Param::floats("density", &vec![fv; 64]),
+        Param::floats("temperature", &vec![t; 64]),
+        Param::int("nx", 4),
+        Param::int("ny", 4),
+        Param::int("nz", 4),
+        Param::string("interpolation", "nearest"),
+        Param::float("alpha", 1.0),
+    ])
+    .unwrap();
+    let (mut sa, mut ss, mut j) = (vec![0.0; 30], vec![0.0; 30], vec![0.0; 30]);
+    v.coefficients(glam::DVec3::splat(0.5), &mut sa, &mut ss, &mut j);
+    let xyz = v.channel_xyz();
+    // The camera is 20 m away with a 0.5° field: rays within ±0.002 of the centre chord.
+    let want: f64 = (0..30)
+        .map(|c| xyz[c].y * j[c] / sa[c] * -(-2.0 * sa[c] * r).exp_m1())
+        .sum();
+    eprintln!(
+        "fire sphere: centre pixel Y {centre:.6e} vs closed form {want:.6e} ({:+.2e})",
+        centre / want - 1.0
+    );
+    assert!(
+        (centre / want - 1.0).abs() < 0.01,
+        "centre pixel Y {centre} vs closed form {want}"
+    );
+}
+
+#[test]
+fn a_pbrt_uniformgrid_pixel_matches_the_plugins_integration() {
+    // pbrt-v4 uniformgrid with a temperature field: the centre pixel equals the plugin's march along that ray.
+    let dir = tmp("grid");
+    let n = 6;
+    let dens: Vec<String> = (0..n * n * n)
+        .map(|i| format!("{}", 0.5 + 0.4 * ((i * 7 % 11) as f64 / 11.0)))
+        .collect();
+    let temp: Vec<String> = (0..n * n * n)
+        .map(|i| format!("{}", 1200.0 + 600.0 * ((i * 5 % 13) as f64 / 13.0)))
+        .collect();
+    let scene = format!(
+        "LookAt 0 -30 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.05\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" {n} \"integer ny\" {n} \"integer nz\" {n} \"float density\" [{}] \"float temperature\" [{}] \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"spectrum sigma_a\" [0.8] \"float Lescale\" 2\nAttributeBegin\nMediumInterface \"g\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.7\nAttributeEnd\n",
+        dens.join(" "),
+        temp.join(" ")
+    );
+    std::fs::write(dir.join("g.pbrt"), &scene).unwrap();
+    let (w, h, px) = read_exr(&render(&dir.join("g.pbrt"), &[]));
+    let got = luminance(px[w / 2 + w * (h / 2)]);
+    use firemedium_plugin::params::Param;
+    let to_f = |v: &[String]| {
+        v.iter()
+            .map(|s| s.parse::<f64>().unwrap())
+            .collect::<Vec<_>>()
+    };
+    let v = firemedium_plugin::volume::FireVolume::new(&[
+        Param::string("mode", "pbrt"),
+        Param::int("nx", n as i64),
+        Param::int("ny", n as i64),
+        Param::int("nz", n as i64),
+        Param::floats("density", &to_f(&dens)),
+        Param::floats("temperature", &to_f(&temp)),
+        Param::point3("p0", [-1.0; 3]),
+        Param::point3("p1", [1.0; 3]),
+        Param::spectrum("sigma_a", &[0.8]),
+        Param::float("Lescale", 2.0),
+    ])
+    .unwrap();
+    // The pixel at (w/2, h/2) covers a tiny cone around the axis; the central ray is representative to ≪1 %.
+    let ray = firemedium_plugin::volume::Ray {
+        o: glam::DVec3::new(0.0, -30.0, 0.0),
+        d: glam::DVec3::Y,
+        t0: 0.0,
+        t1: 100.0,
+        seed: 1,
+    };
+    let (mut l, mut t) = (vec![0.0; 30], vec![0.0; 30]);
+    v.integrate(&ray, &mut l, &mut t);
+    let want: f64 = v.channel_xyz().iter().zip(&l).map(|(w, x)| w.y * x).sum();
+    assert!(want > 0.0);
+    eprintln!(
+        "uniformgrid: pixel Y {got:.6e} vs plugin {want:.6e} ({:+.2e})",
+        got / want - 1.0
+    );
+    assert!(
+        (got / want - 1.0).abs() < 0.01,
+        "pixel Y {got} vs plugin {want}"
+    );
+}
+
+#[test]
+fn the_default_scene_renders_finite_and_lit() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/fire-room/scene.pbrt");
+    let dir = tmp("default");
+    let out = dir.join("room.exr");
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .args(["render"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .args(["--spp", "2", "--stats", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("medium \"flame\": plugin built") && text.contains("camera rays/s"),
+        "{text}"
+    );
+    let (w, h, px) = read_exr(&out);
+    assert_eq!((w, h), (320, 240));
+    assert!(
+        px.iter().all(|p| p.iter().all(|c| c.is_finite())),
+        "NaN or infinity in the image"
+    );
+    // The fire's core is bright; the corners of the dark room are dim; the PNG preview exists.
+    let fire = luminance(px[160 + w * 150]);
+    let corner = luminance(px[5 + w * 5]);
+    eprintln!("default scene: fire core Y {fire:.1} cd/m², corner {corner:.3e}");
+    assert!(
+        fire > 100.0 && fire > 1000.0 * corner.max(1e-9),
+        "fire {fire} cd/m², corner {corner}"
+    );
+    assert!(out.with_extension("png").is_file());
+}
+
+#[test]
+fn bad_scenes_exit_1_with_file_line_col() {
+    let dir = tmp("bad");
+    for (name, text, want) in [
+        ("typo.pbrt", "WorldBegin\nShpe \"sphere\"\n", "typo.pbrt:2:1: unknown directive 'Shpe'"),
+        ("medium.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"nope.vdb\"\n", "medium.pbrt:3:1: medium \"f\" (fire)"),
+        ("light.pbrt", "Camera \"perspective\"\nWorldBegin\nLightSource \"goniometric\"\n", "light.pbrt:3:1: light \"goniometric\" is not supported"),
+    ] {
+        std::fs::write(dir.join(name), text).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium")).arg("render").arg(dir.join(name)).output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(want) && e.trim_end().lines().count() == 1, "{name}: {e}");
+    }
+}
