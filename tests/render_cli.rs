@@ -245,3 +245,96 @@ fn bad_scenes_exit_1_with_file_line_col() {
         assert!(e.contains(want) && e.trim_end().lines().count() == 1, "{name}: {e}");
     }
 }
+
+fn write_exr_map(path: &Path, w: usize, h: usize, f: impl Fn(f32, f32) -> f32 + Sync) {
+    exr::prelude::write_rgb_file(path, w, h, |x, y| {
+        let v = f((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+        (v, v, v)
+    })
+    .unwrap();
+}
+
+#[test]
+fn environment_maps_light_the_right_directions() {
+    // Upper hemisphere bright, lower dark: lat-long (2:1, top rows = +z) and pbrt-v4's equal-area square
+    // (+z hemisphere = the inner diamond |2u−1| + |2v−1| ≤ 1).
+    let dir = tmp("env");
+    write_exr_map(
+        &dir.join("ll.exr"),
+        64,
+        32,
+        |_, v| if v < 0.5 { 2.0 } else { 0.0 },
+    );
+    write_exr_map(&dir.join("ea.exr"), 64, 64, |u, v| {
+        if (2.0 * u - 1.0).abs() + (2.0 * v - 1.0).abs() < 1.0 {
+            2.0
+        } else {
+            0.0
+        }
+    });
+    for map in ["ll.exr", "ea.exr"] {
+        for (look, want_bright) in [("0 0 1", true), ("0 0 -1", false)] {
+            let up = "0 1 0";
+            let scene = format!("LookAt 0 0 0  {look}  {up}\nCamera \"perspective\" \"float fov\" 10\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"{map}\"\n");
+            let f = dir.join(format!("{map}-{}.pbrt", want_bright));
+            std::fs::write(&f, scene).unwrap();
+            let (_, _, px) = read_exr(&render(&f, &[]));
+            let y = mean_y(&px);
+            if want_bright {
+                // 2 × a flat spectrum over 400–700 nm: Y = 2 · 683 · ∫₄₀₀⁷⁰⁰ ȳ ≈ 1.45e5 cd/m².
+                assert!(y > 1.3e5 && y < 1.6e5, "{map} looking {look}: Y {y}");
+            } else {
+                assert!(y < 1e-6, "{map} looking {look}: Y {y}");
+            }
+        }
+    }
+}
+
+#[test]
+fn an_srgb_imagemap_on_a_diffuse_floor_under_a_uniform_sky() {
+    // A floor whose reflectance is a grey PNG (sRGB 128 → linear 0.2158) under a uniform sky L: radiance ρL.
+    let dir = tmp("imagemap");
+    {
+        let f = std::fs::File::create(dir.join("grey.png")).unwrap();
+        let mut e = png::Encoder::new(std::io::BufWriter::new(f), 4, 4);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(png::BitDepth::Eight);
+        e.write_header()
+            .unwrap()
+            .write_image_data(&[128u8; 48])
+            .unwrap();
+    }
+    let scene = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 256\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nTexture \"g\" \"spectrum\" \"imagemap\" \"string filename\" \"grey.png\"\nMaterial \"diffuse\" \"texture reflectance\" \"g\"\nShape \"trianglemesh\" \"point3 P\" [-50 -50 0 50 -50 0 50 50 0 -50 50 0] \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
+    std::fs::write(dir.join("floor.pbrt"), scene).unwrap();
+    let sky = "LookAt 0 0 5  0 0 10  0 1 0\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 4\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
+    std::fs::write(dir.join("sky.pbrt"), sky).unwrap();
+    let floor = mean_y(&read_exr(&render(&dir.join("floor.pbrt"), &[])).2);
+    let l = mean_y(&read_exr(&render(&dir.join("sky.pbrt"), &[])).2);
+    let rho = ((128.0f64 / 255.0 + 0.055) / 1.055).powf(2.4);
+    eprintln!("imagemap floor: Y/L = {:.4} (ρ = {rho:.4})", floor / l);
+    assert!(
+        (floor / l / rho - 1.0).abs() < 0.03,
+        "floor/sky {} vs ρ {rho}",
+        floor / l
+    );
+}
+
+#[test]
+fn a_thick_scattering_emitting_medium_is_in_equilibrium() {
+    // Deep inside a homogeneous medium that emits L_e (σ_a L_e) and scatters with albedo ½, L = L_e: in-scattering
+    // restores what out-scattering removes. (Counting scattering as extinction would give ½ L_e.)
+    let dir = tmp("equilibrium");
+    for (name, ss) in [("absorbing", 0.0), ("scattering", 1.0)] {
+        // The camera sits in the medium: pbrt's camera medium is the outside medium at the Camera directive.
+        let scene = format!(
+            "LookAt 0 0 0  0 1 0  0 0 1\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 128\nIntegrator \"volpath\" \"integer maxdepth\" 400\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"spectrum sigma_a\" [1] \"spectrum sigma_s\" [{ss}] \"spectrum Le\" [1] \"float g\" 0.3\nMediumInterface \"\" \"m\"\nCamera \"perspective\" \"float fov\" 30\nWorldBegin\nAttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 40\nAttributeEnd\n"
+        );
+        let f = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&f, scene).unwrap();
+        let y = mean_y(&read_exr(&render(&f, &[])).2);
+        // L_e = 1 flat over 400–700 nm: Y = 683 ∫₄₀₀⁷⁰⁰ ȳ dλ.
+        let want = 683.0 * firemedium_plugin::cie::cmf_integral(400.0, 700.0).y;
+        eprintln!("equilibrium ({name}): Y/Y(L_e) = {:.4}", y / want);
+        assert!((y / want - 1.0).abs() < 0.02, "{name}: {y} vs {want}");
+    }
+}

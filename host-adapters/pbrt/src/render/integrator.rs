@@ -76,6 +76,32 @@ fn fresnel(cos_i: f32, eta: f32) -> f32 {
     0.5 * (rp * rp + rs * rs)
 }
 
+/// Radiance of an infinite light toward direction `-w` (seen looking along `w`); zero for other lights.
+fn env(light: &Light, w: Vec3A) -> S {
+    match light {
+        Light::Infinite { l } => *l,
+        Light::InfiniteMap {
+            img,
+            to_light,
+            scale,
+            basis,
+        } => {
+            let d = (*to_light * w).normalize_or_zero();
+            let [u, v] = if img.w == img.h {
+                super::image::equal_area_sphere_to_square(d.to_array())
+            } else {
+                [
+                    0.5 + d.y.atan2(d.x) / (2.0 * PI),
+                    d.z.clamp(-1.0, 1.0).acos() / PI,
+                ]
+            };
+            let c = img.bilerp(u, v, super::image::Wrap::Clamp);
+            (basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]) * *scale
+        }
+        _ => S::ZERO,
+    }
+}
+
 /// Renders radiance along camera rays.
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
@@ -134,7 +160,7 @@ impl Integrator<'_> {
                 }
                 (S(l), S(t))
             }
-            Medium::Homogeneous { sa, ss, le } => {
+            Medium::Homogeneous { sa, ss, le, .. } => {
                 let len = if t_end.is_finite() {
                     t_end * d.length()
                 } else {
@@ -231,6 +257,10 @@ impl Integrator<'_> {
             Light::Infinite { l } => {
                 let w = uniform_sphere(u);
                 (w, f32::INFINITY, *l * (4.0 * PI))
+            }
+            Light::InfiniteMap { .. } => {
+                let w = uniform_sphere(u);
+                (w, f32::INFINITY, env(&sc.lights[li], w) * (4.0 * PI))
             }
             Light::Area { prim, l, twosided } => {
                 let (q, n, pdf_a) = sample_area(&sc.bvh.prims[*prim], u);
@@ -341,6 +371,53 @@ impl Integrator<'_> {
                             _ => beta *= S(w),
                         }
                     }
+                } else if let Medium::Homogeneous { sa, ss, g, .. } = &sc.media[m] {
+                    // Emission over the whole segment in closed form; in-scattering by sampling a distance from the
+                    // channel-mean extinction σ̄ with spectral weights T_c(s) σ_s,c / p(s).
+                    let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
+                    l += beta * le;
+                    if ss.is_black() {
+                        beta *= tr;
+                    } else {
+                        let n = sc.bins.n();
+                        let st = *sa + *ss;
+                        let sbar = st.0[..n].iter().sum::<f32>() / n as f32;
+                        let speed = d.length();
+                        let s_hit = -(1.0 - rng.next_f64() as f32).ln() / sbar;
+                        let s_end = t_end * speed;
+                        if s_hit < s_end {
+                            let mut w = S::ZERO;
+                            for c in 0..n {
+                                w.0[c] = (-(st.0[c] - sbar) * s_hit).exp() * ss.0[c] / sbar;
+                            }
+                            beta *= w;
+                            if depth >= sc.maxdepth {
+                                break;
+                            }
+                            let p = o + d * (s_hit / speed);
+                            if !sc.lights.is_empty() {
+                                let li = (rng.next_f64() * sc.lights.len() as f64) as usize
+                                    % sc.lights.len();
+                                if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
+                                    l += beta * le * hg((-d).dot(wi), *g as f32);
+                                }
+                            }
+                            d = sample_hg(d, *g as f32, Self::rng2(rng));
+                            o = p;
+                            depth += 1;
+                            specular = false;
+                            continue;
+                        }
+                        let mut w = S::ZERO;
+                        for c in 0..n {
+                            w.0[c] = if s_end.is_finite() {
+                                (-(st.0[c] - sbar) * s_end).exp()
+                            } else {
+                                0.0
+                            };
+                        }
+                        beta *= w;
+                    }
                 } else {
                     let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
                     l += beta * le;
@@ -351,11 +428,9 @@ impl Integrator<'_> {
                 }
             }
             let Some(h) = hit else {
-                for light in &sc.lights {
-                    if let Light::Infinite { l: le } = light {
-                        if specular || depth == 0 {
-                            l += beta * *le;
-                        }
+                if specular || depth == 0 {
+                    for light in &sc.lights {
+                        l += beta * env(light, d);
                     }
                 }
                 break;

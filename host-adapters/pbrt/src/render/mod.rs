@@ -2,6 +2,7 @@
 //! (media through the plugin), `integrator` is `volpath`, and `render` runs it over tiles in parallel and writes
 //! the film: EXR (linear sRGB, absolute units) and a PNG preview.
 
+pub mod image;
 pub mod integrator;
 pub mod ply;
 pub mod scene;

@@ -30,6 +30,14 @@ pub enum Tex {
         su: f32,
         sv: f32,
     },
+    /// An image: linear RGB × scale (1 − it when inverted), uplifted with the bins' box basis.
+    Image {
+        img: std::sync::Arc<super::image::RgbImage>,
+        scale: f32,
+        invert: bool,
+        wrap: super::image::Wrap,
+        basis: [S; 3],
+    },
 }
 
 impl Tex {
@@ -42,6 +50,23 @@ impl Tex {
                 } else {
                     b.eval(uv)
                 }
+            }
+            Tex::Image {
+                img,
+                scale,
+                invert,
+                wrap,
+                basis,
+            } => {
+                // pbrt-v4 flips t: row 0 of the image is v = 1.
+                let c = img.bilerp(uv.x, 1.0 - uv.y, *wrap).map(|x| {
+                    if *invert {
+                        (1.0 - x * *scale).max(0.0)
+                    } else {
+                        x * *scale
+                    }
+                });
+                basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]
             }
         }
     }
@@ -61,6 +86,7 @@ pub enum Material {
 
 /// Lights (area lights live on primitives).
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // a handful per scene
 pub enum Light {
     Point {
         p: Vec3A,
@@ -79,6 +105,14 @@ pub enum Light {
     },
     Infinite {
         l: S,
+    },
+    /// An environment map: world → light-space rotation, linear RGB × scale, equal-area square (pbrt-v4) or
+    /// lat-long (2:1) parameterisation.
+    InfiniteMap {
+        img: std::sync::Arc<super::image::RgbImage>,
+        to_light: Mat3A,
+        scale: f32,
+        basis: [S; 3],
     },
     Area {
         prim: usize,
@@ -99,7 +133,7 @@ pub enum Medium {
         name: String,
     },
     /// pbrt's homogeneous medium.
-    Homogeneous { sa: S, ss: S, le: S },
+    Homogeneous { sa: S, ss: S, le: S, g: f64 },
 }
 
 impl std::fmt::Debug for Medium {
@@ -257,6 +291,15 @@ impl Builder {
         Ok(Some(Tex::Const(s)))
     }
 
+    /// The bins' box-uplift basis for red, green and blue.
+    fn rgb_basis(&self) -> [S; 3] {
+        [
+            self.bins.uplift_rgb([1.0, 0.0, 0.0]),
+            self.bins.uplift_rgb([0.0, 1.0, 0.0]),
+            self.bins.uplift_rgb([0.0, 0.0, 1.0]),
+        ]
+    }
+
     fn warn(&mut self, loc: &Loc, m: impl std::fmt::Display) {
         self.warnings.push(format!("{loc}: warning: {m}"));
     }
@@ -353,10 +396,7 @@ impl Builder {
                 let sa = self.spectrum(params, "sigma_a", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
                 let ss = self.spectrum(params, "sigma_s", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
                 let le = self.spectrum(params, "Le", Some(S::ZERO))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * num(params, "Lescale", 1.0) as f32;
-                if !ss.is_black() {
-                    self.warn(loc, format!("medium \"{name}\": homogeneous scattering is treated as extinction (single-scattering from homogeneous media is not implemented)"));
-                }
-                Medium::Homogeneous { sa, ss, le }
+                Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
             "fire" | "uniformgrid" | "nanovdb" => {
                 // Parameters pass to the plugin unchanged, but for the type, the plugin file, and relative paths.
@@ -729,11 +769,21 @@ impl Builder {
                         Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
                     }
                     "infinite" => {
-                        if string(&p, "filename").is_some() {
-                            return Err(err(loc, "infinite light: environment maps (\"string filename\") are not supported yet; give \"rgb L\""));
+                        self.check_known("infinite light", &p, &["L", "scale", "illuminance", "portal", "filename"], loc, &["illuminance", "portal"])?;
+                        match string(&p, "filename") {
+                            Some(f) => {
+                                if p.iter().any(|x| x.name == "L") {
+                                    return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
+                                }
+                                let img = super::image::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
+                                if !(img.w == img.h || img.w == 2 * img.h) {
+                                    return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
+                                }
+                                let to_light = Mat3A::from(DMat3::from_mat4(self.st.ctm).inverse().as_mat3());
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale, basis: self.rgb_basis() }
+                            }
+                            None => Light::Infinite { l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale },
                         }
-                        self.check_known("infinite light", &p, &["L", "scale", "illuminance", "portal"], loc, &["illuminance", "portal"])?;
-                        Light::Infinite { l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
                     }
                     other => return Err(err(loc, format!("light \"{other}\" is not supported (point, spot, distant, infinite, and area diffuse)"))),
                 };
@@ -807,10 +857,28 @@ impl Builder {
                     "constant" => self
                         .spectrum(&p, "value", Some(self.bins.mask()))?
                         .unwrap_or(Tex::Const(S::ZERO)),
+                    "imagemap" => {
+                        self.check_known("imagemap", &p, &["filename", "scale", "invert", "encoding", "wrap", "filter", "maxanisotropy", "mapping", "uscale", "vscale", "udelta", "vdelta"], loc, &["filter", "maxanisotropy", "mapping", "uscale", "vscale", "udelta", "vdelta"])?;
+                        let f = string(&p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;
+                        let srgb = match string(&p, "encoding").unwrap_or("sRGB") {
+                            "sRGB" => true,
+                            "linear" => false,
+                            e => return Err(err(loc, format!("imagemap: encoding \"{e}\" is not supported (sRGB, linear)"))),
+                        };
+                        let wrap = match string(&p, "wrap").unwrap_or("repeat") {
+                            "repeat" => super::image::Wrap::Repeat,
+                            "clamp" => super::image::Wrap::Clamp,
+                            "black" => super::image::Wrap::Black,
+                            w => return Err(err(loc, format!("imagemap: wrap \"{w}\" is not one of repeat, clamp, black"))),
+                        };
+                        let img = super::image::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
+                        let invert = p.iter().find(|x| x.name == "invert").and_then(|x| x.bools()).map(|b| b[0]).unwrap_or(false);
+                        Tex::Image { img: std::sync::Arc::new(img), scale: num(&p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
+                    }
                     other => return Err(err(
                         loc,
                         format!(
-                            "texture class \"{other}\" is not supported (checkerboard, constant)"
+                            "texture class \"{other}\" is not supported (checkerboard, constant, imagemap)"
                         ),
                     )),
                 };

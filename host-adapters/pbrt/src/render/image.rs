@@ -1,0 +1,220 @@
+//! Images for `imagemap` textures and `infinite` light maps: EXR (linear) and PNG (8/16-bit, sRGB-encoded unless
+//! told otherwise), looked up bilinearly with pbrt-v4's conventions (pixel centres at (i + ½)/res, row 0 at the
+//! top, `repeat`/`clamp`/`black` wrapping).
+
+use std::path::Path;
+
+/// Linear RGB pixels, row-major, row 0 at the top.
+#[derive(Debug, Clone)]
+pub struct RgbImage {
+    pub w: usize,
+    pub h: usize,
+    pub px: Vec<[f32; 3]>,
+}
+
+/// Out-of-range lookups.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Black,
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Reads an EXR or PNG; `srgb` decodes 8/16-bit PNG values with the sRGB curve (pbrt's default encoding).
+pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
+    let file = path.display().to_string();
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("exr") => {
+            use exr::prelude::*;
+            let img = read_first_rgba_layer_from_file(
+                path,
+                |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+                |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                    px[pos.x() + *w * pos.y()] = [r, g, b]
+                },
+            )
+            .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+            let (w, px) = img.layer_data.channel_data.pixels;
+            let h = px.len().checked_div(w).unwrap_or(0);
+            if px.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+                return Err(format!("{file}: the image holds NaN or infinite values"));
+            }
+            Ok(RgbImage { w, h, px })
+        }
+        Some("png") => {
+            let f = std::fs::File::open(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+            let mut dec = png::Decoder::new(std::io::BufReader::new(f));
+            dec.set_transformations(png::Transformations::EXPAND);
+            let mut r = dec
+                .read_info()
+                .map_err(|e| format!("{file}: not a PNG: {e}"))?;
+            let mut buf = vec![
+                0u8;
+                r.output_buffer_size()
+                    .ok_or_else(|| format!("{file}: PNG too large"))?
+            ];
+            let info = r
+                .next_frame(&mut buf)
+                .map_err(|e| format!("{file}: corrupt PNG: {e}"))?;
+            let (w, h) = (info.width as usize, info.height as usize);
+            let chans = info.color_type.samples();
+            let sixteen = info.bit_depth == png::BitDepth::Sixteen;
+            let value = |i: usize| -> f32 {
+                let v = if sixteen {
+                    u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0
+                } else {
+                    buf[i] as f32 / 255.0
+                };
+                if srgb {
+                    srgb_to_linear(v)
+                } else {
+                    v
+                }
+            };
+            let px = (0..w * h)
+                .map(|p| {
+                    let b = p * chans;
+                    match chans {
+                        1 | 2 => [value(b); 3],
+                        _ => [value(b), value(b + 1), value(b + 2)],
+                    }
+                })
+                .collect();
+            Ok(RgbImage { w, h, px })
+        }
+        _ => Err(format!("{file}: images must be .exr or .png")),
+    }
+}
+
+impl RgbImage {
+    fn texel(&self, x: i64, y: i64, wrap: Wrap) -> [f32; 3] {
+        let (w, h) = (self.w as i64, self.h as i64);
+        let (x, y) = match wrap {
+            Wrap::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
+            Wrap::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
+            Wrap::Black => {
+                if x < 0 || y < 0 || x >= w || y >= h {
+                    return [0.0; 3];
+                }
+                (x, y)
+            }
+        };
+        self.px[(x + w * y) as usize]
+    }
+
+    /// Bilinear lookup at (s, t) in [0, 1]², t = 0 at the top row.
+    pub fn bilerp(&self, s: f32, t: f32, wrap: Wrap) -> [f32; 3] {
+        if self.w == 0 || self.h == 0 || !(s.is_finite() && t.is_finite()) {
+            return [0.0; 3];
+        }
+        let (x, y) = (s * self.w as f32 - 0.5, t * self.h as f32 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let mut out = [0f32; 3];
+        for (dx, dy, wgt) in [
+            (0, 0, (1.0 - fx) * (1.0 - fy)),
+            (1, 0, fx * (1.0 - fy)),
+            (0, 1, (1.0 - fx) * fy),
+            (1, 1, fx * fy),
+        ] {
+            let p = self.texel(x0 + dx, y0 + dy, wrap);
+            for c in 0..3 {
+                out[c] += wgt * p[c];
+            }
+        }
+        out
+    }
+}
+
+/// pbrt-v4's equal-area octahedral map (Clarberg 2008): a unit direction → (u, v) in [0, 1]².
+pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
+    let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let b = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = b.atan() * std::f32::consts::FRAC_2_PI;
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d[2] < 0.0 {
+        std::mem::swap(&mut u, &mut v);
+        u = 1.0 - u;
+        v = 1.0 - v;
+    }
+    u = u.copysign(d[0]);
+    v = v.copysign(d[1]);
+    [0.5 * (u + 1.0), 0.5 * (v + 1.0)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equal_area_map_corners_and_poles() {
+        // +z maps to the centre; −z to the corners; ±x, ±y to the edge midpoints.
+        assert_eq!(equal_area_sphere_to_square([0.0, 0.0, 1.0]), [0.5, 0.5]);
+        let c = equal_area_sphere_to_square([0.0, 0.0, -1.0]);
+        assert!(
+            (c[0] - 0.5).abs() == 0.5 && (c[1] - 0.5).abs() == 0.5,
+            "{c:?}"
+        );
+        let e = equal_area_sphere_to_square([1.0, 0.0, 0.0]);
+        assert!(
+            (e[0] - 1.0).abs() < 1e-6 && (e[1] - 0.5).abs() < 1e-6,
+            "{e:?}"
+        );
+        // Equal area: uniform directions fill the square uniformly (4×4 cells within 4σ).
+        let mut cells = [0u32; 16];
+        let n = 64_000;
+        let mut s = 1u64;
+        for _ in 0..n {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u1 = (s >> 40) as f32 / (1u64 << 24) as f32;
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u2 = (s >> 40) as f32 / (1u64 << 24) as f32;
+            let z = 1.0 - 2.0 * u1;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * std::f32::consts::PI * u2;
+            let [u, v] = equal_area_sphere_to_square([r * phi.cos(), r * phi.sin(), z]);
+            cells[((u * 4.0).min(3.0) as usize) + 4 * ((v * 4.0).min(3.0) as usize)] += 1;
+        }
+        let mean = n as f64 / 16.0;
+        for c in cells {
+            assert!((c as f64 - mean).abs() < 4.0 * mean.sqrt(), "{cells:?}");
+        }
+    }
+
+    #[test]
+    fn bilinear_and_wrapping() {
+        let img = RgbImage {
+            w: 2,
+            h: 1,
+            px: vec![[0.0; 3], [1.0; 3]],
+        };
+        assert_eq!(img.bilerp(0.25, 0.5, Wrap::Clamp)[0], 0.0);
+        assert_eq!(img.bilerp(0.5, 0.5, Wrap::Clamp)[0], 0.5);
+        assert_eq!(img.bilerp(0.0, 0.5, Wrap::Repeat)[0], 0.5);
+        assert_eq!(img.bilerp(1.0, 0.5, Wrap::Black)[0], 0.5);
+    }
+}
