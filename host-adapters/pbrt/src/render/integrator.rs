@@ -287,6 +287,29 @@ impl Integrator<'_> {
         (!l.is_black()).then_some((l, wi))
     }
 
+    /// A real scattering event in a medium at `p`: NEE with the Henyey–Greenstein phase function, then the next
+    /// direction sampled from it (weight 1).
+    #[allow(clippy::too_many_arguments)]
+    fn scatter_vertex(
+        &self,
+        p: Vec3A,
+        d: Vec3A,
+        g: f32,
+        medium: Option<usize>,
+        beta: S,
+        l: &mut S,
+        rng: &mut Rng,
+    ) -> Vec3A {
+        let lights = &self.scene.lights;
+        if !lights.is_empty() {
+            let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
+            if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
+                *l += beta * le * hg((-d).dot(wi), g);
+            }
+        }
+        sample_hg(d, g, Self::rng2(rng))
+    }
+
     fn diffuse_albedo(&self, m: &Material, h: &Hit) -> Option<S> {
         match m {
             Material::Diffuse(t) => Some(t.eval(h.uv)),
@@ -353,15 +376,7 @@ impl Integrator<'_> {
                                     break;
                                 }
                                 let p = o + d * ev[0].t as f32;
-                                // NEE from the scattering point with the phase function.
-                                if !sc.lights.is_empty() {
-                                    let li = (rng.next_f64() * sc.lights.len() as f64) as usize
-                                        % sc.lights.len();
-                                    if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
-                                        l += beta * le * hg((-d).dot(wi), *g as f32);
-                                    }
-                                }
-                                d = sample_hg(d, *g as f32, Self::rng2(rng));
+                                d = self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                                 o = p;
                                 depth += 1;
                                 specular = false;
@@ -395,14 +410,7 @@ impl Integrator<'_> {
                                 break;
                             }
                             let p = o + d * (s_hit / speed);
-                            if !sc.lights.is_empty() {
-                                let li = (rng.next_f64() * sc.lights.len() as f64) as usize
-                                    % sc.lights.len();
-                                if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
-                                    l += beta * le * hg((-d).dot(wi), *g as f32);
-                                }
-                            }
-                            d = sample_hg(d, *g as f32, Self::rng2(rng));
+                            d = self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                             o = p;
                             depth += 1;
                             specular = false;
