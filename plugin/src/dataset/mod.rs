@@ -20,8 +20,10 @@
 //!
 //! ## Bad data
 //! NaN or infinite values in any channel, and negative values in the physical channels (`density`,
-//! `temperature`, species), are errors naming the file, channel, voxel and value unless the [`Policy`] says
-//! `Zero`, which replaces them with 0 and counts them in the report. Other channels keep negative values. Dims whose product
+//! `temperature`, species) as the file holds them, are errors naming the file, channel, voxel and value unless
+//! the [`Policy`] says `Zero`, which replaces them with 0 and counts them in the report. Other channels keep
+//! negative values. Physical values that the mapping moves below zero (an offset used as a cutoff, as pbrt-v4's
+//! `temperaturecutoff`) are clamped to 0. Dims whose product
 //! overflows or whose grid would exceed `max_bytes` are refused before anything is allocated.
 
 mod ascii;
@@ -798,6 +800,23 @@ fn apply_policies(
                 }
             }
         }
+        // The policy judges the data as the file has it…
+        if *v < 0.0 && physical {
+            match opts.negative {
+                Policy::Error => {
+                    return Err(Error::format(
+                        file,
+                        voxel(n),
+                        "a value >= 0 (or 'negative' \"zero\")",
+                        *v,
+                    ));
+                }
+                Policy::Zero => {
+                    *v = 0.0;
+                    negative += 1;
+                }
+            }
+        }
         if !identity {
             *v = mapping.apply(*v);
             if !v.is_finite() {
@@ -808,22 +827,10 @@ fn apply_policies(
                     *v,
                 ));
             }
-        }
-        if *v < 0.0 && physical {
-            match opts.negative {
-                Policy::Error => {
-                    let after = if identity { "" } else { " after the mapping" };
-                    return Err(Error::format(
-                        file,
-                        voxel(n),
-                        format!("a value >= 0{after} (or 'negative' \"zero\")"),
-                        *v,
-                    ));
-                }
-                Policy::Zero => {
-                    *v = 0.0;
-                    negative += 1;
-                }
+            // …while values the mapping moves below zero are a cutoff doing its job (pbrt-v4's
+            // `temperaturecutoff`: colder voxels do not emit), clamped to 0.
+            if *v < 0.0 && physical {
+                *v = 0.0;
             }
         }
     }
