@@ -82,6 +82,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         ("sizeof_FmParam", std::mem::size_of::<FmParam>()),
         ("sizeof_FmParamInfo", std::mem::size_of::<FmParamInfo>()),
         ("sizeof_FmApi", std::mem::size_of::<FmApi>()),
+        ("sizeof_FmLightInfo", std::mem::size_of::<FmLightInfo>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),
@@ -89,7 +90,19 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             "{k}: C and Rust layouts differ"
         );
     }
-    assert_eq!(get("abi"), "0.1");
+    assert_eq!(get("abi"), "0.2");
+    let (p1, p2): (f64, f64) = (
+        get("light_pdf").parse().unwrap(),
+        get("light_pdf_again").parse().unwrap(),
+    );
+    assert!(
+        p1 > 0.0 && (p1 / p2 - 1.0).abs() < 1e-9,
+        "light pdf {p1} vs {p2}"
+    );
+    assert!(
+        get("light_power_w").parse::<f64>().unwrap() > 0.0
+            && get("light_voxels").parse::<u64>().unwrap() > 1000
+    );
     assert_eq!(get("channels"), "30");
     assert_eq!(get("integrate_status"), "0");
     // The same ray through the Rust loader gives the same numbers.
@@ -148,7 +161,7 @@ fn an_abi_mismatch_names_both_versions() {
     ]);
     let e = Plugin::load(&so).unwrap_err().to_string();
     assert!(
-        e.contains("speaks firemedium ABI 99.0, this host needs 0.1"),
+        e.contains("speaks firemedium ABI 99.0, this host needs 0.2"),
         "{e}"
     );
     let e = Plugin::load(Path::new("/etc/hostname"))

@@ -2,6 +2,7 @@
 //! under `catch_unwind`, and returns a status; messages go to a per-thread last-error slot. No Rust type
 //! crosses the boundary: the table and its types are `firemedium-abi`'s `#[repr(C)]` ones.
 
+use crate::light::{FireLight, Weighting};
 use crate::params::{Param, ParamType, Values};
 use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
 use crate::Error;
@@ -241,7 +242,7 @@ unsafe extern "C" fn volume_create(
         let list = unsafe { read_params(params, count) }?;
         let v = FireVolume::new(&list).map_err(fail)?;
         // SAFETY: out is non-null and writable (checked, contract).
-        unsafe { *out = Box::into_raw(Box::new(v)) as *mut FmVolume };
+        unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
         Ok(())
     })
 }
@@ -249,8 +250,9 @@ unsafe extern "C" fn volume_create(
 unsafe extern "C" fn volume_destroy(volume: *mut FmVolume) {
     if !volume.is_null() {
         let _ = catch_unwind(|| {
-            // SAFETY: a handle from volume_create, destroyed once (contract).
-            drop(unsafe { Box::from_raw(volume as *mut FireVolume) });
+            // SAFETY: a handle from volume_create (Arc::into_raw), destroyed once (contract); lights hold their
+            // own references.
+            drop(unsafe { std::sync::Arc::from_raw(volume as *const FireVolume) });
         });
     }
 }
@@ -535,6 +537,230 @@ unsafe extern "C" fn volume_coefficients(
     })
 }
 
+/// The light behind a handle.
+///
+/// # Safety
+/// `l` is null or a live handle from `light_create`.
+unsafe fn light<'a>(l: *const FmLight, what: &str) -> Result<&'a FireLight, (FmStatus, String)> {
+    if l.is_null() {
+        return Err(bad(format!("{what}: light is null")));
+    }
+    // SAFETY: live handle (contract); lights are immutable and Sync.
+    Ok(unsafe { &*(l as *const FireLight) })
+}
+
+unsafe extern "C" fn light_create(
+    volume: *const FmVolume,
+    params: *const FmParam,
+    count: usize,
+    out: *mut *mut FmLight,
+) -> FmStatus {
+    guard(|| {
+        if out.is_null() || volume.is_null() {
+            return Err(bad("light_create: volume or out is null"));
+        }
+        // SAFETY: the caller's contract for `params`/`count`.
+        let list = unsafe { read_params(params, count) }?;
+        let mut weighting = Weighting::Luminance;
+        for p in &list {
+            match (p.name.as_str(), &p.values) {
+                ("weighting", Values::Strings(v)) if v.len() == 1 && v[0] == "luminance" => {
+                    weighting = Weighting::Luminance
+                }
+                ("weighting", Values::Strings(v)) if v.len() == 1 && v[0] == "power" => {
+                    weighting = Weighting::Power
+                }
+                ("weighting", _) => {
+                    return Err(fail(Error::invalid(
+                        "light",
+                        "weighting",
+                        format!("{:?}", p.values),
+                        "\"luminance\" or \"power\"",
+                    )))
+                }
+                (n, _) => {
+                    return Err(fail(Error::invalid(
+                        "light",
+                        n,
+                        "unknown",
+                        "a known parameter (weighting)",
+                    )))
+                }
+            }
+        }
+        // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
+        let vol = unsafe {
+            std::sync::Arc::increment_strong_count(volume as *const FireVolume);
+            std::sync::Arc::from_raw(volume as *const FireVolume)
+        };
+        let l = FireLight::new(vol, weighting).map_err(fail)?;
+        // SAFETY: out is non-null and writable.
+        unsafe { *out = Box::into_raw(Box::new(l)) as *mut FmLight };
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn light_destroy(l: *mut FmLight) {
+    if !l.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: a handle from light_create, destroyed once (contract).
+            drop(unsafe { Box::from_raw(l as *mut FireLight) });
+        });
+    }
+}
+
+unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightInfo) -> FmStatus {
+    guard(|| {
+        // SAFETY: the handle's contract.
+        let lt = unsafe { light(l, "light_info") }?;
+        if out.is_null() {
+            return Err(bad("light_info: out is null"));
+        }
+        let info = FmLightInfo {
+            power_w: lt.power_w(),
+            power_lm: lt.power_lm(),
+            voxels: lt.voxels() as u64,
+            bytes: lt.bytes() as u64,
+            build_seconds: lt.build_seconds(),
+            weighting: if lt.weighting() == Weighting::Power {
+                FM_WEIGHTING_POWER
+            } else {
+                FM_WEIGHTING_LUMINANCE
+            },
+            reserved: 0,
+        };
+        // SAFETY: non-null, writable.
+        unsafe { *out = info };
+        Ok(())
+    })
+}
+
+/// `n × k` doubles at `p`, required.
+///
+/// # Safety
+/// `p` is null or points to `n × k` doubles.
+unsafe fn in_f64<'a>(
+    p: *const f64,
+    n: usize,
+    k: usize,
+    what: &str,
+) -> Result<&'a [f64], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    let len = n
+        .checked_mul(k)
+        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    // SAFETY: caller provides n × k doubles (contract).
+    Ok(unsafe { std::slice::from_raw_parts(p, len) })
+}
+
+/// # Safety
+/// `p` is null or points to `n × k` writable doubles.
+unsafe fn out_f64<'a>(
+    p: *mut f64,
+    n: usize,
+    k: usize,
+    what: &str,
+) -> Result<&'a mut [f64], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    let len = n
+        .checked_mul(k)
+        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    // SAFETY: caller provides n × k writable doubles (contract).
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
+unsafe extern "C" fn light_sample(
+    l: *const FmLight,
+    u: *const f64,
+    n: usize,
+    points: *mut f64,
+    pdf: *mut f64,
+    emission: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY (all): the caller's buffers are as the ABI documents.
+        let lt = unsafe { light(l, "light_sample") }?;
+        let us = unsafe { in_f64(u, n, 6, "light_sample: u") }?;
+        let pts = unsafe { out_f64(points, n, 3, "light_sample: points") }?;
+        let pd = unsafe { out_f64(pdf, n, 1, "light_sample: pdf") }?;
+        let c = lt.volume().channels();
+        let mut em = unsafe { out_f32(emission, n, c) }?;
+        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        for i in 0..n {
+            let uu = [
+                us[6 * i],
+                us[6 * i + 1],
+                us[6 * i + 2],
+                us[6 * i + 3],
+                us[6 * i + 4],
+                us[6 * i + 5],
+            ]
+            .map(|x| x.clamp(0.0, 1.0 - f64::EPSILON));
+            let smp = lt.sample(uu);
+            pts[3 * i..3 * i + 3].copy_from_slice(&smp.point.to_array());
+            pd[i] = smp.pdf;
+            if let Some(e) = em.as_deref_mut() {
+                lt.volume().coefficients(smp.point, &mut a, &mut s, &mut j);
+                for k in 0..c {
+                    e[i * c + k] = j[k] as f32;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn light_pdf(
+    l: *const FmLight,
+    points: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY (all): the caller's buffers are as the ABI documents.
+        let lt = unsafe { light(l, "light_pdf") }?;
+        let pts = unsafe { in_f64(points, n, 3, "light_pdf: points") }?;
+        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf: pdf") }?;
+        for i in 0..n {
+            pd[i] = lt.pdf(DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
+        }
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn light_pdf_direction(
+    l: *const FmLight,
+    origins: *const f64,
+    directions: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY (all): the caller's buffers are as the ABI documents.
+        let lt = unsafe { light(l, "light_pdf_direction") }?;
+        let o = unsafe { in_f64(origins, n, 3, "light_pdf_direction: origins") }?;
+        let d = unsafe { in_f64(directions, n, 3, "light_pdf_direction: directions") }?;
+        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
+        for i in 0..n {
+            pd[i] = lt.pdf_direction(
+                DVec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]),
+                DVec3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]),
+            );
+        }
+        Ok(())
+    })
+}
+
 static API: FmApi = FmApi {
     abi_major: ABI_MAJOR,
     abi_minor: ABI_MINOR,
@@ -551,6 +777,12 @@ static API: FmApi = FmApi {
     volume_transmittance,
     volume_sample_scatter,
     volume_coefficients,
+    light_create,
+    light_destroy,
+    light_info,
+    light_sample,
+    light_pdf,
+    light_pdf_direction,
 };
 
 /// The plugin's entry point: the static function table.

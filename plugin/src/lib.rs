@@ -28,6 +28,7 @@ pub mod dataset;
 pub mod error;
 pub mod export;
 pub mod grid;
+pub mod light;
 pub mod majorant;
 pub mod params;
 pub mod quadrature;

@@ -142,40 +142,57 @@ impl MajorantGrid {
     /// The pieces of the ray o + t·d, t ∈ [t0, t1], inside the bounds, one per brick crossed, in order; they
     /// tile [max(t0, t_enter), min(t1, t_exit)] exactly (each piece starts where the previous ended).
     pub fn segments(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Segments {
-        let [p0, p1] = self.bounds;
-        let (tmin, tmax) = clip_box(o, d, t0, t1, p0, p1).unwrap_or((0.0, f64::NEG_INFINITY));
-        let mut s = Segments {
-            t: tmin,
-            tmax,
-            cell: [0; 3],
-            step: [0; 3],
-            next: [f64::INFINITY; 3],
-            delta: [0.0; 3],
-            counts: self.counts,
-            done: !(tmin < tmax),
-        };
-        if s.done {
-            return s;
-        }
-        // Brick coordinates: bricks per medium unit on each axis.
-        let scale = [0, 1, 2].map(|a| self.dims[a] as f64 / self.brick as f64 / (p1[a] - p0[a]));
-        for a in 0..3 {
-            let ob = (o[a] - p0[a]) * scale[a];
-            let db = d[a] * scale[a];
-            let pos = ob + db * tmin;
-            s.cell[a] = (pos.floor().max(0.0) as i64).min(self.counts[a] as i64 - 1);
-            if db > 0.0 {
-                s.step[a] = 1;
-                s.next[a] = (s.cell[a] as f64 + 1.0 - ob) / db;
-                s.delta[a] = 1.0 / db;
-            } else if db < 0.0 {
-                s.step[a] = -1;
-                s.next[a] = (s.cell[a] as f64 - ob) / db;
-                s.delta[a] = -1.0 / db;
-            }
-        }
-        s
+        walk(self.bounds, self.dims, self.brick, o, d, t0, t1)
     }
+}
+
+/// The cells of `brick`³ voxels (the last one per axis may be partial) that the ray o + t·d, t ∈ [t0, t1],
+/// crosses inside the box of a `dims` lattice, in order (Amanatides & Woo); the pieces tile the clipped ray
+/// exactly. `brick` = 1 walks single voxels.
+pub fn walk(
+    bounds: [DVec3; 2],
+    dims: [usize; 3],
+    brick: usize,
+    o: DVec3,
+    d: DVec3,
+    t0: f64,
+    t1: f64,
+) -> Segments {
+    let [p0, p1] = bounds;
+    let brick = brick.max(1);
+    let counts = dims.map(|n| n.div_ceil(brick));
+    let (tmin, tmax) = clip_box(o, d, t0, t1, p0, p1).unwrap_or((0.0, f64::NEG_INFINITY));
+    let mut s = Segments {
+        t: tmin,
+        tmax,
+        cell: [0; 3],
+        step: [0; 3],
+        next: [f64::INFINITY; 3],
+        delta: [0.0; 3],
+        counts,
+        done: !(tmin < tmax),
+    };
+    if s.done {
+        return s;
+    }
+    // Cell coordinates: cells per medium unit on each axis.
+    let scale = [0, 1, 2].map(|a| dims[a] as f64 / brick as f64 / (p1[a] - p0[a]));
+    for a in 0..3 {
+        let ob = (o[a] - p0[a]) * scale[a];
+        let db = d[a] * scale[a];
+        let pos = ob + db * tmin;
+        s.cell[a] = (pos.floor().max(0.0) as i64).min(counts[a] as i64 - 1);
+        if db > 0.0 {
+            s.step[a] = 1;
+            s.next[a] = (s.cell[a] as f64 + 1.0 - ob) / db;
+            s.delta[a] = 1.0 / db;
+        } else if db < 0.0 {
+            s.step[a] = -1;
+            s.next[a] = (s.cell[a] as f64 - ob) / db;
+            s.delta[a] = -1.0 / db;
+        }
+    }
+    s
 }
 
 /// Iterator over a ray's bricks (see [`MajorantGrid::segments`]).

@@ -9,7 +9,7 @@ int main(int argc, char **argv) {
     if (argc != 3) { fprintf(stderr, "usage: smoke PLUGIN DATASET\n"); return 2; }
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
-    printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi));
+    printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
@@ -41,6 +41,16 @@ int main(int argc, char **argv) {
     FmExit exit;
     FmStatus s = api->volume_integrate(vol, &ray, 1, radiance, transmittance, &exit);
     printf("integrate_status %d\nradiance_29 %.9g\ntransmittance_29 %.9g\nexit_y %.9g\n", s, radiance[29], transmittance[29], exit.point[1]);
+    /* The fire light: one sample, its pdf evaluated again. */
+    FmLight *light = NULL;
+    if (api->light_create(vol, NULL, 0, &light) != FM_OK) return 1;
+    FmLightInfo linfo;
+    api->light_info(light, &linfo);
+    double u[6] = {0.3, 0.6, 0.2, 0.5, 0.5, 0.5}, pt[3], pdf, pdf2;
+    api->light_sample(light, u, 1, pt, &pdf, NULL);
+    api->light_pdf(light, pt, 1, &pdf2);
+    printf("light_power_w %.9g\nlight_voxels %llu\nlight_pdf %.9g\nlight_pdf_again %.9g\n", linfo.power_w, (unsigned long long)linfo.voxels, pdf, pdf2);
+    api->light_destroy(light);
     /* A bad parameter comes back as a status and a message, not a crash. */
     FmParam bad[1] = {{"stepsise", FM_TYPE_FLOAT, 1, &tscale}};
     FmVolume *none = NULL;

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 1u
+#define FM_ABI_MINOR 2u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -98,6 +98,20 @@ typedef struct FmParamInfo {
 } FmParamInfo;
 
 typedef void FmVolume;
+typedef void FmLight;
+
+#define FM_WEIGHTING_LUMINANCE 0u
+#define FM_WEIGHTING_POWER 1u
+
+typedef struct FmLightInfo {
+    double power_w;  /* whole spectrum, W */
+    double power_lm; /* over the bins, lm */
+    uint64_t voxels;
+    uint64_t bytes;
+    double build_seconds;
+    uint32_t weighting;
+    uint32_t reserved;
+} FmLightInfo;
 
 typedef struct FmApi {
     uint32_t abi_major, abi_minor, struct_size, reserved;
@@ -115,6 +129,14 @@ typedef struct FmApi {
                                       float *weights, float *emitted);
     FmStatus (*volume_coefficients)(const FmVolume *volume, const double *points, size_t n, float *sigma_a,
                                     float *sigma_s, float *emission);
+    /* ABI 0.2: the fire light. */
+    FmStatus (*light_create)(const FmVolume *volume, const FmParam *params, size_t count, FmLight **out);
+    void (*light_destroy)(FmLight *light);
+    FmStatus (*light_info)(const FmLight *light, FmLightInfo *out);
+    FmStatus (*light_sample)(const FmLight *light, const double *u, size_t n, double *points, double *pdf, float *emission);
+    FmStatus (*light_pdf)(const FmLight *light, const double *points, size_t n, double *pdf);
+    FmStatus (*light_pdf_direction)(const FmLight *light, const double *origins, const double *directions, size_t n,
+                                    double *pdf);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

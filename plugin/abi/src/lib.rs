@@ -25,7 +25,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 1;
+pub const ABI_MINOR: u32 = 2;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -194,6 +194,33 @@ pub struct FmParamInfo {
 
 /// An opaque volume handle.
 pub type FmVolume = c_void;
+/// An opaque fire-light handle.
+pub type FmLight = c_void;
+
+/// Voxel weights by the luminance of their emission.
+pub const FM_WEIGHTING_LUMINANCE: u32 = 0;
+/// Voxel weights by their emitted power over the bins.
+pub const FM_WEIGHTING_POWER: u32 = 1;
+
+/// What a fire light is.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FmLightInfo {
+    /// Emitted power over the whole spectrum, W (pbrt mode: over the bins, relative units).
+    pub power_w: f64,
+    /// Luminous power over the bins, lm.
+    pub power_lm: f64,
+    /// Emitting voxels (the only ones stored).
+    pub voxels: u64,
+    /// Bytes of the distribution.
+    pub bytes: u64,
+    /// Seconds to build.
+    pub build_seconds: f64,
+    /// `FM_WEIGHTING_*`.
+    pub weighting: u32,
+    /// Zero.
+    pub reserved: u32,
+}
 
 /// The plugin's function table.
 #[repr(C)]
@@ -265,6 +292,44 @@ pub struct FmApi {
         sigma_s: *mut f32,
         emission: *mut f32,
     ) -> FmStatus,
+    /// ABI 0.2. Builds the fire light of a volume (parameters: `string weighting` luminance | power). The light
+    /// keeps the volume alive; destroy both.
+    pub light_create: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        params: *const FmParam,
+        count: usize,
+        out: *mut *mut FmLight,
+    ) -> FmStatus,
+    /// Destroys a light (null is ignored).
+    pub light_destroy: unsafe extern "C" fn(light: *mut FmLight),
+    /// Describes a light.
+    pub light_info: unsafe extern "C" fn(light: *const FmLight, out: *mut FmLightInfo) -> FmStatus,
+    /// Samples `n` points from 6 uniform numbers each (`u`, 6n doubles): medium-space points (3n), their
+    /// density per unit volume (n), and the emission coefficient j = σ_a L_e there (n × channels, may be null).
+    pub light_sample: unsafe extern "C" fn(
+        light: *const FmLight,
+        u: *const f64,
+        n: usize,
+        points: *mut f64,
+        pdf: *mut f64,
+        emission: *mut f32,
+    ) -> FmStatus,
+    /// Density per unit volume of `n` medium-space points (3n doubles).
+    pub light_pdf: unsafe extern "C" fn(
+        light: *const FmLight,
+        points: *const f64,
+        n: usize,
+        pdf: *mut f64,
+    ) -> FmStatus,
+    /// Solid-angle density of the sampled point's direction, seen from `origins` along `directions` (3n each,
+    /// medium space): ∫ pdf(o + s d̂) s² ds.
+    pub light_pdf_direction: unsafe extern "C" fn(
+        light: *const FmLight,
+        origins: *const f64,
+        directions: *const f64,
+        n: usize,
+        pdf: *mut f64,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -297,6 +362,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 112);
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 11 * 8);
+        assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 17 * 8);
     }
 }

@@ -270,6 +270,18 @@ impl TTable {
     }
 }
 
+/// What the fire emits, kept for the light's full-spectrum power (physical mode).
+#[derive(Debug, Clone)]
+pub(crate) struct Source {
+    pub soot: SootOptics,
+    pub alpha: f64,
+    /// sootscale × intensity.
+    pub soot_scale: f64,
+    pub intensity: f64,
+    /// (element, channel index, m⁻³ per unit).
+    pub species: Vec<(Element, usize, f64)>,
+}
+
 #[derive(Debug, Clone)]
 struct SpeciesChannel {
     ch: usize,
@@ -308,6 +320,7 @@ pub struct FireVolume {
     g: f64,
     tables: Vec<TableReport>,
     build_seconds: f64,
+    source: Option<Source>,
     #[cfg(feature = "fault-injection")]
     fault: String,
 }
@@ -476,6 +489,7 @@ impl FireVolume {
         let sigma_s = spectrum_param(&r, "sigma_s", list)?;
         let (a, s, j, t_emit, species);
         let mut a_t = None;
+        let mut source = None;
         let t0 = Instant::now();
         match mode {
             Mode::Physical => {
@@ -517,6 +531,7 @@ impl FireVolume {
                 let alpha = r.float("alpha")?;
                 let sootscale = r.float("sootscale")?;
                 let intensity = r.float("intensity")?;
+                let optics_kept = optics.clone();
                 let kappa = move |l: f64| optics.kappa(l, 1.0, alpha);
                 let kap = kappa.clone();
                 a = basis.absorb(&|l| sootscale * kap(l));
@@ -544,6 +559,32 @@ impl FireVolume {
                 });
                 t_emit = 0.0;
                 species = build_species(&r, &ds, &basis, t_max, intensity, &mut tables)?;
+                let mut sp = Vec::new();
+                for sym in r
+                    .strings("species")?
+                    .unwrap_or_default()
+                    .into_iter()
+                    .filter(|s| !s.is_empty())
+                {
+                    let ch = ds
+                        .channels()
+                        .iter()
+                        .position(|c| c.name == sym)
+                        .unwrap_or(0);
+                    let scale = species
+                        .iter()
+                        .find(|x| x.ch == ch)
+                        .map(|x| x.scale)
+                        .unwrap_or(1.0);
+                    sp.push((Element::by_symbol(&sym)?, ch, scale));
+                }
+                source = Some(Source {
+                    soot: optics_kept,
+                    alpha,
+                    soot_scale: sootscale * intensity,
+                    intensity,
+                    species: sp,
+                });
                 s = match &sigma_s {
                     Some(f) => basis.absorb(&|l| f(l)),
                     None => vec![0.0; c],
@@ -692,6 +733,7 @@ impl FireVolume {
             g,
             tables,
             build_seconds: start.elapsed().as_secs_f64(),
+            source,
             #[cfg(feature = "fault-injection")]
             fault,
         })
@@ -754,6 +796,15 @@ impl FireVolume {
     /// Seconds spent building.
     pub fn build_seconds(&self) -> f64 {
         self.build_seconds
+    }
+    pub(crate) fn source(&self) -> Option<&Source> {
+        self.source.as_ref()
+    }
+    pub(crate) fn density_channel(&self) -> usize {
+        self.density
+    }
+    pub(crate) fn temperature_channel(&self) -> Option<usize> {
+        self.temperature
     }
 
     #[cfg(feature = "fault-injection")]

@@ -66,7 +66,7 @@ pub static VOLUME: Component = Component {
         p("mode", T::String, "physical", "", Range::Choices(&["physical", "pbrt"]), "physical: the paper's fire; pbrt: pbrt-v4 uniformgrid/nanovdb semantics (σ spectra × density, peak-normalised blackbody × Lescale above 100 K)."),
         p("fuel", T::String, "propane", "", Range::Choices(&["propane", "acetylene", "custom"]), "Soot optical constants (Dalzell & Sarofim 1969), or `fuelnk`."),
         p("fuelnk", T::Float, "", "nm, 1, 1", Range::Any, "Custom soot optical constants: (λ nm, n, k) triples, λ increasing."),
-        p("alpha", T::Float, "1.39", "", Range::Between(0.1, 4.0), "Soot exponent: 1.39 (Hottel, λ in µm) or 1 (Rayleigh, λ in m)."),
+        p("alpha", T::Float, "1.39", "", Range::Between(0.0, 4.0), "Soot exponent: 1.39 (Hottel, λ in µm) or 1 (Rayleigh, λ in m); 0 with constant n, k is a grey absorber."),
         p("sootscale", T::Float, "1", "volume fraction per unit density", Range::Between(0.0, 1.0), "Soot volume fraction f_v = sootscale · density."),
         p("intensity", T::Float, "1", "", Range::Between(0.0, 1e12), "Artistic multiplier on emission; 1 is physical."),
         p("sigma_a", T::Spectrum, "1", "m⁻¹ per unit density", Range::Any, "pbrt mode: absorption spectrum (× scale × density)."),
