@@ -164,6 +164,16 @@ fn an_abi_mismatch_names_both_versions() {
         e.contains("speaks firemedium ABI 99.0, this host needs 0.2"),
         "{e}"
     );
+    // A stale library of another ABI earlier on the search path does not shadow a compatible one after it;
+    // alone, it is the error.
+    let stale = so.parent().unwrap().join("stale");
+    std::fs::create_dir_all(&stale).unwrap();
+    std::fs::copy(&so, stale.join(library_file_name())).unwrap();
+    let good = plugin_path().parent().unwrap().to_path_buf();
+    let p = Plugin::find(&[stale.clone(), good]).unwrap();
+    assert_eq!(p.version(), (0, 2));
+    let e = Plugin::find(&[stale]).unwrap_err().to_string();
+    assert!(e.contains("speaks firemedium ABI 99.0"), "{e}");
     let e = Plugin::load(Path::new("/etc/hostname"))
         .unwrap_err()
         .to_string();

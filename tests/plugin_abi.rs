@@ -269,3 +269,69 @@ fn not_found_and_not_a_plugin() {
         "{e}"
     );
 }
+
+#[test]
+fn the_fire_light_samples_through_the_abi() {
+    let p = plugin();
+    let v = p.create_volume(&fire_params()).unwrap();
+    let light = v.create_light(None).unwrap();
+    let lum = v.create_light(Some("luminance")).unwrap();
+    // The volume handle may go first: the light holds its own reference.
+    drop(v);
+    let info = light.info();
+    assert_eq!(info.weighting, firemedium_abi::FM_WEIGHTING_POWER);
+    assert_eq!(lum.info().weighting, firemedium_abi::FM_WEIGHTING_LUMINANCE);
+    assert!(info.voxels > 1000 && info.power_w > 0.0 && info.power_lm > 0.0);
+    // Both weightings describe the same fire: the same total power.
+    assert_eq!(info.power_w, lum.info().power_w);
+
+    let n = 2000;
+    let mut rng = firemedium_plugin::rng::Rng::new(7);
+    let u: Vec<[f64; 6]> = (0..n).map(|_| [(); 6].map(|_| rng.next_f64())).collect();
+    let (mut pts, mut pdf, mut em) = (vec![[0.0; 3]; n], vec![0.0; n], vec![0f32; n * 30]);
+    light.sample(&u, &mut pts, &mut pdf, Some(&mut em)).unwrap();
+    let mut again = vec![0.0; n];
+    light.pdf(&pts, &mut again).unwrap();
+    for i in 0..n {
+        assert!(
+            pdf[i] > 0.0 && (again[i] / pdf[i] - 1.0).abs() < 1e-5,
+            "{} vs {}",
+            pdf[i],
+            again[i]
+        );
+        assert!(
+            pts[i].iter().all(|c| (-0.01..3.01).contains(c)),
+            "{:?}",
+            pts[i]
+        );
+        assert!(em[i * 30..(i + 1) * 30]
+            .iter()
+            .all(|e| e.is_finite() && *e >= 0.0));
+    }
+    // Seen from beside the fire, the direction of a sampled point has positive density; away from it, zero.
+    let o = [[1.0, -2.0, 1.0]];
+    let toward = [[pts[0][0] - 1.0, pts[0][1] + 2.0, pts[0][2] - 1.0]];
+    let mut pd = [0.0];
+    light.pdf_direction(&o, &toward, &mut pd).unwrap();
+    assert!(pd[0] > 0.0);
+    light
+        .pdf_direction(&o, &[[0.0, -1.0, 0.0]], &mut pd)
+        .unwrap();
+    assert_eq!(pd[0], 0.0);
+
+    let e = p
+        .create_volume(&fire_params())
+        .unwrap()
+        .create_light(Some("brightest"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("weighting") && e.contains("brightest") && e.contains("power"),
+        "{e}"
+    );
+    let mut short = vec![0.0; 1];
+    assert!(matches!(
+        light.sample(&u[..2], &mut pts[..2], &mut short, None),
+        Err(Error::Buffer(_))
+    ));
+}

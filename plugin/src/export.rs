@@ -561,33 +561,13 @@ unsafe extern "C" fn light_create(
         }
         // SAFETY: the caller's contract for `params`/`count`.
         let list = unsafe { read_params(params, count) }?;
-        let mut weighting = Weighting::Luminance;
-        for p in &list {
-            match (p.name.as_str(), &p.values) {
-                ("weighting", Values::Strings(v)) if v.len() == 1 && v[0] == "luminance" => {
-                    weighting = Weighting::Luminance
-                }
-                ("weighting", Values::Strings(v)) if v.len() == 1 && v[0] == "power" => {
-                    weighting = Weighting::Power
-                }
-                ("weighting", _) => {
-                    return Err(fail(Error::invalid(
-                        "light",
-                        "weighting",
-                        format!("{:?}", p.values),
-                        "\"luminance\" or \"power\"",
-                    )))
-                }
-                (n, _) => {
-                    return Err(fail(Error::invalid(
-                        "light",
-                        n,
-                        "unknown",
-                        "a known parameter (weighting)",
-                    )))
-                }
-            }
-        }
+        let r = crate::params::ParamReader::new("light", &list, &[&crate::volume::params::LIGHT]);
+        r.check_names().map_err(fail)?;
+        let weighting = match r.string("weighting").map_err(fail)?.as_str() {
+            "luminance" => Weighting::Luminance,
+            _ => Weighting::Power,
+        };
+        r.finish().map_err(fail)?;
         // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
         let vol = unsafe {
             std::sync::Arc::increment_strong_count(volume as *const FireVolume);

@@ -290,18 +290,26 @@ impl Plugin {
         Plugin::find(&dirs)
     }
 
-    /// Loads the library file from the first of `dirs` that holds it.
+    /// Loads the library file from the first of `dirs` that holds one this host can use. A library of an
+    /// incompatible ABI (say, a stale build left in an earlier directory) is skipped; if no directory holds a
+    /// compatible one, the first incompatible one is the error.
     pub fn find(dirs: &[PathBuf]) -> Result<Plugin, Error> {
         let name = library_file_name();
         let mut searched = Vec::new();
+        let mut incompatible = None;
         for d in dirs {
             let p = d.join(&name);
             if p.is_file() {
-                return Plugin::load(p);
+                match Plugin::load(p.clone()) {
+                    Err(e @ Error::Abi { .. }) => {
+                        incompatible.get_or_insert(e);
+                    }
+                    other => return other,
+                }
             }
             searched.push(p);
         }
-        Err(Error::NotFound { searched })
+        Err(incompatible.unwrap_or(Error::NotFound { searched }))
     }
 
     /// The plugin's ABI version.
@@ -477,7 +485,7 @@ impl Drop for Volume {
 }
 
 impl Volume {
-    /// Builds the fire light of this volume (ABI 0.2): `weighting` is `"luminance"` (default) or `"power"`.
+    /// Builds the fire light of this volume (ABI 0.2): `weighting` is `"power"` (default) or `"luminance"`.
     pub fn create_light(&self, weighting: Option<&str>) -> Result<Light, Error> {
         let api = self.inner.api();
         let w = weighting

@@ -7,6 +7,7 @@
 //! Exit status: 0 on success, 1 when a file is refused, 2 on bad arguments (one line on stderr, never a
 //! panic).
 
+mod compare_cmd;
 mod info;
 mod physics;
 mod render;
@@ -35,6 +36,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Render a pbrt-v4 scene (fire media through the plugin) to EXR and a PNG preview.
     Render(render_cmd::RenderArgs),
+    /// Error of renders against a reference over the pixels that see a surface (luminance MSE).
+    Compare(compare_cmd::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +66,7 @@ fn main() -> ExitCode {
         Command::Physics(args) => physics::run(&args).map_err(|m| (2, m)),
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render_cmd::run(&args),
+        Command::Compare(args) => compare_cmd::run(&args),
     };
     match result {
         Ok(text) => {

@@ -1,4 +1,4 @@
-//! `firemedium render SCENE.pbrt [-o OUT.exr] [--spp N] [--threads N] [--seed S] [--stats]`.
+//! `firemedium render SCENE.pbrt [-o OUT.exr] [--spp N] [--threads N] [--seed S] [--fire-light W] [--stats]`.
 
 use crate::render::{self, scene};
 use clap::Args;
@@ -13,6 +13,9 @@ pub struct RenderArgs {
     /// Output EXR (default: the Film's filename, else SCENE.exr); a PNG preview is written beside it.
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Film resolution WxH instead of the scene's (say, 160x120 for a quick look).
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    resolution: Option<(usize, usize)>,
     /// Samples per pixel (default: the Sampler's pixelsamples).
     #[arg(long)]
     spp: Option<usize>,
@@ -25,12 +28,29 @@ pub struct RenderArgs {
     /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
     #[arg(long)]
     plugin: Option<PathBuf>,
+    /// How emitting media light the scene: a fire light sampling voxels by emitted `power` (default) or
+    /// `luminance`; `off` leaves the fire's emission to paths that pass through it.
+    #[arg(long = "fire-light", value_name = "power|luminance|off", default_value = "power",
+          value_parser = ["power", "luminance", "off"])]
+    fire_light: String,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
     /// No warnings or progress.
     #[arg(long, short)]
     quiet: bool,
+}
+
+/// `WxH`, both from 1 to 65536.
+pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
+    let bad =
+        || format!("'{s}' is not a resolution WxH with W and H from 1 to 65536 (say, 320x240)");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (usize, usize) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
 }
 
 pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
@@ -40,6 +60,9 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     let ov = scene::Overrides {
         spp: a.spp,
         plugin: a.plugin.clone(),
+        no_fire_light: a.fire_light == "off",
+        fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
+        res: a.resolution,
     };
     let load_start = std::time::Instant::now();
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
@@ -91,6 +114,12 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
                 m.seconds,
                 m.channels
             );
+            if let Some((voxels, w, lm, bytes, secs)) = m.light {
+                out += &format!(
+                    "  fire light: {voxels} emitting voxels, {w:.4e} W, {lm:.4e} lm, {:.1} MB in {secs:.3} s\n",
+                    bytes as f64 / 1e6
+                );
+            }
         }
         out += &format!(
             "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s\n",

@@ -292,7 +292,7 @@ pub struct FmApi {
         sigma_s: *mut f32,
         emission: *mut f32,
     ) -> FmStatus,
-    /// ABI 0.2. Builds the fire light of a volume (parameters: `string weighting` luminance | power). The light
+    /// ABI 0.2. Builds the fire light of a volume (parameters: `string weighting` power (default) | luminance). The light
     /// keeps the volume alive; destroy both.
     pub light_create: unsafe extern "C" fn(
         volume: *const FmVolume,

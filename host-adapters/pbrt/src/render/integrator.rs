@@ -45,6 +45,16 @@ fn hg(cos: f32, g: f32) -> f32 {
     (1.0 - g * g) / (4.0 * PI * d * d.max(1e-12).sqrt())
 }
 
+/// The balance-heuristic weight of a light sample whose solid-angle pdf is `pl` against the BSDF/phase pdf `pb`
+/// of the same direction; 1 when the light cannot be reached by BSDF sampling (`pl` = 0 marks those lights).
+fn light_mis_weight(pl: f32, pb: f32) -> f32 {
+    if pl > 0.0 {
+        pl / (pl + pb)
+    } else {
+        1.0
+    }
+}
+
 /// Samples HG around the propagation direction `d`.
 fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     let cos = if g.abs() < 1e-3 {
@@ -216,18 +226,93 @@ impl Integrator<'_> {
         tr
     }
 
-    /// Radiance from one light toward point `p` (NEE): (incident radiance × visibility, direction, pdf of the
-    /// direction in solid angle, is-delta).
+    /// The radiance that medium `fire` emits toward `o` from direction `d` (seen along `d`): its emission on
+    /// every segment of the ray inside it, attenuated by every medium in front, up to the first opaque surface.
+    fn emission_along(
+        &self,
+        mut o: Vec3A,
+        d: Vec3A,
+        mut medium: Option<usize>,
+        fire: usize,
+        rng: &mut Rng,
+    ) -> S {
+        let eps = self.scene.eps;
+        let mut tr = self.mask;
+        let mut l = S::ZERO;
+        for _ in 0..64 {
+            let hit = self.scene.bvh.intersect(o, d, eps, f32::INFINITY);
+            let seg = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
+            if let Some(m) = medium {
+                let (le, t) = self.medium_segment(m, o, d, seg, rng, m == fire);
+                if m == fire {
+                    l += tr * le;
+                }
+                tr *= t;
+                if tr.max() <= 0.0 {
+                    break;
+                }
+            }
+            let Some(h) = hit else { break };
+            let prim = &self.scene.bvh.prims[h.prim];
+            if prim.material.is_some() {
+                break;
+            }
+            if let Some((inside, outside)) = prim.media {
+                medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
+            }
+            o = h.p;
+        }
+        l
+    }
+
+    /// Radiance from one light toward point `p` (NEE), already divided by the light's selection probability:
+    /// (incident radiance × visibility, direction, the light's solid-angle pdf of that direction including the
+    /// selection probability — for MIS; 0 for lights that paths cannot hit by themselves).
     fn sample_light(
         &self,
         li: usize,
         p: Vec3A,
         medium: Option<usize>,
         rng: &mut Rng,
-    ) -> Option<(S, Vec3A)> {
+    ) -> Option<(S, Vec3A, f32)> {
         let sc = self.scene;
         let u = Self::rng2(rng);
+        let nl = sc.lights.len() as f32;
         let (wi, dist, le) = match &sc.lights[li] {
+            Light::Fire {
+                light,
+                medium: fm,
+                to_medium,
+                to_world,
+            } => {
+                // The sampled point only chooses the direction (density pdf_direction); the estimate is the
+                // fire's whole emission along it, Σ T·L_e up to the first opaque surface, divided by that
+                // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
+                let uu = [(); 6].map(|_| rng.next_f64());
+                let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
+                light.sample(&[uu], &mut pt, &mut pdf, None).ok()?;
+                if !(pdf[0] > 0.0) {
+                    return None;
+                }
+                let xw = to_world.transform_point3(DVec3::from(pt[0]));
+                let wi = (Vec3A::from(xw.as_vec3()) - p).normalize_or_zero();
+                if wi == Vec3A::ZERO || !wi.is_finite() {
+                    return None;
+                }
+                let pm = to_medium.transform_point3(DVec3::from(p.to_array().map(f64::from)));
+                let dm = to_medium.transform_vector3(DVec3::from(wi.to_array().map(f64::from)));
+                let mut pd = [0.0f64];
+                light
+                    .pdf_direction(&[pm.to_array()], &[dm.to_array()], &mut pd)
+                    .ok()?;
+                // Solid angle in medium space equals world solid angle for a similarity transform.
+                let pdf_dir = pd[0] as f32 / nl;
+                if !(pdf_dir > 0.0) {
+                    return None;
+                }
+                let l = (self.emission_along(p, wi, medium, *fm, rng) / pdf_dir).finite_or_zero();
+                return (!l.is_black()).then_some((l, wi, pdf_dir));
+            }
             Light::Point { p: lp, i } => {
                 let v = *lp - p;
                 let d2 = v.length_squared();
@@ -283,12 +368,52 @@ impl Integrator<'_> {
             1e30
         };
         let vis = self.shadow(p, wi, t_max, medium, rng);
-        let l = le * vis * sc.lights.len() as f32;
-        (!l.is_black()).then_some((l, wi))
+        let l = (le * vis * nl).finite_or_zero();
+        (!l.is_black()).then_some((l, wi, 0.0))
     }
 
-    /// A real scattering event in a medium at `p`: NEE with the Henyey–Greenstein phase function, then the next
-    /// direction sampled from it (weight 1).
+    /// The MIS weight of emission that a path sampled with density `pdf_b` (solid angle) from `origin` along `d`
+    /// collects in medium `m`: pdf_b / (pdf_b + the fire light's directional pdf), or 1 when `m` has no fire
+    /// light or the path was not sampled by a BSDF/phase function (camera rays, specular bounces).
+    fn emission_weight(&self, m: usize, mis: Option<(Vec3A, f32)>, d: Vec3A) -> f32 {
+        let Some((origin, pdf_b)) = mis else {
+            return 1.0;
+        };
+        let sc = self.scene;
+        for l in &sc.lights {
+            if let Light::Fire {
+                light,
+                medium,
+                to_medium,
+                ..
+            } = l
+            {
+                if *medium == m {
+                    let om =
+                        to_medium.transform_point3(DVec3::from(origin.to_array().map(f64::from)));
+                    let dm = to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
+                    let mut pd = [0.0f64];
+                    if light
+                        .pdf_direction(&[om.to_array()], &[dm.to_array()], &mut pd)
+                        .is_err()
+                    {
+                        return 1.0;
+                    }
+                    let pl = pd[0] as f32 / sc.lights.len() as f32;
+                    return if pdf_b + pl > 0.0 {
+                        pdf_b / (pdf_b + pl)
+                    } else {
+                        1.0
+                    };
+                }
+            }
+        }
+        1.0
+    }
+
+    /// A real scattering event in a medium at `p`: NEE with the Henyey–Greenstein phase function (MIS-weighted
+    /// against phase sampling for the fire light), then the next direction sampled from it (weight 1) and its
+    /// solid-angle pdf.
     #[allow(clippy::too_many_arguments)]
     fn scatter_vertex(
         &self,
@@ -299,15 +424,26 @@ impl Integrator<'_> {
         beta: S,
         l: &mut S,
         rng: &mut Rng,
-    ) -> Vec3A {
+    ) -> (Vec3A, f32) {
         let lights = &self.scene.lights;
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
-            if let Some((le, wi)) = self.sample_light(li, p, medium, rng) {
-                *l += beta * le * hg((-d).dot(wi), g);
+            if let Some((le, wi, pl)) = self.sample_light(li, p, medium, rng) {
+                let ph = hg((-d).dot(wi), g);
+                *l += beta * le * (ph * light_mis_weight(pl, ph));
             }
         }
-        sample_hg(d, g, Self::rng2(rng))
+        let wi = sample_hg(d, g, Self::rng2(rng));
+        (wi, hg((-d).dot(wi), g))
+    }
+
+    /// The probability that the BSDF sampler picks its cosine-distributed diffuse lobe at this vertex.
+    fn diffuse_pdf(&self, m: &Material, wo: Vec3A, n: Vec3A) -> f32 {
+        match m {
+            Material::Diffuse(_) => 1.0,
+            Material::CoatedDiffuse(_, eta) => 1.0 - fresnel(wo.dot(n), *eta),
+            _ => 0.0,
+        }
     }
 
     fn diffuse_albedo(&self, m: &Material, h: &Hit) -> Option<S> {
@@ -326,6 +462,9 @@ impl Integrator<'_> {
         let mut medium = sc.camera.medium;
         let mut specular = true;
         let mut depth = 0;
+        // Origin and solid-angle pdf of the current direction when it was sampled from a BSDF or phase function
+        // (for MIS against the fire light); None for camera rays and specular bounces.
+        let mut mis: Option<(Vec3A, f32)> = None;
         for _ in 0..(4 * sc.maxdepth + 64) {
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
@@ -368,7 +507,7 @@ impl Integrator<'_> {
                         {
                             break;
                         }
-                        l += beta * S(e);
+                        l += beta * S(e) * self.emission_weight(m, mis, d);
                         match ev[0].event {
                             firemedium_abi::FM_EVENT_SCATTERED => {
                                 beta *= S(w);
@@ -376,8 +515,9 @@ impl Integrator<'_> {
                                     break;
                                 }
                                 let p = o + d * ev[0].t as f32;
-                                d = self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
-                                o = p;
+                                let (wi, pdf) =
+                                    self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
+                                (o, d, mis) = (p, wi, Some((p, pdf)));
                                 depth += 1;
                                 specular = false;
                                 continue;
@@ -410,8 +550,9 @@ impl Integrator<'_> {
                                 break;
                             }
                             let p = o + d * (s_hit / speed);
-                            d = self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
-                            o = p;
+                            let (wi, pdf) =
+                                self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
+                            (o, d, mis) = (p, wi, Some((p, pdf)));
                             depth += 1;
                             specular = false;
                             continue;
@@ -428,7 +569,7 @@ impl Integrator<'_> {
                     }
                 } else {
                     let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
-                    l += beta * le;
+                    l += beta * le * self.emission_weight(m, mis, d);
                     beta *= tr;
                 }
                 if beta.max() <= 0.0 {
@@ -487,7 +628,7 @@ impl Integrator<'_> {
                 if !sc.lights.is_empty() {
                     let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
                     let p = h.p + ng * sc.eps;
-                    if let Some((le, wi)) = self.sample_light(li, p, side_medium(ng), rng) {
+                    if let Some((le, wi, pl)) = self.sample_light(li, p, side_medium(ng), rng) {
                         let cos = wi.dot(n);
                         if cos > 0.0 && wi.dot(ng) > 0.0 {
                             let coat = if let Material::CoatedDiffuse(_, eta) = mat {
@@ -495,7 +636,8 @@ impl Integrator<'_> {
                             } else {
                                 1.0
                             };
-                            l += beta * albedo * le * (cos / PI * coat);
+                            let pb = self.diffuse_pdf(mat, wo, n) * cos / PI;
+                            l += beta * albedo * le * (cos / PI * coat * light_mis_weight(pl, pb));
                         }
                     }
                 }
@@ -542,6 +684,7 @@ impl Integrator<'_> {
             }
             beta *= weight;
             specular = is_spec;
+            mis = (!is_spec).then(|| (h.p, self.diffuse_pdf(mat, wo, n) * wi.dot(n).max(0.0) / PI));
             medium = side_medium(wi);
             o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
             d = wi;

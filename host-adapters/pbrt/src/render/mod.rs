@@ -57,7 +57,6 @@ pub fn render(
 ) -> (Image, Stats) {
     let start = std::time::Instant::now();
     let (w, h) = scene.res;
-    let cam = &scene.camera;
     let integ = integrator::Integrator {
         scene,
         mask: scene.bins.mask(),
@@ -79,24 +78,8 @@ pub fn render(
                     for s in 0..scene.spp {
                         let mut rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
                         let (u, v) = (rng.next_f64(), rng.next_f64());
-                        let sx = cam.screen[0]
-                            + (x as f64 + u) / w as f64 * (cam.screen[1] - cam.screen[0]);
-                        let sy = cam.screen[3]
-                            - (y as f64 + v) / h as f64 * (cam.screen[3] - cam.screen[2]);
-                        let mut dir = DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0);
-                        let mut org = DVec3::ZERO;
-                        if cam.lens_radius > 0.0 {
-                            let (r, phi) = (
-                                rng.next_f64().sqrt() * cam.lens_radius,
-                                2.0 * std::f64::consts::PI * rng.next_f64(),
-                            );
-                            org = DVec3::new(r * phi.cos(), r * phi.sin(), 0.0);
-                            dir = dir * cam.focal_distance - org;
-                        }
-                        let o = cam.to_world.transform_point3(org);
-                        let d = cam.to_world.transform_vector3(dir).normalize();
-                        let l =
-                            integ.li(Vec3A::from(o.as_vec3()), Vec3A::from(d.as_vec3()), &mut rng);
+                        let (o, d) = camera_ray(scene, x as f64 + u, y as f64 + v, &mut rng);
+                        let l = integ.li(o, d, &mut rng);
                         sum += scene.bins.to_xyz(&l);
                     }
                     out.push((x + w * y, sum / scene.spp as f64));
@@ -133,6 +116,28 @@ pub fn render(
         },
         stats,
     )
+}
+
+/// The camera ray through film position (`fx`, `fy`) in pixels (origin top left), its lens sample from `rng`
+/// when the camera has a lens.
+pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec3A, Vec3A) {
+    let cam = &scene.camera;
+    let (w, h) = (scene.res.0 as f64, scene.res.1 as f64);
+    let sx = cam.screen[0] + fx / w * (cam.screen[1] - cam.screen[0]);
+    let sy = cam.screen[3] - fy / h * (cam.screen[3] - cam.screen[2]);
+    let mut dir = DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0);
+    let mut org = DVec3::ZERO;
+    if cam.lens_radius > 0.0 {
+        let (r, phi) = (
+            rng.next_f64().sqrt() * cam.lens_radius,
+            2.0 * std::f64::consts::PI * rng.next_f64(),
+        );
+        org = DVec3::new(r * phi.cos(), r * phi.sin(), 0.0);
+        dir = dir * cam.focal_distance - org;
+    }
+    let o = cam.to_world.transform_point3(org);
+    let d = cam.to_world.transform_vector3(dir).normalize();
+    (Vec3A::from(o.as_vec3()), Vec3A::from(d.as_vec3()))
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.

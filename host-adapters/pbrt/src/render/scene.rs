@@ -114,6 +114,13 @@ pub enum Light {
         scale: f32,
         basis: [S; 3],
     },
+    /// The fire light of plugin medium `medium` (importance-samples its emission).
+    Fire {
+        light: std::sync::Arc<firemedium_loader::Light>,
+        medium: usize,
+        to_medium: DAffine3,
+        to_world: DAffine3,
+    },
     Area {
         prim: usize,
         l: S,
@@ -163,6 +170,8 @@ pub struct MediumReport {
     pub bytes: u64,
     pub seconds: f64,
     pub channels: u32,
+    /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds).
+    pub light: Option<(u64, f64, f64, u64, f64)>,
 }
 
 /// A render-ready scene.
@@ -437,7 +446,7 @@ impl Builder {
                 if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
-                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels });
+                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
                 Medium::Plugin { vol, to_medium, scatters: info.scatters != 0, g: info.g, name: name.to_string() }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
@@ -908,6 +917,12 @@ impl Builder {
 pub struct Overrides {
     pub spp: Option<usize>,
     pub plugin: Option<PathBuf>,
+    /// Do not build fire lights (paths find the fire's emission only by chance).
+    pub no_fire_light: bool,
+    /// The fire lights' voxel weighting (`power`, the plugin's default, or `luminance`).
+    pub fire_light_weighting: Option<String>,
+    /// Film resolution instead of the scene's.
+    pub res: Option<(usize, usize)>,
 }
 
 /// Parses and builds the scene at `path`.
@@ -1013,6 +1028,9 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         .camera
         .take()
         .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
+    if let Some(r) = ov.res {
+        b.res = r;
+    }
     let (w, h) = (b.res.0 as f64, b.res.1 as f64);
     let aspect = num(&cp, "frameaspectratio", w / h);
     let screen = match nums(&cp, "screenwindow") {
@@ -1028,6 +1046,45 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         focal_distance: num(&cp, "focaldistance", 1e6),
         medium,
     };
+    // Fire lights: every plugin medium that emits gets one (unless switched off).
+    if !ov.no_fire_light {
+        let mut report = 0;
+        for (mi, m) in b.media.iter().enumerate() {
+            if let Medium::Plugin { vol, to_medium, .. } = m {
+                let r = report;
+                report += 1;
+                match vol.create_light(ov.fire_light_weighting.as_deref()) {
+                    Ok(light) => {
+                        let li = light.info();
+                        if let Some(rep) = b.media_reports.get_mut(r) {
+                            rep.light = Some((
+                                li.voxels,
+                                li.power_w,
+                                li.power_lm,
+                                li.bytes,
+                                li.build_seconds,
+                            ));
+                        }
+                        b.lights.push(Light::Fire {
+                            light: std::sync::Arc::new(light),
+                            medium: mi,
+                            to_medium: *to_medium,
+                            to_world: to_medium.inverse(),
+                        });
+                    }
+                    // A medium that does not emit is no light.
+                    Err(firemedium_loader::Error::Status { message, .. })
+                        if message.contains("no emitting voxel") => {}
+                    Err(e) => {
+                        return Err(format!(
+                            "{}: fire light of medium {mi}: {e}",
+                            path.display()
+                        ))
+                    }
+                }
+            }
+        }
+    }
     let scale = b.prims.iter().map(|p| {
         let bb = obvhs::Boundable::aabb(p);
         (bb.max - bb.min).max_element().abs()
