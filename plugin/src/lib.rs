@@ -32,6 +32,7 @@ pub mod light;
 pub mod majorant;
 pub mod params;
 pub mod quadrature;
+pub mod refraction;
 pub mod rng;
 pub mod soot;
 pub mod species;
