@@ -102,9 +102,18 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
             .map(|i| luminance(img.px[i]))
             .sum::<f64>()
             / count as f64;
+        // relMSE as DESIGN.md defines it: mean((a − r)² / (r² + 0.01·mean(r)²)).
+        let rel_mse = (0..w * h)
+            .filter(|&i| mask[i])
+            .map(|i| {
+                let (a, r) = (luminance(img.px[i]), luminance(reference.px[i]));
+                (a - r).powi(2) / (r * r + 0.01 * mean_ref * mean_ref).max(1e-300)
+            })
+            .sum::<f64>()
+            / count as f64;
         let base = *first.get_or_insert(mse);
         out += &format!(
-            "{}: MSE {mse:.6e}, relative {:.6e}, {:.3}× the first; mean {:+.4} % off the reference's; the worst 1 % of pixels hold {:.1} % of the error\n",
+            "{}: MSE {mse:.6e}, relative {:.6e}, relMSE {rel_mse:.6e}, {:.3}× the first; mean {:+.4} % off the reference's; the worst 1 % of pixels hold {:.1} % of the error\n",
             p.display(),
             mse / (mean_ref * mean_ref).max(1e-300),
             mse / base.max(1e-300),
