@@ -395,7 +395,7 @@ unsafe extern "C" fn volume_integrate(
         let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
         for (i, r) in rs.iter().enumerate() {
             let ray = ray_of(r);
-            let t_exit = v.integrate(&ray, &mut l, &mut t);
+            let (p_exit, d_exit, t_exit) = v.integrate_exit(&ray, &mut l, &mut t);
             for k in 0..c {
                 l_out[i * c + k] = l[k] as f32;
             }
@@ -406,8 +406,8 @@ unsafe extern "C" fn volume_integrate(
             }
             if let Some(eo) = e_out.as_deref_mut() {
                 eo[i] = FmExit {
-                    point: (ray.o + ray.d * t_exit).to_array(),
-                    direction: r.direction,
+                    point: p_exit.to_array(),
+                    direction: d_exit.to_array(),
                     t: t_exit,
                 };
             }

@@ -7,7 +7,9 @@
 //!
 //! written as a first-order system in arc length s for the position x and the optical direction v = n dx/ds:
 //! dx/ds = v / n(x), dv/ds = ∇n(x). Steps are classical fourth-order Runge–Kutta; after each step v is rescaled to
-//! |v| = n(x) (the invariant of the system; a projection, so the order stays four). The step is the smaller of
+//! |v| = n(x) (the invariant of the system; a projection, so the order stays four). Each step is checked against
+//! two half steps and halved until they agree within `tol` (step doubling), and ends just past the next plane of
+//! grid samples, where the trilinear gradient has a kink. The first guess of a step is the smaller of
 //! `h_max` and the length over which the ray turns by `max_turn` radians (curvature |∇n⊥| / n), so a steep
 //! gradient — the index jumping within one voxel — is crossed in small steps, and total internal reflection comes
 //! out as the ray turning back smoothly rather than as a jump. `h_max` must not exceed half the length over
@@ -15,8 +17,9 @@
 //!
 //! ## The baked field
 //! [`IndexGrid`] stores δ = scale · ((n(T) − 1) − (n(T_amb) − 1)) per voxel (f32: |δ| ≤ 3e-4 · scale, f32 keeps
-//! 7 digits of it), so n = n_amb + δ with the grid's zero-outside trilinear lookup: outside the volume n is the
-//! ambient index, and entering or leaving is continuous. Voxels colder than `T_amb` (0 K where a simulation holds
+//! 7 digits of it), padded by one ring of δ = 0 voxels, so n = n_amb + δ with the zero-outside trilinear lookup
+//! is continuous everywhere: ambient outside the padded box, and entering or leaving bends the ray smoothly
+//! over the last voxel and a half. Voxels colder than `T_amb` (0 K where a simulation holds
 //! no data) count as ambient air. `scale` is the paper's Figure 2 exaggeration of (n − 1). The gradient is the
 //! analytic gradient of the trilinear interpolant.
 
@@ -30,6 +33,11 @@ pub trait IndexField {
     fn n(&self, p: DVec3) -> f64;
     /// Its gradient at `p`.
     fn grad(&self, p: DVec3) -> DVec3;
+    /// Distance from `p` along unit `dir` to the next place the gradient may jump (for a trilinear grid, the
+    /// next plane of sample centres): steps end there so that each RK4 step sees a smooth field.
+    fn next_kink(&self, _p: DVec3, _dir: DVec3) -> f64 {
+        f64::INFINITY
+    }
 }
 
 /// Step control of [`trace`].
@@ -43,6 +51,9 @@ pub struct Steps {
     pub h_min: f64,
     /// Most steps before giving up (the ray then ends where it is).
     pub max_steps: usize,
+    /// Largest difference allowed between one step and two half steps (position, plus direction × h_max):
+    /// a step that misses it is halved (step doubling; the two half steps are kept).
+    pub tol: f64,
 }
 
 impl Default for Steps {
@@ -52,6 +63,7 @@ impl Default for Steps {
             max_turn: 0.02,
             h_min: 1e-7,
             max_steps: 1 << 20,
+            tol: 1e-10,
         }
     }
 }
@@ -137,8 +149,24 @@ pub fn trace(
         if curvature > 0.0 {
             h = h.min(steps.max_turn / curvature);
         }
-        let h = h.max(steps.h_min.min(s_max - s));
-        let (x1, v1) = rk4_step(f, x, v, h);
+        // End the step just past the next kink of the field's gradient.
+        let kink = f.next_kink(x, tt);
+        if kink.is_finite() {
+            h = h.min(kink + steps.h_min);
+        }
+        let mut h = h.max(steps.h_min.min(s_max - s));
+        // Step doubling: where one step and two half steps disagree (a kink of the trilinear gradient inside
+        // the step, a steep jump), halve.
+        let (x1, v1) = loop {
+            let (xa, va) = rk4_step(f, x, v, h);
+            let (xm, vm) = rk4_step(f, x, v, 0.5 * h);
+            let (xb, vb) = rk4_step(f, xm, vm, 0.5 * h);
+            let err = (xa - xb).length() + (va - vb).length() / n * steps.h_max;
+            if !(err > steps.tol) || h <= steps.h_min {
+                break (xb, vb);
+            }
+            h = (0.5 * h).max(steps.h_min);
+        };
         visit(x, x1, h);
         x = x1;
         v = v1;
@@ -176,9 +204,14 @@ impl IndexGrid {
         air: &Air,
         scale: f64,
     ) -> IndexGrid {
+        // One ring of ambient (δ = 0) voxels around the grid: the zero-outside trilinear lookup of the padded grid
+        // then falls to exactly 0 at its own bounds, so n is continuous everywhere (the unpadded grid would jump
+        // from half the edge sample to 0 at the bounds, a refraction the ray equation cannot see).
+        let [nx, ny, nz] = temperature.dims();
+        let voxel = (p1 - p0) / DVec3::new(nx as f64, ny as f64, nz as f64);
         let amb = ciddor::refractivity(lambda_nm, air);
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
-        let data = temperature
+        let baked: Vec<f32> = temperature
             .data()
             .iter()
             .map(|&t| {
@@ -200,10 +233,19 @@ impl IndexGrid {
                 (scale * (r - amb)) as f32
             })
             .collect();
+        let dims = [nx + 2, ny + 2, nz + 2];
+        let mut data = vec![0f32; dims[0] * dims[1] * dims[2]];
+        for k in 0..nz {
+            for j in 0..ny {
+                let src = nx * (j + ny * k);
+                let dst = 1 + dims[0] * (j + 1 + dims[1] * (k + 1));
+                data[dst..dst + nx].copy_from_slice(&baked[src..src + nx]);
+            }
+        }
         IndexGrid {
-            delta: Grid::new(temperature.dims(), data).unwrap_or_else(|| temperature.clone()),
-            p0,
-            size: p1 - p0,
+            delta: Grid::new(dims, data).unwrap_or_else(|| temperature.clone()),
+            p0: p0 - voxel,
+            size: p1 - p0 + 2.0 * voxel,
             n_amb: 1.0 + scale * amb,
         }
     }
@@ -211,6 +253,14 @@ impl IndexGrid {
     /// The ambient index (outside the volume).
     pub fn ambient(&self) -> f64 {
         self.n_amb
+    }
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.delta.bytes()
+    }
+    /// The box where n differs from ambient: the grid's, one voxel wider on every side.
+    pub fn bounds(&self) -> [DVec3; 2] {
+        [self.p0, self.p0 + self.size]
     }
 
     /// Trilinear value and gradient (per medium unit) of δ at `p`, zero outside.
@@ -256,6 +306,28 @@ impl IndexField for IndexGrid {
     }
     fn grad(&self, p: DVec3) -> DVec3 {
         self.eval(p).1
+    }
+    fn next_kink(&self, p: DVec3, dir: DVec3) -> f64 {
+        let dims = self.delta.dims();
+        let mut best = f64::INFINITY;
+        for a in 0..3 {
+            let cell = self.size[a] / dims[a] as f64;
+            if !(dir[a].abs() > 1e-12) || !(cell > 0.0) {
+                continue;
+            }
+            // Sample centres sit at p0 + (i + ½)·cell.
+            let s = (p[a] - self.p0[a]) / cell - 0.5;
+            let next = if dir[a] > 0.0 {
+                s.floor() + 1.0
+            } else {
+                s.ceil() - 1.0
+            };
+            let d = (next - s) * cell / dir[a];
+            if d.is_finite() && d > 0.0 {
+                best = best.min(d);
+            }
+        }
+        best
     }
 }
 
@@ -329,9 +401,11 @@ mod tests {
         let (want_x, want_d) = catenary(1.0, 0.4, s_end);
         let mut errs = Vec::new();
         for n in [6, 12, 24, 48] {
+            // Fixed steps (no doubling: each step is two RK4 half steps).
             let steps = Steps {
                 h_max: s_end / n as f64,
                 max_turn: 10.0,
+                tol: f64::INFINITY,
                 ..Steps::default()
             };
             let e = trace(

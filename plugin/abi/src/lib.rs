@@ -101,11 +101,11 @@ pub struct FmRay {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FmExit {
-    /// Point.
+    /// Point (medium space).
     pub point: [f64; 3],
-    /// Direction there.
+    /// Unit direction there (bent when the volume's `refraction` is on).
     pub direction: [f64; 3],
-    /// Parameter along the input ray.
+    /// Parameter along the input ray (with refraction: entry parameter + arc length / |direction|).
     pub t: f64,
 }
 

@@ -83,6 +83,13 @@ pub static VOLUME: Component = Component {
         p("integrator", T::String, "march", "", Range::Choices(&["march", "ratio", "delta"]), "march: fixed steps, eq. 3; ratio/delta: unbiased tracking over the majorant bricks."),
         p("brick", T::Integer, "16", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge."),
         p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
+        p("refraction", T::Bool, "false", "", Range::Any, "Bend rays through the hot gas (P&P §3.7): an index field from temperature (Ciddor), curved rays by RK4 on the ray equation. Off: nothing is baked."),
+        p("refractionscale", T::Float, "1", "", Range::Between(0.0, 1e6), "Exaggeration of (n − 1), as the paper's Figure 2."),
+        p("refractionwavelength", T::Float, "550", "nm", Range::Between(200.0, 2000.0), "Vacuum wavelength the index is computed at (one for all channels)."),
+        p("ambienttemperature", T::Float, "293.15", "K", Range::Between(1.0, 1e4), "Temperature of the air around the fire; colder voxels (0 K where a simulation holds no data) count as ambient."),
+        p("pressure", T::Float, "101325", "Pa", Range::Between(1.0, 1e7), "Air pressure (index of refraction)."),
+        p("humidity", T::Float, "0", "", Range::Between(0.0, 1.0), "Relative humidity of the air, 0–1 (index of refraction)."),
+        p("co2", T::Float, "450", "ppm", Range::Between(0.0, 1e6), "CO₂ mole fraction of the air (index of refraction)."),
     ],
 };
 
