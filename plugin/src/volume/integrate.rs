@@ -97,7 +97,7 @@ impl Scratch {
 }
 
 /// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7.
-const MAX_STEPS: f64 = (1u64 << 24) as f64;
+pub(crate) const MAX_STEPS: f64 = (1u64 << 24) as f64;
 
 /// Emitted radiance `l` and transmittance `t` of the ray; returns the parameter where the ray left the medium
 /// (or t1).
