@@ -133,6 +133,21 @@ impl Integrator<'_> {
         rng: &mut Rng,
         emission: bool,
     ) -> (S, S) {
+        let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission);
+        (l, t)
+    }
+
+    /// As [`medium_segment`](Self::medium_segment), and where the ray leaves when a refracting plugin medium
+    /// bent it (world space: point, unit direction); None when it went straight.
+    fn medium_segment_exit(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Rng,
+        emission: bool,
+    ) -> (S, S, Option<(Vec3A, Vec3A)>) {
         let n = self.scene.bins.n();
         match &self.scene.media[m] {
             Medium::Plugin { vol, to_medium, .. } => {
@@ -153,12 +168,13 @@ impl Integrator<'_> {
                     [0f32; super::spectrum::MAX_CHANNELS],
                     [0f32; super::spectrum::MAX_CHANNELS],
                 );
+                let mut exit = [firemedium_loader::Exit::default()];
                 let ok = if emission {
                     vol.integrate(
                         std::slice::from_ref(&ray),
                         &mut l[..n],
                         Some(&mut t[..n]),
-                        None,
+                        Some(&mut exit),
                     )
                     .is_ok()
                 } else {
@@ -166,9 +182,19 @@ impl Integrator<'_> {
                         .is_ok()
                 };
                 if !ok {
-                    return (S::ZERO, S::ZERO);
+                    return (S::ZERO, S::ZERO, None);
                 }
-                (S(l), S(t))
+                let bent = emission.then(|| {
+                    let de = DVec3::from(exit[0].direction);
+                    let dn = dm.normalize_or_zero();
+                    (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
+                        let to_world = to_medium.inverse();
+                        let p = to_world.transform_point3(DVec3::from(exit[0].point));
+                        let w = to_world.transform_vector3(de).normalize_or_zero();
+                        (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
+                    })
+                });
+                (S(l), S(t), bent.flatten())
             }
             Medium::Homogeneous { sa, ss, le, .. } => {
                 let len = if t_end.is_finite() {
@@ -186,7 +212,7 @@ impl Integrator<'_> {
                         l.0[i] = sa.0[i] * le.0[i] * -(-tau).exp_m1() / st.0[i];
                     }
                 }
-                (l, tr)
+                (l, tr, None)
             }
         }
     }
@@ -568,9 +594,18 @@ impl Integrator<'_> {
                         beta *= w;
                     }
                 } else {
-                    let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
+                    let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true);
                     l += beta * le * self.emission_weight(m, mis, d);
                     beta *= tr;
+                    // A refracting fire bent the ray: continue from where it left, in its new direction (the
+                    // surface hit found along the straight line no longer applies).
+                    if let Some((p, w)) = bent {
+                        if beta.max() <= 0.0 {
+                            break;
+                        }
+                        (o, d) = (p, w);
+                        continue;
+                    }
                 }
                 if beta.max() <= 0.0 {
                     break;
