@@ -33,6 +33,10 @@ pub trait IndexField {
     fn n(&self, p: DVec3) -> f64;
     /// Its gradient at `p`.
     fn grad(&self, p: DVec3) -> DVec3;
+    /// Both at once (one lookup for fields that compute them together).
+    fn n_grad(&self, p: DVec3) -> (f64, DVec3) {
+        (self.n(p), self.grad(p))
+    }
     /// Distance from `p` along unit `dir` to the next place the gradient may jump (for a trilinear grid, the
     /// next plane of sample centres): steps end there so that each RK4 step sees a smooth field.
     fn next_kink(&self, _p: DVec3, _dir: DVec3) -> f64 {
@@ -101,7 +105,12 @@ fn grad_at(f: &impl IndexField, p: DVec3) -> DVec3 {
 
 /// One classical RK4 step of length `h` from (x, v), v = n t̂; returns the new (x, v) with |v| = n(x).
 pub fn rk4_step(f: &impl IndexField, x: DVec3, v: DVec3, h: f64) -> (DVec3, DVec3) {
-    let d = |x: DVec3, v: DVec3| (v / index_at(f, x), grad_at(f, x));
+    let d = |x: DVec3, v: DVec3| {
+        let (n, g) = f.n_grad(x);
+        let n = if n.is_finite() { n.max(1e-6) } else { 1.0 };
+        let g = if g.is_finite() { g } else { DVec3::ZERO };
+        (v / n, g)
+    };
     let (k1x, k1v) = d(x, v);
     let (k2x, k2v) = d(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
     let (k3x, k3v) = d(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
@@ -158,6 +167,9 @@ pub fn trace(
         // Step doubling: where one step and two half steps disagree (a kink of the trilinear gradient inside
         // the step, a steep jump), halve.
         let (x1, v1) = loop {
+            if steps.tol == f64::INFINITY {
+                break rk4_step(f, x, v, h);
+            }
             let (xa, va) = rk4_step(f, x, v, h);
             let (xm, vm) = rk4_step(f, x, v, 0.5 * h);
             let (xb, vb) = rk4_step(f, xm, vm, 0.5 * h);
@@ -306,6 +318,10 @@ impl IndexField for IndexGrid {
     }
     fn grad(&self, p: DVec3) -> DVec3 {
         self.eval(p).1
+    }
+    fn n_grad(&self, p: DVec3) -> (f64, DVec3) {
+        let (d, g) = self.eval(p);
+        (self.n_amb + d, g)
     }
     fn next_kink(&self, p: DVec3, dir: DVec3) -> f64 {
         let dims = self.delta.dims();
