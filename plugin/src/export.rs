@@ -395,7 +395,13 @@ unsafe extern "C" fn volume_integrate(
         let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
         for (i, r) in rs.iter().enumerate() {
             let ray = ray_of(r);
-            let (p_exit, d_exit, t_exit) = v.integrate_exit(&ray, &mut l, &mut t);
+            // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
+            let (p_exit, d_exit, t_exit) = if e_out.is_some() {
+                v.integrate_exit(&ray, &mut l, &mut t)
+            } else {
+                let te = v.integrate(&ray, &mut l, &mut t);
+                (ray.o + ray.d * te, ray.d, te)
+            };
             for k in 0..c {
                 l_out[i * c + k] = l[k] as f32;
             }

@@ -12,8 +12,9 @@
 //! grid samples, where the trilinear gradient has a kink. The first guess of a step is the smaller of
 //! `h_max` and the length over which the ray turns by `max_turn` radians (curvature |∇n⊥| / n), so a steep
 //! gradient — the index jumping within one voxel — is crossed in small steps, and total internal reflection comes
-//! out as the ray turning back smoothly rather than as a jump. `h_max` must not exceed half the length over
-//! which the field changes (half a voxel for a grid): a longer step could land inside a jump it never saw.
+//! out as the ray turning back smoothly rather than as a jump. With a field that reports its kinks (a grid), a
+//! step of up to a voxel stays inside one trilinear cell; without, `h_max` must not exceed half the length over
+//! which the field changes, or a step could land inside a jump it never saw.
 //!
 //! ## The baked field
 //! [`IndexGrid`] stores δ = scale · ((n(T) − 1) − (n(T_amb) − 1)) per voxel (f32: |δ| ≤ 3e-4 · scale, f32 keeps

@@ -98,6 +98,8 @@ pub struct FmRay {
 }
 
 /// Where the plugin stopped following a ray: the host continues from here (rays may bend inside the medium).
+/// A host that passes no exits to `volume_integrate` gets the straight-line integration even when the volume
+/// refracts (what NEE and light paths, whose pdfs assume straight lines, want).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FmExit {

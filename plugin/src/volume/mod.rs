@@ -734,9 +734,9 @@ impl FireVolume {
                 bytes: field.bytes(),
                 seconds: t2.elapsed().as_secs_f64(),
             });
-            // Steps: the march's, at most half a voxel (the field changes over a voxel).
+            // Steps: the march's, at most a voxel (each ends at the next plane of samples, so it stays in one cell).
             let steps = crate::refraction::Steps {
-                h_max: step.min(0.5 * ds.voxel_size().min_element()),
+                h_max: step.min(ds.voxel_size().min_element()),
                 h_min: 1e-6 * ds.voxel_size().min_element(),
                 tol: 1e-6 * ds.voxel_size().min_element(),
                 ..Default::default()
@@ -878,7 +878,7 @@ impl FireVolume {
     }
     /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
     /// refraction on, the ray curves inside the index field's box (the grid's, one voxel wider; its march follows
-    /// the curved path in steps of at most half a voxel) and leaves bent; the parameter is then the entry
+    /// the curved path in RK steps of at most a voxel) and leaves bent; the parameter is then the entry
     /// parameter plus arc length / |d|.
     pub fn integrate_exit(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
         let Some((field, steps)) = &self.refraction else {

@@ -133,12 +133,14 @@ impl Integrator<'_> {
         rng: &mut Rng,
         emission: bool,
     ) -> (S, S) {
-        let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission);
+        let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission, false);
         (l, t)
     }
 
-    /// As [`medium_segment`](Self::medium_segment), and where the ray leaves when a refracting plugin medium
-    /// bent it (world space: point, unit direction); None when it went straight.
+    /// As [`medium_segment`](Self::medium_segment), and — when `want_exit` — where the ray leaves if a
+    /// refracting plugin medium bent it (world space: point, unit direction); None when it went straight.
+    /// Without `want_exit` the plugin integrates the straight ray (NEE and light paths).
+    #[allow(clippy::too_many_arguments)]
     fn medium_segment_exit(
         &self,
         m: usize,
@@ -147,6 +149,7 @@ impl Integrator<'_> {
         t_end: f32,
         rng: &mut Rng,
         emission: bool,
+        want_exit: bool,
     ) -> (S, S, Option<(Vec3A, Vec3A)>) {
         let n = self.scene.bins.n();
         match &self.scene.media[m] {
@@ -174,7 +177,7 @@ impl Integrator<'_> {
                         std::slice::from_ref(&ray),
                         &mut l[..n],
                         Some(&mut t[..n]),
-                        Some(&mut exit),
+                        want_exit.then_some(&mut exit[..]),
                     )
                     .is_ok()
                 } else {
@@ -184,7 +187,7 @@ impl Integrator<'_> {
                 if !ok {
                     return (S::ZERO, S::ZERO, None);
                 }
-                let bent = emission.then(|| {
+                let bent = (emission && want_exit).then(|| {
                     let de = DVec3::from(exit[0].direction);
                     let dn = dm.normalize_or_zero();
                     (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
@@ -594,7 +597,7 @@ impl Integrator<'_> {
                         beta *= w;
                     }
                 } else {
-                    let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true);
+                    let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
                     l += beta * le * self.emission_weight(m, mis, d);
                     beta *= tr;
                     // A refracting fire bent the ray: continue from where it left, in its new direction (the
