@@ -244,7 +244,7 @@ impl FireLight {
 
     /// Samples a point from six uniform numbers (three choose the voxel, three place the point in it).
     pub fn sample(&self, u: [f64; 6]) -> LightSample {
-        let (nx, ny) = (self.dims[0], self.dims[1]);
+        let ny = self.dims[1];
         let k = first_above(&self.cdf_z, u[0] * self.total);
         let zbase = if k == 0 { 0.0 } else { self.cdf_z[k - 1] };
         let rowy = &self.cdf_y[k * ny..(k + 1) * ny];
@@ -257,8 +257,7 @@ impl FireLight {
         let wy = rowy[jy] - ybase;
         let m = first_above(cx, u[2] * wy);
         let i = xs[m] as usize;
-        let idx = i + nx * (jy + ny * k);
-        let wv = self.weight(idx);
+        let wv = self.ws[start as usize + m] as f64;
         let [p0, _] = self.vol.dataset().bounds();
         let point = p0
             + (DVec3::new(i as f64, jy as f64, k as f64) + DVec3::new(u[3], u[4], u[5]))

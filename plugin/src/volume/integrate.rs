@@ -81,9 +81,9 @@ pub(crate) trait Medium {
 /// Per-call scratch: coefficient buffers sized to the channel count.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Scratch {
-    sa: Vec<f64>,
-    ss: Vec<f64>,
-    j: Vec<f64>,
+    pub(crate) sa: Vec<f64>,
+    pub(crate) ss: Vec<f64>,
+    pub(crate) j: Vec<f64>,
 }
 
 impl Scratch {
@@ -94,6 +94,26 @@ impl Scratch {
             j: vec![0.0; c],
         }
     }
+}
+
+/// One march step of length `delta` through the coefficients in `sc` (eq. 3, exact for constant coefficients):
+/// adds the step's emission to `l`, attenuates `t`; returns the largest transmittance left.
+pub(crate) fn march_step(sc: &Scratch, delta: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+    let mut tmax = 0.0f64;
+    for c in 0..t.len() {
+        let st = sc.sa[c] + sc.ss[c];
+        let tau = st * delta;
+        // (1 − e^{−τ}) / σ_t, finite for σ_t → 0 and σ_t → ∞.
+        let fac = if tau < 1e-9 {
+            delta * (1.0 - 0.5 * tau)
+        } else {
+            -(-tau).exp_m1() / st
+        };
+        l[c] += t[c] * sc.j[c] * fac;
+        t[c] *= (-tau).exp();
+        tmax = tmax.max(t[c]);
+    }
+    tmax
 }
 
 /// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7.
@@ -175,21 +195,7 @@ fn march(
         let delta = end - s;
         let p = ray.o + ray.d * (a + 0.5 * (s + end) / speed);
         m.eval(p, &mut sc.sa, &mut sc.ss, &mut sc.j);
-        let mut tmax = 0.0f64;
-        for c in 0..t.len() {
-            let st = sc.sa[c] + sc.ss[c];
-            let tau = st * delta;
-            // (1 − e^{−τ}) / σ_t, finite for σ_t → 0 and σ_t → ∞.
-            let fac = if tau < 1e-9 {
-                delta * (1.0 - 0.5 * tau)
-            } else {
-                -(-tau).exp_m1() / st
-            };
-            l[c] += t[c] * sc.j[c] * fac;
-            t[c] *= (-tau).exp();
-            tmax = tmax.max(t[c]);
-        }
-        if tmax < cutoff {
+        if march_step(sc, delta, l, t) < cutoff {
             break;
         }
         s = end;

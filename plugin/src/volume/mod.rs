@@ -898,8 +898,7 @@ impl FireVolume {
         };
         let slack = 1e-9 * (c1 - c0).max_element();
         let inside = |p: DVec3| p.cmpge(c0 - slack).all() && p.cmple(c1 + slack).all();
-        let c = self.channels();
-        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        let mut sc = Scratch::new(self.channels());
         // The curved path as a polyline of RK steps; then the march over it at the volume's own step (so the
         // 30-channel coefficients are evaluated as often as along a straight ray, not once per RK step).
         let mut path: Vec<(DVec3, f64)> = vec![(ray.o + ray.d * a, 0.0)];
@@ -941,21 +940,8 @@ impl FireVolume {
             } else {
                 0.0
             };
-            Medium::eval(self, pa + (pb - pa) * f, &mut sa, &mut ss, &mut j);
-            let mut tmax = 0.0f64;
-            for k in 0..c {
-                let st = sa[k] + ss[k];
-                let tau = st * h;
-                let fac = if tau < 1e-9 {
-                    h * (1.0 - 0.5 * tau)
-                } else {
-                    -(-tau).exp_m1() / st
-                };
-                l[k] += t[k] * j[k] * fac;
-                t[k] *= (-tau).exp();
-                tmax = tmax.max(t[k]);
-            }
-            if tmax < self.cutoff {
+            Medium::eval(self, pa + (pb - pa) * f, &mut sc.sa, &mut sc.ss, &mut sc.j);
+            if integrate::march_step(&sc, h, l, t) < self.cutoff {
                 break;
             }
             s0 = s1;

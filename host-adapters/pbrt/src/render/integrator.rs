@@ -11,7 +11,7 @@ use super::shapes::{sample_area, Hit};
 use super::spectrum::S;
 use firemedium_loader::Ray as FRay;
 use firemedium_plugin::rng::Rng;
-use glam::{DVec3, Vec3A};
+use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
 
 fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
@@ -112,6 +112,44 @@ fn env(light: &Light, w: Vec3A) -> S {
     }
 }
 
+/// World point `o` and direction `d` in the space `xf` maps to.
+fn to_space(xf: &DAffine3, o: Vec3A, d: Vec3A) -> (DVec3, DVec3) {
+    let f = |v: Vec3A| DVec3::from(v.to_array().map(f64::from));
+    (xf.transform_point3(f(o)), xf.transform_vector3(f(d)))
+}
+
+/// The plugin ray of the world segment o + t·d, t ∈ [0, t_end] (unbounded: 1e30), in medium space.
+fn plugin_ray(to_medium: &DAffine3, o: Vec3A, d: Vec3A, t_end: f32, seed: u64) -> FRay {
+    let (om, dm) = to_space(to_medium, o, d);
+    FRay {
+        origin: om.to_array(),
+        direction: dm.to_array(),
+        tmin: 0.0,
+        tmax: if t_end.is_finite() {
+            t_end as f64
+        } else {
+            1e30
+        },
+        seed,
+    }
+}
+
+/// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
+/// from `o`; None if the plugin refused the query.
+fn fire_pdf_direction(
+    light: &firemedium_loader::Light,
+    to_medium: &DAffine3,
+    o: Vec3A,
+    d: Vec3A,
+) -> Option<f64> {
+    let (om, dm) = to_space(to_medium, o, d);
+    let mut pd = [0.0f64];
+    light
+        .pdf_direction(&[om.to_array()], &[dm.to_array()], &mut pd)
+        .ok()?;
+    Some(pd[0])
+}
+
 /// Renders radiance along camera rays.
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
@@ -153,20 +191,13 @@ impl Integrator<'_> {
     ) -> (S, S, Option<(Vec3A, Vec3A)>) {
         let n = self.scene.bins.n();
         match &self.scene.media[m] {
-            Medium::Plugin { vol, to_medium, .. } => {
-                let om = to_medium.transform_point3(DVec3::from(o.to_array().map(f64::from)));
-                let dm = to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
-                let ray = FRay {
-                    origin: om.to_array(),
-                    direction: dm.to_array(),
-                    tmin: 0.0,
-                    tmax: if t_end.is_finite() {
-                        t_end as f64
-                    } else {
-                        1e30
-                    },
-                    seed: rng.next_u64(),
-                };
+            Medium::Plugin {
+                vol,
+                to_medium,
+                to_world,
+                ..
+            } => {
+                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
                 let (mut l, mut t) = (
                     [0f32; super::spectrum::MAX_CHANNELS],
                     [0f32; super::spectrum::MAX_CHANNELS],
@@ -189,9 +220,8 @@ impl Integrator<'_> {
                 }
                 let bent = (emission && want_exit).then(|| {
                     let de = DVec3::from(exit[0].direction);
-                    let dn = dm.normalize_or_zero();
+                    let dn = DVec3::from(ray.direction).normalize_or_zero();
                     (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
-                        let to_world = to_medium.inverse();
                         let p = to_world.transform_point3(DVec3::from(exit[0].point));
                         let w = to_world.transform_vector3(de).normalize_or_zero();
                         (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
@@ -220,31 +250,39 @@ impl Integrator<'_> {
         }
     }
 
-    /// Transmittance from `o` toward `d` over distance parameter `t_max` through surfaces that are only medium
-    /// boundaries; zero if an opaque surface is in the way.
-    fn shadow(
+    /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
+    /// (transmittance — zero if an opaque surface is in the way —, the emission of medium `fire` seen along
+    /// the way, attenuated by every medium in front of it).
+    fn walk_media(
         &self,
         mut o: Vec3A,
         d: Vec3A,
         mut t_max: f32,
         mut medium: Option<usize>,
+        fire: Option<usize>,
         rng: &mut Rng,
-    ) -> S {
+    ) -> (S, S) {
         let eps = self.scene.eps;
         let mut tr = self.mask;
+        let mut l = S::ZERO;
         for _ in 0..64 {
             let hit = self.scene.bvh.intersect(o, d, eps, t_max - eps);
             let seg = hit.map(|h| h.t).unwrap_or(t_max);
             if let Some(m) = medium {
-                tr *= self.medium_segment(m, o, d, seg, rng, false).1;
+                let emits = fire == Some(m);
+                let (le, t) = self.medium_segment(m, o, d, seg, rng, emits);
+                if emits {
+                    l += tr * le;
+                }
+                tr *= t;
                 if tr.max() <= 0.0 {
-                    return S::ZERO;
+                    return (S::ZERO, l);
                 }
             }
-            let Some(h) = hit else { return tr };
+            let Some(h) = hit else { return (tr, l) };
             let prim = &self.scene.bvh.prims[h.prim];
             if prim.material.is_some() {
-                return S::ZERO;
+                return (S::ZERO, l);
             }
             if let Some((inside, outside)) = prim.media {
                 medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
@@ -252,46 +290,7 @@ impl Integrator<'_> {
             o = h.p;
             t_max -= h.t;
         }
-        tr
-    }
-
-    /// The radiance that medium `fire` emits toward `o` from direction `d` (seen along `d`): its emission on
-    /// every segment of the ray inside it, attenuated by every medium in front, up to the first opaque surface.
-    fn emission_along(
-        &self,
-        mut o: Vec3A,
-        d: Vec3A,
-        mut medium: Option<usize>,
-        fire: usize,
-        rng: &mut Rng,
-    ) -> S {
-        let eps = self.scene.eps;
-        let mut tr = self.mask;
-        let mut l = S::ZERO;
-        for _ in 0..64 {
-            let hit = self.scene.bvh.intersect(o, d, eps, f32::INFINITY);
-            let seg = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
-            if let Some(m) = medium {
-                let (le, t) = self.medium_segment(m, o, d, seg, rng, m == fire);
-                if m == fire {
-                    l += tr * le;
-                }
-                tr *= t;
-                if tr.max() <= 0.0 {
-                    break;
-                }
-            }
-            let Some(h) = hit else { break };
-            let prim = &self.scene.bvh.prims[h.prim];
-            if prim.material.is_some() {
-                break;
-            }
-            if let Some((inside, outside)) = prim.media {
-                medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
-            }
-            o = h.p;
-        }
-        l
+        (tr, l)
     }
 
     /// Radiance from one light toward point `p` (NEE), already divided by the light's selection probability:
@@ -308,12 +307,15 @@ impl Integrator<'_> {
         let u = Self::rng2(rng);
         let nl = sc.lights.len() as f32;
         let (wi, dist, le) = match &sc.lights[li] {
-            Light::Fire {
-                light,
-                medium: fm,
-                to_medium,
-                to_world,
-            } => {
+            Light::Fire { light, medium: fm } => {
+                let Medium::Plugin {
+                    to_medium,
+                    to_world,
+                    ..
+                } = &sc.media[*fm]
+                else {
+                    return None;
+                };
                 // The sampled point only chooses the direction (density pdf_direction); the estimate is the
                 // fire's whole emission along it, Σ T·L_e up to the first opaque surface, divided by that
                 // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
@@ -328,18 +330,16 @@ impl Integrator<'_> {
                 if wi == Vec3A::ZERO || !wi.is_finite() {
                     return None;
                 }
-                let pm = to_medium.transform_point3(DVec3::from(p.to_array().map(f64::from)));
-                let dm = to_medium.transform_vector3(DVec3::from(wi.to_array().map(f64::from)));
-                let mut pd = [0.0f64];
-                light
-                    .pdf_direction(&[pm.to_array()], &[dm.to_array()], &mut pd)
-                    .ok()?;
                 // Solid angle in medium space equals world solid angle for a similarity transform.
-                let pdf_dir = pd[0] as f32 / nl;
+                let pdf_dir = fire_pdf_direction(light, to_medium, p, wi)? as f32 / nl;
                 if !(pdf_dir > 0.0) {
                     return None;
                 }
-                let l = (self.emission_along(p, wi, medium, *fm, rng) / pdf_dir).finite_or_zero();
+                // The fire's emission along wi, up to the first opaque surface.
+                let le = self
+                    .walk_media(p, wi, f32::INFINITY, medium, Some(*fm), rng)
+                    .1;
+                let l = (le / pdf_dir).finite_or_zero();
                 return (!l.is_black()).then_some((l, wi, pdf_dir));
             }
             Light::Point { p: lp, i } => {
@@ -396,7 +396,7 @@ impl Integrator<'_> {
         } else {
             1e30
         };
-        let vis = self.shadow(p, wi, t_max, medium, rng);
+        let vis = self.walk_media(p, wi, t_max, medium, None, rng).0;
         let l = (le * vis * nl).finite_or_zero();
         (!l.is_black()).then_some((l, wi, 0.0))
     }
@@ -409,26 +409,16 @@ impl Integrator<'_> {
             return 1.0;
         };
         let sc = self.scene;
+        let Medium::Plugin { to_medium, .. } = &sc.media[m] else {
+            return 1.0;
+        };
         for l in &sc.lights {
-            if let Light::Fire {
-                light,
-                medium,
-                to_medium,
-                ..
-            } = l
-            {
+            if let Light::Fire { light, medium } = l {
                 if *medium == m {
-                    let om =
-                        to_medium.transform_point3(DVec3::from(origin.to_array().map(f64::from)));
-                    let dm = to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
-                    let mut pd = [0.0f64];
-                    if light
-                        .pdf_direction(&[om.to_array()], &[dm.to_array()], &mut pd)
-                        .is_err()
-                    {
+                    let Some(pd) = fire_pdf_direction(light, to_medium, origin, d) else {
                         return 1.0;
-                    }
-                    let pl = pd[0] as f32 / sc.lights.len() as f32;
+                    };
+                    let pl = pd as f32 / sc.lights.len() as f32;
                     return if pdf_b + pl > 0.0 {
                         pdf_b / (pdf_b + pl)
                     } else {
@@ -505,21 +495,7 @@ impl Integrator<'_> {
                     } = &sc.media[m]
                     {
                         let n = sc.bins.n();
-                        let om =
-                            to_medium.transform_point3(DVec3::from(o.to_array().map(f64::from)));
-                        let dm =
-                            to_medium.transform_vector3(DVec3::from(d.to_array().map(f64::from)));
-                        let ray = FRay {
-                            origin: om.to_array(),
-                            direction: dm.to_array(),
-                            tmin: 0.0,
-                            tmax: if t_end.is_finite() {
-                                t_end as f64
-                            } else {
-                                1e30
-                            },
-                            seed: rng.next_u64(),
-                        };
+                        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
                         let mut ev = [firemedium_loader::Scatter::default()];
                         let (mut w, mut e) = (
                             [0f32; super::spectrum::MAX_CHANNELS],

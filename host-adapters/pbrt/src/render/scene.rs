@@ -118,8 +118,6 @@ pub enum Light {
     Fire {
         light: std::sync::Arc<firemedium_loader::Light>,
         medium: usize,
-        to_medium: DAffine3,
-        to_world: DAffine3,
     },
     Area {
         prim: usize,
@@ -135,6 +133,8 @@ pub enum Medium {
     Plugin {
         vol: Volume,
         to_medium: DAffine3,
+        /// The inverse of `to_medium`.
+        to_world: DAffine3,
         scatters: bool,
         g: f64,
         name: String,
@@ -447,7 +447,7 @@ impl Builder {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
-                Medium::Plugin { vol, to_medium, scatters: info.scatters != 0, g: info.g, name: name.to_string() }
+                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string() }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
             other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
@@ -1050,7 +1050,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     if !ov.no_fire_light {
         let mut report = 0;
         for (mi, m) in b.media.iter().enumerate() {
-            if let Medium::Plugin { vol, to_medium, .. } = m {
+            if let Medium::Plugin { vol, .. } = m {
                 let r = report;
                 report += 1;
                 match vol.create_light(ov.fire_light_weighting.as_deref()) {
@@ -1068,8 +1068,6 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                         b.lights.push(Light::Fire {
                             light: std::sync::Arc::new(light),
                             medium: mi,
-                            to_medium: *to_medium,
-                            to_world: to_medium.inverse(),
                         });
                     }
                     // A medium that does not emit is no light.
