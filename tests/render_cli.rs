@@ -424,3 +424,45 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
         sd / a
     );
 }
+
+#[test]
+fn refraction_moves_the_wall_behind_the_fire_and_nothing_else() {
+    // The fire-wall scene with the fire's emission off (only the bending differs), refraction on and off.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let text = std::fs::read_to_string(root.join("fire-wall/scene.pbrt")).unwrap();
+    let vdb = root.join("fire-room/fire_f060.vdb");
+    let dir = tmp("refraction");
+    let mut images = Vec::new();
+    for on in [true, false] {
+        let scene = text
+            .replace("../fire-room/fire_f060.vdb", vdb.to_str().unwrap())
+            .replace(
+                "\"bool refraction\" true",
+                &format!("\"bool refraction\" {on} \"float intensity\" 0"),
+            );
+        let path = dir.join(format!("wall_{on}.pbrt"));
+        std::fs::write(&path, scene).unwrap();
+        let out = render(&path, &["--resolution", "96x96", "--spp", "4"]);
+        images.push(read_exr(&out));
+    }
+    let (w, h, on) = &images[0];
+    let off = &images[1].2;
+    // Mean |ΔY| / mean Y over a band of columns: the plume's (the middle fifth) and the margins' (outside the
+    // medium's box, which spans about the middle 45 % of the view).
+    let band = |x0: usize, x1: usize| {
+        let (mut d, mut y) = (0.0, 0.0);
+        for j in 0..*h {
+            for i in x0..x1 {
+                let (a, b) = (luminance(on[i + w * j]), luminance(off[i + w * j]));
+                d += (a - b).abs();
+                y += b;
+            }
+        }
+        d / y
+    };
+    let plume = band(2 * w / 5, 3 * w / 5);
+    let margins = band(0, w / 5).max(band(4 * w / 5, *w));
+    eprintln!("refraction on vs off: mean |ΔY|/Y {plume:.4} behind the plume, {margins:.4} in the margins");
+    assert!(plume > 0.02, "{plume}");
+    assert!(margins < 0.01 * plume, "{margins} vs {plume}");
+}

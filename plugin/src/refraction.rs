@@ -5,28 +5,38 @@
 //!     d/ds (n dx/ds) = ∇n,
 //! ```
 //!
-//! written as a first-order system in arc length s for the position x and the optical direction v = n dx/ds:
-//! dx/ds = v / n(x), dv/ds = ∇n(x). Steps are classical fourth-order Runge–Kutta; after each step v is rescaled to
-//! |v| = n(x) (the invariant of the system; a projection, so the order stays four). Each step is checked against
-//! two half steps and halved until they agree within `tol` (step doubling), and ends just past the next plane of
-//! grid samples, where the trilinear gradient has a kink. The first guess of a step is the smaller of
-//! `h_max` and the length over which the ray turns by `max_turn` radians (curvature |∇n⊥| / n), so a steep
-//! gradient — the index jumping within one voxel — is crossed in small steps, and total internal reflection comes
-//! out as the ray turning back smoothly rather than as a jump. With a field that reports its kinks (a grid), a
-//! step of up to a voxel stays inside one trilinear cell; without, `h_max` must not exceed half the length over
-//! which the field changes, or a step could land inside a jump it never saw.
+//! Two integrators:
+//!
+//! - [`trace_verlet`], the fire volume's default: one step per march step, position Störmer–Verlet in the
+//!   parameter σ with dσ = ds / n, where the equation reads d²x/dσ² = ∇(n²/2) — a separable Hamiltonian system,
+//!   so the scheme is symplectic and second order, exact for a constant ∇(n²) (the parabola). Its single force
+//!   lookup is at the step's midpoint, where the march samples the medium: a curved ray costs one index lookup
+//!   per sample more than a straight one.
+//! - [`trace`], the accurate reference: in arc length s for x and the optical direction v = n dx/ds
+//!   (dx/ds = v / n, dv/ds = ∇n), classical RK4 rescaled to |v| = n after each step, each step checked against two
+//!   half steps and halved until they agree within `tol` (step doubling), and ending just past the next plane of
+//!   grid samples. `refractionintegrator "rk4"` selects it.
+//!
+//! Both limit the turn per step to `max_turn` radians (relative change of v, for Verlet), so a steep gradient —
+//! the index jumping within one voxel — is crossed in small steps, and total internal reflection comes out as the
+//! ray turning back smoothly rather than as a jump.
 //!
 //! ## The baked field
-//! [`IndexGrid`] stores δ = scale · ((n(T) − 1) − (n(T_amb) − 1)) per voxel (f32: |δ| ≤ 3e-4 · scale, f32 keeps
-//! 7 digits of it), padded by one ring of δ = 0 voxels, so n = n_amb + δ with the zero-outside trilinear lookup
-//! is continuous everywhere: ambient outside the padded box, and entering or leaving bends the ray smoothly
-//! over the last voxel and a half. Voxels colder than `T_amb` (0 K where a simulation holds
-//! no data) count as ambient air. `scale` is the paper's Figure 2 exaggeration of (n − 1). The gradient is the
-//! analytic gradient of the trilinear interpolant.
+//! [`IndexGrid`] stores per voxel δ = scale · ((n(T) − 1) − (n(T_amb) − 1)) and the force ∇(n²/2) by central
+//! differences of n²/2 (as the paper takes ∇n by central differences), four f32 (|δ| ≤ 3e-4 · scale, f32 keeps
+//! 7 digits of it), padded by two rings of ambient voxels, and interpolates all four trilinearly (zero outside):
+//! n = n_amb + δ is continuous everywhere and ambient outside the padded box, and the force is continuous too and
+//! zero beyond 1.5 voxels outside the grid, so entering and leaving bend the ray smoothly. The interpolated force
+//! converges to the continuous field's at second order in the voxel size, and its integral along an axis
+//! telescopes to the change of n²/2, so a ray leaves a slab of parallel layers in the direction it entered
+//! (Snell's invariant) — the analytic gradient of the trilinear n, tried first, is discontinuous at every plane of
+//! samples and cost the Verlet march 10 % of the deflection (docs/RESULTS.md). Voxels colder than `T_amb` (0 K
+//! where a simulation holds no data) count as ambient air. `scale` is the paper's Figure 2 exaggeration of
+//! (n − 1).
 
 use crate::ciddor::{self, Air};
 use crate::grid::Grid;
-use glam::DVec3;
+use glam::{DVec3, Vec4};
 
 /// An index-of-refraction field: n(x) and ∇n(x) at medium-space points.
 pub trait IndexField {
@@ -37,6 +47,11 @@ pub trait IndexField {
     /// Both at once (one lookup for fields that compute them together).
     fn n_grad(&self, p: DVec3) -> (f64, DVec3) {
         (self.n(p), self.grad(p))
+    }
+    /// n and the force of the ray equation in σ, n∇n = ∇(n²/2), at `p`.
+    fn n_force(&self, p: DVec3) -> (f64, DVec3) {
+        let (n, g) = self.n_grad(p);
+        (n, n * g)
     }
     /// Distance from `p` along unit `dir` to the next place the gradient may jump (for a trilinear grid, the
     /// next plane of sample centres): steps end there so that each RK4 step sees a smooth field.
@@ -197,14 +212,133 @@ pub fn trace(
     }
 }
 
+/// One step of the fire volume's curved march: position Störmer–Verlet for the ray equation in the parameter σ
+/// with dσ = ds / n, where it reads d²x/dσ² = ∇(n²/2) — a separable Hamiltonian system (H = |v|²/2 − n²/2,
+/// v = dx/dσ = n t̂), so the scheme is symplectic and second order, and a constant ∇(n²) (n² linear: the parabola)
+/// is integrated exactly. From (x, v) a half step along t̂ reaches the midpoint m, where n and ∇n are looked up
+/// once (and where the march evaluates the medium); then v₁ = v + dσ n∇n(m) and x₁ = m + (dσ/2) v₁, with
+/// dσ = h / |v| for an arc length h. |v| stays n(x) up to the scheme's bounded energy error. A step whose
+/// velocity would change by more than `max_turn` relative (a turn, or a steep jump along the ray) is halved
+/// down to `h_min`, so total internal reflection turns the ray back over several short steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerletStep {
+    /// The midpoint (the medium's sample point).
+    pub mid: DVec3,
+    /// New position.
+    pub x: DVec3,
+    /// New optical velocity (|v| ≈ n).
+    pub v: DVec3,
+    /// Arc length taken: the polyline x → mid → x₁ (`asked` to first order).
+    pub h: f64,
+    /// The step length asked for, after halving (twice the distance to the midpoint).
+    pub asked: f64,
+}
+
+/// See [`VerletStep`]: one step of arc length up to `h` from (x, v), v ≠ 0.
+pub fn verlet_step(f: &impl IndexField, x: DVec3, v: DVec3, h: f64, steps: &Steps) -> VerletStep {
+    let speed = v.length();
+    let (speed, t) = if speed > 0.0 && speed.is_finite() {
+        (speed, v / speed)
+    } else {
+        (1.0, DVec3::X)
+    };
+    let mut h = h;
+    loop {
+        let mid = x + t * (0.5 * h);
+        let (_, force) = f.n_force(mid);
+        let force = if force.is_finite() {
+            force
+        } else {
+            DVec3::ZERO
+        };
+        let dsig = h / speed;
+        let dv = force * dsig;
+        if dv.length() > steps.max_turn * speed && h > steps.h_min {
+            h = (0.5 * h).max(steps.h_min);
+            continue;
+        }
+        let mut v1 = t * speed + dv;
+        if !(v1.length() > 1e-9 * speed) {
+            // Stopped dead at h_min inside a discontinuity: keep the old direction.
+            v1 = t * speed;
+        }
+        // The arc length taken: the two halves of the step (the second is |v₁|/|v| of the first).
+        return VerletStep {
+            mid,
+            x: mid + v1 * (0.5 * dsig),
+            v: v1,
+            h: 0.5 * h + 0.5 * dsig * v1.length(),
+            asked: h,
+        };
+    }
+}
+
+/// Marches a curved ray from `x0` along `dir` for arc length `s_max` in [`verlet_step`]s of arc length `h`,
+/// the first one `first` long (a jittered start, as the straight march), calling `visit(mid, h)` per step;
+/// stops early when `stop` says the point left the region of interest.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_verlet(
+    f: &impl IndexField,
+    x0: DVec3,
+    dir: DVec3,
+    s_max: f64,
+    h: f64,
+    first: f64,
+    steps: &Steps,
+    mut visit: impl FnMut(DVec3, f64),
+    mut stop: impl FnMut(DVec3) -> bool,
+) -> Exit {
+    let t = dir.normalize_or_zero();
+    let t = if t == DVec3::ZERO || !t.is_finite() {
+        DVec3::X
+    } else {
+        t
+    };
+    let (mut x, mut v) = (x0, t * index_at(f, x0));
+    let s_max = if s_max.is_nan() { 0.0 } else { s_max.max(0.0) };
+    let h = if h > 0.0 && h.is_finite() { h } else { s_max };
+    // s: arc length travelled; u: the same counted in the lengths asked for, which sets the step boundaries (so
+    // the first-order difference between the two never leaves slivers of steps).
+    let (mut s, mut u) = (0.0, 0.0);
+    let mut next = if first > 0.0 && first <= h { first } else { h };
+    let mut n_steps = 0;
+    while s < s_max && n_steps < steps.max_steps {
+        let want = (next - u).min(s_max - s).max(steps.h_min.min(s_max - s));
+        let st = verlet_step(f, x, v, want, steps);
+        visit(st.mid, st.h);
+        x = st.x;
+        v = st.v;
+        s += st.h;
+        u += st.asked;
+        n_steps += 1;
+        while next <= u * (1.0 + 1e-12) {
+            next += h;
+        }
+        if stop(x) {
+            break;
+        }
+    }
+    Exit {
+        x,
+        dir: v / v.length().max(1e-300),
+        s,
+        steps: n_steps,
+    }
+}
+
 /// The index field of a temperature grid (module docs).
 #[derive(Debug, Clone)]
 pub struct IndexGrid {
-    delta: Grid,
+    /// Per padded voxel: δ and its central-difference gradient (per medium unit), x fastest.
+    data: Vec<Vec4>,
+    dims: [usize; 3],
     p0: DVec3,
     size: DVec3,
     n_amb: f64,
 }
+
+/// Rings of ambient voxels around the baked grid: δ falls to 0 over the first, the gradient over the second.
+const PAD: usize = 2;
 
 impl IndexGrid {
     /// Bakes δ per voxel from `temperature` (K) over the box `p0..p1`, at vacuum wavelength `lambda_nm`, for
@@ -217,49 +351,69 @@ impl IndexGrid {
         air: &Air,
         scale: f64,
     ) -> IndexGrid {
-        // One ring of ambient (δ = 0) voxels around the grid: the zero-outside trilinear lookup of the padded grid
-        // then falls to exactly 0 at its own bounds, so n is continuous everywhere (the unpadded grid would jump
-        // from half the edge sample to 0 at the bounds, a refraction the ray equation cannot see).
         let [nx, ny, nz] = temperature.dims();
         let voxel = (p1 - p0) / DVec3::new(nx as f64, ny as f64, nz as f64);
         let amb = ciddor::refractivity(lambda_nm, air);
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
-        let baked: Vec<f32> = temperature
-            .data()
-            .iter()
-            .map(|&t| {
-                let t = t as f64;
-                if !(t > air.temperature_k) {
-                    return 0.0;
-                }
-                // Memoised per 0.1 K (n − 1 changes by < 1e-4 relative over it at flame temperatures).
-                let key = (t * 10.0).round() as i64;
-                let r = *memo.entry(key).or_insert_with(|| {
-                    ciddor::refractivity(
-                        lambda_nm,
-                        &Air {
-                            temperature_k: key as f64 / 10.0,
-                            ..*air
-                        },
-                    )
-                });
-                (scale * (r - amb)) as f32
-            })
-            .collect();
-        let dims = [nx + 2, ny + 2, nz + 2];
-        let mut data = vec![0f32; dims[0] * dims[1] * dims[2]];
+        let dims = [nx + 2 * PAD, ny + 2 * PAD, nz + 2 * PAD];
+        let mut delta = vec![0f32; dims[0] * dims[1] * dims[2]];
         for k in 0..nz {
             for j in 0..ny {
-                let src = nx * (j + ny * k);
-                let dst = 1 + dims[0] * (j + 1 + dims[1] * (k + 1));
-                data[dst..dst + nx].copy_from_slice(&baked[src..src + nx]);
+                for i in 0..nx {
+                    let t = temperature.at(i as i64, j as i64, k as i64) as f64;
+                    if !(t > air.temperature_k) {
+                        continue;
+                    }
+                    // Memoised per 0.1 K (n − 1 changes by < 1e-4 relative over it at flame temperatures).
+                    let key = (t * 10.0).round() as i64;
+                    let r = *memo.entry(key).or_insert_with(|| {
+                        ciddor::refractivity(
+                            lambda_nm,
+                            &Air {
+                                temperature_k: key as f64 / 10.0,
+                                ..*air
+                            },
+                        )
+                    });
+                    delta[i + PAD + dims[0] * (j + PAD + dims[1] * (k + PAD))] =
+                        (scale * (r - amb)) as f32;
+                }
             }
         }
+        let at = |i: usize, j: usize, k: usize, a: usize, o: i64| -> f32 {
+            let mut c = [i as i64, j as i64, k as i64];
+            c[a] += o;
+            if c.iter().zip(dims).any(|(&c, d)| c < 0 || c >= d as i64) {
+                return 0.0;
+            }
+            delta[c[0] as usize + dims[0] * (c[1] as usize + dims[1] * c[2] as usize)]
+        };
+        // The force of the ray equation, ∇(n²/2), by central differences of φ = n²/2 − n_amb²/2 = n_amb δ + δ²/2:
+        // interpolated, its integral along an axis telescopes to the change of φ, so a ray leaves a region of
+        // parallel layers in the direction it entered (Snell's invariant), as with the exact gradient.
+        let n_amb = 1.0 + scale * amb;
+        let phi = |i: usize, j: usize, k: usize, a: usize, o: i64| -> f64 {
+            let d = at(i, j, k, a, o) as f64;
+            n_amb * d + 0.5 * d * d
+        };
+        let mut data = Vec::with_capacity(delta.len());
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let g = |a: usize| {
+                        ((phi(i, j, k, a, 1) - phi(i, j, k, a, -1)) / (2.0 * voxel[a])) as f32
+                    };
+                    data.push(Vec4::new(at(i, j, k, 0, 0), g(0), g(1), g(2)));
+                }
+            }
+        }
+        let pad = voxel * PAD as f64;
         IndexGrid {
-            delta: Grid::new(dims, data).unwrap_or_else(|| temperature.clone()),
-            p0: p0 - voxel,
-            size: p1 - p0 + 2.0 * voxel,
-            n_amb: 1.0 + scale * amb,
+            data,
+            dims,
+            p0: p0 - pad,
+            size: p1 - p0 + 2.0 * pad,
+            n_amb,
         }
     }
 
@@ -269,47 +423,62 @@ impl IndexGrid {
     }
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        self.delta.bytes()
+        self.data.len() * std::mem::size_of::<Vec4>()
     }
-    /// The box where n differs from ambient: the grid's, one voxel wider on every side.
+    /// The box where n differs from ambient: the grid's, two voxels wider on every side.
     pub fn bounds(&self) -> [DVec3; 2] {
         [self.p0, self.p0 + self.size]
     }
 
-    /// Trilinear value and gradient (per medium unit) of δ at `p`, zero outside.
+    /// Trilinear δ and force ∇(n²/2) (per medium unit) at `p`, zero outside.
     fn eval(&self, p: DVec3) -> (f64, DVec3) {
         let u = (p - self.p0) / self.size;
         if !(u.cmpge(DVec3::ZERO).all() && u.cmple(DVec3::ONE).all()) {
             return (0.0, DVec3::ZERO);
         }
-        let dims = self.delta.dims();
-        let mut base = [0i64; 3];
-        let mut fr = [0f64; 3];
-        for a in 0..3 {
-            let s = u[a] * dims[a] as f64 - 0.5;
-            let fl = s.floor();
-            base[a] = fl as i64;
-            fr[a] = s - fl;
-        }
-        let [i, j, k] = base;
-        let c = |di: i64, dj: i64, dk: i64| self.delta.at(i + di, j + dj, k + dk) as f64;
-        let [fx, fy, fz] = fr;
-        let (c000, c100, c010, c110) = (c(0, 0, 0), c(1, 0, 0), c(0, 1, 0), c(1, 1, 0));
-        let (c001, c101, c011, c111) = (c(0, 0, 1), c(1, 0, 1), c(0, 1, 1), c(1, 1, 1));
-        let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
-        let (x00, x10) = (lerp(c000, c100, fx), lerp(c010, c110, fx));
-        let (x01, x11) = (lerp(c001, c101, fx), lerp(c011, c111, fx));
-        let (y0, y1) = (lerp(x00, x10, fy), lerp(x01, x11, fy));
-        let value = lerp(y0, y1, fz);
-        let dx = lerp(
-            lerp(c100 - c000, c110 - c010, fy),
-            lerp(c101 - c001, c111 - c011, fy),
-            fz,
-        );
-        let dy = lerp(x10 - x00, x11 - x01, fz);
-        let dz = y1 - y0;
-        let scale = DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64) / self.size;
-        (value, DVec3::new(dx, dy, dz) * scale)
+        let d = self.dims;
+        let s = u * DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64) - 0.5;
+        let fl = s.floor();
+        let f = (s - fl).as_vec3();
+        let [i, j, k] = [fl.x as i64, fl.y as i64, fl.z as i64];
+        // The padding keeps every lookup inside the fire's box off the array's edges; only the outer half of the
+        // last ring reads past them (as zeros).
+        let corners = if i >= 0
+            && j >= 0
+            && k >= 0
+            && i + 1 < d[0] as i64
+            && j + 1 < d[1] as i64
+            && k + 1 < d[2] as i64
+        {
+            // All eight inside (everywhere but the outer half of the last ring): two rows of two pairs.
+            let o = i as usize + d[0] * (j as usize + d[1] * k as usize);
+            let (sy, sz) = (d[0], d[0] * d[1]);
+            let r = |o: usize| (self.data[o], self.data[o + 1]);
+            [r(o), r(o + sy), r(o + sz), r(o + sy + sz)]
+        } else {
+            let c = |di: i64, dj: i64, dk: i64| -> Vec4 {
+                let (a, b, cc) = (i + di, j + dj, k + dk);
+                if a < 0
+                    || b < 0
+                    || cc < 0
+                    || a >= d[0] as i64
+                    || b >= d[1] as i64
+                    || cc >= d[2] as i64
+                {
+                    return Vec4::ZERO;
+                }
+                self.data[a as usize + d[0] * (b as usize + d[1] * cc as usize)]
+            };
+            [
+                (c(0, 0, 0), c(1, 0, 0)),
+                (c(0, 1, 0), c(1, 1, 0)),
+                (c(0, 0, 1), c(1, 0, 1)),
+                (c(0, 1, 1), c(1, 1, 1)),
+            ]
+        };
+        let [x00, x10, x01, x11] = corners.map(|(a, b)| a.lerp(b, f.x));
+        let v = x00.lerp(x10, f.y).lerp(x01.lerp(x11, f.y), f.z);
+        (v.x as f64, DVec3::new(v.y as f64, v.z as f64, v.w as f64))
     }
 }
 
@@ -318,14 +487,20 @@ impl IndexField for IndexGrid {
         self.n_amb + self.eval(p).0
     }
     fn grad(&self, p: DVec3) -> DVec3 {
-        self.eval(p).1
+        self.n_grad(p).1
     }
+    /// n, and ∇n as the interpolated force over n (so n ∇n, what both integrators use, is the force itself).
     fn n_grad(&self, p: DVec3) -> (f64, DVec3) {
-        let (d, g) = self.eval(p);
-        (self.n_amb + d, g)
+        let (d, force) = self.eval(p);
+        let n = self.n_amb + d;
+        (n, force / n)
+    }
+    fn n_force(&self, p: DVec3) -> (f64, DVec3) {
+        let (d, force) = self.eval(p);
+        (self.n_amb + d, force)
     }
     fn next_kink(&self, p: DVec3, dir: DVec3) -> f64 {
-        let dims = self.delta.dims();
+        let dims = self.dims;
         let mut best = f64::INFINITY;
         for a in 0..3 {
             let cell = self.size[a] / dims[a] as f64;
@@ -462,6 +637,96 @@ mod tests {
         assert!(errs[3].0 < 1e-7, "{errs:?}");
     }
 
+    /// n² = a + b y: the ray equation in σ (dσ = ds/n) is d²x/dσ² = ∇(n²/2) = (0, b/2, 0), a parabola
+    /// x(σ) = x₀ + v₀σ + (b/4) σ² ŷ with v₀ = n₀ t̂₀.
+    struct Parabolic {
+        a: f64,
+        b: f64,
+    }
+    impl IndexField for Parabolic {
+        fn n(&self, p: DVec3) -> f64 {
+            (self.a + self.b * p.y).sqrt()
+        }
+        fn grad(&self, p: DVec3) -> DVec3 {
+            DVec3::new(0.0, 0.5 * self.b / self.n(p), 0.0)
+        }
+    }
+
+    #[test]
+    fn verlet_is_exact_on_the_parabola_and_second_order_on_the_catenary() {
+        // Parabola: a constant force, which position Verlet integrates exactly at any step.
+        let f = Parabolic { a: 1.0, b: 0.6 };
+        let d0 = DVec3::new(1.0, 0.2, 0.0).normalize();
+        for n in [3, 10, 40] {
+            let steps = Steps {
+                max_turn: 10.0,
+                ..Steps::default()
+            };
+            let e = trace_verlet(
+                &f,
+                DVec3::ZERO,
+                d0,
+                1.0,
+                1.0 / n as f64,
+                1.0 / n as f64,
+                &steps,
+                |_, _| {},
+                |_| false,
+            );
+            // Where the analytic parabola passes through the same x: σ = x / v₀ₓ.
+            let sig = e.x.x / d0.x;
+            let want_y = d0.y * sig + 0.25 * f.b * sig * sig;
+            let want_d = DVec3::new(d0.x, d0.y + 0.5 * f.b * sig, 0.0).normalize();
+            assert!(
+                (e.x.y - want_y).abs() < 1e-12,
+                "{n} steps: y {} vs {want_y}",
+                e.x.y
+            );
+            assert!(
+                (e.dir - want_d).length() < 1e-12,
+                "{n} steps: {} vs {want_d}",
+                e.dir
+            );
+        }
+        // Catenary (n linear, force ∝ n varies along the path): error ÷4 per halving of the step.
+        let f = Linear { n0: 1.0, g: 0.4 };
+        let mut errs = Vec::new();
+        for n in [12, 24, 48, 96] {
+            let steps = Steps {
+                max_turn: 10.0,
+                ..Steps::default()
+            };
+            let h = 1.5 / n as f64;
+            let e = trace_verlet(
+                &f,
+                DVec3::ZERO,
+                DVec3::X,
+                1.5,
+                h,
+                h,
+                &steps,
+                |_, _| {},
+                |_| false,
+            );
+            assert_eq!(e.steps, n);
+            // Compare at the arc length travelled (the step's arc length is its chord, to second order).
+            let (want_x, want_d) = catenary(1.0, 0.4, e.s);
+            errs.push(((e.x - want_x).length(), (e.dir - want_d).length()));
+        }
+        eprintln!("verlet catenary, 12/24/48/96 steps: (position, direction) errors {errs:?}");
+        for w in errs.windows(2) {
+            let (rx, rd) = (w[0].0 / w[1].0, w[0].1 / w[1].1);
+            assert!(
+                (3.0..5.5).contains(&rx),
+                "position error ratio {rx} ({errs:?})"
+            );
+            assert!(
+                (3.0..5.5).contains(&rd),
+                "direction error ratio {rd} ({errs:?})"
+            );
+        }
+    }
+
     #[test]
     fn a_jump_within_a_voxel_turns_the_ray_back_without_garbage() {
         // n from 1.5 down to 1.0 within ~0.01 (one voxel of a 100-voxel grid; refractionscale-style extremes):
@@ -526,7 +791,7 @@ mod tests {
     }
 
     #[test]
-    fn the_baked_grid_follows_ciddor_and_its_gradient_is_exact() {
+    fn the_baked_grid_follows_ciddor_and_is_continuous() {
         // 6³ temperatures from 288 K (ambient) to 1800 K along x, varying in y and z too.
         let n = 6;
         let mut t = Vec::new();
@@ -553,22 +818,62 @@ mod tests {
         assert_eq!(f.n(DVec3::new(5.0, 0.0, 0.0)), ciddor::index(550.0, &amb));
         let r = ciddor::refractivity(550.0, &air(1500.0)) / ciddor::refractivity(550.0, &amb);
         assert!((r - 288.0 / 1500.0).abs() < 0.005, "{r}");
-        // Analytic gradient vs central differences at points inside.
-        let mut rng = crate::rng::Rng::new(4);
-        for _ in 0..200 {
-            let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-            let p = p0 + (0.05 + 0.9 * u) * (p1 - p0);
-            let h = 1e-6;
-            let fd = DVec3::new(
-                (f.n(p + DVec3::X * h) - f.n(p - DVec3::X * h)) / (2.0 * h),
-                (f.n(p + DVec3::Y * h) - f.n(p - DVec3::Y * h)) / (2.0 * h),
-                (f.n(p + DVec3::Z * h) - f.n(p - DVec3::Z * h)) / (2.0 * h),
-            );
-            let g = f.grad(p);
-            // Central differences of n ≈ 1.0003 at h = 1e-6 carry ~1e-10 of rounding.
-            assert!((g - fd).length() < 1e-9, "{g} vs {fd} at {p}");
-        }
+        // n is continuous across the planes of samples and falls to ambient at the padded box's faces.
+        let x = p0.x + 3.0 * (p1.x - p0.x) / n as f64;
+        let q = |x: f64| DVec3::new(x, 1.3, 0.7);
+        assert!((f.n(q(x + 1e-9)) - f.n(q(x - 1e-9))).abs() < 1e-12);
+        let [b0, _] = f.bounds();
+        assert_eq!(f.n(DVec3::new(b0.x + 1e-9, 1.3, 0.7)), f.ambient());
         // Hot air is less dense: n falls along +x.
         assert!(f.grad(centre(3, 3, 3)).x < 0.0);
+    }
+
+    #[test]
+    fn the_index_gradient_converges_at_second_order() {
+        // A Gaussian hot blob baked at 12³, 24³, 48³ voxels: the interpolated central differences of n²/2 over n
+        // approach ∇n of the continuous field (Ciddor of the analytic temperature) as the voxel².
+        let amb = air(293.15);
+        let temp =
+            |p: DVec3| 293.15 + 1500.0 * (-(p - DVec3::splat(0.5)).length_squared() / 0.04).exp();
+        let n_true = |p: DVec3| ciddor::index(550.0, &air(temp(p)));
+        let mut rng = crate::rng::Rng::new(9);
+        let points: Vec<DVec3> = (0..100)
+            .map(|_| {
+                DVec3::new(0.3, 0.3, 0.3)
+                    + 0.4 * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+            })
+            .collect();
+        let mut errs = Vec::new();
+        for res in [12usize, 24, 48] {
+            let mut t = Vec::with_capacity(res * res * res);
+            for k in 0..res {
+                for j in 0..res {
+                    for i in 0..res {
+                        let c = (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / res as f64;
+                        t.push(temp(c) as f32);
+                    }
+                }
+            }
+            let grid = Grid::new([res, res, res], t).unwrap();
+            let f = IndexGrid::from_temperature(&grid, DVec3::ZERO, DVec3::ONE, 550.0, &amb, 1.0);
+            let mut worst = 0.0f64;
+            let mut scale = 0.0f64;
+            for &p in &points {
+                let h = 1e-4;
+                let want = DVec3::new(
+                    n_true(p + DVec3::X * h) - n_true(p - DVec3::X * h),
+                    n_true(p + DVec3::Y * h) - n_true(p - DVec3::Y * h),
+                    n_true(p + DVec3::Z * h) - n_true(p - DVec3::Z * h),
+                ) / (2.0 * h);
+                worst = worst.max((f.grad(p) - want).length());
+                scale = scale.max(want.length());
+            }
+            errs.push(worst / scale);
+        }
+        eprintln!("∇n relative error at 12³, 24³, 48³: {errs:?}");
+        for w in errs.windows(2) {
+            assert!(w[0] / w[1] > 3.0, "{errs:?}");
+        }
+        assert!(errs[2] < 0.015, "{errs:?}");
     }
 }
