@@ -653,7 +653,7 @@ mod tests {
     }
 
     #[test]
-    fn verlet_is_exact_on_the_parabola_and_second_order_on_the_catenary() {
+    fn the_parabola_of_a_linear_n_squared_at_each_integrators_order() {
         // Parabola: a constant force, which position Verlet integrates exactly at any step.
         let f = Parabolic { a: 1.0, b: 0.6 };
         let d0 = DVec3::new(1.0, 0.2, 0.0).normalize();
@@ -686,6 +686,30 @@ mod tests {
                 (e.dir - want_d).length() < 1e-12,
                 "{n} steps: {} vs {want_d}",
                 e.dir
+            );
+        }
+        // RK4 (in arc length, so the parabola is not its natural variable) on the same path: fourth order.
+        let mut errs = Vec::new();
+        for n in [5, 10, 20, 40] {
+            let steps = Steps {
+                h_max: 1.2 / n as f64,
+                max_turn: 10.0,
+                tol: f64::INFINITY,
+                ..Steps::default()
+            };
+            let e = trace(&f, DVec3::ZERO, d0, 1.2, &steps, |_, _, _| {}, |_| false);
+            let sig = e.x.x / d0.x;
+            let want_y = d0.y * sig + 0.25 * f.b * sig * sig;
+            let want_d = DVec3::new(d0.x, d0.y + 0.5 * f.b * sig, 0.0).normalize();
+            errs.push(((e.x.y - want_y).abs(), (e.dir - want_d).length()));
+        }
+        eprintln!("rk4 parabola, 5/10/20/40 steps: (y, direction) errors {errs:?}");
+        for w in errs.windows(2) {
+            let (ry, rd) = (w[0].0 / w[1].0, w[0].1 / w[1].1);
+            assert!((10.0..24.0).contains(&ry), "y error ratio {ry} ({errs:?})");
+            assert!(
+                (10.0..24.0).contains(&rd),
+                "direction error ratio {rd} ({errs:?})"
             );
         }
         // Catenary (n linear, force ∝ n varies along the path): error ÷4 per halving of the step.
