@@ -90,7 +90,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             "{k}: C and Rust layouts differ"
         );
     }
-    assert_eq!(get("abi"), "0.2");
+    assert_eq!(get("abi"), "0.3");
     let (p1, p2): (f64, f64) = (
         get("light_pdf").parse().unwrap(),
         get("light_pdf_again").parse().unwrap(),
@@ -161,7 +161,7 @@ fn an_abi_mismatch_names_both_versions() {
     ]);
     let e = Plugin::load(&so).unwrap_err().to_string();
     assert!(
-        e.contains("speaks firemedium ABI 99.0, this host needs 0.2"),
+        e.contains("speaks firemedium ABI 99.0, this host needs 0.3"),
         "{e}"
     );
     // A stale library of another ABI earlier on the search path does not shadow a compatible one after it;
@@ -171,7 +171,10 @@ fn an_abi_mismatch_names_both_versions() {
     std::fs::copy(&so, stale.join(library_file_name())).unwrap();
     let good = plugin_path().parent().unwrap().to_path_buf();
     let p = Plugin::find(&[stale.clone(), good]).unwrap();
-    assert_eq!(p.version(), (0, 2));
+    assert_eq!(
+        p.version(),
+        (firemedium_abi::ABI_MAJOR, firemedium_abi::ABI_MINOR)
+    );
     let e = Plugin::find(&[stale]).unwrap_err().to_string();
     assert!(e.contains("speaks firemedium ABI 99.0"), "{e}");
     let e = Plugin::load(Path::new("/etc/hostname"))

@@ -96,6 +96,9 @@ fn loads_describes_and_integrates() {
         "{:?}",
         xyz[15]
     ); // ȳ ≈ 1 at 555 nm
+       // The temperature range (ABI 0.3): the Mantaflow frame's 0 … 2.974609 × temperaturescale 1000.
+    let [lo, hi] = v.temperature_range().unwrap().expect("a temperature grid");
+    assert!(lo == 0.0 && (hi - 2974.609).abs() < 1e-3, "{lo} {hi}");
 
     // Same rays through the rlib, in process: the cdylib gives the same numbers.
     let rs = rays(64);

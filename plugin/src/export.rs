@@ -747,6 +747,19 @@ unsafe extern "C" fn light_pdf_direction(
     })
 }
 
+unsafe extern "C" fn volume_temperature_range(volume: *const FmVolume, out: *mut f64) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_temperature_range") }?;
+        // SAFETY: room for two doubles (contract).
+        let o = unsafe { out_f64(out, 2, 1, "volume_temperature_range: out") }?;
+        let [lo, hi] = v.temperature_range().unwrap_or([0.0, 0.0]);
+        o[0] = lo;
+        o[1] = hi;
+        Ok(())
+    })
+}
+
 static API: FmApi = FmApi {
     abi_major: ABI_MAJOR,
     abi_minor: ABI_MINOR,
@@ -769,6 +782,7 @@ static API: FmApi = FmApi {
     light_sample,
     light_pdf,
     light_pdf_direction,
+    volume_temperature_range,
 };
 
 /// The plugin's entry point: the static function table.

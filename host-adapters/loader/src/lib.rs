@@ -527,6 +527,17 @@ impl Volume {
         self.info
     }
 
+    /// The lowest and highest temperature of the volume's grid (K, after its mapping), `None` without a
+    /// temperature grid (ABI 0.3).
+    pub fn temperature_range(&self) -> Result<Option<[f64; 2]>, Error> {
+        let mut out = [0.0f64; 2];
+        // SAFETY: room for two doubles.
+        let s =
+            unsafe { (self.inner.api().volume_temperature_range)(self.handle, out.as_mut_ptr()) };
+        self.inner.check(s)?;
+        Ok((out != [0.0, 0.0]).then_some(out))
+    }
+
     /// The XYZ of unit radiance in each channel.
     pub fn channel_xyz(&self) -> Result<Vec<[f64; 3]>, Error> {
         let c = self.info.channels as usize;

@@ -137,6 +137,9 @@ typedef struct FmApi {
     FmStatus (*light_pdf)(const FmLight *light, const double *points, size_t n, double *pdf);
     FmStatus (*light_pdf_direction)(const FmLight *light, const double *origins, const double *directions, size_t n,
                                     double *pdf);
+    /* ABI 0.3: lowest and highest temperature (K) of the volume into out[0], out[1] (0, 0 without a temperature
+       grid). */
+    FmStatus (*volume_temperature_range)(const FmVolume *volume, double *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -25,7 +25,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 2;
+pub const ABI_MINOR: u32 = 3;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -332,6 +332,11 @@ pub struct FmApi {
         n: usize,
         pdf: *mut f64,
     ) -> FmStatus,
+    /// ABI 0.3: the lowest and highest temperature (K) of the volume's grid after its mapping, into `out[0..2]`;
+    /// both 0 when the volume has no temperature grid. (A tone mapper's white point: the blackbody at the
+    /// fire's hottest temperature.)
+    pub volume_temperature_range:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
 }
 
 /// The entry point's type.

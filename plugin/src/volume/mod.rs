@@ -872,6 +872,11 @@ impl FireVolume {
     pub(crate) fn temperature_channel(&self) -> Option<usize> {
         self.temperature
     }
+    /// The lowest and highest temperature of the grid (K, after the mapping), if it has one.
+    pub fn temperature_range(&self) -> Option<[f64; 2]> {
+        let s = self.ds.channels()[self.temperature?].grid.stats();
+        Some([s.min as f64, s.max as f64])
+    }
 
     #[cfg(feature = "fault-injection")]
     fn fault_check(&self) {
