@@ -12,6 +12,8 @@ mod info;
 mod physics;
 mod render;
 mod render_cmd;
+mod tonemap;
+mod tonemap_cmd;
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -38,6 +40,8 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Error of renders against a reference over the pixels that see a surface (luminance MSE).
     Compare(compare_cmd::CompareArgs),
+    /// What an observer sees of an absolute EXR: visual adaptation (von Kries + Naka–Rushton) to a PNG.
+    Tonemap(tonemap_cmd::TonemapArgs),
 }
 
 fn main() -> ExitCode {
@@ -67,6 +71,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
+        Command::Tonemap(args) => tonemap_cmd::run(&args),
     };
     match result {
         Ok(text) => {

@@ -94,8 +94,14 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         pool.install(|| render::render(&sc, a.seed, &|n, _| bar.set_position(n as u64)));
     bar.finish_and_clear();
     let (exr, png) = render::outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
-    render::write_exr(&img, &exr).map_err(|e| (1, e))?;
-    render::write_png(&img, &png).map_err(|e| (1, e))?;
+    // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
+    let fire_t = sc.fire_temperature();
+    let tone = crate::tonemap::Options {
+        white: fire_t.map_or(crate::tonemap::White::D65, crate::tonemap::White::Blackbody),
+        ..Default::default()
+    };
+    render::write_exr(&img, &exr, fire_t).map_err(|e| (1, e))?;
+    render::write_png(&img, &png, &tone).map_err(|e| (1, e))?;
     let mut out = format!(
         "wrote {} and {} ({}×{}, {} spp)\n",
         exr.display(),

@@ -370,6 +370,6 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 17 * 8);
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 18 * 8);
     }
 }

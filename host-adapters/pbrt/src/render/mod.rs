@@ -141,7 +141,7 @@ pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
-fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), String>,
 ) -> Result<(), String> {
@@ -158,56 +158,61 @@ fn write_atomic(
 }
 
 /// Writes the image as a linear f32 RGB EXR (absolute units).
-pub fn write_exr(img: &Image, path: &Path) -> Result<(), String> {
+/// The EXR attribute that records the hottest temperature (K) of the scene's fire media: the tone mapper's
+/// default white (`firemedium tonemap --white fire`).
+pub const FIRE_TEMPERATURE_ATTRIBUTE: &str = "firemediumFireTemperature";
+
+/// Writes the linear, absolute image as an RGB float EXR (with the fire temperature, if any, as an attribute).
+pub fn write_exr(img: &Image, path: &Path, fire_temperature: Option<f64>) -> Result<(), String> {
+    use exr::prelude::*;
     write_atomic(path, |tmp| {
-        exr::prelude::write_rgb_file(tmp, img.w, img.h, |x, y| {
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
             let p = img.rgb[x + img.w * y];
             (p[0], p[1], p[2])
-        })
-        .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+        });
+        let mut image = Image::from_channels((img.w, img.h), channels);
+        if let Some(t) = fire_temperature {
+            image.attributes.other.insert(
+                Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                AttributeValue::F64(t),
+            );
+        }
+        image
+            .write()
+            .to_file(tmp)
+            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
     })
 }
 
-/// The preview's exposure: the 99th percentile of luminance maps to 1 (a plain exposure + sRGB curve; the
-/// visual-adaptation tone mapper replaces it).
-pub fn preview_scale(img: &Image) -> f64 {
-    let mut ys: Vec<f64> = img
-        .xyz
-        .iter()
-        .map(|v| v.y)
-        .filter(|y| *y > 0.0 && y.is_finite())
-        .collect();
-    if ys.is_empty() {
-        return 1.0;
-    }
-    ys.sort_by(|a, b| a.total_cmp(b));
-    1.0 / ys[((ys.len() - 1) as f64 * 0.99) as usize]
+/// The fire temperature an EXR records (see [`write_exr`]), if any.
+pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    // (Written as an image attribute; a reader may file an unknown attribute under the layer's.)
+    let key = exr::prelude::Text::from(FIRE_TEMPERATURE_ATTRIBUTE);
+    Ok(meta.headers.first().and_then(|h| {
+        let v = h
+            .shared_attributes
+            .other
+            .get(&key)
+            .or_else(|| h.own_attributes.other.get(&key));
+        match v {
+            Some(exr::meta::attribute::AttributeValue::F64(t)) if t.is_finite() && *t > 0.0 => {
+                Some(*t)
+            }
+            _ => None,
+        }
+    }))
 }
 
-/// Writes an 8-bit sRGB PNG preview.
-pub fn write_png(img: &Image, path: &Path) -> Result<(), String> {
-    let k = preview_scale(img) as f32;
-    let enc = |c: f32| {
-        let c = (c * k).clamp(0.0, 1.0);
-        let s = if c <= 0.003_130_8 {
-            12.92 * c
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0 + 0.5) as u8
-    };
-    let data: Vec<u8> = img.rgb.iter().flat_map(|p| p.map(enc)).collect();
-    write_atomic(path, |tmp| {
-        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-        let mut e = png::Encoder::new(std::io::BufWriter::new(f), img.w as u32, img.h as u32);
-        e.set_color(png::ColorType::Rgb);
-        e.set_depth(png::BitDepth::Eight);
-        let mut wr = e
-            .write_header()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        wr.write_image_data(&data)
-            .map_err(|e| format!("{}: {e}", path.display()))
-    })
+/// Writes the PNG preview: the visual-adaptation tone mapping with `options` (`crate::tonemap`).
+pub fn write_png(
+    img: &Image,
+    path: &Path,
+    options: &crate::tonemap::Options,
+) -> Result<(), String> {
+    let px = crate::tonemap::map(&img.xyz, options);
+    crate::tonemap::write_png(path, img.w, img.h, &px, false)
 }
 
 /// The output paths: `-o` or the film's filename (relative to the scene), and the PNG beside it.

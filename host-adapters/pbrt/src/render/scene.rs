@@ -192,6 +192,21 @@ pub struct Scene {
     pub media_reports: Vec<MediumReport>,
 }
 
+impl Scene {
+    /// The hottest temperature (K) of the scene's fire media, if any has a temperature grid.
+    pub fn fire_temperature(&self) -> Option<f64> {
+        self.media
+            .iter()
+            .filter_map(|m| match m {
+                Medium::Plugin { vol, .. } => vol.temperature_range().ok().flatten(),
+                _ => None,
+            })
+            .map(|[_, hi]| hi)
+            .filter(|t| *t > 0.0)
+            .reduce(f64::max)
+    }
+}
+
 #[derive(Clone)]
 struct State {
     ctm: DMat4,

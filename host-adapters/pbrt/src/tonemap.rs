@@ -1,0 +1,414 @@
+//! Visual adaptation: what an observer sees of an absolute image (Pegoraro & Parker 2006 §3.8; the thesis's
+//! eq. 4.5), as a post-process from XYZ in cd/m² to display sRGB.
+//!
+//! Naka–Rushton (the default), per pixel:
+//!
+//! ```text
+//!     LMS = diag(1 / LMS_w) · M · XYZ                 (von Kries: the white W, Y_W = 1, becomes D65)
+//!     R_c = LMS_c / (LMS_c + σ_c · 2^(−stops))        (Naka–Rushton cone response, c = L, M, S)
+//!     display = sRGB(M⁻¹ · R)                         (R = 1 is the display white, R = ½ mid-grey)
+//! ```
+//!
+//! M is Hunt–Pointer–Estévez normalised to D65 (M · XYZ_D65 = (1, 1, 1)), so after von Kries a pixel of the
+//! white's chromaticity at luminance Y has L = M = S = Y. σ is the mean of each cone's response over the image
+//! (Pegoraro's choice), or one adaptation luminance in cd/m² for all three cones (`night`, `indoor`, `day` or a
+//! number): a grey at that luminance maps to R = ½. The white W is the blackbody at the fire's hottest
+//! temperature (the thesis; a render records it in its EXR), a given temperature, a given chromaticity, or D65
+//! (no von Kries). A flame much brighter than σ saturates every cone towards 1 — near white, as at night; with σ
+//! near the flame's own luminance the cones stay in their proportional range and the orange shows, as in
+//! daylight (the paper's Figure 3).
+//!
+//! The thesis's other choices, for comparison, take the same white: `exposure` (linear, the 99th percentile of
+//! luminance to 1, or the adaptation luminance to 0.18, times 2^stops, clipped) and Reinhard et al.'s 2002 global
+//! operator (key 0.18 · 2^stops over the log-average luminance or the adaptation luminance; L_d = L (1 + L /
+//! L_white²) / (1 + L) with L_white the largest scaled luminance; colour ratios kept).
+//!
+//! Every operator is monotone in the input luminance (M⁻¹'s Y row is non-negative), maps black to black and stays
+//! finite for any finite input (σ of an all-black image falls back to 1 cd/m²).
+
+use firemedium_plugin::{blackbody, cie};
+use glam::DVec3;
+use std::path::Path;
+
+/// Adaptation luminances (cd/m²) of the named surroundings.
+pub const NIGHT: f64 = 1.0;
+pub const INDOOR: f64 = 100.0;
+pub const DAY: f64 = 1.0e4;
+
+/// The tone-mapping operator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Operator {
+    NakaRushton,
+    Exposure,
+    Reinhard,
+}
+
+/// The white the observer is adapted to (von Kries).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum White {
+    /// D65: no chromatic adaptation.
+    D65,
+    /// A blackbody at this temperature (K).
+    Blackbody(f64),
+    /// This CIE 1931 chromaticity (x, y).
+    Chromaticity(f64, f64),
+}
+
+/// Where the adaptation state comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Adapt {
+    /// From the image (Naka–Rushton: mean LMS per cone; exposure: 99th percentile; Reinhard: log-average).
+    Image,
+    /// A luminance in cd/m².
+    Luminance(f64),
+}
+
+/// All choices of a tone mapping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    pub operator: Operator,
+    pub white: White,
+    pub adapt: Adapt,
+    /// Exposure in stops (a factor 2^stops on the input).
+    pub stops: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            operator: Operator::NakaRushton,
+            white: White::D65,
+            adapt: Adapt::Image,
+            stops: 0.0,
+        }
+    }
+}
+
+/// Parses `night`, `indoor`, `day`, `image` or a luminance in cd/m².
+pub fn parse_adapt(s: &str) -> Result<Adapt, String> {
+    match s {
+        "image" => Ok(Adapt::Image),
+        "night" => Ok(Adapt::Luminance(NIGHT)),
+        "indoor" => Ok(Adapt::Luminance(INDOOR)),
+        "day" => Ok(Adapt::Luminance(DAY)),
+        _ => match s.parse::<f64>() {
+            Ok(v) if v > 0.0 && v.is_finite() => Ok(Adapt::Luminance(v)),
+            _ => Err(format!(
+                "'{s}': expected image, night ({NIGHT} cd/m²), indoor ({INDOOR}), day ({DAY}) or a luminance \
+                 in cd/m² > 0"
+            )),
+        },
+    }
+}
+
+/// What `--white` names: `fire` (the render's hottest temperature) or a [`White`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WhiteArg {
+    Fire,
+    Given(White),
+}
+
+/// Parses `fire`, `d65`, a temperature (`1800` or `1800K`, 300–1e5 K) or a chromaticity `x,y`.
+pub fn parse_white(s: &str) -> Result<WhiteArg, String> {
+    let bad = || {
+        format!(
+            "'{s}': expected fire, d65, a temperature in K (300–100000, e.g. 1800K) or a chromaticity x,y \
+             (e.g. 0.3127,0.3290)"
+        )
+    };
+    let lower = s.to_ascii_lowercase();
+    match lower.as_str() {
+        "fire" => return Ok(WhiteArg::Fire),
+        "d65" => return Ok(WhiteArg::Given(White::D65)),
+        _ => {}
+    }
+    if let Some((x, y)) = lower.split_once(',') {
+        let (x, y) = (
+            x.trim().parse::<f64>().map_err(|_| bad())?,
+            y.trim().parse::<f64>().map_err(|_| bad())?,
+        );
+        if !(x > 0.0 && y > 0.0 && x + y < 1.0) {
+            return Err(bad());
+        }
+        return Ok(WhiteArg::Given(White::Chromaticity(x, y)));
+    }
+    let t = lower
+        .strip_suffix('k')
+        .unwrap_or(&lower)
+        .parse::<f64>()
+        .map_err(|_| bad())?;
+    if !(300.0..=1e5).contains(&t) {
+        return Err(bad());
+    }
+    Ok(WhiteArg::Given(White::Blackbody(t)))
+}
+
+/// The white's XYZ with Y = 1.
+pub fn white_xyz(w: White) -> DVec3 {
+    let xyz = match w {
+        White::D65 => return cie_d65(),
+        White::Blackbody(t) => cie::spectrum_to_xyz(|nm| blackbody::spectral_radiance(t, nm)),
+        White::Chromaticity(x, y) => DVec3::new(x / y, 1.0, (1.0 - x - y) / y),
+    };
+    if xyz.y > 0.0 && xyz.is_finite() {
+        xyz / xyz.y
+    } else {
+        cie_d65()
+    }
+}
+
+/// D65 with Y = 1 (the white of sRGB and of the HPE normalisation).
+fn cie_d65() -> DVec3 {
+    DVec3::new(0.95047, 1.0, 1.08883)
+}
+
+/// XYZ of a linear-sRGB (D65) pixel.
+pub fn srgb_to_xyz(rgb: [f32; 3]) -> DVec3 {
+    cie::xyz_to_srgb_matrix().inverse() * DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64)
+}
+
+/// Tone-maps XYZ pixels (cd/m²) to display-linear sRGB in [0, 1].
+pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
+    // HPE rescaled so that D65 is exactly (1, 1, 1) (its 4-digit entries give D65 → (1, 0.99997, 0.99976)).
+    let hpe = cie::xyz_to_lms_matrix();
+    let m = glam::DMat3::from_diagonal(DVec3::ONE / (hpe * cie_d65())) * hpe;
+    let m_inv = m.inverse();
+    let to_srgb = cie::xyz_to_srgb_matrix();
+    let gain = DVec3::ONE / (m * white_xyz(o.white));
+    let k = 2f64.powf(o.stops);
+    // Cone responses after von Kries, clipped at 0 (out-of-gamut negative lobes of M).
+    let lms: Vec<DVec3> = xyz
+        .iter()
+        .map(|&p| {
+            let p = if p.is_finite() { p } else { DVec3::ZERO };
+            (gain * (m * p)).max(DVec3::ZERO)
+        })
+        .collect();
+    let clamp = |c: DVec3| -> [f64; 3] {
+        let c = c.clamp(DVec3::ZERO, DVec3::ONE);
+        [c.x, c.y, c.z]
+    };
+    match o.operator {
+        Operator::NakaRushton => {
+            let sigma = match o.adapt {
+                Adapt::Luminance(l) => DVec3::splat(l),
+                Adapt::Image => {
+                    let n = lms.len().max(1) as f64;
+                    let mean = lms.iter().fold(DVec3::ZERO, |a, &b| a + b) / n;
+                    DVec3::select(mean.cmpgt(DVec3::ZERO), mean, DVec3::ONE)
+                }
+            } / k;
+            lms.iter()
+                .map(|&c| {
+                    let r = c / (c + sigma);
+                    clamp(to_srgb * (m_inv * r))
+                })
+                .collect()
+        }
+        Operator::Exposure | Operator::Reinhard => {
+            // Work on the adapted XYZ (von Kries applied), keeping colour ratios.
+            let adapted: Vec<DVec3> = lms.iter().map(|&c| m_inv * c).collect();
+            let ys: Vec<f64> = adapted.iter().map(|v| v.y.max(0.0)).collect();
+            let scale_of: Box<dyn Fn(f64) -> f64> = if o.operator == Operator::Exposure {
+                let s = match o.adapt {
+                    Adapt::Luminance(l) => 0.18 / l,
+                    Adapt::Image => 1.0 / percentile(&ys, 0.99).unwrap_or(1.0),
+                } * k;
+                Box::new(move |_| s)
+            } else {
+                let key = match o.adapt {
+                    Adapt::Luminance(l) => l,
+                    Adapt::Image => {
+                        let n = ys.len().max(1) as f64;
+                        (ys.iter().map(|y| (1e-4 + y).ln()).sum::<f64>() / n).exp()
+                    }
+                };
+                let a = 0.18 * k / key;
+                let l_white = ys.iter().fold(0.0f64, |m, &y| m.max(a * y)).max(1e-12);
+                Box::new(move |y: f64| {
+                    if !(y > 0.0) {
+                        return 0.0;
+                    }
+                    let l = a * y;
+                    let ld = l * (1.0 + l / (l_white * l_white)) / (1.0 + l);
+                    ld / y
+                })
+            };
+            adapted
+                .iter()
+                .zip(&ys)
+                .map(|(&c, &y)| clamp(to_srgb * (c * scale_of(y))))
+                .collect()
+        }
+    }
+}
+
+/// The `q` quantile of the positive values, if any.
+fn percentile(v: &[f64], q: f64) -> Option<f64> {
+    let mut pos: Vec<f64> = v.iter().copied().filter(|y| *y > 0.0).collect();
+    if pos.is_empty() {
+        return None;
+    }
+    pos.sort_by(f64::total_cmp);
+    Some(pos[((pos.len() - 1) as f64 * q) as usize])
+}
+
+/// The sRGB transfer curve of a display-linear value in [0, 1].
+pub fn srgb_encode(c: f64) -> f64 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Writes display-linear pixels as an sRGB-encoded PNG, 8 or 16 bits per channel, atomically.
+pub fn write_png(
+    path: &Path,
+    w: usize,
+    h: usize,
+    px: &[[f64; 3]],
+    sixteen: bool,
+) -> Result<(), String> {
+    let data: Vec<u8> = if sixteen {
+        px.iter()
+            .flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
+            .flat_map(|v| v.to_be_bytes())
+            .collect()
+    } else {
+        px.iter()
+            .flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
+            .collect()
+    };
+    crate::render::write_atomic(path, |tmp| {
+        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+        let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(if sixteen {
+            png::BitDepth::Sixteen
+        } else {
+            png::BitDepth::Eight
+        });
+        let mut wr = e
+            .write_header()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        wr.write_image_data(&data)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nr(white: White, adapt: Adapt) -> Options {
+        Options {
+            operator: Operator::NakaRushton,
+            white,
+            adapt,
+            stops: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_grey_at_the_adaptation_luminance_is_mid_grey() {
+        // D65 grey of 250 cd/m², adapted to 250 cd/m² (and, as the only value, by the image's mean): R = ½ per
+        // cone, display-linear ½ in every channel.
+        let px = vec![cie_d65() * 250.0; 16];
+        for adapt in [Adapt::Luminance(250.0), Adapt::Image] {
+            let out = map(&px, &nr(White::D65, adapt));
+            for c in out[0] {
+                assert!((c - 0.5).abs() < 1e-3, "{adapt:?}: {:?}", out[0]);
+            }
+        }
+        // One stop more exposure: R = 2/3.
+        let o = Options {
+            stops: 1.0,
+            ..nr(White::D65, Adapt::Luminance(250.0))
+        };
+        let out = map(&px, &o);
+        assert!((out[0][1] - 2.0 / 3.0).abs() < 1e-3, "{:?}", out[0]);
+    }
+
+    #[test]
+    fn the_white_point_maps_to_neutral() {
+        // A 1800 K blackbody pixel under von Kries to 1800 K is grey: r = g = b within 1/255 (8-bit PNG steps),
+        // at several luminances; without adaptation (D65) the same pixel is orange.
+        let white = White::Blackbody(1800.0);
+        let xyz = white_xyz(white);
+        for y in [1e-2, 1.0, 1e3, 1e6] {
+            let out = map(&[xyz * y], &nr(white, Adapt::Luminance(100.0)))[0];
+            let enc = out.map(srgb_encode);
+            assert!(
+                (enc[0] - enc[1]).abs() < 1.0 / 255.0 && (enc[1] - enc[2]).abs() < 1.0 / 255.0,
+                "Y {y}: {enc:?}"
+            );
+        }
+        let raw = map(&[xyz * 100.0], &nr(White::D65, Adapt::Luminance(100.0)))[0];
+        assert!(raw[0] > 2.0 * raw[2], "{raw:?}");
+        // A chromaticity white works the same way.
+        let (x, y) = cie::chromaticity(xyz);
+        let out = map(
+            &[xyz * 100.0],
+            &nr(White::Chromaticity(x, y), Adapt::Luminance(100.0)),
+        )[0];
+        assert!((out[0] - out[2]).abs() < 1e-4, "{out:?}");
+    }
+
+    #[test]
+    fn monotone_finite_and_black_stays_black() {
+        let colour = white_xyz(White::Blackbody(1500.0));
+        for op in [
+            Operator::NakaRushton,
+            Operator::Exposure,
+            Operator::Reinhard,
+        ] {
+            for adapt in [Adapt::Image, Adapt::Luminance(DAY)] {
+                let o = Options {
+                    operator: op,
+                    white: White::Blackbody(2500.0),
+                    adapt,
+                    stops: 0.0,
+                };
+                // Luminance ladder 0, 1e-6 … 1e9 cd/m² of an orange pixel, in one image.
+                let mut px = vec![DVec3::ZERO];
+                px.extend((-6..=9).map(|e| colour * 10f64.powi(e)));
+                let out = map(&px, &o);
+                assert!(out.iter().flatten().all(|c| c.is_finite()), "{op:?}");
+                assert_eq!(out[0], [0.0; 3], "{op:?}: black");
+                let y = |c: [f64; 3]| 0.2126729 * c[0] + 0.7151522 * c[1] + 0.0721750 * c[2];
+                for w in out.windows(2) {
+                    assert!(y(w[1]) >= y(w[0]) - 1e-12, "{op:?} {adapt:?}: {out:?}");
+                }
+                // An all-black image is black, not NaN.
+                let out = map(&[DVec3::ZERO; 4], &o);
+                assert!(out.iter().flatten().all(|c| *c == 0.0), "{op:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn arguments_parse_and_bad_ones_explain() {
+        assert_eq!(parse_adapt("night"), Ok(Adapt::Luminance(NIGHT)));
+        assert_eq!(parse_adapt("250"), Ok(Adapt::Luminance(250.0)));
+        assert!(parse_adapt("-3").unwrap_err().contains("cd/m²"));
+        assert_eq!(parse_white("fire"), Ok(WhiteArg::Fire));
+        assert_eq!(
+            parse_white("1800K"),
+            Ok(WhiteArg::Given(White::Blackbody(1800.0)))
+        );
+        assert_eq!(
+            parse_white("0.3127,0.329"),
+            Ok(WhiteArg::Given(White::Chromaticity(0.3127, 0.329)))
+        );
+        assert!(parse_white("5K").unwrap_err().contains("300–100000"));
+        assert!(parse_white("0.9,0.5").is_err());
+        // D65 through the blackbody route: the white of 6504 K is within 0.003 of D65's chromaticity.
+        let (x, y) = cie::chromaticity(white_xyz(White::Blackbody(6504.0)));
+        assert!(
+            (x - 0.3127).abs() < 0.01 && (y - 0.329).abs() < 0.01,
+            "{x} {y}"
+        );
+    }
+}

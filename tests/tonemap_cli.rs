@@ -1,0 +1,170 @@
+//! `firemedium tonemap` end to end: the default scene rendered once (its EXR records the fire's hottest
+//! temperature), then tone-mapped for night and for daylight adaptation; the flame is closer to white at night.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-tonemap-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// 8-bit RGB PNG pixels in [0, 1] (sRGB-encoded).
+fn read_png(path: &Path) -> (usize, usize, Vec<[f64; 3]>) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0u8; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let px = buf[..info.buffer_size()]
+        .chunks(3)
+        .map(|c| {
+            [
+                c[0] as f64 / 255.0,
+                c[1] as f64 / 255.0,
+                c[2] as f64 / 255.0,
+            ]
+        })
+        .collect();
+    (info.width as usize, info.height as usize, px)
+}
+
+/// Linear-sRGB EXR pixels (cd/m² scale).
+fn read_exr(path: &Path) -> Vec<[f32; 3]> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.x() + *w * pos.y()] = [r, g, b],
+    )
+    .unwrap();
+    img.layer_data.channel_data.pixels.1
+}
+
+/// HSV saturation (max − min) / max of a display pixel.
+fn saturation(p: [f64; 3]) -> f64 {
+    let (hi, lo) = (p[0].max(p[1]).max(p[2]), p[0].min(p[1]).min(p[2]));
+    if hi > 0.0 {
+        (hi - lo) / hi
+    } else {
+        0.0
+    }
+}
+
+#[test]
+fn night_makes_the_flame_whiter_than_day() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/fire-room/scene.pbrt");
+    let dir = tmp("adapt");
+    let exr = dir.join("room.exr");
+    let o = bin()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&exr)
+        .args(["--spp", "2", "--resolution", "80x60", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let hdr = read_exr(&exr);
+    let y =
+        |p: [f32; 3]| 0.2126729 * p[0] as f64 + 0.7151522 * p[1] as f64 + 0.0721750 * p[2] as f64;
+    // The flame's pixels: above the floor's horizon (the upper half of the view; the room is black there) and
+    // brighter than 1e3 cd/m² (its core reaches ~2e7; the fire-lit floor below is 1e4–4e4 cd/m²).
+    let flame: Vec<usize> = (0..hdr.len() / 2).filter(|&i| y(hdr[i]) > 1e3).collect();
+    assert!(flame.len() > 20, "{} flame pixels", flame.len());
+    let mut sat = Vec::new();
+    for adapt in ["night", "day"] {
+        let png = dir.join(format!("{adapt}.png"));
+        let o = run(&[
+            "tonemap",
+            exr.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--adapt",
+            adapt,
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = String::from_utf8_lossy(&o.stdout);
+        // The white is the render's fire: the Mantaflow frame's 2.9746 × 1000 K.
+        assert!(
+            text.contains("white blackbody 2975 K (the render's fire)"),
+            "{text}"
+        );
+        let (w, h, px) = read_png(&png);
+        assert_eq!((w, h), (80, 60));
+        sat.push(flame.iter().map(|&i| saturation(px[i])).sum::<f64>() / flame.len() as f64);
+    }
+    eprintln!(
+        "flame saturation: night {:.3}, day {:.3} ({} pixels)",
+        sat[0],
+        sat[1],
+        flame.len()
+    );
+    assert!(sat[0] + 0.05 < sat[1], "night {} vs day {}", sat[0], sat[1]);
+    // 16-bit output, the other operators, an explicit white.
+    for extra in [
+        &["--bits", "16"][..],
+        &["--operator", "exposure", "--exposure", "-1"],
+        &["--operator", "reinhard", "--white", "d65"],
+        &["--white", "0.3127,0.3290", "--adapt", "250"],
+    ] {
+        let png = dir.join("extra.png");
+        let o = bin()
+            .args([
+                "tonemap",
+                exr.to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let dec = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(dir.join("extra.png")).unwrap(),
+    ));
+    assert_eq!(
+        dec.read_info().unwrap().info().bit_depth,
+        png::BitDepth::Eight
+    );
+}
+
+#[test]
+fn bad_arguments_exit_2_and_bad_files_exit_1() {
+    let dir = tmp("bad");
+    let out = dir.join("o.png");
+    let out = out.to_str().unwrap();
+    for (args, want) in [
+        (vec!["x.exr", "-o", out, "--adapt", "-3"], "cd/m²"),
+        (vec!["x.exr", "-o", out, "--adapt", "dusk"], "night"),
+        (vec!["x.exr", "-o", out, "--white", "5K"], "300–100000"),
+        (vec!["x.exr", "-o", out, "--bits", "12"], "bits"),
+        (vec!["x.exr", "-o", out, "--operator", "aces"], "aces"),
+    ] {
+        let o = run(&[&["tonemap"][..], &args].concat());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.lines().count() == 1 && e.contains(want), "{args:?}: {e}");
+    }
+    // A file that is not an EXR: exit 1, naming it.
+    let fake = dir.join("fake.exr");
+    std::fs::write(&fake, b"not an exr").unwrap();
+    let o = run(&["tonemap", fake.to_str().unwrap(), "-o", out]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("fake.exr") && e.contains("EXR"), "{e}");
+}
