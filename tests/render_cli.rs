@@ -195,8 +195,8 @@ fn a_pbrt_uniformgrid_pixel_matches_the_plugins_integration() {
 }
 
 #[test]
-fn the_default_scene_renders_finite_and_lit() {
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/fire-room/scene.pbrt");
+fn the_mantaflow_scene_renders_finite_and_lit() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mantaflow/scene.pbrt");
     let dir = tmp("default");
     let out = dir.join("room.exr");
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
@@ -229,7 +229,7 @@ fn the_default_scene_renders_finite_and_lit() {
     // The fire's core is bright; the corners of the dark room are dim; the PNG preview exists.
     let fire = luminance(px[160 + w * 150]);
     let corner = luminance(px[5 + w * 5]);
-    eprintln!("default scene: fire core Y {fire:.1} cd/m², corner {corner:.3e}");
+    eprintln!("mantaflow scene: fire core Y {fire:.1} cd/m², corner {corner:.3e}");
     assert!(
         fire > 100.0 && fire > 1000.0 * corner.max(1e-9),
         "fire {fire} cd/m², corner {corner}"
@@ -427,15 +427,15 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
 
 #[test]
 fn refraction_moves_the_wall_behind_the_fire_and_nothing_else() {
-    // The fire-wall scene with the fire's emission off (only the bending differs), refraction on and off.
+    // The refraction scene with the fire's emission off (only the bending differs), refraction on and off.
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-    let text = std::fs::read_to_string(root.join("fire-wall/scene.pbrt")).unwrap();
-    let vdb = root.join("fire-room/fire_f060.vdb");
+    let text = std::fs::read_to_string(root.join("refraction/scene.pbrt")).unwrap();
+    let vdb = root.join("mantaflow/fire_f060.vdb");
     let dir = tmp("refraction");
     let mut images = Vec::new();
     for on in [true, false] {
         let scene = text
-            .replace("../fire-room/fire_f060.vdb", vdb.to_str().unwrap())
+            .replace("../mantaflow/fire_f060.vdb", vdb.to_str().unwrap())
             .replace(
                 "\"bool refraction\" true",
                 &format!("\"bool refraction\" {on} \"float intensity\" 0"),
@@ -465,4 +465,54 @@ fn refraction_moves_the_wall_behind_the_fire_and_nothing_else() {
     eprintln!("refraction on vs off: mean |ΔY|/Y {plume:.4} behind the plume, {margins:.4} in the margins");
     assert!(plume > 0.02, "{plume}");
     assert!(margins < 0.01 * plume, "{margins} vs {plume}");
+}
+
+#[test]
+fn every_scene_renders_at_a_tiny_resolution() {
+    // Each scene of the gallery parses, loads its datasets and renders finite, with its fire visible.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let dir = tmp("gallery");
+    let mut names: Vec<String> = std::fs::read_dir(&root)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().join("scene.pbrt").is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "adaptation",
+            "campfire",
+            "fuels",
+            "mantaflow",
+            "refraction",
+            "spectroscopy"
+        ]
+    );
+    for name in &names {
+        let out = dir.join(format!("{name}.exr"));
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(root.join(name).join("scene.pbrt"))
+            .arg("-o")
+            .arg(&out)
+            .args(["--resolution", "40x30", "--spp", "1", "--quiet"])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let (w, h, px) = read_exr(&out);
+        assert_eq!((w, h), (40, 30));
+        assert!(
+            px.iter().all(|p| p.iter().all(|c| c.is_finite())),
+            "{name}: NaN"
+        );
+        let brightest = px.iter().map(|p| luminance(*p)).fold(0.0, f64::max);
+        eprintln!("{name}: brightest pixel {brightest:.3e} cd/m²");
+        assert!(brightest > 1.0, "{name}: brightest {brightest}");
+    }
 }

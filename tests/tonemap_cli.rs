@@ -62,7 +62,7 @@ fn saturation(p: [f64; 3]) -> f64 {
 
 #[test]
 fn night_makes_the_flame_whiter_than_day() {
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/fire-room/scene.pbrt");
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mantaflow/scene.pbrt");
     let dir = tmp("adapt");
     let exr = dir.join("room.exr");
     let o = bin()

@@ -8,6 +8,8 @@
 //! panic).
 
 mod compare_cmd;
+mod gen;
+mod gen_cmd;
 mod info;
 mod physics;
 mod render;
@@ -42,6 +44,8 @@ enum Command {
     Compare(compare_cmd::CompareArgs),
     /// What an observer sees of an absolute EXR: visual adaptation (von Kries + Naka–Rushton) to a PNG.
     Tonemap(tonemap_cmd::TonemapArgs),
+    /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
+    Gen(gen_cmd::GenArgs),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +76,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Tonemap(args) => tonemap_cmd::run(&args),
+        Command::Gen(args) => gen_cmd::run(&args),
     };
     match result {
         Ok(text) => {
