@@ -167,3 +167,22 @@ fn bad_arguments_exit_2_with_one_line() {
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(e.contains("no gas"), "{e}");
 }
+
+#[test]
+fn the_committed_campfire_is_what_the_generator_makes() {
+    // scenes/campfire/campfire.vdb was written by the command in its README; the generator is deterministic.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire");
+    let out = tmp("campfire").join("campfire.vdb");
+    ok(&run(&[
+        "gen",
+        "campfire",
+        "--resolution",
+        "96",
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(root.join("campfire.vdb")).unwrap(),
+        "regenerate it: firemedium gen campfire --resolution 96 -o scenes/campfire/campfire.vdb"
+    );
+}
