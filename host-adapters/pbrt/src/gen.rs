@@ -75,12 +75,14 @@ pub struct Model {
     pub t_a: f64,
     /// Temperature rise of the reaction: a new flame blob starts at T_fuel + release (K).
     pub release: f64,
-    /// Radiative cooling constant K = 4π α σ / c, 1/(K³ s).
-    pub k_rad: f64,
+    /// Heat capacity of the flame gas per kg of fuel (the products and the air they carry), J/(kg K): with
+    /// `alpha_flame` it sets the radiative cooling K = 4π α σ / c ([`Model::k_rad`]).
+    pub heat_capacity: f64,
     /// Cooling by mixing with the entrained air: T − T_amb decays by e^{−dt/τ} (s; not in §6, whose flames
     /// cool by radiation only and so stay hot as smoke far too long).
     pub mixing_time: f64,
-    /// Flame absorption cross-section per kg (m²/kg), for the radiant power 4π α m σ T⁴ that heats the fuel.
+    /// Flame absorption cross-section per kg (m²/kg): a blob radiates 4π α m σ T⁴ (which cools it and heats
+    /// the fuel).
     pub alpha_flame: f64,
     /// Fraction of the flames' radiant power density a fuel cell absorbs (view factor × absorptance).
     pub feedback: f64,
@@ -106,6 +108,14 @@ pub struct Model {
     pub match_seconds: f64,
     /// Time step, s.
     pub dt: f64,
+}
+
+impl Model {
+    /// Radiative cooling constant K = 4π α σ / c, 1/(K³ s): dT/dt = −K T⁴ is the blob's radiated power
+    /// 4π α m σ T⁴ over its heat capacity c m.
+    pub fn k_rad(&self) -> f64 {
+        4.0 * std::f64::consts::PI * self.alpha_flame * SIGMA / self.heat_capacity
+    }
 }
 
 /// A patch of fuel surface.
@@ -225,7 +235,7 @@ impl Kind {
             nu_a: 3.0e3,
             t_a: 1.0e4,
             release: 750.0,
-            k_rad: 1.0e-9,
+            heat_capacity: 2.1e4,
             mixing_time: 0.35,
             alpha_flame: 30.0,
             feedback: 0.05,
@@ -278,9 +288,8 @@ impl Kind {
                     height: 0.1,
                     fuel_load: 50.0,
                     release: 1200.0,
-                    k_rad: 2.0e-9,
+                    heat_capacity: 1.07e4,
                     mixing_time: 0.03,
-                    alpha_flame: 1.0,
                     feedback: 0.0,
                     t_s: 500.0,
                     nu_b: 1.0,
@@ -307,7 +316,7 @@ impl Kind {
                     half_width: 1.0,
                     height: 3.0,
                     release: 600.0,
-                    k_rad: 6.0e-10,
+                    heat_capacity: 3.56e4,
                     mixing_time: 0.6,
                     feedback: 0.05,
                     sigma0: 0.04,
@@ -498,7 +507,7 @@ impl Sim {
         for (b, (x, _)) in self.blobs.iter().zip(moved) {
             let mut b = *b;
             b.x = x;
-            b.t = radiative_cooling(b.t, m.k_rad, dt);
+            b.t = radiative_cooling(b.t, m.k_rad(), dt);
             b.t = T_AMB + (b.t - T_AMB) * (-dt / m.mixing_time).exp();
             let to_smoke = b.m_flame * -(-m.nu_b * (-b.t / m.t_s).exp() * dt).exp_m1();
             b.m_flame -= to_smoke;
@@ -766,6 +775,35 @@ mod tests {
         let small = implicit_fuel_temperature(300.0, 3e4, 4e3, 1e-3);
         assert!(small > 300.0 && small < 301.0, "{small}");
         assert!(implicit_fuel_temperature(2000.0, 0.0, 4e3, 1e9) >= T_AMB - 1e-6);
+    }
+
+    #[test]
+    fn the_heat_a_flame_loses_is_the_energy_it_radiates() {
+        // Energy bookkeeping of radiative cooling: over one step, c·m·(T₀ − T₁) equals ∫ 4π α m σ T(t)⁴ dt, the
+        // power that heats the fuel, integrated by Simpson's rule over the exact T(t) — for every kind's constants
+        // and a stiff (1 s) step.
+        for kind in Kind::ALL {
+            let (m, _) = kind.setup();
+            let mass = 1e-4;
+            for (t0, dt) in [(1700.0f64, m.dt), (2400.0, 1.0)] {
+                let t_at = |t: f64| (t0.powi(-3) + 3.0 * m.k_rad() * t).powf(-1.0 / 3.0);
+                let lost = m.heat_capacity * mass * (t0 - radiative_cooling(t0, m.k_rad(), dt));
+                let n = 20_000;
+                let h = dt / n as f64;
+                let power = |t: f64| {
+                    4.0 * std::f64::consts::PI * m.alpha_flame * mass * SIGMA * t_at(t).powi(4)
+                };
+                let mut radiated = power(0.0) + power(dt);
+                for i in 1..n {
+                    radiated += power(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+                }
+                radiated *= h / 3.0;
+                assert!(
+                    (lost / radiated - 1.0).abs() < 1e-6,
+                    "{kind:?} T0 {t0} dt {dt}: lost {lost} J vs radiated {radiated} J"
+                );
+            }
+        }
     }
 
     #[test]
