@@ -7,6 +7,7 @@
 //! Exit status: 0 on success, 1 when a file is refused, 2 on bad arguments (one line on stderr, never a
 //! panic).
 
+mod bench;
 mod compare_cmd;
 mod gen;
 mod gen_cmd;
@@ -46,6 +47,8 @@ enum Command {
     Tonemap(tonemap_cmd::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
     Gen(gen_cmd::GenArgs),
+    /// Benchmarks: stability (stiff and extreme cases).
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -77,6 +80,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Tonemap(args) => tonemap_cmd::run(&args),
         Command::Gen(args) => gen_cmd::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(text) => {
