@@ -310,6 +310,8 @@ pub struct FireVolume {
     t_emit: f64,
     majorant: MajorantGrid,
     brick_sigma: Vec<f64>,
+    /// Bricks holding no density and no species anywhere in their interpolation footprint: no σ, no j.
+    brick_empty: Vec<bool>,
     /// Where rays are clipped: the dataset bounds, or pbrt-v4 nanovdb's world box [T(i_min), T(i_max + 1)]
     /// (shifted half a voxel up), with lookups fading over the half voxel beyond the last samples.
     clip_box: [DVec3; 2],
@@ -692,6 +694,12 @@ impl FireVolume {
                     * (1.0 + 1e-6)
             })
             .collect();
+        let brick_empty: Vec<bool> = (0..nb)
+            .map(|b| {
+                majorant.max(b, density) <= 0.0
+                    && species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
+            })
+            .collect();
         tables.push(TableReport {
             name: format!("majorant bricks ({brick}³ voxels)"),
             bytes: majorant.bytes() + brick_sigma.len() * 8,
@@ -790,6 +798,7 @@ impl FireVolume {
             t_emit,
             majorant,
             brick_sigma,
+            brick_empty,
             clip_box,
             margin,
             step,
@@ -986,9 +995,13 @@ impl FireVolume {
             first,
             steps,
             |mid, h| {
-                // (The padding around the grid bends rays but holds no medium.)
+                // (The padding around the grid bends rays but holds no medium; nor do empty bricks.)
                 let [m0, m1] = self.clip_box;
-                if !opaque && mid.cmpge(m0).all() && mid.cmple(m1).all() {
+                let empty = self
+                    .majorant
+                    .brick_at(mid)
+                    .is_some_and(|b| self.brick_empty[b]);
+                if !opaque && !empty && mid.cmpge(m0).all() && mid.cmple(m1).all() {
                     Medium::eval(self, mid, &mut sc.sa, &mut sc.ss, &mut sc.j);
                     opaque = integrate::march_step(&sc, h, l, t) < self.cutoff;
                 }
@@ -1084,6 +1097,14 @@ impl Medium for FireVolume {
         for seg in self.majorant.segments(o, d, t0, t1) {
             if !f(seg.t0, seg.t1, self.brick_sigma[seg.brick]) {
                 return;
+            }
+        }
+    }
+    fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
+        // (Lescale multiplies the soot emission, which is zero where the density is: no need to look at it.)
+        for seg in self.majorant.segments(o, d, t0, t1) {
+            if self.brick_empty[seg.brick] {
+                f(seg.t0, seg.t1);
             }
         }
     }

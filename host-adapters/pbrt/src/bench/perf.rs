@@ -1,0 +1,111 @@
+//! `firemedium bench perf`: Pegoraro & Parker's workload — a 512×512 image, one ray per pixel, through a 256³
+//! fire, a march step of half a voxel, soot + blackbody, emission–absorption only (their 40–80 s on a dual 3 GHz
+//! Xeon in 2006) — timed from loading the grid to the last ray, with the error against a converged reference.
+
+use crate::gen::{Kind, Sim};
+use firemedium_plugin::params::Param;
+use firemedium_plugin::volume::{FireVolume, Ray};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One timed configuration.
+#[derive(Debug, Clone)]
+pub struct Run {
+    pub load_s: f64,
+    pub render_s: f64,
+    pub rays: usize,
+    /// March steps along the clipped rays (early termination not subtracted): an upper bound of medium samples.
+    pub samples: f64,
+    /// Luminance image (Y, cd/m²).
+    pub image: Vec<f64>,
+}
+
+/// The dataset: the campfire at `res` voxels along its longest side, generated once into `dir`.
+pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
+    let path = dir.join(format!("firemedium-bench-campfire-{res}.vdb"));
+    if !path.is_file() {
+        let mut sim = Sim::new(Kind::Campfire, 1);
+        sim.run_to(2.0);
+        crate::gen_cmd::write_frame(&sim, res, &[], &path)?;
+    }
+    Ok(path)
+}
+
+/// Peak resident memory of this process (VmHWM), bytes, where /proc tells.
+pub fn peak_rss() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Renders the workload with `params` added to the dataset's; `size` pixels square.
+pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
+    let t0 = Instant::now();
+    let mut list = vec![Param::string("filename", &file.to_string_lossy())];
+    list.extend_from_slice(params);
+    let v = FireVolume::new(&list).map_err(|e| e.to_string())?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let [b0, b1] = v.bounds();
+    let centre = 0.5 * (b0 + b1);
+    let extent = (b1 - b0).max_element();
+    // A pinhole 2.2 extents in front (−y), looking at the centre, 30° field of view: the fire fills the frame.
+    let eye = centre - DVec3::Y * (2.2 * extent);
+    let half = (15f64).to_radians().tan();
+    let xyz = v.channel_xyz();
+    let step = v.step_length();
+    let t1 = Instant::now();
+    let rows: Vec<(Vec<f64>, f64)> = (0..size)
+        .into_par_iter()
+        .map(|j| {
+            let c = v.channels();
+            let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+            let mut row = Vec::with_capacity(size);
+            let mut samples = 0.0;
+            for i in 0..size {
+                let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
+                let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+                let d = DVec3::new(u, 1.0, w).normalize();
+                let ray = Ray {
+                    o: eye,
+                    d,
+                    t0: 0.0,
+                    t1: 1e30,
+                    seed: (j * size + i) as u64,
+                };
+                // (integrate_exit: the curved march when refraction is on, the straight one otherwise.)
+                v.integrate_exit(&ray, &mut l, &mut t);
+                row.push((0..c).map(|k| l[k] * xyz[k].y).sum::<f64>());
+                if let Some((a, b)) =
+                    firemedium_plugin::majorant::clip_box(eye, d, 0.0, 1e30, b0, b1)
+                {
+                    samples += ((b - a) / step).ceil();
+                }
+            }
+            (row, samples)
+        })
+        .collect();
+    let render_s = t1.elapsed().as_secs_f64();
+    let samples = rows.iter().map(|r| r.1).sum();
+    Ok(Run {
+        load_s,
+        render_s,
+        rays: size * size,
+        samples,
+        image: rows.into_iter().flat_map(|r| r.0).collect(),
+    })
+}
+
+/// Relative RMSE of `a` against the reference `r`: √(mean (a − r)²) / mean r.
+pub fn rel_rmse(a: &[f64], r: &[f64]) -> f64 {
+    let n = r.len().max(1) as f64;
+    let mse = a.iter().zip(r).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / n;
+    let mean = r.iter().sum::<f64>() / n;
+    if mean > 0.0 {
+        mse.sqrt() / mean
+    } else {
+        0.0
+    }
+}
