@@ -860,13 +860,8 @@ impl FireVolume {
     }
     /// Bytes held by the dataset and tables.
     pub fn bytes(&self) -> usize {
-        self.ds.bytes()
-            + self.tables.iter().map(|t| t.bytes).sum::<usize>()
-            + self
-                .species
-                .iter()
-                .map(|s| s.sigma.bytes() + s.j.bytes())
-                .sum::<usize>()
+        // (The species line tables are among `tables`, reported as "species X (lines)".)
+        self.ds.bytes() + self.tables.iter().map(|t| t.bytes).sum::<usize>()
     }
     /// Seconds spent building.
     pub fn build_seconds(&self) -> f64 {
@@ -1026,6 +1021,16 @@ impl FireVolume {
     }
 }
 
+thread_local! {
+    static EVALUATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many times any fire volume evaluated its coefficients on this thread (a counter for benchmarks: read it
+/// before and after the work, on the same thread).
+pub fn evaluations_on_this_thread() -> u64 {
+    EVALUATIONS.with(|n| n.get())
+}
+
 /// The refraction state of a volume: the baked index field and how rays are stepped through it.
 #[derive(Debug, Clone)]
 struct Refraction {
@@ -1046,6 +1051,7 @@ impl Medium for FireVolume {
         self.cutoff
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
+        EVALUATIONS.with(|n| n.set(n.get() + 1));
         let Some(st) = self.ds.stencil_with_margin(p, self.margin) else {
             sa.iter_mut()
                 .chain(ss.iter_mut())

@@ -1,5 +1,6 @@
 //! `firemedium bench …`: the measurements behind docs/RESULTS.md, as commands anyone can rerun.
 
+pub mod error;
 pub mod perf;
 pub mod stability;
 
@@ -18,6 +19,36 @@ enum What {
     /// Pegoraro & Parker's workload: 512², 1 spp, a 256³ fire, half-voxel steps; time, rays/s, samples/s,
     /// memory, error against a converged reference; with refraction.
     Perf(PerfArgs),
+    /// Error against render time of every estimator of the fire seen directly: march (spectral, rgb) at a
+    /// ladder of steps, delta and ratio tracking at a ladder of samples; CSV + log–log plot (SVG, PNG).
+    ErrorVsTime(ErrorArgs),
+    /// What the plugin builds for the same fire with and without species, refraction and the fire light:
+    /// bytes and set-up time per component (unused parts cost nothing).
+    Components(ComponentsArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ComponentsArgs {
+    /// A dataset with a sodium grid; default: scenes/spectroscopy/torch.vdb.
+    #[arg(long, default_value = "scenes/spectroscopy/torch.vdb")]
+    dataset: std::path::PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct ErrorArgs {
+    /// The fire (a dataset file); default: the campfire of scenes/campfire (generated into the temp directory
+    /// when run elsewhere than the repository's root).
+    #[arg(long)]
+    dataset: Option<std::path::PathBuf>,
+    /// Image width and height, pixels.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(4..=4096))]
+    image: u32,
+    /// The largest samples per pixel of the tracking ladder (1, 2, 4, … up to it).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    max_spp: u32,
+    /// Output prefix: PREFIX.csv, PREFIX.svg, PREFIX.png.
+    #[arg(short, long, default_value = "error-vs-time")]
+    output: std::path::PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -39,6 +70,8 @@ pub struct PerfArgs {
 pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
     match &a.what {
         What::Perf(p) => perf_report(p).map_err(|e| (1, e)),
+        What::ErrorVsTime(e) => error_report(e).map_err(|m| (1, m)),
+        What::Components(c) => components_report(c).map_err(|m| (1, m)),
         What::Stability => {
             let start = std::time::Instant::now();
             let cases = stability::cases();
@@ -121,7 +154,14 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         // Each colour mode against its own reference (the step's error); refraction bends rays, so its error
         // against the straight reference is mostly the refraction itself.
         let rgb = params.iter().any(|p| p.name == "colormode");
-        let err = perf::rel_rmse(&r.image, if rgb { &reference_rgb.image } else { &reference.image });
+        let err = perf::rel_rmse(
+            &r.image,
+            if rgb {
+                &reference_rgb.image
+            } else {
+                &reference.image
+            },
+        );
         out += &format!(
             "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.3e} | {:.3e} | {:.2e} |\n",
             r.load_s,
@@ -137,4 +177,182 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         out += &format!("\npeak memory (VmHWM) {:.0} MB\n", m as f64 / 1e6);
     }
     Ok(out)
+}
+
+fn error_report(a: &ErrorArgs) -> Result<String, String> {
+    let file = match &a.dataset {
+        Some(f) => f.clone(),
+        None => {
+            let local = std::path::PathBuf::from("scenes/campfire/campfire.vdb");
+            if local.is_file() {
+                local
+            } else {
+                perf::dataset(&std::env::temp_dir(), 96)?
+            }
+        }
+    };
+    let (points, about) = error::ladder(&file, a.image as usize, a.max_spp as usize)?;
+    let with = |ext: &str| {
+        let mut p = a.output.clone().into_os_string();
+        p.push(ext);
+        std::path::PathBuf::from(p)
+    };
+    let (csv_path, svg_path, png_path) = (with(".csv"), with(".svg"), with(".png"));
+    let write = |path: &std::path::Path, bytes: &[u8]| {
+        crate::render::write_atomic(path, |tmp| {
+            std::fs::write(tmp, bytes).map_err(|e| format!("{}: {e}", tmp.display()))
+        })
+    };
+    write(&csv_path, error::csv(&points).as_bytes())?;
+    let title = format!(
+        "the fire seen directly ({}): error vs time",
+        file.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    write(&svg_path, error::svg(&points, &title).as_bytes())?;
+    let (w, h, rgb) = error::png(&points, &title);
+    crate::render::write_atomic(&png_path, |tmp| {
+        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut wr = enc.write_header().map_err(|e| e.to_string())?;
+        wr.write_image_data(&rgb).map_err(|e| e.to_string())
+    })?;
+    let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
+    for p in &points {
+        out += &format!(
+            "| {} | {} | {:.3} | {:.3e} | {:.3e} | {} |\n",
+            p.estimator, p.setting, p.seconds, p.rel_rmse, p.rel_mse, p.evaluations
+        );
+    }
+    if let Some(i) = error::winner(&points) {
+        out += &format!(
+            "\nequal-time winner (at the time of march, ½ voxel, spectral): {} ({}), rel. RMSE {:.3e}\n",
+            points[i].estimator, points[i].setting, points[i].rel_rmse
+        );
+    }
+    out += &format!(
+        "wrote {}, {}, {}\n",
+        csv_path.display(),
+        svg_path.display(),
+        png_path.display()
+    );
+    Ok(out)
+}
+
+/// Per configuration: (name, [(component, bytes, set-up seconds)], total bytes).
+type Components = Vec<(&'static str, Vec<(String, usize, f64)>, usize)>;
+
+fn components(file: &str) -> Result<Components, String> {
+    use firemedium_plugin::light::{FireLight, Weighting};
+    use firemedium_plugin::params::Param;
+    use firemedium_plugin::volume::FireVolume;
+    let mut out = Vec::new();
+    for (name, extra, light) in [
+        ("soot + blackbody", vec![], false),
+        (
+            "+ sodium lines",
+            vec![Param::string("species", "Na")],
+            false,
+        ),
+        (
+            "+ sodium, refraction",
+            vec![
+                Param::string("species", "Na"),
+                Param::bool("refraction", true),
+            ],
+            false,
+        ),
+        (
+            "+ sodium, refraction, fire light",
+            vec![
+                Param::string("species", "Na"),
+                Param::bool("refraction", true),
+            ],
+            true,
+        ),
+    ] {
+        let mut list = vec![Param::string("filename", file)];
+        list.extend(extra);
+        let v = FireVolume::new(&list).map_err(|e| e.to_string())?;
+        let tables: usize = v.tables().iter().map(|t| t.bytes).sum();
+        let mut rows = vec![(
+            "dataset grids (density, temperature, species)".to_string(),
+            v.bytes() - tables,
+            f64::NAN,
+        )];
+        rows.extend(
+            v.tables()
+                .iter()
+                .map(|t| (t.name.clone(), t.bytes, t.seconds)),
+        );
+        let mut total = v.bytes();
+        if light {
+            let l = FireLight::new(std::sync::Arc::new(v), Weighting::Power)
+                .map_err(|e| e.to_string())?;
+            rows.push((
+                "fire light (CDFs over emitting voxels)".into(),
+                l.bytes(),
+                l.build_seconds(),
+            ));
+            total += l.bytes();
+        }
+        out.push((name, rows, total));
+    }
+    Ok(out)
+}
+
+fn components_report(a: &ComponentsArgs) -> Result<String, String> {
+    let file = a.dataset.to_string_lossy().into_owned();
+    let mut out = format!(
+        "dataset {file}\n\n| configuration | component | bytes | set-up s |\n|---|---|---|---|\n"
+    );
+    for (name, rows, total) in components(&file)? {
+        let seconds: f64 = rows.iter().map(|r| r.2).filter(|s| s.is_finite()).sum();
+        for (k, (c, bytes, s)) in rows.iter().enumerate() {
+            let s = if s.is_finite() {
+                format!("{s:.4}")
+            } else {
+                "—".into()
+            };
+            out += &format!(
+                "| {} | {c} | {bytes} | {s} |\n",
+                if k == 0 { name } else { "" }
+            );
+        }
+        out += &format!("| | **total** | **{total}** | **{seconds:.4}** |\n");
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn unused_components_cost_nothing_and_used_ones_are_counted_once() {
+        let file = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes/spectroscopy/torch.vdb");
+        let c = super::components(&file.to_string_lossy()).unwrap();
+        let get = |k: usize, name: &str| -> usize {
+            c[k].1
+                .iter()
+                .find(|r| r.0.contains(name))
+                .map(|r| r.1)
+                .unwrap_or(0)
+        };
+        // The sum of the components is the total: nothing counted twice, nothing left out.
+        for (name, rows, total) in &c {
+            assert_eq!(rows.iter().map(|r| r.1).sum::<usize>(), *total, "{name}");
+        }
+        // Each option adds what it builds and nothing else: sodium one more grid of the dataset's dims (the
+        // two others' half) and its line tables; refraction its index field; the light its CDFs.
+        let grids = |k| get(k, "dataset grids");
+        assert_eq!(grids(1) - grids(0), grids(0) / 2);
+        assert!(get(0, "species Na") == 0 && get(1, "species Na (lines)") > 0);
+        assert_eq!(get(1, "refraction"), 0);
+        assert_eq!(c[2].2 - c[1].2, get(2, "refraction index field"));
+        assert_eq!(c[3].2 - c[2].2, get(3, "fire light"));
+        assert!(get(2, "fire light") == 0);
+    }
 }

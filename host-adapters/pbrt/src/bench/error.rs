@@ -1,0 +1,491 @@
+//! `firemedium bench error-vs-time`: the error of each estimator of the fire seen directly against the time it
+//! takes — march at a ladder of steps (spectral and rgb), delta and ratio tracking at a ladder of samples per
+//! pixel — against a converged reference, as a CSV and a log–log plot (SVG and PNG).
+
+use firemedium_plugin::params::Param;
+use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume, Ray};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::Path;
+use std::time::Instant;
+
+/// One point of the plot.
+#[derive(Debug, Clone)]
+pub struct Point {
+    pub estimator: String,
+    pub setting: String,
+    pub seconds: f64,
+    pub rel_rmse: f64,
+    pub rel_mse: f64,
+    pub evaluations: u64,
+}
+
+/// A luminance image (cd/m²) of the fire from a pinhole in front of it, `spp` rays per pixel; (image, seconds,
+/// medium evaluations).
+pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, f64, u64) {
+    let [b0, b1] = v.bounds();
+    let centre = 0.5 * (b0 + b1);
+    let extent = (b1 - b0).max_element();
+    let eye = centre - DVec3::Y * (2.2 * extent);
+    let half = 15f64.to_radians().tan();
+    let xyz = v.channel_xyz();
+    let start = Instant::now();
+    let rows: Vec<(Vec<f64>, u64)> = (0..size)
+        .into_par_iter()
+        .map(|j| {
+            let before = evaluations_on_this_thread();
+            let c = v.channels();
+            let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+            let row = (0..size)
+                .map(|i| {
+                    let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
+                    let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+                    let d = DVec3::new(u, 1.0, w).normalize();
+                    let mut y = 0.0;
+                    for s in 0..spp {
+                        let ray = Ray {
+                            o: eye,
+                            d,
+                            t0: 0.0,
+                            t1: 1e30,
+                            seed: seed
+                                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                                .wrapping_add(((j * size + i) * spp + s) as u64),
+                        };
+                        v.integrate(&ray, &mut l, &mut t);
+                        y += (0..c).map(|k| l[k] * xyz[k].y).sum::<f64>();
+                    }
+                    y / spp as f64
+                })
+                .collect();
+            (row, evaluations_on_this_thread() - before)
+        })
+        .collect();
+    let seconds = start.elapsed().as_secs_f64();
+    let evals = rows.iter().map(|r| r.1).sum();
+    (rows.into_iter().flat_map(|r| r.0).collect(), seconds, evals)
+}
+
+/// (relative RMSE √mean(a − r)² / mean r, relMSE mean((a − r)² / (r² + 0.01 mean(r)²))).
+pub fn errors(a: &[f64], r: &[f64]) -> (f64, f64) {
+    let n = r.len().max(1) as f64;
+    let mean = r.iter().sum::<f64>() / n;
+    let mse = a.iter().zip(r).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n;
+    let rel_mse = a
+        .iter()
+        .zip(r)
+        .map(|(x, y)| (x - y).powi(2) / (y * y + 0.01 * mean * mean))
+        .sum::<f64>()
+        / n;
+    (if mean > 0.0 { mse.sqrt() / mean } else { 0.0 }, rel_mse)
+}
+
+/// The whole ladder on `file`; returns the points and a description of the reference.
+pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, String), String> {
+    let build = |extra: &[Param]| {
+        let mut list = vec![Param::string("filename", &file.to_string_lossy())];
+        list.extend_from_slice(extra);
+        FireVolume::new(&list).map_err(|e| e.to_string())
+    };
+    // The reference: march at 1/16 voxel; its own error is bounded by its distance to 1/8 voxel.
+    let fine = build(&[Param::float("stepsize", 1.0 / 16.0)])?;
+    let (reference, ref_s, _) = render(&fine, size, 1, 1);
+    let half = build(&[Param::float("stepsize", 1.0 / 8.0)])?;
+    let (coarser, _, _) = render(&half, size, 1, 2);
+    let (ref_err, _) = errors(&coarser, &reference);
+    let about = format!(
+        "reference: march at 1/16 voxel, spectral, {size}×{size} pixels, {ref_s:.1} s; 1/8 voxel differs from it by rel. RMSE {ref_err:.2e} (the march converges at second order in the step, so the reference's own error is about a quarter of that)"
+    );
+    let mut points = Vec::new();
+    let mut push =
+        |estimator: &str, setting: String, img: &[f64], seconds: f64, evaluations: u64| {
+            let (rel_rmse, rel_mse) = errors(img, &reference);
+            points.push(Point {
+                estimator: estimator.to_string(),
+                setting,
+                seconds,
+                rel_rmse,
+                rel_mse,
+                evaluations,
+            });
+        };
+    for (estimator, extra) in [
+        ("march spectral", None),
+        ("march rgb", Some(Param::string("colormode", "rgb"))),
+    ] {
+        for step in [2.0, 1.0, 0.5, 0.25, 0.125] {
+            let mut params = vec![Param::float("stepsize", step)];
+            params.extend(extra.clone());
+            let v = build(&params)?;
+            let (img, s, n) = render(&v, size, 1, 3);
+            push(estimator, format!("step {step} voxel"), &img, s, n);
+        }
+    }
+    for estimator in ["delta", "ratio"] {
+        let v = build(&[Param::string("integrator", estimator)])?;
+        let mut spp = 1;
+        while spp <= max_spp {
+            let (img, s, n) = render(&v, size, spp, 4);
+            push(
+                &format!("{estimator} tracking"),
+                format!("{spp} spp"),
+                &img,
+                s,
+                n,
+            );
+            spp *= 2;
+        }
+    }
+    Ok((points, about))
+}
+
+/// The equal-time winner: among the points no slower than the paper's setting (march, ½ voxel, spectral), the
+/// one with the lowest error.
+pub fn winner(points: &[Point]) -> Option<usize> {
+    let budget = points
+        .iter()
+        .find(|p| p.estimator == "march spectral" && p.setting == "step 0.5 voxel")?
+        .seconds;
+    (0..points.len())
+        .filter(|&i| points[i].seconds <= budget * 1.0001)
+        .min_by(|&a, &b| points[a].rel_rmse.total_cmp(&points[b].rel_rmse))
+}
+
+pub fn csv(points: &[Point]) -> String {
+    let mut s = String::from("estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations\n");
+    for p in points {
+        s += &format!(
+            "{},{},{:.6},{:.6e},{:.6e},{}\n",
+            p.estimator, p.setting, p.seconds, p.rel_rmse, p.rel_mse, p.evaluations
+        );
+    }
+    s
+}
+
+const COLOURS: [(u8, u8, u8); 6] = [
+    (214, 39, 40),
+    (255, 127, 14),
+    (31, 119, 180),
+    (44, 160, 44),
+    (148, 103, 189),
+    (23, 190, 207),
+];
+
+/// The plot's geometry: log-log axes over the points' range, in a `w`×`h` canvas.
+struct Axes {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    w: f64,
+    h: f64,
+}
+
+impl Axes {
+    const LEFT: f64 = 70.0;
+    const RIGHT: f64 = 190.0;
+    const TOP: f64 = 30.0;
+    const BOTTOM: f64 = 50.0;
+    fn new(points: &[Point], w: f64, h: f64) -> Axes {
+        let xs = points.iter().map(|p| p.seconds.max(1e-6).log10());
+        let ys = points.iter().map(|p| p.rel_rmse.max(1e-9).log10());
+        let (x0, x1) = xs.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+        let (y0, y1) = ys.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+        Axes {
+            x0: x0.floor(),
+            x1: x1.ceil().max(x0.floor() + 1.0),
+            y0: y0.floor(),
+            y1: y1.ceil().max(y0.floor() + 1.0),
+            w,
+            h,
+        }
+    }
+    fn px(&self, seconds: f64) -> f64 {
+        let u = (seconds.max(1e-6).log10() - self.x0) / (self.x1 - self.x0);
+        Self::LEFT + u * (self.w - Self::LEFT - Self::RIGHT)
+    }
+    fn py(&self, err: f64) -> f64 {
+        let u = (err.max(1e-9).log10() - self.y0) / (self.y1 - self.y0);
+        self.h - Self::BOTTOM - u * (self.h - Self::TOP - Self::BOTTOM)
+    }
+}
+
+fn estimators(points: &[Point]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for p in points {
+        if !names.contains(&p.estimator) {
+            names.push(p.estimator.clone());
+        }
+    }
+    names
+}
+
+/// The log–log plot as SVG.
+pub fn svg(points: &[Point], title: &str) -> String {
+    let (w, h) = (760.0, 480.0);
+    let ax = Axes::new(points, w, h);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"18\" font-size=\"14\">{title}</text>\n",
+        Axes::LEFT
+    );
+    // Decade grid and labels.
+    for e in (ax.x0 as i32)..=(ax.x1 as i32) {
+        let x = ax.px(10f64.powi(e));
+        s += &format!(
+            "<line x1=\"{x:.1}\" y1=\"{}\" x2=\"{x:.1}\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{x:.1}\" y=\"{}\" text-anchor=\"middle\">1e{e}</text>\n",
+            Axes::TOP,
+            h - Axes::BOTTOM,
+            h - Axes::BOTTOM + 16.0
+        );
+    }
+    for e in (ax.y0 as i32)..=(ax.y1 as i32) {
+        let y = ax.py(10f64.powi(e));
+        s += &format!(
+            "<line x1=\"{}\" y1=\"{y:.1}\" x2=\"{}\" y2=\"{y:.1}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">1e{e}</text>\n",
+            Axes::LEFT,
+            w - Axes::RIGHT,
+            Axes::LEFT - 6.0,
+            y + 4.0
+        );
+    }
+    s += &format!(
+        "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">render time, s</text>\n<text x=\"16\" y=\"{:.1}\" transform=\"rotate(-90 16 {:.1})\" text-anchor=\"middle\">relative RMSE</text>\n",
+        0.5 * (Axes::LEFT + w - Axes::RIGHT),
+        h - 10.0,
+        0.5 * h,
+        0.5 * h
+    );
+    for (k, name) in estimators(points).iter().enumerate() {
+        let (r, g, b) = COLOURS[k % COLOURS.len()];
+        let pts: Vec<String> = points
+            .iter()
+            .filter(|p| &p.estimator == name)
+            .map(|p| format!("{:.1},{:.1}", ax.px(p.seconds), ax.py(p.rel_rmse)))
+            .collect();
+        s += &format!(
+            "<polyline fill=\"none\" stroke=\"rgb({r},{g},{b})\" stroke-width=\"2\" points=\"{}\"/>\n",
+            pts.join(" ")
+        );
+        for p in pts {
+            let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
+            s += &format!("<circle cx=\"{x}\" cy=\"{y}\" r=\"3\" fill=\"rgb({r},{g},{b})\"/>\n");
+        }
+        let ly = Axes::TOP + 20.0 * k as f64 + 10.0;
+        let lx = w - Axes::RIGHT + 14.0;
+        s += &format!(
+            "<line x1=\"{lx}\" y1=\"{ly}\" x2=\"{}\" y2=\"{ly}\" stroke=\"rgb({r},{g},{b})\" stroke-width=\"3\"/><text x=\"{}\" y=\"{}\">{name}</text>\n",
+            lx + 22.0,
+            lx + 28.0,
+            ly + 4.0
+        );
+    }
+    if let Some(i) = winner(points) {
+        let p = &points[i];
+        let (x, y) = (ax.px(p.seconds), ax.py(p.rel_rmse));
+        s += &format!(
+            "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"9\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/><text x=\"{:.1}\" y=\"{:.1}\">equal-time winner: {} ({})</text>\n",
+            x + 12.0,
+            y - 10.0,
+            p.estimator,
+            p.setting
+        );
+    }
+    s + "</svg>\n"
+}
+
+/// A 5×7 bitmap font for the PNG's labels (the characters the plot uses; others are left blank): rows top to
+/// bottom, bit 4 the leftmost column.
+const FONT: &[(char, [u8; 7])] = &[
+    ('0', [0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e]),
+    ('1', [0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e]),
+    ('2', [0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f]),
+    ('3', [0x1e, 0x01, 0x01, 0x0e, 0x01, 0x01, 0x1e]),
+    ('4', [0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02]),
+    ('5', [0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e]),
+    ('6', [0x0e, 0x10, 0x10, 0x1e, 0x11, 0x11, 0x0e]),
+    ('7', [0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08]),
+    ('8', [0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e]),
+    ('9', [0x0e, 0x11, 0x11, 0x0f, 0x01, 0x01, 0x0e]),
+    ('.', [0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c]),
+    (',', [0x00, 0x00, 0x00, 0x00, 0x0c, 0x04, 0x08]),
+    ('-', [0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00]),
+    (':', [0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00]),
+    ('(', [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02]),
+    (')', [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08]),
+    ('/', [0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00]),
+    ('½', [0x10, 0x12, 0x14, 0x04, 0x0b, 0x11, 0x03]),
+    (' ', [0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00]),
+    ('a', [0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f]),
+    ('b', [0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x1e]),
+    ('c', [0x00, 0x00, 0x0f, 0x10, 0x10, 0x10, 0x0f]),
+    ('d', [0x01, 0x01, 0x0f, 0x11, 0x11, 0x11, 0x0f]),
+    ('e', [0x00, 0x00, 0x0e, 0x11, 0x1f, 0x10, 0x0e]),
+    ('f', [0x06, 0x08, 0x1e, 0x08, 0x08, 0x08, 0x08]),
+    ('g', [0x00, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x0e]),
+    ('h', [0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x11]),
+    ('i', [0x04, 0x00, 0x0c, 0x04, 0x04, 0x04, 0x0e]),
+    ('k', [0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12]),
+    ('l', [0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e]),
+    ('m', [0x00, 0x00, 0x1a, 0x15, 0x15, 0x15, 0x15]),
+    ('n', [0x00, 0x00, 0x1e, 0x11, 0x11, 0x11, 0x11]),
+    ('o', [0x00, 0x00, 0x0e, 0x11, 0x11, 0x11, 0x0e]),
+    ('p', [0x00, 0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10]),
+    ('q', [0x00, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x01]),
+    ('r', [0x00, 0x00, 0x16, 0x18, 0x10, 0x10, 0x10]),
+    ('s', [0x00, 0x00, 0x0f, 0x10, 0x0e, 0x01, 0x1e]),
+    ('t', [0x08, 0x08, 0x1e, 0x08, 0x08, 0x09, 0x06]),
+    ('u', [0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0d]),
+    ('v', [0x00, 0x00, 0x11, 0x11, 0x11, 0x0a, 0x04]),
+    ('w', [0x00, 0x00, 0x11, 0x15, 0x15, 0x15, 0x0a]),
+    ('x', [0x00, 0x00, 0x11, 0x0a, 0x04, 0x0a, 0x11]),
+    ('y', [0x00, 0x11, 0x11, 0x0f, 0x01, 0x11, 0x0e]),
+    ('E', [0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f]),
+    ('M', [0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11]),
+    ('R', [0x1e, 0x11, 0x11, 0x1e, 0x14, 0x12, 0x11]),
+    ('S', [0x0f, 0x10, 0x10, 0x0e, 0x01, 0x01, 0x1e]),
+];
+
+/// Draws `text` with its top-left corner at (x, y), `scale` pixels per font pixel.
+fn draw_text(img: &mut [u8], w: usize, x: i64, y: i64, text: &str, scale: i64) {
+    let h = img.len() / (3 * w);
+    for (k, ch) in text.chars().enumerate() {
+        let Some((_, rows)) = FONT.iter().find(|(c, _)| *c == ch) else {
+            continue;
+        };
+        for (r, bits) in rows.iter().enumerate() {
+            for col in 0..5 {
+                if bits & (0x10 >> col) == 0 {
+                    continue;
+                }
+                for dy in 0..scale {
+                    for dx in 0..scale {
+                        let px = x + (6 * k as i64 + col) * scale + dx;
+                        let py = y + r as i64 * scale + dy;
+                        if px >= 0 && py >= 0 && (px as usize) < w && (py as usize) < h {
+                            let o = 3 * (px as usize + w * py as usize);
+                            img[o..o + 3].copy_from_slice(&[0, 0, 0]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The same plot as a PNG: lines, markers, decade grid and the labels in a small bitmap font.
+pub fn png(points: &[Point], title: &str) -> (usize, usize, Vec<u8>) {
+    let (w, h) = (760usize, 480usize);
+    let ax = Axes::new(points, w as f64, h as f64);
+    let mut img = vec![255u8; w * h * 3];
+    let mut put = |x: i64, y: i64, c: (u8, u8, u8)| {
+        if x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h {
+            let o = 3 * (x as usize + w * y as usize);
+            img[o..o + 3].copy_from_slice(&[c.0, c.1, c.2]);
+        }
+    };
+    let line = |a: (f64, f64),
+                b: (f64, f64),
+                c: (u8, u8, u8),
+                thick: i64,
+                put: &mut dyn FnMut(i64, i64, (u8, u8, u8))| {
+        let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+            for dx in -thick / 2..=thick / 2 {
+                for dy in -thick / 2..=thick / 2 {
+                    put(x.round() as i64 + dx, y.round() as i64 + dy, c);
+                }
+            }
+        }
+    };
+    let grey = (221, 221, 221);
+    for e in (ax.x0 as i32)..=(ax.x1 as i32) {
+        let x = ax.px(10f64.powi(e));
+        line(
+            (x, Axes::TOP),
+            (x, h as f64 - Axes::BOTTOM),
+            grey,
+            1,
+            &mut put,
+        );
+    }
+    for e in (ax.y0 as i32)..=(ax.y1 as i32) {
+        let y = ax.py(10f64.powi(e));
+        line(
+            (Axes::LEFT, y),
+            (w as f64 - Axes::RIGHT, y),
+            grey,
+            1,
+            &mut put,
+        );
+    }
+    for (k, name) in estimators(points).iter().enumerate() {
+        let c = COLOURS[k % COLOURS.len()];
+        let pts: Vec<(f64, f64)> = points
+            .iter()
+            .filter(|p| &p.estimator == name)
+            .map(|p| (ax.px(p.seconds), ax.py(p.rel_rmse)))
+            .collect();
+        for pair in pts.windows(2) {
+            line(pair[0], pair[1], c, 2, &mut put);
+        }
+        for &(x, y) in &pts {
+            line((x - 3.0, y), (x + 3.0, y), c, 5, &mut put);
+        }
+        let ly = Axes::TOP + 20.0 * k as f64 + 10.0;
+        let lx = w as f64 - Axes::RIGHT + 14.0;
+        line((lx, ly), (lx + 22.0, ly), c, 3, &mut put);
+    }
+    if let Some(i) = winner(points) {
+        let (x, y) = (ax.px(points[i].seconds), ax.py(points[i].rel_rmse));
+        for a in 0..72 {
+            let t = a as f64 / 72.0 * std::f64::consts::TAU;
+            put(
+                (x + 9.0 * t.cos()).round() as i64,
+                (y + 9.0 * t.sin()).round() as i64,
+                (0, 0, 0),
+            );
+        }
+        let label = format!(
+            "equal-time winner: {} ({})",
+            points[i].estimator, points[i].setting
+        );
+        draw_text(&mut img, w, x as i64 + 12, y as i64 - 18, &label, 1);
+    }
+    draw_text(&mut img, w, Axes::LEFT as i64 + 30, 6, title, 2);
+    for e in (ax.x0 as i32)..=(ax.x1 as i32) {
+        let x = ax.px(10f64.powi(e)) as i64;
+        let t = format!("1e{e}");
+        draw_text(
+            &mut img,
+            w,
+            x - 3 * t.len() as i64,
+            h as i64 - Axes::BOTTOM as i64 + 8,
+            &t,
+            1,
+        );
+    }
+    for e in (ax.y0 as i32)..=(ax.y1 as i32) {
+        let y = ax.py(10f64.powi(e)) as i64;
+        let t = format!("1e{e}");
+        draw_text(
+            &mut img,
+            w,
+            Axes::LEFT as i64 - 8 - 6 * t.len() as i64,
+            y - 3,
+            &t,
+            1,
+        );
+    }
+    let xt = "render time, s";
+    let mid = (0.5 * (Axes::LEFT + w as f64 - Axes::RIGHT)) as i64;
+    draw_text(&mut img, w, mid - 6 * xt.len() as i64, h as i64 - 22, xt, 2);
+    draw_text(&mut img, w, 4, Axes::TOP as i64 - 14, "relative RMSE", 1);
+    for (k, name) in estimators(points).iter().enumerate() {
+        let ly = Axes::TOP + 20.0 * k as f64 + 10.0;
+        let lx = w as f64 - Axes::RIGHT + 40.0;
+        draw_text(&mut img, w, lx as i64, ly as i64 - 3, name, 1);
+    }
+    (w, h, img)
+}

@@ -1,0 +1,97 @@
+//! `firemedium bench …` from the command line, at tiny sizes: each runs, writes what it says, and its numbers
+//! are sane. (The measurements themselves are in docs/RESULTS.md; no timing is asserted here.)
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(o: &Output) -> String {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn scenes() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+#[test]
+fn stability_passes_every_case() {
+    let text = ok(&run(&["bench", "stability"]));
+    assert!(text.contains(" cases, 0 failed"), "{text}");
+    assert!(!text.contains("FAIL"), "{text}");
+}
+
+#[test]
+fn error_vs_time_writes_csv_svg_and_png() {
+    let dir = std::env::temp_dir().join(format!("firemedium-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let prefix = dir.join("evt");
+    let vdb = scenes().join("campfire/campfire.vdb");
+    let text = ok(&run(&[
+        "bench",
+        "error-vs-time",
+        "--dataset",
+        vdb.to_str().unwrap(),
+        "--image",
+        "12",
+        "--max-spp",
+        "2",
+        "-o",
+        prefix.to_str().unwrap(),
+    ]));
+    assert!(text.contains("equal-time winner"), "{text}");
+    let csv = std::fs::read_to_string(dir.join("evt.csv")).unwrap();
+    // Header, 5 march steps × 2 colour modes, 2 spp levels × 2 trackers.
+    assert_eq!(csv.lines().count(), 1 + 10 + 4, "{csv}");
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (secs, err): (f64, f64) = (f[2].parse().unwrap(), f[3].parse().unwrap());
+        assert!(secs > 0.0 && err.is_finite() && err >= 0.0, "{line}");
+    }
+    // The march converges: its error falls from 2 to 1/8 voxel.
+    let march: Vec<f64> = csv
+        .lines()
+        .filter(|l| l.starts_with("march spectral"))
+        .map(|l| l.split(',').nth(3).unwrap().parse().unwrap())
+        .collect();
+    assert!(march[4] < march[0] / 4.0, "{march:?}");
+    assert!(std::fs::read_to_string(dir.join("evt.svg"))
+        .unwrap()
+        .starts_with("<svg"));
+    let dec = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(dir.join("evt.png")).unwrap(),
+    ));
+    let info = dec.read_info().unwrap();
+    assert_eq!((info.info().width, info.info().height), (760, 480));
+}
+
+#[test]
+fn perf_and_components_run_small() {
+    let vdb = scenes().join("campfire/campfire.vdb");
+    let text = ok(&run(&[
+        "bench",
+        "perf",
+        "--dataset",
+        vdb.to_str().unwrap(),
+        "--image",
+        "16",
+        "--reference-step",
+        "0.25",
+    ]));
+    assert_eq!(text.matches("| march ½ voxel").count(), 3, "{text}");
+    assert!(text.contains("peak memory"), "{text}");
+    let torch = scenes().join("spectroscopy/torch.vdb");
+    let text = ok(&run(&[
+        "bench",
+        "components",
+        "--dataset",
+        torch.to_str().unwrap(),
+    ]));
+    assert_eq!(text.matches("**total**").count(), 4, "{text}");
+}
