@@ -42,9 +42,24 @@ fn error_vs_time_writes_csv_svg_and_png() {
         "12",
         "--max-spp",
         "2",
+        "--surface",
+        scenes().join("campfire/scene.pbrt").to_str().unwrap(),
+        "--surface-resolution",
+        "16x12",
+        "--surface-max-spp",
+        "2",
+        "--surface-reference-spp",
+        "8",
         "-o",
         prefix.to_str().unwrap(),
     ]));
+    // The surface ladder: fire light on and off at 1 and 2 spp.
+    let surface = std::fs::read_to_string(dir.join("evt-surface.csv")).unwrap();
+    assert_eq!(surface.lines().count(), 1 + 4, "{surface}");
+    assert!(
+        surface.contains("fire light on,1 spp") && surface.contains("fire light off,2 spp"),
+        "{surface}"
+    );
     assert!(text.contains("equal-time winner"), "{text}");
     let csv = std::fs::read_to_string(dir.join("evt.csv")).unwrap();
     // Header, 5 march steps × 2 colour modes, 2 spp levels × 2 trackers.

@@ -29,6 +29,26 @@ fn luminance(p: [f32; 3]) -> f64 {
     0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
 }
 
+/// The pixels whose centre and four corners all see a diffuse surface first: no fire, no mirror or coating
+/// reflecting it, inside the pixel's footprint.
+pub fn surface_mask(sc: &scene::Scene, rng: &mut firemedium_plugin::rng::Rng) -> Vec<bool> {
+    let (w, h) = sc.res;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f64, (i / w) as f64);
+            [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .iter()
+                .all(|&(u, v)| {
+                    let (o, d) = render::camera_ray(sc, x + u, y + v, rng);
+                    sc.bvh
+                        .intersect(o, d, sc.eps, f32::INFINITY)
+                        .and_then(|hit| sc.bvh.prims[hit.prim].material)
+                        .is_some_and(|m| matches!(sc.materials[m], scene::Material::Diffuse(_)))
+                })
+        })
+        .collect()
+}
+
 pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
     let ov = scene::Overrides {
         spp: None,
@@ -57,22 +77,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
     };
     check(&reference, &a.reference)?;
     let mut rng = firemedium_plugin::rng::Rng::new(0);
-    // A pixel counts when its centre and four corners all see a diffuse surface first: no fire, no mirror or
-    // coating reflecting it, inside the pixel's footprint.
-    let mask: Vec<bool> = (0..w * h)
-        .map(|i| {
-            let (x, y) = ((i % w) as f64, (i / w) as f64);
-            [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
-                .iter()
-                .all(|&(u, v)| {
-                    let (o, d) = render::camera_ray(&sc, x + u, y + v, &mut rng);
-                    sc.bvh
-                        .intersect(o, d, sc.eps, f32::INFINITY)
-                        .and_then(|hit| sc.bvh.prims[hit.prim].material)
-                        .is_some_and(|m| matches!(sc.materials[m], scene::Material::Diffuse(_)))
-                })
-        })
-        .collect();
+    let mask = surface_mask(&sc, &mut rng);
     let count = mask.iter().filter(|&&m| m).count();
     if count == 0 {
         return Err((1, format!("{}: no pixel sees a surface", a.scene.display())));

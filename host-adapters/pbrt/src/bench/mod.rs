@@ -46,9 +46,21 @@ pub struct ErrorArgs {
     /// The largest samples per pixel of the tracking ladder (1, 2, 4, … up to it).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     max_spp: u32,
-    /// Output prefix: PREFIX.csv, PREFIX.svg, PREFIX.png.
+    /// Output prefix: PREFIX.csv, PREFIX.svg, PREFIX.png, and PREFIX-surface.* for the surface scene.
     #[arg(short, long, default_value = "error-vs-time")]
     output: std::path::PathBuf,
+    /// The second scene, the fire lighting surfaces (fire light on/off); default scenes/campfire/scene.pbrt
+    /// when run from the repository's root; `none` to skip.
+    #[arg(long)]
+    surface: Option<String>,
+    /// The surface scene's resolution.
+    #[arg(long, default_value = "80x60", value_parser = crate::render_cmd::parse_resolution)]
+    surface_resolution: (usize, usize),
+    /// The surface ladder's largest spp, and its reference's spp.
+    #[arg(long, default_value_t = 64)]
+    surface_max_spp: usize,
+    #[arg(long, default_value_t = 1024)]
+    surface_reference_spp: usize,
 }
 
 #[derive(Debug, Args)]
@@ -192,8 +204,49 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
         }
     };
     let (points, about) = error::ladder(&file, a.image as usize, a.max_spp as usize)?;
+    let title = format!(
+        "the fire seen directly ({}): error vs time",
+        file.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    let mut out = write_ladder(&a.output, "", &points, &about, &title)?;
+    let surface = match a.surface.as_deref() {
+        Some("none") => None,
+        Some(s) => Some(std::path::PathBuf::from(s)),
+        None => {
+            Some(std::path::PathBuf::from("scenes/campfire/scene.pbrt")).filter(|p| p.is_file())
+        }
+    };
+    if let Some(scene) = surface {
+        let (points, about) = error::surface_ladder(
+            &scene,
+            a.surface_resolution,
+            a.surface_max_spp,
+            a.surface_reference_spp,
+        )?;
+        out += "\n";
+        out += &write_ladder(
+            &a.output,
+            "-surface",
+            &points,
+            &about,
+            "the fire lighting surfaces: error vs time",
+        )?;
+    }
+    Ok(out)
+}
+
+fn write_ladder(
+    prefix: &std::path::Path,
+    suffix: &str,
+    points: &[error::Point],
+    about: &str,
+    title: &str,
+) -> Result<String, String> {
     let with = |ext: &str| {
-        let mut p = a.output.clone().into_os_string();
+        let mut p = prefix.as_os_str().to_owned();
+        p.push(suffix);
         p.push(ext);
         std::path::PathBuf::from(p)
     };
@@ -203,15 +256,9 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
             std::fs::write(tmp, bytes).map_err(|e| format!("{}: {e}", tmp.display()))
         })
     };
-    write(&csv_path, error::csv(&points).as_bytes())?;
-    let title = format!(
-        "the fire seen directly ({}): error vs time",
-        file.file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    );
-    write(&svg_path, error::svg(&points, &title).as_bytes())?;
-    let (w, h, rgb) = error::png(&points, &title);
+    write(&csv_path, error::csv(points).as_bytes())?;
+    write(&svg_path, error::svg(points, title).as_bytes())?;
+    let (w, h, rgb) = error::png(points, title);
     crate::render::write_atomic(&png_path, |tmp| {
         let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
         let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
@@ -221,15 +268,22 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
         wr.write_image_data(&rgb).map_err(|e| e.to_string())
     })?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
-    for p in &points {
+    for p in points {
         out += &format!(
             "| {} | {} | {:.3} | {:.3e} | {:.3e} | {} |\n",
-            p.estimator, p.setting, p.seconds, p.rel_rmse, p.rel_mse, p.evaluations
+            p.estimator,
+            p.setting,
+            p.seconds,
+            p.rel_rmse,
+            p.rel_mse,
+            p.evaluations
+                .map(|n| n.to_string())
+                .unwrap_or_else(|| "—".into())
         );
     }
-    if let Some(i) = error::winner(&points) {
+    if let Some(i) = error::winner(points) {
         out += &format!(
-            "\nequal-time winner (at the time of march, ½ voxel, spectral): {} ({}), rel. RMSE {:.3e}\n",
+            "\nequal-time winner: {} ({}), rel. RMSE {:.3e}\n",
             points[i].estimator, points[i].setting, points[i].rel_rmse
         );
     }
