@@ -119,6 +119,18 @@ fn grad_at(f: &impl IndexField, p: DVec3) -> DVec3 {
     }
 }
 
+/// The initial state (x, v = n t̂) of a ray from `x0` along `dir` (any length; a zero or non-finite direction
+/// becomes +x).
+fn start(f: &impl IndexField, x0: DVec3, dir: DVec3) -> (DVec3, DVec3) {
+    let t = dir.normalize_or_zero();
+    let t = if t == DVec3::ZERO || !t.is_finite() {
+        DVec3::X
+    } else {
+        t
+    };
+    (x0, t * index_at(f, x0))
+}
+
 /// One classical RK4 step of length `h` from (x, v), v = n t̂; returns the new (x, v) with |v| = n(x).
 pub fn rk4_step(f: &impl IndexField, x: DVec3, v: DVec3, h: f64) -> (DVec3, DVec3) {
     let d = |x: DVec3, v: DVec3| {
@@ -155,13 +167,7 @@ pub fn trace(
     mut visit: impl FnMut(DVec3, DVec3, f64),
     mut stop: impl FnMut(DVec3) -> bool,
 ) -> Exit {
-    let t = dir.normalize_or_zero();
-    let t = if t == DVec3::ZERO || !t.is_finite() {
-        DVec3::X
-    } else {
-        t
-    };
-    let (mut x, mut v) = (x0, t * index_at(f, x0));
+    let (mut x, mut v) = start(f, x0, dir);
     let mut s = 0.0;
     let mut n_steps = 0;
     let s_max = if s_max.is_nan() { 0.0 } else { s_max.max(0.0) };
@@ -288,13 +294,7 @@ pub fn trace_verlet(
     mut visit: impl FnMut(DVec3, f64),
     mut stop: impl FnMut(DVec3) -> bool,
 ) -> Exit {
-    let t = dir.normalize_or_zero();
-    let t = if t == DVec3::ZERO || !t.is_finite() {
-        DVec3::X
-    } else {
-        t
-    };
-    let (mut x, mut v) = (x0, t * index_at(f, x0));
+    let (mut x, mut v) = start(f, x0, dir);
     let s_max = if s_max.is_nan() { 0.0 } else { s_max.max(0.0) };
     let h = if h > 0.0 && h.is_finite() { h } else { s_max };
     // s: arc length travelled; u: the same counted in the lengths asked for, which sets the step boundaries (so
