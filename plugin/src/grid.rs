@@ -85,6 +85,37 @@ impl Stencil {
                     base[a] = f as i64;
                     frac[a] = (s - f) as f32;
                 }
+                // Inside (all eight samples in the grid, the common case): the weights and indices directly, in
+                // the same corner order and products as below (so the same sums, bit for bit: the zero weights
+                // the general path leaves out add +0).
+                if (0..3).all(|a| base[a] >= 0 && base[a] + 1 < dims[a] as i64) {
+                    let [fx, fy, fz] = frac;
+                    let [gx, gy, gz] = frac.map(|f| 1.0 - f);
+                    let i0 = base[0] as usize + nx * (base[1] as usize + ny * base[2] as usize);
+                    let (sy, sz) = (nx, nx * ny);
+                    st.idx = [
+                        i0,
+                        i0 + 1,
+                        i0 + sy,
+                        i0 + sy + 1,
+                        i0 + sz,
+                        i0 + sz + 1,
+                        i0 + sz + sy,
+                        i0 + sz + sy + 1,
+                    ];
+                    st.w = [
+                        gx * gy * gz,
+                        fx * gy * gz,
+                        gx * fy * gz,
+                        fx * fy * gz,
+                        gx * gy * fz,
+                        fx * gy * fz,
+                        gx * fy * fz,
+                        fx * fy * fz,
+                    ];
+                    st.n = 8;
+                    return Some(st);
+                }
                 for corner in 0..8 {
                     let o = [corner & 1, (corner >> 1) & 1, corner >> 2];
                     let q = [0, 1, 2].map(|a| base[a] + o[a] as i64);
