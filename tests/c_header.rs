@@ -104,6 +104,11 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             && get("light_voxels").parse::<u64>().unwrap() > 1000
     );
     assert_eq!(get("channels"), "30");
+    // ABI 0.3 from C: the Mantaflow frame's temperature range, 0 … 2.974609 × temperaturescale 1000 K.
+    assert_eq!(get("temperature_status"), "0");
+    assert_eq!(get("temperature_min"), "0");
+    let tmax: f64 = get("temperature_max").parse().unwrap();
+    assert!((tmax - 2974.609).abs() < 1e-3, "{tmax}");
     assert_eq!(get("integrate_status"), "0");
     // The same ray through the Rust loader gives the same numbers.
     let p = Plugin::load(plugin_path()).unwrap();

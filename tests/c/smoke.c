@@ -36,6 +36,9 @@ int main(int argc, char **argv) {
     FmVolumeInfo info;
     api->volume_info(vol, &info);
     printf("channels %u\n", info.channels);
+    double trange[2] = {-1.0, -1.0};
+    FmStatus ts = api->volume_temperature_range(vol, trange);
+    printf("temperature_status %d\ntemperature_min %.9g\ntemperature_max %.9g\n", ts, trange[0], trange[1]);
     FmRay ray = {{1.0, -1.0, 0.5}, {0.0, 1.0, 0.0}, 0.0, 10.0, 7};
     float *radiance = calloc(info.channels, sizeof(float)), *transmittance = calloc(info.channels, sizeof(float));
     FmExit exit;
