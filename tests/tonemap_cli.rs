@@ -110,6 +110,37 @@ fn night_makes_the_flame_whiter_than_day() {
         flame.len()
     );
     assert!(sat[0] + 0.05 < sat[1], "night {} vs day {}", sat[0], sat[1]);
+    // `render --adapt night` writes the same preview as `tonemap --adapt night` of its EXR (within one 8-bit
+    // level: the EXR holds f32 RGB, the render its f64 XYZ).
+    let night_render = dir.join("room_night.exr");
+    let o = bin()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&night_render)
+        .args([
+            "--spp",
+            "2",
+            "--resolution",
+            "80x60",
+            "--quiet",
+            "--adapt",
+            "night",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, a) = read_png(&night_render.with_extension("png"));
+    let (_, _, b) = read_png(&dir.join("night.png"));
+    let worst = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= 1.0 / 255.0 + 1e-9,
+        "render's night preview differs by {worst}"
+    );
     // 16-bit output, the other operators, an explicit white.
     for extra in [
         &["--bits", "16"][..],

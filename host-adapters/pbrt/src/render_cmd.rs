@@ -33,6 +33,14 @@ pub struct RenderArgs {
     #[arg(long = "fire-light", value_name = "power|luminance|off", default_value = "power",
           value_parser = ["power", "luminance", "off"])]
     fire_light: String,
+    /// The PNG preview's adaptation, as `firemedium tonemap --adapt`: image (default), night, indoor, day or a
+    /// luminance in cd/m².
+    #[arg(long, default_value = "image", value_parser = crate::tonemap::parse_adapt, allow_negative_numbers = true)]
+    adapt: crate::tonemap::Adapt,
+    /// The PNG preview's white, as `firemedium tonemap --white`: fire (default: the blackbody at the hottest
+    /// fire temperature, D65 without a fire), d65, a temperature (1800K) or a chromaticity (x,y).
+    #[arg(long, default_value = "fire", value_parser = crate::tonemap::parse_white)]
+    white: crate::tonemap::WhiteArg,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
@@ -97,7 +105,13 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
     let fire_t = sc.fire_temperature();
     let tone = crate::tonemap::Options {
-        white: fire_t.map_or(crate::tonemap::White::D65, crate::tonemap::White::Blackbody),
+        white: match a.white {
+            crate::tonemap::WhiteArg::Fire => {
+                fire_t.map_or(crate::tonemap::White::D65, crate::tonemap::White::Blackbody)
+            }
+            crate::tonemap::WhiteArg::Given(w) => w,
+        },
+        adapt: a.adapt,
         ..Default::default()
     };
     render::write_exr(&img, &exr, fire_t).map_err(|e| (1, e))?;
