@@ -162,9 +162,12 @@ fn cie_d65() -> DVec3 {
     DVec3::new(0.95047, 1.0, 1.08883)
 }
 
-/// XYZ of a linear-sRGB (D65) pixel.
-pub fn srgb_to_xyz(rgb: [f32; 3]) -> DVec3 {
-    cie::xyz_to_srgb_matrix().inverse() * DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64)
+/// XYZ of linear-sRGB (D65) pixels.
+pub fn srgb_to_xyz(px: &[[f32; 3]]) -> Vec<DVec3> {
+    let m = cie::xyz_to_srgb_matrix().inverse();
+    px.iter()
+        .map(|p| m * DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect()
 }
 
 /// Tone-maps XYZ pixels (cd/m²) to display-linear sRGB in [0, 1].
@@ -281,6 +284,17 @@ pub fn write_png(
             .flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
             .collect()
     };
+    write_png_bytes(path, w, h, &data, sixteen)
+}
+
+/// Writes encoded RGB bytes (8-bit, or 16-bit big-endian) as a PNG, atomically.
+pub fn write_png_bytes(
+    path: &Path,
+    w: usize,
+    h: usize,
+    data: &[u8],
+    sixteen: bool,
+) -> Result<(), String> {
     crate::render::write_atomic(path, |tmp| {
         let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
         let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
@@ -293,7 +307,7 @@ pub fn write_png(
         let mut wr = e
             .write_header()
             .map_err(|e| format!("{}: {e}", path.display()))?;
-        wr.write_image_data(&data)
+        wr.write_image_data(data)
             .map_err(|e| format!("{}: {e}", path.display()))
     })
 }

@@ -59,7 +59,7 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
         adapt: a.adapt,
         stops: a.exposure,
     };
-    let xyz: Vec<_> = img.px.iter().map(|&p| tonemap::srgb_to_xyz(p)).collect();
+    let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
     tonemap::write_png(&a.output, img.w, img.h, &px, a.bits == 16).map_err(|e| (1, e))?;
     let white_text = match white {

@@ -157,7 +157,7 @@ pub(crate) fn integrate(
         Integrator::March => march(m, ray, a, b, speed, &mut rng, sc, l, t),
         Integrator::Ratio => ratio(m, ray, a, b, speed, &mut rng, sc, l, t),
         Integrator::Delta => {
-            delta(m, ray, a, b, speed, &mut rng, sc, l, t, None);
+            delta(m, ray, a, b, speed, &mut rng, sc, l, t, false);
         }
     };
     b
@@ -233,6 +233,38 @@ fn march(
     }
 }
 
+/// The tentative collisions of tracking along [a, b]: in every majorant piece with σ̄ > 0, exponential free
+/// flights at rate σ̄; at each, the medium's coefficients are put in `sc` and `at(t, σ̄, sc, rng)` says whether
+/// to go on.
+#[allow(clippy::too_many_arguments)]
+fn collisions(
+    m: &dyn Medium,
+    ray: &Ray,
+    a: f64,
+    b: f64,
+    speed: f64,
+    rng: &mut Rng,
+    sc: &mut Scratch,
+    at: &mut dyn FnMut(f64, f64, &Scratch, &mut Rng) -> bool,
+) {
+    m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
+        if !(smaj > 0.0) {
+            return true;
+        }
+        let mut tt = ta;
+        loop {
+            tt += -(1.0 - rng.next_f64()).ln() / (smaj * speed);
+            if !(tt < tb) {
+                return true;
+            }
+            m.eval(ray.o + ray.d * tt, &mut sc.sa, &mut sc.ss, &mut sc.j);
+            if !at(tt, smaj, sc, rng) {
+                return false;
+            }
+        }
+    });
+}
+
 #[allow(clippy::too_many_arguments)]
 fn ratio(
     m: &dyn Medium,
@@ -245,37 +277,24 @@ fn ratio(
     l: &mut [f64],
     t: &mut [f64],
 ) {
-    let mut alive = true;
-    m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
-        if !(smaj > 0.0) {
-            return true;
+    collisions(m, ray, a, b, speed, rng, sc, &mut |_, smaj, sc, rng| {
+        let mut tmax = 0.0f64;
+        for c in 0..t.len() {
+            l[c] += t[c] * sc.j[c] / smaj;
+            t[c] *= (1.0 - (sc.sa[c] + sc.ss[c]) / smaj).max(0.0);
+            tmax = tmax.max(t[c]);
         }
-        let mut tt = ta;
-        loop {
-            tt += -(1.0 - rng.next_f64()).ln() / (smaj * speed);
-            if !(tt < tb) {
-                return true;
-            }
-            m.eval(ray.o + ray.d * tt, &mut sc.sa, &mut sc.ss, &mut sc.j);
-            let mut tmax = 0.0f64;
-            for c in 0..t.len() {
-                l[c] += t[c] * sc.j[c] / smaj;
-                t[c] *= (1.0 - (sc.sa[c] + sc.ss[c]) / smaj).max(0.0);
-                tmax = tmax.max(t[c]);
-            }
-            if tmax < 0.01 {
-                // Russian roulette: survive with probability 1/2, doubled weight.
-                if rng.next_f64() < 0.5 {
-                    t.iter_mut().for_each(|v| *v *= 2.0);
-                } else {
-                    t.iter_mut().for_each(|v| *v = 0.0);
-                    alive = false;
-                    return false;
-                }
+        if tmax < 0.01 {
+            // Russian roulette: survive with probability 1/2, doubled weight.
+            if rng.next_f64() < 0.5 {
+                t.iter_mut().for_each(|v| *v *= 2.0);
+            } else {
+                t.iter_mut().for_each(|v| *v = 0.0);
+                return false;
             }
         }
+        true
     });
-    let _ = alive;
 }
 
 /// The outcome of [`sample_scatter`].
@@ -289,7 +308,7 @@ pub enum Event {
     Absorbed,
 }
 
-/// Delta tracking; with `stop_at_scatter`, returns at the first scattering event (for [`sample_scatter`]).
+/// Delta tracking; with `scatter_mode`, returns at the first scattering event (for [`sample_scatter`]).
 #[allow(clippy::too_many_arguments)]
 fn delta(
     m: &dyn Medium,
@@ -301,63 +320,49 @@ fn delta(
     sc: &mut Scratch,
     l: &mut [f64],
     w: &mut [f64],
-    stop_at_scatter: Option<&mut Event>,
+    scatter_mode: bool,
 ) -> Event {
     let n = w.len() as f64;
     let mut event = Event::Escaped;
-    let scatter_mode = stop_at_scatter.is_some();
-    m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
-        if !(smaj > 0.0) {
-            return true;
+    collisions(m, ray, a, b, speed, rng, sc, &mut |tt, smaj, sc, rng| {
+        let pa = sc.sa.iter().sum::<f64>() / (n * smaj);
+        let ps = sc.ss.iter().sum::<f64>() / (n * smaj);
+        if scatter_mode {
+            // Emission collected at every tentative collision (ratio-style), then the event.
+            for c in 0..w.len() {
+                l[c] += w[c] * sc.j[c] / smaj;
+            }
         }
-        let mut tt = ta;
-        loop {
-            tt += -(1.0 - rng.next_f64()).ln() / (smaj * speed);
-            if !(tt < tb) {
-                return true;
-            }
-            m.eval(ray.o + ray.d * tt, &mut sc.sa, &mut sc.ss, &mut sc.j);
-            let pa = sc.sa.iter().sum::<f64>() / (n * smaj);
-            let ps = sc.ss.iter().sum::<f64>() / (n * smaj);
-            if scatter_mode {
-                // Emission collected at every tentative collision (ratio-style), then the event.
+        let xi = rng.next_f64();
+        if xi < pa {
+            if !scatter_mode {
                 for c in 0..w.len() {
-                    l[c] += w[c] * sc.j[c] / smaj;
+                    l[c] += w[c] * sc.j[c] / (smaj * pa);
                 }
             }
-            let xi = rng.next_f64();
-            if xi < pa {
-                if !scatter_mode {
-                    for c in 0..w.len() {
-                        l[c] += w[c] * sc.j[c] / (smaj * pa);
-                    }
+            w.iter_mut().for_each(|v| *v = 0.0);
+            event = Event::Absorbed;
+            false
+        } else if xi < pa + ps {
+            if scatter_mode {
+                for c in 0..w.len() {
+                    w[c] *= sc.ss[c] / (smaj * ps);
                 }
+                event = Event::Scattered(tt);
+            } else {
                 w.iter_mut().for_each(|v| *v = 0.0);
                 event = Event::Absorbed;
-                return false;
-            } else if xi < pa + ps {
-                if scatter_mode {
-                    for c in 0..w.len() {
-                        w[c] *= sc.ss[c] / (smaj * ps);
-                    }
-                    event = Event::Scattered(tt);
-                } else {
-                    w.iter_mut().for_each(|v| *v = 0.0);
-                    event = Event::Absorbed;
-                }
-                return false;
-            } else {
-                let pn = 1.0 - pa - ps;
-                for c in 0..w.len() {
-                    let sn = (smaj - sc.sa[c] - sc.ss[c]).max(0.0);
-                    w[c] *= sn / (smaj * pn);
-                }
             }
+            false
+        } else {
+            let pn = 1.0 - pa - ps;
+            for c in 0..w.len() {
+                let sn = (smaj - sc.sa[c] - sc.ss[c]).max(0.0);
+                w[c] *= sn / (smaj * pn);
+            }
+            true
         }
     });
-    if let Some(e) = stop_at_scatter {
-        *e = event;
-    }
     event
 }
 
@@ -380,8 +385,7 @@ pub(crate) fn sample_scatter(
         return Event::Escaped;
     }
     let mut rng = Rng::new(ray.seed);
-    let mut e = Event::Escaped;
-    delta(m, ray, a, b, speed, &mut rng, sc, l, w, Some(&mut e))
+    delta(m, ray, a, b, speed, &mut rng, sc, l, w, true)
 }
 
 #[cfg(test)]

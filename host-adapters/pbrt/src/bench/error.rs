@@ -4,7 +4,6 @@
 
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume, Ray};
-use glam::DVec3;
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
@@ -24,11 +23,7 @@ pub struct Point {
 /// A luminance image (cd/m²) of the fire from a pinhole in front of it, `spp` rays per pixel; (image, seconds,
 /// medium evaluations).
 pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, f64, u64) {
-    let [b0, b1] = v.bounds();
-    let centre = 0.5 * (b0 + b1);
-    let extent = (b1 - b0).max_element();
-    let eye = centre - DVec3::Y * (2.2 * extent);
-    let half = 15f64.to_radians().tan();
+    let (eye, dir) = super::perf::pinhole(v, size);
     let xyz = v.channel_xyz();
     let start = Instant::now();
     let rows: Vec<(Vec<f64>, u64)> = (0..size)
@@ -39,9 +34,7 @@ pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, 
             let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
             let row = (0..size)
                 .map(|i| {
-                    let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
-                    let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
-                    let d = DVec3::new(u, 1.0, w).normalize();
+                    let d = dir(i, j);
                     let mut y = 0.0;
                     for s in 0..spp {
                         let ray = Ray {

@@ -270,14 +270,7 @@ fn write_ladder(
     write(&csv_path, error::csv(points).as_bytes())?;
     write(&svg_path, error::svg(points, title).as_bytes())?;
     let (w, h, rgb) = error::png(points, title);
-    crate::render::write_atomic(&png_path, |tmp| {
-        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().map_err(|e| e.to_string())?;
-        wr.write_image_data(&rgb).map_err(|e| e.to_string())
-    })?;
+    crate::tonemap::write_png_bytes(&png_path, w, h, &rgb, false)?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
         out += &format!(

@@ -33,6 +33,20 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
     Ok(path)
 }
 
+/// The benchmarks' camera: a pinhole 2.2 fire-sizes in front of the volume (−y), looking at its centre with a
+/// 30° field of view, so the fire fills the frame; (eye, unit direction of pixel (i, j) of `size`²).
+pub fn pinhole(v: &FireVolume, size: usize) -> (DVec3, impl Fn(usize, usize) -> DVec3 + Sync) {
+    let [b0, b1] = v.bounds();
+    let eye = 0.5 * (b0 + b1) - DVec3::Y * (2.2 * (b1 - b0).max_element());
+    let half = 15f64.to_radians().tan();
+    let dir = move |i: usize, j: usize| {
+        let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
+        let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+        DVec3::new(u, 1.0, w).normalize()
+    };
+    (eye, dir)
+}
+
 /// Peak resident memory of this process (VmHWM), bytes, where /proc tells.
 pub fn peak_rss() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -49,11 +63,7 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
     let v = FireVolume::new(&list).map_err(|e| e.to_string())?;
     let load_s = t0.elapsed().as_secs_f64();
     let [b0, b1] = v.bounds();
-    let centre = 0.5 * (b0 + b1);
-    let extent = (b1 - b0).max_element();
-    // A pinhole 2.2 extents in front (−y), looking at the centre, 30° field of view: the fire fills the frame.
-    let eye = centre - DVec3::Y * (2.2 * extent);
-    let half = (15f64).to_radians().tan();
+    let (eye, dir) = pinhole(&v, size);
     let xyz = v.channel_xyz();
     let step = v.step_length();
     let t1 = Instant::now();
@@ -65,9 +75,7 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
             let mut row = Vec::with_capacity(size);
             let mut samples = 0.0;
             for i in 0..size {
-                let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
-                let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
-                let d = DVec3::new(u, 1.0, w).normalize();
+                let d = dir(i, j);
                 let ray = Ray {
                     o: eye,
                     d,
