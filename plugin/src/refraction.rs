@@ -438,7 +438,11 @@ impl IndexGrid {
         }
         let d = self.dims;
         let s = u * DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64) - 0.5;
-        let fl = s.floor();
+        let fl = DVec3::new(
+            crate::grid::floor(s.x),
+            crate::grid::floor(s.y),
+            crate::grid::floor(s.z),
+        );
         let f = (s - fl).as_vec3();
         let [i, j, k] = [fl.x as i64, fl.y as i64, fl.z as i64];
         // The padding keeps every lookup inside the fire's box off the array's edges; only the outer half of the

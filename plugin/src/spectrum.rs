@@ -123,6 +123,21 @@ impl SpectralGrid {
     }
 }
 
+impl SpectralGrid {
+    /// The nodes of [`bin_average`](Self::bin_average): (bin, λ nm, weight), so that a bin's mean of f is
+    /// Σ weight·f(λ) over its nodes.
+    pub fn bin_nodes(&self) -> Vec<(usize, f64, f64)> {
+        (0..self.count)
+            .flat_map(|i| {
+                let (a, b) = self.edges(i);
+                crate::quadrature::gauss_legendre_nodes(a, b, 4)
+                    .into_iter()
+                    .map(move |(x, w)| (i, x, w / (b - a)))
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -104,10 +104,17 @@ impl Scratch {
 
 /// One march step of length `delta` through the coefficients in `sc` (eq. 3, exact for constant coefficients):
 /// adds the step's emission to `l`, attenuates `t`; returns the largest transmittance left.
-pub(crate) fn march_step(sc: &Scratch, delta: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+pub(crate) fn march_step(
+    sa: &[f64],
+    ss: &[f64],
+    j: &[f64],
+    delta: f64,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> f64 {
     let mut tmax = 0.0f64;
     for c in 0..t.len() {
-        let st = sc.sa[c] + sc.ss[c];
+        let st = sa[c] + ss[c];
         let tau = st * delta;
         // e^{−τ} and (1 − e^{−τ}) / σ_t, finite for σ_t → 0 and σ_t → ∞, with one exp at most: below τ = 0.01
         // (most steps of a fire) g = (1 − e^{−τ})/τ by its Taylor series to τ⁵, whose remainder τ⁶/5040 <
@@ -123,7 +130,7 @@ pub(crate) fn march_step(sc: &Scratch, delta: f64, l: &mut [f64], t: &mut [f64])
             let e = (-tau).exp();
             (e, (1.0 - e) / st)
         };
-        l[c] += t[c] * sc.j[c] * fac;
+        l[c] += t[c] * j[c] * fac;
         t[c] *= e;
         tmax = tmax.max(t[c]);
     }
@@ -193,17 +200,39 @@ fn march(
     l: &mut [f64],
     t: &mut [f64],
 ) {
+    let cutoff = m.cutoff();
+    let Scratch { sa, ss, j, empty } = sc;
+    march_steps(m, ray, a, b, speed, rng, empty, |p, delta| {
+        m.eval(p, sa, ss, j);
+        march_step(sa, ss, j, delta, l, t) >= cutoff
+    });
+}
+
+/// The march's steps along [a, b] (arc length `m.step()`, the first one a random fraction of it): calls
+/// `f(midpoint, length)` for each step until it returns false, skipping the steps whose midpoint lies in one of
+/// the medium's empty stretches (collected in `empty`).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn march_steps(
+    m: &dyn Medium,
+    ray: &Ray,
+    a: f64,
+    b: f64,
+    speed: f64,
+    rng: &mut Rng,
+    empty: &mut Vec<(f64, f64)>,
+    mut f: impl FnMut(DVec3, f64) -> bool,
+) {
     let len = (b - a) * speed;
     let mut ds = m.step();
     if !(ds > 0.0) || len / ds > MAX_STEPS {
         ds = len / MAX_STEPS;
     }
-    let cutoff = m.cutoff();
     // Empty stretches (arc length from a): a step whose midpoint falls in one adds nothing (σ = j = 0 there, so
     // L += 0 and T *= e⁰ = 1 exactly), so it is skipped without evaluating the medium — bit for bit the same.
-    sc.empty.clear();
+    empty.clear();
     m.empty_spans(ray.o, ray.d, a, b, &mut |ta, tb| {
-        sc.empty.push(((ta - a) * speed, (tb - a) * speed))
+        empty.push(((ta - a) * speed, (tb - a) * speed))
     });
     let mut e = 0;
     let mut s = 0.0;
@@ -215,17 +244,16 @@ fn march(
         let end = next.min(len);
         let delta = end - s;
         let mid = 0.5 * (s + end);
-        while e < sc.empty.len() && sc.empty[e].1 <= mid {
+        while e < empty.len() && empty[e].1 <= mid {
             e += 1;
         }
-        if e < sc.empty.len() && sc.empty[e].0 <= mid {
+        if e < empty.len() && empty[e].0 <= mid {
             s = end;
             next += ds;
             continue;
         }
         let p = ray.o + ray.d * (a + mid / speed);
-        m.eval(p, &mut sc.sa, &mut sc.ss, &mut sc.j);
-        if march_step(sc, delta, l, t) < cutoff {
+        if !f(p, delta) {
             break;
         }
         s = end;

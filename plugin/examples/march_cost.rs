@@ -1,0 +1,118 @@
+//! The march's cost per medium sample, and what f32 lanes change: one thread, the rays of a square pinhole
+//! image through a fire, each configuration timed in interleaved rounds (fastest and median reported, as the
+//! machine's speed drifts), and the f32 image compared with the f64 one pixel by pixel.
+//!
+//!     cargo run --release -p firemedium-plugin --example march_cost -- [DATASET.vdb] [PIXELS] [ROUNDS] [spectral|rgb]
+//!
+//! Default: the committed campfire (scenes/campfire/campfire.vdb), 96 pixels, 5 rounds. Results are in
+//! docs/RESULTS.md.
+
+use firemedium_plugin::params::Param;
+use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume, Ray};
+use glam::DVec3;
+use std::time::Instant;
+
+/// Luminance of every pixel, seconds, evaluations.
+fn render(v: &FireVolume, size: usize) -> (Vec<f64>, f64, u64) {
+    let [b0, b1] = v.bounds();
+    let eye = 0.5 * (b0 + b1) - DVec3::Y * (2.2 * (b1 - b0).max_element());
+    let half = 15f64.to_radians().tan();
+    let xyz = v.channel_xyz();
+    let c = v.channels();
+    let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+    let mut img = Vec::with_capacity(size * size);
+    let e0 = evaluations_on_this_thread();
+    let start = Instant::now();
+    for j in 0..size {
+        for i in 0..size {
+            let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
+            let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+            let ray = Ray {
+                o: eye,
+                d: DVec3::new(u, 1.0, w).normalize(),
+                t0: 0.0,
+                t1: f64::INFINITY,
+                seed: (j * size + i) as u64,
+            };
+            v.integrate(&ray, &mut l, &mut t);
+            img.push((0..c).map(|k| l[k] * xyz[k].y).sum());
+        }
+    }
+    (
+        img,
+        start.elapsed().as_secs_f64(),
+        evaluations_on_this_thread() - e0,
+    )
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let file = args.first().cloned().unwrap_or_else(|| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/campfire/campfire.vdb"
+        )
+        .to_string()
+    });
+    let size: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(96);
+    let rounds: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(5);
+    let only = args.get(3).cloned().unwrap_or_default();
+    let configs: Vec<_> = [
+        ("spectral f64", "spectral", "f64"),
+        ("spectral f32", "spectral", "f32"),
+        ("rgb f64", "rgb", "f64"),
+        ("rgb f32", "rgb", "f32"),
+    ]
+    .into_iter()
+    .filter(|c| c.1 == only || only.is_empty())
+    .collect();
+    let volumes: Vec<FireVolume> = configs
+        .iter()
+        .map(|(_, mode, precision)| {
+            FireVolume::new(&[
+                Param::string("filename", &file),
+                Param::string("colormode", mode),
+                Param::string("precision", precision),
+            ])
+            .unwrap_or_else(|e| panic!("{e}"))
+        })
+        .collect();
+    let mut times = vec![Vec::new(); configs.len()];
+    let mut images = vec![Vec::new(); configs.len()];
+    let mut evals = vec![0; configs.len()];
+    for _ in 0..rounds {
+        for (k, v) in volumes.iter().enumerate() {
+            let (img, s, n) = render(v, size);
+            times[k].push(s);
+            images[k] = img;
+            evals[k] = n;
+        }
+    }
+    println!("{file}, {size}² rays, one thread, {rounds} rounds");
+    println!("| configuration | fastest s | median s | samples | ns per sample (fastest) | vs f64: max rel. diff | rel. RMS diff |");
+    println!("|---|---|---|---|---|---|---|");
+    for (k, (name, _, _)) in configs.iter().enumerate() {
+        let mut ts = times[k].clone();
+        ts.sort_by(f64::total_cmp);
+        let reference = &images[k & !1];
+        let peak = reference.iter().fold(0f64, |m, &x| m.max(x));
+        let (mut worst, mut sq, mut n) = (0f64, 0.0, 0usize);
+        for (a, b) in images[k].iter().zip(reference) {
+            // Pixels above 1e-3 of the peak (relative differences of black pixels say nothing).
+            if *b > 1e-3 * peak {
+                worst = worst.max((a - b).abs() / b);
+                sq += ((a - b) / b).powi(2);
+                n += 1;
+            }
+        }
+        println!(
+            "| {name} | {:.3} | {:.3} | {} | {:.1} | {:.2e} | {:.2e} |",
+            ts[0],
+            ts[ts.len() / 2],
+            evals[k],
+            ts[0] / evals[k].max(1) as f64 * 1e9,
+            worst,
+            (sq / n.max(1) as f64).sqrt()
+        );
+    }
+}
