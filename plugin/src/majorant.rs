@@ -63,9 +63,11 @@ impl MajorantGrid {
         let counts = dims.map(|n| n.div_ceil(brick));
         let channels = ds.channels().len();
         let nb = counts[0] * counts[1] * counts[2];
-        let mut ranges = vec![(f32::INFINITY, f32::NEG_INFINITY); nb * channels];
-        for (c, ch) in ds.channels().iter().enumerate() {
-            let g = &ch.grid;
+        // Per channel (in parallel), per brick: the range over the brick's voxels and the ring around it that
+        // trilinear lookups inside it reach; rows are read as slices, min/max by comparisons (vectorised).
+        let per_channel = crate::dataset::par_map(ds.channels().iter().collect(), |ch| {
+            let (g, [nx, ny, nz]) = (ch.grid.data(), dims);
+            let mut out = Vec::with_capacity(nb);
             for bz in 0..counts[2] {
                 for by in 0..counts[1] {
                     for bx in 0..counts[0] {
@@ -73,23 +75,31 @@ impl MajorantGrid {
                         let lo = b.map(|v| (v * brick) as i64 - 1);
                         let hi = [0, 1, 2].map(|a| ((b[a] + 1) * brick) as i64);
                         let (mut mn, mut mx) = (f32::INFINITY, f32::NEG_INFINITY);
-                        let outside = (0..3).any(|a| lo[a] < 0 || hi[a] >= dims[a] as i64);
-                        if outside {
+                        // A lookup near the grid's faces also interpolates toward the zero outside.
+                        if (0..3).any(|a| lo[a] < 0 || hi[a] >= dims[a] as i64) {
                             (mn, mx) = (0.0, 0.0);
                         }
-                        for z in lo[2].max(0)..=hi[2].min(dims[2] as i64 - 1) {
-                            for y in lo[1].max(0)..=hi[1].min(dims[1] as i64 - 1) {
-                                for x in lo[0].max(0)..=hi[0].min(dims[0] as i64 - 1) {
-                                    let v = g.at(x, y, z);
-                                    mn = mn.min(v);
-                                    mx = mx.max(v);
+                        let x0 = lo[0].max(0) as usize;
+                        let x1 = hi[0].min(nx as i64 - 1) as usize;
+                        for z in lo[2].max(0) as usize..=hi[2].min(nz as i64 - 1) as usize {
+                            for y in lo[1].max(0) as usize..=hi[1].min(ny as i64 - 1) as usize {
+                                let row = nx * (y + ny * z);
+                                for &v in &g[row + x0..=row + x1] {
+                                    mn = if v < mn { v } else { mn };
+                                    mx = if v > mx { v } else { mx };
                                 }
                             }
                         }
-                        let i = bx + counts[0] * (by + counts[1] * bz);
-                        ranges[i * channels + c] = (mn, mx);
+                        out.push((mn, mx));
                     }
                 }
+            }
+            out
+        });
+        let mut ranges = vec![(0.0, 0.0); nb * channels];
+        for (c, r) in per_channel.iter().enumerate() {
+            for (i, &v) in r.iter().enumerate() {
+                ranges[i * channels + c] = v;
             }
         }
         MajorantGrid {

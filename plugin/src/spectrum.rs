@@ -124,13 +124,13 @@ impl SpectralGrid {
 }
 
 impl SpectralGrid {
-    /// The nodes of [`bin_average`](Self::bin_average): (bin, λ nm, weight), so that a bin's mean of f is
-    /// Σ weight·f(λ) over its nodes.
-    pub fn bin_nodes(&self) -> Vec<(usize, f64, f64)> {
+    /// Gauss–Legendre nodes for bin means, `panels` panels of 8 per bin: (bin, λ nm, weight), so that a bin's
+    /// mean of f is Σ weight·f(λ) over its nodes ([`bin_average`](Self::bin_average)'s with 4 panels).
+    pub fn bin_nodes(&self, panels: usize) -> Vec<(usize, f64, f64)> {
         (0..self.count)
             .flat_map(|i| {
                 let (a, b) = self.edges(i);
-                crate::quadrature::gauss_legendre_nodes(a, b, 4)
+                crate::quadrature::gauss_legendre_nodes(a, b, panels)
                     .into_iter()
                     .map(move |(x, w)| (i, x, w / (b - a)))
             })

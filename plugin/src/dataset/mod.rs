@@ -252,6 +252,22 @@ impl Default for LoadOptions {
     }
 }
 
+/// `f` over `items`, one thread per item (a dataset has a handful of grids; each is independent work of tens
+/// of milliseconds or more), results in order.
+pub(crate) fn par_map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
+    if items.len() <= 1 {
+        return items.into_iter().map(f).collect();
+    }
+    let f = &f;
+    std::thread::scope(|s| {
+        let handles: Vec<_> = items.into_iter().map(|x| s.spawn(move || f(x))).collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
 /// What a reader hands back for one grid, before policies and mapping.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Loaded {
@@ -636,8 +652,9 @@ impl Dataset {
                 "finite corners with p0 < p1 on every axis",
             ));
         }
-        let mut channels = Vec::with_capacity(loaded.len());
-        for (idx, l, file, seconds, _) in loaded.iter().cloned() {
+        let (first_idx, first_bounds, format) = (first.0, first.1.bounds, first.4);
+        // Checks, policies and statistics per channel, in parallel.
+        let channels = par_map(loaded, |(idx, l, file, seconds, _)| {
             let src = &sources[idx];
             if l.dims != dims {
                 return Err(Error::invalid(
@@ -646,18 +663,18 @@ impl Dataset {
                     format!("{}×{}×{} in {file}", l.dims[0], l.dims[1], l.dims[2]),
                     format!(
                         "the {}×{}×{} of channel '{}' (all channels share one grid)",
-                        dims[0], dims[1], dims[2], sources[first.0].name
+                        dims[0], dims[1], dims[2], sources[first_idx].name
                     ),
                 ));
             }
-            if opts.bounds.is_none() && l.bounds.is_some() && l.bounds != first.1.bounds {
+            if opts.bounds.is_none() && l.bounds.is_some() && l.bounds != first_bounds {
                 return Err(Error::invalid(
                     "dataset",
                     format!("{} bounds", src.name),
                     format!("{:?} in {file}", l.bounds.unwrap_or_default()),
                     format!(
                         "the bounds {bounds:?} of channel '{}' (all channels share one grid)",
-                        sources[first.0].name
+                        sources[first_idx].name
                     ),
                 ));
             }
@@ -668,7 +685,7 @@ impl Dataset {
                 apply_policies(&mut grid, &src.name, &file, &src.mapping, opts)?;
             let stats = grid.stats();
             let bytes = grid.bytes();
-            channels.push(Channel {
+            Ok(Channel {
                 name: src.name.clone(),
                 grid,
                 stats,
@@ -679,10 +696,12 @@ impl Dataset {
                     replaced_nonfinite,
                     replaced_negative,
                 },
-            });
-        }
+            })
+        })
+        .into_iter()
+        .collect::<Result<Vec<_>, Error>>()?;
         Ok(Dataset {
-            format: first.4,
+            format,
             dims,
             bounds,
             channels,

@@ -64,10 +64,25 @@ fn active_bbox(t: &Tree) -> Option<([i64; 3], [i64; 3])> {
         grow(o, o.map(|v| v + tile.size as i64 - 1));
     }
     for leaf in &t.leaves {
-        for i in (0..512).filter(|&i| bit(&leaf.mask, i)) {
-            let p = leaf_voxel(leaf.origin, i);
-            grow(p, p);
-        }
+        // The mask's words are x slabs, its bits y·8 + z: the active x range from the non-zero words, y from
+        // the bytes of their union, z from the bits of the union of those bytes.
+        let xs = (0..8).filter(|&x| leaf.mask[x] != 0);
+        let (Some(x0), Some(x1)) = (xs.clone().next(), xs.last()) else {
+            continue;
+        };
+        let union = leaf.mask.iter().fold(0u64, |a, &w| a | w);
+        let ys = (0..8).filter(|&y| (union >> (8 * y)) & 0xff != 0);
+        let (y0, y1) = (ys.clone().next().unwrap_or(0), ys.last().unwrap_or(0));
+        let zbits = (0..8).fold(0u64, |a, y| a | (union >> (8 * y)) & 0xff);
+        let (z0, z1) = (
+            zbits.trailing_zeros() as i64,
+            63 - zbits.leading_zeros() as i64,
+        );
+        let o = leaf.origin.map(|v| v as i64);
+        grow(
+            [o[0] + x0 as i64, o[1] + y0 as i64, o[2] + z0],
+            [o[0] + x1 as i64, o[1] + y1 as i64, o[2] + z1],
+        );
     }
     (lo[0] <= hi[0]).then_some((lo, hi))
 }
@@ -135,10 +150,10 @@ pub(crate) fn densify(
     let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
     let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
     let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
-    let mut out = Vec::new();
-    for (_, t) in trees {
+    // One dense grid per tree, filled in parallel.
+    super::par_map(trees.iter().collect(), |(_, t)| {
         let mut data = alloc_grid(file, dims, max_bytes, t.background)?;
-        let mut put = |p: [i64; 3], v: f32| {
+        let put = |data: &mut [f32], p: [i64; 3], v: f32| {
             let q = [0, 1, 2].map(|k| p[k] - lo[k]);
             if (0..3).all(|k| q[k] >= 0 && (q[k] as usize) < dims[k]) {
                 data[q[0] as usize + dims[0] * (q[1] as usize + dims[1] * q[2] as usize)] = v;
@@ -153,21 +168,35 @@ pub(crate) fn densify(
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
-                        put([x, y, z], tile.value);
+                        put(&mut data, [x, y, z], tile.value);
                     }
                 }
             }
         }
         for leaf in &t.leaves {
+            let o = leaf.origin.map(|v| v as i64);
+            if (0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]) && leaf.values.len() == 512 {
+                // The whole leaf inside the box (the common case): rows of 8 along z, no per-voxel checks.
+                let q = [0, 1, 2].map(|k| (o[k] - lo[k]) as usize);
+                let sz = dims[0] * dims[1];
+                for (xy, row) in leaf.values.chunks_exact(8).enumerate() {
+                    let base = q[0] + (xy >> 3) + dims[0] * (q[1] + (xy & 7) + dims[1] * q[2]);
+                    for (z, &v) in row.iter().enumerate() {
+                        data[base + z * sz] = v;
+                    }
+                }
+                continue;
+            }
             for (i, &v) in leaf.values.iter().enumerate() {
-                put(leaf_voxel(leaf.origin, i), v);
+                put(&mut data, leaf_voxel(leaf.origin, i), v);
             }
         }
-        out.push(Loaded {
+        Ok(Loaded {
             dims,
             data,
             bounds: Some([p0, p1]),
-        });
-    }
-    Ok(out)
+        })
+    })
+    .into_iter()
+    .collect()
 }

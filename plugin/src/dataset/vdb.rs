@@ -494,7 +494,7 @@ pub(crate) fn read(
     max_bytes: u64,
 ) -> Result<Vec<Loaded>, Error> {
     let header = read_header(file, bytes)?;
-    let mut trees = Vec::new();
+    let mut infos = Vec::new();
     for &name in names {
         let Some(info) = header.grids.iter().find(|g| g.name == name) else {
             return Err(missing_grid(
@@ -503,8 +503,14 @@ pub(crate) fn read(
                 header.grids.iter().map(|g| g.name.as_str()),
             ));
         };
-        trees.push((name, read_tree(file, bytes, info)?));
+        infos.push((name, info));
     }
+    // The grids' trees are independent byte ranges: decoded in parallel.
+    let trees = super::par_map(infos, |(name, info)| {
+        read_tree(file, bytes, info).map(|t| (name, t))
+    })
+    .into_iter()
+    .collect::<Result<Vec<_>, Error>>()?;
     densify(file, &trees, max_bytes)
 }
 

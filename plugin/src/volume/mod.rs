@@ -130,12 +130,14 @@ impl Basis {
             }
         }
     }
-    /// The wavelengths (nm) where [`emit`](Self::emit) evaluates its function, and (node, channel, weight)
-    /// terms with emit(f)_c = Σ weight·f(λ_node) over the channel's terms.
+    /// Wavelengths (nm) and (node, channel, weight) terms with emit(f)_c ≈ Σ weight·f(λ_node) over the
+    /// channel's terms: the rgb bands' own 1 nm sums, and for spectral bins `emit`'s four 8-node Gauss–Legendre
+    /// panels per bin. (One panel would quarter a temperature table's work but differs from four by up to 4e-5
+    /// for Planck × soot κ: the soot n, k table is linear between its wavelengths, and its kinks need panels.)
     fn nodes(&self) -> Nodes {
         match self.mode {
             ColorMode::Spectral(g) => {
-                let n = g.bin_nodes();
+                let n = g.bin_nodes(4);
                 Nodes {
                     lambda: n.iter().map(|x| x.1).collect(),
                     terms: n.iter().enumerate().map(|(k, x)| (k, x.0, x.2)).collect(),
@@ -1652,6 +1654,39 @@ mod tests {
             }
             let tau550 = sa[15];
             assert!(tau550 > 0.5e-4 && tau550 < 60.0);
+        }
+    }
+
+    #[test]
+    fn table_nodes_match_the_bin_means() {
+        // The tables' node sums against emit's bin means, for soot κ × Planck from 300 K to 1e5 K, 30 and 5 bins.
+        for bins in [30, 5, 0] {
+            let mode = match bins {
+                0 => ColorMode::Rgb,
+                n => ColorMode::Spectral(SpectralGrid::new(400.0, 750.0, n).unwrap()),
+            };
+            let basis = Basis { mode, k: 683.0 };
+            let bins = basis.channels();
+            let nodes = basis.nodes();
+            let optics = SootOptics::propane();
+            let kap: Vec<f64> = nodes
+                .lambda
+                .iter()
+                .map(|&l| optics.kappa(l, 1.0, 1.39))
+                .collect();
+            for t in [300.0, 1000.0, 1800.0, 3000.0, 1e5] {
+                let fast = basis.emit_planck(&nodes, &kap, t);
+                let slow = basis.emit(&|l| optics.kappa(l, 1.0, 1.39) * spectral_radiance(t, l));
+                for c in 0..bins {
+                    let e = (fast[c] / slow[c] - 1.0).abs();
+                    assert!(
+                        e < 1e-12,
+                        "{bins} bins, T {t}, bin {c}: {} vs {} ({e:e})",
+                        fast[c],
+                        slow[c]
+                    );
+                }
+            }
         }
     }
 

@@ -128,17 +128,26 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
             .unwrap_or_default(),
         a.repeat
     );
-    let reference = perf::run(&file, &[Param::float("stepsize", a.reference_step)], size)?;
+    // References in f64 (so the error column holds the f32 lanes' rounding too).
+    let reference = perf::run(
+        &file,
+        &[
+            Param::float("stepsize", a.reference_step),
+            Param::string("precision", "f64"),
+        ],
+        size,
+    )?;
     let reference_rgb = perf::run(
         &file,
         &[
             Param::float("stepsize", a.reference_step),
             Param::string("colormode", "rgb"),
+            Param::string("precision", "f64"),
         ],
         size,
     )?;
     out += &format!(
-        "references: march at {} voxel, spectral {:.2} s, rgb {:.2} s; rgb vs spectral reference: rel. RMSE {:.2e}\n\n",
+        "references: march at {} voxel in f64, spectral {:.2} s, rgb {:.2} s; rgb vs spectral reference: rel. RMSE {:.2e}\n\n",
         a.reference_step,
         reference.render_s,
         reference_rgb.render_s,
@@ -149,6 +158,13 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         (
             "march ½ voxel, spectral (30 bins)",
             vec![Param::float("stepsize", 0.5)],
+        ),
+        (
+            "march ½ voxel, spectral, f64 (no lanes)",
+            vec![
+                Param::float("stepsize", 0.5),
+                Param::string("precision", "f64"),
+            ],
         ),
         (
             "march ½ voxel, rgb",
