@@ -2,7 +2,7 @@
 //! image through a fire, each configuration timed in interleaved rounds (fastest and median reported, as the
 //! machine's speed drifts), and the f32 image compared with the f64 one pixel by pixel.
 //!
-//!     cargo run --release -p firemedium-plugin --example march_cost -- [DATASET.vdb] [PIXELS] [ROUNDS] [spectral|rgb]
+//!     cargo run --release -p firemedium-plugin --example march_cost -- [DATASET.vdb] [PIXELS] [ROUNDS] [CONFIGURATION SUBSTRING] [BRICK]
 //!
 //! Default: the committed campfire (scenes/campfire/campfire.vdb), 96 pixels, 5 rounds. Results are in
 //! docs/RESULTS.md.
@@ -64,16 +64,20 @@ fn main() {
         ("rgb f32", "rgb", "f32"),
     ]
     .into_iter()
-    .filter(|c| c.1 == only || only.is_empty())
+    .filter(|c| c.0.contains(only.as_str()))
     .collect();
     let volumes: Vec<FireVolume> = configs
         .iter()
         .map(|(_, mode, precision)| {
-            FireVolume::new(&[
+            let mut list = vec![
                 Param::string("filename", &file),
                 Param::string("colormode", mode),
                 Param::string("precision", precision),
-            ])
+            ];
+            if let Some(b) = args.get(4).and_then(|s| s.parse().ok()) {
+                list.push(Param::int("brick", b));
+            }
+            FireVolume::new(&list)
             .unwrap_or_else(|e| panic!("{e}"))
         })
         .collect();

@@ -1010,13 +1010,18 @@ impl FireVolume {
         };
         let ch = self.ds.channels();
         let d = ch[self.density].grid.eval(&st).max(0.0);
-        let t = self.temperature.map_or(0.0, |i| ch[i].grid.eval(&st));
-        let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
-        let emits = t as f64 > self.t_emit || self.temperature.is_none();
         let mut n = [0f32; lanes::MAX_SPECIES];
         for (k, sp) in lt.species.iter().enumerate() {
             n[k] = ch[sp.ch].grid.eval(&st).max(0.0);
         }
+        // No soot and no species here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1 exactly, so it
+        // is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
+        if d == 0.0 && n.iter().all(|&x| x == 0.0) {
+            return 1.0;
+        }
+        let t = self.temperature.map_or(0.0, |i| ch[i].grid.eval(&st));
+        let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
+        let emits = t as f64 > self.t_emit || self.temperature.is_none();
         let LaneScratch { sig, jj, l, t: tr } = ls;
         lt.coefficients(d, t, if emits { d * les } else { 0.0 }, &n, sig, jj);
         lanes::step(sig, jj, delta as f32, l, tr)
