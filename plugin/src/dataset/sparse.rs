@@ -66,13 +66,13 @@ fn active_bbox(t: &Tree) -> Option<([i64; 3], [i64; 3])> {
     for leaf in &t.leaves {
         // The mask's words are x slabs, its bits y·8 + z: the active x range from the non-zero words, y from
         // the bytes of their union, z from the bits of the union of those bytes.
-        let xs = (0..8).filter(|&x| leaf.mask[x] != 0);
-        let (Some(x0), Some(x1)) = (xs.clone().next(), xs.last()) else {
+        let mut xs = (0..8).filter(|&x| leaf.mask[x] != 0);
+        let (Some(x0), Some(x1)) = (xs.clone().next(), xs.next_back()) else {
             continue;
         };
         let union = leaf.mask.iter().fold(0u64, |a, &w| a | w);
-        let ys = (0..8).filter(|&y| (union >> (8 * y)) & 0xff != 0);
-        let (y0, y1) = (ys.clone().next().unwrap_or(0), ys.last().unwrap_or(0));
+        let mut ys = (0..8).filter(|&y| (union >> (8 * y)) & 0xff != 0);
+        let (y0, y1) = (ys.clone().next().unwrap_or(0), ys.next_back().unwrap_or(0));
         let zbits = (0..8).fold(0u64, |a, y| a | (union >> (8 * y)) & 0xff);
         let (z0, z1) = (
             zbits.trailing_zeros() as i64,
