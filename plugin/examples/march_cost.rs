@@ -77,8 +77,7 @@ fn main() {
             if let Some(b) = args.get(4).and_then(|s| s.parse().ok()) {
                 list.push(Param::int("brick", b));
             }
-            FireVolume::new(&list)
-            .unwrap_or_else(|e| panic!("{e}"))
+            FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"))
         })
         .collect();
     let mut times = vec![Vec::new(); configs.len()];
