@@ -76,14 +76,7 @@ impl Stencil {
             }
         }
         if interp == Interpolation::Trilinear {
-            let mut base = [0i64; 3];
-            let mut frac = [0f32; 3];
-            for a in 0..3 {
-                let s = p[a] * dims[a] as f64 - 0.5;
-                let f = floor(s);
-                base[a] = f as i64;
-                frac[a] = (s - f) as f32;
-            }
+            let (base, frac) = Stencil::cell(dims, p);
             // Inside (all eight samples in the grid, the common case): the weights and indices directly, in
             // the same corner order and products as the general path (so the same sums, bit for bit: the zero
             // weights it leaves out add +0).
@@ -121,6 +114,20 @@ impl Stencil {
         Some(Stencil::general(dims, p, interp))
     }
 
+    /// The trilinear cell of `p`: the lower corner's sample index and the fractions toward the upper one.
+    #[inline(always)]
+    fn cell(dims: [usize; 3], p: [f64; 3]) -> ([i64; 3], [f32; 3]) {
+        let mut base = [0i64; 3];
+        let mut frac = [0f32; 3];
+        for a in 0..3 {
+            let s = p[a] * dims[a] as f64 - 0.5;
+            let f = floor(s);
+            base[a] = f as i64;
+            frac[a] = (s - f) as f32;
+        }
+        (base, frac)
+    }
+
     /// The stencil near the grid's faces (samples outside count as zero) and for nearest lookups.
     #[inline(never)]
     fn general(dims: [usize; 3], p: [f64; 3], interp: Interpolation) -> Stencil {
@@ -139,14 +146,7 @@ impl Stencil {
                 st.n = 1;
             }
             Interpolation::Trilinear => {
-                let mut base = [0i64; 3];
-                let mut frac = [0f32; 3];
-                for a in 0..3 {
-                    let s = p[a] * dims[a] as f64 - 0.5;
-                    let f = floor(s);
-                    base[a] = f as i64;
-                    frac[a] = (s - f) as f32;
-                }
+                let (base, frac) = Stencil::cell(dims, p);
                 for corner in 0..8 {
                     let o = [corner & 1, (corner >> 1) & 1, corner >> 2];
                     let q = [0, 1, 2].map(|a| base[a] + o[a] as i64);

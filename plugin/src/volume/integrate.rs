@@ -161,7 +161,14 @@ pub(crate) fn integrate(
     }
     let mut rng = Rng::new(ray.seed);
     match how {
-        Integrator::March => march(m, ray, a, b, speed, &mut rng, sc, l, t),
+        Integrator::March => {
+            let cutoff = m.cutoff();
+            let Scratch { sa, ss, j, empty } = sc;
+            march_steps(m, ray, a, b, speed, &mut rng, empty, |p, delta| {
+                m.eval(p, sa, ss, j);
+                march_step(sa, ss, j, delta, l, t) >= cutoff
+            });
+        }
         Integrator::Ratio => ratio(m, ray, a, b, speed, &mut rng, sc, l, t),
         Integrator::Delta => {
             delta(m, ray, a, b, speed, &mut rng, sc, l, t, false);
@@ -186,26 +193,6 @@ pub(crate) fn transmittance(
         how
     };
     integrate(m, ray, how, sc, &mut l, t);
-}
-
-#[allow(clippy::too_many_arguments)]
-fn march(
-    m: &dyn Medium,
-    ray: &Ray,
-    a: f64,
-    b: f64,
-    speed: f64,
-    rng: &mut Rng,
-    sc: &mut Scratch,
-    l: &mut [f64],
-    t: &mut [f64],
-) {
-    let cutoff = m.cutoff();
-    let Scratch { sa, ss, j, empty } = sc;
-    march_steps(m, ray, a, b, speed, rng, empty, |p, delta| {
-        m.eval(p, sa, ss, j);
-        march_step(sa, ss, j, delta, l, t) >= cutoff
-    });
 }
 
 /// The march's steps along [a, b] (arc length `m.step()`, the first one a random fraction of it): calls
