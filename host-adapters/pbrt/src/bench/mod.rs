@@ -153,7 +153,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         reference_rgb.render_s,
         perf::rel_rmse(&reference_rgb.image, &reference.image)
     );
-    out += "| configuration | load s | render s | total s | rays/s | steps/s | steps/s/core | rel. RMSE |\n|---|---|---|---|---|---|---|---|\n";
+    out += "| configuration | load s | render s | total s | rays/s | steps/s | samples | samples/s/core | rel. RMSE |\n|---|---|---|---|---|---|---|---|---|\n";
     let configs: Vec<(&str, Vec<Param>)> = vec![
         (
             "march ½ voxel, spectral (30 bins)",
@@ -202,13 +202,14 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
             },
         );
         out += &format!(
-            "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.3e} | {:.3e} | {:.2e} |\n",
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.3e} | {:.3e} | {:.3e} | {:.2e} |\n",
             r.load_s,
             r.render_s,
             total,
             r.rays as f64 / r.render_s,
             r.samples / r.render_s,
-            r.samples / r.render_s / cores as f64,
+            r.evaluations as f64,
+            r.evaluations as f64 / r.render_s / cores as f64,
             err
         );
     }

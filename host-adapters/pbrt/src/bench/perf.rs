@@ -18,6 +18,9 @@ pub struct Run {
     pub rays: usize,
     /// March steps along the clipped rays (early termination not subtracted): an upper bound of medium samples.
     pub samples: f64,
+    /// Medium samples the volume actually evaluated (its per-thread counter, read around each row on the thread
+    /// that rendered it): the steps minus those skipped in empty bricks or after early termination.
+    pub evaluations: u64,
     /// Luminance image (Y, cd/m²).
     pub image: Vec<f64>,
 }
@@ -67,13 +70,14 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
     let xyz = v.channel_xyz();
     let step = v.step_length();
     let t1 = Instant::now();
-    let rows: Vec<(Vec<f64>, f64)> = (0..size)
+    let rows: Vec<(Vec<f64>, f64, u64)> = (0..size)
         .into_par_iter()
         .map(|j| {
             let c = v.channels();
             let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
             let mut row = Vec::with_capacity(size);
             let mut samples = 0.0;
+            let e0 = firemedium_plugin::volume::evaluations_on_this_thread();
             for i in 0..size {
                 let d = dir(i, j);
                 let ray = Ray {
@@ -92,16 +96,19 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
                     samples += ((b - a) / step).ceil();
                 }
             }
-            (row, samples)
+            let evaluations = firemedium_plugin::volume::evaluations_on_this_thread() - e0;
+            (row, samples, evaluations)
         })
         .collect();
     let render_s = t1.elapsed().as_secs_f64();
     let samples = rows.iter().map(|r| r.1).sum();
+    let evaluations = rows.iter().map(|r| r.2).sum();
     Ok(Run {
         load_s,
         render_s,
         rays: size * size,
         samples,
+        evaluations,
         image: rows.into_iter().flat_map(|r| r.0).collect(),
     })
 }
