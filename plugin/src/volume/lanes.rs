@@ -4,170 +4,95 @@
 //! (σ_t and j from the temperature tables) and the step (e^{−τ}, the emission weight, the transmittance). Here
 //! both run over fixed-width arrays of `f32` with no branch per channel — the exponential is a polynomial, the
 //! thin-step series a select — so the compiler turns each into vector instructions (8 channels per AVX2
-//! instruction where [`avx2`] finds it, 4 with the baseline SSE2).
+//! instruction in `march_lanes`' AVX2 clone, 4 with the baseline SSE2).
 //!
-//! **Range.** Every table is copied from the `f64`-built [`TTable`](super::TTable)s (already `f32`), emission
-//! divided by the largest emission value (`jscale`), so per-sample products stay far inside `f32`'s range for any
-//! data the build accepted; [`LaneTables::build`] refuses (and the volume marches in `f64`) when the largest
-//! density times the largest coefficient would not. **Accuracy** (tested): one step is within 2e-7 relative of
-//! the `f64` step for every τ from 1e-12 to 1e8; the campfire image within 1e-6 (docs/RESULTS.md).
+//! **Tables.** The lanes read the volume's own temperature tables ([`TTable`] stores its rows as lanes, padded to
+//! a multiple of [`W`] channels), so the march holds no second copy. **Range.** [`LaneTables::build`] refuses
+//! (and the volume marches in `f64`) when the largest density, emission scale or species density times the
+//! largest coefficient could leave `f32`'s range. **Accuracy** (tested): one step is within 4e-7 relative of
+//! the closed form for every τ from 1e-12 to 1e8; the campfire image within 1e-6 of the f64 march
+//! (docs/RESULTS.md).
+
+use super::{FireVolume, TTable};
 
 /// Channels per lane.
 pub(crate) const W: usize = 8;
 /// One lane of channels.
 pub(crate) type Lane = [f32; W];
 
-/// A per-temperature table in lanes: `rows` rows of `chunks` lanes, row r at T = r·dt.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct LTable {
-    dt: f64,
-    rows: usize,
-    chunks: usize,
-    v: Vec<Lane>,
-}
-
-impl LTable {
-    /// From a row-major `rows × c` table at spacing `dt`, each value times `scale`; `None` if any product is not
-    /// finite in `f32`.
-    fn new(dt: f64, rows: usize, c: usize, values: &[f32], scale: f64) -> Option<LTable> {
-        let chunks = c.div_ceil(W);
-        let mut v = vec![[0f32; W]; rows * chunks];
-        for r in 0..rows {
-            for ch in 0..c {
-                let x = (values[r * c + ch] as f64 * scale) as f32;
-                if !x.is_finite() {
-                    return None;
-                }
-                v[r * chunks + ch / W][ch % W] = x;
-            }
-        }
-        Some(LTable {
-            dt,
-            rows,
-            chunks,
-            v,
-        })
-    }
-    /// The two rows around T and the fraction between them.
+impl TTable {
+    /// The two rows around T and the fraction between them, as lanes.
     #[inline(always)]
-    fn rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
+    fn lane_rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
         let f = (t as f64 / self.dt).clamp(0.0, (self.rows - 1) as f64);
         let i = (f as usize).min(self.rows - 2);
         let a = &self.v[i * self.chunks..(i + 1) * self.chunks];
         let b = &self.v[(i + 1) * self.chunks..(i + 2) * self.chunks];
         (a, b, (f - i as f64) as f32)
     }
-    fn max(&self) -> f64 {
+    /// The largest value in the table.
+    pub(super) fn max(&self) -> f64 {
         self.v.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
     }
-    fn bytes(&self) -> usize {
-        self.v.len() * std::mem::size_of::<Lane>()
-    }
 }
 
-/// One species: its grid channel, and σ and j per grid unit (scale folded in, j divided by `jscale`).
-#[derive(Debug, Clone)]
-pub(crate) struct LaneSpecies {
-    pub ch: usize,
-    sigma: LTable,
-    j: LTable,
-}
-
-/// The most species a lane table holds (the line data has seven elements).
+/// The most species the lane march handles (the line data has seven elements).
 pub(crate) const MAX_SPECIES: usize = 8;
 
-/// Everything the lane march reads per sample.
+/// What the lane march needs beyond the volume's tables: σ per unit density in lanes.
 #[derive(Debug, Clone)]
 pub(crate) struct LaneTables {
     chunks: usize,
-    /// σ_a + σ_s per unit density (constant in T), or σ_a over T (`a_t`, rgb physical mode) with σ_s in `s`.
+    /// σ_a + σ_s per unit density (constant in T), or σ_s alone when σ_a depends on T (`a_t`, rgb physical mode).
     sigma: Vec<Lane>,
-    a_t: Option<LTable>,
-    /// Emission per unit density over T, over `jscale`.
-    j: LTable,
-    pub species: Vec<LaneSpecies>,
-    /// What the lane radiance is multiplied by to give the channel radiance.
-    pub jscale: f64,
 }
-
-/// A source table for [`LaneTables::build`]: (dt, rows, channels, values, scale).
-pub(crate) type Source<'a> = (f64, usize, usize, &'a [f32], f64);
 
 /// The largest magnitude any per-sample product may reach (f32 holds 3.4e38; a step multiplies by a few more
 /// factors below 1e6).
 const LIMIT: f64 = 1e30;
 
+/// A sample's soot: density, temperature, and the density times the emission scale (0 where it does not emit).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sample {
+    pub d: f32,
+    pub t: f32,
+    pub dl: f32,
+}
+
 impl LaneTables {
-    /// The lane tables, or `None` when a product could leave `f32`'s range: `a`/`s` σ per unit density,
-    /// `a_t` σ_a over T, `j` emission over T, `species` (σ, j tables with the species' scale), `dmax` / `lesmax`
-    /// / `nmax` the largest grid values, `step` the march step.
-    #[allow(clippy::too_many_arguments)]
+    /// The lane march's constants for volume `v` (its tables built, `c` channels), or `None` when a product
+    /// could leave `f32`'s range: `dmax`, `lesmax`, `nmax` (per species) the largest grid values a lookup can
+    /// return, `step` the march step.
     pub(crate) fn build(
-        c: usize,
-        a: &[f64],
-        s: &[f64],
-        a_t: Option<Source>,
-        j: Source,
-        species: &[(usize, Source, Source, f64)],
+        v: &FireVolume,
         dmax: f64,
         lesmax: f64,
+        nmax: &[f64],
         step: f64,
     ) -> Option<LaneTables> {
+        let c = v.a.len();
         let chunks = c.div_ceil(W);
-        let table = |(dt, rows, c, v, scale): Source| LTable::new(dt, rows, c, v, scale);
-        // The largest emission per unit of each source, to put every emission table at most 1.
-        let jmax = std::iter::once(table(j)?.max() * dmax * lesmax)
-            .chain(
-                species
-                    .iter()
-                    .map(|(_, _, js, nmax)| Some(table(*js)?.max() * nmax))
-                    .collect::<Option<Vec<_>>>()?,
-            )
-            .fold(0.0, f64::max);
-        let jscale = if jmax > 0.0 && jmax.is_finite() {
-            jmax
-        } else {
-            1.0
-        };
         let mut sigma = vec![[0f32; W]; chunks];
         for ch in 0..c {
-            let v = if a_t.is_some() { s[ch] } else { a[ch] + s[ch] };
-            sigma[ch / W][ch % W] = v as f32;
+            let x = if v.a_t.is_some() {
+                v.s[ch]
+            } else {
+                v.a[ch] + v.s[ch]
+            };
+            sigma[ch / W][ch % W] = x as f32;
         }
-        let a_t = match a_t {
-            Some(src) => Some(table(src)?),
-            None => None,
-        };
-        let j = table((j.0, j.1, j.2, j.3, j.4 / jscale))?;
-        let species = species
-            .iter()
-            .map(|&(ch, sg, js, _)| {
-                Some(LaneSpecies {
-                    ch,
-                    sigma: table(sg)?,
-                    j: table((js.0, js.1, js.2, js.3, js.4 / jscale))?,
-                })
-            })
-            .collect::<Option<Vec<_>>>()?;
-        // Largest σ_t·step and emission per sample: inside the range, or the f64 march.
+        // Largest σ_t·step and emission·step per sample: inside the range, or the f64 march.
+        let step = step.max(1.0);
         let smax = sigma.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
-            + a_t.as_ref().map_or(0.0, LTable::max);
-        let taumax = dmax * smax * step.max(1.0);
-        let emax = dmax * lesmax * j.max() * step.max(1.0);
-        let ok = species.len() <= MAX_SPECIES
-            && taumax.is_finite()
-            && taumax < LIMIT
-            && emax.is_finite()
-            && emax < LIMIT
-            && species.iter().all(|sp| sp.sigma.max() < LIMIT);
-        ok.then_some(LaneTables {
-            chunks,
-            sigma,
-            a_t,
-            j,
-            species,
-            jscale,
-        })
+            + v.a_t.as_ref().map_or(0.0, TTable::max);
+        let mut checks = vec![dmax * smax * step, dmax * lesmax * v.j.max() * step];
+        for (sp, &n) in v.species.iter().zip(nmax) {
+            let n = n * sp.scale;
+            checks.extend([n, n * sp.sigma.max() * step, n * sp.j.max() * step]);
+        }
+        let ok =
+            v.species.len() <= MAX_SPECIES && checks.iter().all(|x| x.is_finite() && *x < LIMIT);
+        ok.then_some(LaneTables { chunks, sigma })
     }
 
     /// Lanes per channel set.
@@ -175,32 +100,23 @@ impl LaneTables {
         self.chunks
     }
 
-    /// Bytes held.
+    /// Bytes held (the tables are the volume's).
     pub(crate) fn bytes(&self) -> usize {
         self.sigma.len() * std::mem::size_of::<Lane>()
-            + self.a_t.as_ref().map_or(0, LTable::bytes)
-            + self.j.bytes()
-            + self
-                .species
-                .iter()
-                .map(|sp| sp.sigma.bytes() + sp.j.bytes())
-                .sum::<usize>()
     }
 
-    /// σ_t and j (over `jscale`) at a sample of density `d` and temperature `t`, whose soot emission is `dl`
-    /// (d·Lescale, or 0 where the sample does not emit) times the table, with species number densities `n`
-    /// (grid units, one per species).
+    /// σ_t and j at a sample of volume `v`, with species number densities `n` (m⁻³, one per species).
     #[inline(always)]
     pub(crate) fn coefficients(
         &self,
-        d: f32,
-        t: f32,
-        dl: f32,
+        v: &FireVolume,
+        x: Sample,
         n: &[f32],
         sig: &mut [Lane],
         jj: &mut [Lane],
     ) {
-        let (j0, j1, fr) = self.j.rows(t);
+        let Sample { d, t, dl } = x;
+        let (j0, j1, fr) = v.j.lane_rows(t);
         for k in 0..self.chunks {
             let (s, a, b) = (&self.sigma[k], &j0[k], &j1[k]);
             for w in 0..W {
@@ -208,18 +124,18 @@ impl LaneTables {
                 jj[k][w] = dl * (a[w] + fr * (b[w] - a[w]));
             }
         }
-        if let Some(tab) = &self.a_t {
-            let (a0, a1, fr) = tab.rows(t);
+        if let Some(tab) = &v.a_t {
+            let (a0, a1, fr) = tab.lane_rows(t);
             for k in 0..self.chunks {
                 for w in 0..W {
                     sig[k][w] += d * (a0[k][w] + fr * (a1[k][w] - a0[k][w]));
                 }
             }
         }
-        for (sp, &n) in self.species.iter().zip(n) {
+        for (sp, &n) in v.species.iter().zip(n) {
             if n > 0.0 {
-                let (s0, s1, fr) = sp.sigma.rows(t);
-                let (e0, e1, _) = sp.j.rows(t);
+                let (s0, s1, fr) = sp.sigma.lane_rows(t);
+                let (e0, e1, _) = sp.j.lane_rows(t);
                 for k in 0..self.chunks {
                     for w in 0..W {
                         sig[k][w] += n * (s0[k][w] + fr * (s1[k][w] - s0[k][w]));

@@ -256,13 +256,15 @@ struct Nodes {
     terms: Vec<(usize, usize, f64)>,
 }
 
-/// A temperature table: `rows` × C values, row r at T = r·dt.
+/// A temperature table: `rows` × C values, row r at T = r·dt, each row stored as lanes of `lanes::W` channels
+/// (zero-padded), which the f32 march reads directly.
 #[derive(Debug, Clone, Default)]
 struct TTable {
     dt: f64,
     rows: usize,
-    c: usize,
-    v: Vec<f32>,
+    /// Lanes per row.
+    chunks: usize,
+    v: Vec<lanes::Lane>,
 }
 
 impl TTable {
@@ -274,25 +276,34 @@ impl TTable {
         } else {
             1.0
         };
-        let mut v = vec![0f32; rows * c];
+        let chunks = c.div_ceil(lanes::W).max(1);
+        let mut v = vec![[0f32; lanes::W]; rows * chunks];
         let threads = std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1)
             .min(8);
         let chunk = rows.div_ceil(threads);
         std::thread::scope(|s| {
-            for (k, part) in v.chunks_mut(chunk * c).enumerate() {
+            for (k, part) in v.chunks_mut(chunk * chunks).enumerate() {
                 s.spawn(move || {
-                    for (r, row) in part.chunks_mut(c).enumerate() {
-                        let vals = f((k * chunk + r) as f64 * dt);
-                        for (o, x) in row.iter_mut().zip(vals) {
-                            *o = x as f32;
+                    for (r, row) in part.chunks_mut(chunks).enumerate() {
+                        for (ch, x) in f((k * chunk + r) as f64 * dt).into_iter().enumerate() {
+                            row[ch / lanes::W][ch % lanes::W] = x as f32;
                         }
                     }
                 });
             }
         });
-        TTable { dt, rows, c, v }
+        TTable {
+            dt,
+            rows,
+            chunks,
+            v,
+        }
+    }
+    /// The same values at every temperature.
+    fn constant(row: &[f64]) -> TTable {
+        TTable::build(0.0, row.len(), &|_| row.to_vec())
     }
     /// Row index and fraction of T.
     #[inline]
@@ -302,18 +313,22 @@ impl TTable {
         (i, (f - i as f64) as f32)
     }
     #[inline]
+    fn value(&self, r: usize, c: usize) -> f32 {
+        self.v[r * self.chunks + c / lanes::W][c % lanes::W]
+    }
+    #[inline]
     fn at(&self, (i, fr): (usize, f32), c: usize) -> f32 {
-        let a = self.v[i * self.c + c];
-        a + fr * (self.v[(i + 1) * self.c + c] - a)
+        let a = self.value(i, c);
+        a + fr * (self.value(i + 1, c) - a)
     }
     /// Largest value of channel c over T in [lo, hi].
     fn max_over(&self, lo: f64, hi: f64, c: usize) -> f32 {
         let a = (lo / self.dt).floor().clamp(0.0, (self.rows - 1) as f64) as usize;
         let b = (hi / self.dt).ceil().clamp(0.0, (self.rows - 1) as f64) as usize;
-        (a..=b).map(|r| self.v[r * self.c + c]).fold(0.0, f32::max)
+        (a..=b).map(|r| self.value(r, c)).fold(0.0, f32::max)
     }
     fn bytes(&self) -> usize {
-        self.v.len() * 4
+        self.v.len() * std::mem::size_of::<lanes::Lane>()
     }
 }
 
@@ -683,12 +698,7 @@ impl FireVolume {
                         // j = σ_a Le: per channel σ_a,c times the channel value of Le.
                         let lec = basis.emit(&|l| le(l));
                         let row: Vec<f64> = (0..c).map(|i| a2[i] * le_scale * lec[i]).collect();
-                        j = TTable {
-                            dt: 1.0,
-                            rows: 2,
-                            c,
-                            v: row.iter().chain(row.iter()).map(|&x| x as f32).collect(),
-                        };
+                        j = TTable::constant(&row);
                     }
                     (None, _) => {
                         let nodes = basis.nodes();
@@ -836,45 +846,10 @@ impl FireVolume {
         };
         let precision = r.string("precision")?;
         r.finish()?;
-        let lanes = (precision == "f32" && integrator == Integrator::March)
-            .then(|| {
-                let t3 = Instant::now();
-                // The largest value a lookup can return, from the bricks' ranges.
-                let max =
-                    |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
-                fn src(t: &TTable, scale: f64) -> lanes::Source<'_> {
-                    (t.dt, t.rows, t.c, &t.v[..], scale)
-                }
-                let sp: Vec<_> = species
-                    .iter()
-                    .map(|sp| {
-                        (
-                            sp.ch,
-                            src(&sp.sigma, sp.scale),
-                            src(&sp.j, sp.scale),
-                            max(sp.ch),
-                        )
-                    })
-                    .collect();
-                let lt = lanes::LaneTables::build(
-                    c,
-                    &a,
-                    &s,
-                    a_t.as_ref().map(|t| src(t, 1.0)),
-                    src(&j, 1.0),
-                    &sp,
-                    max(density),
-                    lescale.map_or(1.0, max),
-                    step,
-                )?;
-                tables.push(TableReport {
-                    name: "march tables in f32 lanes".into(),
-                    bytes: lt.bytes(),
-                    seconds: t3.elapsed().as_secs_f64(),
-                });
-                Some(lt)
-            })
-            .flatten();
+        // The largest value a lookup can return, from the bricks' ranges (for the lane march's range check).
+        let max = |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
+        let (dmax, lesmax) = (max(density), lescale.map_or(1.0, max));
+        let nmax: Vec<f64> = species.iter().map(|sp| max(sp.ch)).collect();
         let [b0, b1] = ds.bounds();
         let (clip_box, margin) = if mode == Mode::Pbrt && ds.format() == Format::NanoVdb {
             let half = ds.voxel_size() * 0.5;
@@ -882,7 +857,7 @@ impl FireVolume {
         } else {
             ([b0, b1], 0.0)
         };
-        Ok(FireVolume {
+        let mut vol = FireVolume {
             ds,
             density,
             temperature,
@@ -908,10 +883,23 @@ impl FireVolume {
             build_seconds: start.elapsed().as_secs_f64(),
             source,
             refraction,
-            lanes,
+            lanes: None,
             #[cfg(feature = "fault-injection")]
             fault,
-        })
+        };
+        if precision == "f32" && integrator == Integrator::March {
+            let t3 = Instant::now();
+            vol.lanes = lanes::LaneTables::build(&vol, dmax, lesmax, &nmax, step);
+            if let Some(lt) = &vol.lanes {
+                vol.tables.push(TableReport {
+                    name: "march lanes (σ per unit density; the tables are shared)".into(),
+                    bytes: lt.bytes(),
+                    seconds: t3.elapsed().as_secs_f64(),
+                });
+            }
+        }
+        vol.build_seconds = start.elapsed().as_secs_f64();
+        Ok(vol)
     }
 
     /// The dataset.
@@ -1011,8 +999,8 @@ impl FireVolume {
         let ch = self.ds.channels();
         let d = ch[self.density].grid.eval(&st).max(0.0);
         let mut n = [0f32; lanes::MAX_SPECIES];
-        for (k, sp) in lt.species.iter().enumerate() {
-            n[k] = ch[sp.ch].grid.eval(&st).max(0.0);
+        for (k, sp) in self.species.iter().enumerate() {
+            n[k] = (ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale) as f32;
         }
         // No soot and no species here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1 exactly, so it
         // is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
@@ -1023,7 +1011,8 @@ impl FireVolume {
         let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
         let emits = t as f64 > self.t_emit || self.temperature.is_none();
         let LaneScratch { sig, jj, l, t: tr } = ls;
-        lt.coefficients(d, t, if emits { d * les } else { 0.0 }, &n, sig, jj);
+        let dl = if emits { d * les } else { 0.0 };
+        lt.coefficients(self, lanes::Sample { d, t, dl }, &n, sig, jj);
         lanes::step(sig, jj, delta as f32, l, tr)
     }
     /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
@@ -1141,8 +1130,8 @@ impl FireVolume {
             },
             |p| !inside(p),
         );
-        if let (Some(lt), Some(ls)) = (&self.lanes, &ls) {
-            ls.finish(lt.jscale, l, t);
+        if let Some(ls) = &ls {
+            ls.finish(l, t);
         }
         (exit.x, exit.dir, a + exit.s / speed)
     }
@@ -1191,7 +1180,7 @@ fn march_lanes(
         v.lane_step(lt, p, delta, &mut ls) >= cutoff
     });
     EVALUATIONS.with(|n| n.set(n.get() + samples));
-    ls.finish(lt.jscale, l, t);
+    ls.finish(l, t);
     b
 }
 
@@ -1214,9 +1203,9 @@ impl LaneScratch {
         }
     }
     /// The ray's radiance and transmittance per channel.
-    fn finish(&self, jscale: f64, l: &mut [f64], t: &mut [f64]) {
+    fn finish(&self, l: &mut [f64], t: &mut [f64]) {
         for c in 0..l.len() {
-            l[c] = self.l[c / lanes::W][c % lanes::W] as f64 * jscale;
+            l[c] = self.l[c / lanes::W][c % lanes::W] as f64;
             t[c] = self.t[c / lanes::W][c % lanes::W] as f64;
         }
     }
