@@ -1184,7 +1184,7 @@ fn march_lanes(
     b
 }
 
-/// Per-ray state of the lane march: coefficients at the sample, radiance (over `jscale`) and transmittance.
+/// Per-ray state of the lane march: coefficients at the sample, radiance and transmittance.
 struct LaneScratch {
     sig: Vec<lanes::Lane>,
     jj: Vec<lanes::Lane>,
@@ -1702,7 +1702,7 @@ mod tests {
         assert!(ratio.lanes.is_none());
         let f64_asked = slab_volume(1e-6, 1500.0, vec![Param::string("precision", "f64")]);
         assert!(f64_asked.lanes.is_none());
-        // Emission far above f32's range is scaled, not overflowed: 1e12 × intensity at 3000 K.
+        // A 1e12 × intensity fire at 3000 K (emission per unit density ~1e23) still marches in lanes, 1e12 × the f64 one.
         let bright = slab_volume(
             1e-6,
             3000.0,
