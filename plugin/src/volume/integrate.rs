@@ -137,6 +137,30 @@ pub(crate) fn march_step(
     tmax
 }
 
+/// A ray clipped to a medium: parameters [a, b] inside it, and |d| (arc length per unit of parameter).
+pub(crate) struct Span<'a> {
+    pub m: &'a dyn Medium,
+    pub ray: &'a Ray,
+    pub a: f64,
+    pub b: f64,
+    pub speed: f64,
+}
+
+impl<'a> Span<'a> {
+    /// The part of `ray` inside `m`; `None` when it misses, or its direction is zero or not finite.
+    pub(crate) fn new(m: &'a dyn Medium, ray: &'a Ray) -> Option<Span<'a>> {
+        let (a, b) = m.clip(ray.o, ray.d, ray.t0, ray.t1)?;
+        let speed = ray.d.length();
+        (speed > 0.0 && speed.is_finite()).then_some(Span {
+            m,
+            ray,
+            a,
+            b,
+            speed,
+        })
+    }
+}
+
 /// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7.
 pub(crate) const MAX_STEPS: f64 = (1u64 << 24) as f64;
 
@@ -152,29 +176,25 @@ pub(crate) fn integrate(
 ) -> f64 {
     l.iter_mut().for_each(|v| *v = 0.0);
     t.iter_mut().for_each(|v| *v = 1.0);
-    let Some((a, b)) = m.clip(ray.o, ray.d, ray.t0, ray.t1) else {
+    let Some(span) = Span::new(m, ray) else {
         return ray.t1;
     };
-    let speed = ray.d.length();
-    if !(speed > 0.0 && speed.is_finite()) {
-        return ray.t1;
-    }
     let mut rng = Rng::new(ray.seed);
     match how {
         Integrator::March => {
             let cutoff = m.cutoff();
             let Scratch { sa, ss, j, empty } = sc;
-            march_steps(m, ray, a, b, speed, &mut rng, empty, |p, delta| {
+            march_steps(&span, &mut rng, empty, |p, delta| {
                 m.eval(p, sa, ss, j);
                 march_step(sa, ss, j, delta, l, t) >= cutoff
             });
         }
-        Integrator::Ratio => ratio(m, ray, a, b, speed, &mut rng, sc, l, t),
+        Integrator::Ratio => ratio(&span, &mut rng, sc, l, t),
         Integrator::Delta => {
-            delta(m, ray, a, b, speed, &mut rng, sc, l, t, false);
+            delta(&span, &mut rng, sc, l, t, false);
         }
     };
-    b
+    span.b
 }
 
 /// Transmittance only (shadow rays): march's e^{−Σσ_tΔ}, or a ratio-tracking estimate for the tracking
@@ -198,18 +218,20 @@ pub(crate) fn transmittance(
 /// The march's steps along [a, b] (arc length `m.step()`, the first one a random fraction of it): calls
 /// `f(midpoint, length)` for each step until it returns false, skipping the steps whose midpoint lies in one of
 /// the medium's empty stretches (collected in `empty`).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn march_steps(
-    m: &dyn Medium,
-    ray: &Ray,
-    a: f64,
-    b: f64,
-    speed: f64,
+    span: &Span,
     rng: &mut Rng,
     empty: &mut Vec<(f64, f64)>,
     mut f: impl FnMut(DVec3, f64) -> bool,
 ) {
+    let &Span {
+        m,
+        ray,
+        a,
+        b,
+        speed,
+    } = span;
     let len = (b - a) * speed;
     let mut ds = m.step();
     if !(ds > 0.0) || len / ds > MAX_STEPS {
@@ -251,17 +273,19 @@ pub(crate) fn march_steps(
 /// The tentative collisions of tracking along [a, b]: in every majorant piece with σ̄ > 0, exponential free
 /// flights at rate σ̄; at each, the medium's coefficients are put in `sc` and `at(t, σ̄, sc, rng)` says whether
 /// to go on.
-#[allow(clippy::too_many_arguments)]
 fn collisions(
-    m: &dyn Medium,
-    ray: &Ray,
-    a: f64,
-    b: f64,
-    speed: f64,
+    span: &Span,
     rng: &mut Rng,
     sc: &mut Scratch,
     at: &mut dyn FnMut(f64, f64, &Scratch, &mut Rng) -> bool,
 ) {
+    let &Span {
+        m,
+        ray,
+        a,
+        b,
+        speed,
+    } = span;
     m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
         if !(smaj > 0.0) {
             return true;
@@ -280,19 +304,8 @@ fn collisions(
     });
 }
 
-#[allow(clippy::too_many_arguments)]
-fn ratio(
-    m: &dyn Medium,
-    ray: &Ray,
-    a: f64,
-    b: f64,
-    speed: f64,
-    rng: &mut Rng,
-    sc: &mut Scratch,
-    l: &mut [f64],
-    t: &mut [f64],
-) {
-    collisions(m, ray, a, b, speed, rng, sc, &mut |_, smaj, sc, rng| {
+fn ratio(span: &Span, rng: &mut Rng, sc: &mut Scratch, l: &mut [f64], t: &mut [f64]) {
+    collisions(span, rng, sc, &mut |_, smaj, sc, rng| {
         let mut tmax = 0.0f64;
         for c in 0..t.len() {
             l[c] += t[c] * sc.j[c] / smaj;
@@ -324,13 +337,8 @@ pub enum Event {
 }
 
 /// Delta tracking; with `scatter_mode`, returns at the first scattering event (for [`sample_scatter`]).
-#[allow(clippy::too_many_arguments)]
 fn delta(
-    m: &dyn Medium,
-    ray: &Ray,
-    a: f64,
-    b: f64,
-    speed: f64,
+    span: &Span,
     rng: &mut Rng,
     sc: &mut Scratch,
     l: &mut [f64],
@@ -339,7 +347,7 @@ fn delta(
 ) -> Event {
     let n = w.len() as f64;
     let mut event = Event::Escaped;
-    collisions(m, ray, a, b, speed, rng, sc, &mut |tt, smaj, sc, rng| {
+    collisions(span, rng, sc, &mut |tt, smaj, sc, rng| {
         let pa = sc.sa.iter().sum::<f64>() / (n * smaj);
         let ps = sc.ss.iter().sum::<f64>() / (n * smaj);
         if scatter_mode {
@@ -392,15 +400,11 @@ pub(crate) fn sample_scatter(
 ) -> Event {
     l.iter_mut().for_each(|v| *v = 0.0);
     w.iter_mut().for_each(|v| *v = 1.0);
-    let Some((a, b)) = m.clip(ray.o, ray.d, ray.t0, ray.t1) else {
+    let Some(span) = Span::new(m, ray) else {
         return Event::Escaped;
     };
-    let speed = ray.d.length();
-    if !(speed > 0.0 && speed.is_finite()) {
-        return Event::Escaped;
-    }
     let mut rng = Rng::new(ray.seed);
-    delta(m, ray, a, b, speed, &mut rng, sc, l, w, true)
+    delta(&span, &mut rng, sc, l, w, true)
 }
 
 #[cfg(test)]

@@ -1151,7 +1151,7 @@ impl FireVolume {
     }
 }
 
-/// The straight march in f32 lanes (the same steps, at the same points, as `integrate::march`); compiled
+/// The straight march in f32 lanes (the same steps, at the same points, as the f64 march of `integrate`); compiled
 /// twice, for baseline x86-64 and for AVX2 + FMA (8 channels per instruction), chosen once at run time.
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 fn march_lanes(
@@ -1163,25 +1163,21 @@ fn march_lanes(
 ) -> f64 {
     l.iter_mut().for_each(|v| *v = 0.0);
     t.iter_mut().for_each(|v| *v = 1.0);
-    let Some((a, b)) = Medium::clip(v, ray.o, ray.d, ray.t0, ray.t1) else {
+    let Some(span) = integrate::Span::new(v, ray) else {
         return ray.t1;
     };
-    let speed = ray.d.length();
-    if !(speed > 0.0 && speed.is_finite()) {
-        return ray.t1;
-    }
     let mut rng = crate::rng::Rng::new(ray.seed);
     let mut ls = LaneScratch::new(lt.chunks());
     let mut empty = Vec::new();
     let cutoff = v.cutoff as f32;
     let mut samples = 0;
-    integrate::march_steps(v, ray, a, b, speed, &mut rng, &mut empty, |p, delta| {
+    integrate::march_steps(&span, &mut rng, &mut empty, |p, delta| {
         samples += 1;
         v.lane_step(lt, p, delta, &mut ls) >= cutoff
     });
     EVALUATIONS.with(|n| n.set(n.get() + samples));
     ls.finish(l, t);
-    b
+    span.b
 }
 
 /// Per-ray state of the lane march: coefficients at the sample, radiance and transmittance.
