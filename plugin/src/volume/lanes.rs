@@ -23,7 +23,7 @@ pub(crate) type Lane = [f32; W];
 impl TTable {
     /// The two rows around T and the fraction between them, as lanes.
     #[inline(always)]
-    fn lane_rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
+    pub(super) fn lane_rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
         let f = (t as f64 / self.dt).clamp(0.0, (self.rows - 1) as f64);
         let i = (f as usize).min(self.rows - 2);
         let a = &self.v[i * self.chunks..(i + 1) * self.chunks];
@@ -45,6 +45,10 @@ pub(crate) struct LaneTables {
     chunks: usize,
     /// σ_a + σ_s per unit density (constant in T), or σ_s alone when σ_a depends on T (`a_t`, rgb physical mode).
     sigma: Vec<Lane>,
+    /// The largest σ_t per unit density over channels and temperatures, and per unit number density of each
+    /// species: with the sample's densities, a bound on its optical depth per unit length.
+    sigma_max: f32,
+    species_sigma_max: [f32; MAX_SPECIES],
 }
 
 /// The largest magnitude any per-sample product may reach (f32 holds 3.4e38; a step multiplies by a few more
@@ -85,19 +89,42 @@ impl LaneTables {
         let step = step.max(1.0);
         let smax = sigma.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
             + v.a_t.as_ref().map_or(0.0, TTable::max);
+        let mut species_sigma_max = [0f32; MAX_SPECIES];
         let mut checks = vec![dmax * smax * step, dmax * lesmax * v.j.max() * step];
         for (sp, &n) in v.species.iter().zip(nmax) {
             let n = n * sp.scale;
             checks.extend([n, n * sp.sigma.max() * step, n * sp.j.max() * step]);
         }
+        for (m, sp) in species_sigma_max.iter_mut().zip(&v.species) {
+            // (Rounded up, so that the bound stays a bound in f32.)
+            *m = (sp.sigma.max() * (1.0 + 1e-6)) as f32;
+        }
         let ok =
             v.species.len() <= MAX_SPECIES && checks.iter().all(|x| x.is_finite() && *x < LIMIT);
-        ok.then_some(LaneTables { chunks, sigma })
+        ok.then_some(LaneTables {
+            chunks,
+            sigma,
+            sigma_max: (smax * (1.0 + 1e-6)) as f32,
+            species_sigma_max,
+        })
     }
 
     /// Lanes per channel set.
     pub(crate) fn chunks(&self) -> usize {
         self.chunks
+    }
+
+    /// σ per unit density, in lanes.
+    pub(crate) fn sigma(&self) -> &[Lane] {
+        &self.sigma
+    }
+    /// The largest σ_t per unit density (a bound).
+    pub(crate) fn sigma_max(&self) -> f32 {
+        self.sigma_max
+    }
+    /// The largest σ per unit number density of each species (bounds).
+    pub(crate) fn species_sigma_max(&self) -> [f32; MAX_SPECIES] {
+        self.species_sigma_max
     }
 
     /// Bytes held (the tables are the volume's).

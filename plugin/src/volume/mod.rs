@@ -29,6 +29,7 @@
 //! species present. The build report lists bytes and seconds per table.
 
 mod integrate;
+mod kernel;
 mod lanes;
 pub mod params;
 
@@ -261,6 +262,8 @@ struct Nodes {
 #[derive(Debug, Clone, Default)]
 struct TTable {
     dt: f64,
+    /// 1 / dt (the kernel multiplies).
+    inv_dt: f64,
     rows: usize,
     /// Lanes per row.
     chunks: usize,
@@ -296,6 +299,7 @@ impl TTable {
         });
         TTable {
             dt,
+            inv_dt: 1.0 / dt,
             rows,
             chunks,
             v,
@@ -983,7 +987,8 @@ impl FireVolume {
     pub fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
         self.fault_check();
         if let Some(lt) = &self.lanes {
-            return march_lanes(self, lt, ray, l, t);
+            return march_kernel(self, lt, ray, l, t)
+                .unwrap_or_else(|| march_lanes(self, lt, ray, l, t));
         }
         let mut sc = Scratch::new(self.channels());
         integrate::integrate(self, ray, self.integrator, &mut sc, l, t)
@@ -1178,6 +1183,26 @@ fn march_lanes(
     EVALUATIONS.with(|n| n.set(n.get() + samples));
     ls.finish(l, t);
     span.b
+}
+
+/// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`
+/// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time.
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+fn march_kernel(
+    v: &FireVolume,
+    lt: &lanes::LaneTables,
+    ray: &Ray,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> Option<f64> {
+    const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
+    match lt.chunks() {
+        1 => kernel::march::<1, F>(v, lt, ray, l, t),
+        2 => kernel::march::<2, F>(v, lt, ray, l, t),
+        3 => kernel::march::<3, F>(v, lt, ray, l, t),
+        4 => kernel::march::<4, F>(v, lt, ray, l, t),
+        _ => None,
+    }
 }
 
 /// Per-ray state of the lane march: coefficients at the sample, radiance and transmittance.
@@ -1842,6 +1867,185 @@ mod tests {
             ],
         );
         assert!((run(&v, &ray_x(0)).1[3] - (-10.0f64).exp()).abs() < 1e-9);
+    }
+
+    /// A trilinear 40×36×44 grid over [0, 2] × [0, 1.8] × [0, 2.2] with a hot blob in one corner and a slab on
+    /// the far x side (so many bricks are empty) and `extra` parameters (pbrt mode adds a Lescale grid); `species` adds a sodium grid
+    /// (files: species grids are not inline parameters).
+    fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
+        let [nx, ny, nz] = [40usize, 36, 44];
+        let (mut d, mut t, mut les, mut na) = (vec![], vec![], vec![], vec![]);
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let p = DVec3::new(
+                        i as f64 / nx as f64,
+                        j as f64 / ny as f64,
+                        k as f64 / nz as f64,
+                    );
+                    let r2 = (p - DVec3::new(0.3, 0.35, 0.25)).length_squared() / 0.04;
+                    let w = if r2 < 1.0 { (1.0 - r2).powi(2) } else { 0.0 };
+                    // And a hot slab with a sharp face, right after empty bricks along x.
+                    let slab = if i >= 27 { 1.0 } else { 0.0 };
+                    d.push(3e-6 * w + 1e-6 * slab);
+                    t.push(300.0 + 1700.0 * w + 1200.0 * slab);
+                    les.push(0.5 + p.x);
+                    na.push(w * (1.0 - p.z));
+                }
+            }
+        }
+        let mut list = vec![
+            Param::point3("p0", [0.0, 0.0, 0.0]),
+            Param::point3("p1", [2.0, 1.8, 2.2]),
+        ];
+        if species {
+            let dir =
+                std::env::temp_dir().join(format!("firemedium-kernel-{}", std::process::id()));
+            std::fs::create_dir_all(&dir).unwrap();
+            let f = |name: &str, v: &[f64]| {
+                let p = dir.join(name);
+                let body: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+                std::fs::write(&p, format!("{nx} {ny} {nz}\n{}\n", body.join(" "))).unwrap();
+                p.display().to_string()
+            };
+            list.extend([
+                Param::string("densityfile", &f("d.txt", &d)),
+                Param::string("temperaturefile", &f("t.txt", &t)),
+                Param::strings("species", &["Na"]),
+                Param::strings("speciesfiles", &[&f("na.txt", &na)]),
+                Param::float("speciesscale", 1e15),
+            ]);
+        } else {
+            if extra.iter().any(|p| p.name == "mode") {
+                // (pbrt mode: σ_a per unit density, and a per-voxel emission scale.)
+                list.extend([
+                    Param::floats("Lescale", &les),
+                    Param::spectrum("sigma_a", &[200.0, 2e5, 900.0, 3e5]),
+                ]);
+            }
+            list.extend([
+                Param::floats("density", &d),
+                Param::floats("temperature", &t),
+                Param::int("nx", nx as i64),
+                Param::int("ny", ny as i64),
+                Param::int("nz", nz as i64),
+            ]);
+        }
+        list.extend(extra);
+        FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn kernel_matches_the_lane_and_f64_marches() {
+        // The kernel (`integrate` with lanes) against the lane march it replaces (same f32 arithmetic, per
+        // sample) and the f64 march: random rays from outside and inside, along axes, through faces and
+        // edges, and through the empty bricks the kernel jumps; rgb and spectral; with Lescale, with species.
+        let mut rng = crate::rng::Rng::new(7);
+        let mut rays = vec![
+            Ray {
+                o: DVec3::new(-1.0, 0.63, 0.55),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 1,
+            },
+            Ray {
+                o: DVec3::new(0.6, 0.63, -1.0),
+                d: DVec3::Z,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 2,
+            },
+            Ray {
+                o: DVec3::new(0.6, 0.63, 0.55),
+                d: DVec3::new(0.3, -1.0, 0.2),
+                t0: 0.0,
+                t1: 9.0,
+                seed: 3,
+            },
+            Ray {
+                o: DVec3::new(-1.0, 0.0, 0.5),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 4,
+            }, // in a face
+            Ray {
+                o: DVec3::new(-1.0, 0.0, 0.0),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 5,
+            }, // along an edge
+            Ray {
+                o: DVec3::new(3.0, 0.6, 0.5),
+                d: DVec3::new(-2.0, 0.0, 0.0),
+                t0: 0.0,
+                t1: 9.0,
+                seed: 6,
+            },
+        ];
+        for seed in 0..150 {
+            let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
+            let target = DVec3::new(0.6, 0.63, 0.55)
+                + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 1.2;
+            rays.push(Ray {
+                o,
+                d: target - o,
+                t0: 0.0,
+                t1: 5.0,
+                seed: 100 + seed,
+            });
+        }
+        for (extra, species) in [
+            (vec![], false),
+            (vec![Param::string("colormode", "rgb")], false),
+            (
+                vec![
+                    Param::string("mode", "pbrt"),
+                    Param::float("stepsize", 3.0),
+                    Param::int("brick", 4),
+                ],
+                false,
+            ),
+            (vec![Param::float("stepsize", 0.37)], true),
+        ] {
+            let v = blob_volume(extra.clone(), species);
+            let lt = v.lanes.as_ref().expect("the blob marches in lanes");
+            let mut e64 = extra.clone();
+            e64.push(Param::string("precision", "f64"));
+            let v64 = blob_volume(e64, species);
+            let c = v.channels();
+            let (mut worst, mut lit) = (0f64, 0);
+            for ray in &rays {
+                let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+                let (mut l2, mut t2) = (vec![0.0; c], vec![0.0; c]);
+                let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
+                let te = v.integrate(ray, &mut l, &mut t);
+                let te2 = march_lanes(&v, lt, ray, &mut l2, &mut t2);
+                let te3 = v64.integrate(ray, &mut l3, &mut t3);
+                assert_eq!(te, te2);
+                assert_eq!(te, te3);
+                let peak = l3.iter().fold(0f64, |m, &x| m.max(x));
+                if peak > 0.0 {
+                    lit += 1;
+                }
+                for k in 0..c {
+                    for (a, what) in [(l[k], "lane march"), (l3[k], "f64 march")] {
+                        // Relative to the ray's brightest channel (dim channels carry f32's absolute rounding).
+                        let e = (l[k] - a).abs() / peak.max(1e-300);
+                        worst = worst.max(e);
+                        assert!(e < 2e-5, "{ray:?} ch {k}: kernel {} vs {what} {a}", l[k]);
+                    }
+                    assert!((t[k] - t2[k]).abs() < 1e-5 && (t[k] - t3[k]).abs() < 1e-5);
+                }
+            }
+            assert!(lit > 50, "only {lit} rays saw the fire");
+            assert!(
+                worst > 0.0,
+                "f32 and f64 cannot agree to the bit everywhere"
+            );
+        }
     }
 
     #[test]
