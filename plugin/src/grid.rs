@@ -280,14 +280,32 @@ impl Grid {
             mean: 0.0,
             nonzero_fraction: 0.0,
         };
-        let mut sum = 0.0f64;
-        let mut nonzero = 0usize;
-        for &v in &self.data {
-            s.min = s.min.min(v);
-            s.max = s.max.max(v);
-            sum += v as f64;
-            nonzero += (v != 0.0) as usize;
+        // Eight running minima, maxima, sums and counts, so that the loop vectorises (min and max skip NaN,
+        // as `f32::min` does: a comparison with NaN is false).
+        const L: usize = 8;
+        let (mut lo, mut hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
+        let (mut sums, mut counts) = ([0f64; L], [0u64; L]);
+        let chunks = self.data.chunks_exact(L);
+        let rest = chunks.remainder();
+        for c in chunks {
+            for k in 0..L {
+                let v = c[k];
+                lo[k] = if v < lo[k] { v } else { lo[k] };
+                hi[k] = if v > hi[k] { v } else { hi[k] };
+                sums[k] += v as f64;
+                counts[k] += (v != 0.0) as u64;
+            }
         }
+        for (k, &v) in rest.iter().enumerate() {
+            lo[k] = if v < lo[k] { v } else { lo[k] };
+            hi[k] = if v > hi[k] { v } else { hi[k] };
+            sums[k] += v as f64;
+            counts[k] += (v != 0.0) as u64;
+        }
+        s.min = lo.iter().fold(f32::INFINITY, |m, &v| m.min(v));
+        s.max = hi.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
+        let sum: f64 = sums.iter().sum();
+        let nonzero: u64 = counts.iter().sum();
         let n = self.data.len() as f64;
         s.mean = sum / n;
         s.nonzero_fraction = nonzero as f64 / n;

@@ -161,28 +161,47 @@ pub(crate) fn densify(
         };
         let mut tiles: Vec<&Tile> = t.tiles.iter().collect();
         tiles.sort_by_key(|t| -t.size);
+        let max_tile = tiles.first().map_or(0, |t| t.size);
         for tile in tiles {
             let o = tile.origin.map(|v| v as i64);
             let a = [0, 1, 2].map(|k| o[k].max(lo[k]));
             let b = [0, 1, 2].map(|k| (o[k] + tile.size as i64 - 1).min(hi[k]));
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        put(&mut data, [x, y, z], tile.value);
+            // (A tile of the background value changes nothing, unless a larger tile wrote over it first.)
+            if tile.value.to_bits() == t.background.to_bits() && tile.size == max_tile {
+                continue;
+            }
+            if (0..3).any(|k| a[k] > b[k]) {
+                continue;
+            }
+            let q = [0, 1, 2].map(|k| (a[k] - lo[k]) as usize);
+            let len = (b[0] - a[0] + 1) as usize;
+            for z in 0..=(b[2] - a[2]) as usize {
+                for y in 0..=(b[1] - a[1]) as usize {
+                    let start = q[0] + dims[0] * (q[1] + y + dims[1] * (q[2] + z));
+                    if let Some(row) = data.get_mut(start..start + len) {
+                        row.fill(tile.value);
                     }
                 }
             }
         }
         for leaf in &t.leaves {
             let o = leaf.origin.map(|v| v as i64);
-            if (0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]) && leaf.values.len() == 512 {
-                // The whole leaf inside the box (the common case): rows of 8 along z, no per-voxel checks.
+            let whole: Option<&[f32; 512]> = leaf.values.as_slice().try_into().ok();
+            if let (true, Some(values)) =
+                ((0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]), whole)
+            {
+                // The whole leaf inside the box (the common case): the grid's rows of 8 along x, each written
+                // at once (the leaf is z fastest; reading it across is cheap, it is 2 KB), no per-voxel checks.
                 let q = [0, 1, 2].map(|k| (o[k] - lo[k]) as usize);
-                let sz = dims[0] * dims[1];
-                for (xy, row) in leaf.values.chunks_exact(8).enumerate() {
-                    let base = q[0] + (xy >> 3) + dims[0] * (q[1] + (xy & 7) + dims[1] * q[2]);
-                    for (z, &v) in row.iter().enumerate() {
-                        data[base + z * sz] = v;
+                for z in 0..8 {
+                    for y in 0..8 {
+                        let start = q[0] + dims[0] * (q[1] + y + dims[1] * (q[2] + z));
+                        let Some(row) = data.get_mut(start..start + 8) else {
+                            continue;
+                        };
+                        for (x, d) in row.iter_mut().enumerate() {
+                            *d = values[(x << 6) | (y << 3) | z];
+                        }
                     }
                 }
                 continue;

@@ -44,6 +44,14 @@ fn floor<const F: bool>(x: f64) -> f64 {
     }
 }
 
+/// A non-negative integer-valued `x` below 2⁵² as usize, exactly, in three instructions: adding 2⁵² leaves the
+/// integer in the low mantissa bits (a float→int cast costs a dozen, for its saturation and NaN handling).
+#[inline(always)]
+fn index(x: f64) -> usize {
+    const TWO52: f64 = 4_503_599_627_370_496.0;
+    ((x + TWO52).to_bits() - TWO52.to_bits()) as usize
+}
+
 /// a + t·(b − a).
 #[inline(always)]
 fn lerp<const F: bool>(t: f32, a: f32, b: f32) -> f32 {
@@ -119,11 +127,10 @@ fn interior<const F: bool>(v: &FireVolume, g: [f64; 3], lim: [f64; 3], x: &mut V
     let ch = v.ds.channels();
     let [nx, ny, _] = v.ds.dims();
     let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
-    // The index in f64 (exact below 2⁵³) and one conversion: a float→usize cast per axis costs a dozen
-    // instructions of saturation handling.
+    // The index in f64 (exact below 2⁵²; the interior test bounds it by the grid's size) and one conversion.
     let (fx, fy) = (nx as f64, (nx * ny) as f64);
     let cell = Cell {
-        i: (c[0] + fx * c[1] + fy * c[2]) as i64 as usize,
+        i: index(c[0] + fx * c[1] + fy * c[2]),
         sy: nx,
         sz: nx * ny,
         f: [
@@ -187,7 +194,7 @@ fn rows<const C: usize, const F: bool>(
     let last = (tab.rows - 1) as f64;
     let f = (t as f64 * tab.inv_dt).max(0.0).min(last);
     let i = floor::<F>(f).min(last - 1.0);
-    let at = i as i64 as usize * C;
+    let at = index(i) * C;
     let (a, b) = tab.v.get(at..at + 2 * C)?.split_at(C);
     Some((a.try_into().ok()?, b.try_into().ok()?, (f - i) as f32))
 }
@@ -208,6 +215,9 @@ pub(super) fn march<const C: usize, const F: bool>(
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
+    if C > 4 {
+        return None; // (the lanes below are written out for up to four)
+    }
     let sigma: &[Lane; C] = lt.sigma().try_into().ok()?;
     l.fill(0.0);
     t.fill(1.0);
@@ -344,44 +354,33 @@ pub(super) fn march<const C: usize, const F: bool>(
                 }
             }
             let thin = bound * delta < THIN;
+            let co = Coefficients {
+                d: x.d,
+                dl,
+                sigma,
+                j: (j0, j1, fr),
+                at,
+                species: &sp_rows[..ns],
+                delta,
+                thin,
+            };
             let mut tmax = [0f32; W];
-            for q in 0..C {
-                // σ_t and j of this lane, then its step.
-                let mut sg = [0f32; W];
-                let mut jq = [0f32; W];
-                for w in 0..W {
-                    sg[w] = x.d * sigma[q][w];
-                    jq[w] = dl * lerp::<F>(fr, j0[q][w], j1[q][w]);
-                }
-                if let Some((a0, a1, fa)) = at {
-                    for w in 0..W {
-                        sg[w] = fma::<F>(x.d, lerp::<F>(fa, a0[q][w], a1[q][w]), sg[w]);
+            // Lane by lane, each written out (a loop over q kept the lanes in memory; with constant indices
+            // radiance and transmittance stay in registers).
+            macro_rules! lane {
+                ($q:literal) => {
+                    if $q < C {
+                        if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
+                            co.step::<F>($q, l, t, &mut tmax);
+                        }
                     }
-                }
-                for r in sp_rows.iter().take(ns).flatten() {
-                    for w in 0..W {
-                        sg[w] = fma::<F>(r.n, lerp::<F>(r.f, r.s0[q][w], r.s1[q][w]), sg[w]);
-                        jq[w] = fma::<F>(r.n, lerp::<F>(r.f, r.e0[q][w], r.e1[q][w]), jq[w]);
-                    }
-                }
-                if thin {
-                    thin_step::<F>(&sg, &jq, delta, &mut lk[q], &mut tk[q]);
-                } else {
-                    full_step::<F>(&sg, &jq, delta, &mut lk[q], &mut tk[q]);
-                }
-                for w in 0..W {
-                    tmax[w] = if tk[q][w] > tmax[w] {
-                        tk[q][w]
-                    } else {
-                        tmax[w]
-                    };
-                }
+                };
             }
-            let mut m = 0f32;
-            for w in tmax {
-                m = if w > m { w } else { m };
-            }
-            if m < cutoff {
+            lane!(0);
+            lane!(1);
+            lane!(2);
+            lane!(3);
+            if horizontal_max(tmax) < cutoff {
                 break 'ray;
             }
         }
@@ -395,6 +394,68 @@ pub(super) fn march<const C: usize, const F: bool>(
         t[ch] = tk[ch / W][ch % W] as f64;
     }
     Some(span.b)
+}
+
+/// The largest of a lane's values, as a tree of halves (vector shuffles, not eight scalar steps).
+#[inline(always)]
+fn horizontal_max(x: Lane) -> f32 {
+    let mut h = x;
+    let mut n = W / 2;
+    while n > 0 {
+        for w in 0..n {
+            h[w] = if h[w + n] > h[w] { h[w + n] } else { h[w] };
+        }
+        n /= 2;
+    }
+    h[0]
+}
+
+/// A sample's coefficients, ready for each lane's step.
+struct Coefficients<'a, const C: usize> {
+    d: f32,
+    /// Density times the emission scale (0 where it does not emit).
+    dl: f32,
+    sigma: &'a [Lane; C],
+    /// Emission rows and the fraction between them.
+    j: (&'a [Lane; C], &'a [Lane; C], f32),
+    /// σ_a rows where σ_a depends on T.
+    at: Option<(&'a [Lane; C], &'a [Lane; C], f32)>,
+    species: &'a [Option<SpeciesRows<'a, C>>],
+    delta: f32,
+    thin: bool,
+}
+
+impl<const C: usize> Coefficients<'_, C> {
+    /// σ_t and j in lane `q`, then its step; `tmax` keeps the largest transmittance per lane position.
+    #[inline(always)]
+    fn step<const F: bool>(&self, q: usize, l: &mut Lane, t: &mut Lane, tmax: &mut Lane) {
+        let (j0, j1, fr) = self.j;
+        let mut sg = [0f32; W];
+        let mut jq = [0f32; W];
+        for w in 0..W {
+            sg[w] = self.d * self.sigma[q][w];
+            jq[w] = self.dl * lerp::<F>(fr, j0[q][w], j1[q][w]);
+        }
+        if let Some((a0, a1, fa)) = self.at {
+            for w in 0..W {
+                sg[w] = fma::<F>(self.d, lerp::<F>(fa, a0[q][w], a1[q][w]), sg[w]);
+            }
+        }
+        for r in self.species.iter().flatten() {
+            for w in 0..W {
+                sg[w] = fma::<F>(r.n, lerp::<F>(r.f, r.s0[q][w], r.s1[q][w]), sg[w]);
+                jq[w] = fma::<F>(r.n, lerp::<F>(r.f, r.e0[q][w], r.e1[q][w]), jq[w]);
+            }
+        }
+        if self.thin {
+            thin_step::<F>(&sg, &jq, self.delta, l, t);
+        } else {
+            full_step::<F>(&sg, &jq, self.delta, l, t);
+        }
+        for w in 0..W {
+            tmax[w] = if t[w] > tmax[w] { t[w] } else { tmax[w] };
+        }
+    }
 }
 
 /// One species' table rows at a sample: its number density, the fraction between the rows, σ and j rows.
