@@ -3,10 +3,12 @@
 //! The same steps at the same points as `integrate::march_steps` (eq. 3 of Pegoraro & Parker, a step exact for
 //! constant coefficients, evaluated at the step's midpoint), written for speed:
 //!
-//! - **the ray in grid coordinates**: a sample's lattice position is one multiply–add per axis from the ray's
-//!   start, and where all eight trilinear corners lie inside the grid (nearly every sample) the corners are read
-//!   straight from the dense arrays, x pairs at a time; samples near the faces (and nearest-neighbour datasets)
-//!   take the general stencil, which fades to zero outside;
+//! - **the ray in grid coordinates, eight samples at a time**: the next eight steps outside empty bricks are
+//!   looked up together — lattice positions (one multiply–add per axis from the ray's entry), cells, weights
+//!   and the trilinear interpolation in vector arithmetic across the eight, the corner reads straight from the
+//!   dense arrays, and the loads of eight independent samples overlapped by the CPU; samples whose cell is not
+//!   inside the grid (near the faces, where pbrt-v4's lookup fades to zero) and nearest-neighbour datasets take
+//!   the general stencil;
 //! - **the channels as `C` lanes** (a const generic: 1 for rgb, 4 for 30 spectral bins), so radiance,
 //!   transmittance and σ per unit density stay in registers for the whole ray;
 //! - **a thin step without the exponential**: when a bound on the sample's largest optical depth is below 0.1
@@ -33,8 +35,8 @@ fn fma<const F: bool>(a: f32, b: f32, c: f32) -> f32 {
     }
 }
 
-/// ⌊x⌋ for the lattice coordinates the interior test has bounded: the rounding instruction when the clone has
-/// SSE4.1 (the FMA clone), else [`crate::grid::floor`] (no libm call).
+/// ⌊x⌋ of a lattice coordinate: the rounding instruction when the clone has SSE4.1 (the FMA clone), else
+/// [`crate::grid::floor`] (no libm call).
 #[inline(always)]
 fn floor<const F: bool>(x: f64) -> f64 {
     if F {
@@ -45,49 +47,18 @@ fn floor<const F: bool>(x: f64) -> f64 {
 }
 
 /// A non-negative integer-valued `x` below 2⁵² as usize, exactly, in three instructions: adding 2⁵² leaves the
-/// integer in the low mantissa bits (a float→int cast costs a dozen, for its saturation and NaN handling).
+/// integer in the low mantissa bits (a float→int cast costs a dozen, for its saturation and NaN handling). Any
+/// other `x` gives a meaningless index (never a panic), which callers do not use.
 #[inline(always)]
 fn index(x: f64) -> usize {
     const TWO52: f64 = 4_503_599_627_370_496.0;
-    ((x + TWO52).to_bits() - TWO52.to_bits()) as usize
+    (x + TWO52).to_bits().wrapping_sub(TWO52.to_bits()) as usize
 }
 
 /// a + t·(b − a).
 #[inline(always)]
 fn lerp<const F: bool>(t: f32, a: f32, b: f32) -> f32 {
     fma::<F>(t, b - a, a)
-}
-
-/// Where a sample's trilinear cell lies in the dense arrays: the lower corner's index, the y and z strides,
-/// and the fractions toward the upper corner.
-#[derive(Clone, Copy)]
-struct Cell {
-    i: usize,
-    sy: usize,
-    sz: usize,
-    f: [f32; 3],
-}
-
-/// Trilinear interpolation of `data` in `cell` (all eight corners inside), in pbrt-v4's order (x, then y, then
-/// z). `None` only if the index is out of range, which the interior test excludes. (Functions, not closures:
-/// a closure would not inherit the FMA clone's target features.)
-#[inline(always)]
-fn trilinear<const F: bool>(data: &[f32], c: Cell) -> Option<f32> {
-    let Cell { i, sy, sz, f } = c;
-    // One range check for the cell's block; the eight reads below are then within it.
-    let s = data.get(i..)?.get(..sz + sy + 2)?;
-    let (a, b) = (sz, sz + sy);
-    let y0 = lerp::<F>(
-        f[1],
-        lerp::<F>(f[0], s[0], s[1]),
-        lerp::<F>(f[0], s[sy], s[sy + 1]),
-    );
-    let y1 = lerp::<F>(
-        f[1],
-        lerp::<F>(f[0], s[a], s[a + 1]),
-        lerp::<F>(f[0], s[b], s[b + 1]),
-    );
-    Some(lerp::<F>(f[2], y0, y1))
 }
 
 /// The grid values the march reads at a sample (after the clamps of `FireVolume::lane_step`).
@@ -104,66 +75,120 @@ struct Values {
 enum Lookup {
     /// Read (into the `Values`).
     Found,
-    /// Outside the grid (or an index out of range, which the interior test excludes): no medium.
+    /// Outside the grid: no medium.
     Outside,
-    /// Not in the interior: the general stencil decides.
-    General,
 }
 
-/// The sample at lattice position `g` (pbrt-v4's p·n − 0.5) into `x`, when its cell lies inside the grid
-/// (`lim` = n − 1 per axis, or −1 to refuse every point). (The values are written in place: returning them
-/// by value cost a store-forwarding stall per sample.)
+/// The most grids a sample reads: density, temperature, Lescale and the species.
+const MAX_GRIDS: usize = 3 + MAX_SPECIES;
+
+/// The grids the kernel reads, in the order density, temperature, Lescale, species (those the volume has).
+struct Grids<'a> {
+    data: [&'a [f32]; MAX_GRIDS],
+    n: usize,
+    temperature: Option<usize>,
+    lescale: Option<usize>,
+    species: usize,
+}
+
+impl<'a> Grids<'a> {
+    fn new(v: &'a FireVolume) -> Grids<'a> {
+        let ch = v.ds.channels();
+        let mut g = Grids {
+            data: [&[]; MAX_GRIDS],
+            n: 0,
+            temperature: None,
+            lescale: None,
+            species: 0,
+        };
+        let push = |g: &mut Grids<'a>, k: usize| {
+            g.data[g.n] = ch[k].grid.data();
+            g.n += 1;
+            g.n - 1
+        };
+        push(&mut g, v.density);
+        if let Some(k) = v.temperature {
+            g.temperature = Some(push(&mut g, k));
+        }
+        if let Some(k) = v.lescale {
+            g.lescale = Some(push(&mut g, k));
+        }
+        g.species = g.n;
+        for sp in v.species.iter().take(MAX_SPECIES) {
+            push(&mut g, sp.ch);
+        }
+        g
+    }
+}
+
+/// The grid values at a block of samples (lattice positions g0 + mids·gd), each grid interpolated for all
+/// of them at once (positions, cells and the trilinear weights in vector arithmetic; the eight corner reads
+/// per sample and grid stay scalar). `inside[b]` is false where sample b's cell is not in the interior
+/// (`lim`), or its index out of range: the general stencil takes those.
 #[inline(always)]
-fn interior<const F: bool>(v: &FireVolume, g: [f64; 3], lim: [f64; 3], x: &mut Values) -> Lookup {
-    let inside = g[0] >= 0.0
-        && g[0] < lim[0]
-        && g[1] >= 0.0
-        && g[1] < lim[1]
-        && g[2] >= 0.0
-        && g[2] < lim[2];
-    if !inside {
-        return Lookup::General;
+#[allow(clippy::too_many_arguments)]
+fn lookup_block<const F: bool>(
+    grids: &Grids,
+    dims: [usize; 3],
+    mids: &[f64; BATCH],
+    g0: [f64; 3],
+    gd: [f64; 3],
+    lim: [f64; 3],
+    vals: &mut [[f32; BATCH]; MAX_GRIDS],
+    inside: &mut [bool; BATCH],
+) {
+    let (sy, sz) = (dims[0], dims[0] * dims[1]);
+    let (fy, fz) = (sy as f64, sz as f64);
+    let mut idx = [0usize; BATCH];
+    let mut f = [[0f32; BATCH]; 3];
+    for b in 0..BATCH {
+        let g = [
+            g0[0] + mids[b] * gd[0],
+            g0[1] + mids[b] * gd[1],
+            g0[2] + mids[b] * gd[2],
+        ];
+        inside[b] = (g[0] >= 0.0)
+            & (g[0] < lim[0])
+            & (g[1] >= 0.0)
+            & (g[1] < lim[1])
+            & (g[2] >= 0.0)
+            & (g[2] < lim[2]);
+        let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
+        // (Outside the interior the index is meaningless, and unused.)
+        idx[b] = index(c[0] + fy * c[1] + fz * c[2]);
+        for a in 0..3 {
+            f[a][b] = (g[a] - c[a]) as f32;
+        }
     }
-    let ch = v.ds.channels();
-    let [nx, ny, _] = v.ds.dims();
-    let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
-    // The index in f64 (exact below 2⁵²; the interior test bounds it by the grid's size) and one conversion.
-    let (fx, fy) = (nx as f64, (nx * ny) as f64);
-    let cell = Cell {
-        i: index(c[0] + fx * c[1] + fy * c[2]),
-        sy: nx,
-        sz: nx * ny,
-        f: [
-            (g[0] - c[0]) as f32,
-            (g[1] - c[1]) as f32,
-            (g[2] - c[2]) as f32,
-        ],
-    };
-    let Some(d) = trilinear::<F>(ch[v.density].grid.data(), cell) else {
-        return Lookup::Outside;
-    };
-    x.d = d.max(0.0);
-    x.t = 0.0;
-    if let Some(k) = v.temperature {
-        let Some(t) = trilinear::<F>(ch[k].grid.data(), cell) else {
-            return Lookup::Outside;
-        };
-        x.t = t;
+    for (k, data) in grids.data.iter().take(grids.n).enumerate() {
+        let mut c = [[0f32; BATCH]; 8];
+        for b in 0..BATCH {
+            if !inside[b] {
+                continue;
+            }
+            let Some(s) = data.get(idx[b]..).and_then(|s| s.get(..sz + sy + 2)) else {
+                inside[b] = false;
+                continue;
+            };
+            let (y, z, yz) = (sy, sz, sz + sy);
+            [c[0][b], c[1][b], c[2][b], c[3][b]] = [s[0], s[1], s[y], s[y + 1]];
+            [c[4][b], c[5][b], c[6][b], c[7][b]] = [s[z], s[z + 1], s[yz], s[yz + 1]];
+        }
+        for b in 0..BATCH {
+            let [fx, fy, fz] = [f[0][b], f[1][b], f[2][b]];
+            let y0 = lerp::<F>(
+                fy,
+                lerp::<F>(fx, c[0][b], c[1][b]),
+                lerp::<F>(fx, c[2][b], c[3][b]),
+            );
+            let y1 = lerp::<F>(
+                fy,
+                lerp::<F>(fx, c[4][b], c[5][b]),
+                lerp::<F>(fx, c[6][b], c[7][b]),
+            );
+            vals[k][b] = lerp::<F>(fz, y0, y1);
+        }
     }
-    x.les = 1.0;
-    if let Some(k) = v.lescale {
-        let Some(les) = trilinear::<F>(ch[k].grid.data(), cell) else {
-            return Lookup::Outside;
-        };
-        x.les = les.max(0.0);
-    }
-    for (s, sp) in v.species.iter().enumerate() {
-        let Some(n) = trilinear::<F>(ch[sp.ch].grid.data(), cell) else {
-            return Lookup::Outside;
-        };
-        x.n[s] = (n.max(0.0) as f64 * sp.scale) as f32;
-    }
-    Lookup::Found
 }
 
 /// The sample at medium-space point `p` into `x` by the general stencil (near the faces, where it fades to
@@ -265,14 +290,18 @@ pub(super) fn march<const C: usize, const F: bool>(
     let ns = v.species.len().min(MAX_SPECIES);
     let no_temperature = v.temperature.is_none();
     let mut samples = 0u64;
+    let grids = Grids::new(v);
+    let dims_n = v.ds.dims();
     let (mut k, mut e) = (0u64, 0usize);
     let mut batch = [(Values::default(), 0f32); BATCH];
     'ray: loop {
         // Gather the grid values of the next BATCH samples that hold something (their lookups are
         // independent, so the CPU overlaps their loads), then step through them in order.
-        let mut nb = 0;
+        let mut m = 0;
         let mut end = false;
-        while nb < BATCH {
+        let mut mids = [0f64; BATCH];
+        let mut deltas = [0f32; BATCH];
+        while m < BATCH {
             let s0 = if k == 0 {
                 0.0
             } else {
@@ -298,18 +327,28 @@ pub(super) fn march<const C: usize, const F: bool>(
                 continue;
             }
             k += 1;
-            let g = [
-                g0[0] + mid * gd[0],
-                g0[1] + mid * gd[1],
-                g0[2] + mid * gd[2],
-            ];
-            let (x, delta) = &mut batch[nb];
-            let mut found = interior::<F>(v, g, lim, x);
-            if found == Lookup::General {
-                found = general(v, ray.o + ray.d * (span.a + mid / span.speed), x);
-            }
-            if found == Lookup::Outside {
-                continue;
+            mids[m] = mid;
+            deltas[m] = (s1 - s0) as f32;
+            m += 1;
+        }
+        let mut vals = [[0f32; BATCH]; MAX_GRIDS];
+        let mut inside = [false; BATCH];
+        lookup_block::<F>(&grids, dims_n, &mids, g0, gd, lim, &mut vals, &mut inside);
+        let mut nb = 0;
+        for b in 0..m {
+            let x = &mut batch[nb].0;
+            if inside[b] {
+                x.d = vals[0][b].max(0.0);
+                x.t = grids.temperature.map_or(0.0, |k| vals[k][b]);
+                x.les = grids.lescale.map_or(1.0, |k| vals[k][b].max(0.0));
+                for (s, sp) in v.species.iter().take(ns).enumerate() {
+                    x.n[s] = (vals[grids.species + s][b].max(0.0) as f64 * sp.scale) as f32;
+                }
+            } else {
+                let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                if general(v, p, x) == Lookup::Outside {
+                    continue;
+                }
             }
             samples += 1;
             // No soot and no species: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for
@@ -319,7 +358,7 @@ pub(super) fn march<const C: usize, const F: bool>(
                 nothing &= x.n[s] == 0.0;
             }
             if !nothing {
-                *delta = (s1 - s0) as f32;
+                batch[nb].1 = deltas[b];
                 nb += 1;
             }
         }
