@@ -1,6 +1,6 @@
 //! Majorant grid and DDA: coarse bricks bounding every channel from above and below, walked along rays.
 //!
-//! The dataset's lattice is cut into bricks of `brick`³ voxels (16 by default; the last brick on an axis may
+//! The dataset's lattice is cut into bricks of `brick`³ voxels (8 by default; the last brick on an axis may
 //! be partial). Each brick stores, per channel, the max and min of the voxels it covers **widened by one
 //! voxel** on every side: a trilinear lookup anywhere inside the brick blends only those voxels, so the bound
 //! holds under interpolation; where the widened range leaves the grid, the zero that trilinear lookups use

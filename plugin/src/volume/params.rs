@@ -81,7 +81,7 @@ pub static VOLUME: Component = Component {
         p("lambdamax", T::Float, "700", "nm", Range::Between(200.0, 2000.0), "Upper end of the spectral bins."),
         p("stepsize", T::Float, "0.5", "voxels", Range::Above(0.0), "March step, in voxels (the paper's half voxel)."),
         p("integrator", T::String, "march", "", Range::Choices(&["march", "ratio", "delta"]), "march: fixed steps, eq. 3; ratio/delta: unbiased tracking over the majorant bricks."),
-        p("brick", T::Integer, "16", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge."),
+        p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
         p("precision", T::String, "f32", "", Range::Choices(&["f32", "f64"]), "Per-sample arithmetic of the march: f32 in vector lanes (about 2× faster; within 1e-6 of f64 on the campfire), falling back to f64 when a product could leave f32's range; f64: always f64."),
         p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
         p("refraction", T::Bool, "false", "", Range::Any, "Bend rays through the hot gas (P&P §3.7): an index field from temperature (Ciddor), curved rays by the ray equation. Off: nothing is baked."),
