@@ -285,21 +285,32 @@ fn read_values(
     } else {
         block(c, ctx.compression, nbytes)?
     };
-    let decode = |i: usize| {
-        if ctx.half {
-            half_to_f32(u16::from_le_bytes([raw[2 * i], raw[2 * i + 1]]))
-        } else {
-            f32::from_le_bytes([raw[4 * i], raw[4 * i + 1], raw[4 * i + 2], raw[4 * i + 3]])
-        }
+    // All stored values decoded at once (a loop over exact chunks, which compiles to plain loads).
+    let values: Vec<f32> = if ctx.half {
+        raw.chunks_exact(2)
+            .map(|b| half_to_f32(u16::from_le_bytes([b[0], b[1]])))
+            .collect()
+    } else {
+        raw.chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
     };
+    if values.len() < stored.min(count) {
+        return Err(c.err(
+            format!("{stored} stored values"),
+            format!("{} values", values.len()),
+        ));
+    }
     if !masked || stored == count {
-        return Ok((0..count).map(decode).collect());
+        let mut values = values;
+        values.truncate(count);
+        return Ok(values);
     }
     let mut out = Vec::with_capacity(count);
     let mut k = 0;
     for i in 0..count {
         if bit(value_mask, i) {
-            out.push(decode(k));
+            out.push(values.get(k).copied().unwrap_or(inactive0));
             k += 1;
         } else {
             let sel = selection.as_ref().is_some_and(|s| bit(s, i));
