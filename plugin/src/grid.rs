@@ -274,42 +274,73 @@ impl Grid {
 
     /// Min, max, mean and non-zero fraction of the samples.
     pub fn stats(&self) -> GridStats {
-        let mut s = GridStats {
-            min: f32::INFINITY,
-            max: f32::NEG_INFINITY,
-            mean: 0.0,
-            nonzero_fraction: 0.0,
-        };
-        // Eight running minima, maxima, sums and counts, so that the loop vectorises (min and max skip NaN,
-        // as `f32::min` does: a comparison with NaN is false).
-        const L: usize = 8;
-        let (mut lo, mut hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
-        let (mut sums, mut counts) = ([0f64; L], [0u64; L]);
-        let chunks = self.data.chunks_exact(L);
+        let mut acc = StatsAcc::new();
+        let chunks = self.data.chunks_exact(STATS_LANES);
         let rest = chunks.remainder();
         for c in chunks {
-            for k in 0..L {
-                let v = c[k];
-                lo[k] = if v < lo[k] { v } else { lo[k] };
-                hi[k] = if v > hi[k] { v } else { hi[k] };
-                sums[k] += v as f64;
-                counts[k] += (v != 0.0) as u64;
+            if let Ok(c) = c.try_into() {
+                acc.add_lanes(c);
             }
         }
-        for (k, &v) in rest.iter().enumerate() {
-            lo[k] = if v < lo[k] { v } else { lo[k] };
-            hi[k] = if v > hi[k] { v } else { hi[k] };
-            sums[k] += v as f64;
-            counts[k] += (v != 0.0) as u64;
+        for &v in rest {
+            acc.add(v);
         }
-        s.min = lo.iter().fold(f32::INFINITY, |m, &v| m.min(v));
-        s.max = hi.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
-        let sum: f64 = sums.iter().sum();
-        let nonzero: u64 = counts.iter().sum();
-        let n = self.data.len() as f64;
-        s.mean = sum / n;
-        s.nonzero_fraction = nonzero as f64 / n;
-        s
+        acc.finish()
+    }
+}
+
+/// Lanes of [`StatsAcc`].
+pub(crate) const STATS_LANES: usize = 8;
+
+/// Running grid statistics in eight lanes (running minima, maxima, sums and counts, so that a loop over groups
+/// of eight vectorises; min and max skip NaN, as `f32::min` does: a comparison with NaN is false).
+pub(crate) struct StatsAcc {
+    lo: [f32; STATS_LANES],
+    hi: [f32; STATS_LANES],
+    sums: [f64; STATS_LANES],
+    counts: [u64; STATS_LANES],
+    n: u64,
+}
+
+impl StatsAcc {
+    pub(crate) fn new() -> StatsAcc {
+        StatsAcc {
+            lo: [f32::INFINITY; STATS_LANES],
+            hi: [f32::NEG_INFINITY; STATS_LANES],
+            sums: [0.0; STATS_LANES],
+            counts: [0; STATS_LANES],
+            n: 0,
+        }
+    }
+    /// Eight samples.
+    #[inline]
+    pub(crate) fn add_lanes(&mut self, c: &[f32; STATS_LANES]) {
+        for k in 0..STATS_LANES {
+            let v = c[k];
+            self.lo[k] = if v < self.lo[k] { v } else { self.lo[k] };
+            self.hi[k] = if v > self.hi[k] { v } else { self.hi[k] };
+            self.sums[k] += v as f64;
+            self.counts[k] += (v != 0.0) as u64;
+        }
+        self.n += STATS_LANES as u64;
+    }
+    /// One sample.
+    #[inline]
+    pub(crate) fn add(&mut self, v: f32) {
+        self.lo[0] = if v < self.lo[0] { v } else { self.lo[0] };
+        self.hi[0] = if v > self.hi[0] { v } else { self.hi[0] };
+        self.sums[0] += v as f64;
+        self.counts[0] += (v != 0.0) as u64;
+        self.n += 1;
+    }
+    pub(crate) fn finish(&self) -> GridStats {
+        let n = self.n.max(1) as f64;
+        GridStats {
+            min: self.lo.iter().fold(f32::INFINITY, |m, &v| m.min(v)),
+            max: self.hi.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v)),
+            mean: self.sums.iter().sum::<f64>() / n,
+            nonzero_fraction: self.counts.iter().sum::<u64>() as f64 / n,
+        }
     }
 }
 

@@ -681,9 +681,8 @@ impl Dataset {
             let mut grid = Grid::new(l.dims, l.data).ok_or_else(|| {
                 Error::invalid("dataset", &src.name, "an empty grid", "at least one voxel")
             })?;
-            let (replaced_nonfinite, replaced_negative) =
+            let (replaced_nonfinite, replaced_negative, stats) =
                 apply_policies(&mut grid, &src.name, &file, &src.mapping, opts)?;
-            let stats = grid.stats();
             let bytes = grid.bytes();
             Ok(Channel {
                 name: src.name.clone(),
@@ -778,14 +777,15 @@ impl Dataset {
     }
 }
 
-/// Applies the mapping and the NaN/negative policies; returns the replacement counts.
+/// Applies the mapping and the NaN/negative policies; returns the replacement counts and the statistics of
+/// the result (gathered in the same pass over the grid).
 fn apply_policies(
     grid: &mut Grid,
     name: &str,
     file: &str,
     mapping: &Mapping,
     opts: &LoadOptions,
-) -> Result<(usize, usize), Error> {
+) -> Result<(usize, usize, crate::grid::GridStats), Error> {
     let dims = grid.dims();
     let voxel = |n: usize| {
         let (i, rest) = (n % dims[0], n / dims[0]);
@@ -804,14 +804,16 @@ fn apply_policies(
     let (mut nonfinite, mut negative) = (0, 0);
     // Eight voxels at a time are tested at once (a loop the compiler vectorises); only a group holding a
     // non-finite or negative value, or any group under a mapping, goes through the voxel-by-voxel rules.
-    const L: usize = 8;
+    const L: usize = crate::grid::STATS_LANES;
+    let mut stats = crate::grid::StatsAcc::new();
     for (g, group) in grid.data_mut().chunks_mut(L).enumerate() {
-        if identity {
+        if let (true, Ok(whole)) = (identity, <&[f32; L]>::try_from(&*group)) {
             let mut clean = true;
-            for v in group.iter() {
+            for v in whole.iter() {
                 clean &= v.is_finite() & (*v >= 0.0 || !physical);
             }
             if clean {
+                stats.add_lanes(whole);
                 continue;
             }
         }
@@ -866,9 +868,10 @@ fn apply_policies(
                     *v = 0.0;
                 }
             }
+            stats.add(*v);
         }
     }
-    Ok((nonfinite, negative))
+    Ok((nonfinite, negative, stats.finish()))
 }
 
 #[cfg(test)]
