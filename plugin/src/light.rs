@@ -59,8 +59,12 @@ pub struct FireLight {
     rows: Vec<(u32, u32)>,
     xs: Vec<u32>,
     cdf_x: Vec<f64>,
-    /// The weight of each entry of `xs` (for pdf(x): the row from `rows`, then a search of its `xs`).
+    /// The weight of each entry of `xs`, in voxel order (x fastest).
     ws: Vec<f32>,
+    /// One bit per voxel: emitting. With `rank` (the emitting voxels before each 64-bit word), a voxel's entry
+    /// in `ws` is rank + the set bits below it — a lookup in O(1) for the MIS density's walk.
+    occupied: Vec<u64>,
+    rank: Vec<u32>,
     power_w: f64,
     power_lm: f64,
     build_seconds: f64,
@@ -184,6 +188,18 @@ impl FireLight {
             tz += ty;
             cdf_z.push(tz);
         }
+        let mut occupied = vec![0u64; (nx * ny * nz).div_ceil(64)];
+        for (idx, &v) in w.iter().enumerate() {
+            if v > 0.0 {
+                occupied[idx / 64] |= 1 << (idx % 64);
+            }
+        }
+        let mut rank = Vec::with_capacity(occupied.len());
+        let mut before = 0u32;
+        for m in &occupied {
+            rank.push(before);
+            before += m.count_ones();
+        }
         if !(tz > 0.0) {
             return Err(Error::invalid(
                 "light",
@@ -204,6 +220,8 @@ impl FireLight {
             xs,
             cdf_x,
             ws,
+            occupied,
+            rank,
             power_w,
             power_lm,
             build_seconds: start.elapsed().as_secs_f64(),
@@ -236,6 +254,8 @@ impl FireLight {
             + self.rows.len() * 8
             + self.xs.len() * 4
             + self.ws.len() * 4
+            + self.occupied.len() * 8
+            + self.rank.len() * 4
     }
     /// Seconds to build.
     pub fn build_seconds(&self) -> f64 {
@@ -269,17 +289,17 @@ impl FireLight {
     }
 
     fn weight(&self, idx: usize) -> f64 {
-        let nx = self.dims[0];
-        // rows are indexed by k·ny + j = idx / nx.
-        let (start, len) = self.rows[idx / nx];
-        let (start, len) = (start as usize, len as usize);
-        if len == 0 {
+        let (word, bit) = (idx / 64, idx % 64);
+        let (Some(&m), Some(&r)) = (self.occupied.get(word), self.rank.get(word)) else {
+            return 0.0;
+        };
+        if m >> bit & 1 == 0 {
             return 0.0;
         }
-        match self.xs[start..start + len].binary_search(&((idx % nx) as u32)) {
-            Ok(q) => self.ws[start + q] as f64,
-            Err(_) => 0.0,
-        }
+        let below = (m & ((1u64 << bit) - 1)).count_ones();
+        self.ws
+            .get(r as usize + below as usize)
+            .map_or(0.0, |&w| w as f64)
     }
 
     /// Density of a medium-space point, per unit volume.
