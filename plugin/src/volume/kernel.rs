@@ -19,7 +19,7 @@
 //!
 //! Accuracy (tests, docs/RESULTS.md): the same image as the f64 march to the lanes' f32 rounding.
 
-use super::integrate::{Medium, Span, MAX_STEPS};
+use super::integrate::{Span, MAX_STEPS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
 use super::{FireVolume, Ray, TTable, EVALUATIONS};
 use crate::grid::Interpolation;
@@ -259,11 +259,19 @@ pub(super) fn march<const C: usize, const F: bool>(
     if first <= 0.0 {
         first = ds;
     }
-    // Empty stretches (arc length from the entry), as `march_steps` finds them.
+    // Empty stretches (arc length from the entry): the bricks `empty_spans` reports, walked here directly and
+    // adjacent ones merged (fewer stretches to test, no call per brick).
     let mut empty: Vec<(f64, f64)> = Vec::new();
-    v.empty_spans(ray.o, ray.d, span.a, span.b, &mut |ta, tb| {
-        empty.push(((ta - span.a) * span.speed, (tb - span.a) * span.speed))
-    });
+    for seg in v.majorant.segments(ray.o, ray.d, span.a, span.b) {
+        if !v.brick_empty[seg.brick] {
+            continue;
+        }
+        let (a, b) = ((seg.t0 - span.a) * span.speed, (seg.t1 - span.a) * span.speed);
+        match empty.last_mut() {
+            Some(last) if last.1 == a => last.1 = b,
+            _ => empty.push((a, b)),
+        }
+    }
     // The ray in lattice coordinates g = unit·n − 0.5 as a function of arc length s: g0 + s·gd.
     let dims = v.ds.dims().map(|n| n as f64);
     let [b0, b1] = v.ds.bounds();
