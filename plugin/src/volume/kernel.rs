@@ -3,26 +3,26 @@
 //! The same steps at the same points as `integrate::march_steps` (eq. 3 of Pegoraro & Parker, a step exact for
 //! constant coefficients, evaluated at the step's midpoint), written for speed:
 //!
-//! - **the ray in grid coordinates, eight samples at a time**: the next eight steps outside empty bricks are
-//!   looked up together — lattice positions (one multiply–add per axis from the ray's entry), cells, weights
-//!   and the trilinear interpolation in vector arithmetic across the eight, the corner reads straight from the
-//!   dense arrays, and the loads of eight independent samples overlapped by the CPU; samples whose cell is not
-//!   inside the grid (near the faces, where pbrt-v4's lookup fades to zero) and nearest-neighbour datasets take
-//!   the general stencil;
+//! - **eight samples at a time, in phases**: the next eight steps outside empty bricks (their midpoints), then
+//!   their grid values, read together from the [`Lattice`] (density and temperature interleaved and padded: a
+//!   cell is four 16-byte reads under one range check, and the padding gives pbrt-v4's fade at the faces, so no
+//!   sample inside the bounds needs the general stencil), then their table rows (located once for emission and
+//!   T-dependent absorption), then the steps in order — independent reads first, which the CPU overlaps;
 //! - **the channels as `C` lanes** (a const generic: 1 for rgb, 4 for 30 spectral bins), so radiance,
 //!   transmittance and σ per unit density stay in registers for the whole ray;
 //! - **a thin step without the exponential**: when a bound on the sample's largest optical depth is below 0.1
 //!   (almost every step of a flame), e^{−τ} = 1 − τ·g with g = (1 − e^{−τ})/τ from its series — one polynomial
 //!   instead of the exponential, the series and a division; the full step otherwise;
 //! - **empty bricks jumped over** in one step count, not stepped through;
-//! - **fused multiply–adds** where the CPU has them (`F`, set by the AVX2 + FMA clone).
+//! - **no code for what the volume lacks**: species (`S`) and T-dependent absorption (`A`) are const generics;
+//! - **fused multiply–adds** where the CPU has them (`F`, set by the AVX2 + FMA and AVX-512 clones).
 //!
 //! Accuracy (tests, docs/RESULTS.md): the same image as the f64 march to the lanes' f32 rounding.
 
 use super::integrate::{Span, MAX_STEPS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
+use super::lattice::Lattice;
 use super::{FireVolume, Ray, TTable, EVALUATIONS};
-use crate::grid::Interpolation;
 
 /// a·b + c, fused when `F` (inlined into the FMA clone, a single instruction; without FMA `mul_add` would be a
 /// library call, so the plain product and sum).
@@ -61,168 +61,166 @@ fn lerp<const F: bool>(t: f32, a: f32, b: f32) -> f32 {
     fma::<F>(t, b - a, a)
 }
 
-/// The grid values the march reads at a sample (after the clamps of `FireVolume::lane_step`).
-#[derive(Clone, Copy, Default)]
-struct Values {
-    d: f32,
-    t: f32,
-    les: f32,
-    n: [f32; MAX_SPECIES],
+/// The values of the further grids (Lescale, species) at a batch of samples (after the clamps of
+/// `FireVolume::lane_step`; Lescale 1 where the volume has none).
+struct Extras {
+    les: [f32; BATCH],
+    n: [[f32; BATCH]; MAX_SPECIES],
 }
 
-/// Where a sample's values came from.
-#[derive(PartialEq)]
-enum Lookup {
-    /// Read (into the `Values`).
-    Found,
-    /// Outside the grid: no medium.
-    Outside,
+/// The lattice as one sample's lookup needs it: the arrays, the strides in floats between the x-pairs of a
+/// cell's corners, and what the further grids hold.
+struct Layout<'a> {
+    pairs: &'a [f32],
+    extra: &'a [Vec<f32>],
+    /// Padded voxel strides along y and z.
+    sy: usize,
+    sz: usize,
+    /// The padded linear index of cell (cx, cy, cz) is `off + cx + fy·cy + fz·cz` (fy, fz: the strides).
+    off: f64,
+    fy: f64,
+    fz: f64,
+    /// Largest linear index whose cell has all eight corners in the arrays (exclusive).
+    cells: usize,
+    /// Index of Lescale among the further grids; the species follow it (or start at 0).
+    lescale: bool,
 }
 
-/// The most grids a sample reads: density, temperature, Lescale and the species.
-const MAX_GRIDS: usize = 3 + MAX_SPECIES;
-
-/// The grids the kernel reads, in the order density, temperature, Lescale, species (those the volume has).
-struct Grids<'a> {
-    data: [&'a [f32]; MAX_GRIDS],
-    n: usize,
-    temperature: Option<usize>,
-    lescale: Option<usize>,
-    species: usize,
-}
-
-impl<'a> Grids<'a> {
-    fn new(v: &'a FireVolume) -> Grids<'a> {
-        let ch = v.ds.channels();
-        let mut g = Grids {
-            data: [&[]; MAX_GRIDS],
-            n: 0,
-            temperature: None,
-            lescale: None,
-            species: 0,
-        };
-        let push = |g: &mut Grids<'a>, k: usize| {
-            g.data[g.n] = ch[k].grid.data();
-            g.n += 1;
-            g.n - 1
-        };
-        push(&mut g, v.density);
-        if let Some(k) = v.temperature {
-            g.temperature = Some(push(&mut g, k));
+impl<'a> Layout<'a> {
+    fn new(lat: &'a Lattice, lescale: bool) -> Layout<'a> {
+        let [px, py, pz] = lat.dims();
+        let (sy, sz) = (px, px * py);
+        Layout {
+            pairs: lat.pairs(),
+            extra: lat.extra(),
+            sy,
+            sz,
+            off: (1 + sy + sz) as f64,
+            fy: sy as f64,
+            fz: sz as f64,
+            cells: (px * py * pz).saturating_sub(sy + sz + 1),
+            lescale,
         }
-        if let Some(k) = v.lescale {
-            g.lescale = Some(push(&mut g, k));
-        }
-        g.species = g.n;
-        for sp in v.species.iter().take(MAX_SPECIES) {
-            push(&mut g, sp.ch);
-        }
-        g
     }
 }
 
-/// The grid values at a block of samples (lattice positions g0 + mids·gd), each grid interpolated for all
-/// of them at once (positions, cells and the trilinear weights in vector arithmetic; the eight corner reads
-/// per sample and grid stay scalar). `inside[b]` is false where sample b's cell is not in the interior
-/// (`lim`), or its index out of range: the general stencil takes those.
+/// a + t·(b − a) on four values at once (written out: a closure, as in `array::map`, would not inherit the
+/// clone's target features).
+#[inline(always)]
+fn lerp4<const F: bool>(t: f32, a: &[f32; 4], b: &[f32; 4]) -> [f32; 4] {
+    [
+        lerp::<F>(t, a[0], b[0]),
+        lerp::<F>(t, a[1], b[1]),
+        lerp::<F>(t, a[2], b[2]),
+        lerp::<F>(t, a[3], b[3]),
+    ]
+}
+
+/// Four values of `s` from `o` (`None` past its end: the caller takes the general stencil).
+#[inline(always)]
+fn quad(s: &[f32], o: usize) -> Option<&[f32; 4]> {
+    s.get(o..o + 4)?.try_into().ok()
+}
+
+/// The trilinear value of one further grid `a` at cell `i` (strides `sy`, `sz`), fractions `f`.
+#[inline(always)]
+fn trilinear<const F: bool>(a: &[f32], i: usize, sy: usize, sz: usize, f: [f32; 3]) -> f32 {
+    let Some(s) = a.get(i..i + sy + sz + 2) else {
+        return 0.0;
+    };
+    let (z, zy) = (sz, sz + sy);
+    let v = lerp4::<F>(
+        f[0],
+        &[s[0], s[sy], s[z], s[zy]],
+        &[s[1], s[sy + 1], s[z + 1], s[zy + 1]],
+    );
+    lerp::<F>(
+        f[2],
+        lerp::<F>(f[1], v[0], v[1]),
+        lerp::<F>(f[1], v[2], v[3]),
+    )
+}
+
+/// Sample `b` of a batch at lattice point `g` (the dataset's lattice coordinates: voxel centres at integers,
+/// the bounds at −½ and n − ½) into `d`, `t` and `x`, trilinearly from the padded lattice; false when its cell
+/// is not in the lattice (the general stencil takes it). Species values are scaled by `scales`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn lookup_block<const F: bool>(
-    grids: &Grids,
-    dims: [usize; 3],
-    mids: &[f64; BATCH],
-    g0: [f64; 3],
-    gd: [f64; 3],
-    lim: [f64; 3],
-    vals: &mut [[f32; BATCH]; MAX_GRIDS],
-    inside: &mut [bool; BATCH],
-) {
-    let (sy, sz) = (dims[0], dims[0] * dims[1]);
-    let (fy, fz) = (sy as f64, sz as f64);
-    let mut idx = [0usize; BATCH];
-    let mut f = [[0f32; BATCH]; 3];
-    for b in 0..BATCH {
-        let g = [
-            g0[0] + mids[b] * gd[0],
-            g0[1] + mids[b] * gd[1],
-            g0[2] + mids[b] * gd[2],
-        ];
-        inside[b] = (g[0] >= 0.0)
-            & (g[0] < lim[0])
-            & (g[1] >= 0.0)
-            & (g[1] < lim[1])
-            & (g[2] >= 0.0)
-            & (g[2] < lim[2]);
-        let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
-        // (Outside the interior the index is meaningless, and unused.)
-        idx[b] = index(c[0] + fy * c[1] + fz * c[2]);
-        for a in 0..3 {
-            f[a][b] = (g[a] - c[a]) as f32;
+fn read<const F: bool>(
+    lay: &Layout,
+    g: [f64; 3],
+    scales: &[f64],
+    b: usize,
+    dt: &mut [[f32; 2]; BATCH],
+    x: &mut Extras,
+) -> bool {
+    let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
+    let i = index(lay.off + c[0] + lay.fy * c[1] + lay.fz * c[2]);
+    if i >= lay.cells {
+        return false;
+    }
+    // Offsets in floats, each below 2³² (the lattice holds fewer floats, `Lattice::build`), so that their sums
+    // cannot wrap and one range check covers the four reads.
+    let (o, oy, oz) = (
+        2 * (i as u32 as usize),
+        2 * (lay.sy as u32 as usize),
+        2 * (lay.sz as u32 as usize),
+    );
+    let Some(s) = lay.pairs.get(o..o + oy + oz + 4) else {
+        return false;
+    };
+    // [d, T] at x and x + 1, at the cell's four (y, z) corners: four 16-byte reads.
+    let (Some(q00), Some(q10), Some(q01), Some(q11)) =
+        (quad(s, 0), quad(s, oy), quad(s, oz), quad(s, oy + oz))
+    else {
+        return false;
+    };
+    let f = [
+        (g[0] - c[0]) as f32,
+        (g[1] - c[1]) as f32,
+        (g[2] - c[2]) as f32,
+    ];
+    let z0 = lerp4::<F>(f[1], q00, q10);
+    let z1 = lerp4::<F>(f[1], q01, q11);
+    let v = lerp4::<F>(f[2], &z0, &z1);
+    // Along x, [d, T] toward the x + 1 pair, still four wide (the swapped half is not used).
+    let r = lerp4::<F>(f[0], &v, &[v[2], v[3], v[0], v[1]]);
+    // (Stored side by side and unclamped: the vectoriser builds the lerps above from this pair of stores.)
+    dt[b] = [r[0], r[1]];
+    if !lay.extra.is_empty() {
+        let mut e = 0;
+        if lay.lescale {
+            x.les[b] = trilinear::<F>(&lay.extra[0], i, lay.sy, lay.sz, f).max(0.0);
+            e = 1;
+        }
+        for (k, (a, &scale)) in lay.extra[e..].iter().zip(scales).enumerate() {
+            x.n[k][b] = (trilinear::<F>(a, i, lay.sy, lay.sz, f).max(0.0) as f64 * scale) as f32;
         }
     }
-    for (k, data) in grids.data.iter().take(grids.n).enumerate() {
-        let mut c = [[0f32; BATCH]; 8];
-        for b in 0..BATCH {
-            if !inside[b] {
-                continue;
-            }
-            let Some(s) = data.get(idx[b]..).and_then(|s| s.get(..sz + sy + 2)) else {
-                inside[b] = false;
-                continue;
-            };
-            let (y, z, yz) = (sy, sz, sz + sy);
-            [c[0][b], c[1][b], c[2][b], c[3][b]] = [s[0], s[1], s[y], s[y + 1]];
-            [c[4][b], c[5][b], c[6][b], c[7][b]] = [s[z], s[z + 1], s[yz], s[yz + 1]];
-        }
-        for b in 0..BATCH {
-            let [fx, fy, fz] = [f[0][b], f[1][b], f[2][b]];
-            let y0 = lerp::<F>(
-                fy,
-                lerp::<F>(fx, c[0][b], c[1][b]),
-                lerp::<F>(fx, c[2][b], c[3][b]),
-            );
-            let y1 = lerp::<F>(
-                fy,
-                lerp::<F>(fx, c[4][b], c[5][b]),
-                lerp::<F>(fx, c[6][b], c[7][b]),
-            );
-            vals[k][b] = lerp::<F>(fz, y0, y1);
-        }
-    }
+    true
 }
 
-/// The sample at medium-space point `p` into `x` by the general stencil (near the faces, where it fades to
-/// zero, and for nearest lookups).
+/// Sample `b` at medium-space point `p` by the general stencil (any point whose cell is not in the lattice);
+/// d = −1 where `p` is outside the medium.
+#[cold]
 #[inline(never)]
-fn general(v: &FireVolume, p: glam::DVec3, x: &mut Values) -> Lookup {
+fn general(v: &FireVolume, p: glam::DVec3, b: usize, dt: &mut [[f32; 2]; BATCH], x: &mut Extras) {
     let Some(st) = v.ds.stencil_with_margin(p, v.margin) else {
-        return Lookup::Outside;
+        dt[b] = [OUTSIDE, 0.0];
+        return;
     };
     let ch = v.ds.channels();
     let at = |k: usize| ch[k].grid.eval(&st);
-    for (k, sp) in v.species.iter().enumerate() {
-        x.n[k] = (at(sp.ch).max(0.0) as f64 * sp.scale) as f32;
+    for (k, sp) in v.species.iter().take(MAX_SPECIES).enumerate() {
+        x.n[k][b] = (at(sp.ch).max(0.0) as f64 * sp.scale) as f32;
     }
-    x.d = at(v.density).max(0.0);
-    x.t = v.temperature.map_or(0.0, at);
-    x.les = v.lescale.map_or(1.0, |k| at(k).max(0.0));
-    Lookup::Found
+    dt[b] = [at(v.density), v.temperature.map_or(0.0, at)];
+    x.les[b] = v.lescale.map_or(1.0, |k| at(k).max(0.0));
 }
 
-/// The two rows of `tab` around T and the fraction between them (as `TTable::lane_rows`, with one multiply
-/// and one float→int conversion); `None` only if the table has not `C` lanes per row.
-#[inline(always)]
-fn rows<const C: usize, const F: bool>(
-    tab: &TTable,
-    t: f32,
-) -> Option<(&[Lane; C], &[Lane; C], f32)> {
-    let last = (tab.rows - 1) as f64;
-    let f = (t as f64 * tab.inv_dt).max(0.0).min(last);
-    let i = floor::<F>(f).min(last - 1.0);
-    let at = index(i) * C;
-    let (a, b) = tab.v.get(at..at + 2 * C)?.split_at(C);
-    Some((a.try_into().ok()?, b.try_into().ok()?, (f - i) as f32))
-}
+/// The density that marks a sample outside the medium (not counted; real densities are ≥ 0, or a rounding
+/// below it).
+const OUTSIDE: f32 = -1.0;
 
 /// Samples whose grid values are read before they are stepped through.
 const BATCH: usize = 8;
@@ -231,18 +229,21 @@ const BATCH: usize = 8;
 const THIN: f32 = 0.1;
 
 /// The straight march of `ray` through `v` in `C` lanes (`C` = `lt.chunks()`, checked by the caller; any other
-/// count returns `None`). Fills `l` and `t`; returns the exit parameter.
+/// count, or a volume without a lattice, returns `None`). `S`: the volume has species (their rows are looked
+/// up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical mode).
+/// Fills `l` and `t`; returns the exit parameter.
 #[inline(always)]
-pub(super) fn march<const C: usize, const F: bool>(
+pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>(
     v: &FireVolume,
     lt: &LaneTables,
     ray: &Ray,
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
-    if C > 4 {
+    if C > 4 || S == v.species.is_empty() || A != v.a_t.is_some() {
         return None; // (the lanes below are written out for up to four)
     }
+    let lat = v.lattice.as_ref()?;
     let sigma: &[Lane; C] = lt.sigma().try_into().ok()?;
     l.fill(0.0);
     t.fill(1.0);
@@ -266,7 +267,10 @@ pub(super) fn march<const C: usize, const F: bool>(
         if !v.brick_empty[seg.brick] {
             continue;
         }
-        let (a, b) = ((seg.t0 - span.a) * span.speed, (seg.t1 - span.a) * span.speed);
+        let (a, b) = (
+            (seg.t0 - span.a) * span.speed,
+            (seg.t1 - span.a) * span.speed,
+        );
         match empty.last_mut() {
             Some(last) if last.1 == a => last.1 = b,
             _ => empty.push((a, b)),
@@ -280,11 +284,6 @@ pub(super) fn march<const C: usize, const F: bool>(
     let dir = ray.d / span.speed;
     let g0 = [0, 1, 2].map(|a| (entry[a] - b0[a]) / size[a] * dims[a] - 0.5);
     let gd = [0, 1, 2].map(|a| dir[a] / size[a] * dims[a]);
-    let lim = if v.ds.interpolation() == Interpolation::Trilinear {
-        dims.map(|n| n - 1.0)
-    } else {
-        [-1.0; 3]
-    };
     let c = l.len();
     let mut lk = [[0f32; W]; C];
     // (Padding lanes hold transmittance 0, so they never keep the early termination from stopping.)
@@ -293,142 +292,244 @@ pub(super) fn march<const C: usize, const F: bool>(
         tk[ch / W][ch % W] = 1.0;
     }
     let cutoff = v.cutoff as f32;
-    let sp_max = lt.species_sigma_max();
     let sigma_max = lt.sigma_max();
     let ns = v.species.len().min(MAX_SPECIES);
-    let no_temperature = v.temperature.is_none();
+    let mut scales = [0f64; MAX_SPECIES];
+    for (s, sp) in scales.iter_mut().zip(&v.species) {
+        *s = sp.scale;
+    }
+    let all = v.temperature.is_none();
+    let t_emit = v.t_emit as f32;
+    let lay = Layout::new(lat, v.lescale.is_some());
+    let jt = Rows::<C>::new(&v.j)?;
+    // σ_a(T) rows where they exist (else the emission rows, never read); located with the emission rows when
+    // both tables share their temperatures (as every volume builds them).
+    let at = match &v.a_t {
+        Some(tab) => Rows::<C>::new(tab)?,
+        None => jt,
+    };
+    let shared = at.inv_dt == jt.inv_dt && at.last == jt.last;
+    // Each species' σ and j tables (the same temperature rows) and its largest σ per unit number density.
+    let mut sp_tabs: [Option<(Rows<C>, Rows<C>, f32)>; MAX_SPECIES] = [None; MAX_SPECIES];
+    if S {
+        for (tab, sp) in sp_tabs.iter_mut().zip(&v.species) {
+            *tab = Some((Rows::new(&sp.sigma)?, Rows::new(&sp.j)?, 0.0));
+        }
+        for (tab, m) in sp_tabs.iter_mut().zip(lt.species_sigma_max()) {
+            if let Some(t) = tab {
+                t.2 = m;
+            }
+        }
+    }
     let mut samples = 0u64;
-    let grids = Grids::new(v);
-    let dims_n = v.ds.dims();
-    let (mut k, mut e) = (0u64, 0usize);
-    let mut batch = [(Values::default(), 0f32); BATCH];
+    let (mut k, mut e) = (0f64, 0usize);
+    let mut s0 = 0f64;
+    // The next empty stretch (infinitely far when there is none left).
+    let mut gap = empty
+        .first()
+        .copied()
+        .unwrap_or((f64::INFINITY, f64::INFINITY));
+    let mut x = Extras {
+        les: [1.0; BATCH],
+        n: [[0.0; BATCH]; MAX_SPECIES],
+    };
     'ray: loop {
-        // Gather the grid values of the next BATCH samples that hold something (their lookups are
-        // independent, so the CPU overlaps their loads), then step through them in order.
+        // 1. The next BATCH steps outside empty stretches.
         let mut m = 0;
         let mut end = false;
         let mut mids = [0f64; BATCH];
         let mut deltas = [0f32; BATCH];
         while m < BATCH {
-            let s0 = if k == 0 {
-                0.0
-            } else {
-                first + (k - 1) as f64 * ds
-            };
+            // Step k spans [first + (k − 1)·ds, first + k·ds] ∩ [0, len] (k counted in f64: exact below 2⁵³;
+            // the step's end is the next one's start, as computed here).
             if !(s0 < len) {
                 end = true;
                 break;
             }
-            let s1 = (first + k as f64 * ds).min(len);
+            let s1 = first + k * ds;
+            let s1 = if s1 < len { s1 } else { len };
             let mid = 0.5 * (s0 + s1);
-            while e < empty.len() && empty[e].1 <= mid {
-                e += 1;
-            }
-            if e < empty.len() && empty[e].0 <= mid {
-                // The first step whose midpoint (first + (k − ½)·ds for a whole step) is past this stretch.
-                let past = ((empty[e].1 - first) / ds + 0.5).ceil();
-                k = (k + 1).max(if past < MAX_STEPS {
-                    past as u64
+            if mid >= gap.0 {
+                if mid < gap.1 {
+                    // The first step whose midpoint (first + (k − ½)·ds for a whole step) is past the stretch.
+                    let past = ((gap.1 - first) / ds + 0.5).ceil();
+                    k = if past > k + 1.0 { past } else { k + 1.0 };
+                    s0 = first + (k - 1.0) * ds;
                 } else {
-                    u64::MAX
-                });
+                    e += 1;
+                    gap = empty
+                        .get(e)
+                        .copied()
+                        .unwrap_or((f64::INFINITY, f64::INFINITY));
+                }
                 continue;
             }
-            k += 1;
+            k += 1.0;
             mids[m] = mid;
             deltas[m] = (s1 - s0) as f32;
             m += 1;
+            s0 = s1;
         }
-        let mut vals = [[0f32; BATCH]; MAX_GRIDS];
-        let mut inside = [false; BATCH];
-        lookup_block::<F>(&grids, dims_n, &mids, g0, gd, lim, &mut vals, &mut inside);
-        let mut nb = 0;
+        // 2. Their grid values, read before any is stepped through (independent reads, which the CPU
+        // overlaps). A sample outside the medium gets d = −1 (skipped below, not counted).
+        let mut dt = [[0f32; 2]; BATCH];
         for b in 0..m {
-            let x = &mut batch[nb].0;
-            if inside[b] {
-                x.d = vals[0][b].max(0.0);
-                x.t = grids.temperature.map_or(0.0, |k| vals[k][b]);
-                x.les = grids.lescale.map_or(1.0, |k| vals[k][b].max(0.0));
-                for (s, sp) in v.species.iter().take(ns).enumerate() {
-                    x.n[s] = (vals[grids.species + s][b].max(0.0) as f64 * sp.scale) as f32;
-                }
-            } else {
+            let g = [
+                g0[0] + mids[b] * gd[0],
+                g0[1] + mids[b] * gd[1],
+                g0[2] + mids[b] * gd[2],
+            ];
+            if !read::<F>(&lay, g, &scales[..ns], b, &mut dt, &mut x) {
                 let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
-                if general(v, p, x) == Lookup::Outside {
+                general(v, p, b, &mut dt, &mut x);
+            }
+        }
+        // Densities clamped at 0 (an interpolation of non-negative data may round below it) and the samples
+        // inside the medium, to count.
+        let mut d = [0f32; BATCH];
+        let mut tt = [0f32; BATCH];
+        let mut inside = [false; BATCH];
+        for b in 0..BATCH {
+            inside[b] = dt[b][0] > 0.5 * OUTSIDE;
+            d[b] = dt[b][0].max(0.0);
+            tt[b] = dt[b][1];
+        }
+        // 3. For all of them at once: the table rows at T, the emitting density, the thin-step test (a bound on
+        // the optical depth: the largest σ per unit density times d, plus the species').
+        let (jr, jf) = jt.locate::<F, BATCH>(&tt);
+        let (ar, af) = if A && !shared {
+            at.locate::<F, BATCH>(&tt)
+        } else {
+            (jr, jf)
+        };
+        let mut dl = [0f32; BATCH];
+        let mut thin = [false; BATCH];
+        for b in 0..BATCH {
+            let emits = all | (tt[b] > t_emit);
+            dl[b] = if emits { d[b] * x.les[b] } else { 0.0 };
+            thin[b] = d[b] * sigma_max * deltas[b] < THIN;
+        }
+        // 4. The steps, in order.
+        for b in 0..m {
+            if S {
+                if !inside[b] {
                     continue;
                 }
-            }
-            samples += 1;
-            // No soot and no species: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for
-            // bit).
-            let mut nothing = x.d == 0.0;
-            for s in 0..ns {
-                nothing &= x.n[s] == 0.0;
-            }
-            if !nothing {
-                batch[nb].1 = deltas[b];
-                nb += 1;
-            }
-        }
-        for (x, delta) in batch.iter().take(nb) {
-            let delta = *delta;
-            let emits = no_temperature || x.t as f64 > v.t_emit;
-            let dl = if emits { x.d * x.les } else { 0.0 };
-            // The table rows at the sample's temperature (as `LaneTables::coefficients`) and a bound on its optical
-            // depth, which picks the step.
-            let (j0, j1, fr) = rows::<C, F>(&v.j, x.t)?;
-            let mut at: Option<(&[Lane; C], &[Lane; C], f32)> = None;
-            if let Some(tab) = &v.a_t {
-                at = Some(rows::<C, F>(tab, x.t)?);
-            }
-            let mut bound = x.d * sigma_max;
-            let mut sp_rows: [Option<SpeciesRows<C>>; MAX_SPECIES] = [None; MAX_SPECIES];
-            for s in 0..ns {
-                let n = x.n[s];
-                if n > 0.0 {
-                    let sp = &v.species[s];
-                    bound += n * sp_max[s];
-                    let (s0, s1, f) = rows::<C, F>(&sp.sigma, x.t)?;
-                    let (e0, e1, _) = rows::<C, F>(&sp.j, x.t)?;
-                    sp_rows[s] = Some(SpeciesRows {
-                        n,
-                        f,
-                        s0,
-                        s1,
-                        e0,
-                        e1,
-                    });
-                }
-            }
-            let thin = bound * delta < THIN;
-            let co = Coefficients {
-                d: x.d,
-                dl,
-                sigma,
-                j: (j0, j1, fr),
-                at,
-                species: &sp_rows[..ns],
-                delta,
-                thin,
-            };
-            let mut tmax = [0f32; W];
-            // Lane by lane, each written out (a loop over q kept the lanes in memory; with constant indices
-            // radiance and transmittance stay in registers).
-            macro_rules! lane {
-                ($q:literal) => {
-                    if $q < C {
-                        if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
-                            co.step::<F>($q, l, t, &mut tmax);
+                samples += 1;
+                let step = Step {
+                    d: d[b],
+                    dl: dl[b],
+                    delta: deltas[b],
+                };
+                let mut sp: [Option<SpeciesRows<C>>; MAX_SPECIES] = [None; MAX_SPECIES];
+                let mut bound = d[b] * sigma_max * deltas[b];
+                let mut any = d[b] > 0.0;
+                for s in 0..ns {
+                    let n = x.n[s][b];
+                    if let (true, Some((st, et, smax))) = (n > 0.0, sp_tabs[s]) {
+                        any = true;
+                        bound += n * smax * deltas[b];
+                        let (r, f) = st.locate::<F, 1>(&[tt[b]]);
+                        if let (Some(sr), Some(jr)) = (st.pair(r[0]), et.pair(r[0])) {
+                            sp[s] = Some(SpeciesRows {
+                                n,
+                                f: f[0],
+                                s: sr,
+                                j: jr,
+                            });
                         }
                     }
+                }
+                if !any {
+                    continue;
+                }
+                let thin = bound < THIN;
+                let Some(jp) = jt.pair(jr[b]) else { continue };
+                let j = (jp, jf[b]);
+                let a = if A {
+                    match at.pair(ar[b]) {
+                        Some(p) => (p, af[b]),
+                        None => continue,
+                    }
+                } else {
+                    j
                 };
-            }
-            lane!(0);
-            lane!(1);
-            lane!(2);
-            lane!(3);
-            if horizontal_max(tmax) < cutoff {
-                break 'ray;
+                let mut tmax = [0f32; W];
+                macro_rules! lane {
+                    ($q:literal) => {
+                        if $q < C {
+                            if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
+                                step.lane::<C, A, F>(
+                                    $q,
+                                    sigma,
+                                    j,
+                                    a,
+                                    &sp[..ns],
+                                    thin,
+                                    l,
+                                    t,
+                                    &mut tmax,
+                                );
+                            }
+                        }
+                    };
+                }
+                lane!(0);
+                lane!(1);
+                lane!(2);
+                lane!(3);
+                if horizontal_max(tmax) < cutoff {
+                    break 'ray;
+                }
+            } else {
+                // No soot: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for bit); a sample
+                // outside (d = −1) is not counted.
+                samples += inside[b] as u64;
+                if !(d[b] > 0.0) {
+                    continue;
+                }
+                let step = Step {
+                    d: d[b],
+                    dl: dl[b],
+                    delta: deltas[b],
+                };
+                let Some(jp) = jt.pair(jr[b]) else { continue };
+                let j = (jp, jf[b]);
+                let a = if A {
+                    match at.pair(ar[b]) {
+                        Some(p) => (p, af[b]),
+                        None => continue,
+                    }
+                } else {
+                    j
+                };
+                let mut tmax = [0f32; W];
+                macro_rules! lane {
+                    ($q:literal) => {
+                        if $q < C {
+                            if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
+                                step.lane::<C, A, F>(
+                                    $q,
+                                    sigma,
+                                    j,
+                                    a,
+                                    &[],
+                                    thin[b],
+                                    l,
+                                    t,
+                                    &mut tmax,
+                                );
+                            }
+                        }
+                    };
+                }
+                lane!(0);
+                lane!(1);
+                lane!(2);
+                lane!(3);
+                if horizontal_max(tmax) < cutoff {
+                    break 'ray;
+                }
             }
         }
         if end {
@@ -441,6 +542,109 @@ pub(super) fn march<const C: usize, const F: bool>(
         t[ch] = tk[ch / W][ch % W] as f64;
     }
     Some(span.b)
+}
+
+/// A temperature table as the kernel reads it: rows of `C` lanes.
+#[derive(Clone, Copy)]
+struct Rows<'a, const C: usize> {
+    v: &'a [Lane],
+    inv_dt: f64,
+    /// rows − 1 and rows − 2, as floats (the clamps).
+    last: f64,
+    below: f64,
+}
+
+impl<'a, const C: usize> Rows<'a, C> {
+    /// `None` if the table has not `C` lanes per row.
+    #[inline(always)]
+    fn new(tab: &'a TTable) -> Option<Rows<'a, C>> {
+        (tab.chunks == C && tab.rows >= 2 && tab.v.len() == tab.rows * C).then_some(Rows {
+            v: &tab.v,
+            inv_dt: tab.inv_dt,
+            last: (tab.rows - 1) as f64,
+            below: (tab.rows - 2) as f64,
+        })
+    }
+    /// The lower row index and the fraction toward the next of each temperature (as `TTable::lane_rows`, one
+    /// multiply and one exact float→int conversion each, across the batch at once).
+    #[inline(always)]
+    fn locate<const F: bool, const N: usize>(&self, t: &[f32; N]) -> ([usize; N], [f32; N]) {
+        let mut r = [0usize; N];
+        let mut fr = [0f32; N];
+        for b in 0..N {
+            let f = (t[b] as f64 * self.inv_dt).max(0.0).min(self.last);
+            let i = floor::<F>(f).min(self.below);
+            r[b] = index(i);
+            fr[b] = (f - i) as f32;
+        }
+        (r, fr)
+    }
+    /// Rows i and i + 1 (`locate`'s clamps keep i + 1 in the table, so never `None` from there).
+    #[inline(always)]
+    fn pair(&self, i: usize) -> Option<(&'a [Lane; C], &'a [Lane; C])> {
+        let (a, b) = self.v.get(i * C..i * C + 2 * C)?.split_at(C);
+        Some((a.try_into().ok()?, b.try_into().ok()?))
+    }
+}
+
+/// What a sample's step needs beyond its table rows.
+struct Step {
+    d: f32,
+    /// Density times the emission scale (0 where it does not emit).
+    dl: f32,
+    delta: f32,
+}
+
+/// Two table rows and the fraction between them.
+type RowPair<'a, const C: usize> = ((&'a [Lane; C], &'a [Lane; C]), f32);
+
+impl Step {
+    /// σ_t and j in lane `q` (from σ per unit density, the emission rows `j`, the T-dependent absorption rows
+    /// `a` when `A`, and the species'), then its step; `tmax` keeps the largest transmittance per lane
+    /// position.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn lane<const C: usize, const A: bool, const F: bool>(
+        &self,
+        q: usize,
+        sigma: &[Lane; C],
+        j: RowPair<C>,
+        a: RowPair<C>,
+        species: &[Option<SpeciesRows<C>>],
+        thin: bool,
+        l: &mut Lane,
+        t: &mut Lane,
+        tmax: &mut Lane,
+    ) {
+        let ((j0, j1), fr) = j;
+        let mut sg = [0f32; W];
+        let mut jq = [0f32; W];
+        for w in 0..W {
+            sg[w] = self.d * sigma[q][w];
+            jq[w] = self.dl * lerp::<F>(fr, j0[q][w], j1[q][w]);
+        }
+        if A {
+            let ((a0, a1), fa) = a;
+            for w in 0..W {
+                sg[w] = fma::<F>(self.d, lerp::<F>(fa, a0[q][w], a1[q][w]), sg[w]);
+            }
+        }
+        for r in species.iter().flatten() {
+            let ((s0, s1), (e0, e1)) = (r.s, r.j);
+            for w in 0..W {
+                sg[w] = fma::<F>(r.n, lerp::<F>(r.f, s0[q][w], s1[q][w]), sg[w]);
+                jq[w] = fma::<F>(r.n, lerp::<F>(r.f, e0[q][w], e1[q][w]), jq[w]);
+            }
+        }
+        if thin {
+            thin_step::<F>(&sg, &jq, self.delta, l, t);
+        } else {
+            full_step::<F>(&sg, &jq, self.delta, l, t);
+        }
+        for w in 0..W {
+            tmax[w] = if t[w] > tmax[w] { t[w] } else { tmax[w] };
+        }
+    }
 }
 
 /// The largest of a lane's values, as a tree of halves (vector shuffles, not eight scalar steps).
@@ -457,63 +661,13 @@ fn horizontal_max(x: Lane) -> f32 {
     h[0]
 }
 
-/// A sample's coefficients, ready for each lane's step.
-struct Coefficients<'a, const C: usize> {
-    d: f32,
-    /// Density times the emission scale (0 where it does not emit).
-    dl: f32,
-    sigma: &'a [Lane; C],
-    /// Emission rows and the fraction between them.
-    j: (&'a [Lane; C], &'a [Lane; C], f32),
-    /// σ_a rows where σ_a depends on T.
-    at: Option<(&'a [Lane; C], &'a [Lane; C], f32)>,
-    species: &'a [Option<SpeciesRows<'a, C>>],
-    delta: f32,
-    thin: bool,
-}
-
-impl<const C: usize> Coefficients<'_, C> {
-    /// σ_t and j in lane `q`, then its step; `tmax` keeps the largest transmittance per lane position.
-    #[inline(always)]
-    fn step<const F: bool>(&self, q: usize, l: &mut Lane, t: &mut Lane, tmax: &mut Lane) {
-        let (j0, j1, fr) = self.j;
-        let mut sg = [0f32; W];
-        let mut jq = [0f32; W];
-        for w in 0..W {
-            sg[w] = self.d * self.sigma[q][w];
-            jq[w] = self.dl * lerp::<F>(fr, j0[q][w], j1[q][w]);
-        }
-        if let Some((a0, a1, fa)) = self.at {
-            for w in 0..W {
-                sg[w] = fma::<F>(self.d, lerp::<F>(fa, a0[q][w], a1[q][w]), sg[w]);
-            }
-        }
-        for r in self.species.iter().flatten() {
-            for w in 0..W {
-                sg[w] = fma::<F>(r.n, lerp::<F>(r.f, r.s0[q][w], r.s1[q][w]), sg[w]);
-                jq[w] = fma::<F>(r.n, lerp::<F>(r.f, r.e0[q][w], r.e1[q][w]), jq[w]);
-            }
-        }
-        if self.thin {
-            thin_step::<F>(&sg, &jq, self.delta, l, t);
-        } else {
-            full_step::<F>(&sg, &jq, self.delta, l, t);
-        }
-        for w in 0..W {
-            tmax[w] = if t[w] > tmax[w] { t[w] } else { tmax[w] };
-        }
-    }
-}
-
 /// One species' table rows at a sample: its number density, the fraction between the rows, σ and j rows.
 #[derive(Clone, Copy)]
 struct SpeciesRows<'a, const C: usize> {
     n: f32,
     f: f32,
-    s0: &'a [Lane; C],
-    s1: &'a [Lane; C],
-    e0: &'a [Lane; C],
-    e1: &'a [Lane; C],
+    s: (&'a [Lane; C], &'a [Lane; C]),
+    j: (&'a [Lane; C], &'a [Lane; C]),
 }
 
 /// One step of one lane where every τ = σ·δ < 0.1: g = (1 − e^{−τ})/τ by its series to τ⁴ (remainder
@@ -541,11 +695,92 @@ fn full_step<const F: bool>(sig: &Lane, jj: &Lane, delta: f32, l: &mut Lane, t: 
         let series = 1.0
             - tau
                 * (0.5
-                    - tau * (1.0 / 6.0 - tau * (1.0 / 24.0 - tau * (1.0 / 120.0 - tau / 720.0))));
+                    - tau
+                        * (1.0 / 6.0
+                            - tau * (1.0 / 24.0 - tau * (1.0 / 120.0 - tau * (1.0 / 720.0)))));
         let quot = (1.0 - e) / tau.max(THIN);
         let thin = 0u32.wrapping_sub((tau < THIN) as u32);
         let g = f32::from_bits((series.to_bits() & thin) | (quot.to_bits() & !thin));
         l[w] = fma::<F>(t[w] * jj[w], delta * g, l[w]);
         t[w] *= e;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Grid, Interpolation, Stencil};
+
+    #[test]
+    fn lattice_reads_equal_the_grid_lookup_up_to_and_beyond_the_faces() {
+        // Data non-zero up to the faces, so that pbrt-v4's fade (half the edge sample on a face, zero half a
+        // voxel out, continued to the next voxel centre by nanovdb's margin) is what the zero padding must give.
+        let dims = [5, 4, 3];
+        let n = dims[0] * dims[1] * dims[2];
+        let mut rng = crate::rng::Rng::new(11);
+        let mut grid = || {
+            let v: Vec<f32> = (0..n).map(|_| 0.5 + rng.next_f64() as f32).collect();
+            Grid::new(dims, v).expect("dims match")
+        };
+        let (d, t, les) = (grid(), grid(), grid());
+        let lat = Lattice::build(&d, Some(&t), &[&les]).expect("a small lattice");
+        let lay = Layout::new(&lat, true);
+        let mut rng = crate::rng::Rng::new(12);
+        let (mut worst, mut checked, mut faces) = (0f64, 0, 0);
+        for i in 0..20_000 {
+            // Lattice coordinates from one voxel below the lower bound (−½) to one above the upper (n − ½),
+            // some exactly on a face.
+            let mut g = [0f64; 3];
+            for a in 0..3 {
+                let m = dims[a] as f64;
+                g[a] = -1.5 + rng.next_f64() * (m + 2.0);
+                if i % 7 == a {
+                    g[a] = if i % 2 == 0 { -0.5 } else { m - 0.5 };
+                    faces += 1;
+                }
+            }
+            let unit = [0, 1, 2].map(|a| (g[a] + 0.5) / dims[a] as f64);
+            let Some(st) = Stencil::with_margin(dims, unit, Interpolation::Trilinear, 0.5) else {
+                continue;
+            };
+            let mut dt = [[0f32; 2]; BATCH];
+            let mut x = Extras {
+                les: [1.0; BATCH],
+                n: [[0.0; BATCH]; MAX_SPECIES],
+            };
+            assert!(
+                read::<false>(&lay, g, &[], 3, &mut dt, &mut x),
+                "every point within the margin has its cell in the lattice: {g:?}"
+            );
+            for (got, grid) in [(dt[3][0], &d), (dt[3][1], &t), (x.les[3], &les)] {
+                // (The data is of order 1: the two orders of f32 lerps differ by its rounding.)
+                let want = grid.eval(&st);
+                let e = (got - want).abs() as f64;
+                worst = worst.max(e);
+                assert!(e < 1e-6, "{g:?}: lattice {got} vs grid {want}");
+            }
+            checked += 1;
+        }
+        assert!(
+            checked > 5000 && faces > 1000,
+            "{checked} points, {faces} on faces"
+        );
+        assert!(
+            worst > 0.0,
+            "the two orders of lerps cannot agree to the bit everywhere"
+        );
+    }
+
+    #[test]
+    fn a_lattice_too_large_for_32_bit_offsets_is_refused() {
+        // [d, T] per padded voxel, fewer than u32::MAX floats: 2 × 1293² × 1284 = 4 293 308 232 fits,
+        // 2 × 1293² × 1285 = 4 296 651 930 does not.
+        assert_eq!(
+            Lattice::padded([1291, 1291, 1282]),
+            Some([1293, 1293, 1284])
+        );
+        assert_eq!(Lattice::padded([1291, 1291, 1283]), None);
+        assert_eq!(Lattice::padded([usize::MAX, 2, 2]), None);
+        assert_eq!(Lattice::padded([256, 256, 256]), Some([258, 258, 258]));
     }
 }

@@ -31,6 +31,7 @@
 mod integrate;
 mod kernel;
 mod lanes;
+mod lattice;
 pub mod params;
 
 pub use integrate::{Event, Integrator, Ray};
@@ -393,6 +394,8 @@ pub struct FireVolume {
     refraction: Option<Refraction>,
     /// The march's tables in f32 lanes (`precision "f32"`, the march, and every product inside f32's range).
     lanes: Option<lanes::LaneTables>,
+    /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
+    lattice: Option<lattice::Lattice>,
     #[cfg(feature = "fault-injection")]
     fault: String,
 }
@@ -888,6 +891,7 @@ impl FireVolume {
             source,
             refraction,
             lanes: None,
+            lattice: None,
             #[cfg(feature = "fault-injection")]
             fault,
         };
@@ -900,6 +904,29 @@ impl FireVolume {
                     bytes: lt.bytes(),
                     seconds: t3.elapsed().as_secs_f64(),
                 });
+                if vol.ds.interpolation() == crate::grid::Interpolation::Trilinear {
+                    let t4 = Instant::now();
+                    let ch = vol.ds.channels();
+                    let extra: Vec<&crate::grid::Grid> = vol
+                        .lescale
+                        .iter()
+                        .chain(vol.species.iter().map(|sp| &sp.ch))
+                        .map(|&k| &ch[k].grid)
+                        .collect();
+                    let lat = lattice::Lattice::build(
+                        &ch[vol.density].grid,
+                        vol.temperature.map(|k| &ch[k].grid),
+                        &extra,
+                    );
+                    if let Some(lat) = &lat {
+                        vol.tables.push(TableReport {
+                            name: "march lattice (grids interleaved and padded)".into(),
+                            bytes: lat.bytes(),
+                            seconds: t4.elapsed().as_secs_f64(),
+                        });
+                    }
+                    vol.lattice = lat;
+                }
             }
         }
         vol.build_seconds = start.elapsed().as_secs_f64();
@@ -1187,7 +1214,10 @@ fn march_lanes(
 
 /// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`
 /// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time.
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512vl+avx512bw+avx512dq+avx2+fma",
+    "x86_64+avx2+fma"
+))]
 fn march_kernel(
     v: &FireVolume,
     lt: &lanes::LaneTables,
@@ -1196,11 +1226,18 @@ fn march_kernel(
     t: &mut [f64],
 ) -> Option<f64> {
     const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
-    match lt.chunks() {
-        1 => kernel::march::<1, F>(v, lt, ray, l, t),
-        2 => kernel::march::<2, F>(v, lt, ray, l, t),
-        3 => kernel::march::<3, F>(v, lt, ray, l, t),
-        4 => kernel::march::<4, F>(v, lt, ray, l, t),
+    // (σ_a depends on T only in rgb physical mode: one lane.)
+    match (lt.chunks(), v.species.is_empty(), v.a_t.is_some()) {
+        (1, true, true) => kernel::march::<1, false, true, F>(v, lt, ray, l, t),
+        (1, true, false) => kernel::march::<1, false, false, F>(v, lt, ray, l, t),
+        (2, true, false) => kernel::march::<2, false, false, F>(v, lt, ray, l, t),
+        (3, true, false) => kernel::march::<3, false, false, F>(v, lt, ray, l, t),
+        (4, true, false) => kernel::march::<4, false, false, F>(v, lt, ray, l, t),
+        (1, false, true) => kernel::march::<1, true, true, F>(v, lt, ray, l, t),
+        (1, false, false) => kernel::march::<1, true, false, F>(v, lt, ray, l, t),
+        (2, false, false) => kernel::march::<2, true, false, F>(v, lt, ray, l, t),
+        (3, false, false) => kernel::march::<3, true, false, F>(v, lt, ray, l, t),
+        (4, false, false) => kernel::march::<4, true, false, F>(v, lt, ray, l, t),
         _ => None,
     }
 }

@@ -1,0 +1,139 @@
+//! The grids the march kernel reads, laid out for it.
+//!
+//! The dataset keeps one dense array per channel (x fastest). A trilinear lookup of density and temperature
+//! there is sixteen scattered reads, and a cell on the grid's outer half voxel needs the general stencil,
+//! where pbrt-v4's lookup fades to zero at the faces. Here the same values are stored again:
+//!
+//! - **interleaved**: density and temperature side by side, `[d, T]` per voxel, so the x-pair of both grids
+//!   at one (y, z) corner of a cell is one 16-byte read and a cell is four;
+//! - **padded** by one ring of zero voxels on every side, so every point inside the bounds — and up to one voxel
+//!   beyond them, which covers pbrt-v4 nanovdb's half-voxel margin — has all eight corners in the array. The
+//!   zeros make the plain trilinear lerp equal pbrt-v4's lookup there: half the edge sample on a face, zero
+//!   half a voxel out (tested against `Grid::eval` at and across the faces).
+//!
+//! Further grids the march reads (Lescale, species) are padded the same way, one array each. Built only for
+//! the f32 march of a trilinear dataset; 8 bytes per padded voxel, plus 4 per further grid.
+
+use crate::grid::Grid;
+
+/// The padded, interleaved copy of the grids a march samples.
+#[derive(Debug, Clone)]
+pub(crate) struct Lattice {
+    /// Padded dims (the dataset's + 2 on each axis).
+    dims: [usize; 3],
+    /// `[d, T]` per padded voxel, x fastest (T = 0 when the volume has no temperature grid).
+    pairs: Vec<f32>,
+    /// Further grids, one value per padded voxel each.
+    extra: Vec<Vec<f32>>,
+}
+
+impl Lattice {
+    /// The lattice of `density`, `temperature` (if any) and the `extra` grids, all on one lattice; `None` when
+    /// it would hold 2³² floats or more (the kernel's offsets are 32-bit; such a volume marches without it).
+    pub(crate) fn build(
+        density: &Grid,
+        temperature: Option<&Grid>,
+        extra: &[&Grid],
+    ) -> Option<Lattice> {
+        let [nx, ny, nz] = density.dims();
+        let dims = Lattice::padded(density.dims())?;
+        let slab = dims[0] * dims[1];
+        let total = slab * dims[2];
+        let mut pairs = vec![0f32; 2 * total];
+        let mut extra_v: Vec<Vec<f32>> = extra.iter().map(|_| vec![0f32; total]).collect();
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .clamp(1, 8);
+        // Padded z-slabs 1..=nz hold data; split them over the threads.
+        let per = nz.div_ceil(threads).max(1);
+        let d = density.data();
+        let t = temperature.map(|g| g.data());
+        std::thread::scope(|s| {
+            // Each thread takes whole padded slabs [1 + k·per, 1 + (k+1)·per).
+            let mut rest: &mut [f32] = &mut pairs[2 * slab..];
+            let mut rest_extra: Vec<&mut [f32]> =
+                extra_v.iter_mut().map(|v| &mut v[slab..]).collect();
+            let mut z0 = 0;
+            while z0 < nz {
+                let n = per.min(nz - z0);
+                let (mine, tail) = rest.split_at_mut(2 * slab * n);
+                rest = tail;
+                let mut mine_extra = Vec::with_capacity(rest_extra.len());
+                let mut tails = Vec::with_capacity(rest_extra.len());
+                for r in rest_extra {
+                    let (a, b) = r.split_at_mut(slab * n);
+                    mine_extra.push(a);
+                    tails.push(b);
+                }
+                rest_extra = tails;
+                s.spawn(move || {
+                    for z in 0..n {
+                        for y in 0..ny {
+                            let src = nx * (y + ny * (z0 + z));
+                            let dst = 1 + dims[0] * (y + 1) + slab * z;
+                            let row = &mut mine[2 * dst..2 * (dst + nx)];
+                            match t {
+                                Some(t) => {
+                                    for ((p, &dv), &tv) in row
+                                        .chunks_exact_mut(2)
+                                        .zip(&d[src..src + nx])
+                                        .zip(&t[src..src + nx])
+                                    {
+                                        p[0] = dv;
+                                        p[1] = tv;
+                                    }
+                                }
+                                None => {
+                                    for (p, &dv) in row.chunks_exact_mut(2).zip(&d[src..src + nx]) {
+                                        p[0] = dv;
+                                    }
+                                }
+                            }
+                            for (dst_g, g) in mine_extra.iter_mut().zip(extra) {
+                                dst_g[dst..dst + nx].copy_from_slice(&g.data()[src..src + nx]);
+                            }
+                        }
+                    }
+                });
+                z0 += n;
+            }
+        });
+        Some(Lattice {
+            dims,
+            pairs,
+            extra: extra_v,
+        })
+    }
+
+    /// The padded dims of a dataset of `dims`, if its `[d, T]` pairs stay below 2³² floats.
+    pub(crate) fn padded(dims: [usize; 3]) -> Option<[usize; 3]> {
+        let p = [
+            dims[0].checked_add(2)?,
+            dims[1].checked_add(2)?,
+            dims[2].checked_add(2)?,
+        ];
+        let floats = p.iter().try_fold(2usize, |a, &n| a.checked_mul(n))?;
+        (floats < u32::MAX as usize).then_some(p)
+    }
+
+    /// Padded dims.
+    #[inline(always)]
+    pub(crate) fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    /// `[d, T]` per padded voxel.
+    #[inline(always)]
+    pub(crate) fn pairs(&self) -> &[f32] {
+        &self.pairs
+    }
+    /// The further grids, padded.
+    #[inline(always)]
+    pub(crate) fn extra(&self) -> &[Vec<f32>] {
+        &self.extra
+    }
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> usize {
+        4 * (self.pairs.len() + self.extra.iter().map(Vec::len).sum::<usize>())
+    }
+}
