@@ -377,11 +377,54 @@ pub fn frame_path(path: &Path, frame: Option<i64>) -> Result<PathBuf, Error> {
     )))
 }
 
+/// The bytes of `path`. A large file is read in parallel, one part per thread at its offset (the copy out of
+/// the page cache is bound by one core's memory copy: 27.6 → 20.1 ms, medians of 10, for the 42.5 MB of the 256³
+/// campfire on 2 cores).
 fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
-    std::fs::read(path).map_err(|e| Error::Io {
+    let io = |e: std::io::Error| Error::Io {
         file: path.display().to_string(),
         message: e.to_string(),
-    })
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileExt;
+        /// Below this a single read is as fast.
+        const PARALLEL_BYTES: u64 = 8 << 20;
+        let f = std::fs::File::open(path).map_err(io)?;
+        let len = f.metadata().map_err(io)?.len();
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .min(4);
+        if len >= PARALLEL_BYTES && threads > 1 {
+            let len = usize::try_from(len).map_err(|_| Error::Io {
+                file: path.display().to_string(),
+                message: format!("{len} bytes: larger than this machine can address"),
+            })?;
+            let mut buf = vec![0u8; len];
+            let part = len.div_ceil(threads);
+            let f = &f;
+            let done: Vec<std::io::Result<()>> = std::thread::scope(|s| {
+                let jobs: Vec<_> = buf
+                    .chunks_mut(part)
+                    .enumerate()
+                    .map(|(k, chunk)| s.spawn(move || f.read_exact_at(chunk, (k * part) as u64)))
+                    .collect();
+                jobs.into_iter()
+                    .map(|j| {
+                        j.join().unwrap_or_else(|_| {
+                            Err(std::io::Error::other("a reading thread stopped"))
+                        })
+                    })
+                    .collect()
+            });
+            for r in done {
+                r.map_err(io)?;
+            }
+            return Ok(buf);
+        }
+    }
+    std::fs::read(path).map_err(io)
 }
 
 fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {
@@ -877,6 +920,19 @@ fn apply_policies(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_large_file_read_in_parts_is_the_file() {
+        // Above the parallel threshold, with a length that does not split evenly: every byte where it was.
+        let n = (9 << 20) + 12_345;
+        let bytes: Vec<u8> = (0..n).map(|i| (i * 7 + i / 251) as u8).collect();
+        let path = tmp("large.bin", &bytes);
+        assert_eq!(read_file(&path).expect("readable"), bytes);
+        let e = read_file(&path.with_extension("missing"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("large.missing"), "{e}");
+    }
 
     fn tmp(name: &str, content: &[u8]) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("firemedium-ds-{}", std::process::id()));
