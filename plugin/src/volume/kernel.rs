@@ -233,18 +233,29 @@ const THIN: f32 = 0.1;
 /// up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical mode).
 /// Fills `l` and `t`; returns the exit parameter.
 #[inline(always)]
-pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>(
+pub(super) fn march<
+    const CV: usize,
+    const V: usize,
+    const S: bool,
+    const A: bool,
+    const F: bool,
+>(
     v: &FireVolume,
     lt: &LaneTables,
     ray: &Ray,
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
-    if C > 4 || S == v.species.is_empty() || A != v.a_t.is_some() {
+    let c = l.len();
+    if CV > 4 || CV * V < c || S == v.species.is_empty() || A != v.a_t.is_some() {
         return None; // (the lanes below are written out for up to four)
     }
     let lat = v.lattice.as_ref()?;
-    let sigma: &[Lane; C] = lt.sigma().try_into().ok()?;
+    // σ per unit density in the kernel's lanes (channels past `c` are zero).
+    let mut sigma = [[0f32; V]; CV];
+    for (ch, &x) in lt.sigma().as_flattened().iter().enumerate().take(c) {
+        sigma[ch / V][ch % V] = x;
+    }
     l.fill(0.0);
     t.fill(1.0);
     let Some(span) = Span::new(v, ray) else {
@@ -284,12 +295,11 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
     let dir = ray.d / span.speed;
     let g0 = [0, 1, 2].map(|a| (entry[a] - b0[a]) / size[a] * dims[a] - 0.5);
     let gd = [0, 1, 2].map(|a| dir[a] / size[a] * dims[a]);
-    let c = l.len();
-    let mut lk = [[0f32; W]; C];
+    let mut lk = [[0f32; V]; CV];
     // (Padding lanes hold transmittance 0, so they never keep the early termination from stopping.)
-    let mut tk = [[0f32; W]; C];
+    let mut tk = [[0f32; V]; CV];
     for ch in 0..c {
-        tk[ch / W][ch % W] = 1.0;
+        tk[ch / V][ch % V] = 1.0;
     }
     let cutoff = v.cutoff as f32;
     let sigma_max = lt.sigma_max();
@@ -301,16 +311,16 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
     let all = v.temperature.is_none();
     let t_emit = v.t_emit as f32;
     let lay = Layout::new(lat, v.lescale.is_some());
-    let jt = Rows::<C>::new(&v.j)?;
+    let jt = Rows::<CV, V>::new(&v.j)?;
     // σ_a(T) rows where they exist (else the emission rows, never read); located with the emission rows when
     // both tables share their temperatures (as every volume builds them).
     let at = match &v.a_t {
-        Some(tab) => Rows::<C>::new(tab)?,
+        Some(tab) => Rows::<CV, V>::new(tab)?,
         None => jt,
     };
     let shared = at.inv_dt == jt.inv_dt && at.last == jt.last;
     // Each species' σ and j tables (the same temperature rows) and its largest σ per unit number density.
-    let mut sp_tabs: [Option<(Rows<C>, Rows<C>, f32)>; MAX_SPECIES] = [None; MAX_SPECIES];
+    let mut sp_tabs: [Option<(Rows<CV, V>, Rows<CV, V>, f32)>; MAX_SPECIES] = [None; MAX_SPECIES];
     if S {
         for (tab, sp) in sp_tabs.iter_mut().zip(&v.species) {
             *tab = Some((Rows::new(&sp.sigma)?, Rows::new(&sp.j)?, 0.0));
@@ -421,7 +431,7 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
                     dl: dl[b],
                     delta: deltas[b],
                 };
-                let mut sp: [Option<SpeciesRows<C>>; MAX_SPECIES] = [None; MAX_SPECIES];
+                let mut sp: [Option<SpeciesRows>; MAX_SPECIES] = [None; MAX_SPECIES];
                 let mut bound = d[b] * sigma_max * deltas[b];
                 let mut any = d[b] > 0.0;
                 for s in 0..ns {
@@ -454,14 +464,14 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
                 } else {
                     j
                 };
-                let mut tmax = [0f32; W];
+                let mut tmax = [0f32; V];
                 macro_rules! lane {
                     ($q:literal) => {
-                        if $q < C {
+                        if $q < CV {
                             if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
-                                step.lane::<C, A, F>(
+                                step.lane::<CV, V, A, F>(
                                     $q,
-                                    sigma,
+                                    &sigma,
                                     j,
                                     a,
                                     &sp[..ns],
@@ -503,14 +513,14 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
                 } else {
                     j
                 };
-                let mut tmax = [0f32; W];
+                let mut tmax = [0f32; V];
                 macro_rules! lane {
                     ($q:literal) => {
-                        if $q < C {
+                        if $q < CV {
                             if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
-                                step.lane::<C, A, F>(
+                                step.lane::<CV, V, A, F>(
                                     $q,
-                                    sigma,
+                                    &sigma,
                                     j,
                                     a,
                                     &[],
@@ -538,28 +548,36 @@ pub(super) fn march<const C: usize, const S: bool, const A: bool, const F: bool>
     }
     EVALUATIONS.with(|n| n.set(n.get() + samples));
     for ch in 0..c {
-        l[ch] = lk[ch / W][ch % W] as f64;
-        t[ch] = tk[ch / W][ch % W] as f64;
+        l[ch] = lk[ch / V][ch % V] as f64;
+        t[ch] = tk[ch / V][ch % V] as f64;
     }
     Some(span.b)
 }
 
-/// A temperature table as the kernel reads it: rows of `C` lanes.
+/// A temperature table as the kernel reads it: rows of the table's 8-channel lanes, of which the kernel's `CV`
+/// lanes of `V` channels take the first CV·V.
 #[derive(Clone, Copy)]
-struct Rows<'a, const C: usize> {
+struct Rows<'a, const CV: usize, const V: usize> {
     v: &'a [Lane],
+    /// Lanes per row in the table.
+    chunks: usize,
     inv_dt: f64,
     /// rows − 1 and rows − 2, as floats (the clamps).
     last: f64,
     below: f64,
 }
 
-impl<'a, const C: usize> Rows<'a, C> {
-    /// `None` if the table has not `C` lanes per row.
+impl<'a, const CV: usize, const V: usize> Rows<'a, CV, V> {
+    /// The table's lanes that hold the kernel's CV·V channels (a constant for each kernel).
+    const LANES: usize = (CV * V).div_ceil(W);
+
+    /// `None` if the table's rows hold fewer than CV·V channels.
     #[inline(always)]
-    fn new(tab: &'a TTable) -> Option<Rows<'a, C>> {
-        (tab.chunks == C && tab.rows >= 2 && tab.v.len() == tab.rows * C).then_some(Rows {
+    fn new(tab: &'a TTable) -> Option<Rows<'a, CV, V>> {
+        let ok = tab.chunks >= Self::LANES && tab.rows >= 2 && tab.v.len() == tab.rows * tab.chunks;
+        ok.then_some(Rows {
             v: &tab.v,
+            chunks: tab.chunks,
             inv_dt: tab.inv_dt,
             last: (tab.rows - 1) as f64,
             below: (tab.rows - 2) as f64,
@@ -579,12 +597,21 @@ impl<'a, const C: usize> Rows<'a, C> {
         }
         (r, fr)
     }
-    /// Rows i and i + 1 (`locate`'s clamps keep i + 1 in the table, so never `None` from there).
+    /// Rows i and i + 1, their first `LANES` lanes (`locate`'s clamps keep i + 1 in the table, so never `None`
+    /// from there).
     #[inline(always)]
-    fn pair(&self, i: usize) -> Option<(&'a [Lane; C], &'a [Lane; C])> {
-        let (a, b) = self.v.get(i * C..i * C + 2 * C)?.split_at(C);
-        Some((a.try_into().ok()?, b.try_into().ok()?))
+    fn pair(&self, i: usize) -> Option<(&'a [Lane], &'a [Lane])> {
+        let k = Self::LANES;
+        let at = i.checked_mul(self.chunks)?;
+        let next = at + self.chunks;
+        Some((self.v.get(at..at + k)?, self.v.get(next..next + k)?))
     }
+}
+
+/// Lane `q` of `V` channels of a row's lanes (`None` past them: never, for the rows of [`Rows::pair`]).
+#[inline(always)]
+fn view<const V: usize>(row: &[Lane], q: usize) -> Option<&[f32; V]> {
+    row.as_flattened().get(q * V..q * V + V)?.try_into().ok()
 }
 
 /// What a sample's step needs beyond its table rows.
@@ -596,7 +623,7 @@ struct Step {
 }
 
 /// Two table rows and the fraction between them.
-type RowPair<'a, const C: usize> = ((&'a [Lane; C], &'a [Lane; C]), f32);
+type RowPair<'a> = ((&'a [Lane], &'a [Lane]), f32);
 
 impl Step {
     /// σ_t and j in lane `q` (from σ per unit density, the emission rows `j`, the T-dependent absorption rows
@@ -604,54 +631,67 @@ impl Step {
     /// position.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn lane<const C: usize, const A: bool, const F: bool>(
+    fn lane<const CV: usize, const V: usize, const A: bool, const F: bool>(
         &self,
         q: usize,
-        sigma: &[Lane; C],
-        j: RowPair<C>,
-        a: RowPair<C>,
-        species: &[Option<SpeciesRows<C>>],
+        sigma: &[[f32; V]; CV],
+        j: RowPair,
+        a: RowPair,
+        species: &[Option<SpeciesRows>],
         thin: bool,
-        l: &mut Lane,
-        t: &mut Lane,
-        tmax: &mut Lane,
+        l: &mut [f32; V],
+        t: &mut [f32; V],
+        tmax: &mut [f32; V],
     ) {
         let ((j0, j1), fr) = j;
-        let mut sg = [0f32; W];
-        let mut jq = [0f32; W];
-        for w in 0..W {
-            sg[w] = self.d * sigma[q][w];
-            jq[w] = self.dl * lerp::<F>(fr, j0[q][w], j1[q][w]);
+        let (Some(j0), Some(j1), Some(sig)) = (view::<V>(j0, q), view::<V>(j1, q), sigma.get(q))
+        else {
+            return;
+        };
+        let mut sg = [0f32; V];
+        let mut jq = [0f32; V];
+        for w in 0..V {
+            sg[w] = self.d * sig[w];
+            jq[w] = self.dl * lerp::<F>(fr, j0[w], j1[w]);
         }
         if A {
             let ((a0, a1), fa) = a;
-            for w in 0..W {
-                sg[w] = fma::<F>(self.d, lerp::<F>(fa, a0[q][w], a1[q][w]), sg[w]);
+            if let (Some(a0), Some(a1)) = (view::<V>(a0, q), view::<V>(a1, q)) {
+                for w in 0..V {
+                    sg[w] = fma::<F>(self.d, lerp::<F>(fa, a0[w], a1[w]), sg[w]);
+                }
             }
         }
         for r in species.iter().flatten() {
             let ((s0, s1), (e0, e1)) = (r.s, r.j);
-            for w in 0..W {
-                sg[w] = fma::<F>(r.n, lerp::<F>(r.f, s0[q][w], s1[q][w]), sg[w]);
-                jq[w] = fma::<F>(r.n, lerp::<F>(r.f, e0[q][w], e1[q][w]), jq[w]);
+            if let (Some(s0), Some(s1), Some(e0), Some(e1)) = (
+                view::<V>(s0, q),
+                view::<V>(s1, q),
+                view::<V>(e0, q),
+                view::<V>(e1, q),
+            ) {
+                for w in 0..V {
+                    sg[w] = fma::<F>(r.n, lerp::<F>(r.f, s0[w], s1[w]), sg[w]);
+                    jq[w] = fma::<F>(r.n, lerp::<F>(r.f, e0[w], e1[w]), jq[w]);
+                }
             }
         }
         if thin {
-            thin_step::<F>(&sg, &jq, self.delta, l, t);
+            thin_step::<V, F>(&sg, &jq, self.delta, l, t);
         } else {
-            full_step::<F>(&sg, &jq, self.delta, l, t);
+            full_step::<V, F>(&sg, &jq, self.delta, l, t);
         }
-        for w in 0..W {
+        for w in 0..V {
             tmax[w] = if t[w] > tmax[w] { t[w] } else { tmax[w] };
         }
     }
 }
 
-/// The largest of a lane's values, as a tree of halves (vector shuffles, not eight scalar steps).
+/// The largest of a lane's values, as a tree of halves (vector shuffles, not V scalar steps).
 #[inline(always)]
-fn horizontal_max(x: Lane) -> f32 {
+fn horizontal_max<const V: usize>(x: [f32; V]) -> f32 {
     let mut h = x;
-    let mut n = W / 2;
+    let mut n = V / 2;
     while n > 0 {
         for w in 0..n {
             h[w] = if h[w + n] > h[w] { h[w + n] } else { h[w] };
@@ -663,18 +703,24 @@ fn horizontal_max(x: Lane) -> f32 {
 
 /// One species' table rows at a sample: its number density, the fraction between the rows, σ and j rows.
 #[derive(Clone, Copy)]
-struct SpeciesRows<'a, const C: usize> {
+struct SpeciesRows<'a> {
     n: f32,
     f: f32,
-    s: (&'a [Lane; C], &'a [Lane; C]),
-    j: (&'a [Lane; C], &'a [Lane; C]),
+    s: (&'a [Lane], &'a [Lane]),
+    j: (&'a [Lane], &'a [Lane]),
 }
 
 /// One step of one lane where every τ = σ·δ < 0.1: g = (1 − e^{−τ})/τ by its series to τ⁴ (remainder
 /// τ⁵/720 < 1.4e-8) and e^{−τ} = 1 − τ·g (within 1.4e-9 plus rounding).
 #[inline(always)]
-fn thin_step<const F: bool>(sig: &Lane, jj: &Lane, delta: f32, l: &mut Lane, t: &mut Lane) {
-    for w in 0..W {
+fn thin_step<const V: usize, const F: bool>(
+    sig: &[f32; V],
+    jj: &[f32; V],
+    delta: f32,
+    l: &mut [f32; V],
+    t: &mut [f32; V],
+) {
+    for w in 0..V {
         let tau = sig[w] * delta;
         // 1 − τ(½ − τ(⅙ − τ(1/24 − τ/120))), the signs folded into −τ.
         let g = fma::<F>(-tau, 1.0 / 120.0, 1.0 / 24.0);
@@ -688,8 +734,14 @@ fn thin_step<const F: bool>(sig: &Lane, jj: &Lane, delta: f32, l: &mut Lane, t: 
 
 /// One step of one lane for any τ (as [`super::lanes::step`]).
 #[inline(always)]
-fn full_step<const F: bool>(sig: &Lane, jj: &Lane, delta: f32, l: &mut Lane, t: &mut Lane) {
-    for w in 0..W {
+fn full_step<const V: usize, const F: bool>(
+    sig: &[f32; V],
+    jj: &[f32; V],
+    delta: f32,
+    l: &mut [f32; V],
+    t: &mut [f32; V],
+) {
+    for w in 0..V {
         let tau = sig[w] * delta;
         let e = super::lanes::exp_neg(-tau);
         let series = 1.0

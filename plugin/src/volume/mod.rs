@@ -1251,18 +1251,33 @@ fn march_kernel(
     t: &mut [f64],
 ) -> Option<f64> {
     const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
-    // (σ_a depends on T only in rgb physical mode: one lane.)
-    match (lt.chunks(), v.species.is_empty(), v.a_t.is_some()) {
-        (1, true, true) => kernel::march::<1, false, true, F>(v, lt, ray, l, t),
-        (1, true, false) => kernel::march::<1, false, false, F>(v, lt, ray, l, t),
-        (2, true, false) => kernel::march::<2, false, false, F>(v, lt, ray, l, t),
-        (3, true, false) => kernel::march::<3, false, false, F>(v, lt, ray, l, t),
-        (4, true, false) => kernel::march::<4, false, false, F>(v, lt, ray, l, t),
-        (1, false, true) => kernel::march::<1, true, true, F>(v, lt, ray, l, t),
-        (1, false, false) => kernel::march::<1, true, false, F>(v, lt, ray, l, t),
-        (2, false, false) => kernel::march::<2, true, false, F>(v, lt, ray, l, t),
-        (3, false, false) => kernel::march::<3, true, false, F>(v, lt, ray, l, t),
-        (4, false, false) => kernel::march::<4, true, false, F>(v, lt, ray, l, t),
+    // The lanes' shape from the channel count: rgb in one lane of 4 (a 128-bit register, no padding work),
+    // spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only in rgb
+    // physical mode (3 channels).
+    const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
+    let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
+    macro_rules! lanes {
+        ($cv:literal, $v:literal) => {
+            match (s, a) {
+                (false, false) => kernel::march::<$cv, $v, false, false, F>(v, lt, ray, l, t),
+                (true, false) => kernel::march::<$cv, $v, true, false, F>(v, lt, ray, l, t),
+                _ => None,
+            }
+        };
+    }
+    match v.channels() {
+        0..=4 => match (s, a) {
+            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, ray, l, t),
+            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, ray, l, t),
+            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, ray, l, t),
+            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, ray, l, t),
+        },
+        5..=8 => lanes!(1, 8),
+        9..=16 if WIDE => lanes!(1, 16),
+        9..=16 => lanes!(2, 8),
+        17..=24 => lanes!(3, 8),
+        25..=32 if WIDE => lanes!(2, 16),
+        25..=32 => lanes!(4, 8),
         _ => None,
     }
 }
@@ -2156,6 +2171,108 @@ mod tests {
                 worst > 0.0,
                 "f32 and f64 cannot agree to the bit everywhere"
             );
+        }
+    }
+
+    #[test]
+    fn every_lane_shape_matches_the_f64_march() {
+        // The dispatch picks one lane shape per channel count and CPU (this machine's clone runs only some):
+        // each shape called directly, with and without FMA, against the f64 march — rgb in one lane of 4,
+        // 6/12/20/30 bins in lanes of 8 and of 16, with sodium where it applies.
+        let rays: Vec<Ray> = (0..40)
+            .map(|k| {
+                let mut rng = crate::rng::Rng::new(900 + k);
+                let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
+                let target = DVec3::new(0.6, 0.63, 0.55)
+                    + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
+                Ray {
+                    o,
+                    d: target - o,
+                    t0: 0.0,
+                    t1: 5.0,
+                    seed: k,
+                }
+            })
+            .collect();
+        type Kernel =
+            fn(&FireVolume, &lanes::LaneTables, &Ray, &mut [f64], &mut [f64]) -> Option<f64>;
+        // (The volume's extra parameters, with sodium, and the shapes to run on it.)
+        type Case = (Vec<Param>, bool, Vec<(&'static str, Kernel)>);
+        let cases: Vec<Case> = vec![
+            (
+                vec![Param::string("colormode", "rgb")],
+                false,
+                vec![
+                    ("1×4", kernel::march::<1, 4, false, true, false>),
+                    ("1×4 fma", kernel::march::<1, 4, false, true, true>),
+                ],
+            ),
+            (
+                vec![Param::string("colormode", "rgb")],
+                true,
+                vec![("1×4 Na", kernel::march::<1, 4, true, true, true>)],
+            ),
+            (
+                vec![Param::int("bins", 6)],
+                false,
+                vec![("1×8", kernel::march::<1, 8, false, false, true>)],
+            ),
+            (
+                vec![Param::int("bins", 12)],
+                false,
+                vec![
+                    ("2×8", kernel::march::<2, 8, false, false, true>),
+                    ("1×16", kernel::march::<1, 16, false, false, true>),
+                ],
+            ),
+            (
+                vec![Param::int("bins", 20)],
+                false,
+                vec![("3×8", kernel::march::<3, 8, false, false, false>)],
+            ),
+            (
+                vec![],
+                false,
+                vec![
+                    ("4×8", kernel::march::<4, 8, false, false, true>),
+                    ("4×8 no fma", kernel::march::<4, 8, false, false, false>),
+                    ("2×16", kernel::march::<2, 16, false, false, true>),
+                ],
+            ),
+            (
+                vec![],
+                true,
+                vec![
+                    ("4×8 Na", kernel::march::<4, 8, true, false, true>),
+                    ("2×16 Na", kernel::march::<2, 16, true, false, true>),
+                ],
+            ),
+        ];
+        for (extra, species, kernels) in cases {
+            let v = blob_volume(extra.clone(), species);
+            let lt = v.lanes.as_ref().expect("the blob marches in lanes");
+            let mut e64 = extra.clone();
+            e64.push(Param::string("precision", "f64"));
+            let v64 = blob_volume(e64, species);
+            let c = v.channels();
+            for (name, kernel) in kernels {
+                let mut lit = 0;
+                for ray in &rays {
+                    let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+                    let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
+                    let te = kernel(&v, lt, ray, &mut l, &mut t).expect("this shape fits");
+                    let te3 = v64.integrate(ray, &mut l3, &mut t3);
+                    assert_eq!(te, te3, "{name}");
+                    let peak = l3.iter().fold(0f64, |m, &x| m.max(x));
+                    lit += (peak > 0.0) as usize;
+                    for k in 0..c {
+                        let e = (l[k] - l3[k]).abs() / peak.max(1e-300);
+                        assert!(e < 2e-5, "{name}, {ray:?} ch {k}: {} vs {}", l[k], l3[k]);
+                        assert!((t[k] - t3[k]).abs() < 1e-5, "{name} ch {k}");
+                    }
+                }
+                assert!(lit > 10, "{name}: only {lit} rays saw the fire");
+            }
         }
     }
 
