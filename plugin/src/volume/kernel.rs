@@ -488,7 +488,7 @@ pub(super) fn march<
                 lane!(1);
                 lane!(2);
                 lane!(3);
-                if horizontal_max(tmax) < cutoff {
+                if !any_at_least(&tmax, cutoff) {
                     break 'ray;
                 }
             } else {
@@ -537,7 +537,7 @@ pub(super) fn march<
                 lane!(1);
                 lane!(2);
                 lane!(3);
-                if horizontal_max(tmax) < cutoff {
+                if !any_at_least(&tmax, cutoff) {
                     break 'ray;
                 }
             }
@@ -687,18 +687,15 @@ impl Step {
     }
 }
 
-/// The largest of a lane's values, as a tree of halves (vector shuffles, not V scalar steps).
+/// Whether any of `x` is at least `cutoff` (the march goes on while a channel's transmittance is): compares
+/// reduced by `|`, a mask compare and a test (a tree of maxima went through memory for lanes of 16).
 #[inline(always)]
-fn horizontal_max<const V: usize>(x: [f32; V]) -> f32 {
-    let mut h = x;
-    let mut n = V / 2;
-    while n > 0 {
-        for w in 0..n {
-            h[w] = if h[w + n] > h[w] { h[w + n] } else { h[w] };
-        }
-        n /= 2;
+fn any_at_least<const V: usize>(x: &[f32; V], cutoff: f32) -> bool {
+    let mut any = false;
+    for &v in x {
+        any |= v >= cutoff;
     }
-    h[0]
+    any
 }
 
 /// One species' table rows at a sample: its number density, the fraction between the rows, σ and j rows.
