@@ -348,14 +348,58 @@ impl TTable {
         let a = self.value(i, c);
         a + fr * (self.value(i + 1, c) - a)
     }
-    /// Largest value of channel c over T in [lo, hi].
-    fn max_over(&self, lo: f64, hi: f64, c: usize) -> f32 {
-        let a = (lo / self.dt).floor().clamp(0.0, (self.rows - 1) as f64) as usize;
-        let b = (hi / self.dt).ceil().clamp(0.0, (self.rows - 1) as f64) as usize;
-        (a..=b).map(|r| self.value(r, c)).fold(0.0, f32::max)
-    }
     fn bytes(&self) -> usize {
         self.v.len() * std::mem::size_of::<lanes::Lane>()
+    }
+}
+
+/// The largest value of each of a temperature table's first `c` channels over any range of rows, in O(1): a
+/// sparse table (level k holds the maxima over 2ᵏ rows from each row), so the majorant bricks' temperature
+/// ranges cost two reads each instead of a scan of their rows (the rgb volume's bricks: 60 → 25 ms at 256³).
+/// The same values as a scan of the rows, bit for bit (tested).
+struct RangeMax {
+    dt: f64,
+    rows: usize,
+    c: usize,
+    levels: Vec<Vec<f32>>,
+}
+
+impl RangeMax {
+    fn new(tab: &TTable, c: usize) -> RangeMax {
+        let rows = tab.rows;
+        let mut levels = vec![(0..rows * c)
+            .map(|i| tab.value(i / c, i % c))
+            .collect::<Vec<f32>>()];
+        let mut k = 1;
+        while (1usize << k) <= rows {
+            let (half, prev) = (1usize << (k - 1), &levels[k - 1]);
+            let n = rows + 1 - (1usize << k);
+            let next: Vec<f32> = (0..n * c)
+                .map(|i| prev[i].max(prev[i + half * c]))
+                .collect();
+            levels.push(next);
+            k += 1;
+        }
+        RangeMax {
+            dt: tab.dt,
+            rows,
+            c,
+            levels,
+        }
+    }
+    /// The largest value of channel `ch` over T in [lo, hi] (rows rounded outward), ≥ 0.
+    fn max_over(&self, lo: f64, hi: f64, ch: usize) -> f32 {
+        let last = (self.rows - 1) as f64;
+        let a = (lo / self.dt).floor().clamp(0.0, last) as usize;
+        let b = (hi / self.dt).ceil().clamp(0.0, last) as usize;
+        if b < a || ch >= self.c {
+            return 0.0;
+        }
+        let k = (usize::BITS - 1 - (b - a + 1).leading_zeros()) as usize;
+        let level = &self.levels[k];
+        level[a * self.c + ch]
+            .max(level[(b + 1 - (1usize << k)) * self.c + ch])
+            .max(0.0)
     }
 }
 
@@ -771,6 +815,11 @@ impl FireVolume {
         let majorant = MajorantGrid::build(&ds, brick);
         let counts = majorant.counts();
         let nb = counts[0] * counts[1] * counts[2];
+        let a_max = a_t.as_ref().map(|tab| RangeMax::new(tab, c));
+        let sp_max: Vec<RangeMax> = species
+            .iter()
+            .map(|sp| RangeMax::new(&sp.sigma, c))
+            .collect();
         let brick_sigma: Vec<f64> = (0..nb)
             .map(|b| {
                 let dmax = majorant.max(b, density).max(0.0) as f64;
@@ -779,15 +828,15 @@ impl FireVolume {
                     .unwrap_or((0.0, 0.0));
                 (0..c)
                     .map(|ch| {
-                        let ach = a_t
+                        let ach = a_max
                             .as_ref()
-                            .map(|tab: &TTable| tab.max_over(tlo, thi, ch) as f64)
+                            .map(|m| m.max_over(tlo, thi, ch) as f64)
                             .unwrap_or(a[ch]);
                         let mut v = dmax * (ach + s[ch]);
-                        for sp in &species {
+                        for (sp, m) in species.iter().zip(&sp_max) {
                             v += majorant.max(b, sp.ch).max(0.0) as f64
                                 * sp.scale
-                                * sp.sigma.max_over(tlo, thi, ch) as f64;
+                                * m.max_over(tlo, thi, ch) as f64;
                         }
                         v
                     })
@@ -1746,6 +1795,49 @@ mod tests {
             }
             let tau550 = sa[15];
             assert!(tau550 > 0.5e-4 && tau550 < 60.0);
+        }
+    }
+
+    #[test]
+    fn range_maxima_equal_the_row_scan() {
+        // The sparse table against a scan of the rows (what the bricks did before): random and edge ranges, inside and past the table,
+        // empty (lo > hi) and NaN ranges, every channel — the same f32 bit for bit.
+        let tab = TTable::build(2000.0, 5, &|t| {
+            (0..5)
+                .map(|c| ((t * 0.01 + c as f64).sin() + 1.0) * (1.0 + t / 500.0))
+                .collect()
+        });
+        let m = RangeMax::new(&tab, 5);
+        let mut rng = crate::rng::Rng::new(3);
+        let mut ranges = vec![
+            (0.0, 0.0),
+            (0.0, 2000.0),
+            (-50.0, 3000.0),
+            (1999.9, 2000.0),
+            (700.0, 700.0),
+            (800.0, 700.0),
+            (f64::NAN, 900.0),
+        ];
+        for _ in 0..2000 {
+            let (x, y) = (
+                rng.next_f64() * 2200.0 - 100.0,
+                rng.next_f64() * 2200.0 - 100.0,
+            );
+            ranges.push((x.min(y), x.max(y)));
+        }
+        let scan = |lo: f64, hi: f64, c: usize| {
+            let a = (lo / tab.dt).floor().clamp(0.0, (tab.rows - 1) as f64) as usize;
+            let b = (hi / tab.dt).ceil().clamp(0.0, (tab.rows - 1) as f64) as usize;
+            (a..=b).map(|r| tab.value(r, c)).fold(0.0, f32::max)
+        };
+        for (lo, hi) in ranges {
+            for ch in 0..5 {
+                assert_eq!(
+                    m.max_over(lo, hi, ch).to_bits(),
+                    scan(lo, hi, ch).to_bits(),
+                    "[{lo}, {hi}] ch {ch}"
+                );
+            }
         }
     }
 
