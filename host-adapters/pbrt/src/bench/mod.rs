@@ -151,7 +151,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         a.reference_step,
         reference.render_s,
         reference_rgb.render_s,
-        perf::rel_rmse(&reference_rgb.image, &reference.image)
+        error::errors(&reference_rgb.image, &reference.image).0
     );
     out += "| configuration | load s | render s | total s | rays/s | steps/s | samples | samples/s/core | rel. RMSE |\n|---|---|---|---|---|---|---|---|---|\n";
     let configs: Vec<(&str, Vec<Param>)> = vec![
@@ -194,7 +194,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         // Each colour mode against its own reference (the step's error); refraction bends rays, so its error
         // against the straight reference is mostly the refraction itself.
         let rgb = params.iter().any(|p| p.name == "colormode");
-        let err = perf::rel_rmse(
+        let (err, _) = error::errors(
             &r.image,
             if rgb {
                 &reference_rgb.image

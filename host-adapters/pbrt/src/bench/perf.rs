@@ -112,15 +112,3 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
         image: rows.into_iter().flat_map(|r| r.0).collect(),
     })
 }
-
-/// Relative RMSE of `a` against the reference `r`: √(mean (a − r)²) / mean r.
-pub fn rel_rmse(a: &[f64], r: &[f64]) -> f64 {
-    let n = r.len().max(1) as f64;
-    let mse = a.iter().zip(r).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / n;
-    let mean = r.iter().sum::<f64>() / n;
-    if mean > 0.0 {
-        mse.sqrt() / mean
-    } else {
-        0.0
-    }
-}
