@@ -421,17 +421,13 @@ pub(super) fn march<
         }
         // 4. The steps, in order.
         for b in 0..m {
-            if S {
+            // Whether the sample steps at all, and whether its step is thin; with species, their rows.
+            let mut sp: [Option<SpeciesRows>; MAX_SPECIES] = [None; MAX_SPECIES];
+            let thin_b = if S {
                 if !inside[b] {
                     continue;
                 }
                 samples += 1;
-                let step = Step {
-                    d: d[b],
-                    dl: dl[b],
-                    delta: deltas[b],
-                };
-                let mut sp: [Option<SpeciesRows>; MAX_SPECIES] = [None; MAX_SPECIES];
                 let mut bound = d[b] * sigma_max * deltas[b];
                 let mut any = d[b] > 0.0;
                 for s in 0..ns {
@@ -450,47 +446,11 @@ pub(super) fn march<
                         }
                     }
                 }
+                // (No soot and no species: σ = j = 0, as below.)
                 if !any {
                     continue;
                 }
-                let thin = bound < THIN;
-                let Some(jp) = jt.pair(jr[b]) else { continue };
-                let j = (jp, jf[b]);
-                let a = if A {
-                    match at.pair(ar[b]) {
-                        Some(p) => (p, af[b]),
-                        None => continue,
-                    }
-                } else {
-                    j
-                };
-                let mut tmax = [0f32; V];
-                macro_rules! lane {
-                    ($q:literal) => {
-                        if $q < CV {
-                            if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
-                                step.lane::<CV, V, A, F>(
-                                    $q,
-                                    &sigma,
-                                    j,
-                                    a,
-                                    &sp[..ns],
-                                    thin,
-                                    l,
-                                    t,
-                                    &mut tmax,
-                                );
-                            }
-                        }
-                    };
-                }
-                lane!(0);
-                lane!(1);
-                lane!(2);
-                lane!(3);
-                if !any_at_least(&tmax, cutoff) {
-                    break 'ray;
-                }
+                bound < THIN
             } else {
                 // No soot: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for bit); a sample
                 // outside (d = −1) is not counted.
@@ -498,48 +458,45 @@ pub(super) fn march<
                 if !(d[b] > 0.0) {
                     continue;
                 }
-                let step = Step {
-                    d: d[b],
-                    dl: dl[b],
-                    delta: deltas[b],
-                };
-                let Some(jp) = jt.pair(jr[b]) else { continue };
-                let j = (jp, jf[b]);
-                let a = if A {
-                    match at.pair(ar[b]) {
-                        Some(p) => (p, af[b]),
-                        None => continue,
-                    }
-                } else {
-                    j
-                };
-                let mut tmax = [0f32; V];
-                macro_rules! lane {
-                    ($q:literal) => {
-                        if $q < CV {
-                            if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
-                                step.lane::<CV, V, A, F>(
-                                    $q,
-                                    &sigma,
-                                    j,
-                                    a,
-                                    &[],
-                                    thin[b],
-                                    l,
-                                    t,
-                                    &mut tmax,
-                                );
-                            }
+                thin[b]
+            };
+            // (A constant empty slice without species, so the array above is not even built.)
+            let species: &[Option<SpeciesRows>] = if S { &sp[..ns] } else { &[] };
+            let step = Step {
+                d: d[b],
+                dl: dl[b],
+                delta: deltas[b],
+            };
+            let Some(jp) = jt.pair(jr[b]) else { continue };
+            let j = (jp, jf[b]);
+            let a = if A {
+                match at.pair(ar[b]) {
+                    Some(p) => (p, af[b]),
+                    None => continue,
+                }
+            } else {
+                j
+            };
+            let mut tmax = [0f32; V];
+            // Lane by lane, each written out (a loop over q kept the lanes in memory; with constant indices
+            // radiance and transmittance stay in registers).
+            macro_rules! lane {
+                ($q:literal) => {
+                    if $q < CV {
+                        if let (Some(l), Some(t)) = (lk.get_mut($q), tk.get_mut($q)) {
+                            step.lane::<CV, V, A, F>(
+                                $q, &sigma, j, a, species, thin_b, l, t, &mut tmax,
+                            );
                         }
-                    };
-                }
-                lane!(0);
-                lane!(1);
-                lane!(2);
-                lane!(3);
-                if !any_at_least(&tmax, cutoff) {
-                    break 'ray;
-                }
+                    }
+                };
+            }
+            lane!(0);
+            lane!(1);
+            lane!(2);
+            lane!(3);
+            if !any_at_least(&tmax, cutoff) {
+                break 'ray;
             }
         }
         if end {
