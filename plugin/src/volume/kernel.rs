@@ -82,7 +82,7 @@ struct Layout<'a> {
     fz: f64,
     /// Largest linear index whose cell has all eight corners in the arrays (exclusive).
     cells: usize,
-    /// Index of Lescale among the further grids; the species follow it (or start at 0).
+    /// Whether the first further grid is Lescale (the species follow it).
     lescale: bool,
 }
 
@@ -228,10 +228,10 @@ const BATCH: usize = 8;
 /// A step's optical depth below which the thin step (no exponential) is taken.
 const THIN: f32 = 0.1;
 
-/// The straight march of `ray` through `v` in `C` lanes (`C` = `lt.chunks()`, checked by the caller; any other
-/// count, or a volume without a lattice, returns `None`). `S`: the volume has species (their rows are looked
-/// up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical mode).
-/// Fills `l` and `t`; returns the exit parameter.
+/// The straight march of `ray` through `v` in `CV` lanes of `V` channels (at most 4 lanes holding all the
+/// volume's channels; else, or for a volume without a lattice, `None`). `S`: the volume has species (their rows
+/// are looked up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical
+/// mode). Fills `l` and `t`; returns the exit parameter.
 #[inline(always)]
 pub(super) fn march<
     const CV: usize,
