@@ -61,6 +61,42 @@ fn lerp<const F: bool>(t: f32, a: f32, b: f32) -> f32 {
     fma::<F>(t, b - a, a)
 }
 
+/// A ray's empty stretches (arc length from its entry into the medium): the bricks `empty_spans` reports,
+/// pulled from the brick walk as the march reaches them, adjacent ones merged — no list per ray, and no walk
+/// past where the march stops.
+struct Gaps<'a> {
+    segs: std::iter::Peekable<crate::majorant::Segments>,
+    empty: &'a [bool],
+    /// The ray's entry parameter and |d| (arc length per unit of parameter).
+    a: f64,
+    speed: f64,
+}
+
+impl Gaps<'_> {
+    /// The next empty stretch, (∞, ∞) when none is left.
+    #[inline]
+    fn next(&mut self) -> (f64, f64) {
+        let empty = |g: &Gaps, b: usize| g.empty.get(b).copied().unwrap_or(false);
+        while let Some(seg) = self.segs.next() {
+            if !empty(self, seg.brick) {
+                continue;
+            }
+            let start = (seg.t0 - self.a) * self.speed;
+            let mut end = (seg.t1 - self.a) * self.speed;
+            // (The walk's pieces tile the ray: the next starts exactly where this one ends.)
+            while let Some(&next) = self.segs.peek() {
+                if !empty(self, next.brick) || (next.t0 - self.a) * self.speed != end {
+                    break;
+                }
+                end = (next.t1 - self.a) * self.speed;
+                self.segs.next();
+            }
+            return (start, end);
+        }
+        (f64::INFINITY, f64::INFINITY)
+    }
+}
+
 /// The values of the further grids (Lescale, species) at a batch of samples (after the clamps of
 /// `FireVolume::lane_step`; Lescale 1 where the volume has none).
 struct Extras {
@@ -271,22 +307,13 @@ pub(super) fn march<
     if first <= 0.0 {
         first = ds;
     }
-    // Empty stretches (arc length from the entry): the bricks `empty_spans` reports, walked here directly and
-    // adjacent ones merged (fewer stretches to test, no call per brick).
-    let mut empty: Vec<(f64, f64)> = Vec::new();
-    for seg in v.majorant.segments(ray.o, ray.d, span.a, span.b) {
-        if !v.brick_empty[seg.brick] {
-            continue;
-        }
-        let (a, b) = (
-            (seg.t0 - span.a) * span.speed,
-            (seg.t1 - span.a) * span.speed,
-        );
-        match empty.last_mut() {
-            Some(last) if last.1 == a => last.1 = b,
-            _ => empty.push((a, b)),
-        }
-    }
+    // Empty stretches (arc length from the entry), pulled from the brick walk as the march reaches them.
+    let mut gaps = Gaps {
+        segs: v.majorant.segments(ray.o, ray.d, span.a, span.b).peekable(),
+        empty: &v.brick_empty,
+        a: span.a,
+        speed: span.speed,
+    };
     // The ray in lattice coordinates g = unit·n − 0.5 as a function of arc length s: g0 + s·gd.
     let dims = v.ds.dims().map(|n| n as f64);
     let [b0, b1] = v.ds.bounds();
@@ -332,13 +359,10 @@ pub(super) fn march<
         }
     }
     let mut samples = 0u64;
-    let (mut k, mut e) = (0f64, 0usize);
+    let mut k = 0f64;
     let mut s0 = 0f64;
     // The next empty stretch (infinitely far when there is none left).
-    let mut gap = empty
-        .first()
-        .copied()
-        .unwrap_or((f64::INFINITY, f64::INFINITY));
+    let mut gap = gaps.next();
     let mut x = Extras {
         les: [1.0; BATCH],
         n: [[0.0; BATCH]; MAX_SPECIES],
@@ -366,11 +390,7 @@ pub(super) fn march<
                     k = if past > k + 1.0 { past } else { k + 1.0 };
                     s0 = first + (k - 1.0) * ds;
                 } else {
-                    e += 1;
-                    gap = empty
-                        .get(e)
-                        .copied()
-                        .unwrap_or((f64::INFINITY, f64::INFINITY));
+                    gap = gaps.next();
                 }
                 continue;
             }
