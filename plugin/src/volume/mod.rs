@@ -200,24 +200,43 @@ impl Basis {
         }
         out
     }
-    /// Absorption weighted by the Planck spectrum at T (rgb bands): σ_c = ∫ f B w_c / ∫ B w_c, the band's
-    /// Planck-mean, so that both the thin (j_c) and the thick (j_c/σ_c → the band's blackbody) limits are exact.
-    /// Spectral bins use the plain bin mean. Falls back to `fallback`, the plain band means, where B vanishes; f is given at the rgb nodes
-    /// (380, 381, … 780 nm), evaluated once per table.
-    fn absorb_planck_rgb(&self, f: &[f64], fallback: &[f64], t: f64) -> Vec<f64> {
+    /// rgb soot at T, one Planck evaluation per wavelength for both rows (the CIE table's 1 nm wavelengths,
+    /// 380, 381, … 780 nm, the `nodes` of this basis): the absorption per band, the band's Planck-mean
+    /// σ_c = Σ f B w_c / Σ B w_c (f = σ per unit density at the nodes), so that both the thin (j_c) and the thick
+    /// (j_c/σ_c → the band's blackbody) limits are exact, or `fallback` (the plain band means) where B vanishes;
+    /// then the emission per band, as [`emit_planck`](Self::emit_planck) with `g` — each in its own order of
+    /// operations, so the values are those of two separate passes (tested).
+    fn soot_rgb_rows(
+        &self,
+        nodes: &Nodes,
+        g: &[f64],
+        f: &[f64],
+        fallback: &[f64],
+        t: f64,
+    ) -> Vec<f64> {
+        let b: Vec<f64> = nodes
+            .lambda
+            .iter()
+            .map(|&l| spectral_radiance(t, l))
+            .collect();
         let (mut num, mut den) = ([0.0; 3], [0.0; 3]);
-        for (i, w) in CMF.iter().enumerate() {
-            let b = spectral_radiance(t, 380.0 + i as f64);
+        for ((w, &bi), &fi) in CMF.iter().zip(&b).zip(f) {
             for c in 0..3 {
-                num[c] += f[i] * b * w[c];
-                den[c] += b * w[c];
+                num[c] += fi * bi * w[c];
+                den[c] += bi * w[c];
             }
         }
-        if den.iter().all(|&d| d > 0.0) {
+        let mut out: Vec<f64> = if den.iter().all(|&d| d > 0.0) {
             (0..3).map(|c| num[c] / den[c]).collect()
         } else {
             fallback.to_vec()
+        };
+        let mut e = [0.0; 3];
+        for &(n, c, w) in &nodes.terms {
+            e[c] += w * if g[n] != 0.0 { g[n] * b[n] } else { 0.0 };
         }
+        out.extend(e);
+        out
     }
     /// Per-unit-N line cross-sections of `e` at T: (σ̂ m², ĵ per channel).
     fn lines(
@@ -327,6 +346,28 @@ impl TTable {
             chunks,
             v,
         }
+    }
+    /// The table of channels 0..c and the table of the rest (one build that computes both, split).
+    fn split(&self, c: usize) -> (TTable, TTable) {
+        let total = self.chunks * lanes::W;
+        let part = |from: usize, to: usize| {
+            let n = to - from;
+            let chunks = n.div_ceil(lanes::W).max(1);
+            let mut v = vec![[0f32; lanes::W]; self.rows * chunks];
+            for r in 0..self.rows {
+                for ch in 0..n {
+                    v[r * chunks + ch / lanes::W][ch % lanes::W] = self.value(r, from + ch);
+                }
+            }
+            TTable {
+                dt: self.dt,
+                inv_dt: self.inv_dt,
+                rows: self.rows,
+                chunks,
+                v,
+            }
+        };
+        (part(0, c.min(total)), part(c.min(total), total))
     }
     /// The same values at every temperature.
     fn constant(row: &[f64]) -> TTable {
@@ -679,21 +720,6 @@ impl FireVolume {
                 let kappa = move |l: f64| optics.kappa(l, 1.0, alpha);
                 let kap = kappa.clone();
                 a = basis.absorb_split(&|l| sootscale * kap(l), &kinks);
-                if basis.mode == ColorMode::Rgb {
-                    let bb = basis.clone();
-                    let f: Vec<f64> = (0..CMF.len())
-                        .map(|i| sootscale * kappa(380.0 + i as f64))
-                        .collect();
-                    let fallback = a.clone();
-                    let tab =
-                        TTable::build(t_max, c, &move |t| bb.absorb_planck_rgb(&f, &fallback, t));
-                    tables.push(TableReport {
-                        name: "soot absorption (Planck-mean per band)".into(),
-                        bytes: tab.bytes(),
-                        seconds: t0.elapsed().as_secs_f64(),
-                    });
-                    a_t = Some(tab);
-                }
                 let bb = basis.clone();
                 let nodes = basis.nodes_split(&kinks);
                 let g: Vec<f64> = nodes
@@ -701,12 +727,37 @@ impl FireVolume {
                     .iter()
                     .map(|&l| intensity * sootscale * kappa(l))
                     .collect();
-                j = TTable::build(t_max, c, &move |t| bb.emit_planck(&nodes, &g, t));
-                tables.push(TableReport {
-                    name: "soot emission".into(),
-                    bytes: j.bytes(),
-                    seconds: t0.elapsed().as_secs_f64(),
-                });
+                if basis.mode == ColorMode::Rgb {
+                    // The Planck-mean absorption per band and the emission, from one table build.
+                    let f: Vec<f64> = (0..CMF.len())
+                        .map(|i| sootscale * kappa(380.0 + i as f64))
+                        .collect();
+                    let fallback = a.clone();
+                    let both = TTable::build(t_max, 2 * c, &move |t| {
+                        bb.soot_rgb_rows(&nodes, &g, &f, &fallback, t)
+                    });
+                    let (ta, tj) = both.split(c);
+                    let seconds = t0.elapsed().as_secs_f64();
+                    tables.push(TableReport {
+                        name: "soot absorption (Planck-mean per band)".into(),
+                        bytes: ta.bytes(),
+                        seconds,
+                    });
+                    tables.push(TableReport {
+                        name: "soot emission".into(),
+                        bytes: tj.bytes(),
+                        seconds,
+                    });
+                    a_t = Some(ta);
+                    j = tj;
+                } else {
+                    j = TTable::build(t_max, c, &move |t| bb.emit_planck(&nodes, &g, t));
+                    tables.push(TableReport {
+                        name: "soot emission".into(),
+                        bytes: j.bytes(),
+                        seconds: t0.elapsed().as_secs_f64(),
+                    });
+                }
                 t_emit = 0.0;
                 species = build_species(&r, &ds, &basis, t_max, intensity, &mut tables)?;
                 let mut sp = Vec::new();
@@ -1795,6 +1846,56 @@ mod tests {
             }
             let tau550 = sa[15];
             assert!(tau550 > 0.5e-4 && tau550 < 60.0);
+        }
+    }
+
+    #[test]
+    fn rgb_soot_rows_in_one_pass_equal_two() {
+        // The absorption (Planck-mean per band) and emission rows from one Planck evaluation per wavelength,
+        // against each formula evaluated on its own, bit for bit; and the split table holds each.
+        let basis = Basis {
+            mode: ColorMode::Rgb,
+            k: 683.0,
+        };
+        let optics = SootOptics::propane();
+        let nodes = basis.nodes();
+        let f: Vec<f64> = (0..CMF.len())
+            .map(|i| 3e-7 * optics.kappa(380.0 + i as f64, 1.0, 1.39))
+            .collect();
+        let g: Vec<f64> = nodes
+            .lambda
+            .iter()
+            .map(|&l| 2.0 * 3e-7 * optics.kappa(l, 1.0, 1.39))
+            .collect();
+        let fallback = [1.0, 2.0, 3.0];
+        for t in [0.0, 1.0, 300.0, 900.0, 1675.0, 3000.0, 1e5] {
+            let row = basis.soot_rgb_rows(&nodes, &g, &f, &fallback, t);
+            let (mut num, mut den) = ([0.0; 3], [0.0; 3]);
+            for (i, w) in CMF.iter().enumerate() {
+                let b = spectral_radiance(t, 380.0 + i as f64);
+                for c in 0..3 {
+                    num[c] += f[i] * b * w[c];
+                    den[c] += b * w[c];
+                }
+            }
+            let absorb: Vec<f64> = if den.iter().all(|&d| d > 0.0) {
+                (0..3).map(|c| num[c] / den[c]).collect()
+            } else {
+                fallback.to_vec()
+            };
+            let emit = basis.emit_planck(&nodes, &g, t);
+            assert_eq!(&row[..3], &absorb[..], "absorption at {t} K");
+            assert_eq!(&row[3..], &emit[..], "emission at {t} K");
+        }
+        let both = TTable::build(2000.0, 6, &|t| {
+            basis.soot_rgb_rows(&nodes, &g, &f, &fallback, t)
+        });
+        let (a, j) = both.split(3);
+        for r in [0, 1, 1000, both.rows - 1] {
+            for c in 0..3 {
+                assert_eq!(a.value(r, c), both.value(r, c));
+                assert_eq!(j.value(r, c), both.value(r, c + 3));
+            }
         }
     }
 
