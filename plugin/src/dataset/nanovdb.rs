@@ -12,7 +12,7 @@
 
 use super::compress::zlib;
 use super::cursor::Cursor;
-use super::sparse::{bit, densify, missing_grid, Leaf, Tile, Transform, Tree};
+use super::sparse::{bit, densify, missing_grid, InLeaves, Leaf, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
 use glam::DVec3;
@@ -370,7 +370,7 @@ pub(crate) fn read(
             });
         }
         let buf = buffer(file, bytes, g, max_bytes)?;
-        trees.push((name, tree(file, name, &buf)?));
+        trees.push((name, tree(file, name, &buf)?, InLeaves));
     }
-    densify(file, &trees, max_bytes)
+    densify(file, trees, max_bytes)
 }

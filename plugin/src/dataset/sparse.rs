@@ -14,7 +14,8 @@ pub struct Transform {
     pub translation: DVec3,
 }
 
-/// An 8³ leaf: origin, 512 values (z fastest within the leaf: offset x·64 + y·8 + z), active mask.
+/// An 8³ leaf: origin, 512 values (z fastest within the leaf: offset x·64 + y·8 + z; empty when a
+/// [`LeafValues`] source decodes them while the grid is made dense), active mask.
 pub(crate) struct Leaf {
     pub origin: [i32; 3],
     pub values: Vec<f32>,
@@ -35,6 +36,21 @@ pub(crate) struct Tree {
     pub background: f32,
     pub tiles: Vec<Tile>,
     pub leaves: Vec<Leaf>,
+}
+
+/// Where a tree's leaf values come from while the dense grid is filled: called once per leaf, in order.
+pub(crate) trait LeafValues: Send {
+    /// Leaf `leaf`'s 512 values (z fastest).
+    fn values<'a>(&'a mut self, leaf: &'a Leaf) -> Result<&'a [f32], Error>;
+}
+
+/// Leaves decoded with the tree (their `values`).
+pub(crate) struct InLeaves;
+
+impl LeafValues for InLeaves {
+    fn values<'a>(&'a mut self, leaf: &'a Leaf) -> Result<&'a [f32], Error> {
+        Ok(&leaf.values)
+    }
 }
 
 pub(crate) fn bit(m: &[u64], i: usize) -> bool {
@@ -104,13 +120,13 @@ pub(crate) fn missing_grid<'a>(
 
 /// Makes `trees` dense over the union of their active boxes; every voxel holds the tree's value there
 /// (leaf values, active or not, over tile values, over the background).
-pub(crate) fn densify(
+pub(crate) fn densify<S: LeafValues>(
     file: &str,
-    trees: &[(&str, Tree)],
+    trees: Vec<(&str, Tree, S)>,
     max_bytes: u64,
 ) -> Result<Vec<Loaded>, Error> {
     let (first_name, first) = (&trees[0].0, &trees[0].1);
-    for (name, t) in &trees[1..] {
+    for (name, t, _) in &trees[1..] {
         if t.transform != first.transform {
             return Err(Error::format(
                 file,
@@ -124,7 +140,7 @@ pub(crate) fn densify(
         }
     }
     let mut bbox: Option<([i64; 3], [i64; 3])> = None;
-    for (_, t) in trees {
+    for (_, t, _) in &trees {
         if let Some((a, b)) = active_bbox(t) {
             bbox = Some(match bbox {
                 None => (a, b),
@@ -150,8 +166,8 @@ pub(crate) fn densify(
     let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
     let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
     let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
-    // One dense grid per tree, filled in parallel.
-    super::par_map(trees.iter().collect(), |(_, t)| {
+    // One dense grid per tree, filled in parallel (each leaf's values decoded as it is placed).
+    super::par_map(trees, |(_, t, mut source)| {
         let mut data = alloc_grid(file, dims, max_bytes, t.background)?;
         let put = |data: &mut [f32], p: [i64; 3], v: f32| {
             let q = [0, 1, 2].map(|k| p[k] - lo[k]);
@@ -186,7 +202,8 @@ pub(crate) fn densify(
         }
         for leaf in &t.leaves {
             let o = leaf.origin.map(|v| v as i64);
-            let whole: Option<&[f32; 512]> = leaf.values.as_slice().try_into().ok();
+            let values = source.values(leaf)?;
+            let whole: Option<&[f32; 512]> = values.try_into().ok();
             if let (true, Some(values)) =
                 ((0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]), whole)
             {
@@ -206,7 +223,7 @@ pub(crate) fn densify(
                 }
                 continue;
             }
-            for (i, &v) in leaf.values.iter().enumerate() {
+            for (i, &v) in values.iter().enumerate() {
                 put(&mut data, leaf_voxel(leaf.origin, i), v);
             }
         }

@@ -13,7 +13,7 @@
 
 use super::compress::{blosc, half_to_f32, zlib};
 use super::cursor::Cursor;
-use super::sparse::{bit, densify, missing_grid, Leaf, Tile, Transform, Tree};
+use super::sparse::{bit, densify, missing_grid, Leaf, LeafValues, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
 use glam::DVec3;
@@ -240,6 +240,22 @@ struct Ctx {
     background: f32,
 }
 
+/// A grid's leaf buffers (after its topology): every leaf in tree order, its value mask again, then its
+/// values, decoded one leaf at a time into `scratch` as the dense grid is filled.
+struct Buffers<'a> {
+    c: Cursor<'a>,
+    ctx: Ctx,
+    scratch: Vec<f32>,
+}
+
+impl LeafValues for Buffers<'_> {
+    fn values<'s>(&'s mut self, _leaf: &'s Leaf) -> Result<&'s [f32], Error> {
+        let m = mask(&mut self.c, 8, "a leaf's value mask")?;
+        read_values(&mut self.c, &self.ctx, 512, &m, &mut self.scratch)?;
+        Ok(&self.scratch)
+    }
+}
+
 fn mask(c: &mut Cursor, words: usize, what: &str) -> Result<Vec<u64>, Error> {
     (0..words).map(|_| c.u64(what)).collect()
 }
@@ -250,7 +266,8 @@ fn read_values(
     ctx: &Ctx,
     count: usize,
     value_mask: &[u64],
-) -> Result<Vec<f32>, Error> {
+    out: &mut Vec<f32>,
+) -> Result<(), Error> {
     let at = c.pos;
     let meta = c.u8("a node's value-coding byte")?;
     if meta > 6 {
@@ -285,39 +302,44 @@ fn read_values(
     } else {
         block(c, ctx.compression, nbytes)?
     };
-    // All stored values decoded at once (a loop over exact chunks, which compiles to plain loads).
-    let values: Vec<f32> = if ctx.half {
-        raw.chunks_exact(2)
-            .map(|b| half_to_f32(u16::from_le_bytes([b[0], b[1]])))
-            .collect()
+    // All stored values decoded at once (a loop over exact chunks, which compiles to plain loads), into `out`
+    // (reused from leaf to leaf: no allocation per leaf).
+    out.clear();
+    if ctx.half {
+        out.extend(
+            raw.chunks_exact(2)
+                .map(|b| half_to_f32(u16::from_le_bytes([b[0], b[1]]))),
+        );
     } else {
-        raw.chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect()
-    };
-    if values.len() < stored.min(count) {
+        out.extend(
+            raw.chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+    }
+    if out.len() < stored.min(count) {
         return Err(c.err(
             format!("{stored} stored values"),
-            format!("{} values", values.len()),
+            format!("{} values", out.len()),
         ));
     }
     if !masked || stored == count {
-        let mut values = values;
-        values.truncate(count);
-        return Ok(values);
+        out.truncate(count);
+        return Ok(());
     }
-    let mut out = Vec::with_capacity(count);
-    let mut k = 0;
-    for i in 0..count {
-        if bit(value_mask, i) {
-            out.push(values.get(k).copied().unwrap_or(inactive0));
-            k += 1;
+    // The stored (active) values spread to their places, inactive ones filled: from the back, in place.
+    out.resize(count, 0.0);
+    let mut k = stored;
+    for i in (0..count).rev() {
+        out[i] = if bit(value_mask, i) {
+            k -= 1;
+            out[k]
+        } else if selection.as_ref().is_some_and(|s| bit(s, i)) {
+            inactive1
         } else {
-            let sel = selection.as_ref().is_some_and(|s| bit(s, i));
-            out.push(if sel { inactive1 } else { inactive0 });
-        }
+            inactive0
+        };
     }
-    Ok(out)
+    Ok(())
 }
 
 /// One data block: raw, or an int64 size + blosc/zip data (a negative size means stored raw).
@@ -370,7 +392,8 @@ fn read_internal(
     let words = n / 64;
     let child_mask = mask(c, words, "a child mask")?;
     let value_mask = mask(c, words, "a value mask")?;
-    let values = read_values(c, ctx, n, &value_mask)?;
+    let mut values = Vec::new();
+    read_values(c, ctx, n, &value_mask, &mut values)?;
     let dim = 1i32 << log2;
     let coord = |i: usize| {
         let i = i as i32;
@@ -408,7 +431,12 @@ fn read_internal(
     Ok(())
 }
 
-fn read_tree(file: &str, bytes: &[u8], info: &GridInfo) -> Result<Tree, Error> {
+/// A grid's topology (tiles, leaf origins and masks) and where its leaf values are.
+fn read_tree<'a>(
+    file: &'a str,
+    bytes: &'a [u8],
+    info: &GridInfo,
+) -> Result<(Tree, Buffers<'a>), Error> {
     let name = &info.name;
     if info.tree_type != "Tree_float_5_4_3" {
         return Err(Error::Unsupported {
@@ -482,19 +510,21 @@ fn read_tree(file: &str, bytes: &[u8], info: &GridInfo) -> Result<Tree, Error> {
         ];
         read_internal(&mut c, &ctx, origin, 5, 7, &mut tiles, &mut leaves)?;
     }
-    // Buffers: every leaf in the same order, its value mask again, then its values.
+    // The buffers: read leaf by leaf as the grid is made dense.
     c.seek(info.block_pos, &format!("grid '{name}' data blocks"))?;
-    for leaf in leaves.iter_mut() {
-        let m = mask(&mut c, 8, "a leaf's value mask")?;
-        leaf.values = read_values(&mut c, &ctx, 512, &m)?;
-        leaf.mask = m.try_into().unwrap_or([0; 8]);
-    }
-    Ok(Tree {
-        transform,
-        background,
-        tiles,
-        leaves,
-    })
+    Ok((
+        Tree {
+            transform,
+            background,
+            tiles,
+            leaves,
+        },
+        Buffers {
+            c,
+            ctx,
+            scratch: Vec::with_capacity(512),
+        },
+    ))
 }
 
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
@@ -518,11 +548,11 @@ pub(crate) fn read(
     }
     // The grids' trees are independent byte ranges: decoded in parallel.
     let trees = super::par_map(infos, |(name, info)| {
-        read_tree(file, bytes, info).map(|t| (name, t))
+        read_tree(file, bytes, info).map(|(t, b)| (name, t, b))
     })
     .into_iter()
     .collect::<Result<Vec<_>, Error>>()?;
-    densify(file, &trees, max_bytes)
+    densify(file, trees, max_bytes)
 }
 
 /// Encodes float grids as an OpenVDB file (format 224, library 12.0, standard 5-4-3 trees, full floats, no
