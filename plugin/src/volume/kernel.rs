@@ -177,21 +177,37 @@ fn trilinear<const F: bool>(a: &[f32], i: usize, sy: usize, sz: usize, f: [f32; 
     )
 }
 
-/// Sample `b` of a batch at lattice point `g` (the dataset's lattice coordinates: voxel centres at integers,
-/// the bounds at −½ and n − ½) into `d`, `t` and `x`, trilinearly from the padded lattice; false when its cell
-/// is not in the lattice (the general stencil takes it). Species values are scaled by `scales`.
+/// The cell of lattice point `g` (the dataset's lattice coordinates: voxel centres at integers, the bounds at
+/// −½ and n − ½): its lower corner's padded index (at least `lay.cells`, or meaningless, when the cell is not in
+/// the lattice) and the fractions within it.
+#[inline(always)]
+fn cell<const F: bool>(lay: &Layout, g: [f64; 3]) -> (usize, [f32; 3]) {
+    let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
+    let i = index(lay.off + c[0] + lay.fy * c[1] + lay.fz * c[2]);
+    (
+        i,
+        [
+            (g[0] - c[0]) as f32,
+            (g[1] - c[1]) as f32,
+            (g[2] - c[2]) as f32,
+        ],
+    )
+}
+
+/// Sample `b` of a batch in cell `i` at fractions `f` (from [`cell`]) into `d`, `t` and `x`, trilinearly from
+/// the padded lattice; false when the cell is not in the lattice (the general stencil takes it). Species values
+/// are scaled by `scales`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn read<const F: bool>(
     lay: &Layout,
-    g: [f64; 3],
+    i: usize,
+    f: [f32; 3],
     scales: &[f64],
     b: usize,
     dt: &mut [[f32; 2]; BATCH],
     x: &mut Extras,
 ) -> bool {
-    let c = [floor::<F>(g[0]), floor::<F>(g[1]), floor::<F>(g[2])];
-    let i = index(lay.off + c[0] + lay.fy * c[1] + lay.fz * c[2]);
     if i >= lay.cells {
         return false;
     }
@@ -211,11 +227,6 @@ fn read<const F: bool>(
     else {
         return false;
     };
-    let f = [
-        (g[0] - c[0]) as f32,
-        (g[1] - c[1]) as f32,
-        (g[2] - c[2]) as f32,
-    ];
     let z0 = lerp4::<F>(f[1], q00, q10);
     let z1 = lerp4::<F>(f[1], q01, q11);
     let v = lerp4::<F>(f[2], &z0, &z1);
@@ -403,13 +414,25 @@ pub(super) fn march<
         // 2. Their grid values, read before any is stepped through (independent reads, which the CPU
         // overlaps). A sample outside the medium gets d = −1 (skipped below, not counted).
         let mut dt = [[0f32; 2]; BATCH];
-        for b in 0..m {
+        // (The cells and fractions of all BATCH at once, a loop without exits that vectorises; those past `m`
+        // are not read.)
+        let mut ci = [0usize; BATCH];
+        let mut fx = [[0f32; BATCH]; 3];
+        for b in 0..BATCH {
             let g = [
                 g0[0] + mids[b] * gd[0],
                 g0[1] + mids[b] * gd[1],
                 g0[2] + mids[b] * gd[2],
             ];
-            if !read::<F>(&lay, g, &scales[..ns], b, &mut dt, &mut x) {
+            let (i, f) = cell::<F>(&lay, g);
+            ci[b] = i;
+            fx[0][b] = f[0];
+            fx[1][b] = f[1];
+            fx[2][b] = f[2];
+        }
+        for b in 0..m {
+            let f = [fx[0][b], fx[1][b], fx[2][b]];
+            if !read::<F>(&lay, ci[b], f, &scales[..ns], b, &mut dt, &mut x) {
                 let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
                 general(v, p, b, &mut dt, &mut x);
             }
@@ -774,8 +797,9 @@ mod tests {
                 les: [1.0; BATCH],
                 n: [[0.0; BATCH]; MAX_SPECIES],
             };
+            let (i, f) = cell::<false>(&lay, g);
             assert!(
-                read::<false>(&lay, g, &[], 3, &mut dt, &mut x),
+                read::<false>(&lay, i, f, &[], 3, &mut dt, &mut x),
                 "every point within the margin has its cell in the lattice: {g:?}"
             );
             for (got, grid) in [(dt[3][0], &d), (dt[3][1], &t), (x.les[3], &les)] {
