@@ -384,6 +384,22 @@ pub(super) fn march<
         let mut end = false;
         let mut mids = [0f64; BATCH];
         let mut deltas = [0f32; BATCH];
+        // The common case at once: all BATCH steps whole and before the next empty stretch (the ends are
+        // increasing, so the last step decides), with the loop's arithmetic, bit for bit.
+        let mut ends = [0f64; BATCH + 1];
+        ends[0] = s0;
+        for b in 0..BATCH {
+            ends[b + 1] = first + (k + b as f64) * ds;
+        }
+        if ends[BATCH] < len && 0.5 * (ends[BATCH - 1] + ends[BATCH]) < gap.0 {
+            for b in 0..BATCH {
+                mids[b] = 0.5 * (ends[b] + ends[b + 1]);
+                deltas[b] = (ends[b + 1] - ends[b]) as f32;
+            }
+            k += BATCH as f64;
+            s0 = ends[BATCH];
+            m = BATCH;
+        }
         while m < BATCH {
             // Step k spans [first + (k − 1)·ds, first + k·ds] ∩ [0, len] (k counted in f64: exact below 2⁵³;
             // the step's end is the next one's start, as computed here).
