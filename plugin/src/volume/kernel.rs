@@ -3,8 +3,9 @@
 //! The same steps at the same points as `integrate::march_steps` (eq. 3 of Pegoraro & Parker, a step exact for
 //! constant coefficients, evaluated at the step's midpoint), written for speed:
 //!
-//! - **eight samples at a time, in phases**: the next eight steps outside empty bricks (their midpoints), then
-//!   their grid values, read together from the [`Lattice`] (density and temperature interleaved and padded: a
+//! - **eight samples at a time, in phases**: the next eight steps outside empty bricks (their midpoints; all
+//!   eight at once when they are whole and before the next empty stretch), their cells and fractions (at once,
+//!   in vector registers), then their grid values, read together from the [`Lattice`] (density and temperature interleaved and padded: a
 //!   cell is four 16-byte reads under one range check, and the padding gives pbrt-v4's fade at the faces, so no
 //!   sample inside the bounds needs the general stencil), then their table rows (located once for emission and
 //!   T-dependent absorption), then the steps in order — independent reads first, which the CPU overlaps;
