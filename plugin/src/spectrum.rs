@@ -3,8 +3,8 @@
 //! A [`SpectralGrid`] splits [λ_min, λ_max] (vacuum wavelength, nm) into `count` equal bins; the default is the
 //! thesis's 30 bins over 400–700 nm (10 nm each). A binned spectrum holds, per bin, the **mean** spectral
 //! radiance over the bin (W·m⁻²·sr⁻¹·nm⁻¹), so that a line of total radiance L falling into a bin of width Δλ
-//! is the value L/Δλ there (φ = 1/Δλ, P&P eq. 7) and keeps its energy when projected to XYZ with the CMFs
-//! integrated over each bin ([`crate::cie::bin_weights`]).
+//! is the value L/Δλ there (φ = 1/Δλ, P&P eq. 7) and keeps its energy when projected to XYZ with weights
+//! integrated over the bins ([`crate::cie::bin_weights`]).
 
 use crate::quadrature::gauss_legendre;
 use crate::Error;

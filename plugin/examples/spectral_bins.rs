@@ -1,0 +1,99 @@
+//! The spectral bins' own error: the luminance of a fire marched with N bins against the same march with many
+//! more, for the plain per-bin CMF weights (`cie::bin_integrals`) and the weights of the spectrum rebuilt from
+//! its bin means (`cie::bin_weights`, what the volume uses).
+//!
+//!     cargo run --release -p firemedium-plugin --example spectral_bins -- DATASET [PIXELS] [STEP] [BINS,BINS,…]
+//!
+//! Default: the committed campfire, 96 pixels, ½ voxel, 12,16,20,24,30,240 (the last is the reference). The
+//! camera is the perf bench's pinhole. Results are in docs/RESULTS.md.
+
+use firemedium_plugin::cie::{bin_integrals, bin_weights};
+use firemedium_plugin::params::Param;
+use firemedium_plugin::spectrum::SpectralGrid;
+use firemedium_plugin::volume::{FireVolume, Ray};
+use glam::DVec3;
+
+/// Each pixel's radiance per bin (f64 march).
+fn render(v: &FireVolume, size: usize) -> Vec<Vec<f64>> {
+    let [b0, b1] = v.bounds();
+    let eye = 0.5 * (b0 + b1) - DVec3::Y * (2.2 * (b1 - b0).max_element());
+    let half = 15f64.to_radians().tan();
+    let c = v.channels();
+    let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+    let mut img = Vec::with_capacity(size * size);
+    for j in 0..size {
+        for i in 0..size {
+            let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
+            let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+            let ray = Ray {
+                o: eye,
+                d: DVec3::new(u, 1.0, w).normalize(),
+                t0: 0.0,
+                t1: f64::INFINITY,
+                seed: (j * size + i) as u64,
+            };
+            v.integrate(&ray, &mut l, &mut t);
+            img.push(l.clone());
+        }
+    }
+    img
+}
+
+/// Luminance of each pixel with per-bin weights `w`.
+fn luminance(img: &[Vec<f64>], w: &[DVec3]) -> Vec<f64> {
+    img.iter()
+        .map(|l| l.iter().zip(w).map(|(a, b)| a * b.y).sum())
+        .collect()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let file = args.first().cloned().unwrap_or_else(|| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/campfire/campfire.vdb"
+        )
+        .to_string()
+    });
+    let size: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(96);
+    let step: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(0.5);
+    let bins: Vec<usize> = args
+        .get(3)
+        .map(|s| s.split(',').filter_map(|b| b.parse().ok()).collect())
+        .unwrap_or_else(|| vec![12, 16, 20, 24, 30, 240]);
+    let runs: Vec<(usize, Vec<Vec<f64>>)> = bins
+        .iter()
+        .map(|&n| {
+            let v = FireVolume::new(&[
+                Param::string("filename", &file),
+                Param::int("bins", n as i64),
+                Param::float("stepsize", step),
+                Param::string("precision", "f64"),
+            ])
+            .unwrap_or_else(|e| panic!("{e}"));
+            (n, render(&v, size))
+        })
+        .collect();
+    let grid = |n: usize| SpectralGrid::new(400.0, 700.0, n).unwrap_or_else(|e| panic!("{e}"));
+    let Some((n_ref, img_ref)) = runs.last() else {
+        return;
+    };
+    let reference = luminance(img_ref, &bin_weights(&grid(*n_ref)));
+    let norm: f64 = reference.iter().map(|y| y * y).sum::<f64>();
+    let total: f64 = reference.iter().sum();
+    println!("{file}, {size}² pixels, step {step} voxel, against {n_ref} bins (rebuilt weights)\n");
+    println!(
+        "| bins | plain weights: rel. RMSE | mean bias | rebuilt weights: rel. RMSE | mean bias |"
+    );
+    println!("|---|---|---|---|---|");
+    for (n, img) in &runs {
+        let stats = |w: &[DVec3]| {
+            let y = luminance(img, w);
+            let se: f64 = y.iter().zip(&reference).map(|(a, b)| (a - b).powi(2)).sum();
+            ((se / norm).sqrt(), y.iter().sum::<f64>() / total - 1.0)
+        };
+        let (p, pb) = stats(&bin_integrals(&grid(*n)));
+        let (r, rb) = stats(&bin_weights(&grid(*n)));
+        println!("| {n} | {p:.3e} | {pb:+.3e} | {r:.3e} | {rb:+.3e} |");
+    }
+}
