@@ -58,21 +58,24 @@ fn main() {
     let rounds: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(5);
     let only = args.get(3).cloned().unwrap_or_default();
     let configs: Vec<_> = [
-        ("spectral f64", "spectral", "f64"),
-        ("spectral f32", "spectral", "f32"),
-        ("rgb f64", "rgb", "f64"),
-        ("rgb f32", "rgb", "f32"),
+        ("spectral f64", "spectral", "f64", 30),
+        ("spectral f32", "spectral", "f32", 30),
+        ("rgb f64", "rgb", "f64", 3),
+        ("rgb f32", "rgb", "f32", 3),
+        ("spectral16 f64", "spectral", "f64", 16),
+        ("spectral16 f32", "spectral", "f32", 16),
     ]
     .into_iter()
     .filter(|c| c.0.contains(only.as_str()))
     .collect();
     let volumes: Vec<FireVolume> = configs
         .iter()
-        .map(|(_, mode, precision)| {
+        .map(|(_, mode, precision, bins)| {
             let mut list = vec![
                 Param::string("filename", &file),
                 Param::string("colormode", mode),
                 Param::string("precision", precision),
+                Param::int("bins", *bins),
             ];
             if let Some(b) = args.get(4).and_then(|s| s.parse().ok()) {
                 list.push(Param::int("brick", b));
@@ -94,7 +97,7 @@ fn main() {
     println!("{file}, {size}² rays, one thread, {rounds} rounds");
     println!("| configuration | fastest s | median s | samples | ns per sample (fastest) | vs f64: max rel. diff | rel. RMS diff |");
     println!("|---|---|---|---|---|---|---|");
-    for (k, (name, _, _)) in configs.iter().enumerate() {
+    for (k, (name, _, _, _)) in configs.iter().enumerate() {
         let mut ts = times[k].clone();
         ts.sort_by(f64::total_cmp);
         let reference = &images[k & !1];

@@ -256,17 +256,12 @@ impl Iterator for Segments {
     type Item = Segment;
     fn next(&mut self) -> Option<Segment> {
         while !self.done {
-            let a = if self.next[0] < self.next[1] {
-                if self.next[0] < self.next[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if self.next[1] < self.next[2] {
-                1
-            } else {
-                2
-            };
+            // The axis whose boundary comes first (ties to the later axis, as before), by selects rather than
+            // branches: along a ray the axis changes at nearly every brick, too irregularly to predict.
+            let [n0, n1, n2] = self.next;
+            let b1 = n1 <= n0;
+            let (m, am) = if b1 { (n1, 1) } else { (n0, 0) };
+            let a = if n2 <= m { 2 } else { am };
             let brick = self.cell[0] as usize
                 + self.counts[0] * (self.cell[1] as usize + self.counts[1] * self.cell[2] as usize);
             let mut t_end = self.next[a].min(self.tmax);
