@@ -74,21 +74,19 @@ impl std::ops::MulAssign for S {
 #[derive(Debug, Clone)]
 pub struct Bins {
     pub grid: SpectralGrid,
-    /// XYZ per unit radiance in each bin: K ∫_bin (x̄, ȳ, z̄) dλ, K = 683 lm/W (absolute) or 1/∫ȳ (pbrt's
-    /// relative units).
+    /// XYZ per unit radiance in each bin: K times the plugin's bin weights (`cie::bin_weights`: the CMFs
+    /// integrated against the spectrum rebuilt from its bin means, as the fire volume's channels use), K = 683
+    /// lm/W (absolute) or 1/∫ȳ (pbrt's relative units).
     pub xyz: Vec<DVec3>,
 }
 
 impl Bins {
     pub fn new(grid: SpectralGrid, k: f64) -> Bins {
-        let xyz = (0..grid.count()).map(|i| {
-            let (a, b) = grid.edges(i);
-            cie::cmf_integral(a, b) * k
-        });
-        Bins {
-            grid,
-            xyz: xyz.collect(),
-        }
+        let xyz = cie::bin_weights(&grid)
+            .into_iter()
+            .map(|w| w / firemedium_plugin::constants::LUMINOUS_EFFICACY * k)
+            .collect();
+        Bins { grid, xyz }
     }
     pub fn n(&self) -> usize {
         self.grid.count()
