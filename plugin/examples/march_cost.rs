@@ -8,35 +8,22 @@
 //! docs/RESULTS.md.
 
 use firemedium_plugin::params::Param;
-use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume, Ray};
-use glam::DVec3;
+use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume};
 use std::time::Instant;
+
+mod common;
 
 /// Luminance of every pixel, seconds, evaluations.
 fn render(v: &FireVolume, size: usize) -> (Vec<f64>, f64, u64) {
-    let [b0, b1] = v.bounds();
-    let eye = 0.5 * (b0 + b1) - DVec3::Y * (2.2 * (b1 - b0).max_element());
-    let half = 15f64.to_radians().tan();
     let xyz = v.channel_xyz();
     let c = v.channels();
     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
     let mut img = Vec::with_capacity(size * size);
     let e0 = evaluations_on_this_thread();
     let start = Instant::now();
-    for j in 0..size {
-        for i in 0..size {
-            let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
-            let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
-            let ray = Ray {
-                o: eye,
-                d: DVec3::new(u, 1.0, w).normalize(),
-                t0: 0.0,
-                t1: f64::INFINITY,
-                seed: (j * size + i) as u64,
-            };
-            v.integrate(&ray, &mut l, &mut t);
-            img.push((0..c).map(|k| l[k] * xyz[k].y).sum());
-        }
+    for ray in common::pinhole_rays(v, size) {
+        v.integrate(&ray, &mut l, &mut t);
+        img.push((0..c).map(|k| l[k] * xyz[k].y).sum());
     }
     (
         img,
@@ -46,14 +33,7 @@ fn render(v: &FireVolume, size: usize) -> (Vec<f64>, f64, u64) {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let file = args.first().cloned().unwrap_or_else(|| {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../scenes/campfire/campfire.vdb"
-        )
-        .to_string()
-    });
+    let (args, file) = common::args_and_dataset();
     let size: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(96);
     let rounds: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(5);
     let only = args.get(3).cloned().unwrap_or_default();

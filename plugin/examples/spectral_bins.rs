@@ -10,33 +10,21 @@
 use firemedium_plugin::cie::{bin_integrals, bin_weights};
 use firemedium_plugin::params::Param;
 use firemedium_plugin::spectrum::SpectralGrid;
-use firemedium_plugin::volume::{FireVolume, Ray};
+use firemedium_plugin::volume::FireVolume;
 use glam::DVec3;
+
+mod common;
 
 /// Each pixel's radiance per bin (f64 march).
 fn render(v: &FireVolume, size: usize) -> Vec<Vec<f64>> {
-    let [b0, b1] = v.bounds();
-    let eye = 0.5 * (b0 + b1) - DVec3::Y * (2.2 * (b1 - b0).max_element());
-    let half = 15f64.to_radians().tan();
     let c = v.channels();
     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
-    let mut img = Vec::with_capacity(size * size);
-    for j in 0..size {
-        for i in 0..size {
-            let u = ((i as f64 + 0.5) / size as f64 * 2.0 - 1.0) * half;
-            let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
-            let ray = Ray {
-                o: eye,
-                d: DVec3::new(u, 1.0, w).normalize(),
-                t0: 0.0,
-                t1: f64::INFINITY,
-                seed: (j * size + i) as u64,
-            };
+    common::pinhole_rays(v, size)
+        .map(|ray| {
             v.integrate(&ray, &mut l, &mut t);
-            img.push(l.clone());
-        }
-    }
-    img
+            l.clone()
+        })
+        .collect()
 }
 
 /// Luminance of each pixel with per-bin weights `w`.
@@ -47,14 +35,7 @@ fn luminance(img: &[Vec<f64>], w: &[DVec3]) -> Vec<f64> {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let file = args.first().cloned().unwrap_or_else(|| {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../scenes/campfire/campfire.vdb"
-        )
-        .to_string()
-    });
+    let (args, file) = common::args_and_dataset();
     let size: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(96);
     let step: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(0.5);
     let bins: Vec<usize> = args
