@@ -71,24 +71,26 @@ pub fn cmf(lambda_nm: f64) -> DVec3 {
     DVec3::from(CMF[i]).lerp(DVec3::from(CMF[i + 1]), s)
 }
 
-/// ∫ₐᵇ (x̄, ȳ, z̄) dλ of the piecewise-linear CMFs, exactly (nm).
-pub fn cmf_integral(a_nm: f64, b_nm: f64) -> DVec3 {
+/// [a, b] ∩ the table's range (nm) cut at the CMFs' samples: the pieces on which they are linear, in order.
+fn cmf_pieces(a_nm: f64, b_nm: f64) -> impl Iterator<Item = (f64, f64)> {
     let lo = a_nm.max(CMF_START_NM);
     let hi = b_nm.min(CMF_START_NM + (CMF.len() - 1) as f64 * CMF_STEP_NM);
-    if !(hi > lo) {
-        return DVec3::ZERO;
-    }
-    // Split at the sample points; the trapezoid rule is exact on each linear piece.
-    let mut sum = DVec3::ZERO;
-    let mut x = lo;
-    while x < hi {
-        let next_node =
+    let next = move |x: f64| {
+        let node =
             CMF_START_NM + ((x - CMF_START_NM) / CMF_STEP_NM).floor() * CMF_STEP_NM + CMF_STEP_NM;
-        let y = next_node.min(hi);
-        sum += 0.5 * (cmf(x) + cmf(y)) * (y - x);
-        x = y;
-    }
-    sum
+        node.min(hi)
+    };
+    std::iter::successors((lo < hi).then(|| (lo, next(lo))), move |&(_, x)| {
+        (x < hi).then(|| (x, next(x)))
+    })
+}
+
+/// ∫ₐᵇ (x̄, ȳ, z̄) dλ of the piecewise-linear CMFs, exactly (nm).
+pub fn cmf_integral(a_nm: f64, b_nm: f64) -> DVec3 {
+    // The trapezoid rule is exact on each linear piece.
+    cmf_pieces(a_nm, b_nm)
+        .map(|(x, y)| 0.5 * (cmf(x) + cmf(y)) * (y - x))
+        .sum()
 }
 
 /// Absolute XYZ (Y in cd/m²) of a continuous spectrum `radiance(λ)` in W·m⁻²·sr⁻¹·nm⁻¹: 683 · Σ L x̄ Δλ over
@@ -135,12 +137,7 @@ pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
         let inv = from_rows(&rows).inverse();
         // ∫ xᵖ (x̄, ȳ, z̄) dλ over the bin, exactly: cubic pieces between the CMF's samples, 2-point Gauss.
         let mut moments = [DVec3::ZERO; 3];
-        let mut x0 = lo;
-        while x0 < hi {
-            let next = CMF_START_NM
-                + ((x0 - CMF_START_NM) / CMF_STEP_NM).floor() * CMF_STEP_NM
-                + CMF_STEP_NM;
-            let x1 = next.min(hi);
+        for (x0, x1) in cmf_pieces(lo, hi) {
             let (mid, half) = (0.5 * (x0 + x1), 0.5 * (x1 - x0));
             for s in [-1.0, 1.0] {
                 let l = mid + s * half / 3f64.sqrt();
@@ -150,7 +147,6 @@ pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
                 moments[1] += c * x;
                 moments[2] += c * x * x;
             }
-            x0 = x1;
         }
         for k in 0..3 {
             let coef = inv.col(k);
@@ -237,6 +233,17 @@ mod tests {
         assert!(prev_err / exact < 1e-3);
     }
 
+    /// ∫ f (x̄, ȳ, z̄) dλ over 400–700 nm by the midpoint rule at 0.01 nm.
+    fn over_400_700(f: &dyn Fn(f64) -> f64) -> DVec3 {
+        let steps = 30_000;
+        (0..steps)
+            .map(|k| {
+                let l = 400.0 + (k as f64 + 0.5) * 300.0 / steps as f64;
+                cmf(l) * f(l) * (300.0 / steps as f64)
+            })
+            .sum()
+    }
+
     #[test]
     fn rebuilt_weights_follow_a_smooth_spectrum() {
         // A blackbody binned over 400–700 nm (bin means by fine quadrature), projected to XYZ, against the
@@ -248,13 +255,7 @@ mod tests {
             let g = SpectralGrid::new(400.0, 700.0, count).unwrap();
             let f = |l: f64| spectral_radiance(t, l);
             let means = g.bin_average(f);
-            let mut exact = DVec3::ZERO;
-            let steps = 30_000;
-            for k in 0..steps {
-                let l = 400.0 + (k as f64 + 0.5) * 300.0 / steps as f64;
-                exact += cmf(l) * f(l) * (300.0 / steps as f64);
-            }
-            exact *= LUMINOUS_EFFICACY;
+            let exact = LUMINOUS_EFFICACY * over_400_700(&f);
             let rel = |w: &[DVec3]| {
                 ((binned_to_xyz(&means, w) - exact) / exact)
                     .abs()
@@ -269,11 +270,7 @@ mod tests {
         // A quadratic spectrum: exact to rounding.
         let g = SpectralGrid::new(400.0, 700.0, 30).unwrap();
         let q = |l: f64| 1.0 + 0.01 * (l - 500.0) + 3e-5 * (l - 550.0).powi(2);
-        let (mut exact, steps) = (DVec3::ZERO, 30_000);
-        for k in 0..steps {
-            let l = 400.0 + (k as f64 + 0.5) * 300.0 / steps as f64;
-            exact += cmf(l) * q(l) * (300.0 / steps as f64);
-        }
+        let exact = over_400_700(&q);
         let got = binned_to_xyz(&g.bin_average(q), &bin_weights(&g)) / LUMINOUS_EFFICACY;
         assert!(
             ((got - exact) / exact).abs().max_element() < 1e-6,

@@ -1968,26 +1968,27 @@ mod tests {
                 let fast = basis.emit_planck(&nodes, &kap, t);
                 let reference = grid.bin_average_split(f, &kinks, 64);
                 let four = grid.bin_average(f);
+                assert_bins_agree(&fast, &reference, &format!("T {t}"));
                 for c in 0..30 {
-                    let e = (fast[c] / reference[c] - 1.0).abs();
-                    assert!(
-                        e < 1e-12,
-                        "T {t}, bin {c}: {} vs {} ({e:e})",
-                        fast[c],
-                        reference[c]
-                    );
                     four_worst = four_worst.max((four[c] / reference[c] - 1.0).abs());
                 }
                 let a = basis.absorb_split(&|l| optics.kappa(l, 1.0, 1.39), &kinks);
                 let a_ref = grid.bin_average_split(|l| optics.kappa(l, 1.0, 1.39), &kinks, 64);
-                for c in 0..30 {
-                    assert!((a[c] / a_ref[c] - 1.0).abs() < 1e-12, "κ bin {c}");
-                }
+                assert_bins_agree(&a, &a_ref, "κ");
             }
             assert!(
                 four_worst > 1e-6,
                 "four panels across the kink: {four_worst:e}"
             );
+        }
+    }
+
+    /// Every channel of `got` within 1e-12 (relative) of `want`, the same number of channels.
+    fn assert_bins_agree(got: &[f64], want: &[f64], what: &str) {
+        assert_eq!(got.len(), want.len(), "{what}");
+        for (c, (g, w)) in got.iter().zip(want).enumerate() {
+            let e = (g / w - 1.0).abs();
+            assert!(e < 1e-12, "{what}, bin {c}: {g} vs {w} ({e:e})");
         }
     }
 
@@ -2011,15 +2012,7 @@ mod tests {
             for t in [300.0, 1000.0, 1800.0, 3000.0, 1e5] {
                 let fast = basis.emit_planck(&nodes, &kap, t);
                 let slow = basis.emit(&|l| optics.kappa(l, 1.0, 1.39) * spectral_radiance(t, l));
-                for c in 0..bins {
-                    let e = (fast[c] / slow[c] - 1.0).abs();
-                    assert!(
-                        e < 1e-12,
-                        "{bins} bins, T {t}, bin {c}: {} vs {} ({e:e})",
-                        fast[c],
-                        slow[c]
-                    );
-                }
+                assert_bins_agree(&fast, &slow, &format!("{bins} bins, T {t}"));
             }
         }
     }
@@ -2191,6 +2184,16 @@ mod tests {
     /// A trilinear 40×36×44 grid over [0, 2] × [0, 1.8] × [0, 2.2] with a hot blob in one corner and a slab on
     /// the far x side (so many bricks are empty) and `extra` parameters (pbrt mode adds a Lescale grid); `species` adds a sodium grid
     /// (files: species grids are not inline parameters).
+    /// The blob volume with `extra` parameters in the lanes' precision (the default) and in f64.
+    fn blob_pair(extra: &[Param], species: bool) -> (FireVolume, FireVolume) {
+        let mut e64 = extra.to_vec();
+        e64.push(Param::string("precision", "f64"));
+        (
+            blob_volume(extra.to_vec(), species),
+            blob_volume(e64, species),
+        )
+    }
+
     fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
         let [nx, ny, nz] = [40usize, 36, 44];
         let (mut d, mut t, mut les, mut na) = (vec![], vec![], vec![], vec![]);
@@ -2329,11 +2332,8 @@ mod tests {
             ),
             (vec![Param::float("stepsize", 0.37)], true),
         ] {
-            let v = blob_volume(extra.clone(), species);
+            let (v, v64) = blob_pair(&extra, species);
             let lt = v.lanes.as_ref().expect("the blob marches in lanes");
-            let mut e64 = extra.clone();
-            e64.push(Param::string("precision", "f64"));
-            let v64 = blob_volume(e64, species);
             let c = v.channels();
             let (mut worst, mut lit) = (0f64, 0);
             for ray in &rays {
@@ -2442,11 +2442,8 @@ mod tests {
             ),
         ];
         for (extra, species, kernels) in cases {
-            let v = blob_volume(extra.clone(), species);
+            let (v, v64) = blob_pair(&extra, species);
             let lt = v.lanes.as_ref().expect("the blob marches in lanes");
-            let mut e64 = extra.clone();
-            e64.push(Param::string("precision", "f64"));
-            let v64 = blob_volume(e64, species);
             let c = v.channels();
             for (name, kernel) in kernels {
                 let mut lit = 0;
