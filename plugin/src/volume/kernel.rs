@@ -3,7 +3,7 @@
 //! The same steps at the same points as `integrate::march_steps` (eq. 3 of Pegoraro & Parker, a step exact for
 //! constant coefficients, evaluated at the step's midpoint), written for speed:
 //!
-//! - **sixteen samples at a time, in phases** (`BATCH`): the next sixteen steps outside empty bricks (their
+//! - **24 samples at a time, in phases** (`BATCH`): the next 24 steps outside empty bricks (their
 //!   midpoints; all at once when they are whole and before the next empty stretch), their cells and fractions (at once,
 //!   in vector registers), then their grid values, read together from the [`Lattice`] (density and temperature interleaved and padded: a
 //!   cell is four 16-byte reads under one range check, and the padding gives pbrt-v4's fade at the faces, so no
@@ -270,10 +270,10 @@ fn general(v: &FireVolume, p: glam::DVec3, b: usize, dt: &mut [[f32; 2]; BATCH],
 /// below it).
 const OUTSIDE: f32 = -1.0;
 
-/// Samples whose grid values are read before they are stepped through. (16 rather than 8: 17.2 → 14.0 ns per
-/// sample at 16 bins, 17.8 → 14.4 rgb, 21.8 → 18.3 at 30 bins — more reads in flight and half the per-batch
-/// bookkeeping; 32 measured the same as 16. docs/RESULTS.md, session 8.)
-const BATCH: usize = 16;
+/// Samples whose grid values are read before they are stepped through: more reads in flight, less per-batch
+/// bookkeeping per sample. Measured (docs/RESULTS.md, session 8): 8 → 16 took a sample from 17.2 to 14.0 ns at 16
+/// bins (rgb 17.8 → 14.4, 30 bins 21.8 → 18.3); 24 is a further 5–10 % below 16; 32 is slower than 24.
+const BATCH: usize = 24;
 
 /// A step's optical depth below which the thin step (no exponential) is taken.
 const THIN: f32 = 0.1;
