@@ -58,6 +58,17 @@ pub struct Segment {
 impl MajorantGrid {
     /// Builds the bricks of `brick`³ voxels (`brick` ≥ 1) over every channel of `ds`.
     pub fn build(ds: &Dataset, brick: usize) -> MajorantGrid {
+        MajorantGrid::with_ranges(ds, brick, vec![None; ds.channels().len()])
+    }
+
+    /// As [`MajorantGrid::build`], with the ranges of some channels already gathered (`known[c]`, in
+    /// [`brick_ranges`]'s layout — the march lattice gathers its grids' as it copies them); the rest are
+    /// computed here.
+    pub(crate) fn with_ranges(
+        ds: &Dataset,
+        brick: usize,
+        known: Vec<Option<Ranges>>,
+    ) -> MajorantGrid {
         let brick = brick.max(1);
         let dims = ds.dims();
         let counts = dims.map(|n| n.div_ceil(brick));
@@ -65,8 +76,12 @@ impl MajorantGrid {
         let nb = counts[0] * counts[1] * counts[2];
         // Per channel (in parallel), per brick: the range over the brick's voxels and the ring around it that
         // trilinear lookups inside it reach (and 0 where that reaches past the grid).
-        let per_channel = crate::dataset::par_map(ds.channels().iter().collect(), |ch| {
-            brick_ranges(ch.grid.data(), dims, brick)
+        let mut known = known;
+        known.resize(channels, None);
+        let work: Vec<_> = ds.channels().iter().zip(known).collect();
+        let per_channel = crate::dataset::par_map(work, |(ch, known)| match known {
+            Some(r) if r.len() == nb => r,
+            _ => brick_ranges(ch.grid.data(), dims, brick),
         });
         let mut ranges = vec![(0.0, 0.0); nb * channels];
         for (c, r) in per_channel.iter().enumerate() {
@@ -128,66 +143,162 @@ impl MajorantGrid {
     }
 }
 
+/// Per brick (x fastest), the (min, max) of one grid: [`brick_ranges`]'s layout.
+pub(crate) type Ranges = Vec<(f32, f32)>;
+
 /// The (min, max) of `g` (x fastest, `dims`) over each brick of `brick`³ voxels widened by one voxel on every side,
-/// with 0 taken in where the widened brick reaches past the grid, bricks x fastest. Separably — along x per row,
-/// then along y, then along z — so every voxel is read about once (a brick's own 10³ reads would read each
-/// about twice); min and max are exact, so the values are the brute force's (tested).
-pub(crate) fn brick_ranges(g: &[f32], dims: [usize; 3], brick: usize) -> Vec<(f32, f32)> {
-    let [nx, ny, nz] = dims;
-    let c = dims.map(|n| n.div_ceil(brick));
-    // The voxel range [lo, hi] of brick `b` along an axis of `n` voxels, and whether it reaches past the grid.
-    let span = |b: usize, n: usize| {
-        let lo = (b * brick) as i64 - 1;
-        let hi = ((b + 1) * brick) as i64;
+/// with 0 taken in where the widened brick reaches past the grid, bricks x fastest (see [`BrickRanges`]). Min and
+/// max are exact, so the values are the brute force's (tested).
+pub(crate) fn brick_ranges(g: &[f32], dims: [usize; 3], brick: usize) -> Ranges {
+    let mut acc = BrickRanges::new(dims, brick, 0..dims[2]);
+    for (z, slab) in g.chunks_exact(dims[0] * dims[1]).enumerate() {
+        acc.add_slab(z, slab);
+    }
+    acc.finish()
+}
+
+/// The bricks' ranges of one grid, gathered a z-slab at a time (so that a pass which reads the slabs anyway —
+/// the march lattice's build — gathers them without reading the grid again), separably: along y, row against
+/// row, into the slab's (y-brick, x) ranges; those along z into the (z-brick, y-brick, x) ranges of the
+/// z-bricks the slab belongs to; last, in [`BrickRanges::finish`], along x. The first two are elementwise over
+/// whole rows, which vectorises. Slabs may come in any order and from several accumulators, merged.
+pub(crate) struct BrickRanges {
+    dims: [usize; 3],
+    brick: usize,
+    /// Bricks per axis.
+    c: [usize; 3],
+    /// The z-bricks held: `bz0..bz0 + (zlo.len() / (c[1]·nx))`.
+    bz0: usize,
+    /// Per held z-brick, per y-brick, per x: min and max so far.
+    zlo: Vec<f32>,
+    zhi: Vec<f32>,
+    /// The current slab's per y-brick, per x range (scratch).
+    ylo: Vec<f32>,
+    yhi: Vec<f32>,
+}
+
+/// Elementwise running min of `lo` with `vlo` and max of `hi` with `vhi` (NaN skipped, as `f32::min` does).
+#[inline]
+fn fold_rows(lo: &mut [f32], hi: &mut [f32], vlo: &[f32], vhi: &[f32]) {
+    for (((l, h), &a), &b) in lo.iter_mut().zip(hi.iter_mut()).zip(vlo).zip(vhi) {
+        *l = if a < *l { a } else { *l };
+        *h = if b > *h { b } else { *h };
+    }
+}
+
+impl BrickRanges {
+    /// An accumulator for the slabs `zs` (the z-bricks they reach are the ones held).
+    pub(crate) fn new(dims: [usize; 3], brick: usize, zs: std::ops::Range<usize>) -> BrickRanges {
+        let brick = brick.max(1);
+        let c = dims.map(|n| n.div_ceil(brick));
+        let bz0 = zs.start.saturating_sub(1) / brick;
+        let bz1 = (zs.end / brick + 1).min(c[2]);
+        let n = bz1.saturating_sub(bz0) * c[1] * dims[0];
+        let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
+        BrickRanges {
+            dims,
+            brick,
+            c,
+            bz0,
+            zlo: vec![inf; n],
+            zhi: vec![ninf; n],
+            ylo: vec![inf; c[1] * dims[0]],
+            yhi: vec![ninf; c[1] * dims[0]],
+        }
+    }
+
+    /// The voxel range [lo, hi] of brick `b` along an axis of `n` voxels, and whether it reaches past the grid.
+    fn span(&self, b: usize, n: usize) -> (usize, usize, bool) {
+        let lo = (b * self.brick) as i64 - 1;
+        let hi = ((b + 1) * self.brick) as i64;
         let past = lo < 0 || hi >= n as i64;
         (lo.max(0) as usize, (hi.min(n as i64 - 1)) as usize, past)
-    };
-    let fold =
-        |(mn, mx): (f32, f32), v: f32| (if v < mn { v } else { mn }, if v > mx { v } else { mx });
-    let empty = (f32::INFINITY, f32::NEG_INFINITY);
-    // Along x: per (y, z) row and x-brick.
-    let mut rx = vec![empty; ny * nz * c[0]];
-    for (row, out) in g.chunks_exact(nx).zip(rx.chunks_exact_mut(c[0])) {
-        for (bx, o) in out.iter_mut().enumerate() {
-            let (a, b, _) = span(bx, nx);
-            *o = row[a..=b].iter().fold(empty, |r, &v| fold(r, v));
+    }
+
+    /// Slab `z` of the grid (its nx·ny values, x fastest), which must lie in the range given to `new`.
+    pub(crate) fn add_slab(&mut self, z: usize, slab: &[f32]) {
+        let [nx, ny, nz] = self.dims;
+        let n = self.c[1] * nx;
+        self.ylo.fill(f32::INFINITY);
+        self.yhi.fill(f32::NEG_INFINITY);
+        for by in 0..self.c[1] {
+            let (a, b, _) = self.span(by, ny);
+            let (lo, hi) = (
+                &mut self.ylo[by * nx..][..nx],
+                &mut self.yhi[by * nx..][..nx],
+            );
+            for row in slab[a * nx..(b + 1) * nx].chunks_exact(nx) {
+                fold_rows(lo, hi, row, row);
+            }
+        }
+        // The z-bricks whose widened range holds slab z: its own, and a neighbour when z is on a boundary.
+        let own = z / self.brick;
+        for bz in own.saturating_sub(1)..=(own + 1).min(self.c[2] - 1) {
+            let (a, b, _) = self.span(bz, nz);
+            let Some(k) = bz.checked_sub(self.bz0) else {
+                continue;
+            };
+            if (a..=b).contains(&z) && (k + 1) * n <= self.zlo.len() {
+                let at = k * n;
+                fold_rows(
+                    &mut self.zlo[at..][..n],
+                    &mut self.zhi[at..][..n],
+                    &self.ylo,
+                    &self.yhi,
+                );
+            }
         }
     }
-    // Along y: per z and (y-brick, x-brick).
-    let mut ry = vec![empty; nz * c[1] * c[0]];
-    for z in 0..nz {
-        for by in 0..c[1] {
-            let (a, b, _) = span(by, ny);
-            let out = &mut ry[(z * c[1] + by) * c[0]..][..c[0]];
-            for y in a..=b {
-                let src = &rx[(z * ny + y) * c[0]..][..c[0]];
-                for (o, &v) in out.iter_mut().zip(src) {
-                    *o = fold(fold(*o, v.0), v.1);
+
+    /// Takes in another accumulator's slabs (of the same grid).
+    pub(crate) fn merge(&mut self, other: &BrickRanges) {
+        let n = self.c[1] * self.dims[0];
+        let held = |r: &BrickRanges| r.bz0..r.bz0 + r.zlo.len() / n.max(1);
+        for bz in held(other) {
+            if let (Some(k), Some(ko)) = (bz.checked_sub(self.bz0), bz.checked_sub(other.bz0)) {
+                if (k + 1) * n <= self.zlo.len() {
+                    let (at, ao) = (k * n, ko * n);
+                    fold_rows(
+                        &mut self.zlo[at..][..n],
+                        &mut self.zhi[at..][..n],
+                        &other.zlo[ao..][..n],
+                        &other.zhi[ao..][..n],
+                    );
                 }
             }
         }
     }
-    // Along z, and 0 where the widened brick reaches past the grid on any axis.
-    let mut out = vec![empty; c[2] * c[1] * c[0]];
-    for bz in 0..c[2] {
-        let (a, b, past_z) = span(bz, nz);
-        for by in 0..c[1] {
-            let past_y = span(by, ny).2;
-            let dst = &mut out[(bz * c[1] + by) * c[0]..][..c[0]];
-            for (bx, o) in dst.iter_mut().enumerate() {
-                if past_z || past_y || span(bx, nx).2 {
-                    *o = (0.0, 0.0);
-                }
-            }
-            for z in a..=b {
-                let src = &ry[(z * c[1] + by) * c[0]..][..c[0]];
-                for (o, &v) in dst.iter_mut().zip(src) {
-                    *o = fold(fold(*o, v.0), v.1);
+
+    /// The bricks' (min, max), bricks x fastest: along x, and 0 where the widened brick reaches past the grid
+    /// on any axis. (An accumulator that holds every z-brick: made for all slabs, or merged into.)
+    pub(crate) fn finish(self) -> Ranges {
+        let [nx, ny, nz] = self.dims;
+        let c = self.c;
+        let mut out = vec![(f32::INFINITY, f32::NEG_INFINITY); c[2] * c[1] * c[0]];
+        for bz in 0..c[2] {
+            let past_z = self.span(bz, nz).2;
+            for by in 0..c[1] {
+                let past_y = self.span(by, ny).2;
+                let dst = &mut out[(bz * c[1] + by) * c[0]..][..c[0]];
+                let at = (bz.wrapping_sub(self.bz0) * c[1] + by) * nx;
+                let (Some(lo), Some(hi)) = (self.zlo.get(at..at + nx), self.zhi.get(at..at + nx))
+                else {
+                    continue;
+                };
+                for (bx, o) in dst.iter_mut().enumerate() {
+                    let (a, b, past_x) = self.span(bx, nx);
+                    if past_z || past_y || past_x {
+                        *o = (0.0, 0.0);
+                    }
+                    for x in a..=b {
+                        o.0 = if lo[x] < o.0 { lo[x] } else { o.0 };
+                        o.1 = if hi[x] > o.1 { hi[x] } else { o.1 };
+                    }
                 }
             }
         }
+        out
     }
-    out
 }
 
 /// The cells of `brick`³ voxels (the last one per axis may be partial) that the ray o + t·d, t ∈ [t0, t1],
@@ -339,7 +450,8 @@ mod tests {
 
     #[test]
     fn separable_brick_ranges_equal_the_brute_force() {
-        // Each brick's 10³ neighbourhood read directly (the build before session 5) against the separable passes:
+        // Each brick's 10³ neighbourhood read directly (the build before session 5) against the separable passes
+        // (whole, and split between accumulators):
         // odd sizes, a brick larger than the grid, 1-voxel and 1 × 1 × N grids, zeros and negative values.
         let mut rng = crate::rng::Rng::new(5);
         for (dims, brick) in [
@@ -393,6 +505,20 @@ mod tests {
                 brute,
                 "{dims:?}, brick {brick}"
             );
+            // The slabs split between accumulators at every cut (as the lattice's threads do), then merged.
+            let slab = dims[0] * dims[1];
+            for cut in 0..=dims[2] {
+                let mut a = BrickRanges::new(dims, brick, 0..cut);
+                let mut b = BrickRanges::new(dims, brick, cut..dims[2]);
+                for z in (0..dims[2]).rev() {
+                    let acc = if z < cut { &mut a } else { &mut b };
+                    acc.add_slab(z, &g[z * slab..][..slab]);
+                }
+                let mut all = BrickRanges::new(dims, brick, 0..dims[2]);
+                all.merge(&b);
+                all.merge(&a);
+                assert_eq!(all.finish(), brute, "{dims:?}, brick {brick}, cut {cut}");
+            }
         }
     }
 

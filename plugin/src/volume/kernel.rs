@@ -792,7 +792,7 @@ mod tests {
             Grid::new(dims, v).expect("dims match")
         };
         let (d, t, les) = (grid(), grid(), grid());
-        let lat = Lattice::build(&d, Some(&t), &[&les]).expect("a small lattice");
+        let (lat, _) = Lattice::build(&d, Some(&t), &[&les], 4).expect("a small lattice");
         let lay = Layout::new(&lat, true);
         let mut rng = crate::rng::Rng::new(12);
         let (mut worst, mut checked, mut faces) = (0f64, 0, 0);
@@ -839,6 +839,44 @@ mod tests {
             worst > 0.0,
             "the two orders of lerps cannot agree to the bit everywhere"
         );
+    }
+
+    #[test]
+    fn the_lattice_gathers_each_grids_brick_ranges() {
+        // The ranges gathered slab by slab as the lattice is copied (split over the threads) are the majorant's.
+        let dims = [13, 9, 37];
+        let n = dims[0] * dims[1] * dims[2];
+        let mut rng = crate::rng::Rng::new(21);
+        let mut grid = || {
+            let v: Vec<f32> = (0..n)
+                .map(|_| {
+                    let u = rng.next_f64() as f32;
+                    if u < 0.4 {
+                        0.0
+                    } else {
+                        u - 0.45
+                    }
+                })
+                .collect();
+            Grid::new(dims, v).expect("dims match")
+        };
+        let (d, t, e1, e2) = (grid(), grid(), grid(), grid());
+        for brick in [1, 3, 4, 8, 64] {
+            let (_, ranges) = Lattice::build(&d, Some(&t), &[&e1, &e2], brick).expect("small");
+            assert_eq!(ranges.len(), 4);
+            for (r, g) in ranges.iter().zip([&d, &t, &e1, &e2]) {
+                assert_eq!(
+                    r,
+                    &crate::majorant::brick_ranges(g.data(), dims, brick),
+                    "brick {brick}"
+                );
+            }
+            let (_, only_d) = Lattice::build(&d, None, &[], brick).expect("small");
+            assert_eq!(
+                only_d,
+                vec![crate::majorant::brick_ranges(d.data(), dims, brick)]
+            );
+        }
     }
 
     #[test]

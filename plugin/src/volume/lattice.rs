@@ -15,6 +15,7 @@
 //! the f32 march of a trilinear dataset; 8 bytes per padded voxel, plus 4 per further grid.
 
 use crate::grid::Grid;
+use crate::majorant::{BrickRanges, Ranges};
 
 /// The padded, interleaved copy of the grids a march samples.
 #[derive(Debug, Clone)]
@@ -30,11 +31,15 @@ pub(crate) struct Lattice {
 impl Lattice {
     /// The lattice of `density`, `temperature` (if any) and the `extra` grids, all on one lattice; `None` when
     /// it would hold 2³² floats or more (the kernel's offsets are 32-bit; such a volume marches without it).
+    /// With it, each grid's majorant brick ranges for bricks of `brick`³ voxels (`majorant::brick_ranges`'s
+    /// values, in the order density, temperature, extra), gathered from the slabs as they are copied — while
+    /// they are still in cache — rather than by another pass over the grids.
     pub(crate) fn build(
         density: &Grid,
         temperature: Option<&Grid>,
         extra: &[&Grid],
-    ) -> Option<Lattice> {
+        brick: usize,
+    ) -> Option<(Lattice, Vec<Ranges>)> {
         let [nx, ny, nz] = density.dims();
         let dims = Lattice::padded(density.dims())?;
         let slab = dims[0] * dims[1];
@@ -49,12 +54,23 @@ impl Lattice {
         let per = nz.div_ceil(threads).max(1);
         let d = density.data();
         let t = temperature.map(|g| g.data());
+        // The grids whose brick ranges are gathered, in the order returned.
+        let grids: Vec<&[f32]> = std::iter::once(d)
+            .chain(t)
+            .chain(extra.iter().map(|g| g.data()))
+            .collect();
+        let grids = &grids;
+        let mut ranges: Vec<BrickRanges> = grids
+            .iter()
+            .map(|_| BrickRanges::new([nx, ny, nz], brick, 0..nz))
+            .collect();
         std::thread::scope(|s| {
             // Each thread takes whole padded slabs [1 + k·per, 1 + (k+1)·per).
             let mut rest: &mut [f32] = &mut pairs[2 * slab..];
             let mut rest_extra: Vec<&mut [f32]> =
                 extra_v.iter_mut().map(|v| &mut v[slab..]).collect();
             let mut z0 = 0;
+            let mut handles = Vec::new();
             while z0 < nz {
                 let n = per.min(nz - z0);
                 let (mine, tail) = rest.split_at_mut(2 * slab * n);
@@ -67,7 +83,11 @@ impl Lattice {
                     tails.push(b);
                 }
                 rest_extra = tails;
-                s.spawn(move || {
+                handles.push(s.spawn(move || {
+                    let mut acc: Vec<BrickRanges> = grids
+                        .iter()
+                        .map(|_| BrickRanges::new([nx, ny, nz], brick, z0..z0 + n))
+                        .collect();
                     for z in 0..n {
                         for y in 0..ny {
                             let src = nx * (y + ny * (z0 + z));
@@ -94,16 +114,31 @@ impl Lattice {
                                 dst_g[dst..dst + nx].copy_from_slice(&g.data()[src..src + nx]);
                             }
                         }
+                        // The slab's brick ranges, from the values just read.
+                        let at = nx * ny * (z0 + z);
+                        for (a, g) in acc.iter_mut().zip(grids) {
+                            a.add_slab(z0 + z, &g[at..at + nx * ny]);
+                        }
                     }
-                });
+                    acc
+                }));
                 z0 += n;
             }
+            for h in handles {
+                let part = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+                for (r, p) in ranges.iter_mut().zip(&part) {
+                    r.merge(p);
+                }
+            }
         });
-        Some(Lattice {
-            dims,
-            pairs,
-            extra: extra_v,
-        })
+        Some((
+            Lattice {
+                dims,
+                pairs,
+                extra: extra_v,
+            },
+            ranges.into_iter().map(BrickRanges::finish).collect(),
+        ))
     }
 
     /// The padded dims of a dataset of `dims`, if its `[d, T]` pairs stay below 2³² floats.

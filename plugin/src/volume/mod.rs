@@ -861,9 +861,43 @@ impl FireVolume {
         }
 
         // ---- majorants
-        let t1 = Instant::now();
         let brick = r.int("brick")? as usize;
-        let majorant = MajorantGrid::build(&ds, brick);
+        let precision = r.string("precision")?;
+        let integrator =
+            Integrator::from_name(&r.string("integrator")?).unwrap_or(Integrator::March);
+        // The march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below only
+        // if the lanes are built): made first, because it gathers its grids' brick ranges as it copies them.
+        let mut lattice = None;
+        let mut known = vec![None; ds.channels().len()];
+        if precision == "f32"
+            && integrator == Integrator::March
+            && ds.interpolation() == crate::grid::Interpolation::Trilinear
+        {
+            let t4 = Instant::now();
+            let ch = ds.channels();
+            let extra: Vec<usize> = lescale
+                .iter()
+                .copied()
+                .chain(species.iter().map(|sp| sp.ch))
+                .collect();
+            let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
+            if let Some((lat, ranges)) = lattice::Lattice::build(
+                &ch[density].grid,
+                temperature.map(|k| &ch[k].grid),
+                &grids,
+                brick,
+            ) {
+                let order = std::iter::once(density).chain(temperature).chain(extra);
+                for (k, r) in order.zip(ranges) {
+                    if known[k].is_none() {
+                        known[k] = Some(r);
+                    }
+                }
+                lattice = Some((lat, t4.elapsed().as_secs_f64()));
+            }
+        }
+        let t1 = Instant::now();
+        let majorant = MajorantGrid::with_ranges(&ds, brick, known);
         let counts = majorant.counts();
         let nb = counts[0] * counts[1] * counts[2];
         let a_max = a_t.as_ref().map(|tab| RangeMax::new(tab, c));
@@ -908,8 +942,6 @@ impl FireVolume {
         });
 
         let stepsize = r.float("stepsize")?;
-        let integrator =
-            Integrator::from_name(&r.string("integrator")?).unwrap_or(Integrator::March);
         let cutoff = r.float("cutoff")?;
         let g = r.float("g")?;
         let step = stepsize * ds.voxel_size().min_element();
@@ -976,7 +1008,6 @@ impl FireVolume {
             }
             None
         };
-        let precision = r.string("precision")?;
         r.finish()?;
         // The largest value a lookup can return, from the bricks' ranges (for the lane march's range check).
         let max = |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
@@ -1029,28 +1060,14 @@ impl FireVolume {
                     bytes: lt.bytes(),
                     seconds: t3.elapsed().as_secs_f64(),
                 });
-                if vol.ds.interpolation() == crate::grid::Interpolation::Trilinear {
-                    let t4 = Instant::now();
-                    let ch = vol.ds.channels();
-                    let extra: Vec<&crate::grid::Grid> = vol
-                        .lescale
-                        .iter()
-                        .chain(vol.species.iter().map(|sp| &sp.ch))
-                        .map(|&k| &ch[k].grid)
-                        .collect();
-                    let lat = lattice::Lattice::build(
-                        &ch[vol.density].grid,
-                        vol.temperature.map(|k| &ch[k].grid),
-                        &extra,
-                    );
-                    if let Some(lat) = &lat {
-                        vol.tables.push(TableReport {
-                            name: "march lattice (grids interleaved and padded)".into(),
-                            bytes: lat.bytes(),
-                            seconds: t4.elapsed().as_secs_f64(),
-                        });
-                    }
-                    vol.lattice = lat;
+                if let Some((lat, seconds)) = lattice {
+                    vol.tables.push(TableReport {
+                        name: "march lattice (grids interleaved and padded; their brick ranges)"
+                            .into(),
+                        bytes: lat.bytes(),
+                        seconds,
+                    });
+                    vol.lattice = Some(lat);
                 }
             }
         }
