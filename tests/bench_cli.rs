@@ -99,7 +99,7 @@ fn perf_and_components_run_small() {
         "--reference-step",
         "0.25",
     ]));
-    assert_eq!(text.matches("| march ½ voxel").count(), 5, "{text}");
+    assert_eq!(text.matches("| march ½ voxel").count(), 6, "{text}");
     // The f32 lanes and the f64 march make the same image to f32 rounding: equal errors against the reference.
     let err = |row: &str| -> f64 {
         let line = text.lines().find(|l| l.starts_with(row)).unwrap();
@@ -112,17 +112,21 @@ fn perf_and_components_run_small() {
             .unwrap()
     };
     let (lanes, f64_) = (
-        err("| march ½ voxel, spectral (30 bins) |"),
-        err("| march ½ voxel, spectral (30 bins), f64"),
+        err("| march ½ voxel, spectral (30 bins, 400–700 nm: the default) |"),
+        err("| march ½ voxel, spectral (30 bins, 400–700 nm), f64"),
     );
-    // Against the reference converged in the bins too, 16 bins are further off than 30 (the campfire at 16²:
-    // 1.28e-3 against 7.24e-4), and the reference line splits the 30-bin error into its two parts.
-    let sixteen = err("| march ½ voxel, spectral (16 bins) |");
+    // Against the reference converged in the step, the bins and the range (380–780 nm), the default range leaves
+    // out the fire's red tail past 700 nm (the campfire at 16²: 4.37e-3); 32 bins over 400–780 nm are 7.80e-4
+    // off, 16 bins 1.92e-3. The reference line gives the step's and the spectrum's parts.
+    let (wide32, wide16) = (
+        err("| march ½ voxel, spectral (32 bins, 400–780 nm) |"),
+        err("| march ½ voxel, spectral (16 bins, 400–780 nm) |"),
+    );
     assert!(
-        sixteen > 1.2 * lanes && sixteen < 2e-3,
-        "{sixteen} vs {lanes}\n{text}"
+        lanes > 3e-3 && wide32 < 0.25 * lanes && wide16 > 1.5 * wide32 && wide16 < 2e-3,
+        "{lanes} {wide32} {wide16}\n{text}"
     );
-    assert!(text.contains("the 30 bins alone 3.2"), "{text}");
+    assert!(text.contains("the spectrum alone 4.3"), "{text}");
     // (Printed to three digits: equal up to one unit of the last, as f32 rounding moves the error by ~1e-7.)
     assert!(
         lanes.is_finite() && (lanes - f64_).abs() <= 0.011 * f64_.abs(),

@@ -44,6 +44,7 @@ fn main() {
         ("rgb f32", "rgb", "f32", 3),
         ("spectral16 f64", "spectral", "f64", 16),
         ("spectral16 f32", "spectral", "f32", 16),
+        ("spectral24 f32", "spectral", "f32", 24),
     ]
     .into_iter()
     .filter(|c| c.0.contains(only.as_str()))

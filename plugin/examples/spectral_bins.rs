@@ -57,11 +57,16 @@ fn main() {
         .get(3)
         .map(|s| s.split(',').filter_map(|b| b.parse().ok()).collect())
         .unwrap_or_else(|| vec![12, 16, 20, 24, 30, 240]);
+    let range = args
+        .get(4)
+        .and_then(|s| s.split_once('-'))
+        .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+        .unwrap_or((400.0, 700.0));
     let runs: Vec<(usize, Vec<Vec<f64>>)> = bins
         .iter()
-        .map(|&n| (n, render(&volume(&file, n, step, (400.0, 700.0)), size)))
+        .map(|&n| (n, render(&volume(&file, n, step, range), size)))
         .collect();
-    let grid = |n: usize| SpectralGrid::new(400.0, 700.0, n).unwrap_or_else(|e| panic!("{e}"));
+    let grid = |n: usize| SpectralGrid::new(range.0, range.1, n).unwrap_or_else(|e| panic!("{e}"));
     let Some((n_ref, img_ref)) = runs.last() else {
         return;
     };
@@ -84,7 +89,7 @@ fn main() {
         println!("| {n} | {p:.3e} | {pb:+.3e} | {r:.3e} | {rb:+.3e} |");
     }
     // The range: the reference's bin width over 380–780 nm.
-    let width = 300.0 / *n_ref as f64;
+    let width = (range.1 - range.0) / *n_ref as f64;
     let n_wide = (400.0 / width).round() as usize;
     let wide = volume(&file, n_wide, step, (380.0, 780.0));
     let w = bin_weights(&SpectralGrid::new(380.0, 780.0, n_wide).unwrap_or_else(|e| panic!("{e}")));
@@ -92,7 +97,9 @@ fn main() {
     let se: f64 = y.iter().zip(&reference).map(|(a, b)| (a - b).powi(2)).sum();
     let norm_wide: f64 = y.iter().map(|v| v * v).sum();
     println!(
-        "\n400–700 nm against 380–780 nm ({} bins): rel. RMSE {:.3e}, luminance {:+.3e}",
+        "\n{}–{} nm against 380–780 nm ({} bins): rel. RMSE {:.3e}, luminance {:+.3e}",
+        range.0,
+        range.1,
         n_wide,
         (se / norm_wide).sqrt(),
         total / y.iter().sum::<f64>() - 1.0
