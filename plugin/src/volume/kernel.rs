@@ -780,17 +780,20 @@ mod tests {
     use super::*;
     use crate::grid::{Grid, Interpolation, Stencil};
 
+    /// A grid of `dims` whose values are `f` of uniform numbers in [0, 1).
+    fn random_grid(dims: [usize; 3], rng: &mut crate::rng::Rng, f: impl Fn(f32) -> f32) -> Grid {
+        let n = dims[0] * dims[1] * dims[2];
+        let v: Vec<f32> = (0..n).map(|_| f(rng.next_f64() as f32)).collect();
+        Grid::new(dims, v).expect("dims match")
+    }
+
     #[test]
     fn lattice_reads_equal_the_grid_lookup_up_to_and_beyond_the_faces() {
         // Data non-zero up to the faces, so that pbrt-v4's fade (half the edge sample on a face, zero half a
         // voxel out, continued to the next voxel centre by nanovdb's margin) is what the zero padding must give.
         let dims = [5, 4, 3];
-        let n = dims[0] * dims[1] * dims[2];
         let mut rng = crate::rng::Rng::new(11);
-        let mut grid = || {
-            let v: Vec<f32> = (0..n).map(|_| 0.5 + rng.next_f64() as f32).collect();
-            Grid::new(dims, v).expect("dims match")
-        };
+        let mut grid = || random_grid(dims, &mut rng, |u| 0.5 + u);
         let (d, t, les) = (grid(), grid(), grid());
         let (lat, _) = Lattice::build(&d, Some(&t), &[&les], 4).expect("a small lattice");
         let lay = Layout::new(&lat, true);
@@ -845,21 +848,8 @@ mod tests {
     fn the_lattice_gathers_each_grids_brick_ranges() {
         // The ranges gathered slab by slab as the lattice is copied (split over the threads) are the majorant's.
         let dims = [13, 9, 37];
-        let n = dims[0] * dims[1] * dims[2];
         let mut rng = crate::rng::Rng::new(21);
-        let mut grid = || {
-            let v: Vec<f32> = (0..n)
-                .map(|_| {
-                    let u = rng.next_f64() as f32;
-                    if u < 0.4 {
-                        0.0
-                    } else {
-                        u - 0.45
-                    }
-                })
-                .collect();
-            Grid::new(dims, v).expect("dims match")
-        };
+        let mut grid = || random_grid(dims, &mut rng, |u| if u < 0.4 { 0.0 } else { u - 0.45 });
         let (d, t, e1, e2) = (grid(), grid(), grid(), grid());
         for brick in [1, 3, 4, 8, 64] {
             let (_, ranges) = Lattice::build(&d, Some(&t), &[&e1, &e2], brick).expect("small");
