@@ -67,7 +67,7 @@ impl MajorantGrid {
     pub(crate) fn with_ranges(
         ds: &Dataset,
         brick: usize,
-        known: Vec<Option<Ranges>>,
+        mut known: Vec<Option<Ranges>>,
     ) -> MajorantGrid {
         let brick = brick.max(1);
         let dims = ds.dims();
@@ -76,7 +76,6 @@ impl MajorantGrid {
         let nb = counts[0] * counts[1] * counts[2];
         // Per channel (in parallel), per brick: the range over the brick's voxels and the ring around it that
         // trilinear lookups inside it reach (and 0 where that reaches past the grid).
-        let mut known = known;
         known.resize(channels, None);
         let work: Vec<_> = ds.channels().iter().zip(known).collect();
         let per_channel = crate::dataset::par_map(work, |(ch, known)| match known {
