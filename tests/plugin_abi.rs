@@ -1,8 +1,9 @@
 //! End-to-end through the C ABI: load the **built** plugin library (not the rlib) with the loader, create fire
-//! volumes, integrate from four threads at once, and check errors, panics and lifetimes.
+//! volumes, integrate from four threads at once, and check errors and lifetimes (that a panic inside the plugin
+//! comes back as a status is the plugin's own test, `export::tests`: test-only code never enters the shipped build).
 //!
 //! Declared as a test of `firemedium-loader`, whose dev-dependency on the plugin makes Cargo build the plugin's
-//! cdylib (with the test-only `fault-injection` feature) into the same target directory.
+//! cdylib (the shipped build) into the same target directory.
 
 use firemedium_loader::{library_file_name, Error, Param, Plugin, Ray, Value};
 use std::path::PathBuf;
@@ -202,45 +203,6 @@ fn errors_come_back_typed() {
         v.integrate(&rays(2), &mut small, None, None),
         Err(Error::Buffer(_))
     ));
-}
-
-#[test]
-fn a_panic_inside_the_plugin_is_a_status_and_the_host_lives_on() {
-    let p = plugin();
-    match p.create_volume(
-        &[
-            fire_params(),
-            vec![Param::string("faultinjection", "create")],
-        ]
-        .concat(),
-    ) {
-        Err(Error::Status { code, message }) => {
-            assert_eq!(code, firemedium_abi::FM_PANIC);
-            assert!(
-                message.contains("panic") && message.contains("fault injection"),
-                "{message}"
-            );
-        }
-        other => panic!("expected FM_PANIC, got {other:?}"),
-    }
-    let v = p
-        .create_volume(
-            &[
-                fire_params(),
-                vec![Param::string("faultinjection", "integrate")],
-            ]
-            .concat(),
-        )
-        .unwrap();
-    let c = v.info().channels as usize;
-    let mut out = vec![0f32; c];
-    match v.integrate(&rays(1), &mut out, None, None) {
-        Err(Error::Status { code, .. }) => assert_eq!(code, firemedium_abi::FM_PANIC),
-        other => panic!("expected FM_PANIC, got {other:?}"),
-    }
-    // The plugin still works afterwards.
-    let ok = p.create_volume(&fire_params()).unwrap();
-    ok.integrate(&rays(1), &mut out, None, None).unwrap();
 }
 
 #[test]

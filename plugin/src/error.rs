@@ -101,6 +101,24 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+impl From<firemedium_core::Error> for Error {
+    fn from(e: firemedium_core::Error) -> Self {
+        match e {
+            firemedium_core::Error::InvalidParameter {
+                component,
+                name,
+                value,
+                expected,
+            } => Error::InvalidParameter {
+                component,
+                name,
+                value,
+                expected,
+            },
+        }
+    }
+}
+
 impl Error {
     /// A format error at `at` in `file`.
     pub(crate) fn format(

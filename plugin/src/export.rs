@@ -790,3 +790,108 @@ static API: FmApi = FmApi {
 pub extern "C" fn firemedium_plugin_entry() -> *const FmApi {
     &API
 }
+
+#[cfg(test)]
+mod tests {
+    //! The panic guard, through the same `extern "C"` table a host gets. The `faultinjection` parameter that
+    //! panics exists only in this crate's unit-test build (`cfg(test)`), never in the shipped library.
+    use super::*;
+
+    fn param(name: &CStr, ty: u32, count: u32, values: *const std::ffi::c_void) -> FmParam {
+        FmParam {
+            name: name.as_ptr(),
+            ty,
+            count,
+            values,
+        }
+    }
+
+    /// Creates a 2³ soot slab at 1500 K through the table, with `fault` as its fault-injection point.
+    fn create(api: &FmApi, fault: &CStr) -> (FmStatus, *mut FmVolume) {
+        let d = [1.0f64; 8];
+        let t = [1500.0f64; 8];
+        let n = [2i64];
+        let fault_ptr = [fault.as_ptr()];
+        let list = [
+            param(c"density", FM_TYPE_FLOAT, 8, d.as_ptr().cast()),
+            param(c"temperature", FM_TYPE_FLOAT, 8, t.as_ptr().cast()),
+            param(c"nx", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(c"ny", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(c"nz", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(
+                c"faultinjection",
+                FM_TYPE_STRING,
+                1,
+                fault_ptr.as_ptr().cast(),
+            ),
+        ];
+        let mut out = std::ptr::null_mut();
+        // SAFETY: every parameter points at live values of its type and count; `out` is writable.
+        let status = unsafe { (api.volume_create)(list.as_ptr(), list.len(), &mut out) };
+        (status, out)
+    }
+
+    fn last(api: &FmApi) -> String {
+        let mut buf = vec![0 as c_char; 512];
+        // SAFETY: the buffer holds `buf.len()` chars.
+        unsafe { (api.last_error)(buf.as_mut_ptr(), buf.len()) };
+        // SAFETY: last_error NUL-terminates within the capacity.
+        unsafe { CStr::from_ptr(buf.as_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn a_panic_inside_the_plugin_is_a_status_and_the_host_lives_on() {
+        // SAFETY: the entry returns a pointer to the static table.
+        let api = unsafe { &*firemedium_plugin_entry() };
+        let (status, v) = create(api, c"create");
+        assert_eq!(status, FM_PANIC);
+        assert!(v.is_null());
+        let msg = last(api);
+        assert!(
+            msg.contains("panic") && msg.contains("fault injection"),
+            "{msg}"
+        );
+
+        let (status, v) = create(api, c"integrate");
+        assert_eq!(status, FM_OK, "{}", last(api));
+        let ray = FmRay {
+            origin: [-0.5, 0.5, 0.5],
+            direction: [1.0, 0.0, 0.0],
+            tmin: 0.0,
+            tmax: 3.0,
+            seed: 1,
+        };
+        let mut info = FmVolumeInfo::default();
+        // SAFETY: `v` is a live volume, `info` writable.
+        assert_eq!(unsafe { (api.volume_info)(v, &mut info) }, FM_OK);
+        let mut l = vec![0f32; info.channels as usize];
+        assert_eq!(integrate_one(api, v, &ray, &mut l), FM_PANIC);
+        assert!(last(api).contains("fault injection"));
+        // SAFETY: `v` came from volume_create and is destroyed once.
+        unsafe { (api.volume_destroy)(v) };
+
+        // The plugin still works afterwards: the same slab without the fault emits.
+        let (status, v) = create(api, c"");
+        assert_eq!(status, FM_OK, "{}", last(api));
+        assert_eq!(integrate_one(api, v, &ray, &mut l), FM_OK);
+        assert!(l.iter().any(|&x| x > 0.0), "{l:?}");
+        // SAFETY: as above.
+        unsafe { (api.volume_destroy)(v) };
+    }
+
+    fn integrate_one(api: &FmApi, v: *mut FmVolume, ray: &FmRay, l: &mut [f32]) -> FmStatus {
+        // SAFETY: one ray, `l` holds the volume's channels, optional outputs null.
+        unsafe {
+            (api.volume_integrate)(
+                v,
+                ray,
+                1,
+                l.as_mut_ptr(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            )
+        }
+    }
+}

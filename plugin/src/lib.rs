@@ -20,10 +20,10 @@
 //! Invariants: physics modules are pure (no I/O, no `unsafe`, no `Result` in per-sample code); SI units inside,
 //! wavelengths in nm at the API; every public quantity documents its unit.
 
-pub mod blackbody;
-pub mod ciddor;
-pub mod cie;
-pub mod constants;
+pub use firemedium_core::{
+    blackbody, ciddor, cie, constants, quadrature, rng, soot, species, spectrum,
+};
+
 pub mod dataset;
 pub mod error;
 pub mod export;
@@ -31,12 +31,7 @@ pub mod grid;
 pub mod light;
 pub mod majorant;
 pub mod params;
-pub mod quadrature;
 pub mod refraction;
-pub mod rng;
-pub mod soot;
-pub mod species;
-pub mod spectrum;
 pub mod volume;
 
 pub use error::Error;

@@ -31,7 +31,7 @@ fn luminance(p: [f32; 3]) -> f64 {
 
 /// The pixels whose centre and four corners all see a diffuse surface first: no fire, no mirror or coating
 /// reflecting it, inside the pixel's footprint.
-pub fn surface_mask(sc: &scene::Scene, rng: &mut firemedium_plugin::rng::Rng) -> Vec<bool> {
+pub fn surface_mask(sc: &scene::Scene, rng: &mut firemedium_core::rng::Rng) -> Vec<bool> {
     let (w, h) = sc.res;
     (0..w * h)
         .map(|i| {
@@ -76,7 +76,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
         }
     };
     check(&reference, &a.reference)?;
-    let mut rng = firemedium_plugin::rng::Rng::new(0);
+    let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&sc, &mut rng);
     let count = mask.iter().filter(|&&m| m).count();
     if count == 0 {

@@ -28,8 +28,8 @@
 //! Not modelled (documented): the back-traced warping of blobs for rendering (§4; the kernels are splatted
 //! straight), fuel spread by conduction, oxygen depletion.
 
-use firemedium_plugin::constants::STEFAN_BOLTZMANN as SIGMA;
-use firemedium_plugin::rng::Rng;
+use firemedium_core::constants::STEFAN_BOLTZMANN as SIGMA;
+use firemedium_core::rng::Rng;
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -8,7 +8,7 @@
 //! `blackbody_srgb_linear` {r, g, b} (linear sRGB, D65, same scale as XYZ).
 
 use clap::Args;
-use firemedium_plugin::{blackbody, ciddor, cie, soot};
+use firemedium_core::{blackbody, ciddor, cie, soot};
 use serde::Serialize;
 
 #[derive(Debug, Args)]

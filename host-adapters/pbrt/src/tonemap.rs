@@ -26,7 +26,7 @@
 //! Every operator is monotone in the input luminance (M⁻¹'s Y row is non-negative), maps black to black and stays
 //! finite for any finite input (σ of an all-black image falls back to 1 cd/m²).
 
-use firemedium_plugin::{blackbody, cie};
+use firemedium_core::{blackbody, cie};
 use glam::DVec3;
 use std::path::Path;
 

@@ -52,8 +52,7 @@ use crate::Error;
 use glam::DVec3;
 use std::time::Instant;
 
-/// pbrt-v4's CIE Y integral (∫ȳ dλ over 360–830 nm), its film normalisation.
-pub const CIE_Y_INTEGRAL: f64 = 106.856895;
+pub use crate::cie::CIE_Y_INTEGRAL;
 
 /// The colour space of a volume's channels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -503,7 +502,7 @@ pub struct FireVolume {
     lanes: Option<lanes::LaneTables>,
     /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
     lattice: Option<lattice::Lattice>,
-    #[cfg(feature = "fault-injection")]
+    #[cfg(test)]
     fault: String,
 }
 
@@ -595,16 +594,16 @@ impl FireVolume {
     /// Builds a fire volume from a parameter list (the `dataset` and `volume` tables, docs/params.md).
     pub fn new(list: &[Param]) -> Result<FireVolume, Error> {
         let start = Instant::now();
-        #[cfg(feature = "fault-injection")]
+        #[cfg(test)]
         let comps: Vec<&'static crate::params::Component> =
             vec![&params::DATASET, &params::VOLUME, &params::FAULTS];
-        #[cfg(not(feature = "fault-injection"))]
+        #[cfg(not(test))]
         let comps: Vec<&'static crate::params::Component> = vec![&params::DATASET, &params::VOLUME];
         let r = ParamReader::new("volume", list, &comps);
         r.check_names()?;
-        #[cfg(feature = "fault-injection")]
+        #[cfg(test)]
         let fault = r.string("faultinjection")?;
-        #[cfg(feature = "fault-injection")]
+        #[cfg(test)]
         if fault == "create" {
             panic!("fault injection: panic during creation");
         }
@@ -636,7 +635,7 @@ impl FireVolume {
             r.int("bins")? as usize,
         )
         .map_err(|e| match e {
-            Error::InvalidParameter {
+            firemedium_core::Error::InvalidParameter {
                 name,
                 value,
                 expected,
@@ -647,7 +646,6 @@ impl FireVolume {
                 value,
                 expected,
             },
-            e => e,
         })?;
         let cmode = if colormode == "rgb" {
             ColorMode::Rgb
@@ -1048,7 +1046,7 @@ impl FireVolume {
             refraction,
             lanes: None,
             lattice: None,
-            #[cfg(feature = "fault-injection")]
+            #[cfg(test)]
             fault,
         };
         if precision == "f32" && integrator == Integrator::March {
@@ -1143,13 +1141,13 @@ impl FireVolume {
         Some([s.min as f64, s.max as f64])
     }
 
-    #[cfg(feature = "fault-injection")]
+    #[cfg(test)]
     fn fault_check(&self) {
         if self.fault == "integrate" {
             panic!("fault injection: panic during integration");
         }
     }
-    #[cfg(not(feature = "fault-injection"))]
+    #[cfg(not(test))]
     fn fault_check(&self) {}
 
     /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.

@@ -109,10 +109,11 @@ pub static LIGHT: Component = Component {
     )],
 };
 
-/// Test-only parameters (cargo feature `fault-injection`).
+/// Test-only parameters: compiled into the plugin's own unit tests, never into the shipped library.
+#[cfg(test)]
 pub static FAULTS: Component = Component {
     name: "faults",
-    doc: "Test-only fault injection (built with the `fault-injection` feature).",
+    doc: "Test-only fault injection (the plugin's unit tests).",
     params: &[p(
         "faultinjection",
         T::String,

@@ -178,7 +178,7 @@ pub fn surface_ladder(
     };
     let luminance = |img: &render::Image| img.xyz.iter().map(|v| v.y).collect::<Vec<f64>>();
     let reference_scene = load(ref_spp, true)?;
-    let mut rng = firemedium_plugin::rng::Rng::new(0);
+    let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = crate::compare_cmd::surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
     let reference = luminance(&reference);

@@ -2,12 +2,12 @@
 //! Every case goes through the plugin's public code (the fire volume as a renderer builds it, the physics core);
 //! the same list runs as a test (`every_case_passes`).
 
-use firemedium_plugin::ciddor::{self, Air};
-use firemedium_plugin::constants::BOLTZMANN;
+use firemedium_core::ciddor::{self, Air};
+use firemedium_core::constants::BOLTZMANN;
+use firemedium_core::species::{line_cross_sections, Element};
+use firemedium_core::{blackbody, soot};
 use firemedium_plugin::params::Param;
-use firemedium_plugin::species::{line_cross_sections, Element};
 use firemedium_plugin::volume::{FireVolume, Ray};
-use firemedium_plugin::{blackbody, soot};
 use glam::DVec3;
 
 /// One row of the table.
@@ -542,7 +542,7 @@ fn refraction(out: &mut Vec<Case>) {
             return;
         }
     };
-    let mut rng = firemedium_plugin::rng::Rng::new(8);
+    let mut rng = firemedium_core::rng::Rng::new(8);
     let (mut worst_len, mut all_ok, mut turned) = (0.0f64, true, 0);
     for seed in 0..200 {
         let dir = DVec3::new(

@@ -9,8 +9,8 @@
 use super::scene::{Light, Material, Medium, Scene};
 use super::shapes::{sample_area, Hit};
 use super::spectrum::S;
+use firemedium_core::rng::Rng;
 use firemedium_loader::Ray as FRay;
-use firemedium_plugin::rng::Rng;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
 

@@ -9,8 +9,8 @@ pub mod scene;
 pub mod shapes;
 pub mod spectrum;
 
-use firemedium_plugin::cie;
-use firemedium_plugin::rng::Rng;
+use firemedium_core::cie;
+use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};

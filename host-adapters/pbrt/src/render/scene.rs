@@ -5,9 +5,9 @@
 
 use super::shapes::{Bvh, Geom, Prim};
 use super::spectrum::{Bins, S};
+use firemedium_core::spectrum::SpectralGrid;
 use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
 use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, Param};
-use firemedium_plugin::spectrum::SpectralGrid;
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -983,7 +983,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let grid = SpectralGrid::new(lo, hi, n).map_err(|e| format!("{}: {e}", path.display()))?;
     // Absolute units (683 lm/W) with a fire; pbrt's relative units for scenes of pbrt grid media only.
     let k = if pbrt_media && !fire {
-        1.0 / firemedium_plugin::volume::CIE_Y_INTEGRAL
+        1.0 / firemedium_core::cie::CIE_Y_INTEGRAL
     } else {
         683.0
     };

@@ -5,10 +5,10 @@
 //! exactly; `rgb` values use a simple box uplift (blue below 490 nm, green to 580 nm, red above) — white stays
 //! flat and each channel keeps its energy; saturated colours are approximate (a proper RGB uplift is future work).
 
-use firemedium_plugin::blackbody::{spectral_radiance, WIEN};
-use firemedium_plugin::cie;
-use firemedium_plugin::quadrature::gauss_legendre;
-use firemedium_plugin::spectrum::SpectralGrid;
+use firemedium_core::blackbody::{spectral_radiance, WIEN};
+use firemedium_core::cie;
+use firemedium_core::quadrature::gauss_legendre;
+use firemedium_core::spectrum::SpectralGrid;
 use glam::DVec3;
 
 /// Largest channel count the renderer supports.
@@ -84,7 +84,7 @@ impl Bins {
     pub fn new(grid: SpectralGrid, k: f64) -> Bins {
         let xyz = cie::bin_weights(&grid)
             .into_iter()
-            .map(|w| w / firemedium_plugin::constants::LUMINOUS_EFFICACY * k)
+            .map(|w| w / firemedium_core::constants::LUMINOUS_EFFICACY * k)
             .collect();
         Bins { grid, xyz }
     }

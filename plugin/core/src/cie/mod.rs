@@ -17,6 +17,9 @@ use crate::spectrum::SpectralGrid;
 use cmf_table::{CMF, CMF_START_NM, CMF_STEP_NM};
 use glam::{DMat3, DVec3};
 
+/// pbrt-v4's CIE Y integral (∫ȳ dλ over 360–830 nm), its film normalisation.
+pub const CIE_Y_INTEGRAL: f64 = 106.856895;
+
 /// XYZ → linear sRGB (D65), rows (IEC 61966-2-1 / Lindbloom).
 pub const XYZ_TO_SRGB_ROWS: [[f64; 3]; 3] = [
     [3.2404542, -1.5371385, -0.4985314],
