@@ -243,6 +243,11 @@ struct Builder {
     objects: HashMap<String, Vec<Prim>>,
     current_object: Option<(String, Vec<Prim>)>,
     bins_params: Vec<LParam>,
+    /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
+    has_fire: bool,
+    /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
+    /// first medium in the film's units), and that medium's name; every further medium is checked against it.
+    film_xyz: Option<(String, Vec<DVec3>)>,
 }
 
 fn nums<'a>(p: &'a [Param], name: &str) -> Option<&'a [f64]> {
@@ -410,6 +415,54 @@ impl Builder {
         Ok(p)
     }
 
+    /// Takes the film's colour from the plugin: the medium's bins must be the renderer's, and the first medium in
+    /// the film's units (a `fire` when the scene has one, else any) gives the XYZ weights of every bin. A further
+    /// medium must agree with them up to its units' scale, so a plugin built from another commit, or media that
+    /// project their bins differently, are refused instead of rendering a silently wrong colour.
+    fn check_colour(
+        &mut self,
+        name: &str,
+        fire: bool,
+        vol: &Volume,
+        loc: &Loc,
+    ) -> Result<(), Error> {
+        let info = vol.info();
+        let (lo, hi) = (self.bins.grid.min_nm(), self.bins.grid.max_nm());
+        if (info.lambda_min - lo).abs() > 1e-9 * hi || (info.lambda_max - hi).abs() > 1e-9 * hi {
+            return Err(err(loc, format!("medium \"{name}\": the plugin's bins span {}–{} nm, the renderer's {lo}–{hi} nm (all media share the scene's bins)", info.lambda_min, info.lambda_max)));
+        }
+        let xyz: Vec<DVec3> = vol
+            .channel_xyz()
+            .map_err(|e| err(loc, format!("medium \"{name}\": {e}")))?
+            .into_iter()
+            .map(DVec3::from_array)
+            .collect();
+        match &self.film_xyz {
+            None if fire || !self.has_fire => {
+                self.film_xyz = Some((name.to_string(), xyz));
+                Ok(())
+            }
+            None => Ok(()),
+            Some((first, want)) => {
+                // The same projection up to one scale (physical and pbrt units differ by a constant).
+                let y = |w: &[DVec3]| w.iter().map(|v| v.y).sum::<f64>();
+                let k = y(want) / y(&xyz);
+                let worst = want
+                    .iter()
+                    .zip(&xyz)
+                    .map(|(a, b)| {
+                        (*a - *b * k).abs().max_element() / a.abs().max_element().max(1e-300)
+                    })
+                    .fold(0.0, f64::max);
+                if worst.is_finite() && worst < 1e-6 {
+                    Ok(())
+                } else {
+                    Err(err(loc, format!("medium \"{name}\": its bins project to XYZ differently from medium \"{first}\"'s (largest relative difference {worst:.3e}); are both from the same plugin?")))
+                }
+            }
+        }
+    }
+
     fn medium(&mut self, name: &str, params: &[Param], loc: &Loc) -> Result<(), Error> {
         let ty = string(params, "type").unwrap_or("").to_string();
         let to_medium = affine(&self.st.ctm.inverse());
@@ -461,6 +514,7 @@ impl Builder {
                 if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
+                self.check_colour(name, ty == "fire", &vol, loc)?;
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
                 Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string() }
             }
@@ -944,17 +998,51 @@ pub struct Overrides {
 pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut c = Collect::default();
     parse_file(path, &mut c).map_err(|e| e.to_string())?;
-    // Pre-scan: the render bins (from the media, or the plugin's defaults) and the photometric scale.
-    let mut bins_params: Vec<LParam> = Vec::new();
-    let (mut lo, mut hi, mut n) = (400.0, 700.0, 30usize);
+    // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
+    // photometric scale.
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let (mut fire, mut pbrt_media) = (false, false);
+    let mut plugin_path = ov.plugin.clone();
+    let mut first_medium: Option<&Loc> = None;
     for (d, loc) in &c.0 {
         if let Directive::MakeNamedMedium(_, p) = d {
             match string(p, "type") {
                 Some("fire") => fire = true,
                 Some("uniformgrid" | "nanovdb") => pbrt_media = true,
+                _ => continue,
+            }
+            first_medium.get_or_insert(loc);
+            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
+                plugin_path = Some(dir.join(file));
+            }
+        }
+    }
+    let plugin = match first_medium {
+        Some(loc) => Some(
+            match &plugin_path {
+                Some(file) => Plugin::load(file),
+                None => Plugin::from_env(),
+            }
+            .map_err(|e| err(loc, e))?,
+        ),
+        None => None,
+    };
+    let default = SpectralGrid::default();
+    let (mut lo, mut hi, mut n) = (default.min_nm(), default.max_nm(), default.count());
+    if let Some(p) = &plugin {
+        for row in p.parameters() {
+            let x = row.default.trim().parse::<f64>();
+            match (row.name.as_str(), x) {
+                ("lambdamin", Ok(x)) => lo = x,
+                ("lambdamax", Ok(x)) => hi = x,
+                ("bins", Ok(x)) if x >= 1.0 => n = x as usize,
                 _ => {}
             }
+        }
+    }
+    let mut bins_params: Vec<LParam> = Vec::new();
+    for (d, loc) in &c.0 {
+        if let Directive::MakeNamedMedium(_, p) = d {
             for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
                 if let Some(x) = nums(p, k).and_then(|v| v.first()) {
                     if bins_params
@@ -999,10 +1087,10 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         }
     }
     let mut b = Builder {
-        dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        dir,
         bins: bins.clone(),
-        plugin_path: ov.plugin.clone(),
-        plugin: None,
+        plugin_path,
+        plugin,
         st: State {
             ctm: DMat4::IDENTITY,
             reverse: false,
@@ -1030,6 +1118,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         objects: HashMap::new(),
         current_object: None,
         bins_params,
+        has_fire: fire,
+        film_xyz: None,
     };
     // pbrt's default material: diffuse 0.5.
     b.materials
@@ -1103,6 +1193,11 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         (bb.max - bb.min).max_element().abs()
     });
     let extent = scale.fold(1.0f32, f32::max);
+    // The film's colour is the plugin's projection of its bins (scenes without plugin media: the core's).
+    let mut bins = bins;
+    if let Some((_, xyz)) = b.film_xyz.take() {
+        bins.xyz = xyz;
+    }
     Ok(Scene {
         bins,
         bvh: Bvh::new(b.prims),
