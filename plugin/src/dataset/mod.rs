@@ -30,6 +30,7 @@ mod ascii;
 mod compress;
 mod cursor;
 pub mod nanovdb;
+pub(crate) mod params;
 pub mod raw;
 mod sparse;
 mod text;

@@ -23,7 +23,9 @@
 use super::integrate::{Span, MAX_STEPS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
 use super::lattice::Lattice;
-use super::{FireVolume, Ray, TTable, EVALUATIONS};
+use super::march::EVALUATIONS;
+use super::tables::TTable;
+use super::{FireVolume, Ray};
 
 /// a·b + c, fused when `F` (inlined into the FMA clone, a single instruction; without FMA `mul_add` would be a
 /// library call, so the plain product and sum).

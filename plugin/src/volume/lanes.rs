@@ -13,7 +13,8 @@
 //! the closed form for every τ from 1e-12 to 1e8; the campfire image within 1e-6 of the f64 march
 //! (docs/RESULTS.md).
 
-use super::{FireVolume, TTable};
+use super::tables::TTable;
+use super::FireVolume;
 
 /// Channels per lane.
 pub(crate) const W: usize = 8;

@@ -1,0 +1,210 @@
+//! The voxel dataset's parameters (the `dataset` table, docs/params.md) mapped to what it loads: a file (its
+//! format, grid names, temperature mapping, the thesis formats' options, species grids) or pbrt-v4's inline
+//! arrays, with the policies and the memory cap.
+
+use super::{
+    AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Mapping, Policy, RawCoords, RawValue,
+};
+use crate::grid::Interpolation;
+use crate::params::ParamReader;
+use crate::Error;
+use glam::DVec3;
+
+/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`); returns it and the index of a
+/// per-voxel Lescale channel.
+pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize>), Error> {
+    let pol = |name: &str| -> Result<Policy, Error> { Policy::from_name(name, &r.string(name)?) };
+    let format = match r.string("format")?.as_str() {
+        "" => None,
+        f => Some(Format::from_name(f)?),
+    };
+    let rawdims = r.ints("rawdims")?.unwrap_or(vec![256, 256, 256]);
+    if rawdims.len() != 3 {
+        return Err(Error::invalid(
+            "dataset",
+            "rawdims",
+            format!("{} values", rawdims.len()),
+            "three integers",
+        ));
+    }
+    let (p0, p1) = (r.point3("p0")?, r.point3("p1")?);
+    let bounds = match (p0, p1) {
+        (None, None) => None,
+        (a, b) => Some([
+            DVec3::from(a.unwrap_or([0.0; 3])),
+            DVec3::from(b.unwrap_or([1.0; 3])),
+        ]),
+    };
+    let opts = LoadOptions {
+        format,
+        order: if r.string("order")? == "z" {
+            AxisOrder::ZFastest
+        } else {
+            AxisOrder::XFastest
+        },
+        raw_coords: if r.string("rawcoords")? == "xyz" {
+            RawCoords::Xyz
+        } else {
+            RawCoords::Thesis
+        },
+        raw_value: if r.string("rawvalue")? == "maxrgb" {
+            RawValue::MaxRgb
+        } else {
+            RawValue::Red
+        },
+        raw_dims: [
+            rawdims[0] as usize,
+            rawdims[1] as usize,
+            rawdims[2] as usize,
+        ],
+        nonfinite: pol("nonfinite")?,
+        negative: pol("negative")?,
+        max_bytes: r.float("maxbytes")? as u64,
+        frame: r.ints("frame")?.and_then(|v| v.first().copied()),
+        bounds,
+    };
+    let offset = match (
+        r.opt_float("temperatureoffset")?,
+        r.opt_float("temperaturecutoff")?,
+    ) {
+        (Some(_), Some(_)) => {
+            return Err(Error::invalid(
+                "dataset",
+                "temperaturecutoff",
+                "given with temperatureoffset",
+                "one of the two (they are the same)",
+            ))
+        }
+        (Some(o), None) | (None, Some(o)) => o,
+        (None, None) => 0.0,
+    };
+    let tmap = Mapping {
+        scale: r.float("temperaturescale")?,
+        offset: 0.0,
+        pbrt_offset: offset,
+    };
+    let interp = if r.string("interpolation")? == "nearest" {
+        Interpolation::Nearest
+    } else {
+        Interpolation::Trilinear
+    };
+    let species: Vec<String> = r
+        .strings("species")?
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect();
+    if pbrt && !species.is_empty() {
+        return Err(Error::invalid(
+            "volume",
+            "species",
+            "given",
+            "mode \"physical\"",
+        ));
+    }
+    let inline_density = r.numbers("density")?;
+    let lescale_values = r.numbers("Lescale")?;
+    let (mut ds, lescale) = if let Some(dens) = inline_density {
+        let dims = [
+            r.int("nx")? as usize,
+            r.int("ny")? as usize,
+            r.int("nz")? as usize,
+        ];
+        let to32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        let dens = to32(&dens);
+        let mut temp = r.numbers("temperature")?.map(|v| to32(&v));
+        if let Some(t) = temp.as_mut() {
+            for v in t.iter_mut() {
+                *v = ((*v as f64 - tmap.pbrt_offset) * tmap.scale) as f32;
+            }
+        }
+        let les = lescale_values.filter(|v| v.len() > 1).map(|v| to32(&v));
+        let mut arrays: Vec<(&str, &[f32])> = vec![("density", &dens)];
+        if let Some(t) = &temp {
+            arrays.push(("temperature", t));
+        }
+        if let Some(l) = &les {
+            arrays.push(("Lescale", l));
+        }
+        let [b0, b1] = bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]);
+        let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
+        let li = les.as_ref().map(|_| arrays.len() - 1);
+        (ds, li)
+    } else {
+        let filename = match (r.string("filename")?, r.string("dataset")?) {
+            (f, d) if !f.is_empty() && !d.is_empty() => {
+                return Err(Error::invalid(
+                    "dataset",
+                    "dataset",
+                    format!("\"{d}\" with filename \"{f}\""),
+                    "one of filename or dataset",
+                ))
+            }
+            (f, d) => {
+                if f.is_empty() {
+                    d
+                } else {
+                    f
+                }
+            }
+        };
+        let densityfile = r.string("densityfile")?;
+        let temperaturefile = r.string("temperaturefile")?;
+        let dfile = if !densityfile.is_empty() {
+            densityfile
+        } else {
+            filename.clone()
+        };
+        if dfile.is_empty() {
+            return Err(Error::invalid("dataset", "filename", "unset", "a dataset file (filename or densityfile), or inline \"float density\" with nx ny nz"));
+        }
+        let mut sources = vec![ChannelSource {
+            name: "density".into(),
+            file: dfile.clone().into(),
+            grid: Some(r.string("densitygrid")?),
+            mapping: Mapping::default(),
+        }];
+        let tgrid = r.string("temperaturegrid")?;
+        let tfile = if !temperaturefile.is_empty() {
+            temperaturefile
+        } else {
+            filename.clone()
+        };
+        let single = matches!(
+            opts.format
+                .or_else(|| Format::from_extension(std::path::Path::new(&tfile))),
+            Some(Format::AsciiDense | Format::AsciiSparse | Format::Raw | Format::Raw2)
+        );
+        // A single-grid file cannot hold temperature too: without a temperature file there is none.
+        let no_temperature = tgrid.is_empty() || (single && tfile == dfile);
+        if !no_temperature {
+            sources.push(ChannelSource {
+                name: "temperature".into(),
+                file: tfile.into(),
+                grid: Some(tgrid),
+                mapping: tmap,
+            });
+        }
+        let sfiles = r.strings("speciesfiles")?.unwrap_or_default();
+        for (i, sym) in species.iter().enumerate() {
+            let file = sfiles.get(i).cloned().unwrap_or_else(|| filename.clone());
+            sources.push(ChannelSource {
+                name: sym.clone(),
+                file: file.into(),
+                grid: Some(sym.clone()),
+                mapping: Mapping::default(),
+            });
+        }
+        if lescale_values.as_ref().is_some_and(|v| v.len() > 1) {
+            return Err(Error::invalid(
+                "volume",
+                "Lescale",
+                "an array",
+                "one value for file datasets (arrays are for inline grids)",
+            ));
+        }
+        (Dataset::load(&sources, &opts)?, None)
+    };
+    ds = ds.with_interpolation(interp);
+    Ok((ds, lescale))
+}

@@ -1,0 +1,470 @@
+//! The straight march's one entry point, [`integrate`]: the lane kernel ([`super::kernel`]) where the volume has
+//! f32 lanes and a lattice and at most 32 channels, else the lane march over the dataset ([`march_lanes`]), else
+//! the f64 estimators of [`super::integrate`] (march, ratio, delta). All three take the same steps at the same
+//! points and stop by the same rule (tested), so the choice changes only rounding.
+//!
+//! [`Stepper`] is the march's per-step work for paths the volume does not trace itself: refraction's curved
+//! rays.
+
+use super::integrate::{self, Medium, Scratch};
+use super::{kernel, lanes, FireVolume, Ray};
+use glam::DVec3;
+
+/// Radiance `l` and transmittance `t` along `ray` by the volume's fastest exact path; returns the exit parameter.
+pub(super) fn integrate(v: &FireVolume, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
+    if let Some(lt) = &v.lanes {
+        return march_kernel(v, lt, ray, l, t).unwrap_or_else(|| march_lanes(v, lt, ray, l, t));
+    }
+    let mut sc = Scratch::new(v.channels());
+    integrate::integrate(v, ray, v.integrator, &mut sc, l, t)
+}
+
+impl FireVolume {
+    /// One march step in lanes at `p`: the coefficients there, then the step; returns the largest transmittance.
+    /// (Inlined always, so that `march_lanes`' AVX2 clone holds it.)
+    #[inline(always)]
+    pub(super) fn lane_step(
+        &self,
+        lt: &lanes::LaneTables,
+        p: DVec3,
+        delta: f64,
+        ls: &mut LaneScratch,
+    ) -> f32 {
+        let Some(st) = self.ds.stencil_with_margin(p, self.margin) else {
+            return 1.0;
+        };
+        let ch = self.ds.channels();
+        let d = ch[self.density].grid.eval(&st).max(0.0);
+        let mut n = [0f32; lanes::MAX_SPECIES];
+        for (k, sp) in self.species.iter().enumerate() {
+            n[k] = (ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale) as f32;
+        }
+        // No soot and no species here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1 exactly, so it
+        // is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
+        if d == 0.0 && n.iter().all(|&x| x == 0.0) {
+            return 1.0;
+        }
+        let t = self.temperature.map_or(0.0, |i| ch[i].grid.eval(&st));
+        let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
+        let emits = t as f64 > self.t_emit || self.temperature.is_none();
+        let LaneScratch { sig, jj, l, t: tr } = ls;
+        let dl = if emits { d * les } else { 0.0 };
+        lt.coefficients(self, lanes::Sample { d, t, dl }, &n, sig, jj);
+        lanes::step(sig, jj, delta as f32, l, tr)
+    }
+}
+
+/// One march step at a time at points the caller chooses (refraction's curved rays): in f32 lanes where the
+/// volume has them and the caller asks for them, else in f64 (radiance and transmittance accumulate straight
+/// into the caller's arrays).
+pub(crate) struct Stepper<'a> {
+    v: &'a FireVolume,
+    lanes: Option<(&'a lanes::LaneTables, LaneScratch)>,
+    sc: Scratch,
+}
+
+impl<'a> Stepper<'a> {
+    /// A stepper over `v`; `lanes`: use the volume's f32 lanes if it has them.
+    pub(crate) fn new(v: &'a FireVolume, lanes: bool) -> Stepper<'a> {
+        Stepper {
+            v,
+            lanes: v
+                .lanes
+                .as_ref()
+                .filter(|_| lanes)
+                .map(|lt| (lt, LaneScratch::new(lt.chunks()))),
+            sc: Scratch::new(v.channels()),
+        }
+    }
+    /// Adds the step of length `h` whose coefficients are taken at `p`; returns whether the ray is now opaque
+    /// (its largest transmittance under the volume's cutoff).
+    pub(crate) fn step(&mut self, p: DVec3, h: f64, l: &mut [f64], t: &mut [f64]) -> bool {
+        let v = self.v;
+        match &mut self.lanes {
+            Some((lt, ls)) => {
+                EVALUATIONS.with(|n| n.set(n.get() + 1));
+                v.lane_step(lt, p, h, ls) < v.cutoff as f32
+            }
+            None => {
+                let sc = &mut self.sc;
+                Medium::eval(v, p, &mut sc.sa, &mut sc.ss, &mut sc.j);
+                integrate::march_step(&sc.sa, &sc.ss, &sc.j, h, l, t) < v.cutoff
+            }
+        }
+    }
+    /// Writes the lanes' radiance and transmittance to `l` and `t` (the f64 path wrote them as it went).
+    pub(crate) fn finish(&self, l: &mut [f64], t: &mut [f64]) {
+        if let Some((_, ls)) = &self.lanes {
+            ls.finish(l, t);
+        }
+    }
+}
+
+/// The straight march in f32 lanes (the same steps, at the same points, as the f64 march of `integrate`); compiled
+/// twice, for baseline x86-64 and for AVX2 + FMA (8 channels per instruction), chosen once at run time.
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+pub(super) fn march_lanes(
+    v: &FireVolume,
+    lt: &lanes::LaneTables,
+    ray: &Ray,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> f64 {
+    l.iter_mut().for_each(|v| *v = 0.0);
+    t.iter_mut().for_each(|v| *v = 1.0);
+    let Some(span) = integrate::Span::new(v, ray) else {
+        return ray.t1;
+    };
+    let mut rng = crate::rng::Rng::new(ray.seed);
+    let mut ls = LaneScratch::new(lt.chunks());
+    let mut empty = Vec::new();
+    let cutoff = v.cutoff as f32;
+    let mut samples = 0;
+    integrate::march_steps(&span, &mut rng, &mut empty, |p, delta| {
+        samples += 1;
+        v.lane_step(lt, p, delta, &mut ls) >= cutoff
+    });
+    EVALUATIONS.with(|n| n.set(n.get() + samples));
+    ls.finish(l, t);
+    span.b
+}
+
+/// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`
+/// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time.
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512vl+avx512bw+avx512dq+avx2+fma",
+    "x86_64+avx2+fma"
+))]
+pub(super) fn march_kernel(
+    v: &FireVolume,
+    lt: &lanes::LaneTables,
+    ray: &Ray,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> Option<f64> {
+    const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
+    // The lanes' shape from the channel count: rgb in one lane of 4 (a 128-bit register, no padding work),
+    // spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only in rgb
+    // physical mode (3 channels).
+    const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
+    let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
+    macro_rules! lanes {
+        ($cv:literal, $v:literal) => {
+            match (s, a) {
+                (false, false) => kernel::march::<$cv, $v, false, false, F>(v, lt, ray, l, t),
+                (true, false) => kernel::march::<$cv, $v, true, false, F>(v, lt, ray, l, t),
+                _ => None,
+            }
+        };
+    }
+    match v.channels() {
+        0..=4 => match (s, a) {
+            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, ray, l, t),
+            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, ray, l, t),
+            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, ray, l, t),
+            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, ray, l, t),
+        },
+        5..=8 => lanes!(1, 8),
+        9..=16 if WIDE => lanes!(1, 16),
+        9..=16 => lanes!(2, 8),
+        17..=24 => lanes!(3, 8),
+        25..=32 if WIDE => lanes!(2, 16),
+        25..=32 => lanes!(4, 8),
+        _ => None,
+    }
+}
+
+/// Per-ray state of the lane march: coefficients at the sample, radiance and transmittance.
+pub(super) struct LaneScratch {
+    sig: Vec<lanes::Lane>,
+    jj: Vec<lanes::Lane>,
+    l: Vec<lanes::Lane>,
+    t: Vec<lanes::Lane>,
+}
+
+impl LaneScratch {
+    fn new(chunks: usize) -> LaneScratch {
+        let zero = vec![[0f32; lanes::W]; chunks];
+        LaneScratch {
+            sig: zero.clone(),
+            jj: zero.clone(),
+            l: zero,
+            t: vec![[1f32; lanes::W]; chunks],
+        }
+    }
+    /// The ray's radiance and transmittance per channel.
+    fn finish(&self, l: &mut [f64], t: &mut [f64]) {
+        for c in 0..l.len() {
+            l[c] = self.l[c / lanes::W][c % lanes::W] as f64;
+            t[c] = self.t[c / lanes::W][c % lanes::W] as f64;
+        }
+    }
+}
+
+thread_local! {
+    pub(super) static EVALUATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many times any fire volume evaluated its coefficients on this thread (a counter for benchmarks: read it
+/// before and after the work, on the same thread).
+pub fn evaluations_on_this_thread() -> u64 {
+    EVALUATIONS.with(|n| n.get())
+}
+
+#[cfg(test)]
+mod tests {
+    //! The three marches agree: the kernel, the lane march and the f64 march take the same steps.
+    use super::*;
+    use crate::params::Param;
+    use crate::volume::tests::{blob_pair, ray_x, run, slab_volume};
+
+    #[test]
+    fn f32_lanes_only_where_every_product_fits() {
+        // An everyday fire marches in lanes; a density of 1e35 (σ·step ≈ 1e41, past f32's 3.4e38) and the
+        // tracking integrators do not — and the opaque slab still gives L = B.
+        assert!(slab_volume(1e-6, 1500.0, vec![]).lanes.is_some());
+        let huge = slab_volume(1e35, 1500.0, vec![Param::float("sootscale", 1.0)]);
+        assert!(huge.lanes.is_none());
+        let (l, t) = run(&huge, &ray_x(1));
+        let b = crate::blackbody::spectral_radiance(1500.0, 555.0);
+        assert!(
+            (l[15] / b - 1.0).abs() < 5e-3 && t[15] == 0.0,
+            "{} vs {b}",
+            l[15]
+        );
+        let ratio = slab_volume(1e-6, 1500.0, vec![Param::string("integrator", "ratio")]);
+        assert!(ratio.lanes.is_none());
+        let f64_asked = slab_volume(1e-6, 1500.0, vec![Param::string("precision", "f64")]);
+        assert!(f64_asked.lanes.is_none());
+        // A 1e12 × intensity fire at 3000 K (emission per unit density ~1e23) still marches in lanes, 1e12 × the f64 one.
+        let bright = slab_volume(
+            1e-6,
+            3000.0,
+            vec![
+                Param::float("intensity", 1e12),
+                Param::string("precision", "f32"),
+            ],
+        );
+        assert!(bright.lanes.is_some());
+        let dim = slab_volume(1e-6, 3000.0, vec![Param::string("precision", "f64")]);
+        let (lb, _) = run(&bright, &ray_x(1));
+        let (ld, _) = run(&dim, &ray_x(1));
+        for k in 0..lb.len() {
+            assert!(
+                (lb[k] / (ld[k] * 1e12) - 1.0).abs() < 1e-5,
+                "ch {k}: {} vs {}",
+                lb[k],
+                ld[k] * 1e12
+            );
+        }
+    }
+
+    #[test]
+    fn kernel_matches_the_lane_and_f64_marches() {
+        // The kernel (`integrate` with lanes) against the lane march it replaces (same f32 arithmetic, per
+        // sample) and the f64 march: random rays from outside and inside, along axes, through faces and
+        // edges, and through the empty bricks the kernel jumps; rgb and spectral; with Lescale, with species.
+        let mut rng = crate::rng::Rng::new(7);
+        let mut rays = vec![
+            Ray {
+                o: DVec3::new(-1.0, 0.63, 0.55),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 1,
+            },
+            Ray {
+                o: DVec3::new(0.6, 0.63, -1.0),
+                d: DVec3::Z,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 2,
+            },
+            Ray {
+                o: DVec3::new(0.6, 0.63, 0.55),
+                d: DVec3::new(0.3, -1.0, 0.2),
+                t0: 0.0,
+                t1: 9.0,
+                seed: 3,
+            },
+            Ray {
+                o: DVec3::new(-1.0, 0.0, 0.5),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 4,
+            }, // in a face
+            Ray {
+                o: DVec3::new(-1.0, 0.0, 0.0),
+                d: DVec3::X,
+                t0: 0.0,
+                t1: 9.0,
+                seed: 5,
+            }, // along an edge
+            Ray {
+                o: DVec3::new(3.0, 0.6, 0.5),
+                d: DVec3::new(-2.0, 0.0, 0.0),
+                t0: 0.0,
+                t1: 9.0,
+                seed: 6,
+            },
+        ];
+        for seed in 0..150 {
+            let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
+            let target = DVec3::new(0.6, 0.63, 0.55)
+                + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5) * 1.2;
+            rays.push(Ray {
+                o,
+                d: target - o,
+                t0: 0.0,
+                t1: 5.0,
+                seed: 100 + seed,
+            });
+        }
+        for (extra, species) in [
+            (vec![], false),
+            (vec![Param::string("colormode", "rgb")], false),
+            (
+                vec![
+                    Param::string("mode", "pbrt"),
+                    Param::float("stepsize", 3.0),
+                    Param::int("brick", 4),
+                ],
+                false,
+            ),
+            (vec![Param::float("stepsize", 0.37)], true),
+        ] {
+            let (v, v64) = blob_pair(&extra, species);
+            let lt = v.lanes.as_ref().expect("the blob marches in lanes");
+            let c = v.channels();
+            let (mut worst, mut lit) = (0f64, 0);
+            for ray in &rays {
+                let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+                let (mut l2, mut t2) = (vec![0.0; c], vec![0.0; c]);
+                let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
+                let te = v.integrate(ray, &mut l, &mut t);
+                let te2 = march_lanes(&v, lt, ray, &mut l2, &mut t2);
+                let te3 = v64.integrate(ray, &mut l3, &mut t3);
+                assert_eq!(te, te2);
+                assert_eq!(te, te3);
+                let peak = l3.iter().fold(0f64, |m, &x| m.max(x));
+                if peak > 0.0 {
+                    lit += 1;
+                }
+                for k in 0..c {
+                    for (a, what) in [(l[k], "lane march"), (l3[k], "f64 march")] {
+                        // Relative to the ray's brightest channel (dim channels carry f32's absolute rounding).
+                        let e = (l[k] - a).abs() / peak.max(1e-300);
+                        worst = worst.max(e);
+                        assert!(e < 2e-5, "{ray:?} ch {k}: kernel {} vs {what} {a}", l[k]);
+                    }
+                    assert!((t[k] - t2[k]).abs() < 1e-5 && (t[k] - t3[k]).abs() < 1e-5);
+                }
+            }
+            assert!(lit > 50, "only {lit} rays saw the fire");
+            assert!(
+                worst > 0.0,
+                "f32 and f64 cannot agree to the bit everywhere"
+            );
+        }
+    }
+
+    #[test]
+    fn every_lane_shape_matches_the_f64_march() {
+        // The dispatch picks one lane shape per channel count and CPU (this machine's clone runs only some):
+        // each shape called directly, with and without FMA, against the f64 march — rgb in one lane of 4,
+        // 6/12/20/30 bins in lanes of 8 and of 16, with sodium where it applies.
+        let rays: Vec<Ray> = (0..40)
+            .map(|k| {
+                let mut rng = crate::rng::Rng::new(900 + k);
+                let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
+                let target = DVec3::new(0.6, 0.63, 0.55)
+                    + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
+                Ray {
+                    o,
+                    d: target - o,
+                    t0: 0.0,
+                    t1: 5.0,
+                    seed: k,
+                }
+            })
+            .collect();
+        type Kernel =
+            fn(&FireVolume, &lanes::LaneTables, &Ray, &mut [f64], &mut [f64]) -> Option<f64>;
+        // (The volume's extra parameters, with sodium, and the shapes to run on it.)
+        type Case = (Vec<Param>, bool, Vec<(&'static str, Kernel)>);
+        let cases: Vec<Case> = vec![
+            (
+                vec![Param::string("colormode", "rgb")],
+                false,
+                vec![
+                    ("1×4", kernel::march::<1, 4, false, true, false>),
+                    ("1×4 fma", kernel::march::<1, 4, false, true, true>),
+                ],
+            ),
+            (
+                vec![Param::string("colormode", "rgb")],
+                true,
+                vec![("1×4 Na", kernel::march::<1, 4, true, true, true>)],
+            ),
+            (
+                vec![Param::int("bins", 6)],
+                false,
+                vec![("1×8", kernel::march::<1, 8, false, false, true>)],
+            ),
+            (
+                vec![Param::int("bins", 12)],
+                false,
+                vec![
+                    ("2×8", kernel::march::<2, 8, false, false, true>),
+                    ("1×16", kernel::march::<1, 16, false, false, true>),
+                ],
+            ),
+            (
+                vec![Param::int("bins", 20)],
+                false,
+                vec![("3×8", kernel::march::<3, 8, false, false, false>)],
+            ),
+            (
+                vec![],
+                false,
+                vec![
+                    ("4×8", kernel::march::<4, 8, false, false, true>),
+                    ("4×8 no fma", kernel::march::<4, 8, false, false, false>),
+                    ("2×16", kernel::march::<2, 16, false, false, true>),
+                ],
+            ),
+            (
+                vec![],
+                true,
+                vec![
+                    ("4×8 Na", kernel::march::<4, 8, true, false, true>),
+                    ("2×16 Na", kernel::march::<2, 16, true, false, true>),
+                ],
+            ),
+        ];
+        for (extra, species, kernels) in cases {
+            let (v, v64) = blob_pair(&extra, species);
+            let lt = v.lanes.as_ref().expect("the blob marches in lanes");
+            let c = v.channels();
+            for (name, kernel) in kernels {
+                let mut lit = 0;
+                for ray in &rays {
+                    let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+                    let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
+                    let te = kernel(&v, lt, ray, &mut l, &mut t).expect("this shape fits");
+                    let te3 = v64.integrate(ray, &mut l3, &mut t3);
+                    assert_eq!(te, te3, "{name}");
+                    let peak = l3.iter().fold(0f64, |m, &x| m.max(x));
+                    lit += (peak > 0.0) as usize;
+                    for k in 0..c {
+                        let e = (l[k] - l3[k]).abs() / peak.max(1e-300);
+                        assert!(e < 2e-5, "{name}, {ray:?} ch {k}: {} vs {}", l[k], l3[k]);
+                        assert!((t[k] - t3[k]).abs() < 1e-5, "{name} ch {k}");
+                    }
+                }
+                assert!(lit > 10, "{name}: only {lit} rays saw the fire");
+            }
+        }
+    }
+}

@@ -1,0 +1,344 @@
+//! The fire volume's parameters, read once into typed settings before anything is built (parse → settings →
+//! build, as ripgrep's flags): every value is validated here, so the build cannot fail on a parameter. The
+//! dataset's own parameters are read by [`crate::dataset::params`].
+
+use super::basis::Basis;
+use super::{params, ColorMode, Integrator, Mode, CIE_Y_INTEGRAL};
+use crate::ciddor::Air;
+use crate::params::{Component, Param, ParamReader, Values};
+use crate::soot::SootOptics;
+use crate::species::Element;
+use crate::spectrum::SpectralGrid;
+use crate::Error;
+
+/// Everything the volume's build reads from its parameters.
+pub(super) struct Settings {
+    pub mode: Mode,
+    /// The channels and their photometric factor.
+    pub basis: Basis,
+    /// Where absorption and emission come from.
+    pub emission: Emission,
+    /// σ_s per unit density (pbrt mode: before `scale`), if given.
+    pub sigma_s: Option<SpectrumFn>,
+    /// Majorant brick edge, voxels.
+    pub brick: usize,
+    /// `precision "f32"`: the march in f32 lanes where every product fits.
+    pub f32_lanes: bool,
+    pub integrator: Integrator,
+    /// March step, voxels.
+    pub stepsize: f64,
+    pub cutoff: f64,
+    pub g: f64,
+    /// The index of air and the ray integrator, when `refraction` is on.
+    pub refraction: Option<RefractionSettings>,
+    #[cfg(test)]
+    pub fault: String,
+}
+
+/// The coefficients' source, by mode.
+pub(super) enum Emission {
+    /// Pegoraro & Parker: soot (eq. 5) and atomic lines (eq. 7–12).
+    Physical {
+        optics: SootOptics,
+        alpha: f64,
+        sootscale: f64,
+        intensity: f64,
+        /// (symbol, element, m⁻³ per unit of its grid).
+        species: Vec<(String, Element, f64)>,
+    },
+    /// pbrt-v4's grid media.
+    Pbrt {
+        scale: f64,
+        sigma_a: SpectrumFn,
+        /// `Lescale` when one value (a per-voxel `Lescale` array is a dataset channel).
+        le_scale: f64,
+        /// A constant emission spectrum instead of the blackbody of a temperature grid.
+        le: Option<SpectrumFn>,
+    },
+}
+
+/// Refraction's parameters (P&P §3.7).
+pub(super) struct RefractionSettings {
+    pub air: Air,
+    /// Wavelength of the index field, nm.
+    pub wavelength: f64,
+    pub scale: f64,
+    /// The RK4 reference integrator instead of the Verlet march.
+    pub rk4: bool,
+}
+
+/// The component tables a volume's parameter list is read against.
+pub(super) fn components() -> Vec<&'static Component> {
+    #[cfg(test)]
+    return vec![&params::DATASET, &params::VOLUME, &params::FAULTS];
+    #[cfg(not(test))]
+    vec![&params::DATASET, &params::VOLUME]
+}
+
+impl Settings {
+    /// Reads and validates the volume's parameters (`list` for the raw spectrum values).
+    pub(super) fn read(r: &ParamReader, list: &[Param]) -> Result<Settings, Error> {
+        #[cfg(test)]
+        let fault = r.string("faultinjection")?;
+        #[cfg(test)]
+        if fault == "create" {
+            panic!("fault injection: panic during creation");
+        }
+        let mode = if r.string("mode")? == "pbrt" {
+            Mode::Pbrt
+        } else {
+            Mode::Physical
+        };
+        let basis = read_basis(r, mode)?;
+        let sigma_s = spectrum_param(r, "sigma_s", list)?;
+        let emission = match mode {
+            Mode::Physical => read_physical(r, list)?,
+            Mode::Pbrt => read_pbrt(r, list)?,
+        };
+        let brick = r.int("brick")? as usize;
+        let f32_lanes = r.string("precision")? == "f32";
+        let integrator =
+            Integrator::from_name(&r.string("integrator")?).unwrap_or(Integrator::March);
+        let stepsize = r.float("stepsize")?;
+        let cutoff = r.float("cutoff")?;
+        let g = r.float("g")?;
+        // Refraction's parameters are validated whether or not it is on.
+        let on = r.bool("refraction")?;
+        let air = Air {
+            temperature_k: r.float("ambienttemperature")?,
+            pressure_pa: r.float("pressure")?,
+            relative_humidity: r.float("humidity")?,
+            co2_ppm: r.float("co2")?,
+        };
+        let refraction = RefractionSettings {
+            air,
+            wavelength: r.float("refractionwavelength")?,
+            scale: r.float("refractionscale")?,
+            rk4: r.string("refractionintegrator")? == "rk4",
+        };
+        Ok(Settings {
+            mode,
+            basis,
+            emission,
+            sigma_s,
+            brick,
+            f32_lanes,
+            integrator,
+            stepsize,
+            cutoff,
+            g,
+            refraction: on.then_some(refraction),
+            #[cfg(test)]
+            fault,
+        })
+    }
+}
+
+/// The channels: spectral bins over [lambdamin, lambdamax], or XYZ bands; K = 683 lm/W (physical) or 1/∫ȳ
+/// (pbrt's film normalisation).
+fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
+    let colormode = r.string("colormode")?;
+    let grid = SpectralGrid::new(
+        r.float("lambdamin")?,
+        r.float("lambdamax")?,
+        r.int("bins")? as usize,
+    )
+    .map_err(|e| match e {
+        firemedium_core::Error::InvalidParameter {
+            name,
+            value,
+            expected,
+            ..
+        } => Error::InvalidParameter {
+            component: "volume",
+            name,
+            value,
+            expected,
+        },
+    })?;
+    let mode_c = if colormode == "rgb" {
+        ColorMode::Rgb
+    } else {
+        ColorMode::Spectral(grid)
+    };
+    let k = if mode == Mode::Pbrt {
+        1.0 / CIE_Y_INTEGRAL
+    } else {
+        crate::constants::LUMINOUS_EFFICACY
+    };
+    Ok(Basis { mode: mode_c, k })
+}
+
+/// Soot optics (a named fuel or a custom (λ, n, k) table), its scales, and the species.
+fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
+    for name in ["sigma_a", "scale", "Lescale", "Le"] {
+        if list.iter().any(|p| p.name == name) {
+            return Err(Error::invalid("volume", name, "given", "mode \"pbrt\" (in physical mode the fire's absorption and emission come from soot and species)"));
+        }
+    }
+    let optics = match r.string("fuel")?.as_str() {
+        "custom" => {
+            let v = r.numbers("fuelnk")?.ok_or_else(|| {
+                Error::invalid(
+                    "volume",
+                    "fuelnk",
+                    "unset",
+                    "(λ nm, n, k) triples for fuel \"custom\"",
+                )
+            })?;
+            if v.len() % 3 != 0 {
+                return Err(Error::invalid(
+                    "volume",
+                    "fuelnk",
+                    format!("{} values", v.len()),
+                    "(λ nm, n, k) triples",
+                ));
+            }
+            let rows: Vec<[f64; 3]> = v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+            SootOptics::from_table(&rows).map_err(|e| {
+                Error::invalid("volume", "fuelnk", e.to_string(), "a valid (λ, n, k) table")
+            })?
+        }
+        f => SootOptics::for_fuel(f)?,
+    };
+    let alpha = r.float("alpha")?;
+    let sootscale = r.float("sootscale")?;
+    let intensity = r.float("intensity")?;
+    let syms: Vec<String> = r
+        .strings("species")?
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect();
+    let scales = r.numbers("speciesscale")?.unwrap_or(vec![1.0]);
+    if scales.len() != 1 && scales.len() != syms.len() {
+        return Err(Error::invalid(
+            "dataset",
+            "speciesscale",
+            format!("{} values", scales.len()),
+            format!("one value or one per species ({})", syms.len()),
+        ));
+    }
+    let mut species = Vec::with_capacity(syms.len());
+    for (i, sym) in syms.into_iter().enumerate() {
+        let e = Element::by_symbol(&sym)?;
+        species.push((sym, e, scales.get(i).copied().unwrap_or(scales[0])));
+    }
+    Ok(Emission::Physical {
+        optics,
+        alpha,
+        sootscale,
+        intensity,
+        species,
+    })
+}
+
+/// pbrt-v4's σ_a, scale, Lescale and Le.
+fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
+    for name in ["fuel", "fuelnk", "alpha", "sootscale", "species"] {
+        if list.iter().any(|p| p.name == name) {
+            return Err(Error::invalid(
+                "volume",
+                name,
+                "given",
+                "mode \"physical\" (pbrt mode takes sigma_a, sigma_s, scale, Lescale, Le)",
+            ));
+        }
+    }
+    let scale = r.float("scale")?;
+    let sigma_a = spectrum_param(r, "sigma_a", list)?.unwrap_or_else(|| Box::new(|_| 1.0));
+    // A per-voxel Lescale array is a dataset channel (inline grids); then the scalar factor is 1.
+    let per_voxel = r.numbers("Lescale")?.is_some_and(|v| v.len() > 1);
+    let le_scale = if per_voxel { 1.0 } else { r.float("Lescale")? };
+    let le = spectrum_param(r, "Le", list)?;
+    Ok(Emission::Pbrt {
+        scale,
+        sigma_a,
+        le_scale,
+        le,
+    })
+}
+
+/// A spectrum as a function of wavelength (nm).
+pub(super) type SpectrumFn = Box<dyn Fn(f64) -> f64 + Send + Sync>;
+
+/// A spectrum parameter as a function of λ (nm): one constant, or (λ, value) pairs linear between, zero
+/// outside (pbrt-v4's piecewise-linear spectrum). Gray `rgb` values are constants.
+fn spectrum_param(
+    r: &ParamReader,
+    name: &str,
+    list: &[Param],
+) -> Result<Option<SpectrumFn>, Error> {
+    if let Some(p) = list.iter().find(|p| p.name == name) {
+        if let Values::Strings(v) = &p.values {
+            return Err(Error::invalid(
+                "volume",
+                name,
+                format!("the named spectrum \"{}\"", v.join(" ")),
+                "a constant or (λ nm, value) pairs",
+            ));
+        }
+        if p.ty == crate::params::ParamType::Rgb {
+            if let Values::Numbers(v) = &p.values {
+                if v.len() != 3 || v[0] != v[1] || v[1] != v[2] {
+                    return Err(Error::invalid("volume", name, format!("rgb {v:?}"), "a gray rgb (r = g = b) or a spectrum; coloured rgb needs a spectral uplift this plugin does not do"));
+                }
+            }
+        }
+    }
+    let Some(v) = r.numbers(name)? else {
+        return Ok(None);
+    };
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(Error::invalid(
+            "volume",
+            name,
+            format!("{v:?}"),
+            "finite values",
+        ));
+    }
+    if v.len() == 1 || (v.len() == 3 && v[0] == v[1] && v[1] == v[2]) {
+        let c = v[0];
+        if c < 0.0 {
+            return Err(Error::invalid("volume", name, c, "a value >= 0"));
+        }
+        return Ok(Some(Box::new(move |_| c)));
+    }
+    if v.len() % 2 != 0 || v.len() < 4 {
+        return Err(Error::invalid(
+            "volume",
+            name,
+            format!("{} values", v.len()),
+            "one constant or (λ nm, value) pairs",
+        ));
+    }
+    let pairs: Vec<(f64, f64)> = v.chunks(2).map(|c| (c[0], c[1])).collect();
+    for w in pairs.windows(2) {
+        if w[1].0 <= w[0].0 {
+            return Err(Error::invalid(
+                "volume",
+                name,
+                format!("wavelength {} after {}", w[1].0, w[0].0),
+                "increasing wavelengths",
+            ));
+        }
+    }
+    if pairs.iter().any(|p| p.1 < 0.0) {
+        return Err(Error::invalid(
+            "volume",
+            name,
+            "a negative value",
+            "values >= 0",
+        ));
+    }
+    Ok(Some(Box::new(move |l| {
+        if l < pairs[0].0 || l > pairs[pairs.len() - 1].0 {
+            return 0.0;
+        }
+        let i = pairs
+            .partition_point(|p| p.0 <= l)
+            .clamp(1, pairs.len() - 1);
+        let (a, b) = (pairs[i - 1], pairs[i]);
+        a.1 + (l - a.0) / (b.0 - a.0) * (b.1 - a.1)
+    })))
+}

@@ -1,0 +1,159 @@
+//! Temperature tables: per-channel functions of T alone (emission, T-dependent absorption, line
+//! cross-sections), tabulated once on a uniform grid of ≤ 0.5 K (at most 65 536 rows up to the hottest voxel)
+//! in lanes the f32 march reads directly, interpolated linearly; and [`RangeMax`], their maxima over any
+//! temperature range in O(1), for the majorant bricks.
+
+use super::lanes;
+
+/// A temperature table: `rows` × C values, row r at T = r·dt, each row stored as lanes of `lanes::W` channels
+/// (zero-padded), which the f32 march reads directly.
+#[derive(Debug, Clone, Default)]
+pub(super) struct TTable {
+    pub(super) dt: f64,
+    /// 1 / dt (the kernel multiplies).
+    pub(super) inv_dt: f64,
+    pub(super) rows: usize,
+    /// Lanes per row.
+    pub(super) chunks: usize,
+    pub(super) v: Vec<lanes::Lane>,
+}
+
+impl TTable {
+    /// Tabulates `f(T) -> C values` for T in [0, t_max], in parallel.
+    pub(super) fn build(t_max: f64, c: usize, f: &(dyn Fn(f64) -> Vec<f64> + Sync)) -> TTable {
+        let rows = ((t_max / 0.5).ceil() as usize + 2).clamp(2, 65_536);
+        let dt = if t_max > 0.0 {
+            t_max / (rows - 2) as f64
+        } else {
+            1.0
+        };
+        let chunks = c.div_ceil(lanes::W).max(1);
+        let mut v = vec![[0f32; lanes::W]; rows * chunks];
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .min(8);
+        let chunk = rows.div_ceil(threads);
+        std::thread::scope(|s| {
+            for (k, part) in v.chunks_mut(chunk * chunks).enumerate() {
+                s.spawn(move || {
+                    for (r, row) in part.chunks_mut(chunks).enumerate() {
+                        for (ch, x) in f((k * chunk + r) as f64 * dt).into_iter().enumerate() {
+                            row[ch / lanes::W][ch % lanes::W] = x as f32;
+                        }
+                    }
+                });
+            }
+        });
+        TTable {
+            dt,
+            inv_dt: 1.0 / dt,
+            rows,
+            chunks,
+            v,
+        }
+    }
+    /// The table of channels 0..c and the table of the rest (one build that computes both, split).
+    pub(super) fn split(&self, c: usize) -> (TTable, TTable) {
+        let total = self.chunks * lanes::W;
+        let part = |from: usize, to: usize| {
+            let n = to - from;
+            let chunks = n.div_ceil(lanes::W).max(1);
+            let mut v = vec![[0f32; lanes::W]; self.rows * chunks];
+            for r in 0..self.rows {
+                for ch in 0..n {
+                    v[r * chunks + ch / lanes::W][ch % lanes::W] = self.value(r, from + ch);
+                }
+            }
+            TTable {
+                dt: self.dt,
+                inv_dt: self.inv_dt,
+                rows: self.rows,
+                chunks,
+                v,
+            }
+        };
+        (part(0, c.min(total)), part(c.min(total), total))
+    }
+    /// The same values at every temperature.
+    pub(super) fn constant(row: &[f64]) -> TTable {
+        TTable::build(0.0, row.len(), &|_| row.to_vec())
+    }
+    /// Row index and fraction of T.
+    #[inline]
+    pub(super) fn locate(&self, t: f64) -> (usize, f32) {
+        let f = (t / self.dt).clamp(0.0, (self.rows - 1) as f64);
+        let i = (f as usize).min(self.rows - 2);
+        (i, (f - i as f64) as f32)
+    }
+    #[inline]
+    pub(super) fn value(&self, r: usize, c: usize) -> f32 {
+        self.v[r * self.chunks + c / lanes::W][c % lanes::W]
+    }
+    #[inline]
+    pub(super) fn at(&self, (i, fr): (usize, f32), c: usize) -> f32 {
+        let a = self.value(i, c);
+        a + fr * (self.value(i + 1, c) - a)
+    }
+    pub(super) fn bytes(&self) -> usize {
+        self.v.len() * std::mem::size_of::<lanes::Lane>()
+    }
+}
+
+/// The largest value of each of a temperature table's first `c` channels over any range of rows, in O(1): a
+/// sparse table (level k holds the maxima over 2ᵏ rows from each row), so the majorant bricks' temperature
+/// ranges cost two reads each instead of a scan of their rows (the rgb volume's bricks: 60 → 25 ms at 256³).
+/// The same values as a scan of the rows, bit for bit (tested).
+pub(super) struct RangeMax {
+    pub(super) dt: f64,
+    pub(super) rows: usize,
+    c: usize,
+    levels: Vec<Vec<f32>>,
+}
+
+impl RangeMax {
+    pub(super) fn new(tab: &TTable, c: usize) -> RangeMax {
+        let rows = tab.rows;
+        let mut levels = vec![(0..rows * c)
+            .map(|i| tab.value(i / c, i % c))
+            .collect::<Vec<f32>>()];
+        let mut k = 1;
+        while (1usize << k) <= rows {
+            let (half, prev) = (1usize << (k - 1), &levels[k - 1]);
+            let n = rows + 1 - (1usize << k);
+            let next: Vec<f32> = (0..n * c)
+                .map(|i| prev[i].max(prev[i + half * c]))
+                .collect();
+            levels.push(next);
+            k += 1;
+        }
+        RangeMax {
+            dt: tab.dt,
+            rows,
+            c,
+            levels,
+        }
+    }
+    /// The largest value of channel `ch` over T in [lo, hi] (rows rounded outward), ≥ 0.
+    pub(super) fn max_over(&self, lo: f64, hi: f64, ch: usize) -> f32 {
+        let last = (self.rows - 1) as f64;
+        let a = (lo / self.dt).floor().clamp(0.0, last) as usize;
+        let b = (hi / self.dt).ceil().clamp(0.0, last) as usize;
+        if b < a || ch >= self.c {
+            return 0.0;
+        }
+        let k = (usize::BITS - 1 - (b - a + 1).leading_zeros()) as usize;
+        let level = &self.levels[k];
+        level[a * self.c + ch]
+            .max(level[(b + 1 - (1usize << k)) * self.c + ch])
+            .max(0.0)
+    }
+}
+
+#[derive(Debug, Clone)]
+pub(super) struct SpeciesChannel {
+    pub(super) ch: usize,
+    pub(super) scale: f64,
+    pub(super) sigma: TTable,
+    pub(super) j: TTable,
+}
