@@ -157,6 +157,7 @@ pub struct StepLedger {
 }
 
 /// The state of a simulation.
+#[derive(Debug)]
 pub struct Sim {
     pub model: Model,
     pub cells: Vec<Cell>,
@@ -362,6 +363,7 @@ impl Kind {
 
 /// A seeded, smooth 3D value noise (trilinear over a hashed lattice with a quintic fade); three independent
 /// components give a vector potential whose curl is the turbulent wind.
+#[derive(Debug)]
 struct Noise {
     seed: u64,
 }
@@ -602,6 +604,7 @@ pub fn radiative_cooling(t: f64, k: f64, dt: f64) -> f64 {
 }
 
 /// The voxelised fields.
+#[derive(Debug)]
 pub struct Fields {
     pub dims: [usize; 3],
     pub p0: DVec3,
@@ -695,6 +698,51 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
         temperature,
         flame,
     }
+}
+
+/// Writes one voxelised frame; returns (bytes written, active voxels, peak temperature, peak soot fraction).
+pub fn write_frame(
+    sim: &Sim,
+    res: usize,
+    species: &[(String, f64)],
+    path: &std::path::Path,
+) -> Result<(usize, usize, f32, f32), String> {
+    let f = voxelise(sim, res);
+    let peak_flame = f
+        .flame
+        .iter()
+        .copied()
+        .fold(0f32, f32::max)
+        .max(f32::MIN_POSITIVE);
+    let species_data: Vec<(String, Vec<f32>)> = species
+        .iter()
+        .map(|(sym, n)| {
+            let scale = (*n / peak_flame as f64) as f32;
+            (sym.clone(), f.flame.iter().map(|v| v * scale).collect())
+        })
+        .collect();
+    let mut grids: Vec<(&str, [usize; 3], &[f32])> = vec![
+        ("density", f.dims, &f.density),
+        ("temperature", f.dims, &f.temperature),
+    ];
+    for (sym, data) in &species_data {
+        grids.push((sym.as_str(), f.dims, data));
+    }
+    let active = f.density.iter().filter(|v| **v != 0.0).count();
+    if active == 0 {
+        return Err(format!(
+            "{}: the fire holds no gas at t = {:.3} s (not lit yet or burnt out); choose a later or earlier frame",
+            path.display(),
+            sim.time
+        ));
+    }
+    let bytes = firemedium_plugin::dataset::vdb::write(&grids, f.p0, glam::DVec3::splat(f.voxel));
+    crate::imageio::write_atomic(path, |tmp| {
+        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: {e}", tmp.display()))
+    })?;
+    let tmax = f.temperature.iter().copied().fold(0f32, f32::max);
+    let fmax = f.density.iter().copied().fold(0f32, f32::max);
+    Ok((bytes.len(), active, tmax, fmax))
 }
 
 #[cfg(test)]

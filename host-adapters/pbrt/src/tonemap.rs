@@ -28,7 +28,6 @@
 
 use firemedium_core::{blackbody, cie};
 use glam::DVec3;
-use std::path::Path;
 
 /// Adaptation luminances (cd/m²) of the named surroundings.
 pub const NIGHT: f64 = 1.0;
@@ -256,65 +255,10 @@ fn percentile(v: &[f64], q: f64) -> Option<f64> {
     Some(pos[((pos.len() - 1) as f64 * q) as usize])
 }
 
-/// The sRGB transfer curve of a display-linear value in [0, 1].
-pub fn srgb_encode(c: f64) -> f64 {
-    let c = c.clamp(0.0, 1.0);
-    if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Writes display-linear pixels as an sRGB-encoded PNG, 8 or 16 bits per channel, atomically.
-pub fn write_png(
-    path: &Path,
-    w: usize,
-    h: usize,
-    px: &[[f64; 3]],
-    sixteen: bool,
-) -> Result<(), String> {
-    let data: Vec<u8> = if sixteen {
-        px.iter()
-            .flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
-            .flat_map(|v| v.to_be_bytes())
-            .collect()
-    } else {
-        px.iter()
-            .flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
-            .collect()
-    };
-    write_png_bytes(path, w, h, &data, sixteen)
-}
-
-/// Writes encoded RGB bytes (8-bit, or 16-bit big-endian) as a PNG, atomically.
-pub fn write_png_bytes(
-    path: &Path,
-    w: usize,
-    h: usize,
-    data: &[u8],
-    sixteen: bool,
-) -> Result<(), String> {
-    crate::render::write_atomic(path, |tmp| {
-        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-        let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
-        e.set_color(png::ColorType::Rgb);
-        e.set_depth(if sixteen {
-            png::BitDepth::Sixteen
-        } else {
-            png::BitDepth::Eight
-        });
-        let mut wr = e
-            .write_header()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        wr.write_image_data(data)
-            .map_err(|e| format!("{}: {e}", path.display()))
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::imageio::srgb_encode;
 
     fn nr(white: White, adapt: Adapt) -> Options {
         Options {

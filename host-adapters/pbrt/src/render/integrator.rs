@@ -98,14 +98,14 @@ fn env(light: &Light, w: Vec3A) -> S {
         } => {
             let d = (*to_light * w).normalize_or_zero();
             let [u, v] = if img.w == img.h {
-                super::image::equal_area_sphere_to_square(d.to_array())
+                crate::imageio::equal_area_sphere_to_square(d.to_array())
             } else {
                 [
                     0.5 + d.y.atan2(d.x) / (2.0 * PI),
                     d.z.clamp(-1.0, 1.0).acos() / PI,
                 ]
             };
-            let c = img.bilerp(u, v, super::image::Wrap::Clamp);
+            let c = img.bilerp(u, v, crate::imageio::Wrap::Clamp);
             (basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]) * *scale
         }
         _ => S::ZERO,
@@ -151,6 +151,7 @@ fn fire_pdf_direction(
 }
 
 /// Renders radiance along camera rays.
+#[derive(Debug)]
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
     pub mask: S,

@@ -1,8 +1,7 @@
 //! The pbrt-v4 host: a volumetric path tracer for fire scenes. `scene` builds a render scene from a pbrt-v4 file
-//! (media through the plugin), `integrator` is `volpath`, and `render` runs it over tiles in parallel and writes
-//! the film: EXR (linear sRGB, absolute units) and a PNG preview.
+//! (media through the plugin), `integrator` is `volpath`, and [`render`] runs it over tiles in parallel into an
+//! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
-pub mod image;
 pub mod integrator;
 pub mod ply;
 pub mod scene;
@@ -13,7 +12,6 @@ use firemedium_core::cie;
 use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// Set by Ctrl-C: tiles not yet started are skipped and what is done is written.
@@ -27,6 +25,18 @@ pub struct Image {
     pub rgb: Vec<[f32; 3]>,
     pub xyz: Vec<DVec3>,
     pub complete: bool,
+}
+
+impl Image {
+    /// Writes the linear, absolute image as an RGB float EXR, with the fire's hottest temperature (K), if any,
+    /// as the [`crate::imageio::FIRE_TEMPERATURE_ATTRIBUTE`] attribute.
+    pub fn write_exr(
+        &self,
+        path: &std::path::Path,
+        fire_temperature: Option<f64>,
+    ) -> Result<(), String> {
+        crate::imageio::write_exr(path, self.w, self.h, &self.rgb, fire_temperature)
+    }
 }
 
 /// Render statistics.
@@ -140,93 +150,22 @@ pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec
     (Vec3A::from(o.as_vec3()), Vec3A::from(d.as_vec3()))
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
-pub(crate) fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), String> {
-    let tmp = path.with_extension(format!(
-        "tmp-{}.{}",
-        std::process::id(),
-        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
-    ));
-    write(&tmp).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })?;
-    std::fs::rename(&tmp, path)
-        .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
-}
-
-/// Writes the image as a linear f32 RGB EXR (absolute units).
-/// The EXR attribute that records the hottest temperature (K) of the scene's fire media: the tone mapper's
-/// default white (`firemedium tonemap --white fire`).
-pub const FIRE_TEMPERATURE_ATTRIBUTE: &str = "firemediumFireTemperature";
-
-/// Writes the linear, absolute image as an RGB float EXR (with the fire temperature, if any, as an attribute).
-pub fn write_exr(img: &Image, path: &Path, fire_temperature: Option<f64>) -> Result<(), String> {
-    use exr::prelude::*;
-    write_atomic(path, |tmp| {
-        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
-            let p = img.rgb[x + img.w * y];
-            (p[0], p[1], p[2])
-        });
-        let mut image = Image::from_channels((img.w, img.h), channels);
-        if let Some(t) = fire_temperature {
-            image.attributes.other.insert(
-                Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
-                AttributeValue::F64(t),
-            );
-        }
-        image
-            .write()
-            .to_file(tmp)
-            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
-    })
-}
-
-/// The fire temperature an EXR records (see [`write_exr`]), if any.
-pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, String> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
-    // (Written as an image attribute; a reader may file an unknown attribute under the layer's.)
-    let key = exr::prelude::Text::from(FIRE_TEMPERATURE_ATTRIBUTE);
-    Ok(meta.headers.first().and_then(|h| {
-        let v = h
-            .shared_attributes
-            .other
-            .get(&key)
-            .or_else(|| h.own_attributes.other.get(&key));
-        match v {
-            Some(exr::meta::attribute::AttributeValue::F64(t)) if t.is_finite() && *t > 0.0 => {
-                Some(*t)
-            }
-            _ => None,
-        }
-    }))
-}
-
-/// Writes the PNG preview: the visual-adaptation tone mapping with `options` (`crate::tonemap`).
-pub fn write_png(
-    img: &Image,
-    path: &Path,
-    options: &crate::tonemap::Options,
-) -> Result<(), String> {
-    let px = crate::tonemap::map(&img.xyz, options);
-    crate::tonemap::write_png(path, img.w, img.h, &px, false)
-}
-
-/// The output paths: `-o` or the film's filename (relative to the scene), and the PNG beside it.
-pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (PathBuf, PathBuf) {
-    let exr = match (out, film) {
-        (Some(o), _) => o.to_path_buf(),
-        (None, Some(f)) => scene_path.parent().unwrap_or(Path::new(".")).join(f),
-        (None, None) => scene_path.with_extension("exr"),
-    };
-    let exr = if exr.extension().is_some_and(|e| e == "exr") {
-        exr
-    } else {
-        exr.with_extension("exr")
-    };
-    let png = exr.with_extension("png");
-    (exr, png)
+/// The pixels whose centre and four corners all see a diffuse surface first: no fire, no mirror or coating
+/// reflecting it, inside the pixel's footprint.
+pub fn surface_mask(sc: &scene::Scene, rng: &mut Rng) -> Vec<bool> {
+    let (w, h) = sc.res;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f64, (i / w) as f64);
+            [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                .iter()
+                .all(|&(u, v)| {
+                    let (o, d) = camera_ray(sc, x + u, y + v, rng);
+                    sc.bvh
+                        .intersect(o, d, sc.eps, f32::INFINITY)
+                        .and_then(|hit| sc.bvh.prims[hit.prim].material)
+                        .is_some_and(|m| matches!(sc.materials[m], scene::Material::Diffuse(_)))
+                })
+        })
+        .collect()
 }

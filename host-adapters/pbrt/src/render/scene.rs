@@ -32,10 +32,10 @@ pub enum Tex {
     },
     /// An image: linear RGB × scale (1 − it when inverted), uplifted with the bins' box basis.
     Image {
-        img: std::sync::Arc<super::image::RgbImage>,
+        img: std::sync::Arc<crate::imageio::RgbImage>,
         scale: f32,
         invert: bool,
-        wrap: super::image::Wrap,
+        wrap: crate::imageio::Wrap,
         basis: [S; 3],
     },
 }
@@ -109,7 +109,7 @@ pub enum Light {
     /// An environment map: world → light-space rotation, linear RGB × scale, equal-area square (pbrt-v4) or
     /// lat-long (2:1) parameterisation.
     InfiniteMap {
-        img: std::sync::Arc<super::image::RgbImage>,
+        img: std::sync::Arc<crate::imageio::RgbImage>,
         to_light: Mat3A,
         scale: f32,
         basis: [S; 3],
@@ -853,7 +853,7 @@ impl Builder {
                                 if p.iter().any(|x| x.name == "L") {
                                     return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
                                 }
-                                let img = super::image::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
+                                let img = crate::imageio::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
                                 if !(img.w == img.h || img.w == 2 * img.h) {
                                     return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
                                 }
@@ -944,12 +944,12 @@ impl Builder {
                             e => return Err(err(loc, format!("imagemap: encoding \"{e}\" is not supported (sRGB, linear)"))),
                         };
                         let wrap = match string(&p, "wrap").unwrap_or("repeat") {
-                            "repeat" => super::image::Wrap::Repeat,
-                            "clamp" => super::image::Wrap::Clamp,
-                            "black" => super::image::Wrap::Black,
+                            "repeat" => crate::imageio::Wrap::Repeat,
+                            "clamp" => crate::imageio::Wrap::Clamp,
+                            "black" => crate::imageio::Wrap::Black,
                             w => return Err(err(loc, format!("imagemap: wrap \"{w}\" is not one of repeat, clamp, black"))),
                         };
-                        let img = super::image::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
+                        let img = crate::imageio::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
                         let invert = p.iter().find(|x| x.name == "invert").and_then(|x| x.bools()).map(|b| b[0]).unwrap_or(false);
                         Tex::Image { img: std::sync::Arc::new(img), scale: num(&p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
                     }

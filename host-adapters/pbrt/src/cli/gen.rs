@@ -1,8 +1,8 @@
 //! `firemedium gen KIND -o OUT.vdb`: a fire dataset from the blob model (`crate::gen`), written as OpenVDB.
 
-use crate::gen::{self, Kind, Sim};
 use clap::Args;
-use std::path::{Path, PathBuf};
+use firemedium::gen::{write_frame, Kind, Sim};
+use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct GenArgs {
@@ -50,51 +50,6 @@ fn parse_frames(s: &str) -> Result<(u32, u32), String> {
         return Err(bad());
     }
     Ok((a, b))
-}
-
-/// Writes one voxelised frame; returns (bytes written, active voxels, peak temperature, peak soot fraction).
-pub fn write_frame(
-    sim: &Sim,
-    res: usize,
-    species: &[(String, f64)],
-    path: &Path,
-) -> Result<(usize, usize, f32, f32), String> {
-    let f = gen::voxelise(sim, res);
-    let peak_flame = f
-        .flame
-        .iter()
-        .copied()
-        .fold(0f32, f32::max)
-        .max(f32::MIN_POSITIVE);
-    let species_data: Vec<(String, Vec<f32>)> = species
-        .iter()
-        .map(|(sym, n)| {
-            let scale = (*n / peak_flame as f64) as f32;
-            (sym.clone(), f.flame.iter().map(|v| v * scale).collect())
-        })
-        .collect();
-    let mut grids: Vec<(&str, [usize; 3], &[f32])> = vec![
-        ("density", f.dims, &f.density),
-        ("temperature", f.dims, &f.temperature),
-    ];
-    for (sym, data) in &species_data {
-        grids.push((sym.as_str(), f.dims, data));
-    }
-    let active = f.density.iter().filter(|v| **v != 0.0).count();
-    if active == 0 {
-        return Err(format!(
-            "{}: the fire holds no gas at t = {:.3} s (not lit yet or burnt out); choose a later or earlier frame",
-            path.display(),
-            sim.time
-        ));
-    }
-    let bytes = firemedium_plugin::dataset::vdb::write(&grids, f.p0, glam::DVec3::splat(f.voxel));
-    crate::render::write_atomic(path, |tmp| {
-        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: {e}", tmp.display()))
-    })?;
-    let tmax = f.temperature.iter().copied().fold(0f32, f32::max);
-    let fmax = f.density.iter().copied().fold(0f32, f32::max);
-    Ok((bytes.len(), active, tmax, fmax))
 }
 
 pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {

@@ -1,6 +1,11 @@
-//! Images for `imagemap` textures and `infinite` light maps: EXR (linear) and PNG (8/16-bit, sRGB-encoded unless
-//! told otherwise), looked up bilinearly with pbrt-v4's conventions (pixel centres at (i + ½)/res, row 0 at the
-//! top, `repeat`/`clamp`/`black` wrapping).
+//! Image files in and out.
+//!
+//! In: images for `imagemap` textures, `infinite` light maps and `compare`/`tonemap`: EXR (linear) and PNG
+//! (8/16-bit, sRGB-encoded unless told otherwise), looked up bilinearly with pbrt-v4's conventions (pixel
+//! centres at (i + ½)/res, row 0 at the top, `repeat`/`clamp`/`black` wrapping).
+//!
+//! Out: the film as a linear float EXR (with the fire's hottest temperature as an attribute), display pixels as
+//! an 8/16-bit sRGB PNG; every file is written to a temporary name beside it and renamed into place.
 
 use std::path::Path;
 
@@ -160,6 +165,133 @@ pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
     u = u.copysign(d[0]);
     v = v.copysign(d[1]);
     [0.5 * (u + 1.0), 0.5 * (v + 1.0)]
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let tmp = path.with_extension(format!(
+        "tmp-{}.{}",
+        std::process::id(),
+        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
+    ));
+    write(&tmp).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })?;
+    std::fs::rename(&tmp, path)
+        .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
+}
+
+/// The EXR attribute that records the hottest temperature (K) of the scene's fire media: the tone mapper's
+/// default white (`firemedium tonemap --white fire`).
+pub const FIRE_TEMPERATURE_ATTRIBUTE: &str = "firemediumFireTemperature";
+
+/// Writes `w` × `h` linear RGB pixels (row-major) as an RGB float EXR (with the fire temperature, if any, as an
+/// attribute).
+pub fn write_exr(
+    path: &Path,
+    w: usize,
+    h: usize,
+    rgb: &[[f32; 3]],
+    fire_temperature: Option<f64>,
+) -> Result<(), String> {
+    use exr::prelude::*;
+    write_atomic(path, |tmp| {
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p = rgb[x + w * y];
+            (p[0], p[1], p[2])
+        });
+        let mut image = Image::from_channels((w, h), channels);
+        if let Some(t) = fire_temperature {
+            image.attributes.other.insert(
+                Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                AttributeValue::F64(t),
+            );
+        }
+        image
+            .write()
+            .to_file(tmp)
+            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+    })
+}
+
+/// The fire temperature an EXR records (see [`write_exr`]), if any.
+pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    // (Written as an image attribute; a reader may file an unknown attribute under the layer's.)
+    let key = exr::prelude::Text::from(FIRE_TEMPERATURE_ATTRIBUTE);
+    Ok(meta.headers.first().and_then(|h| {
+        let v = h
+            .shared_attributes
+            .other
+            .get(&key)
+            .or_else(|| h.own_attributes.other.get(&key));
+        match v {
+            Some(exr::meta::attribute::AttributeValue::F64(t)) if t.is_finite() && *t > 0.0 => {
+                Some(*t)
+            }
+            _ => None,
+        }
+    }))
+}
+
+/// The sRGB transfer curve of a display-linear value in [0, 1].
+pub fn srgb_encode(c: f64) -> f64 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Writes display-linear pixels as an sRGB-encoded PNG, 8 or 16 bits per channel, atomically.
+pub fn write_png(
+    path: &Path,
+    w: usize,
+    h: usize,
+    px: &[[f64; 3]],
+    sixteen: bool,
+) -> Result<(), String> {
+    let data: Vec<u8> = if sixteen {
+        px.iter()
+            .flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
+            .flat_map(|v| v.to_be_bytes())
+            .collect()
+    } else {
+        px.iter()
+            .flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
+            .collect()
+    };
+    write_png_bytes(path, w, h, &data, sixteen)
+}
+
+/// Writes encoded RGB bytes (8-bit, or 16-bit big-endian) as a PNG, atomically.
+pub fn write_png_bytes(
+    path: &Path,
+    w: usize,
+    h: usize,
+    data: &[u8],
+    sixteen: bool,
+) -> Result<(), String> {
+    write_atomic(path, |tmp| {
+        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+        let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
+        e.set_color(png::ColorType::Rgb);
+        e.set_depth(if sixteen {
+            png::BitDepth::Sixteen
+        } else {
+            png::BitDepth::Eight
+        });
+        let mut wr = e
+            .write_header()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        wr.write_image_data(data)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
 }
 
 #[cfg(test)]

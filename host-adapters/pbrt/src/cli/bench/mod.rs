@@ -54,7 +54,7 @@ pub struct ErrorArgs {
     #[arg(long)]
     surface: Option<String>,
     /// The surface scene's resolution.
-    #[arg(long, default_value = "80x60", value_parser = crate::render_cmd::parse_resolution)]
+    #[arg(long, default_value = "80x60", value_parser = crate::args::parse_resolution)]
     surface_resolution: (usize, usize),
     /// The surface ladder's largest spp, and its reference's spp.
     #[arg(long, default_value_t = 64)]
@@ -163,8 +163,8 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         fine_step.render_s,
         a.reference_bins,
         half_fine.render_s + half.render_s,
-        error::errors(&half.image, &fine_step.image).0,
-        error::errors(&half.image, &half_fine.image).0,
+        firemedium::metrics::errors(&half.image, &fine_step.image).0,
+        firemedium::metrics::errors(&half.image, &half_fine.image).0,
     );
     out += "| configuration | load s | render s | total s | rays/s | steps/s | samples | samples/s/core | rel. RMSE |\n|---|---|---|---|---|---|---|---|---|\n";
     // Over 400–780 nm, the range that holds ȳ for a fire (380–400 nm adds 1.6e-7 here).
@@ -217,7 +217,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         let total = r.load_s + r.render_s;
         // Every row against the one reference: rgb's error is then its bands' (it does not converge to the
         // spectral answer); refraction bends rays, so its error is mostly the refraction itself.
-        let (err, _) = error::errors(&r.image, &reference);
+        let (err, _) = firemedium::metrics::errors(&r.image, &reference);
         out += &format!(
             "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.3e} | {:.3e} | {:.3e} | {:.2e} |\n",
             r.load_s,
@@ -297,14 +297,14 @@ fn write_ladder(
     };
     let (csv_path, svg_path, png_path) = (with(".csv"), with(".svg"), with(".png"));
     let write = |path: &std::path::Path, bytes: &[u8]| {
-        crate::render::write_atomic(path, |tmp| {
+        firemedium::imageio::write_atomic(path, |tmp| {
             std::fs::write(tmp, bytes).map_err(|e| format!("{}: {e}", tmp.display()))
         })
     };
     write(&csv_path, error::csv(points).as_bytes())?;
     write(&svg_path, error::svg(points, title).as_bytes())?;
     let (w, h, rgb) = error::png(points, title);
-    crate::tonemap::write_png_bytes(&png_path, w, h, &rgb, false)?;
+    firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
         out += &format!(

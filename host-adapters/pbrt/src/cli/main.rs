@@ -7,16 +7,14 @@
 //! Exit status: 0 on success, 1 when a file is refused, 2 on bad arguments (one line on stderr, never a
 //! panic).
 
+mod args;
 mod bench;
-mod compare_cmd;
+mod compare;
 mod gen;
-mod gen_cmd;
 mod info;
 mod physics;
 mod render;
-mod render_cmd;
 mod tonemap;
-mod tonemap_cmd;
 
 use clap::{Parser, Subcommand};
 use std::io::Write;
@@ -40,13 +38,13 @@ enum Command {
     /// Describe a voxel dataset file: dims, bounds, channels with statistics, bytes, load time.
     Info(info::InfoArgs),
     /// Render a pbrt-v4 scene (fire media through the plugin) to EXR and a PNG preview.
-    Render(render_cmd::RenderArgs),
+    Render(render::RenderArgs),
     /// Error of renders against a reference over the pixels that see a surface (luminance MSE).
-    Compare(compare_cmd::CompareArgs),
+    Compare(compare::CompareArgs),
     /// What an observer sees of an absolute EXR: visual adaptation (von Kries + Naka–Rushton) to a PNG.
-    Tonemap(tonemap_cmd::TonemapArgs),
+    Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
-    Gen(gen_cmd::GenArgs),
+    Gen(gen::GenArgs),
     /// Benchmarks: stability (stiff and extreme cases).
     Bench(bench::BenchArgs),
 }
@@ -76,10 +74,10 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Physics(args) => physics::run(&args).map_err(|m| (2, m)),
         Command::Info(args) => info::run(&args),
-        Command::Render(args) => render_cmd::run(&args),
-        Command::Compare(args) => compare_cmd::run(&args),
-        Command::Tonemap(args) => tonemap_cmd::run(&args),
-        Command::Gen(args) => gen_cmd::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::Tonemap(args) => tonemap::run(&args),
+        Command::Gen(args) => gen::run(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

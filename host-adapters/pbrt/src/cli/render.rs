@@ -1,10 +1,13 @@
 //! `firemedium render SCENE.pbrt [-o OUT.exr] [--spp N] [--threads N] [--seed S] [--fire-light W] [--stats]`.
 
-use crate::render::{self, scene};
+use crate::args::parse_resolution;
 use clap::Args;
+use firemedium::render::{self, scene};
+use firemedium::tonemap;
+use firemedium::{imageio, render::Image};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -35,30 +38,18 @@ pub struct RenderArgs {
     fire_light: String,
     /// The PNG preview's adaptation, as `firemedium tonemap --adapt`: image (default), night, indoor, day or a
     /// luminance in cd/m².
-    #[arg(long, default_value = "image", value_parser = crate::tonemap::parse_adapt, allow_negative_numbers = true)]
-    adapt: crate::tonemap::Adapt,
+    #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
+    adapt: tonemap::Adapt,
     /// The PNG preview's white, as `firemedium tonemap --white`: fire (default: the blackbody at the hottest
     /// fire temperature, D65 without a fire), d65, a temperature (1800K) or a chromaticity (x,y).
-    #[arg(long, default_value = "fire", value_parser = crate::tonemap::parse_white)]
-    white: crate::tonemap::WhiteArg,
+    #[arg(long, default_value = "fire", value_parser = tonemap::parse_white)]
+    white: tonemap::WhiteArg,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
     /// No warnings or progress.
     #[arg(long, short)]
     quiet: bool,
-}
-
-/// `WxH`, both from 1 to 65536.
-pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
-    let bad =
-        || format!("'{s}' is not a resolution WxH with W and H from 1 to 65536 (say, 320x240)");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h): (usize, usize) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
-    if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
-        return Err(bad());
-    }
-    Ok((w, h))
 }
 
 pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
@@ -101,21 +92,21 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     let (img, st) =
         pool.install(|| render::render(&sc, a.seed, &|n, _| bar.set_position(n as u64)));
     bar.finish_and_clear();
-    let (exr, png) = render::outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
+    let (exr, png) = outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
     // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
     let fire_t = sc.fire_temperature();
-    let tone = crate::tonemap::Options {
+    let tone = tonemap::Options {
         white: match a.white {
-            crate::tonemap::WhiteArg::Fire => {
-                fire_t.map_or(crate::tonemap::White::D65, crate::tonemap::White::Blackbody)
+            tonemap::WhiteArg::Fire => {
+                fire_t.map_or(tonemap::White::D65, tonemap::White::Blackbody)
             }
-            crate::tonemap::WhiteArg::Given(w) => w,
+            tonemap::WhiteArg::Given(w) => w,
         },
         adapt: a.adapt,
         ..Default::default()
     };
-    render::write_exr(&img, &exr, fire_t).map_err(|e| (1, e))?;
-    render::write_png(&img, &png, &tone).map_err(|e| (1, e))?;
+    img.write_exr(&exr, fire_t).map_err(|e| (1, e))?;
+    write_preview(&img, &png, &tone).map_err(|e| (1, e))?;
     let mut out = format!(
         "wrote {} and {} ({}×{}, {} spp)\n",
         exr.display(),
@@ -160,4 +151,26 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         ));
     }
     Ok(out)
+}
+
+/// Writes the PNG preview: the visual-adaptation tone mapping with `options`.
+pub fn write_preview(img: &Image, path: &Path, options: &tonemap::Options) -> Result<(), String> {
+    let px = tonemap::map(&img.xyz, options);
+    imageio::write_png(path, img.w, img.h, &px, false)
+}
+
+/// The output paths: `-o` or the film's filename (relative to the scene), and the PNG beside it.
+pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (PathBuf, PathBuf) {
+    let exr = match (out, film) {
+        (Some(o), _) => o.to_path_buf(),
+        (None, Some(f)) => scene_path.parent().unwrap_or(Path::new(".")).join(f),
+        (None, None) => scene_path.with_extension("exr"),
+    };
+    let exr = if exr.extension().is_some_and(|e| e == "exr") {
+        exr
+    } else {
+        exr.with_extension("exr")
+    };
+    let png = exr.with_extension("png");
+    (exr, png)
 }

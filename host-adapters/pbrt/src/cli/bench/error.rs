@@ -2,6 +2,7 @@
 //! takes — march at a ladder of steps (spectral and rgb), delta and ratio tracking at a ladder of samples per
 //! pixel — against a converged reference, as a CSV and a log–log plot (SVG and PNG).
 
+use firemedium::metrics::errors;
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume, Ray};
 use rayon::prelude::*;
@@ -58,28 +59,6 @@ pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, 
     let seconds = start.elapsed().as_secs_f64();
     let evals = rows.iter().map(|r| r.1).sum();
     (rows.into_iter().flat_map(|r| r.0).collect(), seconds, evals)
-}
-
-/// The error metrics of DESIGN.md, of image `a` against the reference `r` (the same pixels): relative RMSE
-/// √mean((a − r)²) / √mean(r²), and relMSE mean((a − r)² / (r² + 0.01·mean(r)²)). (Until session 5 the RMSE
-/// was divided by mean(r) instead, smaller by √mean(r²)/mean(r): 4.59 on the perf workload's image, 4.62 on
-/// error-vs-time's — a compact fire on black.)
-pub fn errors(a: &[f64], r: &[f64]) -> (f64, f64) {
-    let n = r.len().max(1) as f64;
-    let mean = r.iter().sum::<f64>() / n;
-    let ms = r.iter().map(|y| y * y).sum::<f64>() / n;
-    let mse = a.iter().zip(r).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / n;
-    // (A pixel equal to the reference adds 0, also where the reference is black everywhere.)
-    let rel_mse = a
-        .iter()
-        .zip(r)
-        .map(|(x, y)| match (x - y).powi(2) {
-            0.0 => 0.0,
-            d2 => d2 / (y * y + 0.01 * mean * mean),
-        })
-        .sum::<f64>()
-        / n;
-    (if ms > 0.0 { (mse / ms).sqrt() } else { 0.0 }, rel_mse)
 }
 
 /// The whole ladder on `file`; returns the points and a description of the reference.
@@ -163,7 +142,7 @@ pub fn surface_ladder(
     max_spp: usize,
     ref_spp: usize,
 ) -> Result<(Vec<Point>, String), String> {
-    use crate::render::{self, scene as sc};
+    use firemedium::render::{self, scene as sc, surface_mask};
     let load = |spp: usize, light: bool| {
         sc::load(
             scene,
@@ -179,7 +158,7 @@ pub fn surface_ladder(
     let luminance = |img: &render::Image| img.xyz.iter().map(|v| v.y).collect::<Vec<f64>>();
     let reference_scene = load(ref_spp, true)?;
     let mut rng = firemedium_core::rng::Rng::new(0);
-    let mask = crate::compare_cmd::surface_mask(&reference_scene, &mut rng);
+    let mask = surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
     let reference = luminance(&reference);
     let masked = |v: &[f64]| -> Vec<f64> {
@@ -592,22 +571,4 @@ pub fn png(points: &[Point], title: &str) -> (usize, usize, Vec<u8>) {
         draw_text(&mut img, w, lx as i64, ly as i64 - 3, name, 1);
     }
     (w, h, img)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::errors;
-
-    #[test]
-    fn relative_rmse_and_relmse_are_designs() {
-        // r = (1, 3, 0), a = (1, 3.1, 0.2): mean (a − r)² = 0.05/3, mean r² = 10/3, so rel. RMSE = √0.005;
-        // relMSE = (0.01/(9 + ε) + 0.04/ε) / 3 with ε = 0.01·mean(r)² = 0.01·(4/3)².
-        let (rmse, rel) = errors(&[1.0, 3.1, 0.2], &[1.0, 3.0, 0.0]);
-        assert!((rmse - 0.005f64.sqrt()).abs() < 1e-15, "{rmse}");
-        let eps = 0.01 * (4.0f64 / 3.0).powi(2);
-        let want = (0.01 / (9.0 + eps) + 0.04 / eps) / 3.0;
-        assert!((rel - want).abs() < 1e-12, "{rel} vs {want}");
-        assert_eq!(errors(&[0.0, 0.0], &[0.0, 0.0]), (0.0, 0.0));
-        assert_eq!(errors(&[1.0, 0.0], &[0.0, 0.0]).1, f64::INFINITY);
-    }
 }

@@ -1,9 +1,9 @@
 //! `firemedium tonemap IN.exr -o OUT.png`: the visual-adaptation tone mapping (`crate::tonemap`) of an absolute
 //! render, with the observer's adaptation and white point as options.
 
-use crate::render::{self, image};
-use crate::tonemap::{self, Adapt, Operator, Options, White, WhiteArg};
 use clap::Args;
+use firemedium::imageio;
+use firemedium::tonemap::{self, Adapt, Operator, Options, White, WhiteArg};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -41,10 +41,10 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
             format!("--exposure {}: expected stops within ±100", a.exposure),
         ));
     }
-    let img = image::read(&a.input, false).map_err(|e| (1, e))?;
+    let img = imageio::read(&a.input, false).map_err(|e| (1, e))?;
     let (white, from) = match a.white {
         WhiteArg::Given(w) => (w, "given"),
-        WhiteArg::Fire => match render::read_fire_temperature(&a.input).map_err(|e| (1, e))? {
+        WhiteArg::Fire => match imageio::read_fire_temperature(&a.input).map_err(|e| (1, e))? {
             Some(t) => (White::Blackbody(t), "the render's fire"),
             None => (White::D65, "none recorded: D65"),
         },
@@ -61,7 +61,7 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
     };
     let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
-    tonemap::write_png(&a.output, img.w, img.h, &px, a.bits == 16).map_err(|e| (1, e))?;
+    imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16).map_err(|e| (1, e))?;
     let white_text = match white {
         White::D65 => "D65".to_string(),
         White::Blackbody(t) => format!("blackbody {t:.0} K"),

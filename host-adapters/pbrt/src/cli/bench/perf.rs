@@ -2,7 +2,7 @@
 //! fire, a march step of half a voxel, soot + blackbody, emission–absorption only (their 40–80 s on a dual 3 GHz
 //! Xeon in 2006) — timed from loading the grid to the last ray, with the error against a converged reference.
 
-use crate::gen::{Kind, Sim};
+use firemedium::gen::{write_frame, Kind, Sim};
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{FireVolume, Ray};
 use glam::DVec3;
@@ -31,7 +31,7 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
     if !path.is_file() {
         let mut sim = Sim::new(Kind::Campfire, 1);
         sim.run_to(2.0);
-        crate::gen_cmd::write_frame(&sim, res, &[], &path)?;
+        write_frame(&sim, res, &[], &path)?;
     }
     Ok(path)
 }

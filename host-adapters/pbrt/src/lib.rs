@@ -1,0 +1,24 @@
+//! # firemedium, the pbrt-v4 host
+//!
+//! A library that renders pbrt-v4 scenes whose media are fires loaded from the firemedium plugin (through its C
+//! ABI, with `firemedium-loader`), and the pieces around it; the `firemedium` command line (`src/cli/`) is a thin
+//! layer of commands over it.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`render`] | scene building from a pbrt-v4 file, the `volpath` integrator, tiles on rayon → an absolute [`render::Image`] |
+//! | [`imageio`] | EXR/PNG in (textures, light maps, references) and out (the film, previews), written atomically |
+//! | [`tonemap`] | visual adaptation (P&P §3.8): XYZ in cd/m² → display sRGB (von Kries + Naka–Rushton) |
+//! | [`gen`] | Stam & Fiume's blob fire model → voxel grids → OpenVDB |
+//! | [`metrics`] | DESIGN's error metrics (relative RMSE, relMSE) and luminance |
+//!
+//! Arrows point one way: `render` → `imageio`; `imageio`, `tonemap`, `metrics` depend on no other module here;
+//! colour comes from `firemedium-core` and, for media, from the plugin the scene loaded.
+
+#![forbid(unsafe_code)]
+
+pub mod gen;
+pub mod imageio;
+pub mod metrics;
+pub mod render;
+pub mod tonemap;
