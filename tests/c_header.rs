@@ -90,7 +90,15 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             "{k}: C and Rust layouts differ"
         );
     }
-    assert_eq!(get("abi"), "0.3");
+    // The header's version is the Rust contract's (it said 0.2 while the plugin spoke 0.3), and so is the
+    // plugin's.
+    let version = format!("{ABI_MAJOR}.{ABI_MINOR}");
+    assert_eq!(
+        get("header_abi"),
+        version,
+        "firemedium.h's FM_ABI_MAJOR/MINOR"
+    );
+    assert_eq!(get("abi"), version);
     let (p1, p2): (f64, f64) = (
         get("light_pdf").parse().unwrap(),
         get("light_pdf_again").parse().unwrap(),
@@ -111,7 +119,8 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     assert!((tmax - 2974.609).abs() < 1e-3, "{tmax}");
     assert_eq!(get("integrate_status"), "0");
     // The same ray through the Rust loader gives the same numbers.
-    let p = Plugin::load(plugin_path()).unwrap();
+    // SAFETY: the plugin this cargo invocation built.
+    let p = unsafe { Plugin::load(plugin_path()) }.unwrap();
     let v = p
         .create_volume(&[
             Param::string("filename", fire.to_str().unwrap()),
@@ -164,7 +173,8 @@ fn an_abi_mismatch_names_both_versions() {
         "-o",
         so.to_str().unwrap(),
     ]);
-    let e = Plugin::load(&so).unwrap_err().to_string();
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let e = unsafe { Plugin::load(&so) }.unwrap_err().to_string();
     assert!(
         e.contains("speaks firemedium ABI 99.0, this host needs 0.3"),
         "{e}"
@@ -175,14 +185,17 @@ fn an_abi_mismatch_names_both_versions() {
     std::fs::create_dir_all(&stale).unwrap();
     std::fs::copy(&so, stale.join(library_file_name())).unwrap();
     let good = plugin_path().parent().unwrap().to_path_buf();
-    let p = Plugin::find(&[stale.clone(), good]).unwrap();
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let p = unsafe { Plugin::find(&[stale.clone(), good]) }.unwrap();
     assert_eq!(
         p.version(),
         (firemedium_abi::ABI_MAJOR, firemedium_abi::ABI_MINOR)
     );
-    let e = Plugin::find(&[stale]).unwrap_err().to_string();
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let e = unsafe { Plugin::find(&[stale]) }.unwrap_err().to_string();
     assert!(e.contains("speaks firemedium ABI 99.0"), "{e}");
-    let e = Plugin::load(Path::new("/etc/hostname"))
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let e = unsafe { Plugin::load(Path::new("/etc/hostname")) }
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot load"), "{e}");

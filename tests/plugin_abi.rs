@@ -16,7 +16,8 @@ fn plugin() -> Plugin {
         .unwrap()
         .to_path_buf();
     let dirs = [deps.clone(), deps.parent().unwrap().to_path_buf()];
-    Plugin::find(&dirs).unwrap_or_else(|e| {
+    // SAFETY: the plugin this cargo invocation built.
+    unsafe { Plugin::find(&dirs) }.unwrap_or_else(|e| {
         panic!(
             "{e} — the plugin cdylib ({}) should be built by `cargo test`",
             library_file_name()
@@ -219,14 +220,16 @@ fn volumes_keep_the_library_alive() {
 
 #[test]
 fn not_found_and_not_a_plugin() {
-    let e = Plugin::find(&[PathBuf::from("/nonexistent-dir")])
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let e = unsafe { Plugin::find(&[PathBuf::from("/nonexistent-dir")]) }
         .unwrap_err()
         .to_string();
     assert!(
         e.contains("no firemedium plugin found") && e.contains("/nonexistent-dir"),
         "{e}"
     );
-    let e = Plugin::load("/nonexistent-dir/libfoo.so")
+    // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
+    let e = unsafe { Plugin::load("/nonexistent-dir/libfoo.so") }
         .unwrap_err()
         .to_string();
     assert!(

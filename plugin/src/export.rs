@@ -178,17 +178,18 @@ unsafe fn read_params(
                 )))
             }
         };
-        // SAFETY (each arm): `values` holds `n` elements of the type `ty` names (caller contract); n > 0
-        // implies non-null, checked above; n == 0 reads nothing.
+        // (Each arm reads `n` values only when n > 0; n == 0 reads nothing.)
         let values = match ty {
             ParamType::Integer => Values::Integers(if n == 0 {
                 vec![]
             } else {
+                // SAFETY: `values` holds `n` elements of the type `ty` names (caller contract); n > 0, so non-null (checked).
                 unsafe { std::slice::from_raw_parts(p.values as *const i64, n) }.to_vec()
             }),
             ParamType::Bool => Values::Bools(if n == 0 {
                 vec![]
             } else {
+                // SAFETY: `values` holds `n` elements of the type `ty` names (caller contract); n > 0, so non-null (checked).
                 unsafe { std::slice::from_raw_parts(p.values as *const u8, n) }
                     .iter()
                     .map(|&b| b != 0)
@@ -198,6 +199,7 @@ unsafe fn read_params(
                 let ptrs = if n == 0 {
                     &[][..]
                 } else {
+                    // SAFETY: `values` holds `n` elements of the type `ty` names (caller contract); n > 0, so non-null (checked).
                     unsafe { std::slice::from_raw_parts(p.values as *const *const c_char, n) }
                 };
                 let mut v = Vec::with_capacity(n);
@@ -208,6 +210,7 @@ unsafe fn read_params(
                         )));
                     }
                     v.push(
+                        // SAFETY: non-null (checked) and NUL-terminated (caller contract).
                         unsafe { CStr::from_ptr(s) }
                             .to_str()
                             .map_err(|_| {
@@ -221,6 +224,7 @@ unsafe fn read_params(
             _ => Values::Numbers(if n == 0 {
                 vec![]
             } else {
+                // SAFETY: `values` holds `n` elements of the type `ty` names (caller contract); n > 0, so non-null (checked).
                 unsafe { std::slice::from_raw_parts(p.values as *const f64, n) }.to_vec()
             }),
         };
@@ -380,16 +384,20 @@ unsafe extern "C" fn volume_integrate(
     exits: *mut FmExit,
 ) -> FmStatus {
     guard(|| {
-        // SAFETY (all four): the caller's buffers are as the ABI documents.
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
         let v = unsafe { vol(volume, "volume_integrate") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
         let c = v.channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let l_out = unsafe { out_f32(radiance, n, c) }?
             .ok_or_else(|| bad("volume_integrate: radiance is null"))?;
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
         let mut e_out = if exits.is_null() {
             None
         } else {
+            // SAFETY: `exits` is non-null here and holds `n` entries (caller contract).
             Some(unsafe { std::slice::from_raw_parts_mut(exits, n) })
         };
         let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
@@ -431,8 +439,10 @@ unsafe extern "C" fn volume_transmittance(
     guard(|| {
         // SAFETY: the caller's buffers are as the ABI documents.
         let v = unsafe { vol(volume, "volume_transmittance") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
         let c = v.channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let out = unsafe { out_f32(transmittance, n, c) }?
             .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
         let mut t = vec![0.0; c];
@@ -457,6 +467,7 @@ unsafe extern "C" fn volume_sample_scatter(
     guard(|| {
         // SAFETY: the caller's buffers are as the ABI documents.
         let v = unsafe { vol(volume, "volume_sample_scatter") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
         let c = v.channels();
         if events.is_null() && n > 0 {
@@ -465,10 +476,13 @@ unsafe extern "C" fn volume_sample_scatter(
         let ev = if n == 0 {
             &mut [][..]
         } else {
+            // SAFETY: `events` is non-null here and holds `n` entries (caller contract).
             unsafe { std::slice::from_raw_parts_mut(events, n) }
         };
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let w_out = unsafe { out_f32(weights, n, c) }?
             .ok_or_else(|| bad("volume_sample_scatter: weights is null"))?;
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut l_out = unsafe { out_f32(emitted, n, c) }?;
         let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
         for (i, r) in rs.iter().enumerate() {
@@ -515,12 +529,16 @@ unsafe extern "C" fn volume_coefficients(
         let pts = if n == 0 {
             &[][..]
         } else {
+            // SAFETY: `points` is non-null here and holds `3 n` doubles (caller contract).
             unsafe { std::slice::from_raw_parts(points, 3 * n) }
         };
         let c = v.channels();
         let mut outs = [
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
             unsafe { out_f32(sigma_a, n, c) }?,
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
             unsafe { out_f32(sigma_s, n, c) }?,
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
             unsafe { out_f32(emission, n, c) }?,
         ];
         let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
@@ -674,12 +692,16 @@ unsafe extern "C" fn light_sample(
     emission: *mut f32,
 ) -> FmStatus {
     guard(|| {
-        // SAFETY (all): the caller's buffers are as the ABI documents.
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_sample") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let us = unsafe { in_f64(u, n, 6, "light_sample: u") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pts = unsafe { out_f64(points, n, 3, "light_sample: points") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_sample: pdf") }?;
         let c = lt.volume().channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut em = unsafe { out_f32(emission, n, c) }?;
         let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
         for i in 0..n {
@@ -713,9 +735,11 @@ unsafe extern "C" fn light_pdf(
     pdf: *mut f64,
 ) -> FmStatus {
     guard(|| {
-        // SAFETY (all): the caller's buffers are as the ABI documents.
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_pdf") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pts = unsafe { in_f64(points, n, 3, "light_pdf: points") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_pdf: pdf") }?;
         for i in 0..n {
             pd[i] = lt.pdf(DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
@@ -732,10 +756,13 @@ unsafe extern "C" fn light_pdf_direction(
     pdf: *mut f64,
 ) -> FmStatus {
     guard(|| {
-        // SAFETY (all): the caller's buffers are as the ABI documents.
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_pdf_direction") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let o = unsafe { in_f64(origins, n, 3, "light_pdf_direction: origins") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let d = unsafe { in_f64(directions, n, 3, "light_pdf_direction: directions") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
         for i in 0..n {
             pd[i] = lt.pdf_direction(

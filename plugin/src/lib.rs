@@ -4,28 +4,32 @@
 //! path tracer loads at run time, in the three components of Dorta-Perez's thesis (voxel dataset, fire volume,
 //! fire light).
 //!
-//! This crate is built twice: as a `cdylib` (the loadable plugin) and as an `rlib` (so tests and tools can call
-//! the pure physics directly). Today it holds the spectral physics core:
+//! This crate is built twice: as a `cdylib` (the loadable plugin, whose one entry point is
+//! [`export::firemedium_plugin_entry`]) and as an `rlib` (for the tests, the benchmarks and the host's `info` and
+//! `gen`). The physics it computes with is `firemedium-core`'s, re-exported here under the same names.
 //!
-//! | module | what | source |
+//! | module | component | what |
 //! |---|---|---|
-//! | [`constants`] | CODATA 2018 constants | CODATA 2018 |
-//! | [`blackbody`] | absolute Planck spectral radiance | P&P eq. 6 |
-//! | [`soot`] | soot absorption coefficient | P&P eq. 5, Dalzell & Sarofim 1969 |
-//! | [`species`] | atomic line absorption and emission | P&P eq. 7–12, NIST ASD |
-//! | [`ciddor`] | refractive index of air | Ciddor 1996 |
-//! | [`cie`] | CIE 1931 colour matching, XYZ, sRGB, LMS | CIE 1931, IEC 61966-2-1, Hunt–Pointer–Estévez |
-//! | [`spectrum`] | spectral bins | the thesis: 30 bins over 400–700 nm |
+//! | [`dataset`] | voxel dataset | files (OpenVDB, NanoVDB, the thesis's ASCII and raw formats, pbrt inline arrays) → validated grids; its parameter mapping |
+//! | [`grid`], [`majorant`] | voxel dataset | cell-centred grids with pbrt-v4's lookup; majorant bricks and their DDA |
+//! | [`volume`] | fire volume | settings → coefficient tables → march lattice and majorants → the RTE along rays (march, ratio, delta) |
+//! | [`refraction`] | fire volume | the index of hot air (Ciddor) baked to a field; curved rays through it |
+//! | [`light`] | fire light | Selle's piecewise-constant 3D pdf over emitting voxels; samples, pdfs, power |
+//! | [`params`] | all | one table per component drives parsing, validation, docs/params.md and the ABI's self-description |
+//! | [`export`] | all | the C ABI: the crate's only `unsafe`, every entry checked and guarded against panics |
 //!
-//! Invariants: physics modules are pure (no I/O, no `unsafe`, no `Result` in per-sample code); SI units inside,
-//! wavelengths in nm at the API; every public quantity documents its unit.
+//! Invariants: components are immutable once built and `Send + Sync`; per-sample code cannot fail (values are
+//! validated when a component is built); SI units inside, wavelengths in nm at the API.
 
+#![deny(unsafe_code)]
 pub use firemedium_core::{
     blackbody, ciddor, cie, constants, quadrature, rng, soot, species, spectrum,
 };
 
 pub mod dataset;
 pub mod error;
+#[allow(unsafe_code)]
+// The C ABI: the plugin's one module with `unsafe`, every block with a `// SAFETY:` line.
 pub mod export;
 pub mod grid;
 pub mod light;

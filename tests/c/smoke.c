@@ -7,6 +7,7 @@
 
 int main(int argc, char **argv) {
     if (argc != 3) { fprintf(stderr, "usage: smoke PLUGIN DATASET\n"); return 2; }
+    printf("header_abi %u.%u\n", FM_ABI_MAJOR, FM_ABI_MINOR);
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));

@@ -5,7 +5,9 @@
 //!
 //! ```no_run
 //! use firemedium_loader::{Plugin, Param, Ray};
-//! let plugin = Plugin::from_env()?; // FIREMEDIUM_PLUGIN or FIREMEDIUM_PLUGIN_PATH
+//! // SAFETY: loading a library runs its initialisers: load only a firemedium plugin you trust (see
+//! // `Plugin::load`). This one is the file FIREMEDIUM_PLUGIN names, or found on FIREMEDIUM_PLUGIN_PATH.
+//! let plugin = unsafe { Plugin::from_env() }?;
 //! let fire = plugin.create_volume(&[Param::string("filename", "fire.vdb"), Param::float("temperaturescale", 1000.0)])?;
 //! let c = fire.info().channels as usize;
 //! let rays = [Ray { origin: [0.0, -2.0, 1.0], direction: [0.0, 1.0, 0.0], tmin: 0.0, tmax: 10.0, seed: 1 }];
@@ -235,9 +237,16 @@ impl Param {
 
 impl Plugin {
     /// Loads the plugin at `path` and checks its ABI.
-    pub fn load(path: impl AsRef<Path>) -> Result<Plugin, Error> {
+    ///
+    /// # Safety
+    ///
+    /// Loading a dynamic library runs its initialisers, and the checks here can prove only that the file
+    /// exports a table of the right version and size with no null entry: that the functions behind it keep the
+    /// ABI's contract is the caller's trust in the file. Load only a firemedium plugin (whose initialisers are
+    /// Rust's runtime alone) from a path you trust.
+    pub unsafe fn load(path: impl AsRef<Path>) -> Result<Plugin, Error> {
         let path = path.as_ref().to_path_buf();
-        // SAFETY: loading a library runs its initialisers; the plugin has none beyond Rust's runtime.
+        // SAFETY: the caller vouches for the file (this function's contract).
         let lib = unsafe { libloading::Library::new(&path) }.map_err(|e| Error::Open {
             path: path.clone(),
             message: e.to_string(),
@@ -273,9 +282,14 @@ impl Plugin {
 
     /// Finds the plugin: the file `FIREMEDIUM_PLUGIN` names, else the library file in each directory of
     /// `FIREMEDIUM_PLUGIN_PATH` (`:`-separated; `;` on Windows), then beside the running executable.
-    pub fn from_env() -> Result<Plugin, Error> {
+    ///
+    /// # Safety
+    ///
+    /// As [`Plugin::load`], for whatever file the environment or the executable's directory provides.
+    pub unsafe fn from_env() -> Result<Plugin, Error> {
         if let Some(f) = std::env::var_os("FIREMEDIUM_PLUGIN") {
-            return Plugin::load(PathBuf::from(f));
+            // SAFETY: the file the environment names (this function's contract).
+            return unsafe { Plugin::load(PathBuf::from(f)) };
         }
         let mut dirs: Vec<PathBuf> = std::env::var_os("FIREMEDIUM_PLUGIN_PATH")
             .map(|p| std::env::split_paths(&p).collect())
@@ -287,20 +301,26 @@ impl Plugin {
             dirs.push(d.clone());
             dirs.push(d.join("deps"));
         }
-        Plugin::find(&dirs)
+        // SAFETY: the caller vouches for the environment's files (this function's contract).
+        unsafe { Plugin::find(&dirs) }
     }
 
     /// Loads the library file from the first of `dirs` that holds one this host can use. A library of an
     /// incompatible ABI (say, a stale build left in an earlier directory) is skipped; if no directory holds a
     /// compatible one, the first incompatible one is the error.
-    pub fn find(dirs: &[PathBuf]) -> Result<Plugin, Error> {
+    ///
+    /// # Safety
+    ///
+    /// As [`Plugin::load`], for the library file in each of `dirs`.
+    pub unsafe fn find(dirs: &[PathBuf]) -> Result<Plugin, Error> {
         let name = library_file_name();
         let mut searched = Vec::new();
         let mut incompatible = None;
         for d in dirs {
             let p = d.join(&name);
             if p.is_file() {
-                match Plugin::load(p.clone()) {
+                // SAFETY: the caller vouches for the files in `dirs` (this function's contract).
+                match unsafe { Plugin::load(p.clone()) } {
                     Err(e @ Error::Abi { .. }) => {
                         incompatible.get_or_insert(e);
                     }
@@ -332,6 +352,8 @@ impl Plugin {
             if p.is_null() {
                 String::new()
             } else {
+                // SAFETY: non-null (checked); the plugin's table strings are NUL-terminated and live as long
+                // as the library (ABI contract).
                 unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
             }
         };

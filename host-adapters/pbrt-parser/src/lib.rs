@@ -10,6 +10,7 @@
 //! `blackbody`, `bool`, `string`, `texture` (plus pbrt-v3's `point`, `vector`, `normal3`, `color` spellings).
 //! `Rotate` angles are degrees, as in pbrt.
 
+#![forbid(unsafe_code)]
 mod parser;
 mod tokenizer;
 

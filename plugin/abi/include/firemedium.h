@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 2u
+#define FM_ABI_MINOR 3u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;

@@ -18,6 +18,7 @@
 //! - Rays are in the medium's space (the host applies its transforms); distances are |direction| · Δt, in
 //!   metres when the medium's space is in metres.
 
+#![forbid(unsafe_code)]
 #![no_std]
 
 use core::ffi::{c_char, c_void};

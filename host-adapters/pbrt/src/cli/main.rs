@@ -1,12 +1,14 @@
-//! `firemedium`: the command-line face of the project.
+//! `firemedium`: the command line over the host library (`firemedium::`), one module per command:
+//! `render` (a pbrt-v4 scene through the plugin to EXR + PNG), `tonemap` (visual adaptation of an EXR),
+//! `compare` (error against a reference over surface pixels), `gen` (blob-model fire datasets), `info` (a
+//! dataset file), `physics` (the physics core's quantities) and `bench` (stability, error-vs-time, perf,
+//! components). A command depends only on the library and on `args` (shared value parsers), never on another
+//! command.
 //!
-//! Today: `firemedium physics …` prints the physical quantities of the fire's physics core (blackbody
-//! radiance, soot absorption, index of air, colour) so that anyone can check them against published values.
-//! The renderer (`firemedium render`) joins when the pbrt-v4 host lands.
-//!
-//! Exit status: 0 on success, 1 when a file is refused, 2 on bad arguments (one line on stderr, never a
-//! panic).
+//! Exit status: 0 on success, 1 when a file or scene is refused, 2 on bad arguments, 130 when interrupted (one
+//! line on stderr, never a panic).
 
+#![forbid(unsafe_code)]
 mod args;
 mod bench;
 mod compare;
@@ -45,7 +47,7 @@ enum Command {
     Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
     Gen(gen::GenArgs),
-    /// Benchmarks: stability (stiff and extreme cases).
+    /// Benchmarks: stability (stiff and extreme cases), error-vs-time, perf (the paper's workload), components.
     Bench(bench::BenchArgs),
 }
 
@@ -60,7 +62,7 @@ fn main() -> ExitCode {
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
                 eprintln!(
-                    "firemedium: a subcommand is required (physics); see 'firemedium --help'"
+                    "firemedium: a subcommand is required (render, tonemap, compare, gen, info, physics, bench); see 'firemedium --help'"
                 );
                 return ExitCode::from(2);
             }

@@ -407,8 +407,8 @@ impl Builder {
             return Ok(p.clone());
         }
         let p = match &self.plugin_path {
-            Some(path) => Plugin::load(path),
-            None => Plugin::from_env(),
+            Some(path) => load_plugin(Some(path)),
+            None => load_plugin(None),
         }
         .map_err(|e| err(loc, e))?;
         self.plugin = Some(p.clone());
@@ -981,6 +981,19 @@ impl Builder {
     }
 }
 
+/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
+/// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
+/// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
+#[allow(unsafe_code)]
+fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
+    match path {
+        // SAFETY: a plugin file the user named; the loader checks its ABI version, size and entries.
+        Some(p) => unsafe { Plugin::load(p) },
+        // SAFETY: the file the user's environment names, or the plugin built beside this executable.
+        None => unsafe { Plugin::from_env() },
+    }
+}
+
 /// Settings the command line can override.
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
@@ -1020,8 +1033,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let plugin = match first_medium {
         Some(loc) => Some(
             match &plugin_path {
-                Some(file) => Plugin::load(file),
-                None => Plugin::from_env(),
+                Some(file) => load_plugin(Some(file)),
+                None => load_plugin(None),
             }
             .map_err(|e| err(loc, e))?,
         ),
