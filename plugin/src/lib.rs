@@ -34,6 +34,7 @@ pub mod export;
 pub mod grid;
 pub mod light;
 pub mod majorant;
+mod par;
 pub mod params;
 pub mod refraction;
 pub mod volume;

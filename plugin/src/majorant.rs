@@ -404,15 +404,14 @@ mod tests {
     use super::*;
     use crate::dataset::{Dataset, LoadOptions};
 
-    /// A deterministic generator (SplitMix64) for property tests.
-    struct Rng(u64);
+    /// The crate's generator with a uniform range, for property tests.
+    struct Rng(crate::rng::Rng);
     impl Rng {
+        fn new(seed: u64) -> Rng {
+            Rng(crate::rng::Rng::new(seed))
+        }
         fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+            self.0.next_f64()
         }
         fn range(&mut self, a: f64, b: f64) -> f64 {
             a + (b - a) * self.next()
@@ -527,7 +526,7 @@ mod tests {
         let ds = blob([37, 20, 29]);
         for brick in [1, 4, 16] {
             let m = MajorantGrid::build(&ds, brick);
-            let mut rng = Rng(brick as u64);
+            let mut rng = Rng::new(brick as u64);
             let [p0, p1] = ds.bounds();
             for _ in 0..100_000 / 3 {
                 let p = DVec3::new(
@@ -554,7 +553,7 @@ mod tests {
         let ds = blob([37, 20, 29]);
         let m = MajorantGrid::build(&ds, 8);
         let [p0, p1] = ds.bounds();
-        let mut rng = Rng(7);
+        let mut rng = Rng::new(7);
         let mut crossed = 0;
         for n in 0..20_000 {
             let o = DVec3::new(

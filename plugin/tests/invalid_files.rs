@@ -195,15 +195,11 @@ fn invalid_corpus_gives_the_right_errors() {
     }
 }
 
-/// SplitMix64.
-struct Rng(u64);
+/// The plugin's generator with a bounded draw.
+struct Rng(firemedium_plugin::rng::Rng);
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     fn below(&mut self, n: usize) -> usize {
         (self.next() % n.max(1) as u64) as usize
@@ -311,7 +307,7 @@ fn mutated_files_never_panic() {
         max_bytes: 64 << 20,
         ..LoadOptions::default()
     };
-    let mut rng = Rng(2026);
+    let mut rng = Rng(firemedium_plugin::rng::Rng::new(2026));
     let (mut ok, mut err) = (0, 0);
     for (format, seed, names) in &seeds {
         let n = if *format == Format::Vdb { 400 } else { 600 };

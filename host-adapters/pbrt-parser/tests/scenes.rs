@@ -128,13 +128,9 @@ fn includes_resolve_relative_to_the_including_file_and_cycles_stop() {
     assert!(e.contains("bad.pbrt:1:11: byte 10: not UTF-8"), "{e}");
 }
 
-/// SplitMix64.
-fn rng(s: &mut u64) -> u64 {
-    *s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *s;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+/// The next 64 random bits of the physics core's generator.
+fn rng(s: &mut firemedium_core::rng::Rng) -> u64 {
+    s.next_u64()
 }
 
 #[test]
@@ -157,7 +153,7 @@ fn mutated_scenes_never_panic() {
         "nan",
         " ",
     ];
-    let mut s = 7u64;
+    let mut s = firemedium_core::rng::Rng::new(7);
     let (mut ok, mut err) = (0, 0);
     for name in [
         "explosion.pbrt",

@@ -254,9 +254,9 @@ impl Default for LoadOptions {
 }
 
 /// `f` over `items`, one thread per item (a dataset has a handful of grids; each is independent work of tens
-/// of milliseconds or more), results in order.
+/// of milliseconds or more), results in order; one after the other when the build's budget is one thread.
 pub(crate) fn par_map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync) -> Vec<R> {
-    if items.len() <= 1 {
+    if items.len() <= 1 || crate::par::threads(2) == 1 {
         return items.into_iter().map(f).collect();
     }
     let f = &f;
@@ -393,10 +393,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
         const PARALLEL_BYTES: u64 = 8 << 20;
         let f = std::fs::File::open(path).map_err(io)?;
         let len = f.metadata().map_err(io)?.len();
-        let threads = std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .min(4);
+        let threads = crate::par::threads(4);
         if len >= PARALLEL_BYTES && threads > 1 {
             let len = usize::try_from(len).map_err(|_| Error::Io {
                 file: path.display().to_string(),

@@ -46,10 +46,7 @@ impl Lattice {
         let total = slab * dims[2];
         let mut pairs = vec![0f32; 2 * total];
         let mut extra_v: Vec<Vec<f32>> = extra.iter().map(|_| vec![0f32; total]).collect();
-        let threads = std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .clamp(1, 8);
+        let threads = crate::par::threads(8);
         // Padded z-slabs 1..=nz hold data; split them over the threads.
         let per = nz.div_ceil(threads).max(1);
         let d = density.data();

@@ -155,9 +155,12 @@ impl FireVolume {
         let r = ParamReader::new("volume", list, &comps);
         r.check_names()?;
         let set = Settings::read(&r, list)?;
-        let (ds, lescale) = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
-        r.finish()?;
-        Self::build(set, ds, lescale, start)
+        let threads = r.int("threads")? as usize;
+        crate::par::with_budget(threads, || {
+            let (ds, lescale) = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
+            r.finish()?;
+            Self::build(set, ds, lescale, start)
+        })
     }
 
     fn build(

@@ -83,6 +83,7 @@ pub static VOLUME: Component = Component {
         p("integrator", T::String, "march", "", Range::Choices(&["march", "ratio", "delta"]), "march: fixed steps, eq. 3; ratio/delta: unbiased tracking over the majorant bricks."),
         p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
         p("precision", T::String, "f32", "", Range::Choices(&["f32", "f64"]), "Per-sample arithmetic of the march: f32 in vector lanes (about 2× faster; within 1e-6 of f64 on the campfire), falling back to f64 when a product could leave f32's range; f64: always f64."),
+        p("threads", T::Integer, "0", "", Range::Between(0.0, 4096.0), "Threads the build may use (tables, lattice, reading and densifying grids); 0: every core. A host passes its own thread count."),
         p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
         p("refraction", T::Bool, "false", "", Range::Any, "Bend rays through the hot gas (P&P §3.7): an index field from temperature (Ciddor), curved rays by the ray equation. Off: nothing is baked."),
         p("refractionintegrator", T::String, "verlet", "", Range::Choices(&["verlet", "rk4"]), "verlet: one symplectic step per march step, n and ∇n looked up at the medium's sample point (fast); rk4: adaptive RK4 with step doubling, steps ending at the grid's planes (the accurate reference, ~3× slower)."),

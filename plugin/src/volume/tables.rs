@@ -29,10 +29,7 @@ impl TTable {
         };
         let chunks = c.div_ceil(lanes::W).max(1);
         let mut v = vec![[0f32; lanes::W]; rows * chunks];
-        let threads = std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .min(8);
+        let threads = crate::par::threads(8);
         let chunk = rows.div_ceil(threads);
         std::thread::scope(|s| {
             for (k, part) in v.chunks_mut(chunk * chunks).enumerate() {

@@ -34,6 +34,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
         no_fire_light: true,
         fire_light_weighting: None,
         res: a.resolution,
+        threads: None,
     };
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
     let (w, h) = sc.res;

@@ -62,6 +62,7 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         no_fire_light: a.fire_light == "off",
         fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
         res: a.resolution,
+        threads: a.threads,
     };
     let load_start = std::time::Instant::now();
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;

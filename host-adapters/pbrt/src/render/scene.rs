@@ -243,6 +243,8 @@ struct Builder {
     objects: HashMap<String, Vec<Prim>>,
     current_object: Option<(String, Vec<Prim>)>,
     bins_params: Vec<LParam>,
+    /// Threads the plugin may use to build a medium (`Overrides::threads`).
+    threads: Option<usize>,
     /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
     has_fire: bool,
     /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
@@ -507,6 +509,11 @@ impl Builder {
                 for b in &self.bins_params {
                     if !list.iter().any(|p| p.name == b.name) {
                         list.push(b.clone());
+                    }
+                }
+                if let Some(n) = self.threads {
+                    if !list.iter().any(|p| p.name == "threads") {
+                        list.push(LParam::int("threads", n as i64));
                     }
                 }
                 let vol = plugin.create_volume(&list).map_err(|e| err(loc, format!("medium \"{name}\" ({ty}): {e}")))?;
@@ -1005,6 +1012,8 @@ pub struct Overrides {
     pub fire_light_weighting: Option<String>,
     /// Film resolution instead of the scene's.
     pub res: Option<(usize, usize)>,
+    /// Threads the plugin may use to build each medium (the render's own; `None`: every core).
+    pub threads: Option<usize>,
 }
 
 /// Parses and builds the scene at `path`.
@@ -1133,6 +1142,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         bins_params,
         has_fire: fire,
         film_xyz: None,
+        threads: ov.threads,
     };
     // pbrt's default material: diffuse 0.5.
     b.materials

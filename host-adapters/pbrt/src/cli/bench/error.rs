@@ -152,6 +152,7 @@ pub fn surface_ladder(
                 no_fire_light: !light,
                 fire_light_weighting: None,
                 res: Some(res),
+                threads: None,
             },
         )
     };
