@@ -175,10 +175,12 @@ fn an_abi_mismatch_names_both_versions() {
     ]);
     // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
     let e = unsafe { Plugin::load(&so) }.unwrap_err().to_string();
-    assert!(
-        e.contains("speaks firemedium ABI 99.0, this host needs 0.3"),
-        "{e}"
+    let needs = format!(
+        "speaks firemedium ABI 99.0, this host needs {}.{}",
+        firemedium_abi::ABI_MAJOR,
+        firemedium_abi::ABI_MINOR
     );
+    assert!(e.contains(&needs), "{e}");
     // A stale library of another ABI earlier on the search path does not shadow a compatible one after it;
     // alone, it is the error.
     let stale = so.parent().unwrap().join("stale");

@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 3));
+    assert_eq!(p.version(), (0, 4));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -192,12 +192,17 @@ fn errors_come_back_typed() {
     let wrong_type = Param {
         name: "stepsize".into(),
         value: Value::String(vec!["fast".into()]),
+        at: Some("scene.pbrt:12:5".into()),
     };
     let e = p
         .create_volume(&[fire_params(), vec![wrong_type]].concat())
         .unwrap_err()
         .to_string();
-    assert!(e.contains("stepsize") && e.contains("float"), "{e}");
+    // The error names the parameter, what it is and what was expected, from where the host said it was given.
+    assert!(
+        e.starts_with("scene.pbrt:12:5: volume: parameter 'stepsize'") && e.contains("float"),
+        "{e}"
+    );
     let v = p.create_volume(&fire_params()).unwrap();
     let mut small = vec![0f32; 10];
     assert!(matches!(

@@ -244,6 +244,10 @@ fn bad_scenes_exit_1_with_file_line_col() {
         ("typo.pbrt", "WorldBegin\nShpe \"sphere\"\n", "typo.pbrt:2:1: unknown directive 'Shpe'"),
         ("medium.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"nope.vdb\"\n", "medium.pbrt:3:1: medium \"f\" (fire)"),
         ("light.pbrt", "Camera \"perspective\"\nWorldBegin\nLightSource \"goniometric\"\n", "light.pbrt:3:1: light \"goniometric\" is not supported"),
+        // A plugin parameter's error points at the parameter itself (the plugin gets each one's location), not
+        // at the directive: here a negative sootscale on line 4, and fuelnk that nothing reads with fuel propane.
+        ("sootscale.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\"\n  \"integer nx\" 1 \"float density\" [1] \"float sootscale\" -1\n", "sootscale.pbrt:4:38: medium \"f\" (fire): volume: parameter 'sootscale' = -1"),
+        ("unread.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"float density\" [1]\n  \"float fuelnk\" [500 1.5 0.5]\n", "unread.pbrt:4:3: medium \"f\" (fire): volume: parameter 'fuelnk' = given, but nothing in this configuration reads it"),
     ] {
         std::fs::write(dir.join(name), text).unwrap();
         let o = Command::new(env!("CARGO_BIN_EXE_firemedium")).arg("render").arg(dir.join(name)).output().unwrap();

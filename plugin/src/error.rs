@@ -8,6 +8,8 @@ use std::fmt;
 pub enum Error {
     /// A parameter has a value outside its documented domain.
     InvalidParameter {
+        /// Where the parameter was given (`file:line:col` of a scene), when the host said.
+        at: Option<String>,
         /// Component that owns the parameter (`soot`, `species`, `spectrum`, …).
         component: &'static str,
         /// Parameter name as the user wrote it.
@@ -66,6 +68,7 @@ impl Error {
         expected: impl Into<String>,
     ) -> Self {
         Error::InvalidParameter {
+            at: None,
             component,
             name: name.into(),
             value: value.to_string(),
@@ -78,14 +81,20 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::InvalidParameter {
+                at,
                 component,
                 name,
                 value,
                 expected,
-            } => write!(
-                f,
-                "{component}: parameter '{name}' = {value}: expected {expected}"
-            ),
+            } => {
+                if let Some(at) = at {
+                    write!(f, "{at}: ")?;
+                }
+                write!(
+                    f,
+                    "{component}: parameter '{name}' = {value}: expected {expected}"
+                )
+            }
             Error::Format { file, at, expected, found } => {
                 write!(f, "{file}: {at}: expected {expected}, found {found}")
             }
@@ -110,6 +119,7 @@ impl From<firemedium_core::Error> for Error {
                 value,
                 expected,
             } => Error::InvalidParameter {
+                at: None,
                 component,
                 name,
                 value,
@@ -120,6 +130,30 @@ impl From<firemedium_core::Error> for Error {
 }
 
 impl Error {
+    /// The error with the location of the parameter it names, when `list` gave one (hosts pass where each
+    /// parameter came from; see `volume_create_located`).
+    pub fn located(self, list: &[crate::params::Param]) -> Error {
+        match self {
+            Error::InvalidParameter {
+                at: None,
+                component,
+                name,
+                value,
+                expected,
+            } => Error::InvalidParameter {
+                at: list
+                    .iter()
+                    .find(|p| p.name == name)
+                    .and_then(|p| p.at.clone()),
+                component,
+                name,
+                value,
+                expected,
+            },
+            e => e,
+        }
+    }
+
     /// A format error at `at` in `file`.
     pub(crate) fn format(
         file: &str,

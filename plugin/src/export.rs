@@ -135,6 +135,7 @@ unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus
 /// `params` points to `count` valid `FmParam`s whose `values` hold `count` elements of their type.
 unsafe fn read_params(
     params: *const FmParam,
+    locations: *const *const c_char,
     count: usize,
 ) -> Result<Vec<Param>, (FmStatus, String)> {
     if count == 0 {
@@ -147,6 +148,12 @@ unsafe fn read_params(
     }
     // SAFETY: non-null, `count` entries (caller contract).
     let list = unsafe { std::slice::from_raw_parts(params, count) };
+    let locations = if locations.is_null() {
+        None
+    } else {
+        // SAFETY: non-null, `count` entries (caller contract of volume_create_located).
+        Some(unsafe { std::slice::from_raw_parts(locations, count) })
+    };
     let mut out = Vec::with_capacity(count);
     for (i, p) in list.iter().enumerate() {
         if p.name.is_null() {
@@ -228,7 +235,26 @@ unsafe fn read_params(
                 unsafe { std::slice::from_raw_parts(p.values as *const f64, n) }.to_vec()
             }),
         };
-        out.push(Param { name, ty, values });
+        let at = match locations.map(|l| l[i]) {
+            Some(s) if !s.is_null() => Some(
+                // SAFETY: non-null (checked) and NUL-terminated (caller contract).
+                unsafe { CStr::from_ptr(s) }
+                    .to_str()
+                    .map_err(|_| {
+                        bad(format!(
+                            "volume_create: parameter '{name}''s location is not UTF-8"
+                        ))
+                    })?
+                    .to_string(),
+            ),
+            _ => None,
+        };
+        out.push(Param {
+            name,
+            ty,
+            values,
+            at,
+        });
     }
     Ok(out)
 }
@@ -238,12 +264,22 @@ unsafe extern "C" fn volume_create(
     count: usize,
     out: *mut *mut FmVolume,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as volume_create_located's without locations.
+    unsafe { volume_create_located(params, std::ptr::null(), count, out) }
+}
+
+unsafe extern "C" fn volume_create_located(
+    params: *const FmParam,
+    locations: *const *const c_char,
+    count: usize,
+    out: *mut *mut FmVolume,
+) -> FmStatus {
     guard(|| {
         if out.is_null() {
             return Err(bad("volume_create: out is null"));
         }
-        // SAFETY: the caller's contract for `params`/`count` (documented in FmApi).
-        let list = unsafe { read_params(params, count) }?;
+        // SAFETY: the caller's contract for `params`/`locations`/`count` (documented in FmApi).
+        let list = unsafe { read_params(params, locations, count) }?;
         let v = FireVolume::new(&list).map_err(fail)?;
         // SAFETY: out is non-null and writable (checked, contract).
         unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
@@ -584,7 +620,7 @@ unsafe extern "C" fn light_create(
             return Err(bad("light_create: volume or out is null"));
         }
         // SAFETY: the caller's contract for `params`/`count`.
-        let list = unsafe { read_params(params, count) }?;
+        let list = unsafe { read_params(params, std::ptr::null(), count) }?;
         let r = crate::params::ParamReader::new("light", &list, &[&crate::volume::params::LIGHT]);
         r.check_names().map_err(fail)?;
         let weighting = match r.string("weighting").map_err(fail)?.as_str() {
@@ -810,6 +846,7 @@ static API: FmApi = FmApi {
     light_pdf,
     light_pdf_direction,
     volume_temperature_range,
+    volume_create_located,
 };
 
 /// The plugin's entry point: the static function table.

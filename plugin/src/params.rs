@@ -93,6 +93,8 @@ pub struct Param {
     pub ty: ParamType,
     /// Its values.
     pub values: Values,
+    /// Where it came from (`file:line:col` of a scene), if the host said; errors about it begin with it.
+    pub at: Option<String>,
 }
 
 impl Param {
@@ -102,6 +104,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Float,
             values: Values::Numbers(vec![v]),
+            at: None,
         }
     }
     /// A `float` array parameter.
@@ -110,6 +113,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Float,
             values: Values::Numbers(v.to_vec()),
+            at: None,
         }
     }
     /// An `integer` parameter.
@@ -118,6 +122,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Integer,
             values: Values::Integers(vec![v]),
+            at: None,
         }
     }
     /// An `integer` array parameter.
@@ -126,6 +131,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Integer,
             values: Values::Integers(v.to_vec()),
+            at: None,
         }
     }
     /// A `string` parameter.
@@ -134,6 +140,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::String,
             values: Values::Strings(vec![v.into()]),
+            at: None,
         }
     }
     /// A `string` array parameter.
@@ -142,6 +149,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::String,
             values: Values::Strings(v.iter().map(|s| s.to_string()).collect()),
+            at: None,
         }
     }
     /// A `bool` parameter.
@@ -150,6 +158,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Bool,
             values: Values::Bools(vec![v]),
+            at: None,
         }
     }
     /// A `point3` parameter.
@@ -158,6 +167,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Point3,
             values: Values::Numbers(v.to_vec()),
+            at: None,
         }
     }
     /// A `spectrum` parameter: (λ nm, value) pairs flattened, or one constant.
@@ -166,6 +176,7 @@ impl Param {
             name: name.into(),
             ty: ParamType::Spectrum,
             values: Values::Numbers(v.to_vec()),
+            at: None,
         }
     }
 }
@@ -494,10 +505,22 @@ impl<'a> ParamReader<'a> {
         Ok(())
     }
 
-    /// Errors on any parameter no table knows (after reading: the same check as [`ParamReader::check_names`]).
-    /// Known parameters that this configuration does not use are accepted.
+    /// After reading: errors on any parameter no table knows ([`ParamReader::check_names`]) and on any known
+    /// parameter that nothing read (it does nothing in this configuration: `fuelnk` without fuel "custom", a
+    /// file option for an inline grid…), as pbrt-v4's `ReportUnused` does, so a parameter is never silently
+    /// dropped.
     pub fn finish(&self) -> Result<(), Error> {
-        self.check_names()
+        self.check_names()?;
+        let used = self.used.borrow();
+        match self.list.iter().zip(used.iter()).find(|(_, &u)| !u) {
+            None => Ok(()),
+            Some((p, _)) => Err(Error::invalid(
+                self.component,
+                &p.name,
+                "given, but nothing in this configuration reads it",
+                "only the parameters that apply (docs/params.md says when each does)",
+            )),
+        }
     }
 }
 
@@ -639,6 +662,22 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("see docs/params.md"), "{e}");
+    }
+
+    #[test]
+    fn a_parameter_nothing_reads_is_an_error_naming_where_it_was_given() {
+        // pbrt-v4's ReportUnused: a known parameter that the configuration never reads is not dropped silently.
+        let mut list = vec![Param::float("stepsize", 0.5), Param::string("mode", "rgb")];
+        list[1].at = Some("fire.pbrt:3:7".into());
+        let r = ParamReader::new("volume", &list, &[&T]);
+        r.float("stepsize").unwrap();
+        let e = r.finish().unwrap_err().located(&list).to_string();
+        assert_eq!(
+            e,
+            "fire.pbrt:3:7: volume: parameter 'mode' = given, but nothing in this configuration reads it: expected only the parameters that apply (docs/params.md says when each does)"
+        );
+        r.string("mode").unwrap();
+        r.finish().unwrap();
     }
 
     #[test]

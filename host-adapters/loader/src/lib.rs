@@ -87,7 +87,8 @@ impl fmt::Display for Error {
                 let s: Vec<String> = searched.iter().map(|p| p.display().to_string()).collect();
                 write!(f, "no firemedium plugin found (set FIREMEDIUM_PLUGIN to its file); looked in: {}", s.join(", "))
             }
-            Error::Status { code, message } => write!(f, "{message} (status {code})"),
+            // (The code is for programs, in the variant; people read the plugin's message.)
+            Error::Status { message, .. } => write!(f, "{message}"),
             Error::Buffer(m) => write!(f, "{m}"),
         }
     }
@@ -209,6 +210,8 @@ pub struct Param {
     pub name: String,
     /// Value.
     pub value: Value,
+    /// Where it came from (`file:line:col` of a scene), if anywhere: the plugin's errors about it begin there.
+    pub at: Option<String>,
 }
 
 impl Param {
@@ -217,6 +220,7 @@ impl Param {
         Param {
             name: name.into(),
             value: Value::Float(vec![v]),
+            at: None,
         }
     }
     /// An integer.
@@ -224,6 +228,7 @@ impl Param {
         Param {
             name: name.into(),
             value: Value::Integer(vec![v]),
+            at: None,
         }
     }
     /// A string.
@@ -231,6 +236,7 @@ impl Param {
         Param {
             name: name.into(),
             value: Value::String(vec![v.into()]),
+            at: None,
         }
     }
 }
@@ -452,6 +458,14 @@ impl Plugin {
             };
             raw.push((ty, count, values));
         }
+        let ats: Vec<Option<CString>> = params
+            .iter()
+            .map(|p| p.at.as_deref().map(to_c).transpose())
+            .collect::<Result<_, _>>()?;
+        let at_ptrs: Vec<*const c_char> = ats
+            .iter()
+            .map(|a| a.as_ref().map_or(std::ptr::null(), |c| c.as_ptr()))
+            .collect();
         let list: Vec<abi::FmParam> = names
             .iter()
             .zip(&raw)
@@ -464,8 +478,11 @@ impl Plugin {
             .collect();
         let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
         let api = self.inner.api();
-        // SAFETY: `list` and everything it points to live until after the call; `handle` is writable.
-        let status = unsafe { (api.volume_create)(list.as_ptr(), list.len(), &mut handle) };
+        // SAFETY: `list`, `at_ptrs` (one entry per parameter) and everything they point to live until after the
+        // call; `handle` is writable.
+        let status = unsafe {
+            (api.volume_create_located)(list.as_ptr(), at_ptrs.as_ptr(), list.len(), &mut handle)
+        };
         self.inner.check(status)?;
         let mut info = abi::FmVolumeInfo::default();
         // SAFETY: a live handle and a writable info.

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 3u
+#define FM_ABI_MINOR 4u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -140,6 +140,11 @@ typedef struct FmApi {
     /* ABI 0.3: lowest and highest temperature (K) of the volume into out[0], out[1] (0, 0 without a temperature
        grid). */
     FmStatus (*volume_temperature_range)(const FmVolume *volume, double *out);
+    /* ABI 0.4: volume_create with where each parameter came from: locations holds count NUL-terminated
+     * strings ("file:line:col"; an entry may be NULL, and locations itself may be NULL). An error about a
+     * parameter then begins with its location. */
+    FmStatus (*volume_create_located)(const FmParam *params, const char *const *locations, size_t count,
+                                      FmVolume **out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

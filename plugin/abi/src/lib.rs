@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 3;
+pub const ABI_MINOR: u32 = 4;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -338,6 +338,15 @@ pub struct FmApi {
     /// fire's hottest temperature.)
     pub volume_temperature_range:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
+    /// ABI 0.4: [`volume_create`](Self::volume_create) with where each parameter came from: `locations` holds
+    /// `count` NUL-terminated strings (`file:line:col` of the scene that gave the parameter; an entry may be
+    /// null, and `locations` itself may be null). An error about a parameter then begins with its location.
+    pub volume_create_located: unsafe extern "C" fn(
+        params: *const FmParam,
+        locations: *const *const c_char,
+        count: usize,
+        out: *mut *mut FmVolume,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -371,6 +380,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 18 * 8);
+        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 19 * 8);
     }
 }

@@ -150,6 +150,10 @@ impl FireVolume {
     /// parameters are read and checked first ([`Settings`]), then the dataset is loaded, then the coefficient
     /// tables, the march lattice, the majorant bricks and (if asked for) the refraction field are built.
     pub fn new(list: &[Param]) -> Result<FireVolume, Error> {
+        Self::new_unlocated(list).map_err(|e| e.located(list))
+    }
+
+    fn new_unlocated(list: &[Param]) -> Result<FireVolume, Error> {
         let start = Instant::now();
         let comps = settings::components();
         let r = ParamReader::new("volume", list, &comps);

@@ -150,6 +150,7 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
             expected,
             ..
         } => Error::InvalidParameter {
+            at: None,
             component: "volume",
             name,
             value,

@@ -501,7 +501,7 @@ impl Builder {
                         (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
                         (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
                     };
-                    list.push(LParam { name: p.name.clone(), value });
+                    list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
                 }
                 if ty != "fire" {
                     list.push(LParam::string("mode", "pbrt"));
@@ -516,7 +516,15 @@ impl Builder {
                         list.push(LParam::int("threads", n as i64));
                     }
                 }
-                let vol = plugin.create_volume(&list).map_err(|e| err(loc, format!("medium \"{name}\" ({ty}): {e}")))?;
+                let vol = plugin.create_volume(&list).map_err(|e| {
+                    // An error about one parameter begins with where it was given: report it there.
+                    let text = e.to_string();
+                    let at = params.iter().find_map(|p| text.strip_prefix(&format!("{}: ", p.loc)).map(|rest| (&p.loc, rest)));
+                    match at {
+                        Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
+                        None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
+                    }
+                })?;
                 let info = vol.info();
                 if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
