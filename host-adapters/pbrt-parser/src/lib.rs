@@ -11,8 +11,11 @@
 //! `Rotate` angles are degrees, as in pbrt.
 
 #![forbid(unsafe_code)]
+mod dict;
 mod parser;
 mod tokenizer;
+
+pub use dict::{closest, ParamDict};
 
 pub use parser::{
     parse_file, parse_str, ActiveTransform, Collect, Directive, Param, Target, Values,

@@ -3,6 +3,7 @@
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
 pub mod integrator;
+pub mod pbrt_v4;
 pub mod ply;
 pub mod scene;
 pub mod shapes;

@@ -3,11 +3,12 @@
 //! reported by name: ignored with a warning when it cannot change the picture much, refused with an error when
 //! it would be misread.
 
+use super::pbrt_v4::{self, Kind};
 use super::shapes::{Bvh, Geom, Prim};
 use super::spectrum::{Bins, S};
 use firemedium_core::spectrum::SpectralGrid;
 use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
-use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, Param};
+use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, Param, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -252,20 +253,14 @@ struct Builder {
     film_xyz: Option<(String, Vec<DVec3>)>,
 }
 
-fn nums<'a>(p: &'a [Param], name: &str) -> Option<&'a [f64]> {
-    p.iter().find(|x| x.name == name).and_then(|x| x.numbers())
+fn nums<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a [f64]> {
+    p.numbers(name)
 }
-fn num(p: &[Param], name: &str, def: f64) -> f64 {
-    nums(p, name)
-        .and_then(|v| v.first().copied())
-        .unwrap_or(def)
+fn num(p: &ParamDict, name: &str, def: f64) -> f64 {
+    p.float(name, def)
 }
-fn string<'a>(p: &'a [Param], name: &str) -> Option<&'a str> {
-    p.iter()
-        .find(|x| x.name == name)
-        .and_then(|x| x.strings())
-        .and_then(|v| v.first())
-        .map(|s| s.as_str())
+fn string<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a str> {
+    p.string(name)
 }
 
 fn affine(m: &DMat4) -> DAffine3 {
@@ -301,8 +296,13 @@ fn look_at(v: &[f64; 9]) -> DMat4 {
 
 impl Builder {
     /// A spectrum-valued parameter: rgb, spectrum (pairs or constant), blackbody; or a texture reference.
-    fn spectrum(&self, params: &[Param], name: &str, def: Option<S>) -> Result<Option<Tex>, Error> {
-        let Some(p) = params.iter().find(|x| x.name == name) else {
+    fn spectrum(
+        &self,
+        params: &ParamDict,
+        name: &str,
+        def: Option<S>,
+    ) -> Result<Option<Tex>, Error> {
+        let Some(p) = params.get(name) else {
             return Ok(def.map(Tex::Const));
         };
         let s = match (p.ty.as_str(), &p.values) {
@@ -335,36 +335,13 @@ impl Builder {
         self.warnings.push(format!("{loc}: warning: {m}"));
     }
 
-    fn check_known(
-        &mut self,
-        what: &str,
-        params: &[Param],
-        known: &[&str],
-        loc: &Loc,
-        ignored: &[&str],
-    ) -> Result<(), Error> {
-        for p in params {
-            if ignored.contains(&p.name.as_str()) {
-                self.warn(
-                    &p.loc,
-                    format!(
-                        "{what}: \"{} {}\" is ignored by this renderer",
-                        p.ty, p.name
-                    ),
-                );
-            } else if !known.contains(&p.name.as_str()) {
-                return Err(err(
-                    &p.loc,
-                    format!(
-                        "{what}: unknown parameter \"{} {}\" (known: {})",
-                        p.ty,
-                        p.name,
-                        known.join(", ")
-                    ),
-                ));
-            }
+    /// Names every parameter of a directive that nothing read: a warning at the parameter when pbrt-v4 reads it
+    /// (this renderer does not yet), an error with the closest name when pbrt-v4 does not know it either.
+    fn finish(&mut self, kind: Kind, ty: &str, what: &str, p: &ParamDict) -> Result<(), Error> {
+        let names = pbrt_v4::parameters(kind, ty).unwrap_or_default();
+        for (loc, w) in p.report_unused(what, &names).map_err(|e| e.to_string())? {
+            self.warn(&loc, w);
         }
-        let _ = loc;
         Ok(())
     }
 
@@ -465,12 +442,11 @@ impl Builder {
         }
     }
 
-    fn medium(&mut self, name: &str, params: &[Param], loc: &Loc) -> Result<(), Error> {
+    fn medium(&mut self, name: &str, params: &ParamDict, loc: &Loc) -> Result<(), Error> {
         let ty = string(params, "type").unwrap_or("").to_string();
         let to_medium = affine(&self.st.ctm.inverse());
         let m = match ty.as_str() {
             "homogeneous" => {
-                self.check_known("homogeneous medium", params, &["type", "sigma_a", "sigma_s", "scale", "g", "Le", "Lescale", "preset"], loc, &[])?;
                 let scale = num(params, "scale", 1.0) as f32;
                 let sa = self.spectrum(params, "sigma_a", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
                 let ss = self.spectrum(params, "sigma_s", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
@@ -483,8 +459,10 @@ impl Builder {
                     self.plugin_path = Some(self.dir.join(p));
                 }
                 let plugin = self.plugin(loc)?;
+                // The plugin reads and checks every parameter itself, reporting any it does not use.
+                params.mark_all_used();
                 let mut list: Vec<LParam> = Vec::new();
-                for p in params {
+                for p in params.params() {
                     if p.name == "type" || p.name == "plugin" {
                         continue;
                     }
@@ -519,7 +497,7 @@ impl Builder {
                 let vol = plugin.create_volume(&list).map_err(|e| {
                     // An error about one parameter begins with where it was given: report it there.
                     let text = e.to_string();
-                    let at = params.iter().find_map(|p| text.strip_prefix(&format!("{}: ", p.loc)).map(|rest| (&p.loc, rest)));
+                    let at = params.params().iter().find_map(|p| text.strip_prefix(&format!("{}: ", p.loc)).map(|rest| (&p.loc, rest)));
                     match at {
                         Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
                         None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
@@ -541,12 +519,11 @@ impl Builder {
         Ok(())
     }
 
-    fn shape(&mut self, ty: &str, p: &[Param], loc: &Loc) -> Result<(), Error> {
+    fn shape(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<(), Error> {
         let to_world = affine_f32(&self.st.ctm);
         let to_obj = to_world.inverse();
         match ty {
             "sphere" => {
-                self.check_known("sphere", p, &["radius", "zmin", "zmax", "phimax", "alpha"], loc, &["alpha"])?;
                 let r = num(p, "radius", 1.0) as f32;
                 if nums(p, "zmin").is_some() || nums(p, "zmax").is_some() || nums(p, "phimax").is_some() {
                     self.warn(loc, "sphere: partial spheres (zmin, zmax, phimax) are rendered whole");
@@ -554,20 +531,16 @@ impl Builder {
                 self.add_prim(Geom::Sphere { to_world, to_obj, r });
             }
             "disk" => {
-                self.check_known("disk", p, &["radius", "innerradius", "height", "phimax", "alpha"], loc, &["alpha", "phimax"])?;
                 self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32 });
             }
             "cylinder" => {
-                self.check_known("cylinder", p, &["radius", "zmin", "zmax", "phimax", "alpha"], loc, &["alpha", "phimax"])?;
                 self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: num(p, "zmin", -1.0) as f32, zmax: num(p, "zmax", 1.0) as f32 });
             }
             "trianglemesh" | "bilinearmesh" | "plymesh" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
-                    self.check_known("plymesh", p, &["filename", "displacement", "edgelength", "alpha"], loc, &["displacement", "edgelength", "alpha"])?;
                     let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
                     super::ply::read(&self.dir.join(f)).map_err(|e| err(loc, e))?
                 } else {
-                    self.check_known(ty, p, &["P", "indices", "N", "uv", "S", "faceIndices", "alpha"], loc, &["S", "faceIndices", "alpha"])?;
                     let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
                     let idx: Vec<usize> = match nums(p, "indices") {
                         Some(v) => v.iter().map(|&x| x as usize).collect(),
@@ -609,24 +582,20 @@ impl Builder {
         Ok(())
     }
 
-    fn material(&mut self, ty: &str, p: &[Param], loc: &Loc) -> Result<Option<usize>, Error> {
+    fn material(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<Option<usize>, Error> {
         let m = match ty {
             "interface" | "" => return Ok(None),
             "diffuse" => {
-                self.check_known("diffuse", p, &["reflectance", "type", "displacement", "normalmap"], loc, &["displacement", "normalmap"])?;
                 Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)))
             }
             "coateddiffuse" => {
-                self.check_known("coateddiffuse", p, &["reflectance", "eta", "roughness", "uroughness", "vroughness", "thickness", "albedo", "g", "maxdepth", "nsamples", "remaproughness", "type", "displacement", "normalmap"], loc, &["roughness", "uroughness", "vroughness", "thickness", "albedo", "g", "maxdepth", "nsamples", "remaproughness", "displacement", "normalmap"])?;
                 Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
             }
             "conductor" => {
-                self.check_known("conductor", p, &["reflectance", "eta", "k", "roughness", "uroughness", "vroughness", "remaproughness", "type", "displacement", "normalmap"], loc, &["eta", "k", "roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"])?;
                 let r = self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.9))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO);
                 Material::Conductor(r)
             }
             "dielectric" | "thindielectric" => {
-                self.check_known("dielectric", p, &["eta", "roughness", "uroughness", "vroughness", "remaproughness", "type", "displacement", "normalmap"], loc, &["roughness", "uroughness", "vroughness", "remaproughness", "displacement", "normalmap"])?;
                 Material::Dielectric(num(p, "eta", 1.5) as f32)
             }
             other => return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, conductor, dielectric, interface)"))),
@@ -744,92 +713,59 @@ impl Builder {
                         format!("camera \"{ty}\" is not supported (perspective)"),
                     ));
                 }
-                self.check_known(
-                    "perspective camera",
-                    &p,
-                    &[
-                        "fov",
-                        "screenwindow",
-                        "lensradius",
-                        "focaldistance",
-                        "frameaspectratio",
-                        "shutteropen",
-                        "shutterclose",
-                    ],
-                    loc,
-                    &["shutteropen", "shutterclose"],
-                )?;
                 let medium = if self.st.outside.is_empty() {
                     None
                 } else {
                     self.named_media.get(&self.st.outside).copied()
                 };
+                // (Its parameters are read, and the rest reported, once the film is known: `load`.)
                 self.named_coords
                     .insert("camera".into(), self.st.ctm.inverse());
                 self.camera = Some((p, self.st.ctm, medium, loc.clone()));
             }
-            Directive::Film(ty, p) => {
+            Directive::Film(ty, params) => {
+                let p = &ParamDict::new(&params);
                 if ty != "rgb" && ty != "gbuffer" {
                     self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
                 }
-                self.check_known(
-                    "film",
-                    &p,
-                    &[
-                        "xresolution",
-                        "yresolution",
-                        "filename",
-                        "sensor",
-                        "iso",
-                        "whitebalance",
-                        "exposuretime",
-                        "cropwindow",
-                        "pixelbounds",
-                        "diagonal",
-                        "maxcomponentvalue",
-                        "savefp16",
-                    ],
-                    loc,
-                    &[
-                        "sensor",
-                        "iso",
-                        "whitebalance",
-                        "exposuretime",
-                        "cropwindow",
-                        "pixelbounds",
-                        "diagonal",
-                        "maxcomponentvalue",
-                        "savefp16",
-                    ],
-                )?;
                 self.res = (
-                    num(&p, "xresolution", 1280.0).max(1.0) as usize,
-                    num(&p, "yresolution", 720.0).max(1.0) as usize,
+                    num(p, "xresolution", 1280.0).max(1.0) as usize,
+                    num(p, "yresolution", 720.0).max(1.0) as usize,
                 );
-                self.film_name = string(&p, "filename").map(String::from);
+                self.film_name = string(p, "filename").map(String::from);
+                self.finish(Kind::Film, &ty, "film", p)?;
             }
-            Directive::Sampler(_, p) => self.spp = num(&p, "pixelsamples", 16.0).max(1.0) as usize,
-            Directive::Integrator(ty, p) => {
+            Directive::Sampler(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.spp = num(p, "pixelsamples", 16.0).max(1.0) as usize;
+                self.finish(Kind::Sampler, &ty, &format!("sampler \"{ty}\""), p)?;
+            }
+            Directive::Integrator(ty, params) => {
                 if ty != "volpath" && ty != "path" {
                     self.warn(loc, format!("integrator \"{ty}\" is rendered with volpath"));
                 }
-                self.maxdepth = num(&p, "maxdepth", 5.0).max(0.0) as usize;
+                let p = &ParamDict::new(&params);
+                self.maxdepth = num(p, "maxdepth", 5.0).max(0.0) as usize;
+                self.finish(Kind::Integrator, &ty, &format!("integrator \"{ty}\""), p)?;
             }
-            Directive::PixelFilter(ty, _) => {
+            Directive::PixelFilter(ty, params) => {
                 if ty != "box" {
                     self.warn(
                         loc,
                         format!("pixel filter \"{ty}\" is rendered as a box filter"),
                     );
                 }
+                let p = &ParamDict::new(&params);
+                self.finish(Kind::PixelFilter, &ty, &format!("pixel filter \"{ty}\""), p)?;
             }
             Directive::Accelerator(..) => {}
             Directive::WorldBegin => {
                 self.st.ctm = DMat4::IDENTITY;
                 self.named_coords.insert("world".into(), DMat4::IDENTITY);
             }
-            Directive::LightSource(ty, p) => {
-                let scale = num(&p, "scale", 1.0) as f32;
+            Directive::LightSource(ty, params) => {
+                let p = &ParamDict::new(&params);
+                let scale = num(p, "scale", 1.0) as f32;
                 let m = self.st.ctm;
                 let pt = |v: Option<&[f64]>, def: [f64; 3]| {
                     Vec3A::from(
@@ -841,31 +777,27 @@ impl Builder {
                 };
                 let l = match ty.as_str() {
                     "point" => {
-                        self.check_known("point light", &p, &["I", "scale", "power", "from"], loc, &["power"])?;
-                        Light::Point { p: pt(nums(&p, "from"), [0.0; 3]), i: self.spectrum(&p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                        Light::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
                     }
                     "spot" => {
-                        self.check_known("spot light", &p, &["I", "scale", "power", "from", "to", "coneangle", "conedelta"], loc, &["power"])?;
-                        let (from, to) = (pt(nums(&p, "from"), [0.0; 3]), pt(nums(&p, "to"), [0.0, 0.0, 1.0]));
-                        let cone = num(&p, "coneangle", 30.0);
+                        let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
+                        let cone = num(p, "coneangle", 30.0);
                         Light::Spot {
                             p: from,
                             dir: (to - from).normalize_or_zero(),
                             cos_total: cone.to_radians().cos() as f32,
-                            cos_falloff: (cone - num(&p, "conedelta", 5.0)).to_radians().cos() as f32,
-                            i: self.spectrum(&p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale,
+                            cos_falloff: (cone - num(p, "conedelta", 5.0)).to_radians().cos() as f32,
+                            i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale,
                         }
                     }
                     "distant" => {
-                        self.check_known("distant light", &p, &["L", "scale", "illuminance", "from", "to"], loc, &["illuminance"])?;
-                        let (from, to) = (pt(nums(&p, "from"), [0.0; 3]), pt(nums(&p, "to"), [0.0, 0.0, 1.0]));
-                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                        let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
+                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
                     }
                     "infinite" => {
-                        self.check_known("infinite light", &p, &["L", "scale", "illuminance", "portal", "filename"], loc, &["illuminance", "portal"])?;
-                        match string(&p, "filename") {
+                        match string(p, "filename") {
                             Some(f) => {
-                                if p.iter().any(|x| x.name == "L") {
+                                if p.has("L") {
                                     return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
                                 }
                                 let img = crate::imageio::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
@@ -875,50 +807,47 @@ impl Builder {
                                 let to_light = Mat3A::from(DMat3::from_mat4(self.st.ctm).inverse().as_mat3());
                                 Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale, basis: self.rgb_basis() }
                             }
-                            None => Light::Infinite { l: self.spectrum(&p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale },
+                            None => Light::Infinite { l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale },
                         }
                     }
                     other => return Err(err(loc, format!("light \"{other}\" is not supported (point, spot, distant, infinite, and area diffuse)"))),
                 };
                 self.lights.push(l);
+                self.finish(Kind::Light, &ty, &format!("{ty} light"), p)?;
             }
-            Directive::AreaLightSource(ty, p) => {
+            Directive::AreaLightSource(ty, params) => {
+                let p = &ParamDict::new(&params);
                 if ty != "diffuse" {
                     return Err(err(
                         loc,
                         format!("area light \"{ty}\" is not supported (diffuse)"),
                     ));
                 }
-                self.check_known(
-                    "area light",
-                    &p,
-                    &["L", "scale", "twosided", "power", "filename"],
-                    loc,
-                    &["power", "filename"],
-                )?;
                 let l = self
                     .spectrum(&p, "L", Some(self.bins.mask()))?
                     .map(|t| t.eval(Vec2::ZERO))
                     .unwrap_or(S::ZERO)
-                    * num(&p, "scale", 1.0) as f32;
-                let two = p
-                    .iter()
-                    .find(|x| x.name == "twosided")
-                    .and_then(|x| x.bools())
-                    .map(|b| b[0])
-                    .unwrap_or(false);
+                    * num(p, "scale", 1.0) as f32;
+                let two = p.bool("twosided", false);
                 self.st.area = Some((l, two));
+                self.finish(Kind::AreaLight, &ty, "diffuse area light", p)?;
             }
-            Directive::Material(ty, p) => self.st.material = self.material(&ty, &p, loc)?,
-            Directive::MakeNamedMaterial(name, p) => {
-                let ty = string(&p, "type").unwrap_or("").to_string();
+            Directive::Material(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.st.material = self.material(&ty, p, loc)?;
+                self.finish(Kind::Material, &ty, &format!("{ty} material"), p)?;
+            }
+            Directive::MakeNamedMaterial(name, params) => {
+                let p = &ParamDict::new(&params);
+                let ty = string(p, "type").unwrap_or("").to_string();
                 if ty.is_empty() {
                     return Err(err(
                         loc,
                         format!("MakeNamedMaterial \"{name}\": missing \"string type\""),
                     ));
                 }
-                let m = self.material(&ty, &p, loc)?;
+                let m = self.material(&ty, p, loc)?;
+                self.finish(Kind::Material, &ty, &format!("{ty} material \"{name}\""), p)?;
                 // Interface named materials are stored as usize::MAX.
                 self.named_materials.insert(name, m.unwrap_or(usize::MAX));
             }
@@ -931,7 +860,8 @@ impl Builder {
                     ))
                 }
             },
-            Directive::Texture(name, _ty, class, p) => {
+            Directive::Texture(name, _ty, class, params) => {
+                let p = &ParamDict::new(&params);
                 let t = match class.as_str() {
                     "checkerboard" => {
                         let a = self
@@ -943,30 +873,29 @@ impl Builder {
                         Tex::Checker {
                             a: Box::new(a),
                             b: Box::new(b),
-                            su: num(&p, "uscale", 1.0) as f32,
-                            sv: num(&p, "vscale", 1.0) as f32,
+                            su: num(p, "uscale", 1.0) as f32,
+                            sv: num(p, "vscale", 1.0) as f32,
                         }
                     }
                     "constant" => self
                         .spectrum(&p, "value", Some(self.bins.mask()))?
                         .unwrap_or(Tex::Const(S::ZERO)),
                     "imagemap" => {
-                        self.check_known("imagemap", &p, &["filename", "scale", "invert", "encoding", "wrap", "filter", "maxanisotropy", "mapping", "uscale", "vscale", "udelta", "vdelta"], loc, &["filter", "maxanisotropy", "mapping", "uscale", "vscale", "udelta", "vdelta"])?;
-                        let f = string(&p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;
-                        let srgb = match string(&p, "encoding").unwrap_or("sRGB") {
+                        let f = string(p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;
+                        let srgb = match string(p, "encoding").unwrap_or("sRGB") {
                             "sRGB" => true,
                             "linear" => false,
                             e => return Err(err(loc, format!("imagemap: encoding \"{e}\" is not supported (sRGB, linear)"))),
                         };
-                        let wrap = match string(&p, "wrap").unwrap_or("repeat") {
+                        let wrap = match string(p, "wrap").unwrap_or("repeat") {
                             "repeat" => crate::imageio::Wrap::Repeat,
                             "clamp" => crate::imageio::Wrap::Clamp,
                             "black" => crate::imageio::Wrap::Black,
                             w => return Err(err(loc, format!("imagemap: wrap \"{w}\" is not one of repeat, clamp, black"))),
                         };
                         let img = crate::imageio::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
-                        let invert = p.iter().find(|x| x.name == "invert").and_then(|x| x.bools()).map(|b| b[0]).unwrap_or(false);
-                        Tex::Image { img: std::sync::Arc::new(img), scale: num(&p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
+                        let invert = p.bool("invert", false);
+                        Tex::Image { img: std::sync::Arc::new(img), scale: num(p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
                     }
                     other => return Err(err(
                         loc,
@@ -975,10 +904,25 @@ impl Builder {
                         ),
                     )),
                 };
+                self.finish(
+                    Kind::Texture,
+                    &class,
+                    &format!("{class} texture \"{name}\""),
+                    p,
+                )?;
                 self.textures.insert(name, t);
             }
-            Directive::Shape(ty, p) => self.shape(&ty, &p, loc)?,
-            Directive::MakeNamedMedium(name, p) => self.medium(&name, &p, loc)?,
+            Directive::Shape(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.shape(&ty, p, loc)?;
+                self.finish(Kind::Shape, &ty, &ty, p)?;
+            }
+            Directive::MakeNamedMedium(name, params) => {
+                let p = &ParamDict::new(&params);
+                self.medium(&name, p, loc)?;
+                let ty = string(p, "type").unwrap_or("");
+                self.finish(Kind::Medium, ty, &format!("{ty} medium \"{name}\""), p)?;
+            }
             Directive::MediumInterface(i, o) => {
                 for n in [&i, &o] {
                     if !n.is_empty() && !self.named_media.contains_key(n) {
@@ -1036,6 +980,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut first_medium: Option<&Loc> = None;
     for (d, loc) in &c.0 {
         if let Directive::MakeNamedMedium(_, p) = d {
+            let p = &ParamDict::new(p);
             match string(p, "type") {
                 Some("fire") => fire = true,
                 Some("uniformgrid" | "nanovdb") => pbrt_media = true,
@@ -1073,6 +1018,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut bins_params: Vec<LParam> = Vec::new();
     for (d, loc) in &c.0 {
         if let Directive::MakeNamedMedium(_, p) = d {
+            let p = &ParamDict::new(p);
             for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
                 if let Some(x) = nums(p, k).and_then(|v| v.first()) {
                     if bins_params
@@ -1164,24 +1110,26 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         .camera
         .take()
         .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
+    let cp = &ParamDict::new(&cp);
     if let Some(r) = ov.res {
         b.res = r;
     }
     let (w, h) = (b.res.0 as f64, b.res.1 as f64);
-    let aspect = num(&cp, "frameaspectratio", w / h);
-    let screen = match nums(&cp, "screenwindow") {
+    let aspect = num(cp, "frameaspectratio", w / h);
+    let screen = match nums(cp, "screenwindow") {
         Some(s) if s.len() == 4 => [s[0], s[1], s[2], s[3]],
         _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
         _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
     };
     let camera = Camera {
         to_world: affine(&camera_from_world.inverse()),
-        tan_half: (num(&cp, "fov", 90.0).to_radians() / 2.0).tan(),
+        tan_half: (num(cp, "fov", 90.0).to_radians() / 2.0).tan(),
         screen,
-        lens_radius: num(&cp, "lensradius", 0.0),
-        focal_distance: num(&cp, "focaldistance", 1e6),
+        lens_radius: num(cp, "lensradius", 0.0),
+        focal_distance: num(cp, "focaldistance", 1e6),
         medium,
     };
+    b.finish(Kind::Camera, "perspective", "perspective camera", cp)?;
     // Fire lights: every plugin medium that emits gets one (unless switched off).
     if !ov.no_fire_light {
         let mut report = 0;

@@ -1,0 +1,249 @@
+//! The parameters pbrt-v4 reads, per directive and type (from pbrt-v4's `Create` functions: `cameras.cpp`,
+//! `film.cpp`, `samplers.cpp`, `filters.cpp`, `integrators.cpp`, `lights.cpp`, `materials.cpp`, `textures.cpp`,
+//! `media.cpp`, `shapes.cpp`). The scene builder reads what it supports through a `ParamDict`; whatever is left
+//! is a warning when pbrt-v4 reads it (named here) and an error with the closest name when it does not.
+
+/// What a directive is, for its parameter list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Camera,
+    Film,
+    Sampler,
+    PixelFilter,
+    Integrator,
+    Light,
+    AreaLight,
+    Material,
+    Texture,
+    Medium,
+    Shape,
+}
+
+/// Texture mapping parameters (every texture class takes them).
+const MAPPING: &[&str] = &[
+    "mapping",
+    "uscale",
+    "vscale",
+    "udelta",
+    "vdelta",
+    "v1",
+    "v2",
+    "dimension",
+];
+
+/// The parameters pbrt-v4 reads for directive `kind` of type `ty`, or `None` for a type pbrt-v4 does not have.
+pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
+    let common: &[&str] = match kind {
+        Kind::Camera => &[
+            "shutteropen",
+            "shutterclose",
+            "screenwindow",
+            "frameaspectratio",
+        ],
+        Kind::Film => &[
+            "xresolution",
+            "yresolution",
+            "cropwindow",
+            "pixelbounds",
+            "diagonal",
+            "filename",
+            "sensor",
+            "iso",
+            "whitebalance",
+            "exposuretime",
+            "maxcomponentvalue",
+            "savefp16",
+        ],
+        Kind::Sampler => &["pixelsamples", "seed"],
+        Kind::PixelFilter => &["xradius", "yradius"],
+        Kind::Integrator => &["maxdepth", "regularize", "lightsampler"],
+        Kind::Light => &["scale", "power", "illuminance"],
+        Kind::AreaLight => &[],
+        Kind::Material => &["type", "displacement", "normalmap"],
+        Kind::Texture => MAPPING,
+        Kind::Medium => &["type"],
+        Kind::Shape => &["alpha", "emissionfilename"],
+    };
+    let own: &[&str] = match (kind, ty) {
+        (Kind::Camera, "perspective") => &["fov", "lensradius", "focaldistance"],
+        (Kind::Camera, "orthographic") => &["lensradius", "focaldistance"],
+        (Kind::Camera, "realistic") => {
+            &["lensfile", "aperturediameter", "focusdistance", "aperture"]
+        }
+        (Kind::Camera, "spherical") => &["mapping"],
+        (Kind::Film, "rgb") => &[],
+        (Kind::Film, "gbuffer") => &["coordinatesystem"],
+        (Kind::Film, "spectral") => &["nbuckets", "lambdamin", "lambdamax"],
+        (Kind::Sampler, "zsobol" | "sobol" | "paddedsobol" | "halton") => &["randomization"],
+        (Kind::Sampler, "stratified") => &["jitter", "xsamples", "ysamples"],
+        (Kind::Sampler, "independent" | "pmj02bn") => &[],
+        (Kind::PixelFilter, "box" | "triangle") => &[],
+        (Kind::PixelFilter, "gaussian") => &["sigma"],
+        (Kind::PixelFilter, "mitchell") => &["B", "C"],
+        (Kind::PixelFilter, "sinc" | "lanczos") => &["tau"],
+        (Kind::Integrator, "volpath" | "path" | "simplevolpath" | "simplepath") => {
+            &["samplelights", "samplebsdf"]
+        }
+        (Kind::Integrator, "bdpt") => &["visualizestrategies", "visualizeweights"],
+        (Kind::Integrator, "mlt") => &[
+            "bootstrapsamples",
+            "chains",
+            "mutationsperpixel",
+            "largestepprobability",
+            "sigma",
+        ],
+        (Kind::Integrator, "sppm") => &["iterations", "photonsperiteration", "radius", "seed"],
+        (Kind::Integrator, "ambientocclusion") => &["cossample", "maxdistance"],
+        (Kind::Integrator, "randomwalk" | "lightpath") => &[],
+        (Kind::Light, "point") => &["I", "from"],
+        (Kind::Light, "spot") => &["I", "from", "to", "coneangle", "conedelta"],
+        (Kind::Light, "goniometric") => &["I", "filename"],
+        (Kind::Light, "projection") => &["fov", "filename"],
+        (Kind::Light, "distant") => &["L", "from", "to"],
+        (Kind::Light, "infinite") => &["L", "filename", "portal"],
+        (Kind::AreaLight, "diffuse") => &["L", "scale", "twosided", "power", "filename"],
+        (Kind::Material, "interface") => &[],
+        (Kind::Material, "diffuse") => &["reflectance"],
+        (Kind::Material, "coateddiffuse") => &[
+            "reflectance",
+            "eta",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "thickness",
+            "albedo",
+            "g",
+            "maxdepth",
+            "nsamples",
+            "remaproughness",
+        ],
+        (Kind::Material, "coatedconductor") => &[
+            "interface.eta",
+            "interface.roughness",
+            "interface.uroughness",
+            "interface.vroughness",
+            "thickness",
+            "conductor.eta",
+            "conductor.k",
+            "reflectance",
+            "conductor.roughness",
+            "conductor.uroughness",
+            "conductor.vroughness",
+            "albedo",
+            "g",
+            "maxdepth",
+            "nsamples",
+            "remaproughness",
+        ],
+        (Kind::Material, "conductor") => &[
+            "reflectance",
+            "eta",
+            "k",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "remaproughness",
+        ],
+        (Kind::Material, "dielectric" | "thindielectric") => &[
+            "eta",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "remaproughness",
+        ],
+        (Kind::Material, "diffusetransmission") => &["reflectance", "transmittance", "scale"],
+        (Kind::Material, "mix") => &["materials", "amount"],
+        (Kind::Material, "measured") => &["filename"],
+        (Kind::Material, "subsurface") => &[
+            "eta",
+            "g",
+            "mfp",
+            "name",
+            "reflectance",
+            "scale",
+            "sigma_a",
+            "sigma_s",
+            "roughness",
+            "uroughness",
+            "vroughness",
+            "remaproughness",
+        ],
+        (Kind::Material, "hair") => &[
+            "sigma_a",
+            "reflectance",
+            "color",
+            "eumelanin",
+            "pheomelanin",
+            "eta",
+            "beta_m",
+            "beta_n",
+            "alpha",
+        ],
+        (Kind::Texture, "constant") => &["value"],
+        (Kind::Texture, "checkerboard") => &["tex1", "tex2"],
+        (Kind::Texture, "imagemap") => &[
+            "filename",
+            "scale",
+            "invert",
+            "encoding",
+            "wrap",
+            "filter",
+            "maxanisotropy",
+        ],
+        (Kind::Texture, "scale") => &["tex", "scale"],
+        (Kind::Texture, "mix") => &["tex1", "tex2", "amount"],
+        (Kind::Texture, "directionmix") => &["tex1", "tex2", "dir"],
+        (Kind::Texture, "bilerp") => &["v00", "v01", "v10", "v11"],
+        (Kind::Texture, "dots") => &["inside", "outside"],
+        (Kind::Texture, "fbm" | "wrinkled") => &["octaves", "roughness"],
+        (Kind::Texture, "windy" | "marble" | "ptex") => &[
+            "octaves",
+            "roughness",
+            "scale",
+            "variation",
+            "filename",
+            "encoding",
+        ],
+        (Kind::Medium, "homogeneous") => &[
+            "sigma_a", "sigma_s", "scale", "g", "Le", "Lescale", "preset",
+        ],
+        (Kind::Medium, "uniformgrid" | "nanovdb" | "rgbgrid" | "cloud") => &[],
+        (Kind::Shape, "sphere") => &["radius", "zmin", "zmax", "phimax"],
+        (Kind::Shape, "disk") => &["radius", "innerradius", "height", "phimax"],
+        (Kind::Shape, "cylinder") => &["radius", "zmin", "zmax", "phimax"],
+        (Kind::Shape, "trianglemesh") => &["P", "indices", "N", "uv", "S", "faceIndices"],
+        (Kind::Shape, "bilinearmesh") => &["P", "indices", "N", "uv", "faceIndices"],
+        (Kind::Shape, "plymesh") => &["filename", "displacement", "edgelength"],
+        (Kind::Shape, "loopsubdiv") => &["levels", "indices", "P"],
+        (Kind::Shape, "curve") => &[
+            "P",
+            "basis",
+            "degree",
+            "type",
+            "N",
+            "width",
+            "width0",
+            "width1",
+            "splitdepth",
+        ],
+        _ => return None,
+    };
+    Some(common.iter().chain(own).copied().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_type_has_its_own_and_the_common_names() {
+        let sphere = parameters(Kind::Shape, "sphere").unwrap();
+        assert!(sphere.contains(&"radius") && sphere.contains(&"alpha"));
+        let film = parameters(Kind::Film, "spectral").unwrap();
+        assert!(film.contains(&"nbuckets") && film.contains(&"xresolution"));
+        assert!(parameters(Kind::Medium, "homogeneous")
+            .unwrap()
+            .contains(&"preset"));
+        assert!(parameters(Kind::Shape, "teapot").is_none());
+    }
+}
