@@ -824,7 +824,7 @@ impl Builder {
                     ));
                 }
                 let l = self
-                    .spectrum(&p, "L", Some(self.bins.mask()))?
+                    .spectrum(p, "L", Some(self.bins.mask()))?
                     .map(|t| t.eval(Vec2::ZERO))
                     .unwrap_or(S::ZERO)
                     * num(p, "scale", 1.0) as f32;
@@ -865,10 +865,10 @@ impl Builder {
                 let t = match class.as_str() {
                     "checkerboard" => {
                         let a = self
-                            .spectrum(&p, "tex1", Some(self.bins.mask()))?
+                            .spectrum(p, "tex1", Some(self.bins.mask()))?
                             .unwrap_or(Tex::Const(S::ZERO));
                         let b = self
-                            .spectrum(&p, "tex2", Some(S::ZERO))?
+                            .spectrum(p, "tex2", Some(S::ZERO))?
                             .unwrap_or(Tex::Const(S::ZERO));
                         Tex::Checker {
                             a: Box::new(a),
@@ -878,7 +878,7 @@ impl Builder {
                         }
                     }
                     "constant" => self
-                        .spectrum(&p, "value", Some(self.bins.mask()))?
+                        .spectrum(p, "value", Some(self.bins.mask()))?
                         .unwrap_or(Tex::Const(S::ZERO)),
                     "imagemap" => {
                         let f = string(p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;
