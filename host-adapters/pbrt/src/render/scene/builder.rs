@@ -1,0 +1,426 @@
+//! The scene builder's state (pbrt-v4's graphics state and the named things a scene declares) and what it
+//! builds per directive: media (through the plugin), shapes, materials, spectra from parameters; every
+//! directive's parameters are read through a `ParamDict` and the rest reported (`finish`).
+
+use super::{err, load_plugin, Error, Light, Material, Medium, MediumReport, Tex};
+use crate::render::pbrt_v4::{self, Kind};
+use crate::render::shapes::{Geom, Prim};
+use crate::render::spectrum::{Bins, S};
+use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
+use firemedium_pbrt_parser::{Loc, Param, ParamDict};
+use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+#[derive(Clone)]
+pub(super) struct State {
+    pub(super) ctm: DMat4,
+    pub(super) reverse: bool,
+    pub(super) material: Option<usize>,
+    pub(super) area: Option<(S, bool)>,
+    pub(super) inside: String,
+    pub(super) outside: String,
+}
+
+pub(super) struct Builder {
+    pub(super) dir: PathBuf,
+    pub(super) bins: Bins,
+    pub(super) plugin_path: Option<PathBuf>,
+    pub(super) plugin: Option<Plugin>,
+    pub(super) st: State,
+    pub(super) stack: Vec<State>,
+    pub(super) named_coords: HashMap<String, DMat4>,
+    pub(super) named_materials: HashMap<String, usize>,
+    pub(super) textures: HashMap<String, Tex>,
+    pub(super) named_media: HashMap<String, usize>,
+    pub(super) materials: Vec<Material>,
+    pub(super) prims: Vec<Prim>,
+    pub(super) lights: Vec<Light>,
+    pub(super) media: Vec<Medium>,
+    pub(super) media_reports: Vec<MediumReport>,
+    /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
+    pub(super) camera: Option<(Vec<Param>, DMat4, Option<usize>, Loc)>,
+    pub(super) res: (usize, usize),
+    pub(super) spp: usize,
+    pub(super) maxdepth: usize,
+    pub(super) film_name: Option<String>,
+    pub(super) warnings: Vec<String>,
+    pub(super) objects: HashMap<String, Vec<Prim>>,
+    pub(super) current_object: Option<(String, Vec<Prim>)>,
+    pub(super) bins_params: Vec<LParam>,
+    /// Threads the plugin may use to build a medium (`Overrides::threads`).
+    pub(super) threads: Option<usize>,
+    /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
+    pub(super) has_fire: bool,
+    /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
+    /// first medium in the film's units), and that medium's name; every further medium is checked against it.
+    pub(super) film_xyz: Option<(String, Vec<DVec3>)>,
+}
+
+pub(super) fn nums<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a [f64]> {
+    p.numbers(name)
+}
+pub(super) fn num(p: &ParamDict, name: &str, def: f64) -> f64 {
+    p.float(name, def)
+}
+pub(super) fn string<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a str> {
+    p.string(name)
+}
+
+pub(super) fn affine(m: &DMat4) -> DAffine3 {
+    DAffine3::from_mat4(*m)
+}
+
+pub(super) fn affine_f32(m: &DMat4) -> Affine3A {
+    let a = DAffine3::from_mat4(*m);
+    Affine3A {
+        matrix3: Mat3A::from(a.matrix3.as_mat3()),
+        translation: a.translation.as_vec3().into(),
+    }
+}
+
+/// pbrt-v4's LookAt: the camera-from-world matrix (pbrt's left-handed camera space).
+pub(super) fn look_at(v: &[f64; 9]) -> DMat4 {
+    let (pos, look, up) = (
+        DVec3::new(v[0], v[1], v[2]),
+        DVec3::new(v[3], v[4], v[5]),
+        DVec3::new(v[6], v[7], v[8]),
+    );
+    let dir = (look - pos).normalize_or_zero();
+    let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
+    let new_up = dir.cross(right);
+    let world_from_camera = DMat4::from_cols(
+        right.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        pos.extend(1.0),
+    );
+    world_from_camera.inverse()
+}
+
+impl Builder {
+    /// A spectrum-valued parameter: rgb, spectrum (pairs or constant), blackbody; or a texture reference.
+    pub(super) fn spectrum(
+        &self,
+        params: &ParamDict,
+        name: &str,
+        def: Option<S>,
+    ) -> Result<Option<Tex>, Error> {
+        let Some(p) = params.get(name) else {
+            return Ok(def.map(Tex::Const));
+        };
+        let s = match (p.ty.as_str(), &p.values) {
+            ("rgb", _) => {
+                let v = p.numbers().unwrap_or(&[]);
+                self.bins.uplift_rgb([v[0], v[1], v[2]])
+            }
+            ("spectrum", firemedium_pbrt_parser::Values::Numbers(v)) => self.bins.pairs(v),
+            ("blackbody", _) => self.bins.blackbody(p.numbers().unwrap_or(&[0.0])[0]),
+            ("float", _) => S::splat(p.numbers().unwrap_or(&[0.0])[0] as f32) * self.bins.mask(),
+            ("texture", _) => {
+                let n = p.strings().and_then(|v| v.first()).cloned().unwrap_or_default();
+                return self.textures.get(&n).cloned().map(Some).ok_or_else(|| err(&p.loc, format!("\"texture {name}\": no texture named \"{n}\"")));
+            }
+            (t, _) => return Err(err(&p.loc, format!("\"{t} {name}\": named spectra are not supported; give rgb, (λ, value) pairs or blackbody"))),
+        };
+        Ok(Some(Tex::Const(s)))
+    }
+
+    /// The bins' box-uplift basis for red, green and blue.
+    pub(super) fn rgb_basis(&self) -> [S; 3] {
+        [
+            self.bins.uplift_rgb([1.0, 0.0, 0.0]),
+            self.bins.uplift_rgb([0.0, 1.0, 0.0]),
+            self.bins.uplift_rgb([0.0, 0.0, 1.0]),
+        ]
+    }
+
+    pub(super) fn warn(&mut self, loc: &Loc, m: impl std::fmt::Display) {
+        self.warnings.push(format!("{loc}: warning: {m}"));
+    }
+
+    /// Names every parameter of a directive that nothing read: a warning at the parameter when pbrt-v4 reads it
+    /// (this renderer does not yet), an error with the closest name when pbrt-v4 does not know it either.
+    pub(super) fn finish(
+        &mut self,
+        kind: Kind,
+        ty: &str,
+        what: &str,
+        p: &ParamDict,
+    ) -> Result<(), Error> {
+        let names = pbrt_v4::parameters(kind, ty).unwrap_or_default();
+        for (loc, w) in p.report_unused(what, &names).map_err(|e| e.to_string())? {
+            self.warn(&loc, w);
+        }
+        Ok(())
+    }
+
+    pub(super) fn add_prim(&mut self, geom: Geom) {
+        let light = self.st.area;
+        let media = if self.st.inside.is_empty() && self.st.outside.is_empty() {
+            None
+        } else {
+            let look = |n: &str| {
+                if n.is_empty() {
+                    None
+                } else {
+                    self.named_media.get(n).copied()
+                }
+            };
+            Some((look(&self.st.inside), look(&self.st.outside)))
+        };
+        let mut prim = Prim {
+            geom,
+            material: self.st.material,
+            area_light: None,
+            media,
+            reverse: self.st.reverse,
+        };
+        if let Some((_, objs)) = self.current_object.as_mut() {
+            objs.push(prim);
+            return;
+        }
+        if let Some((l, twosided)) = light {
+            prim.area_light = Some(self.lights.len());
+            self.lights.push(Light::Area {
+                prim: self.prims.len(),
+                l,
+                twosided,
+            });
+        }
+        self.prims.push(prim);
+    }
+
+    pub(super) fn plugin(&mut self, loc: &Loc) -> Result<Plugin, Error> {
+        if let Some(p) = &self.plugin {
+            return Ok(p.clone());
+        }
+        let p = match &self.plugin_path {
+            Some(path) => load_plugin(Some(path)),
+            None => load_plugin(None),
+        }
+        .map_err(|e| err(loc, e))?;
+        self.plugin = Some(p.clone());
+        Ok(p)
+    }
+
+    /// Takes the film's colour from the plugin: the medium's bins must be the renderer's, and the first medium in
+    /// the film's units (a `fire` when the scene has one, else any) gives the XYZ weights of every bin. A further
+    /// medium must agree with them up to its units' scale, so a plugin built from another commit, or media that
+    /// project their bins differently, are refused instead of rendering a silently wrong colour.
+    pub(super) fn check_colour(
+        &mut self,
+        name: &str,
+        fire: bool,
+        vol: &Volume,
+        loc: &Loc,
+    ) -> Result<(), Error> {
+        let info = vol.info();
+        let (lo, hi) = (self.bins.grid.min_nm(), self.bins.grid.max_nm());
+        if (info.lambda_min - lo).abs() > 1e-9 * hi || (info.lambda_max - hi).abs() > 1e-9 * hi {
+            return Err(err(loc, format!("medium \"{name}\": the plugin's bins span {}–{} nm, the renderer's {lo}–{hi} nm (all media share the scene's bins)", info.lambda_min, info.lambda_max)));
+        }
+        let xyz: Vec<DVec3> = vol
+            .channel_xyz()
+            .map_err(|e| err(loc, format!("medium \"{name}\": {e}")))?
+            .into_iter()
+            .map(DVec3::from_array)
+            .collect();
+        match &self.film_xyz {
+            None if fire || !self.has_fire => {
+                self.film_xyz = Some((name.to_string(), xyz));
+                Ok(())
+            }
+            None => Ok(()),
+            Some((first, want)) => {
+                // The same projection up to one scale (physical and pbrt units differ by a constant).
+                let y = |w: &[DVec3]| w.iter().map(|v| v.y).sum::<f64>();
+                let k = y(want) / y(&xyz);
+                let worst = want
+                    .iter()
+                    .zip(&xyz)
+                    .map(|(a, b)| {
+                        (*a - *b * k).abs().max_element() / a.abs().max_element().max(1e-300)
+                    })
+                    .fold(0.0, f64::max);
+                if worst.is_finite() && worst < 1e-6 {
+                    Ok(())
+                } else {
+                    Err(err(loc, format!("medium \"{name}\": its bins project to XYZ differently from medium \"{first}\"'s (largest relative difference {worst:.3e}); are both from the same plugin?")))
+                }
+            }
+        }
+    }
+
+    pub(super) fn medium(
+        &mut self,
+        name: &str,
+        params: &ParamDict,
+        loc: &Loc,
+    ) -> Result<(), Error> {
+        let ty = string(params, "type").unwrap_or("").to_string();
+        let to_medium = affine(&self.st.ctm.inverse());
+        let m = match ty.as_str() {
+            "homogeneous" => {
+                let scale = num(params, "scale", 1.0) as f32;
+                let sa = self.spectrum(params, "sigma_a", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
+                let ss = self.spectrum(params, "sigma_s", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
+                let le = self.spectrum(params, "Le", Some(S::ZERO))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * num(params, "Lescale", 1.0) as f32;
+                Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
+            }
+            "fire" | "uniformgrid" | "nanovdb" => {
+                // Parameters pass to the plugin unchanged, but for the type, the plugin file, and relative paths.
+                if let Some(p) = string(params, "plugin") {
+                    self.plugin_path = Some(self.dir.join(p));
+                }
+                let plugin = self.plugin(loc)?;
+                // The plugin reads and checks every parameter itself, reporting any it does not use.
+                params.mark_all_used();
+                let mut list: Vec<LParam> = Vec::new();
+                for p in params.params() {
+                    if p.name == "type" || p.name == "plugin" {
+                        continue;
+                    }
+                    let value = match (&p.values, p.ty.as_str()) {
+                        (firemedium_pbrt_parser::Values::Strings(v), _) => {
+                            let files = ["filename", "dataset", "densityfile", "temperaturefile", "speciesfiles"];
+                            Value::String(v.iter().map(|s| if files.contains(&p.name.as_str()) && !Path::new(s).is_absolute() { self.dir.join(s).display().to_string() } else { s.clone() }).collect())
+                        }
+                        (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "integer") => Value::Integer(v.iter().map(|&x| x as i64).collect()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
+                    };
+                    list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
+                }
+                if ty != "fire" {
+                    list.push(LParam::string("mode", "pbrt"));
+                }
+                for b in &self.bins_params {
+                    if !list.iter().any(|p| p.name == b.name) {
+                        list.push(b.clone());
+                    }
+                }
+                if let Some(n) = self.threads {
+                    if !list.iter().any(|p| p.name == "threads") {
+                        list.push(LParam::int("threads", n as i64));
+                    }
+                }
+                let vol = plugin.create_volume(&list).map_err(|e| {
+                    // An error about one parameter begins with where it was given: report it there.
+                    let text = e.to_string();
+                    let at = params.params().iter().find_map(|p| text.strip_prefix(&format!("{}: ", p.loc)).map(|rest| (&p.loc, rest)));
+                    match at {
+                        Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
+                        None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
+                    }
+                })?;
+                let info = vol.info();
+                if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
+                    return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
+                }
+                self.check_colour(name, ty == "fire", &vol, loc)?;
+                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
+                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string() }
+            }
+            "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
+            other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
+        };
+        self.named_media.insert(name.to_string(), self.media.len());
+        self.media.push(m);
+        Ok(())
+    }
+
+    pub(super) fn shape(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<(), Error> {
+        let to_world = affine_f32(&self.st.ctm);
+        let to_obj = to_world.inverse();
+        match ty {
+            "sphere" => {
+                let r = num(p, "radius", 1.0) as f32;
+                if nums(p, "zmin").is_some() || nums(p, "zmax").is_some() || nums(p, "phimax").is_some() {
+                    self.warn(loc, "sphere: partial spheres (zmin, zmax, phimax) are rendered whole");
+                }
+                self.add_prim(Geom::Sphere { to_world, to_obj, r });
+            }
+            "disk" => {
+                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32 });
+            }
+            "cylinder" => {
+                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: num(p, "zmin", -1.0) as f32, zmax: num(p, "zmax", 1.0) as f32 });
+            }
+            "trianglemesh" | "bilinearmesh" | "plymesh" => {
+                let (pos, idx, normals, uvs) = if ty == "plymesh" {
+                    let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
+                    crate::render::ply::read(&self.dir.join(f)).map_err(|e| err(loc, e))?
+                } else {
+                    let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
+                    let idx: Vec<usize> = match nums(p, "indices") {
+                        Some(v) => v.iter().map(|&x| x as usize).collect(),
+                        None if ty == "trianglemesh" && pos.len() == 9 => vec![0, 1, 2],
+                        None if ty == "bilinearmesh" && pos.len() == 12 => vec![0, 1, 2, 3],
+                        None => return Err(err(loc, format!("{ty}: missing \"integer indices\""))),
+                    };
+                    (pos, idx, nums(p, "N").map(|v| v.to_vec()), nums(p, "uv").map(|v| v.to_vec()))
+                };
+                let nv = pos.len() / 3;
+                let per = if ty == "bilinearmesh" { 4 } else { 3 };
+                if idx.len() % per != 0 || idx.iter().any(|&i| i >= nv) {
+                    return Err(err(loc, format!("{ty}: indices must come in {per}s and be below the {nv} vertices")));
+                }
+                let m = self.st.ctm;
+                let vp = |i: usize| Vec3A::from(m.transform_point3(DVec3::new(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2])).as_vec3());
+                let nm = DMat3::from_mat4(m).inverse().transpose();
+                let vn = |i: usize| normals.as_ref().filter(|n| n.len() == pos.len()).map(|n| Vec3A::from((nm * DVec3::new(n[3 * i], n[3 * i + 1], n[3 * i + 2])).normalize_or_zero().as_vec3()));
+                let vt = |i: usize| uvs.as_ref().filter(|u| u.len() == 2 * nv).map(|u| Vec2::new(u[2 * i] as f32, u[2 * i + 1] as f32)).unwrap_or(Vec2::ZERO);
+                let tri = |b: &mut Builder, a: usize, c: usize, d: usize| {
+                    let n = match (vn(a), vn(c), vn(d)) {
+                        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+                        _ => None,
+                    };
+                    b.add_prim(Geom::Triangle { p: [vp(a), vp(c), vp(d)], n, uv: [vt(a), vt(c), vt(d)] });
+                };
+                for f in idx.chunks(per) {
+                    if per == 4 {
+                        // pbrt's bilinear patch vertex order: p00 p10 p01 p11 → two triangles.
+                        tri(self, f[0], f[1], f[3]);
+                        tri(self, f[0], f[3], f[2]);
+                    } else {
+                        tri(self, f[0], f[1], f[2]);
+                    }
+                }
+            }
+            other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh)"))),
+        }
+        Ok(())
+    }
+
+    pub(super) fn material(
+        &mut self,
+        ty: &str,
+        p: &ParamDict,
+        loc: &Loc,
+    ) -> Result<Option<usize>, Error> {
+        let m = match ty {
+            "interface" | "" => return Ok(None),
+            "diffuse" => {
+                Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)))
+            }
+            "coateddiffuse" => {
+                Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
+            }
+            "conductor" => {
+                let r = self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.9))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO);
+                Material::Conductor(r)
+            }
+            "dielectric" | "thindielectric" => {
+                Material::Dielectric(num(p, "eta", 1.5) as f32)
+            }
+            other => return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, conductor, dielectric, interface)"))),
+        };
+        self.materials.push(m);
+        Ok(Some(self.materials.len() - 1))
+    }
+}

@@ -1,0 +1,347 @@
+//! The scene builder's dispatch: one pbrt-v4 directive at a time, in file order (transforms, attributes,
+//! objects and instances, camera, film, sampler, integrator, lights, materials, textures, shapes, media).
+
+use super::builder::{affine_f32, look_at, num, nums, string, Builder};
+use super::{err, Error, Light, Tex};
+use crate::render::pbrt_v4::Kind;
+use crate::render::shapes::Geom;
+use crate::render::spectrum::S;
+use firemedium_pbrt_parser::{Directive, Loc, ParamDict};
+use glam::{DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
+
+impl Builder {
+    pub(super) fn directive(&mut self, d: Directive, loc: &Loc) -> Result<(), Error> {
+        let ctm = &mut self.st.ctm;
+        match d {
+            Directive::Identity => *ctm = DMat4::IDENTITY,
+            Directive::Translate(v) => *ctm *= DMat4::from_translation(DVec3::from(v)),
+            Directive::Scale(v) => *ctm *= DMat4::from_scale(DVec3::from(v)),
+            Directive::Rotate(a, axis) => {
+                *ctm *=
+                    DMat4::from_axis_angle(DVec3::from(axis).normalize_or_zero(), a.to_radians())
+            }
+            Directive::LookAt(v) => *ctm *= look_at(&v),
+            Directive::Transform(m) => *ctm = DMat4::from_cols_array(&m),
+            Directive::ConcatTransform(m) => *ctm *= DMat4::from_cols_array(&m),
+            Directive::CoordinateSystem(n) => {
+                self.named_coords.insert(n, *ctm);
+            }
+            Directive::CoordSysTransform(n) => match self.named_coords.get(&n) {
+                Some(m) => *ctm = *m,
+                None => {
+                    return Err(err(
+                        loc,
+                        format!("CoordSysTransform \"{n}\": no such coordinate system"),
+                    ))
+                }
+            },
+            Directive::TransformTimes(..) | Directive::ActiveTransform(_) => {
+                self.warn(loc, "motion blur transforms are ignored (one shutter time)")
+            }
+            Directive::ReverseOrientation => self.st.reverse = !self.st.reverse,
+            Directive::AttributeBegin | Directive::TransformBegin => {
+                self.stack.push(self.st.clone())
+            }
+            Directive::AttributeEnd | Directive::TransformEnd => match self.stack.pop() {
+                Some(s) => self.st = s,
+                None => return Err(err(loc, "AttributeEnd without AttributeBegin")),
+            },
+            Directive::Attribute(..) => self.warn(loc, "Attribute defaults are ignored"),
+            Directive::ObjectBegin(n) => {
+                self.stack.push(self.st.clone());
+                self.current_object = Some((n, Vec::new()));
+            }
+            Directive::ObjectEnd => {
+                if let Some((n, prims)) = self.current_object.take() {
+                    self.objects.insert(n, prims);
+                }
+                if let Some(s) = self.stack.pop() {
+                    self.st = s;
+                }
+            }
+            Directive::ObjectInstance(n) => {
+                let prims =
+                    self.objects.get(&n).cloned().ok_or_else(|| {
+                        err(loc, format!("ObjectInstance \"{n}\": no such object"))
+                    })?;
+                let m = affine_f32(&self.st.ctm);
+                for mut p in prims {
+                    p.geom = match p.geom {
+                        Geom::Triangle { p: v, n, uv } => Geom::Triangle {
+                            p: v.map(|x| m.transform_point3a(x)),
+                            n: n.map(|n| n.map(|x| m.transform_vector3a(x).normalize_or_zero())),
+                            uv,
+                        },
+                        Geom::Sphere { to_world, r, .. } => Geom::Sphere {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            r,
+                        },
+                        Geom::Disk {
+                            to_world, h, r, ri, ..
+                        } => Geom::Disk {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            h,
+                            r,
+                            ri,
+                        },
+                        Geom::Cylinder {
+                            to_world,
+                            r,
+                            zmin,
+                            zmax,
+                            ..
+                        } => Geom::Cylinder {
+                            to_world: m * to_world,
+                            to_obj: (m * to_world).inverse(),
+                            r,
+                            zmin,
+                            zmax,
+                        },
+                    };
+                    self.prims.push(p);
+                }
+            }
+            Directive::Option(p) => self.warn(loc, format!("Option \"{}\" is ignored", p.name)),
+            Directive::ColorSpace(n) => {
+                if n != "srgb" {
+                    self.warn(
+                        loc,
+                        format!("ColorSpace \"{n}\": rgb values are read as sRGB"),
+                    );
+                }
+            }
+            Directive::Camera(ty, p) => {
+                if ty != "perspective" {
+                    return Err(err(
+                        loc,
+                        format!("camera \"{ty}\" is not supported (perspective)"),
+                    ));
+                }
+                let medium = if self.st.outside.is_empty() {
+                    None
+                } else {
+                    self.named_media.get(&self.st.outside).copied()
+                };
+                // (Its parameters are read, and the rest reported, once the film is known: `load`.)
+                self.named_coords
+                    .insert("camera".into(), self.st.ctm.inverse());
+                self.camera = Some((p, self.st.ctm, medium, loc.clone()));
+            }
+            Directive::Film(ty, params) => {
+                let p = &ParamDict::new(&params);
+                if ty != "rgb" && ty != "gbuffer" {
+                    self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
+                }
+                self.res = (
+                    num(p, "xresolution", 1280.0).max(1.0) as usize,
+                    num(p, "yresolution", 720.0).max(1.0) as usize,
+                );
+                self.film_name = string(p, "filename").map(String::from);
+                self.finish(Kind::Film, &ty, "film", p)?;
+            }
+            Directive::Sampler(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.spp = num(p, "pixelsamples", 16.0).max(1.0) as usize;
+                self.finish(Kind::Sampler, &ty, &format!("sampler \"{ty}\""), p)?;
+            }
+            Directive::Integrator(ty, params) => {
+                if ty != "volpath" && ty != "path" {
+                    self.warn(loc, format!("integrator \"{ty}\" is rendered with volpath"));
+                }
+                let p = &ParamDict::new(&params);
+                self.maxdepth = num(p, "maxdepth", 5.0).max(0.0) as usize;
+                self.finish(Kind::Integrator, &ty, &format!("integrator \"{ty}\""), p)?;
+            }
+            Directive::PixelFilter(ty, params) => {
+                if ty != "box" {
+                    self.warn(
+                        loc,
+                        format!("pixel filter \"{ty}\" is rendered as a box filter"),
+                    );
+                }
+                let p = &ParamDict::new(&params);
+                self.finish(Kind::PixelFilter, &ty, &format!("pixel filter \"{ty}\""), p)?;
+            }
+            Directive::Accelerator(..) => {}
+            Directive::WorldBegin => {
+                self.st.ctm = DMat4::IDENTITY;
+                self.named_coords.insert("world".into(), DMat4::IDENTITY);
+            }
+            Directive::LightSource(ty, params) => {
+                let p = &ParamDict::new(&params);
+                let scale = num(p, "scale", 1.0) as f32;
+                let m = self.st.ctm;
+                let pt = |v: Option<&[f64]>, def: [f64; 3]| {
+                    Vec3A::from(
+                        m.transform_point3(DVec3::from(
+                            v.map(|v| [v[0], v[1], v[2]]).unwrap_or(def),
+                        ))
+                        .as_vec3(),
+                    )
+                };
+                let l = match ty.as_str() {
+                    "point" => {
+                        Light::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                    }
+                    "spot" => {
+                        let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
+                        let cone = num(p, "coneangle", 30.0);
+                        Light::Spot {
+                            p: from,
+                            dir: (to - from).normalize_or_zero(),
+                            cos_total: cone.to_radians().cos() as f32,
+                            cos_falloff: (cone - num(p, "conedelta", 5.0)).to_radians().cos() as f32,
+                            i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale,
+                        }
+                    }
+                    "distant" => {
+                        let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
+                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                    }
+                    "infinite" => {
+                        match string(p, "filename") {
+                            Some(f) => {
+                                if p.has("L") {
+                                    return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
+                                }
+                                let img = crate::imageio::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
+                                if !(img.w == img.h || img.w == 2 * img.h) {
+                                    return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
+                                }
+                                let to_light = Mat3A::from(DMat3::from_mat4(self.st.ctm).inverse().as_mat3());
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale, basis: self.rgb_basis() }
+                            }
+                            None => Light::Infinite { l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale },
+                        }
+                    }
+                    other => return Err(err(loc, format!("light \"{other}\" is not supported (point, spot, distant, infinite, and area diffuse)"))),
+                };
+                self.lights.push(l);
+                self.finish(Kind::Light, &ty, &format!("{ty} light"), p)?;
+            }
+            Directive::AreaLightSource(ty, params) => {
+                let p = &ParamDict::new(&params);
+                if ty != "diffuse" {
+                    return Err(err(
+                        loc,
+                        format!("area light \"{ty}\" is not supported (diffuse)"),
+                    ));
+                }
+                let l = self
+                    .spectrum(p, "L", Some(self.bins.mask()))?
+                    .map(|t| t.eval(Vec2::ZERO))
+                    .unwrap_or(S::ZERO)
+                    * num(p, "scale", 1.0) as f32;
+                let two = p.bool("twosided", false);
+                self.st.area = Some((l, two));
+                self.finish(Kind::AreaLight, &ty, "diffuse area light", p)?;
+            }
+            Directive::Material(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.st.material = self.material(&ty, p, loc)?;
+                self.finish(Kind::Material, &ty, &format!("{ty} material"), p)?;
+            }
+            Directive::MakeNamedMaterial(name, params) => {
+                let p = &ParamDict::new(&params);
+                let ty = string(p, "type").unwrap_or("").to_string();
+                if ty.is_empty() {
+                    return Err(err(
+                        loc,
+                        format!("MakeNamedMaterial \"{name}\": missing \"string type\""),
+                    ));
+                }
+                let m = self.material(&ty, p, loc)?;
+                self.finish(Kind::Material, &ty, &format!("{ty} material \"{name}\""), p)?;
+                // Interface named materials are stored as usize::MAX.
+                self.named_materials.insert(name, m.unwrap_or(usize::MAX));
+            }
+            Directive::NamedMaterial(name) => match self.named_materials.get(&name) {
+                Some(&m) => self.st.material = (m != usize::MAX).then_some(m),
+                None => {
+                    return Err(err(
+                        loc,
+                        format!("NamedMaterial \"{name}\": no such material"),
+                    ))
+                }
+            },
+            Directive::Texture(name, _ty, class, params) => {
+                let p = &ParamDict::new(&params);
+                let t = match class.as_str() {
+                    "checkerboard" => {
+                        let a = self
+                            .spectrum(p, "tex1", Some(self.bins.mask()))?
+                            .unwrap_or(Tex::Const(S::ZERO));
+                        let b = self
+                            .spectrum(p, "tex2", Some(S::ZERO))?
+                            .unwrap_or(Tex::Const(S::ZERO));
+                        Tex::Checker {
+                            a: Box::new(a),
+                            b: Box::new(b),
+                            su: num(p, "uscale", 1.0) as f32,
+                            sv: num(p, "vscale", 1.0) as f32,
+                        }
+                    }
+                    "constant" => self
+                        .spectrum(p, "value", Some(self.bins.mask()))?
+                        .unwrap_or(Tex::Const(S::ZERO)),
+                    "imagemap" => {
+                        let f = string(p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;
+                        let srgb = match string(p, "encoding").unwrap_or("sRGB") {
+                            "sRGB" => true,
+                            "linear" => false,
+                            e => return Err(err(loc, format!("imagemap: encoding \"{e}\" is not supported (sRGB, linear)"))),
+                        };
+                        let wrap = match string(p, "wrap").unwrap_or("repeat") {
+                            "repeat" => crate::imageio::Wrap::Repeat,
+                            "clamp" => crate::imageio::Wrap::Clamp,
+                            "black" => crate::imageio::Wrap::Black,
+                            w => return Err(err(loc, format!("imagemap: wrap \"{w}\" is not one of repeat, clamp, black"))),
+                        };
+                        let img = crate::imageio::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
+                        let invert = p.bool("invert", false);
+                        Tex::Image { img: std::sync::Arc::new(img), scale: num(p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
+                    }
+                    other => return Err(err(
+                        loc,
+                        format!(
+                            "texture class \"{other}\" is not supported (checkerboard, constant, imagemap)"
+                        ),
+                    )),
+                };
+                self.finish(
+                    Kind::Texture,
+                    &class,
+                    &format!("{class} texture \"{name}\""),
+                    p,
+                )?;
+                self.textures.insert(name, t);
+            }
+            Directive::Shape(ty, params) => {
+                let p = &ParamDict::new(&params);
+                self.shape(&ty, p, loc)?;
+                self.finish(Kind::Shape, &ty, &ty, p)?;
+            }
+            Directive::MakeNamedMedium(name, params) => {
+                let p = &ParamDict::new(&params);
+                self.medium(&name, p, loc)?;
+                let ty = string(p, "type").unwrap_or("");
+                self.finish(Kind::Medium, ty, &format!("{ty} medium \"{name}\""), p)?;
+            }
+            Directive::MediumInterface(i, o) => {
+                for n in [&i, &o] {
+                    if !n.is_empty() && !self.named_media.contains_key(n) {
+                        return Err(err(
+                            loc,
+                            format!("MediumInterface: no medium named \"{n}\""),
+                        ));
+                    }
+                }
+                self.st.inside = i;
+                self.st.outside = o;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,467 @@
+//! pbrt-v4 scene → render scene. Walks the parser's directives with pbrt's graphics state (CTM, attribute stack,
+//! named materials/textures/media, object instances). Everything a fire scene needs is built; anything else is
+//! reported by name: ignored with a warning when it cannot change the picture much, refused with an error when
+//! it would be misread.
+
+mod builder;
+mod directives;
+
+use super::pbrt_v4::Kind;
+use super::shapes::Bvh;
+use super::spectrum::{Bins, S};
+use builder::{affine, num, nums, string, Builder, State};
+use firemedium_core::spectrum::SpectralGrid;
+use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
+use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, ParamDict};
+use glam::{DAffine3, DMat4, Mat3A, Vec2, Vec3A};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// A scene error: where and what.
+pub type Error = String;
+
+fn err(loc: &Loc, m: impl std::fmt::Display) -> Error {
+    format!("{loc}: {m}")
+}
+
+/// A spectrum texture.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // constants are the common case; boxing them would cost a pointer chase per lookup
+pub enum Tex {
+    Const(S),
+    Checker {
+        a: Box<Tex>,
+        b: Box<Tex>,
+        su: f32,
+        sv: f32,
+    },
+    /// An image: linear RGB × scale (1 − it when inverted), uplifted with the bins' box basis.
+    Image {
+        img: std::sync::Arc<crate::imageio::RgbImage>,
+        scale: f32,
+        invert: bool,
+        wrap: crate::imageio::Wrap,
+        basis: [S; 3],
+    },
+}
+
+impl Tex {
+    pub fn eval(&self, uv: Vec2) -> S {
+        match self {
+            Tex::Const(s) => *s,
+            Tex::Checker { a, b, su, sv } => {
+                if ((uv.x * su).floor() as i64 + (uv.y * sv).floor() as i64) % 2 == 0 {
+                    a.eval(uv)
+                } else {
+                    b.eval(uv)
+                }
+            }
+            Tex::Image {
+                img,
+                scale,
+                invert,
+                wrap,
+                basis,
+            } => {
+                // pbrt-v4 flips t: row 0 of the image is v = 1.
+                let c = img.bilerp(uv.x, 1.0 - uv.y, *wrap).map(|x| {
+                    if *invert {
+                        (1.0 - x * *scale).max(0.0)
+                    } else {
+                        x * *scale
+                    }
+                });
+                basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]
+            }
+        }
+    }
+}
+
+/// Surface materials.
+#[derive(Debug, Clone)]
+pub enum Material {
+    Diffuse(Tex),
+    /// Smooth mirror with this reflectance.
+    Conductor(S),
+    /// Smooth glass of this index.
+    Dielectric(f32),
+    /// Diffuse base under a smooth dielectric coat.
+    CoatedDiffuse(Tex, f32),
+}
+
+/// Lights (area lights live on primitives).
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // a handful per scene
+pub enum Light {
+    Point {
+        p: Vec3A,
+        i: S,
+    },
+    Spot {
+        p: Vec3A,
+        dir: Vec3A,
+        cos_total: f32,
+        cos_falloff: f32,
+        i: S,
+    },
+    Distant {
+        to_light: Vec3A,
+        l: S,
+    },
+    Infinite {
+        l: S,
+    },
+    /// An environment map: world → light-space rotation, linear RGB × scale, equal-area square (pbrt-v4) or
+    /// lat-long (2:1) parameterisation.
+    InfiniteMap {
+        img: std::sync::Arc<crate::imageio::RgbImage>,
+        to_light: Mat3A,
+        scale: f32,
+        basis: [S; 3],
+    },
+    /// The fire light of plugin medium `medium` (importance-samples its emission).
+    Fire {
+        light: std::sync::Arc<firemedium_loader::Light>,
+        medium: usize,
+    },
+    Area {
+        prim: usize,
+        l: S,
+        twosided: bool,
+    },
+}
+
+/// Participating media.
+#[allow(clippy::large_enum_variant)] // a handful per scene
+pub enum Medium {
+    /// A fire (or pbrt grid medium) living in the plugin; `to_medium` maps world to medium space.
+    Plugin {
+        vol: Volume,
+        to_medium: DAffine3,
+        /// The inverse of `to_medium`.
+        to_world: DAffine3,
+        scatters: bool,
+        g: f64,
+        name: String,
+    },
+    /// pbrt's homogeneous medium.
+    Homogeneous { sa: S, ss: S, le: S, g: f64 },
+}
+
+impl std::fmt::Debug for Medium {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Medium::Plugin { name, .. } => write!(f, "Plugin({name})"),
+            Medium::Homogeneous { .. } => write!(f, "Homogeneous"),
+        }
+    }
+}
+
+/// Perspective camera.
+#[derive(Debug, Clone)]
+pub struct Camera {
+    pub to_world: DAffine3,
+    pub tan_half: f64,
+    pub screen: [f64; 4],
+    pub lens_radius: f64,
+    pub focal_distance: f64,
+    pub medium: Option<usize>,
+}
+
+/// What the plugin built for one medium.
+#[derive(Debug, Clone)]
+pub struct MediumReport {
+    pub name: String,
+    pub bytes: u64,
+    pub seconds: f64,
+    pub channels: u32,
+    /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds).
+    pub light: Option<(u64, f64, f64, u64, f64)>,
+}
+
+/// A render-ready scene.
+#[derive(Debug)]
+pub struct Scene {
+    pub bins: Bins,
+    pub bvh: Bvh,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    pub media: Vec<Medium>,
+    pub camera: Camera,
+    pub res: (usize, usize),
+    pub spp: usize,
+    pub maxdepth: usize,
+    pub film_name: Option<String>,
+    pub eps: f32,
+    pub warnings: Vec<String>,
+    pub media_reports: Vec<MediumReport>,
+}
+
+impl Scene {
+    /// The hottest temperature (K) of the scene's fire media, if any has a temperature grid.
+    pub fn fire_temperature(&self) -> Option<f64> {
+        self.media
+            .iter()
+            .filter_map(|m| match m {
+                Medium::Plugin { vol, .. } => vol.temperature_range().ok().flatten(),
+                _ => None,
+            })
+            .map(|[_, hi]| hi)
+            .filter(|t| *t > 0.0)
+            .reduce(f64::max)
+    }
+}
+
+/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
+/// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
+/// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
+#[allow(unsafe_code)]
+fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
+    match path {
+        // SAFETY: a plugin file the user named; the loader checks its ABI version, size and entries.
+        Some(p) => unsafe { Plugin::load(p) },
+        // SAFETY: the file the user's environment names, or the plugin built beside this executable.
+        None => unsafe { Plugin::from_env() },
+    }
+}
+
+/// Settings the command line can override.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub spp: Option<usize>,
+    pub plugin: Option<PathBuf>,
+    /// Do not build fire lights (paths find the fire's emission only by chance).
+    pub no_fire_light: bool,
+    /// The fire lights' voxel weighting (`power`, the plugin's default, or `luminance`).
+    pub fire_light_weighting: Option<String>,
+    /// Film resolution instead of the scene's.
+    pub res: Option<(usize, usize)>,
+    /// Threads the plugin may use to build each medium (the render's own; `None`: every core).
+    pub threads: Option<usize>,
+}
+
+/// Parses and builds the scene at `path`.
+pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
+    let mut c = Collect::default();
+    parse_file(path, &mut c).map_err(|e| e.to_string())?;
+    // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
+    // photometric scale.
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let (mut fire, mut pbrt_media) = (false, false);
+    let mut plugin_path = ov.plugin.clone();
+    let mut first_medium: Option<&Loc> = None;
+    for (d, loc) in &c.0 {
+        if let Directive::MakeNamedMedium(_, p) = d {
+            let p = &ParamDict::new(p);
+            match string(p, "type") {
+                Some("fire") => fire = true,
+                Some("uniformgrid" | "nanovdb") => pbrt_media = true,
+                _ => continue,
+            }
+            first_medium.get_or_insert(loc);
+            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
+                plugin_path = Some(dir.join(file));
+            }
+        }
+    }
+    let plugin = match first_medium {
+        Some(loc) => Some(
+            match &plugin_path {
+                Some(file) => load_plugin(Some(file)),
+                None => load_plugin(None),
+            }
+            .map_err(|e| err(loc, e))?,
+        ),
+        None => None,
+    };
+    let default = SpectralGrid::default();
+    let (mut lo, mut hi, mut n) = (default.min_nm(), default.max_nm(), default.count());
+    if let Some(p) = &plugin {
+        for row in p.parameters() {
+            let x = row.default.trim().parse::<f64>();
+            match (row.name.as_str(), x) {
+                ("lambdamin", Ok(x)) => lo = x,
+                ("lambdamax", Ok(x)) => hi = x,
+                ("bins", Ok(x)) if x >= 1.0 => n = x as usize,
+                _ => {}
+            }
+        }
+    }
+    let mut bins_params: Vec<LParam> = Vec::new();
+    for (d, loc) in &c.0 {
+        if let Directive::MakeNamedMedium(_, p) = d {
+            let p = &ParamDict::new(p);
+            for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
+                if let Some(x) = nums(p, k).and_then(|v| v.first()) {
+                    if bins_params
+                        .iter()
+                        .any(|b| b.name == k && b.value != Value::Float(vec![*x]))
+                    {
+                        return Err(err(loc, format!("media disagree on \"{k}\": all media share the scene's spectral bins")));
+                    }
+                    *v = *x;
+                    bins_params.push(LParam::float(k, *x));
+                }
+            }
+            if let Some(x) = nums(p, "bins").and_then(|v| v.first()) {
+                n = *x as usize;
+                bins_params.push(LParam::int("bins", *x as i64));
+            }
+        }
+    }
+    if n > super::spectrum::MAX_CHANNELS {
+        return Err(format!(
+            "{}: {n} spectral bins; the renderer supports at most {}",
+            path.display(),
+            super::spectrum::MAX_CHANNELS
+        ));
+    }
+    let grid = SpectralGrid::new(lo, hi, n).map_err(|e| format!("{}: {e}", path.display()))?;
+    // Absolute units (683 lm/W) with a fire; pbrt's relative units for scenes of pbrt grid media only.
+    let k = if pbrt_media && !fire {
+        1.0 / firemedium_core::cie::CIE_Y_INTEGRAL
+    } else {
+        683.0
+    };
+    let bins = Bins::new(grid, k);
+    bins_params.dedup_by(|a, b| a.name == b.name);
+    for (name, v) in [("bins", n as f64), ("lambdamin", lo), ("lambdamax", hi)] {
+        if !bins_params.iter().any(|p| p.name == name) {
+            bins_params.push(if name == "bins" {
+                LParam::int(name, v as i64)
+            } else {
+                LParam::float(name, v)
+            });
+        }
+    }
+    let mut b = Builder {
+        dir,
+        bins: bins.clone(),
+        plugin_path,
+        plugin,
+        st: State {
+            ctm: DMat4::IDENTITY,
+            reverse: false,
+            material: None,
+            area: None,
+            inside: String::new(),
+            outside: String::new(),
+        },
+        stack: Vec::new(),
+        named_coords: HashMap::new(),
+        named_materials: HashMap::new(),
+        textures: HashMap::new(),
+        named_media: HashMap::new(),
+        materials: Vec::new(),
+        prims: Vec::new(),
+        lights: Vec::new(),
+        media: Vec::new(),
+        media_reports: Vec::new(),
+        camera: None,
+        res: (1280, 720),
+        spp: 16,
+        maxdepth: 5,
+        film_name: None,
+        warnings: Vec::new(),
+        objects: HashMap::new(),
+        current_object: None,
+        bins_params,
+        has_fire: fire,
+        film_xyz: None,
+        threads: ov.threads,
+    };
+    // pbrt's default material: diffuse 0.5.
+    b.materials
+        .push(Material::Diffuse(Tex::Const(bins.mask() * 0.5)));
+    b.st.material = Some(0);
+    for (d, loc) in c.0 {
+        b.directive(d, &loc)?;
+    }
+    // The camera, now that the film resolution is known (pbrt allows Film after Camera).
+    let (cp, camera_from_world, medium, _) = b
+        .camera
+        .take()
+        .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
+    let cp = &ParamDict::new(&cp);
+    if let Some(r) = ov.res {
+        b.res = r;
+    }
+    let (w, h) = (b.res.0 as f64, b.res.1 as f64);
+    let aspect = num(cp, "frameaspectratio", w / h);
+    let screen = match nums(cp, "screenwindow") {
+        Some(s) if s.len() == 4 => [s[0], s[1], s[2], s[3]],
+        _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
+        _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
+    };
+    let camera = Camera {
+        to_world: affine(&camera_from_world.inverse()),
+        tan_half: (num(cp, "fov", 90.0).to_radians() / 2.0).tan(),
+        screen,
+        lens_radius: num(cp, "lensradius", 0.0),
+        focal_distance: num(cp, "focaldistance", 1e6),
+        medium,
+    };
+    b.finish(Kind::Camera, "perspective", "perspective camera", cp)?;
+    // Fire lights: every plugin medium that emits gets one (unless switched off).
+    if !ov.no_fire_light {
+        let mut report = 0;
+        for (mi, m) in b.media.iter().enumerate() {
+            if let Medium::Plugin { vol, .. } = m {
+                let r = report;
+                report += 1;
+                match vol.create_light(ov.fire_light_weighting.as_deref()) {
+                    Ok(light) => {
+                        let li = light.info();
+                        if let Some(rep) = b.media_reports.get_mut(r) {
+                            rep.light = Some((
+                                li.voxels,
+                                li.power_w,
+                                li.power_lm,
+                                li.bytes,
+                                li.build_seconds,
+                            ));
+                        }
+                        b.lights.push(Light::Fire {
+                            light: std::sync::Arc::new(light),
+                            medium: mi,
+                        });
+                    }
+                    // A medium that does not emit is no light.
+                    Err(firemedium_loader::Error::Status { message, .. })
+                        if message.contains("no emitting voxel") => {}
+                    Err(e) => {
+                        return Err(format!(
+                            "{}: fire light of medium {mi}: {e}",
+                            path.display()
+                        ))
+                    }
+                }
+            }
+        }
+    }
+    let scale = b.prims.iter().map(|p| {
+        let bb = obvhs::Boundable::aabb(p);
+        (bb.max - bb.min).max_element().abs()
+    });
+    let extent = scale.fold(1.0f32, f32::max);
+    // The film's colour is the plugin's projection of its bins (scenes without plugin media: the core's).
+    let mut bins = bins;
+    if let Some((_, xyz)) = b.film_xyz.take() {
+        bins.xyz = xyz;
+    }
+    Ok(Scene {
+        bins,
+        bvh: Bvh::new(b.prims),
+        materials: b.materials,
+        lights: b.lights,
+        media: b.media,
+        camera,
+        res: b.res,
+        spp: ov.spp.unwrap_or(b.spp),
+        maxdepth: b.maxdepth,
+        film_name: b.film_name,
+        eps: (extent * 1e-5).max(1e-6),
+        warnings: b.warnings,
+        media_reports: b.media_reports,
+    })
+}
