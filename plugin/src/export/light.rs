@@ -1,0 +1,226 @@
+//! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
+
+use super::params::read_params;
+use super::volume::out_f32;
+use super::{bad, fail, guard};
+use crate::light::{FireLight, Weighting};
+use crate::volume::FireVolume;
+use firemedium_abi::*;
+use glam::DVec3;
+use std::panic::catch_unwind;
+
+/// The light behind a handle.
+///
+/// # Safety
+/// `l` is null or a live handle from `light_create`.
+pub(super) unsafe fn light<'a>(
+    l: *const FmLight,
+    what: &str,
+) -> Result<&'a FireLight, (FmStatus, String)> {
+    if l.is_null() {
+        return Err(bad(format!("{what}: light is null")));
+    }
+    // SAFETY: live handle (contract); lights are immutable and Sync.
+    Ok(unsafe { &*(l as *const FireLight) })
+}
+
+pub(super) unsafe extern "C" fn light_create(
+    volume: *const FmVolume,
+    params: *const FmParam,
+    count: usize,
+    out: *mut *mut FmLight,
+) -> FmStatus {
+    guard(|| {
+        if out.is_null() || volume.is_null() {
+            return Err(bad("light_create: volume or out is null"));
+        }
+        // SAFETY: the caller's contract for `params`/`count`.
+        let list = unsafe { read_params(params, std::ptr::null(), count) }?;
+        let r = crate::params::ParamReader::new("light", &list, &[&crate::volume::params::LIGHT]);
+        r.check_names().map_err(fail)?;
+        let weighting = match r.string("weighting").map_err(fail)?.as_str() {
+            "luminance" => Weighting::Luminance,
+            _ => Weighting::Power,
+        };
+        r.finish().map_err(fail)?;
+        // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
+        let vol = unsafe {
+            std::sync::Arc::increment_strong_count(volume as *const FireVolume);
+            std::sync::Arc::from_raw(volume as *const FireVolume)
+        };
+        let l = FireLight::new(vol, weighting).map_err(fail)?;
+        // SAFETY: out is non-null and writable.
+        unsafe { *out = Box::into_raw(Box::new(l)) as *mut FmLight };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn light_destroy(l: *mut FmLight) {
+    if !l.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: a handle from light_create, destroyed once (contract).
+            drop(unsafe { Box::from_raw(l as *mut FireLight) });
+        });
+    }
+}
+
+pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightInfo) -> FmStatus {
+    guard(|| {
+        // SAFETY: the handle's contract.
+        let lt = unsafe { light(l, "light_info") }?;
+        if out.is_null() {
+            return Err(bad("light_info: out is null"));
+        }
+        let info = FmLightInfo {
+            power_w: lt.power_w(),
+            power_lm: lt.power_lm(),
+            voxels: lt.voxels() as u64,
+            bytes: lt.bytes() as u64,
+            build_seconds: lt.build_seconds(),
+            weighting: if lt.weighting() == Weighting::Power {
+                FM_WEIGHTING_POWER
+            } else {
+                FM_WEIGHTING_LUMINANCE
+            },
+            reserved: 0,
+        };
+        // SAFETY: non-null, writable.
+        unsafe { *out = info };
+        Ok(())
+    })
+}
+
+/// `n × k` doubles at `p`, required.
+///
+/// # Safety
+/// `p` is null or points to `n × k` doubles.
+pub(super) unsafe fn in_f64<'a>(
+    p: *const f64,
+    n: usize,
+    k: usize,
+    what: &str,
+) -> Result<&'a [f64], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    let len = n
+        .checked_mul(k)
+        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    // SAFETY: caller provides n × k doubles (contract).
+    Ok(unsafe { std::slice::from_raw_parts(p, len) })
+}
+
+/// # Safety
+/// `p` is null or points to `n × k` writable doubles.
+pub(super) unsafe fn out_f64<'a>(
+    p: *mut f64,
+    n: usize,
+    k: usize,
+    what: &str,
+) -> Result<&'a mut [f64], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    let len = n
+        .checked_mul(k)
+        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    // SAFETY: caller provides n × k writable doubles (contract).
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
+pub(super) unsafe extern "C" fn light_sample(
+    l: *const FmLight,
+    u: *const f64,
+    n: usize,
+    points: *mut f64,
+    pdf: *mut f64,
+    emission: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
+        let lt = unsafe { light(l, "light_sample") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let us = unsafe { in_f64(u, n, 6, "light_sample: u") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let pts = unsafe { out_f64(points, n, 3, "light_sample: points") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let pd = unsafe { out_f64(pdf, n, 1, "light_sample: pdf") }?;
+        let c = lt.volume().channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let mut em = unsafe { out_f32(emission, n, c) }?;
+        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        for i in 0..n {
+            let uu = [
+                us[6 * i],
+                us[6 * i + 1],
+                us[6 * i + 2],
+                us[6 * i + 3],
+                us[6 * i + 4],
+                us[6 * i + 5],
+            ]
+            .map(|x| x.clamp(0.0, 1.0 - f64::EPSILON));
+            let smp = lt.sample(uu);
+            pts[3 * i..3 * i + 3].copy_from_slice(&smp.point.to_array());
+            pd[i] = smp.pdf;
+            if let Some(e) = em.as_deref_mut() {
+                lt.volume().coefficients(smp.point, &mut a, &mut s, &mut j);
+                for k in 0..c {
+                    e[i * c + k] = j[k] as f32;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn light_pdf(
+    l: *const FmLight,
+    points: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
+        let lt = unsafe { light(l, "light_pdf") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let pts = unsafe { in_f64(points, n, 3, "light_pdf: points") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf: pdf") }?;
+        for i in 0..n {
+            pd[i] = lt.pdf(DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn light_pdf_direction(
+    l: *const FmLight,
+    origins: *const f64,
+    directions: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
+        let lt = unsafe { light(l, "light_pdf_direction") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let o = unsafe { in_f64(origins, n, 3, "light_pdf_direction: origins") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let d = unsafe { in_f64(directions, n, 3, "light_pdf_direction: directions") }?;
+        // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
+        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
+        for i in 0..n {
+            pd[i] = lt.pdf_direction(
+                DVec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]),
+                DVec3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]),
+            );
+        }
+        Ok(())
+    })
+}

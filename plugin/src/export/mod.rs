@@ -1,0 +1,270 @@
+//! The C ABI export: the one `unsafe` module of the plugin. Every exported function checks its pointers, runs
+//! under `catch_unwind`, and returns a status; messages go to a per-thread last-error slot. No Rust type
+//! crosses the boundary: the table and its types are `firemedium-abi`'s `#[repr(C)]` ones.
+
+mod light;
+mod params;
+mod volume;
+
+use crate::Error;
+use firemedium_abi::*;
+use light::*;
+use std::cell::RefCell;
+use std::ffi::{c_char, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::OnceLock;
+use volume::*;
+
+thread_local! {
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+fn set_error(msg: String) {
+    LAST_ERROR.with(|e| *e.borrow_mut() = msg);
+}
+
+/// Runs `f`, mapping its error and any panic to a status and the last-error message.
+fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => FM_OK,
+        Ok(Err((status, msg))) => {
+            set_error(msg);
+            status
+        }
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            set_error(format!("firemedium: internal error (panic: {what}); the call did nothing, the host may continue"));
+            FM_PANIC
+        }
+    }
+}
+
+fn status_of(e: &Error) -> FmStatus {
+    match e {
+        Error::InvalidParameter { .. } => FM_INVALID_PARAMETER,
+        Error::Format { .. } | Error::Io { .. } | Error::TooLarge { .. } => FM_DATASET,
+        Error::Unsupported { .. } => FM_UNSUPPORTED,
+    }
+}
+
+fn fail(e: Error) -> (FmStatus, String) {
+    (status_of(&e), e.to_string())
+}
+
+fn bad(msg: impl Into<String>) -> (FmStatus, String) {
+    (FM_INVALID_ARGUMENT, msg.into())
+}
+
+unsafe extern "C" fn last_error(buf: *mut c_char, cap: usize) -> usize {
+    LAST_ERROR.with(|e| {
+        let e = e.borrow();
+        let bytes = e.as_bytes();
+        if !buf.is_null() && cap > 0 {
+            let n = bytes.len().min(cap - 1);
+            // SAFETY: the caller passes a writable buffer of `cap` bytes (ABI contract); we write n + 1 ≤ cap.
+            unsafe {
+                std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+                *buf.add(n) = 0;
+            }
+        }
+        bytes.len()
+    })
+}
+
+/// Every row of the public parameter tables, as C strings that live as long as the library.
+fn param_rows() -> &'static [[CString; 7]] {
+    static ROWS: OnceLock<Vec<[CString; 7]>> = OnceLock::new();
+    ROWS.get_or_init(|| {
+        let c = |s: &str| CString::new(s.replace('\0', " ")).unwrap_or_default();
+        crate::volume::params::components()
+            .iter()
+            .flat_map(|comp| {
+                comp.params.iter().map(move |p| {
+                    [
+                        c(comp.name),
+                        c(p.name),
+                        c(p.ty.name()),
+                        c(p.default),
+                        c(p.unit),
+                        c(&p.range.describe().replace("\\|", "|")),
+                        c(p.doc),
+                    ]
+                })
+            })
+            .collect()
+    })
+}
+
+unsafe extern "C" fn param_count() -> usize {
+    catch_unwind(|| param_rows().len()).unwrap_or(0)
+}
+
+unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("param_info: out is null"));
+        }
+        let rows = param_rows();
+        let r = rows.get(index).ok_or_else(|| {
+            bad(format!(
+                "param_info: index {index} is not below the {} rows",
+                rows.len()
+            ))
+        })?;
+        // SAFETY: out is non-null and points to an FmParamInfo the caller owns (ABI contract).
+        unsafe {
+            *out = FmParamInfo {
+                component: r[0].as_ptr(),
+                name: r[1].as_ptr(),
+                ty: r[2].as_ptr(),
+                default_value: r[3].as_ptr(),
+                unit: r[4].as_ptr(),
+                range: r[5].as_ptr(),
+                doc: r[6].as_ptr(),
+            };
+        }
+        Ok(())
+    })
+}
+
+static API: FmApi = FmApi {
+    abi_major: ABI_MAJOR,
+    abi_minor: ABI_MINOR,
+    struct_size: std::mem::size_of::<FmApi>() as u32,
+    reserved: 0,
+    last_error,
+    param_count,
+    param_info,
+    volume_create,
+    volume_destroy,
+    volume_info,
+    volume_channel_xyz,
+    volume_integrate,
+    volume_transmittance,
+    volume_sample_scatter,
+    volume_coefficients,
+    light_create,
+    light_destroy,
+    light_info,
+    light_sample,
+    light_pdf,
+    light_pdf_direction,
+    volume_temperature_range,
+    volume_create_located,
+};
+
+/// The plugin's entry point: the static function table.
+#[no_mangle]
+pub extern "C" fn firemedium_plugin_entry() -> *const FmApi {
+    &API
+}
+
+#[cfg(test)]
+mod tests {
+    //! The panic guard, through the same `extern "C"` table a host gets. The `faultinjection` parameter that
+    //! panics exists only in this crate's unit-test build (`cfg(test)`), never in the shipped library.
+    use super::*;
+    use std::ffi::CStr;
+
+    fn param(name: &CStr, ty: u32, count: u32, values: *const std::ffi::c_void) -> FmParam {
+        FmParam {
+            name: name.as_ptr(),
+            ty,
+            count,
+            values,
+        }
+    }
+
+    /// Creates a 2³ soot slab at 1500 K through the table, with `fault` as its fault-injection point.
+    fn create(api: &FmApi, fault: &CStr) -> (FmStatus, *mut FmVolume) {
+        let d = [1.0f64; 8];
+        let t = [1500.0f64; 8];
+        let n = [2i64];
+        let fault_ptr = [fault.as_ptr()];
+        let list = [
+            param(c"density", FM_TYPE_FLOAT, 8, d.as_ptr().cast()),
+            param(c"temperature", FM_TYPE_FLOAT, 8, t.as_ptr().cast()),
+            param(c"nx", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(c"ny", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(c"nz", FM_TYPE_INTEGER, 1, n.as_ptr().cast()),
+            param(
+                c"faultinjection",
+                FM_TYPE_STRING,
+                1,
+                fault_ptr.as_ptr().cast(),
+            ),
+        ];
+        let mut out = std::ptr::null_mut();
+        // SAFETY: every parameter points at live values of its type and count; `out` is writable.
+        let status = unsafe { (api.volume_create)(list.as_ptr(), list.len(), &mut out) };
+        (status, out)
+    }
+
+    fn last(api: &FmApi) -> String {
+        let mut buf = vec![0 as c_char; 512];
+        // SAFETY: the buffer holds `buf.len()` chars.
+        unsafe { (api.last_error)(buf.as_mut_ptr(), buf.len()) };
+        // SAFETY: last_error NUL-terminates within the capacity.
+        unsafe { CStr::from_ptr(buf.as_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn a_panic_inside_the_plugin_is_a_status_and_the_host_lives_on() {
+        // SAFETY: the entry returns a pointer to the static table.
+        let api = unsafe { &*firemedium_plugin_entry() };
+        let (status, v) = create(api, c"create");
+        assert_eq!(status, FM_PANIC);
+        assert!(v.is_null());
+        let msg = last(api);
+        assert!(
+            msg.contains("panic") && msg.contains("fault injection"),
+            "{msg}"
+        );
+
+        let (status, v) = create(api, c"integrate");
+        assert_eq!(status, FM_OK, "{}", last(api));
+        let ray = FmRay {
+            origin: [-0.5, 0.5, 0.5],
+            direction: [1.0, 0.0, 0.0],
+            tmin: 0.0,
+            tmax: 3.0,
+            seed: 1,
+        };
+        let mut info = FmVolumeInfo::default();
+        // SAFETY: `v` is a live volume, `info` writable.
+        assert_eq!(unsafe { (api.volume_info)(v, &mut info) }, FM_OK);
+        let mut l = vec![0f32; info.channels as usize];
+        assert_eq!(integrate_one(api, v, &ray, &mut l), FM_PANIC);
+        assert!(last(api).contains("fault injection"));
+        // SAFETY: `v` came from volume_create and is destroyed once.
+        unsafe { (api.volume_destroy)(v) };
+
+        // The plugin still works afterwards: the same slab without the fault emits.
+        let (status, v) = create(api, c"");
+        assert_eq!(status, FM_OK, "{}", last(api));
+        assert_eq!(integrate_one(api, v, &ray, &mut l), FM_OK);
+        assert!(l.iter().any(|&x| x > 0.0), "{l:?}");
+        // SAFETY: as above.
+        unsafe { (api.volume_destroy)(v) };
+    }
+
+    fn integrate_one(api: &FmApi, v: *mut FmVolume, ray: &FmRay, l: &mut [f32]) -> FmStatus {
+        // SAFETY: one ray, `l` holds the volume's channels, optional outputs null.
+        unsafe {
+            (api.volume_integrate)(
+                v,
+                ray,
+                1,
+                l.as_mut_ptr(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            )
+        }
+    }
+}

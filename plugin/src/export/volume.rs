@@ -1,0 +1,374 @@
+//! The fire volume's entries: create (with parameter locations), destroy, describe, and the batch queries —
+//! integrate, transmittance, scattering events, point coefficients, temperature range.
+
+use super::light::out_f64;
+use super::params::read_params;
+use super::{bad, fail, guard};
+use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
+use firemedium_abi::*;
+use glam::DVec3;
+use std::ffi::c_char;
+use std::panic::catch_unwind;
+
+pub(super) unsafe extern "C" fn volume_create(
+    params: *const FmParam,
+    count: usize,
+    out: *mut *mut FmVolume,
+) -> FmStatus {
+    // SAFETY: the caller's contract, as volume_create_located's without locations.
+    unsafe { volume_create_located(params, std::ptr::null(), count, out) }
+}
+
+pub(super) unsafe extern "C" fn volume_create_located(
+    params: *const FmParam,
+    locations: *const *const c_char,
+    count: usize,
+    out: *mut *mut FmVolume,
+) -> FmStatus {
+    guard(|| {
+        if out.is_null() {
+            return Err(bad("volume_create: out is null"));
+        }
+        // SAFETY: the caller's contract for `params`/`locations`/`count` (documented in FmApi).
+        let list = unsafe { read_params(params, locations, count) }?;
+        let v = FireVolume::new(&list).map_err(fail)?;
+        // SAFETY: out is non-null and writable (checked, contract).
+        unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_destroy(volume: *mut FmVolume) {
+    if !volume.is_null() {
+        let _ = catch_unwind(|| {
+            // SAFETY: a handle from volume_create (Arc::into_raw), destroyed once (contract); lights hold their
+            // own references.
+            drop(unsafe { std::sync::Arc::from_raw(volume as *const FireVolume) });
+        });
+    }
+}
+
+/// The volume behind a handle.
+///
+/// # Safety
+/// `v` is null or a live handle from `volume_create`.
+pub(super) unsafe fn vol<'a>(
+    v: *const FmVolume,
+    what: &str,
+) -> Result<&'a FireVolume, (FmStatus, String)> {
+    if v.is_null() {
+        return Err(bad(format!("{what}: volume is null")));
+    }
+    // SAFETY: live handle (contract); volumes are immutable and Sync.
+    Ok(unsafe { &*(v as *const FireVolume) })
+}
+
+/// `n × c` mutable f32 outputs at `p` (null → None).
+///
+/// # Safety
+/// `p` is null or points to `n × c` writable f32.
+pub(super) unsafe fn out_f32<'a>(
+    p: *mut f32,
+    n: usize,
+    c: usize,
+) -> Result<Option<&'a mut [f32]>, (FmStatus, String)> {
+    if p.is_null() {
+        return Ok(None);
+    }
+    let len = n
+        .checked_mul(c)
+        .ok_or_else(|| bad(format!("{n} rays × {c} channels overflow")))?;
+    // SAFETY: caller provides n × c floats (contract).
+    Ok(Some(unsafe { std::slice::from_raw_parts_mut(p, len) }))
+}
+
+/// # Safety
+/// `rays` points to `n` rays.
+pub(super) unsafe fn rays<'a>(
+    rays: *const FmRay,
+    n: usize,
+) -> Result<&'a [FmRay], (FmStatus, String)> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if rays.is_null() {
+        return Err(bad(format!("{n} rays at a null pointer")));
+    }
+    // SAFETY: n rays (contract).
+    Ok(unsafe { std::slice::from_raw_parts(rays, n) })
+}
+
+pub(super) fn ray_of(r: &FmRay) -> Ray {
+    Ray {
+        o: DVec3::from(r.origin),
+        d: DVec3::from(r.direction),
+        t0: r.tmin,
+        t1: r.tmax,
+        seed: r.seed,
+    }
+}
+
+pub(super) unsafe extern "C" fn volume_info(
+    volume: *const FmVolume,
+    out: *mut FmVolumeInfo,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_info") }?;
+        if out.is_null() {
+            return Err(bad("volume_info: out is null"));
+        }
+        let [p0, p1] = v.bounds();
+        let (space, lo, hi) = match v.color_mode() {
+            ColorMode::Spectral(g) => (FM_SPACE_SPECTRAL, g.min_nm(), g.max_nm()),
+            ColorMode::Rgb => (FM_SPACE_XYZ, 380.0, 780.0),
+        };
+        let info = FmVolumeInfo {
+            bounds_min: p0.to_array(),
+            bounds_max: p1.to_array(),
+            channels: v.channels() as u32,
+            channel_space: space,
+            lambda_min: lo,
+            lambda_max: hi,
+            g: v.g(),
+            scatters: v.scatters() as u32,
+            integrator: match v.integrator() {
+                Integrator::March => FM_INTEGRATOR_MARCH,
+                Integrator::Ratio => FM_INTEGRATOR_RATIO,
+                Integrator::Delta => FM_INTEGRATOR_DELTA,
+            },
+            step: v.step_length(),
+            bytes: v.bytes() as u64,
+            build_seconds: v.build_seconds(),
+        };
+        // SAFETY: non-null, writable (contract).
+        unsafe { *out = info };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_channel_xyz(
+    volume: *const FmVolume,
+    out: *mut f64,
+    cap: usize,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_channel_xyz") }?;
+        let w = v.channel_xyz();
+        if out.is_null() || cap < 3 * w.len() {
+            return Err(bad(format!(
+                "volume_channel_xyz: need room for {} doubles, have {cap}",
+                3 * w.len()
+            )));
+        }
+        // SAFETY: non-null with cap ≥ 3·channels doubles (checked, contract).
+        let o = unsafe { std::slice::from_raw_parts_mut(out, 3 * w.len()) };
+        for (i, x) in w.iter().enumerate() {
+            o[3 * i..3 * i + 3].copy_from_slice(&x.to_array());
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_integrate(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    radiance: *mut f32,
+    transmittance: *mut f32,
+    exits: *mut FmExit,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_integrate") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let l_out = unsafe { out_f32(radiance, n, c) }?
+            .ok_or_else(|| bad("volume_integrate: radiance is null"))?;
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
+        let mut e_out = if exits.is_null() {
+            None
+        } else {
+            // SAFETY: `exits` is non-null here and holds `n` entries (caller contract).
+            Some(unsafe { std::slice::from_raw_parts_mut(exits, n) })
+        };
+        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+        for (i, r) in rs.iter().enumerate() {
+            let ray = ray_of(r);
+            // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
+            let (p_exit, d_exit, t_exit) = if e_out.is_some() {
+                v.integrate_exit(&ray, &mut l, &mut t)
+            } else {
+                let te = v.integrate(&ray, &mut l, &mut t);
+                (ray.o + ray.d * te, ray.d, te)
+            };
+            for k in 0..c {
+                l_out[i * c + k] = l[k] as f32;
+            }
+            if let Some(to) = t_out.as_deref_mut() {
+                for k in 0..c {
+                    to[i * c + k] = t[k] as f32;
+                }
+            }
+            if let Some(eo) = e_out.as_deref_mut() {
+                eo[i] = FmExit {
+                    point: p_exit.to_array(),
+                    direction: d_exit.to_array(),
+                    t: t_exit,
+                };
+            }
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_transmittance(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    transmittance: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_transmittance") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let out = unsafe { out_f32(transmittance, n, c) }?
+            .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
+        let mut t = vec![0.0; c];
+        for (i, r) in rs.iter().enumerate() {
+            v.transmittance(&ray_of(r), &mut t);
+            for k in 0..c {
+                out[i * c + k] = t[k] as f32;
+            }
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_sample_scatter(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    n: usize,
+    events: *mut FmScatter,
+    weights: *mut f32,
+    emitted: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_sample_scatter") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        let c = v.channels();
+        if events.is_null() && n > 0 {
+            return Err(bad("volume_sample_scatter: events is null"));
+        }
+        let ev = if n == 0 {
+            &mut [][..]
+        } else {
+            // SAFETY: `events` is non-null here and holds `n` entries (caller contract).
+            unsafe { std::slice::from_raw_parts_mut(events, n) }
+        };
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let w_out = unsafe { out_f32(weights, n, c) }?
+            .ok_or_else(|| bad("volume_sample_scatter: weights is null"))?;
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let mut l_out = unsafe { out_f32(emitted, n, c) }?;
+        let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
+        for (i, r) in rs.iter().enumerate() {
+            let ray = ray_of(r);
+            let e = v.sample_scatter(&ray, &mut l, &mut w);
+            let (event, t) = match e {
+                Event::Escaped => (FM_EVENT_ESCAPED, ray.t1),
+                Event::Scattered(t) => (FM_EVENT_SCATTERED, t),
+                Event::Absorbed => (FM_EVENT_ABSORBED, ray.t1),
+            };
+            ev[i] = FmScatter {
+                event,
+                reserved: 0,
+                t,
+                point: (ray.o + ray.d * t).to_array(),
+            };
+            for k in 0..c {
+                w_out[i * c + k] = w[k] as f32;
+            }
+            if let Some(lo) = l_out.as_deref_mut() {
+                for k in 0..c {
+                    lo[i * c + k] = l[k] as f32;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_coefficients(
+    volume: *const FmVolume,
+    points: *const f64,
+    n: usize,
+    sigma_a: *mut f32,
+    sigma_s: *mut f32,
+    emission: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: the caller's buffers are as the ABI documents.
+        let v = unsafe { vol(volume, "volume_coefficients") }?;
+        if points.is_null() && n > 0 {
+            return Err(bad("volume_coefficients: points is null"));
+        }
+        let pts = if n == 0 {
+            &[][..]
+        } else {
+            // SAFETY: `points` is non-null here and holds `3 n` doubles (caller contract).
+            unsafe { std::slice::from_raw_parts(points, 3 * n) }
+        };
+        let c = v.channels();
+        let mut outs = [
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+            unsafe { out_f32(sigma_a, n, c) }?,
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+            unsafe { out_f32(sigma_s, n, c) }?,
+            // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+            unsafe { out_f32(emission, n, c) }?,
+        ];
+        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        for i in 0..n {
+            v.coefficients(
+                DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]),
+                &mut a,
+                &mut s,
+                &mut j,
+            );
+            for (o, src) in outs.iter_mut().zip([&a, &s, &j]) {
+                if let Some(o) = o.as_deref_mut() {
+                    for k in 0..c {
+                        o[i * c + k] = src[k] as f32;
+                    }
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_temperature_range(
+    volume: *const FmVolume,
+    out: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_temperature_range") }?;
+        // SAFETY: room for two doubles (contract).
+        let o = unsafe { out_f64(out, 2, 1, "volume_temperature_range: out") }?;
+        let [lo, hi] = v.temperature_range().unwrap_or([0.0, 0.0]);
+        o[0] = lo;
+        o[1] = hi;
+        Ok(())
+    })
+}
