@@ -1,0 +1,288 @@
+//! The dataset component against small files it writes itself: every format, policies, mappings, frames.
+
+use super::*;
+
+#[test]
+fn a_large_file_read_in_parts_is_the_file() {
+    // Above the parallel threshold, with a length that does not split evenly: every byte where it was.
+    let n = (9 << 20) + 12_345;
+    let bytes: Vec<u8> = (0..n).map(|i| (i * 7 + i / 251) as u8).collect();
+    let path = tmp("large.bin", &bytes);
+    assert_eq!(read_file(&path).expect("readable"), bytes);
+    let e = read_file(&path.with_extension("missing"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("large.missing"), "{e}");
+}
+
+fn tmp(name: &str, content: &[u8]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("firemedium-ds-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+#[test]
+fn frame_patterns() {
+    let p = |s: &str, f| frame_path(Path::new(s), f).map(|p| p.display().to_string());
+    assert_eq!(p("fire_####.vdb", Some(7)).unwrap(), "fire_0007.vdb");
+    assert_eq!(p("fire_##.vdb", Some(123)).unwrap(), "fire_123.vdb");
+    assert_eq!(p("fire_%04d.vdb", Some(42)).unwrap(), "fire_0042.vdb");
+    assert_eq!(p("fire_%d.vdb", Some(42)).unwrap(), "fire_42.vdb");
+    assert_eq!(p("fire.vdb", Some(42)).unwrap(), "fire.vdb");
+    assert_eq!(p("100%.vdb", Some(1)).unwrap(), "100%.vdb");
+    assert!(p("fire_####.vdb", None)
+        .unwrap_err()
+        .to_string()
+        .contains("frame"));
+}
+
+#[test]
+fn frame_sequence_loads_the_right_file() {
+    tmp("seq_0001.txt", b"1 1 1\n1.5\n");
+    let p2 = tmp("seq_0002.txt", b"1 1 1\n2.5\n");
+    let pattern = p2.parent().unwrap().join("seq_####.txt");
+    for (f, want) in [(1, 1.5), (2, 2.5)] {
+        let ds = Dataset::load(
+            &[ChannelSource::new("density", &pattern)],
+            &LoadOptions {
+                frame: Some(f),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(ds.channels()[0].grid.data(), &[want]);
+        assert!(ds.channels()[0]
+            .report
+            .file
+            .ends_with(&format!("seq_000{f}.txt")));
+    }
+    let e = Dataset::load(
+        &[ChannelSource::new("density", &pattern)],
+        &LoadOptions {
+            frame: Some(3),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("seq_0003.txt: cannot read"), "{e}");
+}
+
+#[test]
+fn two_ascii_channels_share_a_grid_and_map() {
+    let d = tmp("d.txt", b"2 1 1\n0.5 1\n");
+    let t = tmp("t.txt", b"2 1 1\n1.5 2\n");
+    let mut temp = ChannelSource::new("temperature", &t);
+    temp.mapping = Mapping {
+        scale: 1000.0,
+        offset: 0.0,
+        pbrt_offset: 0.5,
+    };
+    let opts = LoadOptions {
+        bounds: Some([DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0)]),
+        ..Default::default()
+    };
+    let ds = Dataset::load(&[ChannelSource::new("density", &d), temp], &opts).unwrap();
+    assert_eq!(ds.dims(), [2, 1, 1]);
+    assert_eq!(
+        ds.channel("temperature").unwrap().grid.data(),
+        &[1000.0, 1500.0]
+    );
+    // The centre of voxel 1 is at x = 0.5 in medium space.
+    assert_eq!(ds.sample(0, DVec3::new(0.5, 0.5, 0.5)), 1.0);
+    assert_eq!(ds.sample(1, DVec3::new(-0.5, 0.5, 0.5)), 1000.0);
+    assert_eq!(ds.sample(0, DVec3::new(2.0, 0.5, 0.5)), 0.0);
+    let r = &ds.channels()[0].report;
+    assert_eq!(r.bytes, 8);
+    assert!(r.load_seconds >= 0.0);
+    // Mismatched dims are an error naming both.
+    let t3 = tmp("t3.txt", b"3 1 1\n1 2 3\n");
+    let e = Dataset::load(
+        &[
+            ChannelSource::new("density", &d),
+            ChannelSource::new("temperature", &t3),
+        ],
+        &opts,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("3×1×1") && e.contains("2×1×1") && e.contains("'density'"),
+        "{e}"
+    );
+}
+
+#[test]
+fn nan_and_negative_policies() {
+    let f = tmp("nan.txt", b"2 1 1\nnan -3\n");
+    let e = Dataset::load(
+        &[ChannelSource::new("density", &f)],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("nan.txt") && e.contains("voxel (0, 0, 0)") && e.contains("NaN"),
+        "{e}"
+    );
+    let opts = LoadOptions {
+        nonfinite: Policy::Zero,
+        ..Default::default()
+    };
+    let e = Dataset::load(&[ChannelSource::new("density", &f)], &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("voxel (1, 0, 0)") && e.contains("-3") && e.contains(">= 0"),
+        "{e}"
+    );
+    let opts = LoadOptions {
+        nonfinite: Policy::Zero,
+        negative: Policy::Zero,
+        ..Default::default()
+    };
+    let ds = Dataset::load(&[ChannelSource::new("density", &f)], &opts).unwrap();
+    assert_eq!(ds.channels()[0].grid.data(), &[0.0, 0.0]);
+    assert_eq!(
+        (
+            ds.channels()[0].report.replaced_nonfinite,
+            ds.channels()[0].report.replaced_negative
+        ),
+        (1, 1)
+    );
+    let inf = tmp("inf.txt", b"1 1 1\ninf\n");
+    assert!(Dataset::load(
+        &[ChannelSource::new("density", &inf)],
+        &LoadOptions::default()
+    )
+    .unwrap_err()
+    .to_string()
+    .contains("inf"));
+}
+
+#[test]
+fn inline_arrays_like_pbrt() {
+    let dens = [0.0f32, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+    let ds = Dataset::from_inline(
+        [2, 2, 2],
+        DVec3::splat(-1.0),
+        DVec3::splat(1.0),
+        &[("density", &dens)],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(ds.format(), Format::Inline);
+    assert_eq!(ds.sample(0, DVec3::new(0.5, 0.5, 0.5)), 7.0);
+    assert_eq!(ds.sample(0, DVec3::new(-0.5, -0.5, -0.5)), 0.0);
+    assert_eq!(ds.sample(0, DVec3::ZERO), 3.5);
+    let e = Dataset::from_inline(
+        [2, 2, 3],
+        DVec3::ZERO,
+        DVec3::ONE,
+        &[("density", &dens)],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("8 values") && e.contains("2·2·3 = 12"), "{e}");
+    let e = Dataset::from_inline(
+        [2, 2, 2],
+        DVec3::ONE,
+        DVec3::ZERO,
+        &[("density", &dens)],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("p0 < p1"), "{e}");
+}
+
+#[test]
+fn raw_files_through_the_public_loader() {
+    // raw2: dims 4×3×2; voxel (3, 2, 1) 0-based is stored 1-based x, z, y = (4, 2, 3).
+    let f = tmp(
+        "fire.raw2",
+        &raw::encode(Some([4, 3, 2]), &[([4, 2, 3], [64.0, 200.0, 0.0, 1.0])]),
+    );
+    let ds = Dataset::load(
+        &[ChannelSource::new("density", &f)],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((ds.format(), ds.dims()), (Format::Raw2, [4, 3, 2]));
+    assert_eq!(ds.channels()[0].grid.at(3, 2, 1), 0.25);
+    let opts = LoadOptions {
+        raw_value: RawValue::MaxRgb,
+        ..Default::default()
+    };
+    assert_eq!(
+        Dataset::load(&[ChannelSource::new("density", &f)], &opts)
+            .unwrap()
+            .channels()[0]
+            .grid
+            .at(3, 2, 1),
+        200.0 / 256.0
+    );
+    // Headerless raw: the grid is raw_dims (256³ by default).
+    let f = tmp(
+        "fire.raw",
+        &raw::encode(None, &[([1, 1, 1], [256.0, 0.0, 0.0, 1.0])]),
+    );
+    let opts = LoadOptions {
+        raw_dims: [8, 8, 8],
+        ..Default::default()
+    };
+    let ds = Dataset::load(&[ChannelSource::new("density", &f)], &opts).unwrap();
+    assert_eq!(
+        (ds.dims(), ds.channels()[0].grid.at(0, 0, 0)),
+        ([8, 8, 8], 1.0)
+    );
+    let ds = Dataset::load(
+        &[ChannelSource::new("density", &f)],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(ds.dims(), [256, 256, 256]);
+    // Two channels from one single-grid file is an error.
+    let e = Dataset::load(
+        &[
+            ChannelSource::new("density", &f),
+            ChannelSource::new("temperature", &f),
+        ],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("one channel per raw file"), "{e}");
+}
+
+#[test]
+fn missing_file_unknown_extension_and_binary_as_text() {
+    let e = Dataset::load(
+        &[ChannelSource::new("density", "/no/such/file.vdb")],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("/no/such/file.vdb: cannot read"), "{e}");
+    let e = Dataset::load(
+        &[ChannelSource::new("density", "fire.xyz")],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("format") && e.contains("fire.xyz"), "{e}");
+    let b = tmp("bin.txt", &[b'1', b' ', 0xff, 0xfe]);
+    let e = Dataset::load(
+        &[ChannelSource::new("density", &b)],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("byte 2") && e.contains("not text"), "{e}");
+    assert!(Format::from_name("obj")
+        .unwrap_err()
+        .to_string()
+        .contains("ascii, asciisparse"));
+}
