@@ -1,0 +1,233 @@
+//! A fire volume handle: its description, colour and temperature range, and the batch queries.
+
+use crate::{abi, Error, Exit, Inner, Light, Ray, Scatter, VolumeInfo};
+use std::ffi::{c_char, c_void, CString};
+use std::fmt;
+use std::sync::Arc;
+
+/// A fire volume living in the plugin. Immutable; `Send + Sync`.
+pub struct Volume {
+    pub(crate) inner: Arc<Inner>,
+    pub(crate) handle: *mut abi::FmVolume,
+    pub(crate) info: abi::FmVolumeInfo,
+}
+
+// SAFETY: the plugin guarantees volumes are immutable and safe to query from many threads (ABI contract), and
+// `inner` keeps the library loaded.
+unsafe impl Send for Volume {}
+// SAFETY: as above.
+unsafe impl Sync for Volume {}
+
+impl fmt::Debug for Volume {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Volume({:?})", self.info)
+    }
+}
+
+impl Drop for Volume {
+    fn drop(&mut self) {
+        // SAFETY: the handle came from volume_create and is destroyed exactly once, here.
+        unsafe { (self.inner.api().volume_destroy)(self.handle) }
+    }
+}
+
+impl Volume {
+    /// Builds the fire light of this volume (ABI 0.2): `weighting` is `"power"` (default) or `"luminance"`.
+    pub fn create_light(&self, weighting: Option<&str>) -> Result<Light, Error> {
+        let api = self.inner.api();
+        let w = weighting
+            .map(|w| {
+                CString::new(w).map_err(|_| Error::Buffer("weighting holds a NUL byte".into()))
+            })
+            .transpose()?;
+        let ptrs: Vec<*const c_char> = w.iter().map(|c| c.as_ptr()).collect();
+        let name = c"weighting";
+        let params: Vec<abi::FmParam> = ptrs
+            .iter()
+            .map(|p| abi::FmParam {
+                name: name.as_ptr(),
+                ty: abi::FM_TYPE_STRING,
+                count: 1,
+                values: p as *const *const c_char as *const c_void,
+            })
+            .collect();
+        let mut handle: *mut abi::FmLight = std::ptr::null_mut();
+        // SAFETY: params and the strings they point to live until after the call; handle is writable.
+        let s =
+            unsafe { (api.light_create)(self.handle, params.as_ptr(), params.len(), &mut handle) };
+        self.inner.check(s)?;
+        let mut info = abi::FmLightInfo::default();
+        // SAFETY: a live handle and a writable info.
+        let s = unsafe { (api.light_info)(handle, &mut info) };
+        let light = Light {
+            inner: self.inner.clone(),
+            handle,
+            info,
+            channels: self.info.channels as usize,
+        };
+        self.inner.check(s)?;
+        Ok(light)
+    }
+
+    /// What the volume is (bounds, channels, …).
+    pub fn info(&self) -> VolumeInfo {
+        self.info
+    }
+
+    /// The lowest and highest temperature of the volume's grid (K, after its mapping), `None` without a
+    /// temperature grid (ABI 0.3).
+    pub fn temperature_range(&self) -> Result<Option<[f64; 2]>, Error> {
+        let mut out = [0.0f64; 2];
+        // SAFETY: room for two doubles.
+        let s =
+            unsafe { (self.inner.api().volume_temperature_range)(self.handle, out.as_mut_ptr()) };
+        self.inner.check(s)?;
+        Ok((out != [0.0, 0.0]).then_some(out))
+    }
+
+    /// The XYZ of unit radiance in each channel.
+    pub fn channel_xyz(&self) -> Result<Vec<[f64; 3]>, Error> {
+        let c = self.info.channels as usize;
+        let mut out = vec![0.0; 3 * c];
+        // SAFETY: room for 3·c doubles.
+        let s = unsafe {
+            (self.inner.api().volume_channel_xyz)(self.handle, out.as_mut_ptr(), out.len())
+        };
+        self.inner.check(s)?;
+        Ok(out.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    fn need(&self, what: &str, len: usize, n: usize) -> Result<(), Error> {
+        let want = n * self.info.channels as usize;
+        if len < want {
+            return Err(Error::Buffer(format!(
+                "{what}: {len} floats for {n} rays × {} channels = {want}",
+                self.info.channels
+            )));
+        }
+        Ok(())
+    }
+
+    /// Emitted radiance (and optionally transmittance and exit points) along `rays`; buffers hold
+    /// `rays.len() × channels` floats, channel fastest.
+    pub fn integrate(
+        &self,
+        rays: &[Ray],
+        radiance: &mut [f32],
+        transmittance: Option<&mut [f32]>,
+        exits: Option<&mut [Exit]>,
+    ) -> Result<(), Error> {
+        self.need("radiance", radiance.len(), rays.len())?;
+        let t_ptr = match transmittance {
+            Some(t) => {
+                self.need("transmittance", t.len(), rays.len())?;
+                t.as_mut_ptr()
+            }
+            None => std::ptr::null_mut(),
+        };
+        let e_ptr = match exits {
+            Some(e) if e.len() >= rays.len() => e.as_mut_ptr(),
+            Some(e) => {
+                return Err(Error::Buffer(format!(
+                    "exits: {} entries for {} rays",
+                    e.len(),
+                    rays.len()
+                )))
+            }
+            None => std::ptr::null_mut(),
+        };
+        // SAFETY: buffers sized above; rays.len() rays.
+        let s = unsafe {
+            (self.inner.api().volume_integrate)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                radiance.as_mut_ptr(),
+                t_ptr,
+                e_ptr,
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// Transmittance along `rays` (`rays.len() × channels` floats).
+    pub fn transmittance(&self, rays: &[Ray], transmittance: &mut [f32]) -> Result<(), Error> {
+        self.need("transmittance", transmittance.len(), rays.len())?;
+        // SAFETY: buffer sized above.
+        let s = unsafe {
+            (self.inner.api().volume_transmittance)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                transmittance.as_mut_ptr(),
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// The first real scattering event per ray, with weights and the emission before it.
+    pub fn sample_scatter(
+        &self,
+        rays: &[Ray],
+        events: &mut [Scatter],
+        weights: &mut [f32],
+        emitted: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        if events.len() < rays.len() {
+            return Err(Error::Buffer(format!(
+                "events: {} entries for {} rays",
+                events.len(),
+                rays.len()
+            )));
+        }
+        self.need("weights", weights.len(), rays.len())?;
+        let l_ptr = match emitted {
+            Some(l) => {
+                self.need("emitted", l.len(), rays.len())?;
+                l.as_mut_ptr()
+            }
+            None => std::ptr::null_mut(),
+        };
+        // SAFETY: buffers sized above.
+        let s = unsafe {
+            (self.inner.api().volume_sample_scatter)(
+                self.handle,
+                rays.as_ptr(),
+                rays.len(),
+                events.as_mut_ptr(),
+                weights.as_mut_ptr(),
+                l_ptr,
+            )
+        };
+        self.inner.check(s)
+    }
+
+    /// σ_a, σ_s and j per channel at medium-space points.
+    pub fn coefficients(
+        &self,
+        points: &[[f64; 3]],
+        sigma_a: &mut [f32],
+        sigma_s: &mut [f32],
+        emission: &mut [f32],
+    ) -> Result<(), Error> {
+        for (what, b) in [
+            ("sigma_a", &*sigma_a),
+            ("sigma_s", &*sigma_s),
+            ("emission", &*emission),
+        ] {
+            self.need(what, b.len(), points.len())?;
+        }
+        // SAFETY: buffers sized above; points are 3 contiguous f64 each.
+        let s = unsafe {
+            (self.inner.api().volume_coefficients)(
+                self.handle,
+                points.as_ptr() as *const f64,
+                points.len(),
+                sigma_a.as_mut_ptr(),
+                sigma_s.as_mut_ptr(),
+                emission.as_mut_ptr(),
+            )
+        };
+        self.inner.check(s)
+    }
+}
