@@ -260,6 +260,76 @@ fn bad_scenes_exit_1_with_file_line_col() {
 }
 
 #[test]
+fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
+    // A plugin (C, through the header) that forwards to the real one but reports every channel's XYZ weights
+    // doubled: the renderer must render exactly twice as bright through it. (It computed its own weights from a
+    // linked copy of the plugin's code before, so a plugin from another commit rendered silently wrong.)
+    let dir = tmp("colour");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let real = bin.parent().unwrap().join("deps").join(format!(
+        "{}firemedium_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    assert!(real.is_file(), "{} not built", real.display());
+    let shim = dir.join("libdoubled.so");
+    let cc = Command::new("gcc")
+        .args(["-std=c99", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])
+        .arg(root.join("plugin/abi/include"))
+        .arg(root.join("tests/c/doubled_colour_plugin.c"))
+        .arg("-o")
+        .arg(&shim)
+        .arg("-ldl")
+        .output()
+        .unwrap();
+    assert!(
+        cc.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cc.stderr)
+    );
+    let scene = format!(
+        "LookAt 0 -3 0.5  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 2\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"float sootscale\" 1e-6\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n",
+        inline_grid(4, 1.0, 1600.0)
+    );
+    std::fs::write(dir.join("c.pbrt"), scene).unwrap();
+    let plain = read_exr(&render(
+        &dir.join("c.pbrt"),
+        &["--plugin", real.to_str().unwrap()],
+    ))
+    .2;
+    let o = Command::new(&bin)
+        .arg("render")
+        .arg(dir.join("c.pbrt"))
+        .args([
+            "-o",
+            dir.join("d.exr").to_str().unwrap(),
+            "--quiet",
+            "--plugin",
+        ])
+        .arg(&shim)
+        .env("FIREMEDIUM_REAL_PLUGIN", &real)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doubled = read_exr(&dir.join("d.exr")).2;
+    let (mut lit, mut worst) = (0, 0f64);
+    for (a, b) in plain.iter().zip(&doubled) {
+        for c in 0..3 {
+            if a[c] != 0.0 {
+                lit += 1;
+                worst = worst.max((b[c] as f64 / a[c] as f64 - 2.0).abs());
+            }
+        }
+    }
+    assert!(lit > 0, "the fire is not in view");
+    assert!(
+        worst < 1e-6,
+        "doubled weights give {worst} away from twice the image"
+    );
+}
+
+#[test]
 fn unsupported_pbrt_parameters_are_named_where_they_stand() {
     // pbrt-v4 reads "preset" (a named scattering medium) and a camera's shutter; this renderer does not yet:
     // each is a warning at its own position, never dropped silently (pbrt-v4's ReportUnused).
