@@ -78,6 +78,7 @@ impl<'a> Stepper<'a> {
     }
     /// Adds the step of length `h` whose coefficients are taken at `p`; returns whether the ray is now opaque
     /// (its largest transmittance under the volume's cutoff).
+    #[inline(always)]
     pub(crate) fn step(&mut self, p: DVec3, h: f64, l: &mut [f64], t: &mut [f64]) -> bool {
         let v = self.v;
         match &mut self.lanes {

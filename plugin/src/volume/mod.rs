@@ -444,6 +444,7 @@ impl FireVolume {
     }
 
     /// Whether `p` can hold medium: inside the clip box and not in an empty brick.
+    #[inline]
     pub(crate) fn holds_medium(&self, p: DVec3) -> bool {
         let [m0, m1] = self.clip_box;
         let empty = self
