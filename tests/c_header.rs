@@ -202,3 +202,40 @@ fn an_abi_mismatch_names_both_versions() {
         .to_string();
     assert!(e.contains("cannot load"), "{e}");
 }
+
+#[test]
+fn a_broken_plugin_is_refused_saying_what_is_wrong() {
+    // The right version, but no table, a short table, or null entries: each is an error naming the fault, never a
+    // crash of the host that loaded it.
+    let include = root().join("plugin/abi/include");
+    for (kind, want) in [
+        (1, "its firemedium_plugin_entry returned no table (null)"),
+        (2, "table declares 16 bytes"),
+        (3, "its entry 'last_error' is null"),
+    ] {
+        let so = tmp(&format!(
+            "{}broken{kind}{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_SUFFIX
+        ));
+        gcc(&[
+            "-std=c99",
+            "-Wall",
+            "-Werror",
+            "-shared",
+            "-fPIC",
+            &format!("-DBROKEN={kind}"),
+            "-I",
+            include.to_str().unwrap(),
+            root().join("tests/c/broken_plugin.c").to_str().unwrap(),
+            "-o",
+            so.to_str().unwrap(),
+        ]);
+        // SAFETY: a library this test built; the loader reads its table and must refuse it before any call.
+        let e = unsafe { Plugin::load(&so) }.unwrap_err().to_string();
+        assert!(
+            e.contains("is a broken firemedium plugin") && e.contains(want),
+            "{kind}: {e}"
+        );
+    }
+}

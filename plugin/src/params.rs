@@ -257,6 +257,16 @@ pub struct ParamReader<'a> {
     used: RefCell<Vec<bool>>,
 }
 
+/// A number as a person reads it: plain, or in exponent form when plain would take more than a dozen digits
+/// (`1e-320`, not 320 zeros).
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 fn levenshtein(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
     let mut prev: Vec<usize> = (0..=b.len()).collect();
@@ -339,7 +349,7 @@ impl<'a> ParamReader<'a> {
             let r = spec.range.describe();
             Err(self.err(
                 spec.name,
-                v,
+                short(v),
                 if r.is_empty() {
                     "a finite number".to_string()
                 } else {

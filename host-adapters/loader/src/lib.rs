@@ -57,6 +57,14 @@ pub enum Error {
         /// This host's (major, minor).
         host: (u32, u32),
     },
+    /// The library exports the entry symbol but its table cannot be used: the entry returned null, the table is
+    /// smaller than its version promises, or an entry this host calls is null.
+    Broken {
+        /// Path.
+        path: PathBuf,
+        /// What is wrong with it.
+        what: String,
+    },
     /// No plugin file was found.
     NotFound {
         /// Where we looked.
@@ -88,6 +96,7 @@ impl fmt::Display for Error {
                 host.1,
                 host.1
             ),
+            Error::Broken { path, what } => write!(f, "{} is a broken firemedium plugin: {what}", path.display()),
             Error::NotFound { searched } => {
                 let s: Vec<String> = searched.iter().map(|p| p.display().to_string()).collect();
                 write!(f, "no firemedium plugin found (set FIREMEDIUM_PLUGIN to its file); looked in: {}", s.join(", "))
@@ -246,6 +255,37 @@ impl Param {
     }
 }
 
+/// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
+const ENTRIES: [&str; 20] = [
+    "last_error",
+    "param_count",
+    "param_info",
+    "volume_create",
+    "volume_destroy",
+    "volume_info",
+    "volume_channel_xyz",
+    "volume_integrate",
+    "volume_transmittance",
+    "volume_sample_scatter",
+    "volume_coefficients",
+    "light_create",
+    "light_destroy",
+    "light_info",
+    "light_sample",
+    "light_pdf",
+    "light_pdf_direction",
+    "volume_temperature_range",
+    "volume_create_located",
+    "volume_capped_rays",
+];
+
+/// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.
+#[repr(C)]
+struct RawApi {
+    _header: [u32; 4],
+    entries: [*const c_void; ENTRIES.len()],
+}
+
 impl Plugin {
     /// Loads the plugin at `path` and checks its ABI.
     ///
@@ -268,18 +308,36 @@ impl Plugin {
         // SAFETY: calling the entry point, which returns a pointer to a static table.
         let api = unsafe { entry() };
         if api.is_null() {
-            return Err(Error::NoEntry { path });
+            return Err(Error::Broken {
+                path,
+                what: "its firemedium_plugin_entry returned no table (null)".into(),
+            });
         }
-        // SAFETY: non-null; read the version fields first (present in every ABI version).
+        // SAFETY: non-null; the version fields come first in every ABI version.
         let (major, minor, size) =
             unsafe { ((*api).abi_major, (*api).abi_minor, (*api).struct_size) };
-        if !abi::compatible(major, minor, abi::ABI_MAJOR, abi::ABI_MINOR)
-            || (size as usize) < std::mem::size_of::<abi::FmApi>()
-        {
+        if !abi::compatible(major, minor, abi::ABI_MAJOR, abi::ABI_MINOR) {
             return Err(Error::Abi {
                 path,
                 plugin: (major, minor),
                 host: (abi::ABI_MAJOR, abi::ABI_MINOR),
+            });
+        }
+        let need = std::mem::size_of::<abi::FmApi>();
+        if (size as usize) < need {
+            return Err(Error::Broken {
+                path,
+                what: format!("its ABI {major}.{minor} table declares {size} bytes, ABI {major}.{minor} has at least {need}"),
+            });
+        }
+        // Every function pointer this host may call, read as a raw word before it is trusted as a Rust fn
+        // pointer (which may not be null).
+        // SAFETY: the table holds at least `need` bytes (checked): the header, then ENTRIES.len() pointers.
+        let raw = unsafe { std::ptr::read(api as *const RawApi) };
+        if let Some(k) = raw.entries.iter().position(|p| p.is_null()) {
+            return Err(Error::Broken {
+                path,
+                what: format!("its entry '{}' is null", ENTRIES[k]),
             });
         }
         Ok(Plugin {
@@ -499,5 +557,19 @@ impl Plugin {
         };
         self.inner.check(s)?;
         Ok(vol)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_raw_table_is_the_table() {
+        // One name per function pointer, so a null entry is named right.
+        assert_eq!(
+            std::mem::size_of::<RawApi>(),
+            std::mem::size_of::<abi::FmApi>()
+        );
     }
 }

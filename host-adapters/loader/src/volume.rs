@@ -85,6 +85,16 @@ impl Volume {
         Ok((out != [0.0, 0.0]).then_some(out))
     }
 
+    /// How many rays' tracking stopped at the plugin's per-ray collision cap so far (each cut short as if
+    /// absorbed; report it).
+    pub fn capped_rays(&self) -> Result<u64, Error> {
+        let mut n = 0u64;
+        // SAFETY: a live handle and a writable u64.
+        let s = unsafe { (self.inner.api().volume_capped_rays)(self.handle, &mut n) };
+        self.inner.check(s)?;
+        Ok(n)
+    }
+
     /// The XYZ of unit radiance in each channel.
     pub fn channel_xyz(&self) -> Result<Vec<[f64; 3]>, Error> {
         let c = self.info.channels as usize;

@@ -145,6 +145,9 @@ typedef struct FmApi {
      * parameter then begins with its location. */
     FmStatus (*volume_create_located)(const FmParam *params, const char *const *locations, size_t count,
                                       FmVolume **out);
+    /* ABI 0.4: how many rays' tracking stopped at the per-ray collision cap so far, into *out (each cut short
+     * as if absorbed: a bias towards dark a host should report). */
+    FmStatus (*volume_capped_rays)(const FmVolume *volume, uint64_t *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -347,6 +347,10 @@ pub struct FmApi {
         count: usize,
         out: *mut *mut FmVolume,
     ) -> FmStatus,
+    /// ABI 0.4: how many rays' tracking (ratio, delta, scattering events) stopped at the per-ray collision cap so
+    /// far, into `*out`: each was cut short as if absorbed, a bias towards dark that a host should report.
+    pub volume_capped_rays:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -380,7 +384,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
-        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 19 * 8);
+        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and `volume_capped_rays`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 20 * 8);
     }
 }

@@ -155,6 +155,7 @@ static API: FmApi = FmApi {
     light_pdf_direction,
     volume_temperature_range,
     volume_create_located,
+    volume_capped_rays,
 };
 
 /// The plugin's entry point: the static function table.

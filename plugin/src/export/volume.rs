@@ -372,3 +372,19 @@ pub(super) unsafe extern "C" fn volume_temperature_range(
         Ok(())
     })
 }
+
+pub(super) unsafe extern "C" fn volume_capped_rays(
+    volume: *const FmVolume,
+    out: *mut u64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_capped_rays") }?;
+        if out.is_null() {
+            return Err(bad("volume_capped_rays: out is null"));
+        }
+        // SAFETY: non-null (checked) and writable (caller contract).
+        unsafe { *out = v.capped_rays() };
+        Ok(())
+    })
+}

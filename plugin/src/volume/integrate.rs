@@ -79,6 +79,8 @@ pub(crate) trait Medium {
     /// Calls `f(ta, tb)` for pieces of [t0, t1], in order, where the medium is known to be empty — no
     /// absorption, scattering or emission anywhere (the march skips its steps there). Default: none known.
     fn empty_spans(&self, _o: DVec3, _d: DVec3, _t0: f64, _t1: f64, _f: &mut dyn FnMut(f64, f64)) {}
+    /// Told when a ray's tracking stopped at [`MAX_COLLISIONS`] (so the medium can count and report it).
+    fn collision_cap_hit(&self) {}
 }
 
 /// Per-call scratch: coefficient buffers sized to the channel count.
@@ -163,6 +165,12 @@ impl<'a> Span<'a> {
 
 /// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7.
 pub(crate) const MAX_STEPS: f64 = (1u64 << 24) as f64;
+
+/// The most tentative collisions one ray's tracking may take: 2²⁰ ≈ 10⁶, tens of milliseconds. A ray that
+/// reaches it (a majorant far above the data, or an optical depth of 10⁶ along the ray) stops there as if
+/// absorbed — a bias towards dark, so the medium counts it ([`Medium::collision_cap_hit`]) and the host reports
+/// it. The march needs no cap: its steps are bounded by [`MAX_STEPS`].
+pub(crate) const MAX_COLLISIONS: u64 = 1 << 20;
 
 /// Emitted radiance `l` and transmittance `t` of the ray; returns the parameter where the ray left the medium
 /// (or t1).
@@ -272,13 +280,13 @@ pub(crate) fn march_steps(
 
 /// The tentative collisions of tracking along [a, b]: in every majorant piece with σ̄ > 0, exponential free
 /// flights at rate σ̄; at each, the medium's coefficients are put in `sc` and `at(t, σ̄, sc, rng)` says whether
-/// to go on.
+/// to go on. Returns true when the ray stopped at [`MAX_COLLISIONS`] (the medium was told).
 fn collisions(
     span: &Span,
     rng: &mut Rng,
     sc: &mut Scratch,
     at: &mut dyn FnMut(f64, f64, &Scratch, &mut Rng) -> bool,
-) {
+) -> bool {
     let &Span {
         m,
         ray,
@@ -286,6 +294,8 @@ fn collisions(
         b,
         speed,
     } = span;
+    let mut count = 0u64;
+    let mut capped = false;
     m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
         if !(smaj > 0.0) {
             return true;
@@ -296,16 +306,25 @@ fn collisions(
             if !(tt < tb) {
                 return true;
             }
+            count += 1;
+            if count > MAX_COLLISIONS {
+                capped = true;
+                return false;
+            }
             m.eval(ray.o + ray.d * tt, &mut sc.sa, &mut sc.ss, &mut sc.j);
             if !at(tt, smaj, sc, rng) {
                 return false;
             }
         }
     });
+    if capped {
+        m.collision_cap_hit();
+    }
+    capped
 }
 
 fn ratio(span: &Span, rng: &mut Rng, sc: &mut Scratch, l: &mut [f64], t: &mut [f64]) {
-    collisions(span, rng, sc, &mut |_, smaj, sc, rng| {
+    let capped = collisions(span, rng, sc, &mut |_, smaj, sc, rng| {
         let mut tmax = 0.0f64;
         for c in 0..t.len() {
             l[c] += t[c] * sc.j[c] / smaj;
@@ -323,6 +342,9 @@ fn ratio(span: &Span, rng: &mut Rng, sc: &mut Scratch, l: &mut [f64], t: &mut [f
         }
         true
     });
+    if capped {
+        t.iter_mut().for_each(|v| *v = 0.0);
+    }
 }
 
 /// The outcome of [`sample_scatter`].
@@ -347,7 +369,7 @@ fn delta(
 ) -> Event {
     let n = w.len() as f64;
     let mut event = Event::Escaped;
-    collisions(span, rng, sc, &mut |tt, smaj, sc, rng| {
+    let capped = collisions(span, rng, sc, &mut |tt, smaj, sc, rng| {
         let pa = sc.sa.iter().sum::<f64>() / (n * smaj);
         let ps = sc.ss.iter().sum::<f64>() / (n * smaj);
         if scatter_mode {
@@ -386,6 +408,10 @@ fn delta(
             true
         }
     });
+    if capped {
+        w.iter_mut().for_each(|v| *v = 0.0);
+        event = Event::Absorbed;
+    }
     event
 }
 

@@ -61,6 +61,10 @@ use std::time::Instant;
 
 pub use crate::cie::CIE_Y_INTEGRAL;
 
+/// The largest optical depth a voxel may have: a bound on the work of tracking, far above any fire (the paper's
+/// thickest soot is ~10 per voxel).
+pub const MAX_OPTICAL_DEPTH_PER_VOXEL: f64 = 1e12;
+
 /// The colour space of a volume's channels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ColorMode {
@@ -141,8 +145,22 @@ pub struct FireVolume {
     lanes: Option<lanes::LaneTables>,
     /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
     lattice: Option<lattice::Lattice>,
+    /// Rays whose tracking stopped at the collision cap (see `integrate::MAX_COLLISIONS`).
+    capped: CapCounter,
     #[cfg(test)]
     fault: String,
+}
+
+/// A count that clones as its current value (a volume is cloned whole in tests and tools).
+#[derive(Debug, Default)]
+struct CapCounter(std::sync::atomic::AtomicU64);
+
+impl Clone for CapCounter {
+    fn clone(&self) -> Self {
+        CapCounter(std::sync::atomic::AtomicU64::new(
+            self.0.load(std::sync::atomic::Ordering::Relaxed),
+        ))
+    }
 }
 
 impl FireVolume {
@@ -265,6 +283,24 @@ impl FireVolume {
         let majorant = MajorantGrid::with_ranges(&ds, brick, known);
         let brick_sigma = coefficients::brick_majorants(&majorant, &co, density, temperature, c);
         let nb = brick_sigma.len();
+        // An optical depth above 1e12 per voxel is no fire: a voxel value far outside the data's range, or a
+        // scale far too large. Tracking through it would take ~1e12 collisions per voxel.
+        let voxel = ds.voxel_size().max_element();
+        if let Some((b, &sigma)) = brick_sigma
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1.total_cmp(y.1))
+            .filter(|(_, &s)| !(s * voxel <= MAX_OPTICAL_DEPTH_PER_VOXEL))
+        {
+            let [cx, cy, _] = majorant.counts();
+            let (i, j, k) = (b % cx, (b / cx) % cy, b / (cx * cy));
+            return Err(Error::invalid(
+                "volume",
+                "extinction",
+                format!("{sigma:.3e} m⁻¹ in brick ({i}, {j}, {k}) of {brick}³ voxels, an optical depth of {:.3e} per voxel", sigma * voxel),
+                format!("at most {MAX_OPTICAL_DEPTH_PER_VOXEL:e} per voxel (a voxel value far outside the data's range, or sootscale, scale, sigma_a or sigma_s far too large?)"),
+            ));
+        }
         let brick_empty: Vec<bool> = (0..nb)
             .map(|b| {
                 majorant.max(b, density) <= 0.0
@@ -348,6 +384,7 @@ impl FireVolume {
             refraction,
             lanes: None,
             lattice: None,
+            capped: CapCounter::default(),
             #[cfg(test)]
             fault: set.fault,
         };
@@ -443,6 +480,11 @@ impl FireVolume {
         Some([s.min as f64, s.max as f64])
     }
 
+    /// How many rays' tracking stopped at the collision cap so far (each a ray cut short as if absorbed: a bias
+    /// a host should report).
+    pub fn capped_rays(&self) -> u64 {
+        self.capped.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
     /// Whether `p` can hold medium: inside the clip box and not in an empty brick.
     #[inline]
     pub(crate) fn holds_medium(&self, p: DVec3) -> bool {
@@ -561,6 +603,11 @@ impl Medium for FireVolume {
                 return;
             }
         }
+    }
+    fn collision_cap_hit(&self) {
+        self.capped
+            .0
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
         // (Lescale multiplies the soot emission, which is zero where the density is: no need to look at it.)

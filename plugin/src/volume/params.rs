@@ -79,7 +79,7 @@ pub static VOLUME: Component = Component {
         p("bins", T::Integer, "30", "", Range::Between(1.0, 4096.0), "Spectral bins."),
         p("lambdamin", T::Float, "400", "nm", Range::Between(200.0, 2000.0), "Lower end of the spectral bins."),
         p("lambdamax", T::Float, "700", "nm", Range::Between(200.0, 2000.0), "Upper end of the spectral bins (CIE ȳ continues to 780 nm: on a soot flame 700 leaves out about 0.4 % of the luminance, 780 keeps it)."),
-        p("stepsize", T::Float, "0.5", "voxels", Range::Above(0.0), "March step, in voxels (the paper's half voxel)."),
+        p("stepsize", T::Float, "0.5", "voxels", Range::Between(1e-4, 1e9), "March step, in voxels (the paper's half voxel); from 1e-4 (a step count per ray that still ends)."),
         p("integrator", T::String, "march", "", Range::Choices(&["march", "ratio", "delta"]), "march: fixed steps, eq. 3; ratio/delta: unbiased tracking over the majorant bricks."),
         p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
         p("precision", T::String, "f32", "", Range::Choices(&["f32", "f64"]), "Per-sample arithmetic of the march: f32 in vector lanes (about 2× faster; within 1e-6 of f64 on the campfire), falling back to f64 when a product could leave f32's range; f64: always f64."),

@@ -93,6 +93,17 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     let (img, st) =
         pool.install(|| render::render(&sc, a.seed, &|n, _| bar.set_position(n as u64)));
     bar.finish_and_clear();
+    // Tracking that stopped at the plugin's per-ray collision cap biases towards dark: say so, per medium.
+    for m in &sc.media {
+        if let scene::Medium::Plugin { vol, name, .. } = m {
+            match vol.capped_rays() {
+                Ok(0) => {}
+                Ok(n) if !a.quiet => eprintln!("firemedium: warning: medium \"{name}\": {n} rays stopped at the per-ray collision cap (2^20 tentative collisions) and were cut short as if absorbed; the medium's majorant is far above its data (an outlier voxel?) or it is optically very thick: the image is darker there than it should be"),
+                Ok(_) => {}
+                Err(e) => return Err((1, format!("medium \"{name}\": {e}"))),
+            }
+        }
+    }
     let (exr, png) = outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
     // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
     let fire_t = sc.fire_temperature();
