@@ -110,7 +110,15 @@ pub(super) unsafe fn in_f64<'a>(
         .checked_mul(k)
         .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
     // SAFETY: caller provides n × k doubles (contract).
-    Ok(unsafe { std::slice::from_raw_parts(p, len) })
+    let v = unsafe { std::slice::from_raw_parts(p, len) };
+    // Every number is checked: a NaN would propagate into a sample or a pdf the host then trusts.
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(bad(format!(
+            "{what}[{i}] = {}: expected finite numbers ({n} rows of {k})",
+            v[i]
+        )));
+    }
+    Ok(v)
 }
 
 /// # Safety

@@ -9,14 +9,40 @@ mod volume;
 use crate::Error;
 use firemedium_abi::*;
 use light::*;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::OnceLock;
+use std::sync::{Once, OnceLock};
 use volume::*;
 
 thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+    /// Set while an entry runs under [`guard`]: a panic there is caught and reported, so the hook stays quiet.
+    static IN_GUARD: Cell<bool> = const { Cell::new(false) };
+    /// Where the last caught panic happened (`file:line`), for its message.
+    static PANIC_AT: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+/// Makes panics inside an entry quiet: the default hook would print a message (and a backtrace) on the host's
+/// stderr for a panic that the entry catches and returns as `FM_PANIC` — output the host did not ask for. The
+/// hook records where the panic happened instead; a panic anywhere else goes to the previous hook. (In the
+/// cdylib this is the plugin's own copy of std's hook: the host's panics are untouched.)
+fn quiet_panics() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if IN_GUARD.with(Cell::get) {
+                let at = info
+                    .location()
+                    .map(|l| format!("{}:{}", l.file(), l.line()))
+                    .unwrap_or_default();
+                PANIC_AT.with(|p| *p.borrow_mut() = at);
+            } else {
+                previous(info)
+            }
+        }));
+    });
 }
 
 fn set_error(msg: String) {
@@ -25,7 +51,10 @@ fn set_error(msg: String) {
 
 /// Runs `f`, mapping its error and any panic to a status and the last-error message.
 fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
-    match catch_unwind(AssertUnwindSafe(f)) {
+    let outer = IN_GUARD.with(|g| g.replace(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    IN_GUARD.with(|g| g.set(outer));
+    match result {
         Ok(Ok(())) => FM_OK,
         Ok(Err((status, msg))) => {
             set_error(msg);
@@ -37,7 +66,8 @@ fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_default();
-            set_error(format!("firemedium: internal error (panic: {what}); the call did nothing, the host may continue"));
+            let at = PANIC_AT.with(|p| std::mem::take(&mut *p.borrow_mut()));
+            set_error(format!("firemedium: internal error (panic at {at}: {what}); the call did nothing, the host may continue"));
             FM_PANIC
         }
     }
@@ -161,6 +191,7 @@ static API: FmApi = FmApi {
 /// The plugin's entry point: the static function table.
 #[no_mangle]
 pub extern "C" fn firemedium_plugin_entry() -> *const FmApi {
+    quiet_panics();
     &API
 }
 
@@ -242,7 +273,11 @@ mod tests {
         assert_eq!(unsafe { (api.volume_info)(v, &mut info) }, FM_OK);
         let mut l = vec![0f32; info.channels as usize];
         assert_eq!(integrate_one(api, v, &ray, &mut l), FM_PANIC);
-        assert!(last(api).contains("fault injection"));
+        let msg = last(api);
+        assert!(
+            msg.contains("fault injection") && msg.contains("panic at ") && msg.contains(".rs:"),
+            "{msg}"
+        );
         // SAFETY: `v` came from volume_create and is destroyed once.
         unsafe { (api.volume_destroy)(v) };
 
@@ -266,6 +301,70 @@ mod tests {
                 std::ptr::null_mut(),
                 std::ptr::null_mut(),
             )
+        }
+    }
+
+    #[test]
+    fn numbers_are_checked_at_every_entry() {
+        // NaN where a number is read, and counts whose products overflow, are errors naming them — never a panic
+        // (a NaN in light_sample's u used to panic inside the plugin) and never a read past a buffer.
+        // SAFETY: the entry returns a pointer to the static table.
+        let api = unsafe { &*firemedium_plugin_entry() };
+        let (status, v) = create(api, c"");
+        assert_eq!(status, FM_OK, "{}", last(api));
+        let mut light = std::ptr::null_mut();
+        // SAFETY: a live volume, no parameters, a writable out.
+        let s = unsafe { (api.light_create)(v, std::ptr::null(), 0, &mut light) };
+        assert_eq!(s, FM_OK, "{}", last(api));
+        let u = [0.5, f64::NAN, 0.5, 0.5, 0.5, 0.5];
+        let (mut pts, mut pdf) = ([0.0; 3], [0.0; 1]);
+        // SAFETY: one row of u, points and pdf as documented; emission null.
+        let s = unsafe {
+            (api.light_sample)(
+                light,
+                u.as_ptr(),
+                1,
+                pts.as_mut_ptr(),
+                pdf.as_mut_ptr(),
+                std::ptr::null_mut(),
+            )
+        };
+        assert_eq!(s, FM_INVALID_ARGUMENT);
+        assert!(
+            last(api).contains("light_sample: u[1] = NaN"),
+            "{}",
+            last(api)
+        );
+        // A count whose 3 n overflows: refused before any read.
+        let p = [0.0f64; 3];
+        // SAFETY: the count is refused before `p` is read.
+        let s = unsafe {
+            (api.volume_coefficients)(
+                v,
+                p.as_ptr(),
+                usize::MAX / 2,
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            )
+        };
+        assert_eq!(s, FM_INVALID_ARGUMENT, "{}", last(api));
+        assert!(last(api).contains("overflows"), "{}", last(api));
+        // A ray with a NaN origin.
+        let ray = FmRay {
+            origin: [f64::NAN, 0.5, 0.5],
+            direction: [1.0, 0.0, 0.0],
+            tmin: 0.0,
+            tmax: 3.0,
+            seed: 1,
+        };
+        let mut l = [0f32; 64];
+        assert_eq!(integrate_one(api, v, &ray, &mut l), FM_INVALID_ARGUMENT);
+        assert!(last(api).contains("ray 0"), "{}", last(api));
+        // SAFETY: both came from their create calls and are destroyed once.
+        unsafe {
+            (api.light_destroy)(light);
+            (api.volume_destroy)(v);
         }
     }
 }

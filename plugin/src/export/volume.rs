@@ -1,7 +1,7 @@
 //! The fire volume's entries: create (with parameter locations), destroy, describe, and the batch queries —
 //! integrate, transmittance, scattering events, point coefficients, temperature range.
 
-use super::light::out_f64;
+use super::light::{in_f64, out_f64};
 use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
@@ -95,7 +95,19 @@ pub(super) unsafe fn rays<'a>(
         return Err(bad(format!("{n} rays at a null pointer")));
     }
     // SAFETY: n rays (contract).
-    Ok(unsafe { std::slice::from_raw_parts(rays, n) })
+    let rs = unsafe { std::slice::from_raw_parts(rays, n) };
+    // Origins and directions finite, tmin and tmax not NaN (tmax may be +∞; tmin ≥ tmax is an empty segment):
+    // a NaN would reach a sample's arithmetic; this checks it once per call instead of once per step.
+    for (i, r) in rs.iter().enumerate() {
+        let finite = r.origin.iter().chain(&r.direction).all(|x| x.is_finite());
+        if !finite || r.tmin.is_nan() || r.tmax.is_nan() {
+            return Err(bad(format!(
+                "ray {i}: origin {:?}, direction {:?}, t in [{}, {}]: expected a finite origin and direction and t not NaN",
+                r.origin, r.direction, r.tmin, r.tmax
+            )));
+        }
+    }
+    Ok(rs)
 }
 
 pub(super) fn ray_of(r: &FmRay) -> Ray {
@@ -319,15 +331,8 @@ pub(super) unsafe extern "C" fn volume_coefficients(
     guard(|| {
         // SAFETY: the caller's buffers are as the ABI documents.
         let v = unsafe { vol(volume, "volume_coefficients") }?;
-        if points.is_null() && n > 0 {
-            return Err(bad("volume_coefficients: points is null"));
-        }
-        let pts = if n == 0 {
-            &[][..]
-        } else {
-            // SAFETY: `points` is non-null here and holds `3 n` doubles (caller contract).
-            unsafe { std::slice::from_raw_parts(points, 3 * n) }
-        };
+        // SAFETY: `points` holds `3 n` doubles or is null with n = 0 (caller contract); 3 n is checked.
+        let pts = unsafe { in_f64(points, n, 3, "volume_coefficients: points") }?;
         let c = v.channels();
         let mut outs = [
             // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).

@@ -15,7 +15,7 @@ use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-/// Set by Ctrl-C: tiles not yet started are skipped and what is done is written.
+/// Set by Ctrl-C: the tiles not finished are left out and the finished ones are written.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 /// A rendered image: linear sRGB (absolute: Y in cd/m² when the scene is absolute), row-major.
@@ -85,6 +85,11 @@ pub fn render(
             let mut out = Vec::with_capacity(TILE * TILE);
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                    // Checked per pixel, not only per tile: Ctrl-C ends a render whose tiles take long within
+                    // a pixel's time (the unfinished tile is left out, the finished ones are written).
+                    if INTERRUPTED.load(Ordering::Relaxed) {
+                        return None;
+                    }
                     let mut sum = DVec3::ZERO;
                     for s in 0..scene.spp {
                         let mut rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));

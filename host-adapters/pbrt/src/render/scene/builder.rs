@@ -28,7 +28,8 @@ pub(super) struct Builder {
     pub(super) plugin_path: Option<PathBuf>,
     pub(super) plugin: Option<Plugin>,
     pub(super) st: State,
-    pub(super) stack: Vec<State>,
+    /// Saved states, with where each was saved (AttributeBegin, TransformBegin, ObjectBegin).
+    pub(super) stack: Vec<(State, Loc)>,
     pub(super) named_coords: HashMap<String, DMat4>,
     pub(super) named_materials: HashMap<String, usize>,
     pub(super) textures: HashMap<String, Tex>,
@@ -191,6 +192,43 @@ impl Builder {
         self.prims.push(prim);
     }
 
+    /// Primitives built so far where new ones go (the open object's, or the scene's).
+    fn prim_count(&self) -> usize {
+        match &self.current_object {
+            Some((_, objs)) => objs.len(),
+            None => self.prims.len(),
+        }
+    }
+
+    /// The primitives a shape added since `first` must have finite bounds in f32: a radius of 1e39, or a
+    /// `Scale 1e300`, overflows them, and the BVH build would panic on it.
+    pub(super) fn check_bounds(
+        &mut self,
+        first: usize,
+        what: &str,
+        loc: &Loc,
+    ) -> Result<(), Error> {
+        let prims = match &self.current_object {
+            Some((_, objs)) => &objs[first..],
+            None => &self.prims[first..],
+        };
+        if let Some(prim) = prims.iter().find(|pr| {
+            let b = obvhs::Boundable::aabb(*pr);
+            !(b.min.is_finite() && b.max.is_finite())
+        }) {
+            let b = obvhs::Boundable::aabb(prim);
+            return Err(err(
+                loc,
+                format!(
+                    "{what}: its bounds {:?}–{:?} do not fit in f32 (±3.4e38): expected finite geometry (a huge radius, coordinate or scale?)",
+                    b.min.to_array(),
+                    b.max.to_array()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     pub(super) fn plugin(&mut self, loc: &Loc) -> Result<Plugin, Error> {
         if let Some(p) = &self.plugin {
             return Ok(p.clone());
@@ -337,6 +375,7 @@ impl Builder {
     pub(super) fn shape(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<(), Error> {
         let to_world = affine_f32(&self.st.ctm);
         let to_obj = to_world.inverse();
+        let first = self.prim_count();
         match ty {
             "sphere" => {
                 let r = num(p, "radius", 1.0) as f32;
@@ -358,7 +397,13 @@ impl Builder {
                 } else {
                     let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
                     let idx: Vec<usize> = match nums(p, "indices") {
-                        Some(v) => v.iter().map(|&x| x as usize).collect(),
+                        Some(v) => {
+                            // (A cast would turn -1 into vertex 0 silently.)
+                            if let Some((k, x)) = v.iter().enumerate().find(|(_, x)| !(**x >= 0.0 && x.fract() == 0.0 && **x <= u32::MAX as f64)) {
+                                return Err(err(loc, format!("{ty}: \"integer indices\" [{k}] = {x}: expected a vertex number from 0")));
+                            }
+                            v.iter().map(|&x| x as usize).collect()
+                        }
                         None if ty == "trianglemesh" && pos.len() == 9 => vec![0, 1, 2],
                         None if ty == "bilinearmesh" && pos.len() == 12 => vec![0, 1, 2, 3],
                         None => return Err(err(loc, format!("{ty}: missing \"integer indices\""))),
@@ -394,6 +439,7 @@ impl Builder {
             }
             other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh)"))),
         }
+        self.check_bounds(first, ty, loc)?;
         Ok(())
     }
 

@@ -40,26 +40,34 @@ impl Builder {
             }
             Directive::ReverseOrientation => self.st.reverse = !self.st.reverse,
             Directive::AttributeBegin | Directive::TransformBegin => {
-                self.stack.push(self.st.clone())
+                self.stack.push((self.st.clone(), loc.clone()))
             }
             Directive::AttributeEnd | Directive::TransformEnd => match self.stack.pop() {
-                Some(s) => self.st = s,
+                Some((s, _)) => self.st = s,
                 None => return Err(err(loc, "AttributeEnd without AttributeBegin")),
             },
             Directive::Attribute(..) => self.warn(loc, "Attribute defaults are ignored"),
             Directive::ObjectBegin(n) => {
-                self.stack.push(self.st.clone());
+                if let Some((open, _)) = &self.current_object {
+                    return Err(err(loc, format!("ObjectBegin \"{n}\" inside object \"{open}\": objects do not nest (as pbrt-v4)")));
+                }
+                self.stack.push((self.st.clone(), loc.clone()));
                 self.current_object = Some((n, Vec::new()));
             }
             Directive::ObjectEnd => {
-                if let Some((n, prims)) = self.current_object.take() {
-                    self.objects.insert(n, prims);
-                }
-                if let Some(s) = self.stack.pop() {
+                let Some((n, prims)) = self.current_object.take() else {
+                    return Err(err(loc, "ObjectEnd without ObjectBegin"));
+                };
+                self.objects.insert(n, prims);
+                if let Some((s, _)) = self.stack.pop() {
                     self.st = s;
                 }
             }
             Directive::ObjectInstance(n) => {
+                if let Some((open, _)) = &self.current_object {
+                    return Err(err(loc, format!("ObjectInstance \"{n}\" inside object \"{open}\": an instance cannot be part of an object's definition (as pbrt-v4)")));
+                }
+                let first = self.prims.len();
                 let prims =
                     self.objects.get(&n).cloned().ok_or_else(|| {
                         err(loc, format!("ObjectInstance \"{n}\": no such object"))
@@ -102,6 +110,7 @@ impl Builder {
                     };
                     self.prims.push(p);
                 }
+                self.check_bounds(first, &format!("ObjectInstance \"{n}\""), loc)?;
             }
             Directive::Option(p) => self.warn(loc, format!("Option \"{}\" is ignored", p.name)),
             Directive::ColorSpace(n) => {

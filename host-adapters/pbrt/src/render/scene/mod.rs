@@ -377,6 +377,9 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     for (d, loc) in c.0 {
         b.directive(d, &loc)?;
     }
+    if let Some((_, open)) = b.stack.last() {
+        return Err(err(open, "AttributeBegin (or TransformBegin, ObjectBegin) without its End: the scene ends inside it"));
+    }
     // The camera, now that the film resolution is known (pbrt allows Film after Camera).
     let (cp, camera_from_world, medium, _) = b
         .camera
