@@ -254,6 +254,9 @@ fn bad_scenes_exit_1_with_file_line_col() {
         ("negative.pbrt", "Camera \"perspective\"\nWorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 -1 2]\n", "negative.pbrt:3:1: trianglemesh: \"integer indices\" [1] = -1: expected a vertex number from 0"),
         ("unbalanced.pbrt", "Camera \"perspective\"\nWorldBegin\nAttributeBegin\nShape \"sphere\"\n", "unbalanced.pbrt:3:1: AttributeBegin (or TransformBegin, ObjectBegin) without its End"),
         ("nested.pbrt", "Camera \"perspective\"\nWorldBegin\nObjectBegin \"a\"\nShape \"sphere\"\nObjectEnd\nObjectBegin \"b\"\nObjectInstance \"a\"\nObjectEnd\n", "nested.pbrt:7:1: ObjectInstance \"a\" inside object \"b\""),
+        // A film of 1e9 pixels a side allocated until the process aborted; 0 was clamped to 1 silently.
+        ("film.pbrt", "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 1000000000\nWorldBegin\n", "film.pbrt:2:12: film: \"integer xresolution\" 1000000000: expected 1 to 65536 pixels"),
+        ("film0.pbrt", "Camera \"perspective\"\nFilm \"rgb\" \"integer yresolution\" 0\nWorldBegin\n", "film0.pbrt:2:12: film: \"integer yresolution\" 0: expected 1 to 65536 pixels"),
         // A typo in a pbrt-v4 parameter: at the parameter, with the closest name.
         ("radus.pbrt", "Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float radus\" 2\n", "radus.pbrt:3:16: sphere: unknown parameter \"float radus\" (did you mean \"radius\"?)"),
         ("unread.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"float density\" [1]\n  \"float fuelnk\" [500 1.5 0.5]\n", "unread.pbrt:4:3: medium \"f\" (fire): volume: parameter 'fuelnk' = given, but nothing in this configuration reads it"),
@@ -667,4 +670,36 @@ fn ctrl_c_ends_a_long_render_inside_its_tiles() {
     };
     assert_eq!(status.code(), Some(130));
     assert!(out.is_file(), "the finished tiles are written");
+}
+
+#[test]
+fn an_image_claiming_a_huge_size_is_refused_before_it_is_read() {
+    // A real 1×1 EXR whose data window is patched to claim 100 000² pixels (a few hundred bytes): as a light
+    // map it must be an error naming the size against the memory budget, not a 120 GB allocation that aborts.
+    let dir = tmp("bomb");
+    let exr_path = dir.join("bomb.exr");
+    write_exr_map(&exr_path, 1, 1, |_, _| 1.0);
+    let mut bytes = std::fs::read(&exr_path).unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+        let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+        // box2i: xMin, yMin, xMax, yMax (i32, little-endian).
+        bytes[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    }
+    std::fs::write(&exr_path, &bytes).unwrap();
+    let scene = "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"bomb.exr\"\n";
+    std::fs::write(dir.join("b.pbrt"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(dir.join("b.pbrt"))
+        .args(["--max-memory", "2"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("b.pbrt:4:1: infinite light:")
+            && e.contains("a 100000×100000 image needs 120000000000 bytes"),
+        "{e}"
+    );
 }

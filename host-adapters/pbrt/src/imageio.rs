@@ -34,8 +34,23 @@ fn srgb_to_linear(c: f32) -> f32 {
 }
 
 /// Reads an EXR or PNG; `srgb` decodes 8/16-bit PNG values with the sRGB curve (pbrt's default encoding).
+/// Its pixels must fit in the default memory budget ([`crate::budget`]).
 pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
+    read_within(path, srgb, crate::budget::default_bytes())
+}
+
+/// As [`read`], with the image's size checked against `budget` bytes from its header, before its pixels are
+/// read (a 373-byte EXR may claim 100 000² pixels).
+pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, String> {
     let file = path.display().to_string();
+    let fits = |w: usize, h: usize| {
+        crate::budget::check(
+            &format!("{file}: a {w}×{h} image"),
+            (w as u64).saturating_mul(h as u64),
+            std::mem::size_of::<[f32; 3]>() as u64,
+            budget,
+        )
+    };
     match path
         .extension()
         .and_then(|e| e.to_str())
@@ -44,6 +59,12 @@ pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
     {
         Some("exr") => {
             use exr::prelude::*;
+            let meta = exr::meta::MetaData::read_from_file(path, false)
+                .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+            for h in &meta.headers {
+                let size = h.layer_size;
+                fits(size.width(), size.height())?;
+            }
             let img = read_first_rgba_layer_from_file(
                 path,
                 |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
@@ -66,6 +87,10 @@ pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
             let mut r = dec
                 .read_info()
                 .map_err(|e| format!("{file}: not a PNG: {e}"))?;
+            {
+                let info = r.info();
+                fits(info.width as usize, info.height as usize)?;
+            }
             let mut buf = vec![
                 0u8;
                 r.output_buffer_size()

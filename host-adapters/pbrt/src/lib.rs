@@ -11,6 +11,7 @@
 //! | [`tonemap`] | visual adaptation (P&P §3.8): XYZ in cd/m² → display sRGB (von Kries + Naka–Rushton) |
 //! | [`gen`] | Stam & Fiume's blob fire model → voxel grids → OpenVDB |
 //! | [`metrics`] | DESIGN's error metrics (relative RMSE, relMSE) and luminance |
+//! | [`budget`] | the memory budget, checked before allocating what input sizes |
 //!
 //! Arrows point one way: `render` → `imageio`; `imageio`, `tonemap`, `metrics` depend on no other module here;
 //! colour comes from `firemedium-core` and, for media, from the plugin the scene loaded.
@@ -18,6 +19,7 @@
 // One `unsafe` call, allowed where it is made: loading the plugin (`render::scene`).
 #![deny(unsafe_code)]
 
+pub mod budget;
 pub mod gen;
 pub mod imageio;
 pub mod metrics;

@@ -35,6 +35,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
         fire_light_weighting: None,
         res: a.resolution,
         threads: None,
+        max_memory: None,
     };
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
     let (w, h) = sc.res;

@@ -44,6 +44,10 @@ pub struct RenderArgs {
     /// fire temperature, D65 without a fire), d65, a temperature (1800K) or a chromaticity (x,y).
     #[arg(long, default_value = "fire", value_parser = tonemap::parse_white)]
     white: tonemap::WhiteArg,
+    /// The memory budget in GB (default: half the machine's memory): the film, images read and each of the
+    /// plugin's grids are checked against it before they are allocated.
+    #[arg(long, value_name = "GB", value_parser = parse_gb)]
+    max_memory: Option<f64>,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
@@ -63,6 +67,7 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
         res: a.resolution,
         threads: a.threads,
+        max_memory: a.max_memory.map(|gb| (gb * 1e9) as u64),
     };
     let load_start = std::time::Instant::now();
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
@@ -185,4 +190,14 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
     };
     let png = exr.with_extension("png");
     (exr, png)
+}
+
+/// A memory size in GB: a finite number above 0.
+fn parse_gb(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v < 1e9 => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a memory size in GB (a number above 0, say 4 or 0.5)"
+        )),
+    }
 }

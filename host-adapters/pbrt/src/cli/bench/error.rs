@@ -153,6 +153,7 @@ pub fn surface_ladder(
                 fire_light_weighting: None,
                 res: Some(res),
                 threads: None,
+                max_memory: None,
             },
         )
     };

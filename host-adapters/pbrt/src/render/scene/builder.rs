@@ -51,6 +51,8 @@ pub(super) struct Builder {
     pub(super) bins_params: Vec<LParam>,
     /// Threads the plugin may use to build a medium (`Overrides::threads`).
     pub(super) threads: Option<usize>,
+    /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
+    pub(super) max_memory: u64,
     /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
     pub(super) has_fire: bool,
     /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
@@ -346,6 +348,9 @@ impl Builder {
                     if !list.iter().any(|p| p.name == "threads") {
                         list.push(LParam::int("threads", n as i64));
                     }
+                }
+                if !list.iter().any(|p| p.name == "maxbytes") {
+                    list.push(LParam::float("maxbytes", self.max_memory as f64));
                 }
                 let vol = plugin.create_volume(&list).map_err(|e| {
                     // An error about one parameter begins with where it was given: report it there.

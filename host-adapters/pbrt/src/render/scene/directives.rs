@@ -143,10 +143,21 @@ impl Builder {
                 if ty != "rgb" && ty != "gbuffer" {
                     self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
                 }
-                self.res = (
-                    num(p, "xresolution", 1280.0).max(1.0) as usize,
-                    num(p, "yresolution", 720.0).max(1.0) as usize,
-                );
+                // 1 to 65 536 pixels a side, as --resolution (zero and negative were clamped to 1 silently, 1e9
+                // allocated until the process aborted); the film's bytes are checked against the budget in `load`.
+                let side = |name: &str, default: f64| -> Result<usize, Error> {
+                    let v = num(p, name, default);
+                    if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
+                        Ok(v as usize)
+                    } else {
+                        let at = p.get(name).map_or(loc.clone(), |q| q.loc.clone());
+                        Err(err(
+                            &at,
+                            format!("film: \"integer {name}\" {v}: expected 1 to 65536 pixels"),
+                        ))
+                    }
+                };
+                self.res = (side("xresolution", 1280.0)?, side("yresolution", 720.0)?);
                 self.film_name = string(p, "filename").map(String::from);
                 self.finish(Kind::Film, &ty, "film", p)?;
             }

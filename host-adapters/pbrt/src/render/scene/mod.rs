@@ -238,6 +238,9 @@ pub struct Overrides {
     pub res: Option<(usize, usize)>,
     /// Threads the plugin may use to build each medium (the render's own; `None`: every core).
     pub threads: Option<usize>,
+    /// The memory budget in bytes (`None`: half the machine's memory, [`crate::budget::default_bytes`]): the
+    /// film is checked against it, and each plugin grid (`maxbytes`, unless the scene sets it).
+    pub max_memory: Option<u64>,
 }
 
 /// Parses and builds the scene at `path`.
@@ -369,6 +372,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         has_fire: fire,
         film_xyz: None,
         threads: ov.threads,
+        max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     };
     // pbrt's default material: diffuse 0.5.
     b.materials
@@ -389,6 +393,18 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     if let Some(r) = ov.res {
         b.res = r;
     }
+    // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room).
+    crate::budget::check(
+        &format!(
+            "{}: the film of {}×{} pixels",
+            path.display(),
+            b.res.0,
+            b.res.1
+        ),
+        (b.res.0 as u64) * (b.res.1 as u64),
+        64,
+        ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
+    )?;
     let (w, h) = (b.res.0 as f64, b.res.1 as f64);
     let aspect = num(cp, "frameaspectratio", w / h);
     let screen = match nums(cp, "screenwindow") {

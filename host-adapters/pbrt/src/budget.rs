@@ -1,0 +1,67 @@
+//! One memory budget for what a render builds in the host — the film, images read as textures, light maps or
+//! references — checked before each allocation, so that a few bytes of input claiming a huge size are an error
+//! naming what would not fit, never an allocation failure that aborts the process. The same number is passed to
+//! the plugin as its `maxbytes` (each grid's cap) unless a scene sets that itself.
+
+/// Half the machine's physical memory (`/proc/meminfo`), or 8 GiB where that cannot be read.
+pub fn default_bytes() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("MemTotal:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(8 << 30, |kb| kb.saturating_mul(1024) / 2)
+}
+
+/// An error unless `count` items of `size` bytes (`what`, named in the message) fit in `budget` bytes.
+pub fn check(what: &str, count: u64, size: u64, budget: u64) -> Result<(), String> {
+    match count.checked_mul(size) {
+        Some(bytes) if bytes <= budget => Ok(()),
+        bytes => Err(format!(
+            "{what} needs {} bytes, above the memory budget of {budget} bytes (--max-memory raises it)",
+            bytes.map_or_else(|| "more than 2^64".to_string(), |b| b.to_string())
+        )),
+    }
+}
+
+/// A vector of `n` copies of `value`, allocated fallibly: an error naming `what` instead of an abort when the
+/// allocator says no.
+pub fn filled<T: Clone>(what: &str, n: usize, value: T) -> Result<Vec<T>, String> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        format!(
+            "{what}: cannot allocate {n} items of {} bytes",
+            std::mem::size_of::<T>()
+        )
+    })?;
+    v.resize(n, value);
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_are_checked_before_anything_is_allocated() {
+        assert!(check("a film", 1920 * 1080, 36, 1 << 30).is_ok());
+        let e = check(
+            "a film of 1e9 × 1e9 pixels",
+            1_000_000_000 * 1_000_000_000,
+            36,
+            1 << 30,
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("needs 36000000000000000000 bytes") && e.contains("budget of 1073741824"),
+            "{e}"
+        );
+        let e = check("x", u64::MAX, 2, u64::MAX).unwrap_err();
+        assert!(e.contains("more than 2^64"), "{e}");
+        assert!(default_bytes() >= 1 << 20);
+        assert!(filled::<u8>("huge", usize::MAX, 0).is_err());
+        assert_eq!(filled("three", 3, 7u8).unwrap(), vec![7, 7, 7]);
+    }
+}
