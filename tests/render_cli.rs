@@ -703,3 +703,45 @@ fn an_image_claiming_a_huge_size_is_refused_before_it_is_read() {
         "{e}"
     );
 }
+
+#[test]
+fn files_that_never_end_are_refused_not_read() {
+    // /dev/zero never ends and a FIFO blocks its reader forever: as a dataset, an Include or a mesh each must
+    // be an error naming it, promptly (bounded waits: a hang fails the test instead of stalling it).
+    let dir = tmp("endless");
+    let fifo = dir.join("fifo.vdb");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let cases = [
+        ("dataset", format!("Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"/dev/zero\" \"string format\" \"vdb\"\n")),
+        ("fifo", format!("Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"{}\"\n", fifo.display())),
+        ("include", "Camera \"perspective\"\nWorldBegin\nInclude \"/dev/zero\"\n".to_string()),
+        ("plymesh", "Camera \"perspective\"\nWorldBegin\nShape \"plymesh\" \"string filename\" \"/dev/zero\"\n".to_string()),
+    ];
+    for (name, text) in cases {
+        let path = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&path, text).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(&path)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut waited = 0;
+        let status = loop {
+            if let Some(s) = child.try_wait().unwrap() {
+                break s;
+            }
+            if waited > 300 {
+                let _ = child.kill();
+                panic!("{name}: still reading after 30 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            waited += 1;
+        };
+        let mut e = String::new();
+        std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut e).unwrap();
+        assert_eq!(status.code(), Some(1), "{name}: {e}");
+        assert!(e.contains("not a regular file"), "{name}: {e}");
+    }
+}

@@ -67,3 +67,27 @@ impl fmt::Display for ParseError {
 }
 
 impl std::error::Error for ParseError {}
+
+/// Reads a regular file to the length it had when opened. A device (`/dev/zero`) never ends and a FIFO blocks
+/// its reader forever (checked before opening: opening one blocks too); a scene, an `Include` and the files a
+/// scene names (meshes, images) are read with this.
+pub fn read_regular_file(path: &std::path::Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(std::io::Error::other(
+            "not a regular file (a directory, device or FIFO): scene files are read from files of a known size",
+        ));
+    }
+    let f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    let mut buf = Vec::new();
+    usize::try_from(len)
+        .ok()
+        .and_then(|n| buf.try_reserve_exact(n).ok())
+        .ok_or_else(|| {
+            std::io::Error::other(format!("{len} bytes: more than this machine can hold"))
+        })?;
+    f.take(len).read_to_end(&mut buf)?;
+    Ok(buf)
+}

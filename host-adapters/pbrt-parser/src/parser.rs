@@ -179,7 +179,7 @@ fn parse_path(
             format!("Includes nested deeper than {MAX_INCLUDE_DEPTH}"),
         ));
     }
-    let bytes = std::fs::read(path)
+    let bytes = crate::read_regular_file(path)
         .map_err(|e| ParseError::new(from, format!("cannot read {}: {e}", path.display())))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();

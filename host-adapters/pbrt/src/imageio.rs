@@ -43,6 +43,12 @@ pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
 /// read (a 373-byte EXR may claim 100 000² pixels).
 pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, String> {
     let file = path.display().to_string();
+    // (A device or FIFO named as an image would never end or block: only regular files.)
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return Err(format!(
+            "{file}: cannot read: not a regular file (missing, a directory, device or FIFO)"
+        ));
+    }
     let fits = |w: usize, h: usize| {
         crate::budget::check(
             &format!("{file}: a {w}×{h} image"),

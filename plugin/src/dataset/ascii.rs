@@ -30,6 +30,20 @@ pub(crate) fn read_dense(
     let mut t = Tokens::new(file, text);
     let dims = dims(&mut t)?;
     let [w, h, d] = dims;
+    // Each value takes at least two bytes (a digit and a separator): a header claiming far more values than the
+    // text can hold is refused before the grid is allocated (15 bytes claiming 1000³ allocated 4 GB). A small
+    // claim is left to the reader, whose error names the first missing value.
+    let claimed = (w as u64).saturating_mul(h as u64).saturating_mul(d as u64);
+    let room = (text.len() as u64).div_ceil(2);
+    let within_cap = claimed.saturating_mul(4) <= max_bytes;
+    if within_cap && claimed > room && claimed > 1 << 20 {
+        return Err(Error::format(
+            file,
+            format!("the header `{w} {h} {d}`"),
+            format!("at most {room} values in its {} bytes", text.len()),
+            format!("a claim of {claimed} values"),
+        ));
+    }
     let mut data = alloc_grid(file, dims, max_bytes, 0.0)?;
     let n = data.len();
     for idx in 0..n {
@@ -101,6 +115,20 @@ mod tests {
         assert_eq!(z.data[2], 2.0); // (0,1,0) ← file 2
         assert_eq!(z.data[4], 1.0); // (0,0,1) ← file 1
         assert_eq!(z.data[7], 7.0);
+    }
+
+    #[test]
+    fn a_header_claiming_more_values_than_the_text_holds_is_refused_before_allocating() {
+        // 15 bytes claiming 1000³ values: refused from the file's length, with a cap of 8 GB that would allow it.
+        let e = read_dense("bomb.txt", "1000 1000 1000\n", AxisOrder::XFastest, 8 << 30)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bomb.txt")
+                && e.contains("at most 8 values in its 15 bytes")
+                && e.contains("1000000000 values"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -53,6 +53,26 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
         file: path.display().to_string(),
         message: e.to_string(),
     };
+    // Only regular files, read to the length they had when opened: a device (/dev/zero) never ends and a FIFO
+    // blocks its reader forever (it is checked before it is opened: opening one blocks too).
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(Error::Io {
+            file: path.display().to_string(),
+            message: "not a regular file (a directory, device or FIFO): datasets are read from files of a known size".into(),
+        });
+    }
+    let alloc = |len: u64| -> Result<Vec<u8>, Error> {
+        let mut buf = Vec::new();
+        usize::try_from(len)
+            .ok()
+            .and_then(|n| buf.try_reserve_exact(n).ok())
+            .ok_or_else(|| Error::Io {
+                file: path.display().to_string(),
+                message: format!("{len} bytes: more than this machine can hold"),
+            })?;
+        Ok(buf)
+    };
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileExt;
@@ -62,11 +82,9 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
         let len = f.metadata().map_err(io)?.len();
         let threads = crate::par::threads(4);
         if len >= PARALLEL_BYTES && threads > 1 {
-            let len = usize::try_from(len).map_err(|_| Error::Io {
-                file: path.display().to_string(),
-                message: format!("{len} bytes: larger than this machine can address"),
-            })?;
-            let mut buf = vec![0u8; len];
+            let mut buf = alloc(len)?;
+            let len = len as usize;
+            buf.resize(len, 0);
             let part = len.div_ceil(threads);
             let f = &f;
             let done: Vec<std::io::Result<()>> = std::thread::scope(|s| {
@@ -89,7 +107,12 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
             return Ok(buf);
         }
     }
-    std::fs::read(path).map_err(io)
+    use std::io::Read;
+    let f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    let mut buf = alloc(len)?;
+    f.take(len).read_to_end(&mut buf).map_err(io)?;
+    Ok(buf)
 }
 
 pub(super) fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {

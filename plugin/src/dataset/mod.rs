@@ -86,7 +86,23 @@ pub(crate) fn alloc_grid(
     let n = dims.iter().try_fold(1u64, |a, &d| a.checked_mul(d as u64));
     let bytes = n.and_then(|n| n.checked_mul(4));
     match bytes {
-        Some(b) if b <= max_bytes && b > 0 => Ok(vec![fill; n.unwrap_or(0) as usize]),
+        Some(b) if b <= max_bytes && b > 0 => {
+            // Fallible: a grid within the cap that the allocator still refuses is an error, not an abort of the
+            // host that loaded the plugin.
+            let n = n.unwrap_or(0) as usize;
+            let mut v = Vec::new();
+            v.try_reserve_exact(n).map_err(|_| Error::TooLarge {
+                file: file.to_string(),
+                what: format!(
+                    "a {}×{}×{} grid of f32 (the allocator refused it)",
+                    dims[0], dims[1], dims[2]
+                ),
+                bytes: b,
+                cap: max_bytes,
+            })?;
+            v.resize(n, fill);
+            Ok(v)
+        }
         _ => Err(Error::TooLarge {
             file: file.to_string(),
             what: format!("a {}×{}×{} grid of f32", dims[0], dims[1], dims[2]),

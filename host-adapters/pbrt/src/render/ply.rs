@@ -108,7 +108,8 @@ impl Reader<'_> {
 /// Reads a PLY mesh.
 pub fn read(path: &Path) -> Result<Mesh, String> {
     let file = path.display().to_string();
-    let data = std::fs::read(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+    let data = firemedium_pbrt_parser::read_regular_file(path)
+        .map_err(|e| format!("{file}: cannot read: {e}"))?;
     let end = data
         .windows(10)
         .position(|w| w == b"end_header")
