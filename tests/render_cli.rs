@@ -713,7 +713,7 @@ fn files_that_never_end_are_refused_not_read() {
     let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
     assert!(made.success());
     let cases = [
-        ("dataset", format!("Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"/dev/zero\" \"string format\" \"vdb\"\n")),
+        ("dataset", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"/dev/zero\" \"string format\" \"vdb\"\n".to_string()),
         ("fifo", format!("Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"{}\"\n", fifo.display())),
         ("include", "Camera \"perspective\"\nWorldBegin\nInclude \"/dev/zero\"\n".to_string()),
         ("plymesh", "Camera \"perspective\"\nWorldBegin\nShape \"plymesh\" \"string filename\" \"/dev/zero\"\n".to_string()),
