@@ -745,3 +745,41 @@ fn files_that_never_end_are_refused_not_read() {
         assert!(e.contains("not a regular file"), "{name}: {e}");
     }
 }
+
+#[test]
+fn the_same_render_gives_the_same_bytes_and_cleans_up_after_killed_writers() {
+    // Farms and caches compare files: two renders of one scene on 2 threads must be byte-identical (the EXR's
+    // blocks were written in completion order). A temporary left by a killed writer (its PID gone) is removed
+    // by the next write of the same file.
+    let dir = tmp("bytes");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let stale = dir.join("a.tmp-4194400.exr");
+    std::fs::write(&stale, b"left by a killed render").unwrap();
+    let mut files = Vec::new();
+    for name in ["a.exr", "b.exr"] {
+        let out = dir.join(name);
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(root.join("scenes/campfire/scene.pbrt"))
+            .args([
+                "--resolution",
+                "48x32",
+                "--spp",
+                "2",
+                "--threads",
+                "2",
+                "-q",
+                "-o",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert!(
+        files[0] == files[1],
+        "two identical renders wrote different EXR bytes"
+    );
+    assert!(!stale.exists(), "the stale temporary is still there");
+}

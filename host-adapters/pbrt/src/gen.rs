@@ -738,7 +738,7 @@ pub fn write_frame(
     }
     let bytes = firemedium_plugin::dataset::vdb::write(&grids, f.p0, glam::DVec3::splat(f.voxel));
     crate::imageio::write_atomic(path, |tmp| {
-        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: {e}", tmp.display()))
+        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: cannot write: {e}", path.display()))
     })?;
     let tmax = f.temperature.iter().copied().fold(0f32, f32::max);
     let fmax = f.density.iter().copied().fold(0f32, f32::max);

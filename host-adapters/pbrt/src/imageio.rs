@@ -208,11 +208,43 @@ pub fn write_atomic(
         std::process::id(),
         path.extension().and_then(|e| e.to_str()).unwrap_or("out")
     ));
+    remove_stale_temporaries(path);
     write(&tmp).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);
     })?;
     std::fs::rename(&tmp, path)
         .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
+}
+
+/// Removes the temporaries of `path` (`NAME.tmp-PID.EXT`) that a killed writer left behind: those whose process
+/// no longer runs (Linux: no `/proc/PID`). A write that is killed cannot clean up after itself; the next write of
+/// the same file does.
+fn remove_stale_temporaries(path: &Path) {
+    let (Some(dir), Some(stem)) = (path.parent(), path.file_stem().and_then(|s| s.to_str())) else {
+        return;
+    };
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let prefix = format!("{stem}.tmp-");
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(&prefix)) else {
+            continue;
+        };
+        let pid = rest.split('.').next().unwrap_or("");
+        if pid.parse::<u32>().is_ok() && !Path::new("/proc").join(pid).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 /// The EXR attribute that records the hottest temperature (K) of the scene's fire media: the tone mapper's
@@ -241,8 +273,11 @@ pub fn write_exr(
                 AttributeValue::F64(t),
             );
         }
+        // One thread writes the blocks in order, so the same render gives the same bytes (parallel writing put
+        // them in completion order; farms and caches compare files).
         image
             .write()
+            .non_parallel()
             .to_file(tmp)
             .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
     })
@@ -309,7 +344,9 @@ pub fn write_png_bytes(
     sixteen: bool,
 ) -> Result<(), String> {
     write_atomic(path, |tmp| {
-        let f = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+        // (Messages name the file the user asked for, not the temporary one beside it.)
+        let f = std::fs::File::create(tmp)
+            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
         let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
         e.set_color(png::ColorType::Rgb);
         e.set_depth(if sixteen {

@@ -132,6 +132,19 @@ mod tests {
     }
 
     #[test]
+    fn a_value_beyond_f32_is_named_as_written() {
+        let e = read_dense("big.txt", "1 1 2\n1 1e39", AxisOrder::XFastest, CAP)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("big.txt: line 2, column 3")
+                && e.contains("within f32's range")
+                && e.contains("'1e39'"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn dense_errors_name_line_and_column() {
         let e = read_dense("f.txt", "2 2 2\n0 1 2\n3 x 5 6 7", AxisOrder::XFastest, CAP)
             .unwrap_err()

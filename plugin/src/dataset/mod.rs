@@ -335,10 +335,24 @@ impl Dataset {
             .or(first.1.bounds)
             .unwrap_or([DVec3::ZERO, DVec3::ONE]);
         if !(bounds[0].is_finite() && bounds[1].is_finite() && bounds[0].cmplt(bounds[1]).all()) {
+            let v = |p: DVec3| {
+                let c = p.to_array().map(crate::params::short);
+                format!("({}, {}, {})", c[0], c[1], c[2])
+            };
+            let shown = format!("{} to {}", v(bounds[0]), v(bounds[1]));
+            // From the file's own transform (a voxel size of 0, 1e300, NaN…): name the file.
+            if opts.bounds.is_none() && first.1.bounds.is_some() && first.4 != Format::Inline {
+                return Err(Error::format(
+                    &first.2,
+                    "the grid's transform (voxel size and offset)",
+                    "a box with finite corners and a positive size on every axis",
+                    shown,
+                ));
+            }
             return Err(Error::invalid(
                 "dataset",
                 "p0 p1",
-                format!("{} {}", bounds[0], bounds[1]),
+                shown,
                 "finite corners with p0 < p1 on every axis",
             ));
         }

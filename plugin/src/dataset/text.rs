@@ -64,14 +64,22 @@ impl<'a> Tokens<'a> {
     /// The next token as an f64 (finite or not: policies judge values later).
     pub fn number(&mut self, what: &str) -> Result<f64, Error> {
         let (tok, at) = self.next_token().ok_or_else(|| self.end_error(what))?;
-        tok.parse::<f64>().map_err(|_| {
-            Error::format(
+        match tok.parse::<f64>() {
+            // Grid values are stored as f32: 1e39 would become inf and be reported as "found inf".
+            Ok(v) if v.is_finite() && v.abs() > f32::MAX as f64 => Err(Error::format(
+                self.file,
+                at,
+                format!("{what} within f32's range (±3.4e38)"),
+                format!("'{}'", shorten(tok)),
+            )),
+            Ok(v) => Ok(v),
+            Err(_) => Err(Error::format(
                 self.file,
                 at,
                 what.to_string(),
                 format!("'{}'", shorten(tok)),
-            )
-        })
+            )),
+        }
     }
 
     /// The next token as an integer in [lo, hi].

@@ -298,7 +298,7 @@ fn write_ladder(
     let (csv_path, svg_path, png_path) = (with(".csv"), with(".svg"), with(".png"));
     let write = |path: &std::path::Path, bytes: &[u8]| {
         firemedium::imageio::write_atomic(path, |tmp| {
-            std::fs::write(tmp, bytes).map_err(|e| format!("{}: {e}", tmp.display()))
+            std::fs::write(tmp, bytes).map_err(|e| format!("{}: cannot write: {e}", path.display()))
         })
     };
     write(&csv_path, error::csv(points).as_bytes())?;
