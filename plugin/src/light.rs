@@ -75,10 +75,25 @@ fn first_above(cdf: &[f64], target: f64) -> usize {
         .min(cdf.len().saturating_sub(1))
 }
 
+/// The error for a fire with nothing to sample.
+fn no_emission() -> Error {
+    Error::invalid(
+        "light",
+        "fire",
+        "no emitting voxel",
+        "a fire with some emission (temperature above 0 K and density or species)",
+    )
+}
+
 impl FireLight {
     /// Builds the light of `vol` (the light's own parameter, `weighting`, is `luminance` or `power`).
     pub fn new(vol: Arc<FireVolume>, weighting: Weighting) -> Result<FireLight, Error> {
         let start = Instant::now();
+        // Nothing to sample: refused before a weight per voxel is allocated (a 16-byte raw file claiming 600³
+        // voxels and no temperature built a 3.4 GB light).
+        if !vol.can_emit() {
+            return Err(no_emission());
+        }
         let ds = vol.dataset();
         let dims = ds.dims();
         let voxel = ds.voxel_size();
@@ -106,7 +121,16 @@ impl FireLight {
         };
         let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
         let n = dims[0] * dims[1] * dims[2];
-        let mut w = vec![0f32; n];
+        let mut w = Vec::new();
+        w.try_reserve_exact(n).map_err(|_| {
+            Error::invalid(
+                "light",
+                "fire",
+                format!("{n} voxels"),
+                "a grid whose per-voxel weights (4 bytes each) the allocator can hold",
+            )
+        })?;
+        w.resize(n, 0f32);
         let (mut pw, mut plm) = (0.0, 0.0);
         // Soot power depends on T only: memoise per 0.5 K.
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
@@ -201,12 +225,7 @@ impl FireLight {
             before += m.count_ones();
         }
         if !(tz > 0.0) {
-            return Err(Error::invalid(
-                "light",
-                "fire",
-                "no emitting voxel",
-                "a fire with some emission (temperature above 0 K and density or species)",
-            ));
+            return Err(no_emission());
         }
         Ok(FireLight {
             vol,
@@ -604,5 +623,23 @@ mod tests {
             "fire light {mean} ± {se} vs quadrature {quad} (rel. σ {})",
             se / mean
         );
+    }
+
+    #[test]
+    fn a_fire_that_cannot_emit_is_refused_before_its_voxels_are_weighed() {
+        // No temperature grid: nothing emits. Refused up front (a 600³ grid of this kind built a 3.4 GB light).
+        let vol = FireVolume::new(&[
+            Param::floats("density", &[1.0; 8]),
+            Param::int("nx", 2),
+            Param::int("ny", 2),
+            Param::int("nz", 2),
+        ])
+        .unwrap();
+        assert!(!vol.can_emit());
+        let e = FireLight::new(Arc::new(vol), Weighting::Power)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no emitting voxel"), "{e}");
+        assert!(sphere_fire(8, 0.8, 1e-6, 1500.0, vec![]).can_emit());
     }
 }

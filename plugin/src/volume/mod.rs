@@ -480,6 +480,11 @@ impl FireVolume {
         Some([s.min as f64, s.max as f64])
     }
 
+    /// Whether anything in the volume can emit: some temperature (or constant `Le`) with a non-zero emission
+    /// table, or species. A fire light of a volume that cannot emit is refused before it allocates per voxel.
+    pub fn can_emit(&self) -> bool {
+        !self.species.is_empty() || self.j.v.iter().any(|lane| lane.iter().any(|&x| x > 0.0))
+    }
     /// How many rays' tracking stopped at the collision cap so far (each a ray cut short as if absorbed: a bias
     /// a host should report).
     pub fn capped_rays(&self) -> u64 {
