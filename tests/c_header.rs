@@ -33,6 +33,27 @@ fn gcc(args: &[&str]) {
     );
 }
 
+/// Compiles the C file `src` (relative to the repository) against the header into a shared library named
+/// `name`, with extra compiler flags.
+fn c_plugin(name: &str, src: &str, flags: &[&str]) -> PathBuf {
+    let include = root().join("plugin/abi/include");
+    let so = tmp(&format!(
+        "{}{name}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    let mut args = vec!["-std=c99", "-Wall", "-Werror", "-shared", "-fPIC"];
+    args.extend_from_slice(flags);
+    let (inc, file, out) = (
+        include.to_str().unwrap().to_string(),
+        root().join(src).to_str().unwrap().to_string(),
+        so.to_str().unwrap().to_string(),
+    );
+    args.extend_from_slice(&["-I", &inc, &file, "-o", &out]);
+    gcc(&args);
+    so
+}
+
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("firemedium-c-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -155,24 +176,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
 
 #[test]
 fn an_abi_mismatch_names_both_versions() {
-    let include = root().join("plugin/abi/include");
-    let so = tmp(&format!(
-        "{}fake{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
-    gcc(&[
-        "-std=c99",
-        "-Wall",
-        "-Werror",
-        "-shared",
-        "-fPIC",
-        "-I",
-        include.to_str().unwrap(),
-        root().join("tests/c/fake_plugin.c").to_str().unwrap(),
-        "-o",
-        so.to_str().unwrap(),
-    ]);
+    let so = c_plugin("fake", "tests/c/fake_plugin.c", &[]);
     // SAFETY: files this test made or chose (a firemedium build, a stale or fake library, or no library at all).
     let e = unsafe { Plugin::load(&so) }.unwrap_err().to_string();
     let needs = format!(
@@ -207,30 +211,16 @@ fn an_abi_mismatch_names_both_versions() {
 fn a_broken_plugin_is_refused_saying_what_is_wrong() {
     // The right version, but no table, a short table, or null entries: each is an error naming the fault, never a
     // crash of the host that loaded it.
-    let include = root().join("plugin/abi/include");
     for (kind, want) in [
         (1, "its firemedium_plugin_entry returned no table (null)"),
         (2, "table declares 16 bytes"),
         (3, "its entry 'last_error' is null"),
     ] {
-        let so = tmp(&format!(
-            "{}broken{kind}{}",
-            std::env::consts::DLL_PREFIX,
-            std::env::consts::DLL_SUFFIX
-        ));
-        gcc(&[
-            "-std=c99",
-            "-Wall",
-            "-Werror",
-            "-shared",
-            "-fPIC",
-            &format!("-DBROKEN={kind}"),
-            "-I",
-            include.to_str().unwrap(),
-            root().join("tests/c/broken_plugin.c").to_str().unwrap(),
-            "-o",
-            so.to_str().unwrap(),
-        ]);
+        let so = c_plugin(
+            &format!("broken{kind}"),
+            "tests/c/broken_plugin.c",
+            &[&format!("-DBROKEN={kind}")],
+        );
         // SAFETY: a library this test built; the loader reads its table and must refuse it before any call.
         let e = unsafe { Plugin::load(&so) }.unwrap_err().to_string();
         assert!(

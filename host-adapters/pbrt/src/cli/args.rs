@@ -11,3 +11,13 @@ pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
     }
     Ok((w, h))
 }
+
+/// A memory size in GB: a finite number above 0.
+pub fn parse_gb(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v < 1e9 => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a memory size in GB (a number above 0, say 4 or 0.5)"
+        )),
+    }
+}

@@ -53,6 +53,9 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// The memory budget in GB for each grid (default: half the machine's memory).
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
+    max_memory: Option<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -126,6 +129,9 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         negative: Policy::from_name("negative", &args.negative)
             .map_err(|e| bad_arg(format!("--negative: {e}")))?,
         frame: args.frame,
+        max_bytes: args
+            .max_memory
+            .map_or_else(firemedium::budget::default_bytes, |gb| (gb * 1e9) as u64),
         ..LoadOptions::default()
     };
     if let Some(s) = &args.sample {

@@ -46,7 +46,7 @@ pub struct RenderArgs {
     white: tonemap::WhiteArg,
     /// The memory budget in GB (default: half the machine's memory): the film, images read and each of the
     /// plugin's grids are checked against it before they are allocated.
-    #[arg(long, value_name = "GB", value_parser = parse_gb)]
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
     max_memory: Option<f64>,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
@@ -191,14 +191,4 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
     };
     let png = exr.with_extension("png");
     (exr, png)
-}
-
-/// A memory size in GB: a finite number above 0.
-fn parse_gb(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v < 1e9 => Ok(v),
-        _ => Err(format!(
-            "'{s}' is not a memory size in GB (a number above 0, say 4 or 0.5)"
-        )),
-    }
 }
