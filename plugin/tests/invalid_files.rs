@@ -333,3 +333,27 @@ fn mutated_files_never_panic() {
     eprintln!("mutations: {ok} loaded, {err} refused with an error, 0 panics");
     assert!(err > 1000 && ok > 100, "{ok} ok, {err} errors");
 }
+
+#[test]
+fn grids_share_one_memory_cap() {
+    // A mutant of the fuzz run (tools/mutants.py: a leaf moved far away) with every float grid asked for: their
+    // active box makes four 2176×128×768 grids (855 MB each). Each passed a 1 GB cap alone and the four together
+    // took 3.2 GB; they now share the cap, refused before anything is allocated.
+    let file = path("fuzz/fuzz_vdb_grids_share_the_cap.vdb");
+    let opts = LoadOptions {
+        max_bytes: 1_000_000_000,
+        ..LoadOptions::default()
+    };
+    let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
+    let sources: Vec<ChannelSource> = grids
+        .iter()
+        .filter(|g| g.loadable)
+        .map(|g| ChannelSource::new(&g.name, file.clone()))
+        .collect();
+    assert_eq!(sources.len(), 4);
+    let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("needs 855638016 bytes, above the memory cap of 250000000 bytes"),
+        "{e}"
+    );
+}

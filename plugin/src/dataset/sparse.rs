@@ -166,9 +166,11 @@ pub(crate) fn densify<S: LeafValues>(
     let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
     let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
     let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
-    // One dense grid per tree, filled in parallel (each leaf's values decoded as it is placed).
+    // One dense grid per tree, filled in parallel (each leaf's values decoded as it is placed). The cap covers
+    // them all: each gets its share (three grids of 1 GB each passed a 1 GB cap one by one).
+    let share = max_bytes / trees.len().max(1) as u64;
     super::par_map(trees, |(_, t, mut source)| {
-        let mut data = alloc_grid(file, dims, max_bytes, t.background)?;
+        let mut data = alloc_grid(file, dims, share, t.background)?;
         let put = |data: &mut [f32], p: [i64; 3], v: f32| {
             let q = [0, 1, 2].map(|k| p[k] - lo[k]);
             if (0..3).all(|k| q[k] >= 0 && (q[k] as usize) < dims[k]) {
