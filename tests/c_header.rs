@@ -229,3 +229,34 @@ fn a_broken_plugin_is_refused_saying_what_is_wrong() {
         );
     }
 }
+
+#[test]
+fn every_entry_refuses_bad_arguments_from_c() {
+    // A C host calling every entry with null handles and buffers, absurd counts, NaN numbers and unknown type
+    // codes: each call fails with a status other than FM_PANIC and a message, and the plugin goes on working.
+    let include = root().join("plugin/abi/include");
+    let exe = tmp("abi_abuse");
+    gcc(&[
+        "-std=c99",
+        "-Wall",
+        "-Werror",
+        "-I",
+        include.to_str().unwrap(),
+        root().join("tests/c/abi_abuse.c").to_str().unwrap(),
+        "-o",
+        exe.to_str().unwrap(),
+        "-ldl",
+        "-lm",
+    ]);
+    let out = Command::new(&exe).arg(plugin_path()).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.lines().count() >= 38 && text.contains("failures 0"),
+        "{text}"
+    );
+}
