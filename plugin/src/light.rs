@@ -121,6 +121,20 @@ impl FireLight {
         };
         let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
         let n = dims[0] * dims[1] * dims[2];
+        // Per voxel: a weight and its dilated copy (4 + 4 bytes) and an occupancy bit with its rank; within
+        // what the volume's budget (`maxbytes`) leaves after its grids and tables.
+        let need = (n as u64).saturating_mul(9);
+        if need > vol.spare_bytes() {
+            return Err(Error::TooLarge {
+                file: "fire light".into(),
+                what: format!(
+                    "the weights of {} × {} × {} voxels",
+                    dims[0], dims[1], dims[2]
+                ),
+                bytes: need,
+                cap: vol.spare_bytes(),
+            });
+        }
         let mut w = Vec::new();
         w.try_reserve_exact(n).map_err(|_| {
             Error::invalid(

@@ -797,7 +797,7 @@ mod tests {
         let mut rng = crate::rng::Rng::new(11);
         let mut grid = || random_grid(dims, &mut rng, |u| 0.5 + u);
         let (d, t, les) = (grid(), grid(), grid());
-        let (lat, _) = Lattice::build(&d, Some(&t), &[&les], 4).expect("a small lattice");
+        let (lat, _) = Lattice::build(&d, Some(&t), &[&les], 4, u64::MAX).expect("a small lattice");
         let lay = Layout::new(&lat, true);
         let mut rng = crate::rng::Rng::new(12);
         let (mut worst, mut checked, mut faces) = (0f64, 0, 0);
@@ -854,7 +854,8 @@ mod tests {
         let mut grid = || random_grid(dims, &mut rng, |u| if u < 0.4 { 0.0 } else { u - 0.45 });
         let (d, t, e1, e2) = (grid(), grid(), grid(), grid());
         for brick in [1, 3, 4, 8, 64] {
-            let (_, ranges) = Lattice::build(&d, Some(&t), &[&e1, &e2], brick).expect("small");
+            let (_, ranges) =
+                Lattice::build(&d, Some(&t), &[&e1, &e2], brick, u64::MAX).expect("small");
             assert_eq!(ranges.len(), 4);
             for (r, g) in ranges.iter().zip([&d, &t, &e1, &e2]) {
                 assert_eq!(
@@ -863,7 +864,7 @@ mod tests {
                     "brick {brick}"
                 );
             }
-            let (_, only_d) = Lattice::build(&d, None, &[], brick).expect("small");
+            let (_, only_d) = Lattice::build(&d, None, &[], brick, u64::MAX).expect("small");
             assert_eq!(
                 only_d,
                 vec![crate::majorant::brick_ranges(d.data(), dims, brick)]

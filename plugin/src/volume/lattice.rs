@@ -34,18 +34,33 @@ impl Lattice {
     /// With it, each grid's majorant brick ranges for bricks of `brick`³ voxels (`majorant::brick_ranges`'s
     /// values, in the order density, temperature, extra), gathered from the slabs as they are copied — while
     /// they are still in cache — rather than by another pass over the grids.
+    ///
+    /// It is an acceleration, so it is also `None` when its bytes would exceed `budget` or the allocator refuses
+    /// them: the volume then marches without it (the same results, slower), never aborts.
     pub(crate) fn build(
         density: &Grid,
         temperature: Option<&Grid>,
         extra: &[&Grid],
         brick: usize,
+        budget: u64,
     ) -> Option<(Lattice, Vec<Ranges>)> {
         let [nx, ny, nz] = density.dims();
         let dims = Lattice::padded(density.dims())?;
         let slab = dims[0] * dims[1];
         let total = slab * dims[2];
-        let mut pairs = vec![0f32; 2 * total];
-        let mut extra_v: Vec<Vec<f32>> = extra.iter().map(|_| vec![0f32; total]).collect();
+        let bytes = (total as u64).saturating_mul(4 * (2 + extra.len() as u64));
+        if bytes > budget {
+            return None;
+        }
+        let zeros = |n: usize| -> Option<Vec<f32>> {
+            let mut v = Vec::new();
+            v.try_reserve_exact(n).ok()?;
+            v.resize(n, 0f32);
+            Some(v)
+        };
+        let mut pairs = zeros(2 * total)?;
+        let mut extra_v: Vec<Vec<f32>> =
+            extra.iter().map(|_| zeros(total)).collect::<Option<_>>()?;
         let threads = crate::par::threads(8);
         // Padded z-slabs 1..=nz hold data; split them over the threads.
         let per = nz.div_ceil(threads).max(1);

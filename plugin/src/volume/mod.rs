@@ -147,6 +147,8 @@ pub struct FireVolume {
     lattice: Option<lattice::Lattice>,
     /// Rays whose tracking stopped at the collision cap (see `integrate::MAX_COLLISIONS`).
     capped: CapCounter,
+    /// Bytes the budget (`maxbytes`) leaves for what is derived from the volume later (its fire light).
+    spare: u64,
     #[cfg(test)]
     fault: String,
 }
@@ -178,19 +180,24 @@ impl FireVolume {
         r.check_names()?;
         let set = Settings::read(&r, list)?;
         let threads = r.int("threads")? as usize;
+        let budget = r.float("maxbytes")? as u64;
         crate::par::with_budget(threads, || {
             let (ds, lescale) = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
             r.finish()?;
-            Self::build(set, ds, lescale, start)
+            Self::build(set, ds, lescale, budget, start)
         })
     }
 
+    /// `budget`: the volume's memory budget (`maxbytes`); what it derives beyond its grids must fit in what the
+    /// grids leave of it.
     fn build(
         set: Settings,
         ds: Dataset,
         lescale: Option<usize>,
+        budget: u64,
         start: Instant,
     ) -> Result<FireVolume, Error> {
+        let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
         let density = channel("density").unwrap_or(0);
         let temperature = channel("temperature");
@@ -267,6 +274,7 @@ impl FireVolume {
                 temperature.map(|k| &ch[k].grid),
                 &grids,
                 brick,
+                spare,
             ) {
                 let order = std::iter::once(density).chain(temperature).chain(extra);
                 for (k, r) in order.zip(ranges) {
@@ -385,6 +393,7 @@ impl FireVolume {
             lanes: None,
             lattice: None,
             capped: CapCounter::default(),
+            spare: 0,
             #[cfg(test)]
             fault: set.fault,
         };
@@ -408,6 +417,7 @@ impl FireVolume {
                 }
             }
         }
+        vol.spare = spare.saturating_sub(vol.tables.iter().map(|t| t.bytes as u64).sum());
         vol.build_seconds = start.elapsed().as_secs_f64();
         Ok(vol)
     }
@@ -480,6 +490,11 @@ impl FireVolume {
         Some([s.min as f64, s.max as f64])
     }
 
+    /// Bytes of the volume's memory budget (`maxbytes`) left after its grids and tables: what a fire light built
+    /// from it may take.
+    pub fn spare_bytes(&self) -> u64 {
+        self.spare
+    }
     /// Whether anything in the volume can emit: some temperature (or constant `Le`) with a non-zero emission
     /// table, or species. A fire light of a volume that cannot emit is refused before it allocates per voxel.
     pub fn can_emit(&self) -> bool {

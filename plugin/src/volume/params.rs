@@ -42,7 +42,7 @@ pub static DATASET: Component = Component {
         p("rawdims", T::Integer, "256 256 256", "voxels", Range::Between(1.0, 1048576.0), "Dims of a headerless raw file."),
         p("nonfinite", T::String, "error", "", Range::Choices(&["error", "zero"]), "NaN or infinite values: refuse the file, or replace by 0 (counted)."),
         p("negative", T::String, "error", "", Range::Choices(&["error", "zero"]), "Negative density, temperature or species values: refuse, or replace by 0."),
-        p("maxbytes", T::Float, "8589934592", "bytes", Range::Above(0.0), "Refuse any grid larger than this (checked before allocating)."),
+        p("maxbytes", T::Float, "8589934592", "bytes", Range::Above(0.0), "The volume's memory budget, checked before allocating: a file's grids share it (refused beyond it), the march lattice is built only within what they leave (else the volume marches without it), and the fire light must fit in what remains."),
         p("frame", T::Integer, "", "", Range::Between(-1e9, 1e9), "Frame number substituted into a patterned file name."),
         p("interpolation", T::String, "trilinear", "", Range::Choices(&["trilinear", "nearest"]), "Lookup between voxel centres."),
         p("p0", T::Point3, "", "medium units", Range::Any, "Lower corner of the grid's box (inline grids, formats without a transform; default 0,0,0)."),

@@ -746,3 +746,43 @@ fn an_optical_depth_beyond_any_fire_is_an_error_naming_where() {
         "{e}"
     );
 }
+
+#[test]
+fn the_budget_covers_what_the_volume_derives() {
+    // A 4³ trilinear fire whose grids (2 × 256 bytes) fit `maxbytes` but whose march lattice (6³ padded voxels
+    // × 8 bytes) does not: it marches without the lattice — the same answer within f32 rounding — and its fire
+    // light, which would not fit either, is refused naming the budget.
+    let build = |maxbytes: f64| {
+        FireVolume::new(&[
+            Param::floats("density", &[1e-6; 64]),
+            Param::floats("temperature", &[1500.0; 64]),
+            Param::int("nx", 4),
+            Param::int("ny", 4),
+            Param::int("nz", 4),
+            Param::float("maxbytes", maxbytes),
+        ])
+        .unwrap()
+    };
+    let tight = build(600.0);
+    let roomy = build(1e9);
+    assert!(tight.lattice.is_none() && roomy.lattice.is_some());
+    let (a, b) = (run(&tight, &ray_x(3)).0, run(&roomy, &ray_x(3)).0);
+    for k in 0..a.len() {
+        assert!(
+            (a[k] / b[k] - 1.0).abs() < 1e-5,
+            "ch {k}: {} vs {}",
+            a[k],
+            b[k]
+        );
+    }
+    let e =
+        crate::light::FireLight::new(std::sync::Arc::new(tight), crate::light::Weighting::Power)
+            .unwrap_err()
+            .to_string();
+    assert!(e.contains("fire light") && e.contains("memory cap"), "{e}");
+    assert!(crate::light::FireLight::new(
+        std::sync::Arc::new(roomy),
+        crate::light::Weighting::Power
+    )
+    .is_ok());
+}
