@@ -783,3 +783,41 @@ fn the_same_render_gives_the_same_bytes_and_cleans_up_after_killed_writers() {
     );
     assert!(!stale.exists(), "the stale temporary is still there");
 }
+
+#[test]
+fn instancing_is_checked_against_the_memory_budget_before_copying() {
+    // An object of 2 000 triangles instanced 1 000 times: 2 million primitives copied (hundreds of MB). With a
+    // 0.1 GB budget it is an error at the instance that would not fit, before anything is copied.
+    let dir = tmp("instances");
+    let mut p = Vec::new();
+    let mut idx = Vec::new();
+    for i in 0..2000 {
+        let x = i as f64 * 0.001;
+        p.extend([format!("{x} 0 0"), format!("{x} 1 0"), format!("{x} 0 1")]);
+        idx.push(format!("{} {} {}", 3 * i, 3 * i + 1, 3 * i + 2));
+    }
+    let mut scene = format!(
+        "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nObjectBegin \"a\"\nShape \"trianglemesh\" \"point3 P\" [{}] \"integer indices\" [{}]\nObjectEnd\n",
+        p.join(" "),
+        idx.join(" ")
+    );
+    for i in 0..1000 {
+        scene +=
+            &format!("AttributeBegin\nTranslate {i} 0 0\nObjectInstance \"a\"\nAttributeEnd\n");
+    }
+    std::fs::write(dir.join("i.pbrt"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(dir.join("i.pbrt"))
+        .args(["--max-memory", "0.1", "-q"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("ObjectInstance \"a\":")
+            && e.contains("primitives needs")
+            && e.contains("memory budget"),
+        "{e}"
+    );
+}

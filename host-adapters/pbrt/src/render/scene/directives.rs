@@ -68,10 +68,12 @@ impl Builder {
                     return Err(err(loc, format!("ObjectInstance \"{n}\" inside object \"{open}\": an instance cannot be part of an object's definition (as pbrt-v4)")));
                 }
                 let first = self.prims.len();
-                let prims =
-                    self.objects.get(&n).cloned().ok_or_else(|| {
+                let count =
+                    self.objects.get(&n).map(Vec::len).ok_or_else(|| {
                         err(loc, format!("ObjectInstance \"{n}\": no such object"))
                     })?;
+                self.room_for_prims(count, &format!("ObjectInstance \"{n}\""), loc)?;
+                let prims = self.objects.get(&n).cloned().unwrap_or_default();
                 let m = affine_f32(&self.st.ctm);
                 for mut p in prims {
                     p.geom = match p.geom {
