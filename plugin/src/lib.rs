@@ -26,6 +26,7 @@ pub use firemedium_core::{
     blackbody, ciddor, cie, constants, quadrature, rng, soot, species, spectrum,
 };
 
+mod alloc;
 pub mod dataset;
 pub mod error;
 #[allow(unsafe_code)]

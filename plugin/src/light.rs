@@ -135,8 +135,7 @@ impl FireLight {
                 cap: vol.spare_bytes(),
             });
         }
-        let mut w = Vec::new();
-        w.try_reserve_exact(n).map_err(|_| {
+        let mut w = crate::alloc::filled(n, 0f32).ok_or_else(|| {
             Error::invalid(
                 "light",
                 "fire",
@@ -144,7 +143,6 @@ impl FireLight {
                 "a grid whose per-voxel weights (4 bytes each) the allocator can hold",
             )
         })?;
-        w.resize(n, 0f32);
         let (mut pw, mut plm) = (0.0, 0.0);
         // Soot power depends on T only: memoise per 0.5 K.
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();

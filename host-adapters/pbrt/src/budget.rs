@@ -26,20 +26,6 @@ pub fn check(what: &str, count: u64, size: u64, budget: u64) -> Result<(), Strin
     }
 }
 
-/// A vector of `n` copies of `value`, allocated fallibly: an error naming `what` instead of an abort when the
-/// allocator says no.
-pub fn filled<T: Clone>(what: &str, n: usize, value: T) -> Result<Vec<T>, String> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|_| {
-        format!(
-            "{what}: cannot allocate {n} items of {} bytes",
-            std::mem::size_of::<T>()
-        )
-    })?;
-    v.resize(n, value);
-    Ok(v)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -55,7 +41,5 @@ mod tests {
         let e = check("x", u64::MAX, 2, u64::MAX).unwrap_err();
         assert!(e.contains("more than 2^64"), "{e}");
         assert!(default_bytes() >= 1 << 20);
-        assert!(filled::<u8>("huge", usize::MAX, 0).is_err());
-        assert_eq!(filled("three", 3, 7u8).unwrap(), vec![7, 7, 7]);
     }
 }

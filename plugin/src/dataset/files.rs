@@ -63,15 +63,13 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
         });
     }
     let alloc = |len: u64| -> Result<Vec<u8>, Error> {
-        let mut buf = Vec::new();
         usize::try_from(len)
             .ok()
-            .and_then(|n| buf.try_reserve_exact(n).ok())
+            .and_then(crate::alloc::with_capacity)
             .ok_or_else(|| Error::Io {
                 file: path.display().to_string(),
                 message: format!("{len} bytes: more than this machine can hold"),
-            })?;
-        Ok(buf)
+            })
     };
     #[cfg(unix)]
     {

@@ -89,9 +89,7 @@ pub(crate) fn alloc_grid(
         Some(b) if b <= max_bytes && b > 0 => {
             // Fallible: a grid within the cap that the allocator still refuses is an error, not an abort of the
             // host that loaded the plugin.
-            let n = n.unwrap_or(0) as usize;
-            let mut v = Vec::new();
-            v.try_reserve_exact(n).map_err(|_| Error::TooLarge {
+            crate::alloc::filled(n.unwrap_or(0) as usize, fill).ok_or_else(|| Error::TooLarge {
                 file: file.to_string(),
                 what: format!(
                     "a {}×{}×{} grid of f32 (the allocator refused it)",
@@ -99,9 +97,7 @@ pub(crate) fn alloc_grid(
                 ),
                 bytes: b,
                 cap: max_bytes,
-            })?;
-            v.resize(n, fill);
-            Ok(v)
+            })
         }
         _ => Err(Error::TooLarge {
             file: file.to_string(),

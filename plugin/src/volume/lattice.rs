@@ -52,15 +52,11 @@ impl Lattice {
         if bytes > budget {
             return None;
         }
-        let zeros = |n: usize| -> Option<Vec<f32>> {
-            let mut v = Vec::new();
-            v.try_reserve_exact(n).ok()?;
-            v.resize(n, 0f32);
-            Some(v)
-        };
-        let mut pairs = zeros(2 * total)?;
-        let mut extra_v: Vec<Vec<f32>> =
-            extra.iter().map(|_| zeros(total)).collect::<Option<_>>()?;
+        let mut pairs = crate::alloc::filled(2 * total, 0f32)?;
+        let mut extra_v: Vec<Vec<f32>> = extra
+            .iter()
+            .map(|_| crate::alloc::filled(total, 0f32))
+            .collect::<Option<_>>()?;
         let threads = crate::par::threads(8);
         // Padded z-slabs 1..=nz hold data; split them over the threads.
         let per = nz.div_ceil(threads).max(1);

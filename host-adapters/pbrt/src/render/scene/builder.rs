@@ -2,7 +2,7 @@
 //! builds per directive: media (through the plugin), shapes, materials, spectra from parameters; every
 //! directive's parameters are read through a `ParamDict` and the rest reported (`finish`).
 
-use super::{err, load_plugin, Error, Light, Material, Medium, MediumReport, Tex};
+use super::{err, Error, Light, Material, Medium, MediumReport, Tex};
 use crate::render::pbrt_v4::{self, Kind};
 use crate::render::shapes::{Geom, Prim};
 use crate::render::spectrum::{Bins, S};
@@ -25,7 +25,6 @@ pub(super) struct State {
 pub(super) struct Builder {
     pub(super) dir: PathBuf,
     pub(super) bins: Bins,
-    pub(super) plugin_path: Option<PathBuf>,
     pub(super) plugin: Option<Plugin>,
     pub(super) st: State,
     /// Saved states, with where each was saved (AttributeBegin, TransformBegin, ObjectBegin).
@@ -247,17 +246,12 @@ impl Builder {
         Ok(())
     }
 
-    pub(super) fn plugin(&mut self, loc: &Loc) -> Result<Plugin, Error> {
-        if let Some(p) = &self.plugin {
-            return Ok(p.clone());
-        }
-        let p = match &self.plugin_path {
-            Some(path) => load_plugin(Some(path)),
-            None => load_plugin(None),
-        }
-        .map_err(|e| err(loc, e))?;
-        self.plugin = Some(p.clone());
-        Ok(p)
+    /// The plugin `load` found for the scene's plugin media (from `--plugin`, the first such medium's
+    /// `"string plugin"`, or the environment).
+    pub(super) fn plugin(&self, loc: &Loc) -> Result<Plugin, Error> {
+        self.plugin
+            .clone()
+            .ok_or_else(|| err(loc, "no firemedium plugin was loaded for this medium"))
     }
 
     /// Takes the film's colour from the plugin: the medium's bins must be the renderer's, and the first medium in
@@ -325,10 +319,8 @@ impl Builder {
                 Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
             "fire" | "uniformgrid" | "nanovdb" => {
-                // Parameters pass to the plugin unchanged, but for the type, the plugin file, and relative paths.
-                if let Some(p) = string(params, "plugin") {
-                    self.plugin_path = Some(self.dir.join(p));
-                }
+                // Parameters pass to the plugin unchanged, but for the type, the plugin file (read by `load`'s
+                // pre-scan, which loaded the plugin), and relative paths.
                 let plugin = self.plugin(loc)?;
                 // The plugin reads and checks every parameter itself, reporting any it does not use.
                 params.mark_all_used();

@@ -340,7 +340,6 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut b = Builder {
         dir,
         bins: bins.clone(),
-        plugin_path,
         plugin,
         st: State {
             ctm: DMat4::IDENTITY,
