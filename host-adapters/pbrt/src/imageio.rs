@@ -43,12 +43,48 @@ pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
 /// read (a 373-byte EXR may claim 100 000² pixels).
 pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, String> {
     let file = path.display().to_string();
-    // (A device or FIFO named as an image would never end or block: only regular files.)
-    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
-        return Err(format!(
-            "{file}: cannot read: not a regular file (missing, a directory, device or FIFO)"
-        ));
-    }
+    let kind = match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("exr") => ImageKind::Exr,
+        Some("png") => ImageKind::Png,
+        _ => return Err(format!("{file}: images must be .exr or .png")),
+    };
+    // (A device or FIFO named as an image would never end or block: only regular files, read to their length.)
+    let len = std::fs::metadata(path)
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.len())
+        .ok_or_else(|| {
+            format!(
+                "{file}: cannot read: not a regular file (missing, a directory, device or FIFO)"
+            )
+        })?;
+    crate::budget::check(&format!("{file}: the file"), len, 1, budget)?;
+    let bytes = firemedium_pbrt_parser::read_regular_file(path)
+        .map_err(|e| format!("{file}: cannot read: {e}"))?;
+    decode(&file, &bytes, kind, srgb, budget)
+}
+
+/// The image formats [`decode`] reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageKind {
+    Exr,
+    Png,
+}
+
+/// Decodes an image held in memory (`file` names it in errors). Its pixels must fit in `budget` bytes, checked
+/// from the header before they are allocated; NaN and infinite EXR values are refused.
+pub fn decode(
+    file: &str,
+    bytes: &[u8],
+    kind: ImageKind,
+    srgb: bool,
+    budget: u64,
+) -> Result<RgbImage, String> {
     let fits = |w: usize, h: usize| {
         crate::budget::check(
             &format!("{file}: a {w}×{h} image"),
@@ -57,28 +93,28 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
             budget,
         )
     };
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-    {
-        Some("exr") => {
+    match kind {
+        ImageKind::Exr => {
             use exr::prelude::*;
-            let meta = exr::meta::MetaData::read_from_file(path, false)
+            let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
                 .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
             for h in &meta.headers {
                 let size = h.layer_size;
                 fits(size.width(), size.height())?;
             }
-            let img = read_first_rgba_layer_from_file(
-                path,
-                |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-                |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                    px[pos.x() + *w * pos.y()] = [r, g, b]
-                },
-            )
-            .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+            let img = read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .rgba_channels(
+                    |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+                    |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                        px[pos.x() + *w * pos.y()] = [r, g, b]
+                    },
+                )
+                .first_valid_layer()
+                .all_attributes()
+                .from_buffered(std::io::Cursor::new(bytes))
+                .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
             let (w, px) = img.layer_data.channel_data.pixels;
             let h = px.len().checked_div(w).unwrap_or(0);
             if px.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
@@ -86,9 +122,8 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
             }
             Ok(RgbImage { w, h, px })
         }
-        Some("png") => {
-            let f = std::fs::File::open(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
-            let mut dec = png::Decoder::new(std::io::BufReader::new(f));
+        ImageKind::Png => {
+            let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
             dec.set_transformations(png::Transformations::EXPAND);
             let mut r = dec
                 .read_info()
@@ -131,7 +166,6 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
                 .collect();
             Ok(RgbImage { w, h, px })
         }
-        _ => Err(format!("{file}: images must be .exr or .png")),
     }
 }
 

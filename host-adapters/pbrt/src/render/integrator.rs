@@ -281,7 +281,7 @@ impl Integrator<'_> {
                 }
             }
             let Some(h) = hit else { return (tr, l) };
-            let prim = &self.scene.bvh.prims[h.prim];
+            let prim = self.scene.bvh.prim(&h);
             if prim.material.is_some() {
                 return (S::ZERO, l);
             }
@@ -599,7 +599,7 @@ impl Integrator<'_> {
                 }
                 break;
             };
-            let prim = &sc.bvh.prims[h.prim];
+            let prim = sc.bvh.prim(&h);
             if let Some(li) = prim.area_light {
                 if specular {
                     if let Light::Area {

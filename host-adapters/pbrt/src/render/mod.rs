@@ -169,7 +169,7 @@ pub fn surface_mask(sc: &scene::Scene, rng: &mut Rng) -> Vec<bool> {
                     let (o, d) = camera_ray(sc, x + u, y + v, rng);
                     sc.bvh
                         .intersect(o, d, sc.eps, f32::INFINITY)
-                        .and_then(|hit| sc.bvh.prims[hit.prim].material)
+                        .and_then(|hit| sc.bvh.prim(&hit).material)
                         .is_some_and(|m| matches!(sc.materials[m], scene::Material::Diffuse(_)))
                 })
         })

@@ -110,6 +110,11 @@ pub fn read(path: &Path) -> Result<Mesh, String> {
     let file = path.display().to_string();
     let data = firemedium_pbrt_parser::read_regular_file(path)
         .map_err(|e| format!("{file}: cannot read: {e}"))?;
+    parse(&file, &data)
+}
+
+/// Parses a PLY mesh held in memory (`file` names it in errors).
+pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
     let end = data
         .windows(10)
         .position(|w| w == b"end_header")
@@ -182,11 +187,11 @@ pub fn read(path: &Path) -> Result<Mesh, String> {
         }
     }
     let mut r = Reader {
-        data: &data,
+        data,
         pos: body_start,
         ascii,
         big,
-        file: file.clone(),
+        file: file.to_string(),
     };
     let (mut pos, mut normals, mut uvs, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for el in &elements {

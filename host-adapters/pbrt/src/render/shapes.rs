@@ -1,9 +1,12 @@
 //! Shapes and their BVH: triangles (from `trianglemesh`, `bilinearmesh`, `plymesh`), and analytic `sphere`,
 //! `disk` and `cylinder` in their object space. The BVH is obvhs's BVH2 (PLOC build) over primitive boxes.
+//! Object instances are one primitive each that points at their object's own BVH (shared, never copied), with
+//! the instance's transform: pbrt-v4's two-level scheme, so memory grows with the objects, not the instances.
 
 use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::{aabb::Aabb, bvh2::Bvh2, ray::Ray as BRay, ray::RayHit, Boundable, BvhBuildParams};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// Geometry of one primitive.
 #[derive(Debug, Clone)]
@@ -32,6 +35,12 @@ pub enum Geom {
         zmin: f32,
         zmax: f32,
     },
+    /// An `ObjectInstance`: the object's primitives under `to_world`, shared by every instance of it.
+    Instance {
+        to_world: Affine3A,
+        to_obj: Affine3A,
+        object: Arc<Bvh>,
+    },
 }
 
 /// A primitive with what the renderer attaches to it.
@@ -57,7 +66,10 @@ pub struct Hit {
     /// Shading normal, on the side of `ng`.
     pub ns: Vec3A,
     pub uv: Vec2,
+    /// The scene's primitive that was hit (an instance, for a hit inside one)...
     pub prim: usize,
+    /// ...and, inside an instance, the object's primitive (see [`Bvh::prim`]).
+    pub part: Option<usize>,
 }
 
 impl Boundable for Prim {
@@ -87,6 +99,12 @@ impl Boundable for Prim {
                 Vec3A::new(-r, -r, *zmin),
                 Vec3A::new(*r, *r, *zmax),
             ),
+            Geom::Instance {
+                to_world, object, ..
+            } => {
+                let b = object.bounds();
+                box_of(to_world, b.min, b.max)
+            }
         }
     }
 }
@@ -197,14 +215,34 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             }
             f32::INFINITY
         }
+        Geom::Instance { to_obj, object, .. } => {
+            // The object-space ray keeps the parameter t (its direction is not renormalised).
+            let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+            object
+                .nearest(oo, dd, tmin, tmax)
+                .map_or(f32::INFINITY, |(t, _)| t)
+        }
     }
 }
 
-/// Hit details at parameter t.
-pub fn hit_at(prims: &[Prim], id: usize, o: Vec3A, d: Vec3A, t: f32) -> Hit {
+/// Hit details at parameter t; `part` is the object's primitive when `prims[id]` is an instance.
+pub fn hit_at(prims: &[Prim], id: usize, part: Option<usize>, o: Vec3A, d: Vec3A, t: f32) -> Hit {
     let pr = &prims[id];
     let p = o + d * t;
     let (mut ng, mut ns, uv) = match &pr.geom {
+        Geom::Instance { to_obj, object, .. } => {
+            let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+            let inner = hit_at(&object.prims, part.unwrap_or(0), None, oo, dd, t);
+            return Hit {
+                t,
+                p,
+                ng: normal_to_world(to_obj, inner.ng),
+                ns: normal_to_world(to_obj, inner.ns),
+                uv: inner.uv,
+                prim: id,
+                part: Some(inner.prim),
+            };
+        }
         Geom::Triangle { p: v, n, uv } => {
             let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
             // Barycentrics of p.
@@ -282,6 +320,7 @@ pub fn hit_at(prims: &[Prim], id: usize, o: Vec3A, d: Vec3A, t: f32) -> Hit {
         ns,
         uv,
         prim: id,
+        part: None,
     }
 }
 
@@ -354,6 +393,9 @@ pub fn sample_area(pr: &Prim, u: [f32; 2]) -> (Vec3A, Vec3A, f32) {
                 1.0 / area,
             )
         }
+        // Instances are never area lights (the builder warns and leaves the light out, as pbrt-v4 does): an
+        // infinite pdf is a sample that contributes nothing.
+        Geom::Instance { to_world, .. } => (to_world.translation, Vec3A::Z, f32::INFINITY),
     }
 }
 
@@ -388,19 +430,74 @@ impl Bvh {
 
     /// The nearest hit in (tmin, tmax).
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+        let (t, (pid, part)) = self.nearest_part(o, d, tmin, tmax)?;
+        Some(hit_at(&self.prims, pid, part, o, d, t))
+    }
+
+    /// The primitive a hit is on: the object's own one for a hit inside an instance, which carries the
+    /// material, the medium interface and the orientation.
+    pub fn prim(&self, hit: &Hit) -> &Prim {
+        match (&self.prims[hit.prim].geom, hit.part) {
+            (Geom::Instance { object, .. }, Some(part)) => &object.prims[part],
+            _ => &self.prims[hit.prim],
+        }
+    }
+
+    /// The box around every primitive (empty: a point at the origin).
+    pub fn bounds(&self) -> Aabb {
+        match &self.bvh {
+            Some(b) if !b.nodes.is_empty() => *b.nodes[0].aabb(),
+            _ => Aabb {
+                min: Vec3A::ZERO,
+                max: Vec3A::ZERO,
+            },
+        }
+    }
+
+    /// The nearest hit's parameter and primitive index.
+    fn nearest(&self, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, usize)> {
+        self.nearest_part(o, d, tmin, tmax)
+            .map(|(t, (pid, _))| (t, pid))
+    }
+
+    /// The nearest hit's parameter, primitive index and, inside an instance, the object's primitive index.
+    fn nearest_part(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<(f32, (usize, Option<usize>))> {
         let bvh = self.bvh.as_ref()?;
         let mut hit = RayHit::none();
         let ray = BRay::new(o, d, tmin, tmax);
         let prims = &self.prims;
+        let mut part = None;
         let found = bvh.ray_traverse(ray, &mut hit, |r, id| {
             let pid = bvh.primitive_indices[id] as usize;
-            intersect_t(&prims[pid].geom, o, d, tmin, r.tmax)
+            match &prims[pid].geom {
+                Geom::Instance { to_obj, object, .. } => {
+                    let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+                    match object.nearest(oo, dd, tmin, r.tmax) {
+                        // The traversal keeps t exactly when t < r.tmax, and so does this.
+                        Some((t, inner)) if t < r.tmax => {
+                            part = Some(inner);
+                            t
+                        }
+                        _ => f32::INFINITY,
+                    }
+                }
+                g => intersect_t(g, o, d, tmin, r.tmax),
+            }
         });
         if !found || !hit.t.is_finite() {
             return None;
         }
         let pid = bvh.primitive_indices[hit.primitive_id as usize] as usize;
-        Some(hit_at(prims, pid, o, d, hit.t))
+        let part = matches!(prims[pid].geom, Geom::Instance { .. })
+            .then_some(part)
+            .flatten();
+        Some((hit.t, (pid, part)))
     }
 }
 

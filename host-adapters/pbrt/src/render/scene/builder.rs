@@ -4,13 +4,14 @@
 
 use super::{err, Error, Light, Material, Medium, MediumReport, Tex};
 use crate::render::pbrt_v4::{self, Kind};
-use crate::render::shapes::{Geom, Prim};
+use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::{Bins, S};
 use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
 use firemedium_pbrt_parser::{Loc, Param, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Clone)]
 pub(super) struct State {
@@ -45,7 +46,9 @@ pub(super) struct Builder {
     pub(super) maxdepth: usize,
     pub(super) film_name: Option<String>,
     pub(super) warnings: Vec<String>,
-    pub(super) objects: HashMap<String, Vec<Prim>>,
+    pub(super) objects: HashMap<String, Arc<Bvh>>,
+    /// Primitives held by the objects defined so far (each once, however often it is instanced).
+    pub(super) object_prims: usize,
     pub(super) current_object: Option<(String, Vec<Prim>)>,
     pub(super) bins_params: Vec<LParam>,
     /// Threads the plugin may use to build a medium (`Overrides::threads`).
@@ -179,6 +182,7 @@ impl Builder {
             reverse: self.st.reverse,
         };
         if let Some((_, objs)) = self.current_object.as_mut() {
+            // An object's primitives are no area lights (pbrt-v4 leaves them out too; `shape` warns).
             objs.push(prim);
             return;
         }
@@ -194,12 +198,15 @@ impl Builder {
     }
 
     /// An error unless `n` more primitives (with their BVH nodes) fit in the memory budget beside the scene's:
-    /// checked before they are made (instancing copies its object's primitives, so a 253 KB scene of instances
-    /// grew to 1.7 GB).
+    /// checked before they are made (a mesh by its face count; an instance is one primitive over its object's
+    /// shared BVH).
     pub(super) fn room_for_prims(&self, n: usize, what: &str, loc: &Loc) -> Result<(), Error> {
         // A primitive, its BVH leaf reference and its share of the nodes: about 2.5 × its own size.
         let each = (std::mem::size_of::<Prim>() as u64) * 5 / 2;
-        let total = (self.prims.len() as u64).saturating_add(n as u64);
+        let open = self.current_object.as_ref().map_or(0, |(_, o)| o.len());
+        let total = [self.prims.len(), self.object_prims, open, n]
+            .iter()
+            .fold(0u64, |a, &k| a.saturating_add(k as u64));
         crate::budget::check(
             &format!("{what}: {total} primitives"),
             total,
@@ -386,6 +393,10 @@ impl Builder {
     }
 
     pub(super) fn shape(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<(), Error> {
+        if let (Some(_), Some((object, _))) = (self.st.area, &self.current_object) {
+            let m = format!("{ty} in object \"{object}\": area lights are not supported with object instancing (as pbrt-v4): the shape is kept, its emission left out");
+            self.warn(loc, m);
+        }
         let to_world = affine_f32(&self.st.ctm);
         let to_obj = to_world.inverse();
         let first = self.prim_count();

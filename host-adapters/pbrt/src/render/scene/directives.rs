@@ -4,10 +4,11 @@
 use super::builder::{affine_f32, look_at, num, nums, string, Builder};
 use super::{err, Error, Light, Tex};
 use crate::render::pbrt_v4::Kind;
-use crate::render::shapes::Geom;
+use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::S;
 use firemedium_pbrt_parser::{Directive, Loc, ParamDict};
 use glam::{DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
+use std::sync::Arc;
 
 impl Builder {
     pub(super) fn directive(&mut self, d: Directive, loc: &Loc) -> Result<(), Error> {
@@ -58,7 +59,9 @@ impl Builder {
                 let Some((n, prims)) = self.current_object.take() else {
                     return Err(err(loc, "ObjectEnd without ObjectBegin"));
                 };
-                self.objects.insert(n, prims);
+                // One BVH per object, built once and shared by every instance of it.
+                self.object_prims += prims.len();
+                self.objects.insert(n, Arc::new(Bvh::new(prims)));
                 if let Some((s, _)) = self.stack.pop() {
                     self.st = s;
                 }
@@ -67,51 +70,27 @@ impl Builder {
                 if let Some((open, _)) = &self.current_object {
                     return Err(err(loc, format!("ObjectInstance \"{n}\" inside object \"{open}\": an instance cannot be part of an object's definition (as pbrt-v4)")));
                 }
-                let first = self.prims.len();
-                let count =
-                    self.objects.get(&n).map(Vec::len).ok_or_else(|| {
+                let object =
+                    self.objects.get(&n).cloned().ok_or_else(|| {
                         err(loc, format!("ObjectInstance \"{n}\": no such object"))
                     })?;
-                self.room_for_prims(count, &format!("ObjectInstance \"{n}\""), loc)?;
-                let prims = self.objects.get(&n).cloned().unwrap_or_default();
-                let m = affine_f32(&self.st.ctm);
-                for mut p in prims {
-                    p.geom = match p.geom {
-                        Geom::Triangle { p: v, n, uv } => Geom::Triangle {
-                            p: v.map(|x| m.transform_point3a(x)),
-                            n: n.map(|n| n.map(|x| m.transform_vector3a(x).normalize_or_zero())),
-                            uv,
-                        },
-                        Geom::Sphere { to_world, r, .. } => Geom::Sphere {
-                            to_world: m * to_world,
-                            to_obj: (m * to_world).inverse(),
-                            r,
-                        },
-                        Geom::Disk {
-                            to_world, h, r, ri, ..
-                        } => Geom::Disk {
-                            to_world: m * to_world,
-                            to_obj: (m * to_world).inverse(),
-                            h,
-                            r,
-                            ri,
-                        },
-                        Geom::Cylinder {
-                            to_world,
-                            r,
-                            zmin,
-                            zmax,
-                            ..
-                        } => Geom::Cylinder {
-                            to_world: m * to_world,
-                            to_obj: (m * to_world).inverse(),
-                            r,
-                            zmin,
-                            zmax,
-                        },
-                    };
-                    self.prims.push(p);
+                if object.prims.is_empty() {
+                    return Ok(());
                 }
+                self.room_for_prims(1, &format!("ObjectInstance \"{n}\""), loc)?;
+                let first = self.prims.len();
+                let to_world = affine_f32(&self.st.ctm);
+                self.prims.push(Prim {
+                    geom: Geom::Instance {
+                        to_world,
+                        to_obj: to_world.inverse(),
+                        object,
+                    },
+                    material: None,
+                    area_light: None,
+                    media: None,
+                    reverse: false,
+                });
                 self.check_bounds(first, &format!("ObjectInstance \"{n}\""), loc)?;
             }
             Directive::Option(p) => self.warn(loc, format!("Option \"{}\" is ignored", p.name)),

@@ -366,6 +366,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         film_name: None,
         warnings: Vec::new(),
         objects: HashMap::new(),
+        object_prims: 0,
         current_object: None,
         bins_params,
         has_fire: fire,
