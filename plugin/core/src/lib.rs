@@ -13,6 +13,7 @@
 //! | [`cie`] | CIE 1931 colour matching, XYZ, sRGB, LMS | CIE 1931, IEC 61966-2-1, Hunt–Pointer–Estévez |
 //! | [`spectrum`] | spectral bins | the thesis: equal bins over a range |
 //! | [`quadrature`] | Gauss–Legendre | — |
+//! | [`rgb_spectrum`] | rgb → spectrum (albedo, unbounded, illuminant), D65 | Jakob & Hanika 2019, pbrt-v4, CIE 15:2004 |
 //! | [`rng`] | SplitMix64 | Steele, Lea & Flood 2014 |
 //!
 //! Invariants: no I/O, no `unsafe`, no `Result` in per-sample code (inputs outside a function's domain map to
@@ -27,6 +28,7 @@ pub mod cie;
 pub mod constants;
 pub mod error;
 pub mod quadrature;
+pub mod rgb_spectrum;
 pub mod rng;
 pub mod soot;
 pub mod species;
