@@ -13,24 +13,25 @@ use mutate::{mutate, Rng};
 
 const BUDGET: u64 = 64 << 20;
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-mutated-{}", std::process::id()));
+/// A file in this test's own folder (tests run in parallel, and writers clean up each other's temporaries).
+fn tmp(test: &str, name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-mutated-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
 }
 
 /// Valid files to mutate: (name, bytes, what reads them).
-fn seeds() -> Vec<(&'static str, Vec<u8>, Option<ImageKind>)> {
+fn seeds(test: &str) -> Vec<(&'static str, Vec<u8>, Option<ImageKind>)> {
     let (w, h) = (7, 5);
     let rgb: Vec<[f32; 3]> = (0..w * h)
         .map(|i| [i as f32, 0.5, 1.0 / (1.0 + i as f32)])
         .collect();
-    let exr = tmp("seed.exr");
+    let exr = tmp(test, "seed.exr");
     write_exr(&exr, w, h, &rgb, Some(1500.0)).unwrap();
-    let png8 = tmp("seed8.png");
+    let png8 = tmp(test, "seed8.png");
     let bytes: Vec<u8> = (0..w * h * 3).map(|i| (i * 7) as u8).collect();
     write_png_bytes(&png8, w, h, &bytes, false).unwrap();
-    let png16 = tmp("seed16.png");
+    let png16 = tmp(test, "seed16.png");
     let bytes: Vec<u8> = (0..w * h * 6).map(|i| (i * 13) as u8).collect();
     write_png_bytes(&png16, w, h, &bytes, true).unwrap();
     let header = "ply\nformat {F} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
@@ -75,7 +76,7 @@ fn read(name: &str, bytes: &[u8], kind: Option<ImageKind>) -> Result<usize, Stri
 
 #[test]
 fn the_seeds_read_back() {
-    for (name, bytes, kind) in seeds() {
+    for (name, bytes, kind) in seeds("seeds") {
         let n = read(name, &bytes, kind).unwrap_or_else(|e| panic!("{e}"));
         // 35 pixels, or 3 + 6 triangle indices (the quad split in two).
         assert_eq!(n, if kind.is_some() { 35 } else { 9 }, "{name}");
@@ -86,7 +87,7 @@ fn the_seeds_read_back() {
 fn mutated_images_and_meshes_never_panic() {
     let mut rng = Rng::new(2027);
     let (mut ok, mut err) = (0, 0);
-    for (name, bytes, kind) in seeds() {
+    for (name, bytes, kind) in seeds("mutants") {
         for i in 0..1200 {
             let m = mutate(&mut rng, &bytes);
             match std::panic::catch_unwind(|| read(name, &m, kind)) {
@@ -109,7 +110,7 @@ fn mutated_images_and_meshes_never_panic() {
 #[test]
 fn an_image_header_claiming_more_than_the_budget_is_refused_before_its_pixels() {
     // A PNG whose IHDR claims 60 000 × 60 000 pixels (43 GB as f32 RGB) in 57 bytes.
-    let png8 = tmp("huge.png");
+    let png8 = tmp("huge", "huge.png");
     write_png_bytes(&png8, 1, 1, &[1, 2, 3], false).unwrap();
     let mut b = std::fs::read(png8).unwrap();
     b[16..20].copy_from_slice(&60_000u32.to_be_bytes());

@@ -121,7 +121,7 @@ fn a_pbrt_uniformgrid_pixel_matches_the_plugins_integration() {
         .map(|i| format!("{}", 1200.0 + 600.0 * ((i * 5 % 13) as f64 / 13.0)))
         .collect();
     let scene = format!(
-        "LookAt 0 -30 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.05\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" {n} \"integer ny\" {n} \"integer nz\" {n} \"float density\" [{}] \"float temperature\" [{}] \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"spectrum sigma_a\" [0.8] \"float Lescale\" 2\nAttributeBegin\nMediumInterface \"g\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.7\nAttributeEnd\n",
+        "LookAt 0 -30 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.05\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"g\" \"string type\" \"uniformgrid\" \"integer nx\" {n} \"integer ny\" {n} \"integer nz\" {n} \"float density\" [{}] \"float temperature\" [{}] \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"spectrum sigma_a\" [0.8] \"spectrum sigma_s\" [0] \"string integrator\" \"march\" \"float Lescale\" 2\nAttributeBegin\nMediumInterface \"g\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.7\nAttributeEnd\n",
         dens.join(" "),
         temp.join(" ")
     );
@@ -144,7 +144,13 @@ fn a_pbrt_uniformgrid_pixel_matches_the_plugins_integration() {
         Param::point3("p0", [-1.0; 3]),
         Param::point3("p1", [1.0; 3]),
         Param::spectrum("sigma_a", &[0.8]),
+        Param::spectrum("sigma_s", &[0.0]),
+        Param::string("integrator", "march"),
         Param::float("Lescale", 2.0),
+        // A scene without a fire renders over the whole CIE table in 10 nm bins.
+        Param::int("bins", 40),
+        Param::float("lambdamin", 380.0),
+        Param::float("lambdamax", 780.0),
     ])
     .unwrap();
     // The pixel at (w/2, h/2) covers a tiny cone around the axis; the central ray is representative to ≪1 %.
@@ -155,7 +161,7 @@ fn a_pbrt_uniformgrid_pixel_matches_the_plugins_integration() {
         t1: 100.0,
         seed: 1,
     };
-    let (mut l, mut t) = (vec![0.0; 30], vec![0.0; 30]);
+    let (mut l, mut t) = (vec![0.0; 40], vec![0.0; 40]);
     v.integrate(&ray, &mut l, &mut t);
     let want: f64 = v.channel_xyz().iter().zip(&l).map(|(w, x)| w.y * x).sum();
     assert!(want > 0.0);
@@ -371,8 +377,8 @@ fn environment_maps_light_the_right_directions() {
             let (_, _, px) = read_exr(&render(&f, &[]));
             let y = mean_y(&px);
             if want_bright {
-                // 2 × a flat spectrum over 400–700 nm: Y = 2 · 683 · ∫₄₀₀⁷⁰⁰ ȳ ≈ 1.45e5 cd/m².
-                assert!(y > 1.3e5 && y < 1.6e5, "{map} looking {look}: Y {y}");
+                // pbrt-v4: a texel (2, 2, 2) is twice the colour space's illuminant scaled to 1 nit: Y = 2.
+                assert!((y / 2.0 - 1.0).abs() < 1e-3, "{map} looking {look}: Y {y}");
             } else {
                 assert!(y < 1e-6, "{map} looking {look}: Y {y}");
             }
@@ -422,8 +428,8 @@ fn a_thick_scattering_emitting_medium_is_in_equilibrium() {
         let f = dir.join(format!("{name}.pbrt"));
         std::fs::write(&f, scene).unwrap();
         let y = mean_y(&read_exr(&render(&f, &[])).2);
-        // L_e = 1 flat over 400–700 nm: Y = 683 ∫₄₀₀⁷⁰⁰ ȳ dλ.
-        let want = 683.0 * firemedium_plugin::cie::cmf_integral(400.0, 700.0).y;
+        // pbrt-v4 scales a homogeneous medium's Le to luminance 1 ("equivalent to 1 nit") times Lescale: Y = 1.
+        let want = 1.0;
         eprintln!("equilibrium ({name}): Y/Y(L_e) = {:.4}", y / want);
         assert!((y / want - 1.0).abs() < 0.02, "{name}: {y} vs {want}");
     }
@@ -442,16 +448,20 @@ fn a_pbrt_nanovdb_scene_like_explosion_pbrt_renders() {
     );
     std::fs::write(dir.join("kaboom.pbrt"), scene).unwrap();
     let (w, h, px) = read_exr(&render(&dir.join("kaboom.pbrt"), &["--stats"]));
-    assert!(
-        px.iter()
-            .all(|p| p.iter().all(|c| c.is_finite() && *c >= -1e-3)),
-        "non-finite pixels"
-    );
+    let bad: Vec<_> = px
+        .iter()
+        // (A hot fire's colour lies outside sRGB: blue a little below zero, relative to red.)
+        .filter(|p| {
+            !p.iter()
+                .all(|c| c.is_finite() && *c >= -0.05 * p[0].max(1e-3))
+        })
+        .collect();
+    assert!(bad.is_empty(), "non-finite pixels: {bad:?}");
     let centre = luminance(px[w / 2 + w * (h / 2)]);
     let corner = luminance(px[0]);
     eprintln!("nanovdb plume: centre Y {centre:.4e}, corner (sky) Y {corner:.4e}");
     // Albedo ½, τ ≈ 14 across and maxdepth 5 (explosion.pbrt's settings): little of the hot core's light gets
-    // out; measured 3× the sky at the centre.
+    // out; measured 3× the sky at the centre when the grid was divided by ∫ȳ = 106.86, pbrt-v4's level is 106.86× that.
     assert!(
         centre > 2.0 * corner && corner > 0.0,
         "the plume should glow against the sky: {centre} vs {corner}"

@@ -23,7 +23,7 @@
 
 #![deny(unsafe_code)]
 pub use firemedium_core::{
-    blackbody, ciddor, cie, constants, quadrature, rng, soot, species, spectrum,
+    blackbody, ciddor, cie, constants, quadrature, rgb_spectrum, rng, soot, species, spectrum,
 };
 
 mod alloc;

@@ -31,4 +31,3 @@ pub fn luminance(p: [f32; 3]) -> f64 {
 pub fn mean_y(px: &[[f32; 3]]) -> f64 {
     px.iter().map(|p| luminance(*p)).sum::<f64>() / px.len() as f64
 }
-

@@ -118,7 +118,9 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize
                 *v = ((*v as f64 - tmap.pbrt_offset) * tmap.scale) as f32;
             }
         }
-        let les = lescale_values.filter(|v| v.len() > 1).map(|v| to32(&v));
+        let les = lescale_values
+            .filter(|v| v.len() > 1 || dims == [1, 1, 1])
+            .map(|v| to32(&v));
         let mut arrays: Vec<(&str, &[f32])> = vec![("density", &dens)];
         if let Some(t) = &temp {
             arrays.push(("temperature", t));
@@ -207,4 +209,15 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize
     };
     ds = ds.with_interpolation(interp);
     Ok((ds, lescale))
+}
+
+/// Whether `Lescale` is a per-voxel grid (pbrt-v4: any `Lescale` array of an inline grid is one, a single value
+/// included when the grid is one voxel — it then fades to its faces as the density does) rather than one factor.
+pub(crate) fn lescale_is_grid(r: &ParamReader) -> Result<bool, Error> {
+    let Some(v) = r.numbers("Lescale")? else {
+        return Ok(false);
+    };
+    let one_voxel =
+        r.numbers("density")?.is_some() && [r.int("nx")?, r.int("ny")?, r.int("nz")?] == [1, 1, 1];
+    Ok(v.len() > 1 || one_voxel)
 }

@@ -329,6 +329,7 @@ mod tests {
             (
                 vec![
                     Param::string("mode", "pbrt"),
+                    Param::string("integrator", "march"),
                     Param::float("stepsize", 3.0),
                     Param::int("brick", 4),
                 ],

@@ -9,8 +9,10 @@
 //!   per unit volume fraction (eq. 5), B Planck's law (eq. 6) and σ̂, ĵ the line cross-sections (eq. 7–12).
 //!   Kirchhoff holds per line and for soot: j = σ_a B.
 //! - **pbrt** mode (pbrt-v4 `uniformgrid`/`nanovdb`): σ_a,c = scale · sigma_a,c · d, σ_s,c = scale ·
-//!   sigma_s,c · d, j_c = σ_a,c · Lescale · B̃_c(T) for T > 100 K with B̃ the peak-normalised blackbody (or a
-//!   constant `Le` spectrum), Lescale possibly a grid. For NanoVDB files rays are clipped, as pbrt-v4 does, to
+//!   sigma_s,c · d (both σ's default to 1, as pbrt-v4's), j_c = σ_a,c · Lescale · B̃_c(T) for T > 100 K with B̃
+//!   the peak-normalised blackbody, not photometrically scaled (an optically thick 2000 K grid records Y = 5.2
+//!   in pbrt-v4), or a constant `Le` spectrum scaled to luminance 1 (rgb: to its rgb's), Lescale possibly a
+//!   grid. For NanoVDB files rays are clipped, as pbrt-v4 does, to
 //!   NanoVDB's world box [T(i_min), T(i_max + 1)], and lookups fade toward the background over the half voxel
 //!   beyond the last samples (NanoVDB's trilinear sampler).
 //!
@@ -19,7 +21,7 @@
 //! - `rgb`: three bands with the CIE 1931 x̄, ȳ, z̄ as weights over 380–780 nm: σ_c is the band's
 //!   Planck-mean of σ(λ) at the local temperature (∫σ B w_c / ∫B w_c, so the optically thin limit j_c and the
 //!   thick limit j_c/σ_c = the band's blackbody are both exact), j_c = K ∫ j(λ) w_c(λ) dλ with K = 683 lm/W, so radiance comes out as XYZ with Y in cd/m² (pbrt
-//!   mode: K = 1/∫ȳ, pbrt's film normalisation). Non-negative weights keep every coefficient non-negative.
+//!   mode: K = 1: pbrt-v4's film records ∫ L ȳ dλ, not divided by ∫ȳ dλ). Non-negative weights keep every coefficient non-negative.
 //!
 //! Each channel's XYZ weights ([`FireVolume::channel_xyz`]) turn radiance into absolute XYZ.
 //!
@@ -58,8 +60,6 @@ use crate::Error;
 use basis::Basis;
 use glam::DVec3;
 use std::time::Instant;
-
-pub use crate::cie::CIE_Y_INTEGRAL;
 
 /// The largest optical depth a voxel may have: a bound on the work of tracking, far above any fire (the paper's
 /// thickest soot is ~10 per voxel).

@@ -3,9 +3,11 @@
 //! dataset's own parameters are read by [`crate::dataset::params`].
 
 use super::basis::Basis;
-use super::{params, ColorMode, Integrator, Mode, CIE_Y_INTEGRAL};
+use super::{params, ColorMode, Integrator, Mode};
 use crate::ciddor::Air;
-use crate::params::{Component, Param, ParamReader, Values};
+use crate::cie::cmf_table::{CMF, CMF_START_NM};
+use crate::params::{Component, Param, ParamReader, ParamType, Values};
+use crate::rgb_spectrum::{RgbSpectrum, RgbUse};
 use crate::soot::SootOptics;
 use crate::species::Element;
 use crate::spectrum::SpectralGrid;
@@ -90,15 +92,24 @@ impl Settings {
             Mode::Physical
         };
         let basis = read_basis(r, mode)?;
-        let sigma_s = spectrum_param(r, "sigma_s", list)?;
+        // pbrt-v4's grid media scatter unless told otherwise (σ_s defaults to 1, as σ_a); the paper's fire does not.
+        let sigma_s = match (spectrum_param(r, "sigma_s", list, RgbUse::Unbounded)?, mode) {
+            (None, Mode::Pbrt) => Some(Box::new(|_: f64| 1.0) as SpectrumFn),
+            (s, _) => s,
+        };
         let emission = match mode {
             Mode::Physical => read_physical(r, list)?,
             Mode::Pbrt => read_pbrt(r, list)?,
         };
         let brick = r.int("brick")? as usize;
         let f32_lanes = r.string("precision")? == "f32";
-        let integrator =
-            Integrator::from_name(&r.string("integrator")?).unwrap_or(Integrator::March);
+        // Unset: the march for the paper's fire; ratio tracking for pbrt-v4's grids, as pbrt-v4 integrates them
+        // (unbiased whatever the optical depth of a step: a 1-voxel grid σ_a = 1000 has τ = 500 per half-voxel
+        // step, where the march's midpoint emission is 80× brighter than the surface layer pbrt-v4 sees).
+        let integrator = Integrator::from_name(&r.string("integrator")?).unwrap_or(match mode {
+            Mode::Physical => Integrator::March,
+            Mode::Pbrt => Integrator::Ratio,
+        });
         let stepsize = r.float("stepsize")?;
         let cutoff = r.float("cutoff")?;
         let g = r.float("g")?;
@@ -134,8 +145,8 @@ impl Settings {
     }
 }
 
-/// The channels: spectral bins over [lambdamin, lambdamax], or XYZ bands; K = 683 lm/W (physical) or 1/∫ȳ
-/// (pbrt's film normalisation).
+/// The channels: spectral bins over [lambdamin, lambdamax], or XYZ bands; K = 683 lm/W (physical: Y in cd/m²)
+/// or 1 (pbrt-v4's film records ∫ L ȳ dλ as it is, with an imaging ratio of 1).
 fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
     let colormode = r.string("colormode")?;
     let grid = SpectralGrid::new(
@@ -163,7 +174,7 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
         ColorMode::Spectral(grid)
     };
     let k = if mode == Mode::Pbrt {
-        1.0 / CIE_Y_INTEGRAL
+        1.0
     } else {
         crate::constants::LUMINOUS_EFFICACY
     };
@@ -247,11 +258,30 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         }
     }
     let scale = r.float("scale")?;
-    let sigma_a = spectrum_param(r, "sigma_a", list)?.unwrap_or_else(|| Box::new(|_| 1.0));
+    let sigma_a =
+        spectrum_param(r, "sigma_a", list, RgbUse::Unbounded)?.unwrap_or_else(|| Box::new(|_| 1.0));
     // A per-voxel Lescale array is a dataset channel (inline grids); then the scalar factor is 1.
-    let per_voxel = r.numbers("Lescale")?.is_some_and(|v| v.len() > 1);
+    let per_voxel = crate::dataset::params::lescale_is_grid(r)?;
     let le_scale = if per_voxel { 1.0 } else { r.float("Lescale")? };
-    let le = spectrum_param(r, "Le", list)?;
+    let le = spectrum_param(r, "Le", list, RgbUse::Illuminant)?;
+    // pbrt-v4 (GridMedium::Create) scales a constant `Le` to luminance 1 ("equivalent to 1 nit"): an rgb one
+    // already is (to the luminance of its rgb); pairs and constants are divided by ∫ Le ȳ dλ here. An `Le` that
+    // is zero everywhere emits nothing.
+    let le = match le {
+        Some(f)
+            if !list
+                .iter()
+                .any(|p| p.name == "Le" && p.ty == ParamType::Rgb) =>
+        {
+            let y: f64 = CMF
+                .iter()
+                .enumerate()
+                .map(|(i, c)| c[1] * f(CMF_START_NM + i as f64))
+                .sum();
+            (y > 0.0).then(|| Box::new(move |l| f(l) / y) as SpectrumFn)
+        }
+        le => le,
+    };
     Ok(Emission::Pbrt {
         scale,
         sigma_a,
@@ -264,11 +294,15 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
 pub(super) type SpectrumFn = Box<dyn Fn(f64) -> f64 + Send + Sync>;
 
 /// A spectrum parameter as a function of λ (nm): one constant, or (λ, value) pairs linear between, zero
-/// outside (pbrt-v4's piecewise-linear spectrum). Gray `rgb` values are constants.
+/// outside (pbrt-v4's piecewise-linear spectrum), or an `rgb` value as pbrt-v4 makes it a spectrum of its use
+/// (core's `rgb_spectrum`: σ's are unbounded spectra; an emission `Le` is an illuminant, the sigmoid times D65
+/// scaled to the luminance of its rgb — pbrt-v4 divides a grid's `Le` by its photometric value, and for an rgb
+/// spectrum that is its illuminant's alone).
 fn spectrum_param(
     r: &ParamReader,
     name: &str,
     list: &[Param],
+    usage: RgbUse,
 ) -> Result<Option<SpectrumFn>, Error> {
     if let Some(p) = list.iter().find(|p| p.name == name) {
         if let Values::Strings(v) = &p.values {
@@ -281,9 +315,16 @@ fn spectrum_param(
         }
         if p.ty == crate::params::ParamType::Rgb {
             if let Values::Numbers(v) = &p.values {
-                if v.len() != 3 || v[0] != v[1] || v[1] != v[2] {
-                    return Err(Error::invalid("volume", name, format!("rgb {v:?}"), "a gray rgb (r = g = b) or a spectrum; coloured rgb needs a spectral uplift this plugin does not do"));
+                if v.len() != 3 || v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+                    return Err(Error::invalid(
+                        "volume",
+                        name,
+                        format!("rgb {v:?}"),
+                        "three finite values >= 0",
+                    ));
                 }
+                let s = RgbSpectrum::new([v[0], v[1], v[2]], usage);
+                return Ok(Some(Box::new(move |l| s.eval(l))));
             }
         }
     }
@@ -298,7 +339,7 @@ fn spectrum_param(
             "finite values",
         ));
     }
-    if v.len() == 1 || (v.len() == 3 && v[0] == v[1] && v[1] == v[2]) {
+    if v.len() == 1 {
         let c = v[0];
         if c < 0.0 {
             return Err(Error::invalid("volume", name, c, "a value >= 0"));

@@ -341,7 +341,9 @@ fn pbrt_mode_is_sigma_times_density_and_normalised_blackbody() {
         1500.0,
         vec![
             Param::string("mode", "pbrt"),
+            Param::string("integrator", "march"),
             Param::spectrum("sigma_a", &[0.5]),
+            Param::spectrum("sigma_s", &[0.0]),
             Param::float("scale", 0.75),
             Param::float("Lescale", 3.0),
         ],
@@ -365,6 +367,19 @@ fn pbrt_mode_is_sigma_times_density_and_normalised_blackbody() {
         );
         assert!((t[k] - (-tau).exp()).abs() < 1e-6);
     }
+    // σ_s defaults to 1 in pbrt mode (pbrt-v4's GridMedium and NanoVDBMedium), as σ_a: τ = 2 · (0.5 + 1) · 0.75.
+    let v = slab_volume(
+        2.0,
+        1500.0,
+        vec![
+            Param::string("mode", "pbrt"),
+            Param::string("integrator", "march"),
+            Param::spectrum("sigma_a", &[0.5]),
+            Param::float("scale", 0.75),
+        ],
+    );
+    let t = run(&v, &ray_x(0)).1;
+    assert!((t[3] - (-2.25f64).exp()).abs() < 1e-6, "{}", t[3]);
     // Below 100 K pbrt emits nothing.
     let cold = slab_volume(2.0, 90.0, vec![Param::string("mode", "pbrt")]);
     assert!(run(&cold, &ray_x(0)).0.iter().all(|&x| x == 0.0));
@@ -374,7 +389,9 @@ fn pbrt_mode_is_sigma_times_density_and_normalised_blackbody() {
         0.0,
         vec![
             Param::string("mode", "pbrt"),
+            Param::string("integrator", "march"),
             Param::spectrum("sigma_a", &[200.0, 10.0, 900.0, 10.0]),
+            Param::spectrum("sigma_s", &[0.0]),
         ],
     );
     assert!((run(&v, &ray_x(0)).1[3] - (-10.0f64).exp()).abs() < 1e-9);
@@ -611,6 +628,7 @@ fn pbrt_nanovdb_clips_to_nanovdbs_world_box() {
         Param::string("filename", f),
         Param::string("mode", "pbrt"),
         Param::spectrum("sigma_a", &[1e-4]),
+        Param::spectrum("sigma_s", &[0.0]),
     ])
     .unwrap();
     let [p0, p1] = v.bounds();

@@ -196,6 +196,7 @@ impl Integrator<'_> {
                 vol,
                 to_medium,
                 to_world,
+                units,
                 ..
             } => {
                 let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
@@ -228,7 +229,7 @@ impl Integrator<'_> {
                         (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
                     })
                 });
-                (S(l), S(t), bent.flatten())
+                (S(l) * *units, S(t), bent.flatten())
             }
             Medium::Homogeneous { sa, ss, le, .. } => {
                 let len = if t_end.is_finite() {
@@ -492,7 +493,11 @@ impl Integrator<'_> {
                 let scatters = matches!(&sc.media[m], Medium::Plugin { scatters: true, .. });
                 if scatters {
                     if let Medium::Plugin {
-                        vol, to_medium, g, ..
+                        vol,
+                        to_medium,
+                        g,
+                        units,
+                        ..
                     } = &sc.media[m]
                     {
                         let n = sc.bins.n();
@@ -513,7 +518,7 @@ impl Integrator<'_> {
                         {
                             break;
                         }
-                        l += beta * S(e) * self.emission_weight(m, mis, d);
+                        l += beta * S(e) * (*units * self.emission_weight(m, mis, d));
                         match ev[0].event {
                             firemedium_abi::FM_EVENT_SCATTERED => {
                                 beta *= S(w);

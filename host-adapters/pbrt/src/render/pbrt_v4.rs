@@ -96,7 +96,7 @@ pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
         (Kind::Integrator, "ambientocclusion") => &["cossample", "maxdistance"],
         (Kind::Integrator, "randomwalk" | "lightpath") => &[],
         (Kind::Light, "point") => &["I", "from"],
-        (Kind::Light, "spot") => &["I", "from", "to", "coneangle", "conedelta"],
+        (Kind::Light, "spot") => &["I", "from", "to", "coneangle", "conedeltaangle"],
         (Kind::Light, "goniometric") => &["I", "filename"],
         (Kind::Light, "projection") => &["fov", "filename"],
         (Kind::Light, "distant") => &["L", "from", "to"],

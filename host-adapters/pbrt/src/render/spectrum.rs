@@ -2,12 +2,15 @@
 //! reflectance and transmittance multiply bin by bin), converted to absolute XYZ only at the film.
 //!
 //! Scene spectra become bins as follows: `spectrum` (λ, value) pairs and `blackbody` are averaged over each bin
-//! exactly; `rgb` values use a simple box uplift (blue below 490 nm, green to 580 nm, red above) — white stays
-//! flat and each channel keeps its energy; saturated colours are approximate (a proper RGB uplift is future work).
+//! exactly; constant `rgb` values become pbrt-v4's spectra of their use (core's `rgb_spectrum`: sigmoid
+//! polynomials as reflectances, unbounded σ's, or illuminants times D65); image textures, whose texels mix
+//! linearly, use a box basis (blue below 490 nm, green to 580 nm, red above: white stays flat, saturated colours
+//! are approximate), times D65 for emitted maps.
 
 use firemedium_core::blackbody::{spectral_radiance, WIEN};
 use firemedium_core::cie;
 use firemedium_core::quadrature::gauss_legendre;
+use firemedium_core::rgb_spectrum::{d65, d65_luminance, RgbSpectrum, RgbUse};
 use firemedium_core::spectrum::SpectralGrid;
 use glam::DVec3;
 
@@ -99,6 +102,21 @@ impl Bins {
             s.0[i] = (gauss_legendre(&f, a, b, 2) / (b - a)) as f32;
         }
         s
+    }
+    /// pbrt-v4's spectrum of an rgb value used as `usage` (illuminants: D65 of luminance 1 for rgb (1, 1, 1)).
+    pub fn uplift(&self, rgb: [f64; 3], usage: RgbUse) -> S {
+        let s = RgbSpectrum::new(rgb, usage);
+        self.bin_means(|l| s.eval(l))
+    }
+    /// CIE D65 scaled to luminance 1 (the default spectrum of pbrt-v4's lights: the colour space's illuminant).
+    pub fn d65(&self) -> S {
+        let y = d65_luminance();
+        self.bin_means(|l| d65(l) / y)
+    }
+    /// The film's luminance of a spectrum (what pbrt-v4's photometric light normalisation divides by, taken over
+    /// the film's own bins so that a normalised light records exactly its luminance).
+    pub fn luminance(&self, s: &S) -> f64 {
+        self.to_xyz(s).y
     }
     /// The box uplift of an RGB triple.
     pub fn uplift_rgb(&self, rgb: [f64; 3]) -> S {

@@ -6,6 +6,7 @@ use super::{err, Error, Light, Material, Medium, MediumReport, Tex};
 use crate::render::pbrt_v4::{self, Kind};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::{Bins, S};
+use firemedium_core::rgb_spectrum::RgbUse;
 use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
 use firemedium_pbrt_parser::{Loc, Param, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
@@ -18,7 +19,8 @@ pub(super) struct State {
     pub(super) ctm: DMat4,
     pub(super) reverse: bool,
     pub(super) material: Option<usize>,
-    pub(super) area: Option<(S, bool)>,
+    /// The area light of the shapes that follow: (L, two-sided, the `power` in W each shape emits, or 0).
+    pub(super) area: Option<(S, bool, f32)>,
     pub(super) inside: String,
     pub(super) outside: String,
 }
@@ -104,12 +106,14 @@ pub(super) fn look_at(v: &[f64; 9]) -> DMat4 {
 }
 
 impl Builder {
-    /// A spectrum-valued parameter: rgb, spectrum (pairs or constant), blackbody; or a texture reference.
+    /// A spectrum-valued parameter: rgb (as pbrt-v4 makes it a spectrum of its `usage`), spectrum (pairs or
+    /// constant), blackbody; or a texture reference.
     pub(super) fn spectrum(
         &self,
         params: &ParamDict,
         name: &str,
         def: Option<S>,
+        usage: RgbUse,
     ) -> Result<Option<Tex>, Error> {
         let Some(p) = params.get(name) else {
             return Ok(def.map(Tex::Const));
@@ -117,7 +121,7 @@ impl Builder {
         let s = match (p.ty.as_str(), &p.values) {
             ("rgb", _) => {
                 let v = p.numbers().unwrap_or(&[]);
-                self.bins.uplift_rgb([v[0], v[1], v[2]])
+                self.bins.uplift([v[0], v[1], v[2]], usage)
             }
             ("spectrum", firemedium_pbrt_parser::Values::Numbers(v)) => self.bins.pairs(v),
             ("blackbody", _) => self.bins.blackbody(p.numbers().unwrap_or(&[0.0])[0]),
@@ -129,6 +133,43 @@ impl Builder {
             (t, _) => return Err(err(&p.loc, format!("\"{t} {name}\": named spectra are not supported; give rgb, (λ, value) pairs or blackbody"))),
         };
         Ok(Some(Tex::Const(s)))
+    }
+
+    /// A constant spectrum of the parameter `name`.
+    pub(super) fn constant(
+        &self,
+        params: &ParamDict,
+        name: &str,
+        def: S,
+        usage: RgbUse,
+    ) -> Result<S, Error> {
+        Ok(self
+            .spectrum(params, name, Some(def), usage)?
+            .map(|t| t.eval(Vec2::ZERO))
+            .unwrap_or(S::ZERO))
+    }
+
+    /// An emitted spectrum as pbrt-v4 scales it "to be equivalent to 1 nit" (`SpectrumToPhotometric`): a light's
+    /// `L`/`I` (default: the colour space's illuminant, D65) or a homogeneous medium's `Le` (default: none),
+    /// divided by its luminance — for an rgb value, by its illuminant's alone, so `rgb L [1 1 1]` records Y = 1
+    /// and `[1 0 0]` the luminance of red — and multiplied by `scale`. Luminances are the film's own (its bins
+    /// and weights), so a normalised light records exactly that.
+    pub(super) fn emitted(
+        &self,
+        params: &ParamDict,
+        name: &str,
+        default_d65: bool,
+        scale: f64,
+    ) -> Result<S, Error> {
+        let white = self.bins.d65();
+        let def = if default_d65 { white } else { S::ZERO };
+        let s = self.constant(params, name, def, RgbUse::Illuminant)?;
+        let rgb = params.get(name).is_some_and(|p| p.ty == "rgb");
+        let y = self.bins.luminance(if rgb { &white } else { &s });
+        if !(y > 0.0) || s.is_black() {
+            return Ok(S::ZERO);
+        }
+        Ok(s * (scale / y) as f32)
     }
 
     /// The bins' box-uplift basis for red, green and blue.
@@ -186,7 +227,16 @@ impl Builder {
             objs.push(prim);
             return;
         }
-        if let Some((l, twosided)) = light {
+        if let Some((mut l, twosided, power)) = light {
+            // pbrt-v4 makes an area light per shape (per triangle of a mesh): `power` is each one's, over its
+            // area A and both sides when two-sided: L · (sides · A · π) = power.
+            if power > 0.0 {
+                let area = 1.0 / crate::render::shapes::sample_area(&prim, [0.5, 0.5]).2;
+                let k = if twosided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
+                if k > 0.0 && k.is_finite() {
+                    l = l * (power / k);
+                }
+            }
             prim.area_light = Some(self.lights.len());
             self.lights.push(Light::Area {
                 prim: self.prims.len(),
@@ -264,14 +314,16 @@ impl Builder {
     /// Takes the film's colour from the plugin: the medium's bins must be the renderer's, and the first medium in
     /// the film's units (a `fire` when the scene has one, else any) gives the XYZ weights of every bin. A further
     /// medium must agree with them up to its units' scale, so a plugin built from another commit, or media that
-    /// project their bins differently, are refused instead of rendering a silently wrong colour.
+    /// project their bins differently, are refused instead of rendering a silently wrong colour. Returns the
+    /// factor that takes the medium's radiance to the film's units (its weights' luminance over the film's:
+    /// 1 in its own units, 1/683 for a pbrt grid beside a fire).
     pub(super) fn check_colour(
         &mut self,
         name: &str,
         fire: bool,
         vol: &Volume,
         loc: &Loc,
-    ) -> Result<(), Error> {
+    ) -> Result<f32, Error> {
         let info = vol.info();
         let (lo, hi) = (self.bins.grid.min_nm(), self.bins.grid.max_nm());
         if (info.lambda_min - lo).abs() > 1e-9 * hi || (info.lambda_max - hi).abs() > 1e-9 * hi {
@@ -283,15 +335,30 @@ impl Builder {
             .into_iter()
             .map(DVec3::from_array)
             .collect();
+        let y = |w: &[DVec3]| w.iter().map(|v| v.y).sum::<f64>();
+        // The film's weights are the renderer's own until the first medium in its units replaces them.
+        let film = match &self.film_xyz {
+            Some((_, want)) => y(want),
+            None => y(&self.bins.xyz),
+        };
+        let units = y(&xyz) / film;
+        let units = if (units - 1.0).abs() < 1e-6 {
+            1.0
+        } else {
+            units as f32
+        };
+        if !(units > 0.0 && units.is_finite()) {
+            return Err(err(loc, format!("medium \"{name}\": its bins' colour weights have luminance {}; expected a positive one", y(&xyz))));
+        }
         match &self.film_xyz {
+            // The medium that sets the film's weights is in the film's units by definition.
             None if fire || !self.has_fire => {
                 self.film_xyz = Some((name.to_string(), xyz));
-                Ok(())
+                Ok(1.0)
             }
-            None => Ok(()),
+            None => Ok(units),
             Some((first, want)) => {
                 // The same projection up to one scale (physical and pbrt units differ by a constant).
-                let y = |w: &[DVec3]| w.iter().map(|v| v.y).sum::<f64>();
                 let k = y(want) / y(&xyz);
                 let worst = want
                     .iter()
@@ -301,7 +368,7 @@ impl Builder {
                     })
                     .fold(0.0, f64::max);
                 if worst.is_finite() && worst < 1e-6 {
-                    Ok(())
+                    Ok(units)
                 } else {
                     Err(err(loc, format!("medium \"{name}\": its bins project to XYZ differently from medium \"{first}\"'s (largest relative difference {worst:.3e}); are both from the same plugin?")))
                 }
@@ -320,9 +387,9 @@ impl Builder {
         let m = match ty.as_str() {
             "homogeneous" => {
                 let scale = num(params, "scale", 1.0) as f32;
-                let sa = self.spectrum(params, "sigma_a", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
-                let ss = self.spectrum(params, "sigma_s", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale;
-                let le = self.spectrum(params, "Le", Some(S::ZERO))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * num(params, "Lescale", 1.0) as f32;
+                let sa = self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)? * scale;
+                let ss = self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)? * scale;
+                let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
                 Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
             "fire" | "uniformgrid" | "nanovdb" => {
@@ -347,6 +414,12 @@ impl Builder {
                         (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
                         (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
                         (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
+                        // pbrt-v4's `BlackbodySpectrum(T)`, peak-normalised, as 1 nm (λ, value) pairs over 360–830.
+                        (firemedium_pbrt_parser::Values::Numbers(v), "blackbody") => {
+                            let t = v.first().copied().unwrap_or(0.0);
+                            let peak = firemedium_core::blackbody::spectral_radiance(t, firemedium_core::blackbody::WIEN / t * 1e9);
+                            Value::Spectrum((360..=830).flat_map(|l| [l as f64, if t > 0.0 && peak > 0.0 { firemedium_core::blackbody::spectral_radiance(t, l as f64) / peak } else { 0.0 }]).collect())
+                        }
                         (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
                     };
                     list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
@@ -380,9 +453,9 @@ impl Builder {
                 if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
-                self.check_colour(name, ty == "fire", &vol, loc)?;
+                let units = self.check_colour(name, ty == "fire", &vol, loc)?;
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
-                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string() }
+                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
             other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
@@ -477,13 +550,13 @@ impl Builder {
         let m = match ty {
             "interface" | "" => return Ok(None),
             "diffuse" => {
-                Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)))
+                Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5), RgbUse::Albedo)?.unwrap_or(Tex::Const(S::ZERO)))
             }
             "coateddiffuse" => {
-                Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5))?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
+                Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5), RgbUse::Albedo)?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
             }
             "conductor" => {
-                let r = self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.9))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO);
+                let r = self.constant(p, "reflectance", self.bins.mask() * 0.9, RgbUse::Albedo)?;
                 Material::Conductor(r)
             }
             "dielectric" | "thindielectric" => {

@@ -6,8 +6,9 @@ use super::{err, Error, Light, Tex};
 use crate::render::pbrt_v4::Kind;
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::S;
+use firemedium_core::rgb_spectrum::RgbUse;
 use firemedium_pbrt_parser::{Directive, Loc, ParamDict};
-use glam::{DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
+use glam::{DMat3, DMat4, DVec3, Mat3A, Vec3A};
 use std::sync::Arc;
 
 impl Builder {
@@ -172,7 +173,7 @@ impl Builder {
             }
             Directive::LightSource(ty, params) => {
                 let p = &ParamDict::new(&params);
-                let scale = num(p, "scale", 1.0) as f32;
+                let scale = num(p, "scale", 1.0);
                 let m = self.st.ctm;
                 let pt = |v: Option<&[f64]>, def: [f64; 3]| {
                     Vec3A::from(
@@ -184,22 +185,32 @@ impl Builder {
                 };
                 let l = match ty.as_str() {
                     "point" => {
-                        Light::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                        // pbrt-v4: I in nits-equivalent ("scale /= SpectrumToPhotometric(I)"), `power` in W over 4π.
+                        let power = num(p, "power", -1.0);
+                        let k = if power > 0.0 { power / (4.0 * std::f64::consts::PI) } else { 1.0 };
+                        Light::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.emitted(p, "I", true, scale * k)? }
                     }
                     "spot" => {
                         let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
                         let cone = num(p, "coneangle", 30.0);
+                        let (cos_total, cos_falloff) = (cone.to_radians().cos(), (cone - num(p, "conedeltaangle", 5.0)).to_radians().cos());
+                        // pbrt-v4's `power`: over the cone, its smooth falloff counted at half.
+                        let power = num(p, "power", -1.0);
+                        let k_e = 2.0 * std::f64::consts::PI * ((1.0 - cos_falloff) + (cos_falloff - cos_total) / 2.0);
+                        let k = if power > 0.0 && k_e > 0.0 { power / k_e } else { 1.0 };
                         Light::Spot {
                             p: from,
                             dir: (to - from).normalize_or_zero(),
-                            cos_total: cone.to_radians().cos() as f32,
-                            cos_falloff: (cone - num(p, "conedelta", 5.0)).to_radians().cos() as f32,
-                            i: self.spectrum(p, "I", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale,
+                            cos_total: cos_total as f32,
+                            cos_falloff: cos_falloff as f32,
+                            i: self.emitted(p, "I", true, scale * k)?,
                         }
                     }
                     "distant" => {
                         let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
-                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale }
+                        // `illuminance` in lux on a surface facing the light.
+                        let e = num(p, "illuminance", -1.0);
+                        Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.emitted(p, "L", true, scale * if e > 0.0 { e } else { 1.0 })? }
                     }
                     "infinite" => {
                         match string(p, "filename") {
@@ -212,9 +223,17 @@ impl Builder {
                                     return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
                                 }
                                 let to_light = Mat3A::from(DMat3::from_mat4(self.st.ctm).inverse().as_mat3());
-                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale, basis: self.rgb_basis() }
+                                // pbrt-v4: each texel is an illuminant rgb (× D65), the map scaled by 1 / the luminance of D65, so a
+                                // texel (1, 1, 1) records Y = 1.
+                                let white = self.bins.d65();
+                                let basis = self.rgb_basis().map(|b| b * white * (1.0 / self.bins.luminance(&white)) as f32);
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: scale as f32, basis }
                             }
-                            None => Light::Infinite { l: self.spectrum(p, "L", Some(self.bins.mask()))?.map(|t| t.eval(Vec2::ZERO)).unwrap_or(S::ZERO) * scale },
+                            None => {
+                                // `illuminance` in lux on an upward-facing patch under the uniform sky: π L.
+                                let e = num(p, "illuminance", -1.0);
+                                Light::Infinite { l: self.emitted(p, "L", true, scale * if e > 0.0 { e / std::f64::consts::PI } else { 1.0 })? }
+                            }
                         }
                     }
                     other => return Err(err(loc, format!("light \"{other}\" is not supported (point, spot, distant, infinite, and area diffuse)"))),
@@ -230,13 +249,9 @@ impl Builder {
                         format!("area light \"{ty}\" is not supported (diffuse)"),
                     ));
                 }
-                let l = self
-                    .spectrum(p, "L", Some(self.bins.mask()))?
-                    .map(|t| t.eval(Vec2::ZERO))
-                    .unwrap_or(S::ZERO)
-                    * num(p, "scale", 1.0) as f32;
+                let l = self.emitted(p, "L", true, num(p, "scale", 1.0))?;
                 let two = p.bool("twosided", false);
-                self.st.area = Some((l, two));
+                self.st.area = Some((l, two, num(p, "power", -1.0).max(0.0) as f32));
                 self.finish(Kind::AreaLight, &ty, "diffuse area light", p)?;
             }
             Directive::Material(ty, params) => {
@@ -272,10 +287,10 @@ impl Builder {
                 let t = match class.as_str() {
                     "checkerboard" => {
                         let a = self
-                            .spectrum(p, "tex1", Some(self.bins.mask()))?
+                            .spectrum(p, "tex1", Some(self.bins.mask()), RgbUse::Albedo)?
                             .unwrap_or(Tex::Const(S::ZERO));
                         let b = self
-                            .spectrum(p, "tex2", Some(S::ZERO))?
+                            .spectrum(p, "tex2", Some(S::ZERO), RgbUse::Albedo)?
                             .unwrap_or(Tex::Const(S::ZERO));
                         Tex::Checker {
                             a: Box::new(a),
@@ -285,7 +300,7 @@ impl Builder {
                         }
                     }
                     "constant" => self
-                        .spectrum(p, "value", Some(self.bins.mask()))?
+                        .spectrum(p, "value", Some(self.bins.mask()), RgbUse::Albedo)?
                         .unwrap_or(Tex::Const(S::ZERO)),
                     "imagemap" => {
                         let f = string(p, "filename").ok_or_else(|| err(loc, "imagemap: missing \"string filename\""))?;

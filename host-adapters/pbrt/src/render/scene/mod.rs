@@ -143,6 +143,9 @@ pub enum Medium {
         scatters: bool,
         g: f64,
         name: String,
+        /// The factor that takes the medium's radiance to the film's units: 1, or 1/683 for a pbrt grid (its
+        /// radiance in pbrt-v4's units, Y = ∫ L ȳ) in a scene whose film is absolute (a fire's, Y = 683 ∫ L ȳ).
+        units: f32,
     },
     /// pbrt's homogeneous medium.
     Homogeneous { sa: S, ss: S, le: S, g: f64 },
@@ -250,7 +253,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
     // photometric scale.
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (mut fire, mut pbrt_media) = (false, false);
+    let mut fire = false;
     let mut plugin_path = ov.plugin.clone();
     let mut first_medium: Option<&Loc> = None;
     for (d, loc) in &c.0 {
@@ -258,7 +261,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
             let p = &ParamDict::new(p);
             match string(p, "type") {
                 Some("fire") => fire = true,
-                Some("uniformgrid" | "nanovdb") => pbrt_media = true,
+                Some("uniformgrid" | "nanovdb") => {}
                 _ => continue,
             }
             first_medium.get_or_insert(loc);
@@ -277,9 +280,13 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         ),
         None => None,
     };
-    let default = SpectralGrid::default();
-    let (mut lo, mut hi, mut n) = (default.min_nm(), default.max_nm(), default.count());
-    if let Some(p) = &plugin {
+    // The bins: a fire's from the plugin's defaults; without one, the whole CIE table (380–780 nm, 10 nm bins),
+    // as pbrt-v4 samples wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's
+    // luminance).
+    let (mut lo, mut hi, mut n) = (380.0, 780.0, 40);
+    if let (Some(p), true) = (&plugin, fire) {
+        let default = SpectralGrid::default();
+        (lo, hi, n) = (default.min_nm(), default.max_nm(), default.count());
         for row in p.parameters() {
             let x = row.default.trim().parse::<f64>();
             match (row.name.as_str(), x) {
@@ -320,12 +327,11 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         ));
     }
     let grid = SpectralGrid::new(lo, hi, n).map_err(|e| format!("{}: {e}", path.display()))?;
-    // Absolute units (683 lm/W) with a fire; pbrt's relative units for scenes of pbrt grid media only.
-    let k = if pbrt_media && !fire {
-        1.0 / firemedium_core::cie::CIE_Y_INTEGRAL
-    } else {
-        683.0
-    };
+    // The film records Y in cd/m² (nits) either way. With a fire, radiance is absolute (683 lm/W); without one it
+    // is in pbrt-v4's units, whose film records ∫ L ȳ dλ as it is (K = 1): a pbrt scene's numbers are pbrt-v4's.
+    // Lights are normalised to their luminance in both (`Builder::emitted`), and a pbrt grid in a fire's scene is
+    // brought to the film's units by its weights' ratio (`Builder::check_colour`).
+    let k = if fire { 683.0 } else { 1.0 };
     let bins = Bins::new(grid, k);
     bins_params.dedup_by(|a, b| a.name == b.name);
     for (name, v) in [("bins", n as f64), ("lambdamin", lo), ("lambdamax", hi)] {
