@@ -199,3 +199,38 @@ fn a_one_voxel_grid_fades_to_its_faces_as_pbrt_v4s() {
         "face centre Y {got}, closed form {want}"
     );
 }
+
+#[test]
+fn a_scene_asking_for_pixel_centres_gets_pixel_centres() {
+    // An `rgb L [1 1 1]` quad over world x ∈ [0.25, 9], seen from far away on an 8 × 2 film one unit per pixel:
+    // its edge runs a quarter into a pixel. With pbrt-v4's "stratified" 1 × 1 without jitter and a box filter,
+    // every pixel is its centre's ray: Y exactly 1 (the light's luminance) or 0, four of each. With random samples
+    // and pbrt-v4's default filter (a Gaussian of radius 1.5), the pixels at the edge blend both.
+    let dir = out_dir("centres");
+    let scene = |sampler: &str| {
+        format!("LookAt 0 0 -100  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 1.14591559\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 2\n{sampler}\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nShape \"trianglemesh\" \"point3 P\" [0.25 -5 0  9 -5 0  9 5 0  0.25 5 0] \"integer indices\" [0 1 2 0 2 3]\nAttributeEnd\n")
+    };
+    let centres = dir.join("centres.pbrt");
+    std::fs::write(&centres, scene("Sampler \"stratified\" \"bool jitter\" false \"integer xsamples\" 1 \"integer ysamples\" 1\nPixelFilter \"box\"")).unwrap();
+    let img = render(&centres, &dir.join("c.exr"), &[]);
+    let cols: Vec<f64> = (0..8)
+        .map(|x| y_of(mean_rgb(&img, (x, x + 1), (0, 2))))
+        .collect();
+    assert!(
+        cols.iter()
+            .all(|y| y.abs() < 1e-4 || (y - 1.0).abs() < 1e-4),
+        "{cols:?}"
+    );
+    assert_eq!(cols.iter().filter(|y| **y > 0.5).count(), 4, "{cols:?}");
+    let blended = dir.join("blended.pbrt");
+    std::fs::write(
+        &blended,
+        scene("Sampler \"independent\" \"integer pixelsamples\" 256"),
+    )
+    .unwrap();
+    let img = render(&blended, &dir.join("b.exr"), &[]);
+    let cols: Vec<f64> = (0..8)
+        .map(|x| y_of(mean_rgb(&img, (x, x + 1), (0, 2))))
+        .collect();
+    assert!(cols.iter().any(|y| *y > 0.05 && *y < 0.95), "{cols:?}");
+}

@@ -4,6 +4,7 @@
 
 pub mod integrator;
 pub mod pbrt_v4;
+pub mod pixel;
 pub mod ply;
 pub mod scene;
 pub mod shapes;
@@ -90,14 +91,27 @@ pub fn render(
                     if INTERRUPTED.load(Ordering::Relaxed) {
                         return None;
                     }
-                    let mut sum = DVec3::ZERO;
+                    let (mut sum, mut weights) = (DVec3::ZERO, 0.0);
+                    // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
+                    let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
                         let mut rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
-                        let (u, v) = (rng.next_f64(), rng.next_f64());
-                        let (o, d) = camera_ray(scene, x as f64 + u, y as f64 + v, &mut rng);
+                        let draw = [rng.next_f64(), rng.next_f64()];
+                        let u = scene.sampler.pixel_sample(s, order, draw);
+                        // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
+                        // the pixel is Σ w L / Σ w).
+                        let (off, w) = scene.filter.sample(u);
+                        let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
+                        let (o, d) = camera_ray(scene, fx, fy, &mut rng);
                         let l = integ.li(o, d, &mut rng);
-                        sum += scene.bins.to_xyz(&l);
+                        sum += scene.bins.to_xyz(&l) * w;
+                        weights += w;
                     }
+                    let sum = if weights != 0.0 {
+                        sum * (scene.spp as f64 / weights)
+                    } else {
+                        DVec3::ZERO
+                    };
                     out.push((x + w * y, sum / scene.spp as f64));
                 }
             }

@@ -45,6 +45,8 @@ pub(super) struct Builder {
     pub(super) camera: Option<(Vec<Param>, DMat4, Option<usize>, Loc)>,
     pub(super) res: (usize, usize),
     pub(super) spp: usize,
+    pub(super) sampler: crate::render::pixel::Sampler,
+    pub(super) filter: crate::render::pixel::Filter,
     pub(super) maxdepth: usize,
     pub(super) film_name: Option<String>,
     pub(super) warnings: Vec<String>,

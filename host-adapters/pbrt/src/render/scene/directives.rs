@@ -3,7 +3,8 @@
 
 use super::builder::{affine_f32, look_at, num, nums, string, Builder};
 use super::{err, Error, Light, Tex};
-use crate::render::pbrt_v4::Kind;
+use crate::render::pbrt_v4::{self, Kind};
+use crate::render::pixel::{Filter, Params as FilterParams, Sampler};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::S;
 use firemedium_core::rgb_spectrum::RgbUse;
@@ -145,7 +146,28 @@ impl Builder {
             }
             Directive::Sampler(ty, params) => {
                 let p = &ParamDict::new(&params);
-                self.spp = num(p, "pixelsamples", 16.0).max(1.0) as usize;
+                if ty == "stratified" {
+                    let side = |name: &str| -> Result<usize, Error> {
+                        let v = num(p, name, 4.0);
+                        if !(1.0..=4096.0).contains(&v) || v.fract() != 0.0 {
+                            return Err(err(loc, format!("sampler \"stratified\": \"integer {name}\" {v}: expected 1 to 4096")));
+                        }
+                        Ok(v as usize)
+                    };
+                    let (xs, ys) = (side("xsamples")?, side("ysamples")?);
+                    self.sampler = Sampler::Stratified {
+                        xs,
+                        ys,
+                        jitter: p.bool("jitter", true),
+                    };
+                    self.spp = xs * ys;
+                } else {
+                    if ty != "independent" && pbrt_v4::parameters(Kind::Sampler, &ty).is_some() {
+                        self.warn(loc, format!("sampler \"{ty}\" is rendered with independent random samples (its convergence rate is not yet this renderer's)"));
+                    }
+                    self.sampler = Sampler::Independent;
+                    self.spp = num(p, "pixelsamples", 16.0).max(1.0) as usize;
+                }
                 self.finish(Kind::Sampler, &ty, &format!("sampler \"{ty}\""), p)?;
             }
             Directive::Integrator(ty, params) => {
@@ -157,13 +179,34 @@ impl Builder {
                 self.finish(Kind::Integrator, &ty, &format!("integrator \"{ty}\""), p)?;
             }
             Directive::PixelFilter(ty, params) => {
-                if ty != "box" {
-                    self.warn(
-                        loc,
-                        format!("pixel filter \"{ty}\" is rendered as a box filter"),
-                    );
-                }
                 let p = &ParamDict::new(&params);
+                let r0 = Filter::default_radius(&ty);
+                let radius = [num(p, "xradius", r0), num(p, "yradius", r0)];
+                if radius.iter().any(|r| !(*r > 0.0 && *r <= 64.0)) {
+                    return Err(err(
+                        loc,
+                        format!(
+                            "pixel filter \"{ty}\": radius {radius:?}: expected 0 < r <= 64 pixels"
+                        ),
+                    ));
+                }
+                let fp = FilterParams {
+                    radius,
+                    sigma: num(p, "sigma", 0.5),
+                    b: num(p, "B", 1.0 / 3.0),
+                    c: num(p, "C", 1.0 / 3.0),
+                    tau: num(p, "tau", 3.0),
+                };
+                if !(fp.sigma > 0.0 && fp.tau > 0.0 && fp.b.is_finite() && fp.c.is_finite()) {
+                    return Err(err(
+                        loc,
+                        format!(
+                            "pixel filter \"{ty}\": sigma {}, tau {}: expected positive values",
+                            fp.sigma, fp.tau
+                        ),
+                    ));
+                }
+                self.filter = Filter::new(&ty, fp).ok_or_else(|| err(loc, format!("pixel filter \"{ty}\" is not a pbrt-v4 filter (box, gaussian, mitchell, sinc, triangle)")))?;
                 self.finish(Kind::PixelFilter, &ty, &format!("pixel filter \"{ty}\""), p)?;
             }
             Directive::Accelerator(..) => {}

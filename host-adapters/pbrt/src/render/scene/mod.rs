@@ -193,6 +193,9 @@ pub struct Scene {
     pub camera: Camera,
     pub res: (usize, usize),
     pub spp: usize,
+    /// Where a pixel's samples fall, and the pixel filter that places and weighs them.
+    pub sampler: crate::render::pixel::Sampler,
+    pub filter: crate::render::pixel::Filter,
     pub maxdepth: usize,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -368,6 +371,19 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         camera: None,
         res: (1280, 720),
         spp: 16,
+        // pbrt-v4's defaults: zsobol (rendered with independent samples here) and a Gaussian of radius 1.5, σ 0.5.
+        sampler: crate::render::pixel::Sampler::Independent,
+        filter: crate::render::pixel::Filter::new(
+            "gaussian",
+            crate::render::pixel::Params {
+                radius: [1.5, 1.5],
+                sigma: 0.5,
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+                tau: 3.0,
+            },
+        )
+        .unwrap_or(crate::render::pixel::Filter::Box { radius: [0.5, 0.5] }),
         maxdepth: 5,
         film_name: None,
         warnings: Vec::new(),
@@ -483,6 +499,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         camera,
         res: b.res,
         spp: ov.spp.unwrap_or(b.spp),
+        sampler: b.sampler,
+        filter: b.filter,
         maxdepth: b.maxdepth,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
