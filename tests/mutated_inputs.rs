@@ -1,5 +1,5 @@
 //! The host's own readers under deterministic mutation: EXR and PNG images (environment maps, image textures,
-//! `compare` and `tonemap` inputs) and PLY meshes. Every mutant must give an image/mesh or a one-line error that
+//! `compare` and `tonemap` inputs) and PLY meshes, plain and gzipped. Every mutant must give an image/mesh or a one-line error that
 //! names the file — never a panic, and never pixels allocated past the budget their header is checked against.
 //! (The dataset readers have their own mutation test in the plugin; the built binary is fuzzed by
 //! tools/mutants.py; fuzz/ holds cargo-fuzz targets over the same entry points.)
@@ -101,6 +101,29 @@ fn mutated_images_and_meshes_never_panic() {
                 }
                 Err(_) => panic!("{name} mutation #{i} panicked"),
             }
+        }
+    }
+    // Gzipped meshes (`.ply.gz`): the gzip member and the mesh inside, inflated within a 1 MB budget.
+    let ascii = &seeds("mutants")[3].1;
+    let mut gz = vec![0x1f, 0x8b, 8, 8, 0, 0, 0, 0, 0, 0xff, b'm', 0];
+    gz.extend(miniz_oxide::deflate::compress_to_vec(ascii, 9));
+    gz.extend([0u8; 4]);
+    gz.extend((ascii.len() as u32).to_le_bytes());
+    for i in 0..1200 {
+        let m = mutate(&mut rng, &gz);
+        let r = std::panic::catch_unwind(|| {
+            ply::gunzip("m.ply.gz", &m, 1 << 20).and_then(|b| ply::parse("m.ply.gz", &b))
+        });
+        match r {
+            Ok(Ok(_)) => ok += 1,
+            Ok(Err(e)) => {
+                assert!(
+                    e.starts_with("m.ply.gz") && !e.contains('\n'),
+                    "gz mutation #{i}: {e}"
+                );
+                err += 1;
+            }
+            Err(_) => panic!("gz mutation #{i} panicked"),
         }
     }
     eprintln!("image and mesh mutations: {ok} read, {err} refused with an error, 0 panics");

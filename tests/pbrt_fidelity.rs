@@ -234,3 +234,64 @@ fn a_scene_asking_for_pixel_centres_gets_pixel_centres() {
         .collect();
     assert!(cols.iter().any(|y| *y > 0.05 && *y < 0.95), "{cols:?}");
 }
+
+#[test]
+fn an_orthographic_view_of_partial_spheres_covers_their_projected_area() {
+    // Orthographic from above, the screen window 4 × 4 units on 64 × 64 pixels: an emitting sphere of radius 1
+    // (rgb L [1 1 1]: luminance 1) covers π/16 of the image whatever its distance; its upper half (zmin 0) the
+    // same disk; the half of that with φ ≤ 180° (phimax) half the disk.
+    let dir = out_dir("ortho");
+    for (name, shape, want) in [
+        ("whole", "", std::f64::consts::PI / 16.0),
+        ("upper", "\"float zmin\" 0", std::f64::consts::PI / 16.0),
+        (
+            "half",
+            "\"float zmin\" 0 \"float phimax\" 180",
+            std::f64::consts::PI / 32.0,
+        ),
+    ] {
+        let scene = format!("LookAt 0 0 30  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\nFilm \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 64\nSampler \"stratified\" \"integer xsamples\" 4 \"integer ysamples\" 4\nPixelFilter \"box\"\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nShape \"sphere\" \"float radius\" 1 {shape}\nAttributeEnd\n");
+        let f = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&f, scene).unwrap();
+        let img = render(&f, &dir.join(format!("{name}.exr")), &[]);
+        let y = y_of(mean_rgb(&img, (0, 64), (0, 64)));
+        assert!(
+            (y / want - 1.0).abs() < 0.01,
+            "{name}: mean Y {y}, projected area {want}"
+        );
+    }
+}
+
+#[test]
+fn a_homogeneous_preset_is_pbrt_v4s_measured_medium() {
+    // "Ketchup" (Jensen et al. 2001, as pbrt-v4 lists it): σ'_s (0.18, 0.07, 0.03), σ_a (0.061, 0.97, 1.45) mm⁻¹,
+    // as unbounded rgb spectra. The spectra's own colours (as reflectances under D65, scaled back) give the rgb.
+    let dir = out_dir("preset");
+    let f = dir.join("p.pbrt");
+    std::fs::write(&f, "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nMakeNamedMedium \"k\" \"string type\" \"homogeneous\" \"string preset\" \"Ketchup\" \"float scale\" 2\n").unwrap();
+    let sc = firemedium::render::scene::load(&f, &Default::default()).unwrap();
+    let firemedium::render::scene::Medium::Homogeneous { sa, ss, .. } = &sc.media[0] else {
+        panic!("not a homogeneous medium")
+    };
+    let n = sc.bins.n();
+    let rgb_of = |s: &firemedium::render::spectrum::S| {
+        // The colour of a spectrum (bin means) seen as a reflectance under D65: ∫ s D65 x̄ȳz̄ / ∫ D65 ȳ → sRGB.
+        let d65 = sc.bins.d65();
+        let mut lit = *s;
+        for i in 0..n {
+            lit.0[i] *= d65.0[i];
+        }
+        let xyz = sc.bins.to_xyz(&lit) / sc.bins.luminance(&d65);
+        firemedium_core::cie::xyz_to_linear_srgb(xyz).to_array()
+    };
+    for (s, want) in [(ss, [0.18, 0.07, 0.03]), (sa, [0.061, 0.97, 1.45])] {
+        let got = rgb_of(s);
+        for c in 0..3 {
+            let w = 2.0 * want[c];
+            assert!(
+                (got[c] - w).abs() < 0.02 * (w + 0.1 * 2.9),
+                "{got:?} vs 2 × {want:?}"
+            );
+        }
+    }
+}

@@ -3,6 +3,7 @@
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
 pub mod integrator;
+pub mod media_presets;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;
@@ -155,15 +156,24 @@ pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec
     let (w, h) = (scene.res.0 as f64, scene.res.1 as f64);
     let sx = cam.screen[0] + fx / w * (cam.screen[1] - cam.screen[0]);
     let sy = cam.screen[3] - fy / h * (cam.screen[3] - cam.screen[2]);
-    let mut dir = DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0);
-    let mut org = DVec3::ZERO;
+    // Perspective: through the pinhole toward the screen at z = 1; orthographic: parallel, from the screen.
+    let (mut org, mut dir) = if cam.orthographic {
+        (DVec3::new(sx, sy, 0.0), DVec3::Z)
+    } else {
+        (
+            DVec3::ZERO,
+            DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0),
+        )
+    };
     if cam.lens_radius > 0.0 {
         let (r, phi) = (
             rng.next_f64().sqrt() * cam.lens_radius,
             2.0 * std::f64::consts::PI * rng.next_f64(),
         );
-        org = DVec3::new(r * phi.cos(), r * phi.sin(), 0.0);
-        dir = dir * cam.focal_distance - org;
+        // The point in focus along the pinhole ray, seen from the lens sample (pbrt-v4's thin lens).
+        let focus = org + dir * (cam.focal_distance / dir.z);
+        org += DVec3::new(r * phi.cos(), r * phi.sin(), 0.0);
+        dir = focus - org;
     }
     let o = cam.to_world.transform_point3(org);
     let d = cam.to_world.transform_vector3(dir).normalize();

@@ -105,12 +105,69 @@ impl Reader<'_> {
     }
 }
 
-/// Reads a PLY mesh.
-pub fn read(path: &Path) -> Result<Mesh, String> {
+/// Reads a PLY mesh, gzip-compressed or not (pbrt-v4-scenes ship `.ply.gz`); a compressed file may inflate to
+/// at most `budget` bytes.
+pub fn read(path: &Path, budget: u64) -> Result<Mesh, String> {
     let file = path.display().to_string();
     let data = firemedium_pbrt_parser::read_regular_file(path)
         .map_err(|e| format!("{file}: cannot read: {e}"))?;
+    if data.starts_with(&[0x1f, 0x8b]) {
+        let plain = gunzip(&file, &data, budget)?;
+        return parse(&file, &plain);
+    }
     parse(&file, &data)
+}
+
+/// The payload of a gzip member (RFC 1952): its header, its raw deflate stream inflated to at most `budget`
+/// bytes (a few bytes can claim gigabytes), and the length its trailer states checked.
+pub fn gunzip(file: &str, data: &[u8], budget: u64) -> Result<Vec<u8>, String> {
+    let bad = |what: &str| format!("{file}: not a valid gzip file: {what}");
+    if data.len() < 18 || data[2] != 8 {
+        return Err(bad("expected a deflate member of at least 18 bytes"));
+    }
+    let flags = data[3];
+    let mut pos = 10usize;
+    if flags & 4 != 0 {
+        // FEXTRA: a little-endian length, then that many bytes.
+        let n = data
+            .get(pos..pos + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]) as usize)
+            .ok_or_else(|| bad("the extra field ends early"))?;
+        pos += 2 + n;
+    }
+    for flag in [8u8, 16] {
+        // FNAME, FCOMMENT: zero-terminated.
+        if flags & flag != 0 {
+            let end = data
+                .get(pos..)
+                .and_then(|rest| rest.iter().position(|&b| b == 0))
+                .ok_or_else(|| bad("a header string does not end"))?;
+            pos += end + 1;
+        }
+    }
+    if flags & 2 != 0 {
+        pos += 2; // FHCRC
+    }
+    let body = data
+        .get(pos..data.len().saturating_sub(8))
+        .ok_or_else(|| bad("the header runs past the data"))?;
+    let limit = usize::try_from(budget).unwrap_or(usize::MAX);
+    let out = miniz_oxide::inflate::decompress_to_vec_with_limit(body, limit).map_err(|e| {
+        if e.status == miniz_oxide::inflate::TINFLStatus::HasMoreOutput {
+            format!("{file}: inflates to more than the memory budget of {budget} bytes")
+        } else {
+            bad(&format!("{e}"))
+        }
+    })?;
+    let t = &data[data.len() - 4..];
+    let isize = u32::from_le_bytes([t[0], t[1], t[2], t[3]]);
+    if out.len() as u32 != isize {
+        return Err(bad(&format!(
+            "it inflates to {} bytes, its trailer says {isize}",
+            out.len()
+        )));
+    }
+    Ok(out)
 }
 
 /// Parses a PLY mesh held in memory (`file` names it in errors).
@@ -280,7 +337,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let a = dir.join("a.ply");
         std::fs::write(&a, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n").unwrap();
-        let (p, i, n, uv) = read(&a).unwrap();
+        let (p, i, n, uv) = read(&a, u64::MAX).unwrap();
         assert_eq!(
             (p.len(), i, n.is_none(), uv.is_none()),
             (12, vec![0, 1, 2, 0, 2, 3], true, true)
@@ -295,9 +352,39 @@ mod tests {
             bytes.extend_from_slice(&k.to_le_bytes());
         }
         std::fs::write(&b, &bytes).unwrap();
-        assert_eq!(read(&b).unwrap().1, vec![0, 1, 2]);
+        assert_eq!(read(&b, u64::MAX).unwrap().1, vec![0, 1, 2]);
         bytes.truncate(bytes.len() - 2);
         std::fs::write(&b, &bytes).unwrap();
-        assert!(read(&b).unwrap_err().contains("end of the file"));
+        assert!(read(&b, u64::MAX).unwrap_err().contains("end of the file"));
+    }
+
+    /// A gzip member of `data` (header without options, deflate, CRC left zero, the length).
+    pub(crate) fn gzip(data: &[u8]) -> Vec<u8> {
+        let mut gz = vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 0xff];
+        gz.extend(miniz_oxide::deflate::compress_to_vec(data, 6));
+        gz.extend([0u8; 4]);
+        gz.extend((data.len() as u32).to_le_bytes());
+        gz
+    }
+
+    #[test]
+    fn gzipped_meshes_read_and_bombs_are_refused() {
+        let dir = std::env::temp_dir().join(format!("firemedium-plygz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+        let f = dir.join("m.ply.gz");
+        std::fs::write(&f, gzip(text.as_bytes())).unwrap();
+        assert_eq!(read(&f, 1 << 20).unwrap().1, vec![0, 1, 2]);
+        // 16 MB of zeros in 16 KB: refused at a 1 MB budget before it is inflated past it.
+        let bomb = gzip(&vec![0u8; 16 << 20]);
+        assert!(bomb.len() < 64 << 10);
+        std::fs::write(&f, &bomb).unwrap();
+        let e = read(&f, 1 << 20).unwrap_err();
+        assert!(e.contains("m.ply.gz") && e.contains("memory budget"), "{e}");
+        // A truncated member names what is wrong.
+        std::fs::write(&f, &bomb[..12]).unwrap();
+        assert!(read(&f, 1 << 20)
+            .unwrap_err()
+            .contains("not a valid gzip file"));
     }
 }

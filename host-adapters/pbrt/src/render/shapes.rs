@@ -20,6 +20,10 @@ pub enum Geom {
         to_world: Affine3A,
         to_obj: Affine3A,
         r: f32,
+        /// pbrt-v4's partial sphere: the part with z in [zmin, zmax] and φ in [0, phimax] (whole: −r, r, 2π).
+        zmin: f32,
+        zmax: f32,
+        phimax: f32,
     },
     Disk {
         to_world: Affine3A,
@@ -155,7 +159,14 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
                 f32::INFINITY
             }
         }
-        Geom::Sphere { to_obj, r, .. } => {
+        Geom::Sphere {
+            to_obj,
+            r,
+            zmin,
+            zmax,
+            phimax,
+            ..
+        } => {
             let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
             let (a, b, c) = (dd.dot(dd), 2.0 * oo.dot(dd), oo.dot(oo) - r * r);
             let disc = b * b - 4.0 * a * c;
@@ -164,9 +175,17 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             }
             let q = disc.sqrt();
             let (t0, t1) = ((-b - q) / (2.0 * a), (-b + q) / (2.0 * a));
-            if ok(t0) {
+            let whole = *zmin <= -r && *zmax >= *r && *phimax >= 2.0 * PI;
+            let kept = |t: f32| {
+                if whole {
+                    return true;
+                }
+                let p = oo + dd * t;
+                p.z >= *zmin && p.z <= *zmax && p.y.atan2(p.x).rem_euclid(2.0 * PI) <= *phimax
+            };
+            if ok(t0) && kept(t0) {
                 t0
-            } else if ok(t1) {
+            } else if ok(t1) && kept(t1) {
                 t1
             } else {
                 f32::INFINITY
@@ -348,12 +367,17 @@ pub fn sample_area(pr: &Prim, u: [f32; 2]) -> (Vec3A, Vec3A, f32) {
             to_world,
             to_obj,
             r,
+            zmin,
+            zmax,
+            phimax,
         } => {
-            let z = 1.0 - 2.0 * u[0];
+            // Archimedes: z uniform is area-uniform on a sphere, on a zone too.
+            let (z0, z1) = (zmin.max(-r) / r, zmax.min(*r) / r);
+            let z = z0 + (z1 - z0) * u[0];
             let rr = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * PI * u[1];
+            let phi = phimax * u[1];
             let q = Vec3A::new(rr * phi.cos(), rr * phi.sin(), z) * *r;
-            let area = 4.0 * PI * r * r * area_scale(to_world);
+            let area = phimax * r * r * (z1 - z0) * area_scale(to_world);
             (
                 to_world.transform_point3a(q),
                 flip(normal_to_world(to_obj, q)),
@@ -512,6 +536,9 @@ mod tests {
                 to_world: m,
                 to_obj: m.inverse(),
                 r,
+                zmin: -r,
+                zmax: r,
+                phimax: 2.0 * PI,
             },
             material: Some(0),
             area_light: None,

@@ -42,7 +42,7 @@ pub(super) struct Builder {
     pub(super) media: Vec<Medium>,
     pub(super) media_reports: Vec<MediumReport>,
     /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
-    pub(super) camera: Option<(Vec<Param>, DMat4, Option<usize>, Loc)>,
+    pub(super) camera: Option<(String, Vec<Param>, DMat4, Option<usize>, Loc)>,
     pub(super) res: (usize, usize),
     pub(super) spp: usize,
     pub(super) sampler: crate::render::pixel::Sampler,
@@ -389,8 +389,20 @@ impl Builder {
         let m = match ty.as_str() {
             "homogeneous" => {
                 let scale = num(params, "scale", 1.0) as f32;
-                let sa = self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)? * scale;
-                let ss = self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)? * scale;
+                // pbrt-v4: a named preset (measured, mm⁻¹) replaces sigma_a and sigma_s; an unknown one warns.
+                let preset = string(params, "preset").filter(|n| !n.is_empty());
+                let found = preset.and_then(crate::render::media_presets::preset);
+                if let (Some(n), None) = (preset, found) {
+                    self.warn(loc, format!("homogeneous medium \"{name}\": preset \"{n}\" not found (pbrt-v4's named media: Apple, Skin1, Wholemilk, Ketchup, …); sigma_a and sigma_s are used"));
+                }
+                let (sa, ss) = match found {
+                    Some((s, a)) => (self.bins.uplift(a, RgbUse::Unbounded), self.bins.uplift(s, RgbUse::Unbounded)),
+                    None => (
+                        self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)?,
+                        self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)?,
+                    ),
+                };
+                let (sa, ss) = (sa * scale, ss * scale);
                 let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
                 Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
@@ -477,11 +489,18 @@ impl Builder {
         let first = self.prim_count();
         match ty {
             "sphere" => {
-                let r = num(p, "radius", 1.0) as f32;
-                if nums(p, "zmin").is_some() || nums(p, "zmax").is_some() || nums(p, "phimax").is_some() {
-                    self.warn(loc, "sphere: partial spheres (zmin, zmax, phimax) are rendered whole");
-                }
-                self.add_prim(Geom::Sphere { to_world, to_obj, r });
+                let r = num(p, "radius", 1.0);
+                // pbrt-v4: z clamped to [−r, r] and ordered; φmax clamped to [0°, 360°].
+                let (z0, z1) = (num(p, "zmin", -r).clamp(-r, r), num(p, "zmax", r).clamp(-r, r));
+                let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians();
+                self.add_prim(Geom::Sphere {
+                    to_world,
+                    to_obj,
+                    r: r as f32,
+                    zmin: z0.min(z1) as f32,
+                    zmax: z0.max(z1) as f32,
+                    phimax: phimax as f32,
+                });
             }
             "disk" => {
                 self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32 });
@@ -492,7 +511,7 @@ impl Builder {
             "trianglemesh" | "bilinearmesh" | "plymesh" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
                     let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
-                    crate::render::ply::read(&self.dir.join(f)).map_err(|e| err(loc, e))?
+                    crate::render::ply::read(&self.dir.join(f), self.max_memory).map_err(|e| err(loc, e))?
                 } else {
                     let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
                     let idx: Vec<usize> = match nums(p, "indices") {

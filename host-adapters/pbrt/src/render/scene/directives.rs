@@ -105,10 +105,10 @@ impl Builder {
                 }
             }
             Directive::Camera(ty, p) => {
-                if ty != "perspective" {
+                if ty != "perspective" && ty != "orthographic" {
                     return Err(err(
                         loc,
-                        format!("camera \"{ty}\" is not supported (perspective)"),
+                        format!("camera \"{ty}\" is not supported (perspective, orthographic)"),
                     ));
                 }
                 let medium = if self.st.outside.is_empty() {
@@ -119,7 +119,7 @@ impl Builder {
                 // (Its parameters are read, and the rest reported, once the film is known: `load`.)
                 self.named_coords
                     .insert("camera".into(), self.st.ctm.inverse());
-                self.camera = Some((p, self.st.ctm, medium, loc.clone()));
+                self.camera = Some((ty, p, self.st.ctm, medium, loc.clone()));
             }
             Directive::Film(ty, params) => {
                 let p = &ParamDict::new(&params);

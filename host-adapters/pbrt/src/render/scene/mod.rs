@@ -160,7 +160,7 @@ impl std::fmt::Debug for Medium {
     }
 }
 
-/// Perspective camera.
+/// pbrt-v4's perspective or orthographic camera (camera space: x right, y up, z forward).
 #[derive(Debug, Clone)]
 pub struct Camera {
     pub to_world: DAffine3,
@@ -169,6 +169,8 @@ pub struct Camera {
     pub lens_radius: f64,
     pub focal_distance: f64,
     pub medium: Option<usize>,
+    /// Parallel rays from the screen window (in camera-space units) instead of rays through a pinhole.
+    pub orthographic: bool,
 }
 
 /// What the plugin built for one medium.
@@ -407,7 +409,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         return Err(err(open, "AttributeBegin (or TransformBegin, ObjectBegin) without its End: the scene ends inside it"));
     }
     // The camera, now that the film resolution is known (pbrt allows Film after Camera).
-    let (cp, camera_from_world, medium, _) = b
+    let (camera_type, cp, camera_from_world, medium, _) = b
         .camera
         .take()
         .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
@@ -434,15 +436,26 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
         _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
     };
+    let orthographic = camera_type == "orthographic";
     let camera = Camera {
         to_world: affine(&camera_from_world.inverse()),
-        tan_half: (num(cp, "fov", 90.0).to_radians() / 2.0).tan(),
+        tan_half: if orthographic {
+            1.0
+        } else {
+            (num(cp, "fov", 90.0).to_radians() / 2.0).tan()
+        },
         screen,
         lens_radius: num(cp, "lensradius", 0.0),
         focal_distance: num(cp, "focaldistance", 1e6),
         medium,
+        orthographic,
     };
-    b.finish(Kind::Camera, "perspective", "perspective camera", cp)?;
+    b.finish(
+        Kind::Camera,
+        &camera_type,
+        &format!("{camera_type} camera"),
+        cp,
+    )?;
     // Fire lights: every plugin medium that emits gets one (unless switched off).
     if !ov.no_fire_light {
         let mut report = 0;
