@@ -25,6 +25,10 @@ pub(super) struct State {
     pub(super) outside: String,
 }
 
+/// A `Camera` directive as given: its type, parameters, camera-from-world, medium and place (read once the film
+/// is known).
+pub(super) type CameraDirective = (String, Vec<Param>, DMat4, Option<usize>, Loc);
+
 pub(super) struct Builder {
     pub(super) dir: PathBuf,
     pub(super) bins: Bins,
@@ -42,7 +46,7 @@ pub(super) struct Builder {
     pub(super) media: Vec<Medium>,
     pub(super) media_reports: Vec<MediumReport>,
     /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
-    pub(super) camera: Option<(String, Vec<Param>, DMat4, Option<usize>, Loc)>,
+    pub(super) camera: Option<CameraDirective>,
     pub(super) res: (usize, usize),
     pub(super) spp: usize,
     pub(super) sampler: crate::render::pixel::Sampler,
