@@ -210,6 +210,18 @@ impl RgbImage {
     }
 }
 
+/// The inverse of [`equal_area_sphere_to_square`]: (u, v) in [0, 1]² → a unit direction.
+pub fn equal_area_square_to_sphere(p: [f32; 2]) -> [f32; 3] {
+    let (u, v) = (2.0 * p[0] - 1.0, 2.0 * p[1] - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    let signed = 1.0 - (up + vp);
+    let r = 1.0 - signed.abs();
+    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * std::f32::consts::FRAC_PI_4;
+    let z = (1.0 - r * r).copysign(signed);
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    [phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z]
+}
+
 /// pbrt-v4's equal-area octahedral map (Clarberg 2008): a unit direction → (u, v) in [0, 1]².
 pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
     let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());

@@ -95,6 +95,7 @@ fn env(light: &Light, w: Vec3A) -> S {
             to_light,
             scale,
             basis,
+            ..
         } => {
             let d = (*to_light * w).normalize_or_zero();
             let [u, v] = if img.w == img.h {
@@ -374,9 +375,14 @@ impl Integrator<'_> {
                 let w = uniform_sphere(u);
                 (w, f32::INFINITY, *l * (4.0 * PI))
             }
-            Light::InfiniteMap { .. } => {
-                let w = uniform_sphere(u);
-                (w, f32::INFINITY, env(&sc.lights[li], w) * (4.0 * PI))
+            Light::InfiniteMap { to_light, dist, .. } => {
+                // A direction by the map's luminance, taken from the map's space to the world's.
+                let (dl, pdf) = dist.sample(u);
+                if !(pdf > 0.0) {
+                    return None;
+                }
+                let w = (to_light.inverse() * Vec3A::from(dl)).normalize_or_zero();
+                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf)
             }
             Light::Area { prim, l, twosided } => {
                 let (q, n, pdf_a) = sample_area(&sc.bvh.prims[*prim], u);

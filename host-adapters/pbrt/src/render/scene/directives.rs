@@ -270,7 +270,8 @@ impl Builder {
                                 // texel (1, 1, 1) records Y = 1.
                                 let white = self.bins.d65();
                                 let basis = self.rgb_basis().map(|b| b * white * (1.0 / self.bins.luminance(&white)) as f32);
-                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: scale as f32, basis }
+                                let dist = std::sync::Arc::new(crate::render::envmap::EnvSampler::new(&img));
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: scale as f32, basis, dist }
                             }
                             None => {
                                 // `illuminance` in lux on an upward-facing patch under the uniform sky: π L.

@@ -118,6 +118,8 @@ pub enum Light {
         to_light: Mat3A,
         scale: f32,
         basis: [S; 3],
+        /// Directions drawn by the map's luminance (pbrt-v4 importance-samples its image lights).
+        dist: std::sync::Arc<crate::render::envmap::EnvSampler>,
     },
     /// The fire light of plugin medium `medium` (importance-samples its emission).
     Fire {
