@@ -343,3 +343,114 @@ fn environment_maps_are_importance_sampled_without_bias() {
         }
     }
 }
+
+#[test]
+fn the_film_applies_pbrt_v4s_sensor_settings() {
+    // slab_const.pbrt with film settings added: ISO 200 doubles every pixel (imaging ratio = shutter × ISO / 100);
+    // maxcomponentvalue 1 clamps each sample's largest sRGB component (the fire's red, 13.06) to 1 keeping its
+    // colour; whitebalance 5000 K adapts 5000 K daylight to D65, so the D65 light turns blue (b > r); savefp16
+    // writes half floats (a smaller file, the same picture to half's precision).
+    let dir = out_dir("film");
+    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let with = |name: &str, extra: &str| {
+        let p = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&p, text.replace("\"bool savefp16\" false", extra)).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        let img = render(&p, &out, &["--spp", "4"]);
+        (
+            mean_rgb(&img, BOX.0, BOX.1),
+            mean_rgb(&img, LIGHT.0, LIGHT.1),
+            std::fs::metadata(&out).unwrap().len(),
+        )
+    };
+    let (f0, l0, bytes32) = with("plain", "\"bool savefp16\" false");
+    let (f1, l1, _) = with("iso", "\"float iso\" 200");
+    assert!(
+        (y_of(f1) / y_of(f0) - 2.0).abs() < 1e-3 && (y_of(l1) / y_of(l0) - 2.0).abs() < 1e-3,
+        "{f1:?} {f0:?}"
+    );
+    let (f2, l2, _) = with("clamp", "\"float maxcomponentvalue\" 1");
+    assert!(
+        (f2[0] - 1.0).abs() < 1e-3 && (f2[1] / f2[0] - f0[1] / f0[0]).abs() < 1e-3,
+        "{f2:?}"
+    );
+    assert!(
+        (l2[0] - l0[0]).abs() < 1e-3,
+        "the light (max 1) is left alone: {l2:?}"
+    );
+    let (_, l3, _) = with("wb", "\"float whitebalance\" 5000");
+    assert!(
+        l3[2] > 1.05 * l3[0],
+        "D65 seen by a film balanced for 5000 K: {l3:?}"
+    );
+    let (f4, _, bytes16) = with("half", "\"bool savefp16\" true");
+    assert!(
+        bytes16 < bytes32 && (y_of(f4) / y_of(f0) - 1.0).abs() < 2e-3,
+        "{bytes16} vs {bytes32}: {f4:?}"
+    );
+}
+
+#[test]
+fn a_crop_window_renders_its_pixels_of_the_full_film() {
+    // slab_const.pbrt (64 × 32): the crop window [0.5, 1] × [0.25, 0.75] is pixels [32, 64) × [8, 24), and so are
+    // the pixel bounds 32 64 8 24, given in the scene or on the command line (pbrt-v4's --cropwindow and
+    // --pixelbounds). Each pixel is the full render's, to the bit (pixels keep their seeds), and the EXR's data
+    // window sits at (32, 8) inside the 64 × 32 display window.
+    let dir = out_dir("crop");
+    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let full = render(
+        &shared("pbrt-v4-measured/slab_const.pbrt"),
+        &dir.join("full.exr"),
+        &["--spp", "2"],
+    );
+    let scene = dir.join("pb.pbrt");
+    std::fs::write(
+        &scene,
+        text.replace(
+            "\"bool savefp16\" false",
+            "\"integer pixelbounds\" [32 64 8 24]",
+        ),
+    )
+    .unwrap();
+    let cases: [(&Path, &str, Vec<&str>); 3] = [
+        (
+            &shared("pbrt-v4-measured/slab_const.pbrt"),
+            "crop",
+            vec!["--cropwindow", "0.5", "1", "0.25", "0.75"],
+        ),
+        (
+            &shared("pbrt-v4-measured/slab_const.pbrt"),
+            "bounds",
+            vec!["--pixelbounds", "32", "64", "8", "24"],
+        ),
+        (&scene, "scene", vec![]),
+    ];
+    for (path, name, flags) in cases {
+        let out = dir.join(format!("{name}.exr"));
+        let mut args = vec!["--spp", "2"];
+        args.extend(flags);
+        let (w, h, px) = render(path, &out, &args);
+        assert_eq!((w, h), (32, 16), "{name}");
+        for y in 0..16 {
+            for x in 0..32 {
+                assert_eq!(
+                    px[x + 32 * y],
+                    full.2[(x + 32) + 64 * (y + 8)],
+                    "{name}: pixel ({x}, {y})"
+                );
+            }
+        }
+        let meta = exr::meta::MetaData::read_from_file(&out, false).unwrap();
+        let head = &meta.headers[0];
+        assert_eq!(
+            head.own_attributes.layer_position,
+            exr::math::Vec2(32, 8),
+            "{name}"
+        );
+        assert_eq!(
+            head.shared_attributes.display_window.size,
+            exr::math::Vec2(64, 32),
+            "{name}"
+        );
+    }
+}

@@ -322,10 +322,10 @@ fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
 
 #[test]
 fn unsupported_pbrt_parameters_are_named_where_they_stand() {
-    // pbrt-v4 reads "preset" (a named scattering medium) and a camera's shutter; this renderer does not yet:
-    // each is a warning at its own position, never dropped silently (pbrt-v4's ReportUnused).
+    // pbrt-v4 reads an integrator's "regularize" and a shape's "alpha"; this renderer does not yet: each is a
+    // warning at its own position, never dropped silently (pbrt-v4's ReportUnused).
     let dir = tmp("unsupported");
-    let scene = "Camera \"perspective\" \"float shutterclose\" 0.5\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n    \"string preset\" \"Skin1\"\n";
+    let scene = "Camera \"perspective\" \"float fov\" 30\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nIntegrator \"volpath\" \"bool regularize\" true\nWorldBegin\nShape \"sphere\" \"float alpha\" 0.5\n";
     std::fs::write(dir.join("u.pbrt"), scene).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
@@ -335,8 +335,8 @@ fn unsupported_pbrt_parameters_are_named_where_they_stand() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{e}");
     for want in [
-        "u.pbrt:5:5: warning: homogeneous medium \"m\": \"string preset\" is read by pbrt-v4 but not supported",
-        "u.pbrt:1:22: warning: perspective camera: \"float shutterclose\" is read by pbrt-v4 but not supported",
+        "u.pbrt:3:22: warning: integrator \"volpath\": \"bool regularize\" is read by pbrt-v4 but not supported",
+        "u.pbrt:5:16: warning: sphere: \"float alpha\" is read by pbrt-v4 but not supported",
     ] {
         assert!(e.contains(want), "{want}\nin\n{e}");
     }

@@ -306,27 +306,71 @@ pub fn write_exr(
     rgb: &[[f32; 3]],
     fire_temperature: Option<f64>,
 ) -> Result<(), String> {
+    let window = Window {
+        origin: (0, 0),
+        full: (w, h),
+    };
+    write_exr_as(path, w, h, rgb, fire_temperature, false, window)
+}
+
+/// Where an image lies on its full film: its first pixel's position, and the film's size (EXR's data window in its
+/// display window).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Window {
+    pub origin: (usize, usize),
+    pub full: (usize, usize),
+}
+
+/// As [`write_exr`], in half floats when `fp16` (pbrt-v4's `savefp16`; values above 65 504 become infinite), and
+/// placed at `window` on its film (a crop: the data window inside the display window).
+pub fn write_exr_as(
+    path: &Path,
+    w: usize,
+    h: usize,
+    rgb: &[[f32; 3]],
+    fire_temperature: Option<f64>,
+    fp16: bool,
+    window: Window,
+) -> Result<(), String> {
     use exr::prelude::*;
-    write_atomic(path, |tmp| {
-        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
-            let p = rgb[x + w * y];
-            (p[0], p[1], p[2])
-        });
-        let mut image = Image::from_channels((w, h), channels);
-        if let Some(t) = fire_temperature {
-            image.attributes.other.insert(
-                Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
-                AttributeValue::F64(t),
-            );
-        }
-        // One thread writes the blocks in order, so the same render gives the same bytes (parallel writing put
-        // them in completion order; farms and caches compare files).
-        image
-            .write()
-            .non_parallel()
-            .to_file(tmp)
-            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
-    })
+    // The attribute, then one thread writes the blocks in order, so the same render gives the same bytes
+    // (parallel writing put them in completion order; farms and caches compare files).
+    macro_rules! write {
+        ($pixel:expr) => {
+            write_atomic(path, |tmp| {
+                let channels =
+                    SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| $pixel(rgb[x + w * y]));
+                let mut image = Image::from_channels((w, h), channels);
+                let pos = |v: usize| i32::try_from(v).unwrap_or(i32::MAX);
+                image.layer_data.attributes.layer_position =
+                    Vec2(pos(window.origin.0), pos(window.origin.1));
+                image.attributes.display_window = IntegerBounds::new(
+                    Vec2(0, 0),
+                    Vec2(window.full.0.max(1), window.full.1.max(1)),
+                );
+                if let Some(t) = fire_temperature {
+                    image.attributes.other.insert(
+                        Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                        AttributeValue::F64(t),
+                    );
+                }
+                image
+                    .write()
+                    .non_parallel()
+                    .to_file(tmp)
+                    .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+            })
+        };
+    }
+    if fp16 {
+        write!(|p: [f32; 3]| (
+            f16::from_f32(p[0]),
+            f16::from_f32(p[1]),
+            f16::from_f32(p[2])
+        ))
+    } else {
+        write!(|p: [f32; 3]| (p[0], p[1], p[2]))
+    }
 }
 
 /// The fire temperature an EXR records (see [`write_exr`]), if any.

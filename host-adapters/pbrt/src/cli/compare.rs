@@ -36,6 +36,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
         res: a.resolution,
         threads: None,
         max_memory: None,
+        ..Default::default()
     };
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
     let (w, h) = sc.res;

@@ -19,6 +19,13 @@ pub struct RenderArgs {
     /// Film resolution WxH instead of the scene's (say, 160x120 for a quick look).
     #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
     resolution: Option<(usize, usize)>,
+    /// Render only this part of the film, x0 x1 y0 y1 in [0, 1] from the top left (pbrt-v4's --cropwindow);
+    /// the EXR's data window lies inside the full display window.
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    cropwindow: Option<Vec<f64>>,
+    /// Render only the pixels [x0, x1) × [y0, y1) (pbrt-v4's --pixelbounds).
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    pixelbounds: Option<Vec<f64>>,
     /// Samples per pixel (default: the Sampler's pixelsamples).
     #[arg(long)]
     spp: Option<usize>,
@@ -56,6 +63,11 @@ pub struct RenderArgs {
     quiet: bool,
 }
 
+/// Four values clap counted (`num_args = 4`).
+fn four(v: &Option<Vec<f64>>) -> Option<[f64; 4]> {
+    v.as_deref().and_then(|v| v.try_into().ok())
+}
+
 pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     if a.spp == Some(0) {
         return Err((2, "--spp must be at least 1".into()));
@@ -66,6 +78,8 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         no_fire_light: a.fire_light == "off",
         fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
         res: a.resolution,
+        crop: four(&a.cropwindow),
+        pixel_bounds: four(&a.pixelbounds),
         threads: a.threads.map(usize::from),
         max_memory: a.max_memory.map(|gb| (gb * 1e9) as u64),
     };
@@ -79,7 +93,8 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     }
     let _ =
         ctrlc::set_handler(|| render::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
-    let tiles = sc.res.0.div_ceil(16) * sc.res.1.div_ceil(16);
+    let [x0, x1, y0, y1] = sc.bounds;
+    let tiles = (x1 - x0).div_ceil(16) * (y1 - y0).div_ceil(16);
     let bar = ProgressBar::new(tiles as u64);
     let show = !a.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     bar.set_draw_target(if show {
@@ -123,7 +138,8 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         adapt: a.adapt,
         ..Default::default()
     };
-    img.write_exr(&exr, fire_t).map_err(|e| (1, e))?;
+    img.write_exr(&exr, fire_t, sc.response.fp16)
+        .map_err(|e| (1, e))?;
     write_preview(&img, &png, &tone).map_err(|e| (1, e))?;
     let mut out = format!(
         "wrote {} and {} ({}×{}, {} spp)\n",

@@ -3,6 +3,7 @@
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
 pub mod envmap;
+pub mod film;
 pub mod integrator;
 pub mod media_presets;
 pub mod pbrt_v4;
@@ -29,6 +30,10 @@ pub struct Image {
     pub rgb: Vec<[f32; 3]>,
     pub xyz: Vec<DVec3>,
     pub complete: bool,
+    /// Where the image's first pixel lies on the full film, and the full film's size (a crop window or pixel
+    /// bounds render part of it: the EXR's data window inside its display window).
+    pub origin: (usize, usize),
+    pub full: (usize, usize),
 }
 
 impl Image {
@@ -38,8 +43,21 @@ impl Image {
         &self,
         path: &std::path::Path,
         fire_temperature: Option<f64>,
+        fp16: bool,
     ) -> Result<(), String> {
-        crate::imageio::write_exr(path, self.w, self.h, &self.rgb, fire_temperature)
+        let window = crate::imageio::Window {
+            origin: self.origin,
+            full: self.full,
+        };
+        crate::imageio::write_exr_as(
+            path,
+            self.w,
+            self.h,
+            &self.rgb,
+            fire_temperature,
+            fp16,
+            window,
+        )
     }
 }
 
@@ -70,7 +88,9 @@ pub fn render(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> (Image, Stats) {
     let start = std::time::Instant::now();
-    let (w, h) = scene.res;
+    // The pixels rendered: the film's pixel bounds (all of it, unless cropped), in full-film coordinates.
+    let [x0, x1, y0, y1] = scene.bounds;
+    let (w, h) = (x1 - x0, y1 - y0);
     let integ = integrator::Integrator {
         scene,
         mask: scene.bins.mask(),
@@ -86,8 +106,9 @@ pub fn render(
                 return None;
             }
             let mut out = Vec::with_capacity(TILE * TILE);
-            for y in ty * TILE..((ty + 1) * TILE).min(h) {
-                for x in tx * TILE..((tx + 1) * TILE).min(w) {
+            for cy in ty * TILE..((ty + 1) * TILE).min(h) {
+                for cx in tx * TILE..((tx + 1) * TILE).min(w) {
+                    let (x, y) = (x0 + cx, y0 + cy);
                     // Checked per pixel, not only per tile: Ctrl-C ends a render whose tiles take long within
                     // a pixel's time (the unfinished tile is left out, the finished ones are written).
                     if INTERRUPTED.load(Ordering::Relaxed) {
@@ -106,15 +127,15 @@ pub fn render(
                         let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
                         let (o, d) = camera_ray(scene, fx, fy, &mut rng);
                         let l = integ.li(o, d, &mut rng);
-                        sum += scene.bins.to_xyz(&l) * w;
+                        sum += scene.response.clamp_sample(scene.bins.to_xyz(&l)) * w;
                         weights += w;
                     }
                     let sum = if weights != 0.0 {
-                        sum * (scene.spp as f64 / weights)
+                        scene.response.finish(sum * (scene.spp as f64 / weights))
                     } else {
                         DVec3::ZERO
                     };
-                    out.push((x + w * y, sum / scene.spp as f64));
+                    out.push((cx + w * cy, sum / scene.spp as f64));
                 }
             }
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -145,6 +166,8 @@ pub fn render(
             rgb,
             xyz,
             complete,
+            origin: (x0, y0),
+            full: scene.res,
         },
         stats,
     )

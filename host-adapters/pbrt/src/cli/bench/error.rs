@@ -154,6 +154,7 @@ pub fn surface_ladder(
                 res: Some(res),
                 threads: None,
                 max_memory: None,
+                ..Default::default()
             },
         )
     };

@@ -25,6 +25,27 @@ pub(super) struct State {
     pub(super) outside: String,
 }
 
+/// What the `Film` directive says of the sensor and the output (the camera's shutter completes it in `load`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FilmParams {
+    pub(super) iso: f64,
+    /// White balance temperature in K (0: none).
+    pub(super) white_k: f64,
+    pub(super) max_component: f64,
+    pub(super) fp16: bool,
+}
+
+impl Default for FilmParams {
+    fn default() -> FilmParams {
+        FilmParams {
+            iso: 100.0,
+            white_k: 0.0,
+            max_component: f64::INFINITY,
+            fp16: false,
+        }
+    }
+}
+
 /// A `Camera` directive as given: its type, parameters, camera-from-world, medium and place (read once the film
 /// is known).
 pub(super) type CameraDirective = (String, Vec<Param>, DMat4, Option<usize>, Loc);
@@ -51,6 +72,10 @@ pub(super) struct Builder {
     pub(super) spp: usize,
     pub(super) sampler: crate::render::pixel::Sampler,
     pub(super) filter: crate::render::pixel::Filter,
+    pub(super) film_response: FilmParams,
+    /// The film's `cropwindow` (x0, x1, y0, y1 in [0, 1]) or `pixelbounds` (pixels), with where each was given.
+    pub(super) crop: Option<([f64; 4], Loc)>,
+    pub(super) pixel_bounds: Option<([f64; 4], Loc)>,
     pub(super) maxdepth: usize,
     pub(super) film_name: Option<String>,
     pub(super) warnings: Vec<String>,

@@ -1,7 +1,7 @@
 //! The scene builder's dispatch: one pbrt-v4 directive at a time, in file order (transforms, attributes,
 //! objects and instances, camera, film, sampler, integrator, lights, materials, textures, shapes, media).
 
-use super::builder::{affine_f32, look_at, num, nums, string, Builder};
+use super::builder::{affine_f32, look_at, num, nums, string, Builder, FilmParams};
 use super::{err, Error, Light, Tex};
 use crate::render::pbrt_v4::{self, Kind};
 use crate::render::pixel::{Filter, Params as FilterParams, Sampler};
@@ -142,6 +142,47 @@ impl Builder {
                 };
                 self.res = (side("xresolution", 1280.0)?, side("yresolution", 720.0)?);
                 self.film_name = string(p, "filename").map(String::from);
+                // The sensor (pbrt-v4's PixelSensor): cie1931 is the CIE XYZ matching functions; a named camera's
+                // measured curves are not carried yet, so it is rendered as cie1931 with its default 6500 K white.
+                let sensor = string(p, "sensor").unwrap_or("cie1931");
+                if sensor != "cie1931" {
+                    let at = p.get("sensor").map_or(loc.clone(), |q| q.loc.clone());
+                    self.warn(&at, format!("film: sensor \"{sensor}\" is rendered with the cie1931 sensor (the camera's measured response curves are not carried yet), white-balanced as pbrt-v4 does for it"));
+                }
+                let white = num(
+                    p,
+                    "whitebalance",
+                    if sensor == "cie1931" { 0.0 } else { 6500.0 },
+                );
+                let (iso, maxc) = (
+                    num(p, "iso", 100.0),
+                    num(p, "maxcomponentvalue", f64::INFINITY),
+                );
+                let valid = iso > 0.0
+                    && iso.is_finite()
+                    && maxc > 0.0
+                    && (white == 0.0 || (white > 0.0 && white.is_finite()));
+                if !valid {
+                    return Err(err(loc, format!("film: iso {iso}, maxcomponentvalue {maxc}, whitebalance {white}: expected iso > 0, a positive maximum and a temperature >= 0 K")));
+                }
+                for (name, slot) in [
+                    ("cropwindow", &mut self.crop),
+                    ("pixelbounds", &mut self.pixel_bounds),
+                ] {
+                    if let Some(q) = p.get(name) {
+                        let v = q.numbers().unwrap_or(&[]);
+                        if v.len() != 4 || v.iter().any(|x| !x.is_finite()) {
+                            return Err(err(&q.loc, format!("film: \"{name}\" {v:?}: expected four finite values x0 x1 y0 y1")));
+                        }
+                        *slot = Some(([v[0], v[1], v[2], v[3]], q.loc.clone()));
+                    }
+                }
+                self.film_response = FilmParams {
+                    iso,
+                    white_k: white,
+                    max_component: maxc,
+                    fp16: p.bool("savefp16", false),
+                };
                 self.finish(Kind::Film, &ty, "film", p)?;
             }
             Directive::Sampler(ty, params) => {

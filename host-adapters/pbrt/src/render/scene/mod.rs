@@ -200,6 +200,10 @@ pub struct Scene {
     /// Where a pixel's samples fall, and the pixel filter that places and weighs them.
     pub sampler: crate::render::pixel::Sampler,
     pub filter: crate::render::pixel::Filter,
+    /// The film's response: imaging ratio, white balance, sample clamp, half floats.
+    pub response: crate::render::film::Response,
+    /// The pixels rendered, [x0, x1) × [y0, y1) of the `res` film (pbrt-v4's pixel bounds; all of it by default).
+    pub bounds: [usize; 4],
     pub maxdepth: usize,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -235,6 +239,70 @@ fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> 
     }
 }
 
+/// The film's pixel bounds (pbrt-v4's `FilmBaseParameters`): a crop window (the command line's, else the scene's)
+/// covers the pixels [⌈W x0⌉, ⌈W x1⌉) × [⌈H y0⌉, ⌈H y1⌉); else pixel bounds, clamped to the film; else the film.
+fn pixel_bounds(b: &Builder, ov: &Overrides, path: &Path) -> Result<[usize; 4], Error> {
+    let (w, h) = (b.res.0 as f64, b.res.1 as f64);
+    let at = |loc: Option<&Loc>| {
+        loc.map_or_else(
+            || format!("{}: command line", path.display()),
+            |l| l.to_string(),
+        )
+    };
+    let crop = ov
+        .crop
+        .map(|c| (c, None))
+        .or(b.crop.as_ref().map(|(c, l)| (*c, Some(l))));
+    let bounds = if let Some((c, loc)) = crop {
+        let (cx0, cx1) = (
+            c[0].min(c[1]).clamp(0.0, 1.0),
+            c[0].max(c[1]).clamp(0.0, 1.0),
+        );
+        let (cy0, cy1) = (
+            c[2].min(c[3]).clamp(0.0, 1.0),
+            c[2].max(c[3]).clamp(0.0, 1.0),
+        );
+        [
+            (w * cx0).ceil(),
+            (w * cx1).ceil(),
+            (h * cy0).ceil(),
+            (h * cy1).ceil(),
+        ]
+        .map(|v| v as usize)
+        .into_iter()
+        .collect::<Vec<_>>()
+        .try_into()
+        .map_err(|_| at(loc))?
+    } else if let Some((p, loc)) = ov
+        .pixel_bounds
+        .map(|p| (p, None))
+        .or(b.pixel_bounds.as_ref().map(|(p, l)| (*p, Some(l))))
+    {
+        let clamp = |v: f64, n: f64| v.clamp(0.0, n) as usize;
+        let r = [
+            clamp(p[0], w),
+            clamp(p[1], w),
+            clamp(p[2], h),
+            clamp(p[3], h),
+        ];
+        if r[1] <= r[0] || r[3] <= r[2] {
+            return Err(format!("{}: pixel bounds {p:?} leave no pixel of the {}×{} film: expected x0 < x1, y0 < y1 inside it", at(loc), b.res.0, b.res.1));
+        }
+        r
+    } else {
+        [0, b.res.0, 0, b.res.1]
+    };
+    if bounds[1] <= bounds[0] || bounds[3] <= bounds[2] {
+        return Err(format!(
+            "{}: the crop window leaves no pixel of the {}×{} film",
+            at(crop.and_then(|c| c.1)),
+            b.res.0,
+            b.res.1
+        ));
+    }
+    Ok(bounds)
+}
+
 /// Settings the command line can override.
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
@@ -246,6 +314,9 @@ pub struct Overrides {
     pub fire_light_weighting: Option<String>,
     /// Film resolution instead of the scene's.
     pub res: Option<(usize, usize)>,
+    /// pbrt-v4's `--cropwindow x0 x1 y0 y1` and `--pixelbounds x0 x1 y0 y1`, instead of the film's.
+    pub crop: Option<[f64; 4]>,
+    pub pixel_bounds: Option<[f64; 4]>,
     /// Threads the plugin may use to build each medium (the render's own; `None`: every core).
     pub threads: Option<usize>,
     /// The memory budget in bytes (`None`: half the machine's memory, [`crate::budget::default_bytes`]): the
@@ -377,6 +448,9 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         spp: 16,
         // pbrt-v4's defaults: zsobol (rendered with independent samples here) and a Gaussian of radius 1.5, σ 0.5.
         sampler: crate::render::pixel::Sampler::Independent,
+        film_response: Default::default(),
+        crop: None,
+        pixel_bounds: None,
         filter: crate::render::pixel::Filter::new(
             "gaussian",
             crate::render::pixel::Params {
@@ -419,6 +493,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     if let Some(r) = ov.res {
         b.res = r;
     }
+    let bounds = pixel_bounds(&b, ov, path)?;
     // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room).
     crate::budget::check(
         &format!(
@@ -452,6 +527,14 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         medium,
         orthographic,
     };
+    // pbrt-v4's imaging ratio: the shutter interval × ISO / 100 (1 by default).
+    let exposure = num(cp, "shutterclose", 1.0) - num(cp, "shutteropen", 0.0);
+    if !(exposure > 0.0 && exposure.is_finite()) {
+        return Err(format!("{}: camera: the shutter closes at or before it opens (shutteropen {}, shutterclose {}): expected an interval", path.display(), num(cp, "shutteropen", 0.0), num(cp, "shutterclose", 1.0)));
+    }
+    let f = b.film_response;
+    let response =
+        crate::render::film::Response::new(f.iso, exposure, f.white_k, f.max_component, f.fp16);
     b.finish(
         Kind::Camera,
         &camera_type,
@@ -516,6 +599,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         spp: ov.spp.unwrap_or(b.spp),
         sampler: b.sampler,
         filter: b.filter,
+        response,
+        bounds,
         maxdepth: b.maxdepth,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),

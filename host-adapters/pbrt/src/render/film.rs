@@ -1,0 +1,138 @@
+//! The film's response, as pbrt-v4's `RGBFilm` with the `cie1931` sensor (`src/pbrt/film.cpp`): the imaging
+//! ratio (exposure time × ISO / 100, with the exposure time the camera's shutter interval), an optional white
+//! balance, each sample's largest RGB component clamped to `maxcomponentvalue`, and half- or full-float output.
+//!
+//! White balance (`whitebalance` T, in K): a von Kries adaptation in Bradford's LMS (pbrt-v4's `WhiteBalance`,
+//! Lindbloom's matrices) from the white of CIE daylight at T to sRGB's D65. The daylight white is the CIE daylight
+//! locus (CIE 15:2004 §3.1: x_D a cubic in 10³/T over 4000–7000 K and 7000–25 000 K, y_D = −3x_D² + 2.870x_D −
+//! 0.275), which is the chromaticity of pbrt-v4's `Spectra::D(T)` by construction.
+
+use glam::{DMat3, DVec3};
+
+/// Bradford's cone responses from XYZ (rows), as pbrt-v4's `LMSFromXYZ`.
+const BRADFORD: [[f64; 3]; 3] = [
+    [0.8951, 0.2664, -0.1614],
+    [-0.7502, 1.7135, 0.0367],
+    [0.0389, -0.0685, 1.0296],
+];
+
+/// The sRGB (D65) white point, xy.
+const D65_XY: [f64; 2] = [0.3127, 0.3290];
+
+/// How the film turns samples into pixels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Response {
+    /// exposure time × ISO / 100 (1: pbrt-v4's pass-through default).
+    pub imaging_ratio: f64,
+    /// XYZ → XYZ white balance, when asked for.
+    pub white_balance: Option<DMat3>,
+    /// The largest linear-sRGB component a sample may have (pbrt-v4's `maxcomponentvalue`; infinite by default).
+    pub max_component: f64,
+    /// Half-float EXR channels (`savefp16`).
+    pub fp16: bool,
+}
+
+impl Default for Response {
+    fn default() -> Response {
+        Response {
+            imaging_ratio: 1.0,
+            white_balance: None,
+            max_component: f64::INFINITY,
+            fp16: false,
+        }
+    }
+}
+
+/// The chromaticity of CIE daylight at correlated colour temperature `t` (4000–25 000 K; clamped).
+pub fn daylight_xy(t: f64) -> [f64; 2] {
+    let t = t.clamp(4000.0, 25_000.0);
+    let (a, b) = (1e3 / t, 1e6 / (t * t));
+    let c = 1e9 / (t * t * t);
+    let x = if t <= 7000.0 {
+        -4.6070 * c + 2.9678 * b + 0.09911 * a + 0.244063
+    } else {
+        -2.0064 * c + 1.9018 * b + 0.24748 * a + 0.237040
+    };
+    [x, -3.0 * x * x + 2.870 * x - 0.275]
+}
+
+/// The XYZ → XYZ von Kries adaptation (Bradford LMS) taking white `from` (xy) to white `to` (xy).
+pub fn white_balance(from: [f64; 2], to: [f64; 2]) -> DMat3 {
+    let m = DMat3::from_cols_array_2d(&BRADFORD).transpose();
+    let xyz = |w: [f64; 2]| DVec3::new(w[0] / w[1], 1.0, (1.0 - w[0] - w[1]) / w[1]);
+    let (src, dst) = (m * xyz(from), m * xyz(to));
+    m.inverse() * DMat3::from_diagonal(dst / src) * m
+}
+
+impl Response {
+    /// The response for a film's `iso`, `whitebalance` (K; 0: none) and `maxcomponentvalue`, and the camera's
+    /// shutter interval.
+    pub fn new(iso: f64, exposure: f64, white_k: f64, max_component: f64, fp16: bool) -> Response {
+        Response {
+            imaging_ratio: exposure * iso / 100.0,
+            white_balance: (white_k > 0.0).then(|| white_balance(daylight_xy(white_k), D65_XY)),
+            max_component,
+            fp16,
+        }
+    }
+
+    /// A sample's XYZ with its largest sRGB component clamped (pbrt-v4 clamps before filtering).
+    pub fn clamp_sample(&self, xyz: DVec3) -> DVec3 {
+        if !self.max_component.is_finite() {
+            return xyz;
+        }
+        let m = firemedium_core::cie::xyz_to_linear_srgb(xyz).max_element();
+        if m > self.max_component {
+            xyz * (self.max_component / m)
+        } else {
+            xyz
+        }
+    }
+
+    /// A pixel's final XYZ from its filtered XYZ.
+    pub fn finish(&self, xyz: DVec3) -> DVec3 {
+        let xyz = xyz * self.imaging_ratio;
+        match &self.white_balance {
+            Some(m) => *m * xyz,
+            None => xyz,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn daylight_and_white_balance() {
+        // CIE 15:2004 Table T.3: D65 (6504 K) at (0.31272, 0.32903), D50 (5003 K) at (0.34567, 0.35851).
+        for (t, want) in [(6504.0, [0.31272, 0.32903]), (5003.0, [0.34567, 0.35851])] {
+            let xy = daylight_xy(t);
+            assert!(
+                (xy[0] - want[0]).abs() < 2e-4 && (xy[1] - want[1]).abs() < 2e-4,
+                "{t}: {xy:?}"
+            );
+        }
+        // Balancing for D50 takes D50's white to D65's and leaves luminance alone.
+        let d50 = daylight_xy(5003.0);
+        let m = white_balance(d50, D65_XY);
+        let w = m * DVec3::new(d50[0] / d50[1], 1.0, (1.0 - d50[0] - d50[1]) / d50[1]);
+        let s = w.x + w.y + w.z;
+        assert!(
+            (w.x / s - 0.3127).abs() < 1e-9 && (w.y / s - 0.3290).abs() < 1e-9,
+            "{w}"
+        );
+        assert!((w.y - 1.0).abs() < 0.02, "{w}");
+        // The imaging ratio: ISO 400 for 1/4 s is 1.
+        assert_eq!(
+            Response::new(400.0, 0.25, 0.0, f64::INFINITY, false).imaging_ratio,
+            1.0
+        );
+        // Clamping keeps the chromaticity.
+        let r = Response::new(100.0, 1.0, 0.0, 2.0, false);
+        let xyz = DVec3::new(9.5, 10.0, 10.9);
+        let c = r.clamp_sample(xyz);
+        assert!((firemedium_core::cie::xyz_to_linear_srgb(c).max_element() - 2.0).abs() < 1e-9);
+        assert!((c / c.y - xyz / xyz.y).abs().max_element() < 1e-12);
+    }
+}
