@@ -246,4 +246,151 @@ mod tests {
             .contains(&"preset"));
         assert!(parameters(Kind::Shape, "teapot").is_none());
     }
+
+    #[test]
+    fn pbrt_compat_lists_every_parameter() {
+        // docs/pbrt-compat.md has a row per pbrt-v4 directive and type, and every parameter pbrt-v4 reads for it
+        // appears (`name`) in that row or the directive's "(all)" row.
+        let doc = include_str!("../../../../docs/pbrt-compat.md");
+        let rows: Vec<Vec<&str>> = doc
+            .lines()
+            .filter(|l| l.starts_with('|'))
+            .map(|l| l.split('|').map(str::trim).collect())
+            .filter(|c: &Vec<&str>| c.len() > 4)
+            .collect();
+        let types: &[(Kind, &str, &[&str])] = &[
+            (
+                Kind::Camera,
+                "Camera",
+                &["perspective", "orthographic", "realistic", "spherical"],
+            ),
+            (Kind::Film, "Film", &["rgb", "gbuffer", "spectral"]),
+            (
+                Kind::Sampler,
+                "Sampler",
+                &[
+                    "independent",
+                    "stratified",
+                    "zsobol",
+                    "sobol",
+                    "paddedsobol",
+                    "halton",
+                    "pmj02bn",
+                ],
+            ),
+            (
+                Kind::PixelFilter,
+                "PixelFilter",
+                &["box", "triangle", "gaussian", "mitchell", "sinc", "lanczos"],
+            ),
+            (
+                Kind::Integrator,
+                "Integrator",
+                &[
+                    "volpath",
+                    "path",
+                    "simplevolpath",
+                    "simplepath",
+                    "bdpt",
+                    "mlt",
+                    "sppm",
+                    "ambientocclusion",
+                    "randomwalk",
+                    "lightpath",
+                ],
+            ),
+            (
+                Kind::Light,
+                "LightSource",
+                &[
+                    "point",
+                    "spot",
+                    "goniometric",
+                    "projection",
+                    "distant",
+                    "infinite",
+                ],
+            ),
+            (Kind::AreaLight, "AreaLightSource", &["diffuse"]),
+            (
+                Kind::Material,
+                "Material",
+                &[
+                    "interface",
+                    "diffuse",
+                    "coateddiffuse",
+                    "coatedconductor",
+                    "conductor",
+                    "dielectric",
+                    "thindielectric",
+                    "diffusetransmission",
+                    "mix",
+                    "measured",
+                    "subsurface",
+                    "hair",
+                ],
+            ),
+            (
+                Kind::Texture,
+                "Texture",
+                &[
+                    "constant",
+                    "checkerboard",
+                    "imagemap",
+                    "scale",
+                    "mix",
+                    "directionmix",
+                    "bilerp",
+                    "dots",
+                    "fbm",
+                    "wrinkled",
+                    "windy",
+                    "marble",
+                    "ptex",
+                ],
+            ),
+            (
+                Kind::Medium,
+                "MakeNamedMedium",
+                &["homogeneous", "uniformgrid", "nanovdb", "rgbgrid", "cloud"],
+            ),
+            (
+                Kind::Shape,
+                "Shape",
+                &[
+                    "sphere",
+                    "disk",
+                    "cylinder",
+                    "trianglemesh",
+                    "bilinearmesh",
+                    "plymesh",
+                    "loopsubdiv",
+                    "curve",
+                ],
+            ),
+        ];
+        for (kind, directive, tys) in types {
+            let all = rows
+                .iter()
+                .find(|r| r[1] == *directive && r[2] == "(all)")
+                .map(|r| r.join("|"))
+                .unwrap_or_default();
+            for ty in *tys {
+                let row = rows
+                    .iter()
+                    .find(|r| r[1] == *directive && r[2].split(", ").any(|t| t == *ty))
+                    .map(|r| r.join("|"))
+                    .unwrap_or_else(|| {
+                        panic!("docs/pbrt-compat.md: no row for {directive} \"{ty}\"")
+                    });
+                for name in parameters(*kind, ty).unwrap_or_default() {
+                    let quoted = format!("`{name}`");
+                    assert!(
+                        row.contains(&quoted) || all.contains(&quoted),
+                        "docs/pbrt-compat.md: {directive} \"{ty}\" does not say what becomes of {quoted}"
+                    );
+                }
+            }
+        }
+    }
 }
