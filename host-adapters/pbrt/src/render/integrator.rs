@@ -6,10 +6,10 @@
 //! Light is counted once: the fire's emission only where paths pass through it (the fire light, issue 6, adds
 //! sampling); area lights by NEE after diffuse bounces and by hitting them at depth 0 or after specular bounces.
 
+use super::pixel::Samples;
 use super::scene::{Light, Material, Medium, Scene};
 use super::shapes::{sample_area, Hit};
 use super::spectrum::S;
-use firemedium_core::rng::Rng;
 use firemedium_loader::Ray as FRay;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
@@ -159,7 +159,7 @@ pub struct Integrator<'a> {
 }
 
 impl Integrator<'_> {
-    fn rng2(rng: &mut Rng) -> [f32; 2] {
+    fn rng2(rng: &mut Samples) -> [f32; 2] {
         [rng.next_f64() as f32, rng.next_f64() as f32]
     }
 
@@ -170,7 +170,7 @@ impl Integrator<'_> {
         o: Vec3A,
         d: Vec3A,
         t_end: f32,
-        rng: &mut Rng,
+        rng: &mut Samples,
         emission: bool,
     ) -> (S, S) {
         let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission, false);
@@ -187,7 +187,7 @@ impl Integrator<'_> {
         o: Vec3A,
         d: Vec3A,
         t_end: f32,
-        rng: &mut Rng,
+        rng: &mut Samples,
         emission: bool,
         want_exit: bool,
     ) -> (S, S, Option<(Vec3A, Vec3A)>) {
@@ -263,7 +263,7 @@ impl Integrator<'_> {
         mut t_max: f32,
         mut medium: Option<usize>,
         fire: Option<usize>,
-        rng: &mut Rng,
+        rng: &mut Samples,
     ) -> (S, S) {
         let eps = self.scene.eps;
         let mut tr = self.mask;
@@ -304,7 +304,7 @@ impl Integrator<'_> {
         li: usize,
         p: Vec3A,
         medium: Option<usize>,
-        rng: &mut Rng,
+        rng: &mut Samples,
     ) -> Option<(S, Vec3A, f32)> {
         let sc = self.scene;
         let u = Self::rng2(rng);
@@ -450,7 +450,7 @@ impl Integrator<'_> {
         medium: Option<usize>,
         beta: S,
         l: &mut S,
-        rng: &mut Rng,
+        rng: &mut Samples,
     ) -> (Vec3A, f32) {
         let lights = &self.scene.lights;
         if !lights.is_empty() {
@@ -482,7 +482,7 @@ impl Integrator<'_> {
     }
 
     /// Radiance along a camera ray.
-    pub fn li(&self, mut o: Vec3A, mut d: Vec3A, rng: &mut Rng) -> S {
+    pub fn li(&self, mut o: Vec3A, mut d: Vec3A, rng: &mut Samples) -> S {
         let sc = self.scene;
         let mut l = S::ZERO;
         let mut beta = self.mask;

@@ -16,6 +16,7 @@ pub mod spectrum;
 use firemedium_core::cie;
 use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
+use pixel::Samples;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -118,9 +119,9 @@ pub fn render(
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
-                        let mut rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
-                        let draw = [rng.next_f64(), rng.next_f64()];
-                        let u = scene.sampler.pixel_sample(s, order, draw);
+                        let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
+                        let mut rng = scene.sampler.samples(s, scene.spp, order, rng);
+                        let u = [rng.next_f64(), rng.next_f64()];
                         // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
                         // the pixel is Σ w L / Σ w).
                         let (off, w) = scene.filter.sample(u);
@@ -175,7 +176,7 @@ pub fn render(
 
 /// The camera ray through film position (`fx`, `fy`) in pixels (origin top left), its lens sample from `rng`
 /// when the camera has a lens.
-pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec3A, Vec3A) {
+pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Samples) -> (Vec3A, Vec3A) {
     let cam = &scene.camera;
     let (w, h) = (scene.res.0 as f64, scene.res.1 as f64);
     let sx = cam.screen[0] + fx / w * (cam.screen[1] - cam.screen[0]);
@@ -207,6 +208,7 @@ pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Rng) -> (Vec
 /// The pixels whose centre and four corners all see a diffuse surface first: no fire, no mirror or coating
 /// reflecting it, inside the pixel's footprint.
 pub fn surface_mask(sc: &scene::Scene, rng: &mut Rng) -> Vec<bool> {
+    let mut rng = Samples::random(rng.clone());
     let (w, h) = sc.res;
     (0..w * h)
         .map(|i| {
@@ -214,7 +216,7 @@ pub fn surface_mask(sc: &scene::Scene, rng: &mut Rng) -> Vec<bool> {
             [(0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
                 .iter()
                 .all(|&(u, v)| {
-                    let (o, d) = camera_ray(sc, x + u, y + v, rng);
+                    let (o, d) = camera_ray(sc, x + u, y + v, &mut rng);
                     sc.bvh
                         .intersect(o, d, sc.eps, f32::INFINITY)
                         .and_then(|hit| sc.bvh.prim(&hit).material)

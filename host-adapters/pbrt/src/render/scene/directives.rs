@@ -3,7 +3,7 @@
 
 use super::builder::{affine_f32, look_at, num, nums, string, Builder, FilmParams};
 use super::{err, Error, Light, Tex};
-use crate::render::pbrt_v4::{self, Kind};
+use crate::render::pbrt_v4::Kind;
 use crate::render::pixel::{Filter, Params as FilterParams, Sampler};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::S;
@@ -203,10 +203,22 @@ impl Builder {
                     };
                     self.spp = xs * ys;
                 } else {
-                    if ty != "independent" && pbrt_v4::parameters(Kind::Sampler, &ty).is_some() {
-                        self.warn(loc, format!("sampler \"{ty}\" is rendered with independent random samples (its convergence rate is not yet this renderer's)"));
+                    self.sampler = match ty.as_str() {
+                        "independent" => Sampler::Independent,
+                        "halton" => Sampler::Halton,
+                        "zsobol" | "sobol" | "paddedsobol" | "pmj02bn" => {
+                            if ty != "paddedsobol" {
+                                self.warn(loc, format!("sampler \"{ty}\" is rendered as \"paddedsobol\" (Owen-scrambled Sobol pairs per pixel: the same stratification within a pixel)"));
+                            }
+                            Sampler::PaddedSobol
+                        }
+                        _ => return Err(err(loc, format!("sampler \"{ty}\" is not a pbrt-v4 sampler (zsobol, sobol, paddedsobol, halton, pmj02bn, stratified, independent)"))),
+                    };
+                    if let Some(r) = string(p, "randomization") {
+                        if !matches!(r, "fastowen" | "owen") {
+                            self.warn(loc, format!("sampler \"{ty}\": randomization \"{r}\" is rendered with Owen scrambling"));
+                        }
                     }
-                    self.sampler = Sampler::Independent;
                     self.spp = num(p, "pixelsamples", 16.0).max(1.0) as usize;
                 }
                 self.finish(Kind::Sampler, &ty, &format!("sampler \"{ty}\""), p)?;

@@ -446,8 +446,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         camera: None,
         res: (1280, 720),
         spp: 16,
-        // pbrt-v4's defaults: zsobol (rendered with independent samples here) and a Gaussian of radius 1.5, σ 0.5.
-        sampler: crate::render::pixel::Sampler::Independent,
+        // pbrt-v4's defaults: zsobol (rendered as padded Sobol here) and a Gaussian of radius 1.5, σ 0.5.
+        sampler: crate::render::pixel::Sampler::PaddedSobol,
         film_response: Default::default(),
         crop: None,
         pixel_bounds: None,
