@@ -222,6 +222,25 @@ fn a_scene_asking_for_pixel_centres_gets_pixel_centres() {
         "{cols:?}"
     );
     assert_eq!(cols.iter().filter(|y| **y > 0.5).count(), 4, "{cols:?}");
+    // pbrt-v4's `Option "bool disablepixeljitter" true` puts every sample at the centre too.
+    let option = dir.join("option.pbrt");
+    std::fs::write(
+        &option,
+        format!(
+            "Option \"bool disablepixeljitter\" true\n{}",
+            scene("PixelFilter \"box\"")
+        ),
+    )
+    .unwrap();
+    let img = render(&option, &dir.join("o.exr"), &[]);
+    let cols: Vec<f64> = (0..8)
+        .map(|x| y_of(mean_rgb(&img, (x, x + 1), (0, 2))))
+        .collect();
+    assert!(
+        cols.iter()
+            .all(|y| y.abs() < 1e-4 || (y - 1.0).abs() < 1e-4),
+        "{cols:?}"
+    );
     let blended = dir.join("blended.pbrt");
     std::fs::write(
         &blended,
@@ -453,4 +472,38 @@ fn a_crop_window_renders_its_pixels_of_the_full_film() {
             "{name}"
         );
     }
+}
+
+#[test]
+fn the_scenes_seed_option_is_the_default_seed() {
+    // `Option "integer seed" 5` renders as `--seed 5`; `--seed` wins over it.
+    let dir = out_dir("seed");
+    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let seeded = dir.join("seeded.pbrt");
+    std::fs::write(&seeded, format!("Option \"integer seed\" 5\n{text}")).unwrap();
+    let run = |scene: &Path, name: &str, seed: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(scene)
+            .arg("-o")
+            .arg(dir.join(name))
+            .args(["-q", "--spp", "2", "--resolution", "16x8"])
+            .args(if seed.is_empty() {
+                vec![]
+            } else {
+                vec!["--seed", seed]
+            })
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        read_exr(&dir.join(name)).2
+    };
+    let plain = shared("pbrt-v4-measured/slab_const.pbrt");
+    let (a, b, c) = (
+        run(&seeded, "a.exr", ""),
+        run(&plain, "b.exr", "5"),
+        run(&plain, "c.exr", "6"),
+    );
+    assert!(a == b && a != c);
+    assert!(run(&seeded, "d.exr", "6") == c);
 }

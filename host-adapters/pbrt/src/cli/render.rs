@@ -32,9 +32,10 @@ pub struct RenderArgs {
     /// Worker threads, 1 to 1024 (default: all cores); no more are started than there are tiles.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
     threads: Option<u16>,
-    /// Seed of the pixel samples (same seed, same image, any thread count).
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    /// Seed of the pixel samples (same seed, same image, any thread count; default: the scene's
+    /// `Option "integer seed"`, else 0).
+    #[arg(long)]
+    seed: Option<u64>,
     /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
     #[arg(long)]
     plugin: Option<PathBuf>,
@@ -111,8 +112,11 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         .num_threads(a.threads.map_or(0, usize::from).min(tiles))
         .build()
         .map_err(|e| (1, format!("threads: {e}")))?;
-    let (img, st) =
-        pool.install(|| render::render(&sc, a.seed, &|n, _| bar.set_position(n as u64)));
+    let (img, st) = pool.install(|| {
+        render::render(&sc, a.seed.unwrap_or(sc.seed), &|n, _| {
+            bar.set_position(n as u64)
+        })
+    });
     bar.finish_and_clear();
     // Tracking that stopped at the plugin's per-ray collision cap biases towards dark: say so, per medium.
     for m in &sc.media {

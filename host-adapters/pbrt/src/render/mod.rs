@@ -121,7 +121,10 @@ pub fn render(
                     for s in 0..scene.spp {
                         let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
                         let mut rng = scene.sampler.samples(s, scene.spp, order, rng);
-                        let u = [rng.next_f64(), rng.next_f64()];
+                        let mut u = [rng.next_f64(), rng.next_f64()];
+                        if !scene.pixel_jitter {
+                            u = [0.5, 0.5];
+                        }
                         // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
                         // the pixel is Σ w L / Σ w).
                         let (off, w) = scene.filter.sample(u);

@@ -518,7 +518,12 @@ mod tests {
                 let (mut m1, mut m2, mut n) = (0.0, 0.0, 0.0);
                 for pixel in 0..4000u64 {
                     for k in 0..16 {
-                        let mut st = sampler.samples(k, 16, hash2(pixel, 3), Rng::new(pixel * 16 + k as u64));
+                        let mut st = sampler.samples(
+                            k,
+                            16,
+                            hash2(pixel, 3),
+                            Rng::new(pixel * 16 + k as u64),
+                        );
                         let v = (0..=d).map(|_| st.next_f64()).last().unwrap();
                         m1 += v;
                         m2 += v * v;
@@ -526,7 +531,10 @@ mod tests {
                     }
                 }
                 let (m1, m2) = (m1 / n, m2 / n);
-                assert!((m1 - 0.5).abs() < 5e-3 && (m2 - 1.0 / 3.0).abs() < 5e-3, "{sampler:?} dimension {d}: mean {m1}, E[x²] {m2}");
+                assert!(
+                    (m1 - 0.5).abs() < 5e-3 && (m2 - 1.0 / 3.0).abs() < 5e-3,
+                    "{sampler:?} dimension {d}: mean {m1}, E[x²] {m2}"
+                );
             }
         }
     }

@@ -73,6 +73,9 @@ pub(super) struct Builder {
     pub(super) sampler: crate::render::pixel::Sampler,
     pub(super) filter: crate::render::pixel::Filter,
     pub(super) film_response: FilmParams,
+    /// `Option "integer seed"` and `Option "bool disablepixeljitter"`.
+    pub(super) seed: u64,
+    pub(super) pixel_jitter: bool,
     /// The film's `cropwindow` (x0, x1, y0, y1 in [0, 1]) or `pixelbounds` (pixels), with where each was given.
     pub(super) crop: Option<([f64; 4], Loc)>,
     pub(super) pixel_bounds: Option<([f64; 4], Loc)>,

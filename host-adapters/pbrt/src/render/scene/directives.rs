@@ -95,7 +95,16 @@ impl Builder {
                 });
                 self.check_bounds(first, &format!("ObjectInstance \"{n}\""), loc)?;
             }
-            Directive::Option(p) => self.warn(loc, format!("Option \"{}\" is ignored", p.name)),
+            Directive::Option(p) => match (p.name.as_str(), p.numbers(), p.bools()) {
+                // pbrt-v4's options that change the image: the sampler's seed, and pixel samples at the pixels'
+                // centres.
+                ("seed", Some([v]), _) if v.fract() == 0.0 && *v >= 0.0 && *v < 2f64.powi(63) => self.seed = *v as u64,
+                ("disablepixeljitter", _, Some([b])) => self.pixel_jitter = !*b,
+                ("seed" | "disablepixeljitter", ..) => {
+                    return Err(err(&p.loc, format!("Option \"{}\": expected an integer >= 0 (seed) or a bool (disablepixeljitter)", p.name)))
+                }
+                _ => self.warn(loc, format!("Option \"{}\" is ignored (seed and disablepixeljitter are read)", p.name)),
+            },
             Directive::ColorSpace(n) => {
                 if n != "srgb" {
                     self.warn(

@@ -204,6 +204,10 @@ pub struct Scene {
     pub response: crate::render::film::Response,
     /// The pixels rendered, [x0, x1) × [y0, y1) of the `res` film (pbrt-v4's pixel bounds; all of it by default).
     pub bounds: [usize; 4],
+    /// The scene's seed (`Option "integer seed"`; the command line's `--seed` wins) and whether pixel samples
+    /// spread over the pixel (`Option "bool disablepixeljitter" true`: all at its centre).
+    pub seed: u64,
+    pub pixel_jitter: bool,
     pub maxdepth: usize,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -449,6 +453,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         // pbrt-v4's defaults: zsobol (rendered as padded Sobol here) and a Gaussian of radius 1.5, σ 0.5.
         sampler: crate::render::pixel::Sampler::PaddedSobol,
         film_response: Default::default(),
+        seed: 0,
+        pixel_jitter: true,
         crop: None,
         pixel_bounds: None,
         filter: crate::render::pixel::Filter::new(
@@ -601,6 +607,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         filter: b.filter,
         response,
         bounds,
+        seed: b.seed,
+        pixel_jitter: b.pixel_jitter,
         maxdepth: b.maxdepth,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
