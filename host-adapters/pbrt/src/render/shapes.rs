@@ -31,6 +31,8 @@ pub enum Geom {
         h: f32,
         r: f32,
         ri: f32,
+        /// The part with φ in [0, phimax] (whole: 2π), as for spheres and cylinders.
+        phimax: f32,
     },
     Cylinder {
         to_world: Affine3A,
@@ -38,6 +40,7 @@ pub enum Geom {
         r: f32,
         zmin: f32,
         zmax: f32,
+        phimax: f32,
     },
     /// An `ObjectInstance`: the object's primitives under `to_world`, shared by every instance of it.
     Instance {
@@ -181,7 +184,7 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
                     return true;
                 }
                 let p = oo + dd * t;
-                p.z >= *zmin && p.z <= *zmax && p.y.atan2(p.x).rem_euclid(2.0 * PI) <= *phimax
+                p.z >= *zmin && p.z <= *zmax && within_phi(p, *phimax)
             };
             if ok(t0) && kept(t0) {
                 t0
@@ -192,7 +195,12 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             }
         }
         Geom::Disk {
-            to_obj, h, r, ri, ..
+            to_obj,
+            h,
+            r,
+            ri,
+            phimax,
+            ..
         } => {
             let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
             if dd.z == 0.0 {
@@ -201,7 +209,7 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             let t = (h - oo.z) / dd.z;
             let q = oo + dd * t;
             let r2 = q.x * q.x + q.y * q.y;
-            if ok(t) && r2 <= r * r && r2 >= ri * ri {
+            if ok(t) && r2 <= r * r && r2 >= ri * ri && within_phi(q, *phimax) {
                 t
             } else {
                 f32::INFINITY
@@ -212,6 +220,7 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             r,
             zmin,
             zmax,
+            phimax,
             ..
         } => {
             let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
@@ -228,7 +237,7 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
             let q = disc.sqrt();
             for t in [(-b - q) / (2.0 * a), (-b + q) / (2.0 * a)] {
                 let z = oo.z + dd.z * t;
-                if ok(t) && z >= *zmin && z <= *zmax {
+                if ok(t) && z >= *zmin && z <= *zmax && within_phi(oo + dd * t, *phimax) {
                     return t;
                 }
             }
@@ -242,6 +251,11 @@ pub fn intersect_t(g: &Geom, o: Vec3A, d: Vec3A, tmin: f32, tmax: f32) -> f32 {
                 .map_or(f32::INFINITY, |(t, _)| t)
         }
     }
+}
+
+/// Whether object-space point `p` lies at φ ≤ `phimax` (always, for a whole turn).
+fn within_phi(p: Vec3A, phimax: f32) -> bool {
+    phimax >= 2.0 * PI || p.y.atan2(p.x).rem_euclid(2.0 * PI) <= phimax
 }
 
 /// Hit details at parameter t; `part` is the object's primitive when `prims[id]` is an instance.
@@ -390,11 +404,12 @@ pub fn sample_area(pr: &Prim, u: [f32; 2]) -> (Vec3A, Vec3A, f32) {
             h,
             r,
             ri,
+            phimax,
         } => {
             let rr = (ri * ri + u[0] * (r * r - ri * ri)).sqrt();
-            let phi = 2.0 * PI * u[1];
+            let phi = phimax * u[1];
             let q = Vec3A::new(rr * phi.cos(), rr * phi.sin(), *h);
-            let area = PI * (r * r - ri * ri) * area_scale(to_world);
+            let area = 0.5 * phimax * (r * r - ri * ri) * area_scale(to_world);
             (
                 to_world.transform_point3a(q),
                 flip(normal_to_world(to_obj, Vec3A::Z)),
@@ -407,10 +422,11 @@ pub fn sample_area(pr: &Prim, u: [f32; 2]) -> (Vec3A, Vec3A, f32) {
             r,
             zmin,
             zmax,
+            phimax,
         } => {
-            let phi = 2.0 * PI * u[1];
+            let phi = phimax * u[1];
             let q = Vec3A::new(r * phi.cos(), r * phi.sin(), zmin + u[0] * (zmax - zmin));
-            let area = 2.0 * PI * r * (zmax - zmin) * area_scale(to_world);
+            let area = phimax * r * (zmax - zmin) * area_scale(to_world);
             (
                 to_world.transform_point3a(q),
                 flip(normal_to_world(to_obj, Vec3A::new(q.x, q.y, 0.0))),

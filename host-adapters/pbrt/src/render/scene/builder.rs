@@ -535,10 +535,13 @@ impl Builder {
                 });
             }
             "disk" => {
-                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32 });
+                let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians() as f32;
+                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32, phimax });
             }
             "cylinder" => {
-                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: num(p, "zmin", -1.0) as f32, zmax: num(p, "zmax", 1.0) as f32 });
+                let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians() as f32;
+                let (z0, z1) = (num(p, "zmin", -1.0), num(p, "zmax", 1.0));
+                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: z0.min(z1) as f32, zmax: z0.max(z1) as f32, phimax });
             }
             "trianglemesh" | "bilinearmesh" | "plymesh" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
