@@ -256,50 +256,44 @@ fn a_scene_asking_for_pixel_centres_gets_pixel_centres() {
 
 #[test]
 fn an_orthographic_view_of_partial_shapes_covers_their_projected_area() {
-    // Orthographic from above, the screen window 4 × 4 units on 64 × 64 pixels: an emitting sphere of radius 1
-    // (rgb L [1 1 1]: luminance 1) covers π/16 of the image whatever its distance; its upper half (zmin 0) the
-    // same disk; the half of that with φ ≤ 180° (phimax) half the disk.
+    // Orthographic, the screen window 4 × 4 units on 64 × 64 pixels: an emitting shape (rgb L [1 1 1]: luminance
+    // 1) covers its projected area / 16 of the image whatever its distance. From above: a sphere of radius 1 (π),
+    // its upper half (zmin 0: the same disc), the half of that with φ ≤ 180° (π/2), a quarter disk (π/4), a half
+    // ring of inner radius ½ (½ π (1 − ¼)); from +x, a half cylinder (φ ≤ 180°, r 1, z ∈ [−1, 1]): its half at
+    // y ≥ 0 projects to 1 × 2.
     let dir = out_dir("ortho");
-    for (name, shape, want) in [
-        ("whole", "", std::f64::consts::PI / 16.0),
-        ("upper", "\"float zmin\" 0", std::f64::consts::PI / 16.0),
+    let pi = std::f64::consts::PI;
+    for (name, look, shape, area) in [
+        ("whole", "0 0 30", "\"sphere\" \"float radius\" 1", pi),
+        (
+            "upper",
+            "0 0 30",
+            "\"sphere\" \"float radius\" 1 \"float zmin\" 0",
+            pi,
+        ),
         (
             "half",
-            "\"float zmin\" 0 \"float phimax\" 180",
-            std::f64::consts::PI / 32.0,
+            "0 0 30",
+            "\"sphere\" \"float radius\" 1 \"float zmin\" 0 \"float phimax\" 180",
+            pi / 2.0,
         ),
-    ] {
-        let scene = format!("LookAt 0 0 30  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\nFilm \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 64\nSampler \"stratified\" \"integer xsamples\" 4 \"integer ysamples\" 4\nPixelFilter \"box\"\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nShape \"sphere\" \"float radius\" 1 {shape}\nAttributeEnd\n");
-        let f = dir.join(format!("{name}.pbrt"));
-        std::fs::write(&f, scene).unwrap();
-        let img = render(&f, &dir.join(format!("{name}.exr")), &[]);
-        let y = y_of(mean_rgb(&img, (0, 64), (0, 64)));
-        assert!(
-            (y / want - 1.0).abs() < 0.01,
-            "{name}: mean Y {y}, projected area {want}"
-        );
-    }
-    // Partial disks from above (a quarter; a half ring of inner radius ½: ½ π (1 − ¼)) and a half cylinder
-    // (φ ≤ 180°, axis z, r 1, z ∈ [−1, 1]) seen from +x: its half at y ≥ 0 projects to 1 × 2 of the 4 × 4 window.
-    let pi = std::f64::consts::PI;
-    for (name, look, shape, want) in [
         (
             "quarter",
             "0 0 30",
             "\"disk\" \"float radius\" 1 \"float phimax\" 90",
-            pi / 4.0 / 16.0,
+            pi / 4.0,
         ),
         (
             "ring",
             "0 0 30",
             "\"disk\" \"float radius\" 1 \"float innerradius\" 0.5 \"float phimax\" 180",
-            0.5 * pi * 0.75 / 16.0,
+            0.5 * pi * 0.75,
         ),
         (
             "cylinder",
             "30 0 0",
             "\"cylinder\" \"float radius\" 1 \"float phimax\" 180",
-            2.0 / 16.0,
+            2.0,
         ),
     ] {
         let up = if look == "30 0 0" { "0 0 1" } else { "0 1 0" };
@@ -307,10 +301,10 @@ fn an_orthographic_view_of_partial_shapes_covers_their_projected_area() {
         let f = dir.join(format!("{name}.pbrt"));
         std::fs::write(&f, scene).unwrap();
         let img = render(&f, &dir.join(format!("{name}.exr")), &[]);
-        let y = y_of(mean_rgb(&img, (0, 64), (0, 64)));
+        let (y, want) = (y_of(mean_rgb(&img, (0, 64), (0, 64))), area / 16.0);
         assert!(
             (y / want - 1.0).abs() < 0.01,
-            "{name}: mean Y {y}, projected area {want}"
+            "{name}: mean Y {y}, projected area / 16 = {want}"
         );
     }
 }

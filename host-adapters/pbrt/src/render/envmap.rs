@@ -6,6 +6,7 @@
 //! a point in one texel reads its neighbours too: the density is positive wherever the map's radiance is, so the
 //! estimate stays unbiased; a small floor (1e-4 of the mean) keeps it so for maps with negative-clamped texels.
 
+use super::distrib::Distribution2D;
 use crate::imageio::{equal_area_square_to_sphere, RgbImage};
 use std::f32::consts::PI;
 
@@ -15,10 +16,7 @@ pub struct EnvSampler {
     w: usize,
     h: usize,
     equal_area: bool,
-    /// CDF over rows (h + 1 entries, ending at the total).
-    marg: Vec<f64>,
-    /// Per row, the CDF over its texels (w + 1 entries each).
-    cond: Vec<f64>,
+    cells: Distribution2D,
 }
 
 impl EnvSampler {
@@ -55,48 +53,25 @@ impl EnvSampler {
         }
         let mean = weight.iter().sum::<f64>() / (w * h) as f64;
         let floor = if mean > 0.0 { 1e-4 * mean } else { 1.0 };
-        let mut cond = Vec::with_capacity(h * (w + 1));
-        let mut marg = vec![0.0];
-        for y in 0..h {
-            let mut acc = 0.0;
-            cond.push(0.0);
-            for x in 0..w {
-                acc += weight[x + w * y] + floor;
-                cond.push(acc);
-            }
-            marg.push(marg[y] + acc);
-        }
+        weight.iter_mut().for_each(|v| *v += floor);
         EnvSampler {
             w,
             h,
             equal_area,
-            marg,
-            cond,
+            cells: Distribution2D::new(&weight, w),
         }
     }
 
     /// A direction in the map's space and its density per steradian.
     pub fn sample(&self, u: [f32; 2]) -> ([f32; 3], f32) {
-        let find = |cdf: &[f64], t: f64| -> (usize, f64) {
-            let n = cdf.len() - 1;
-            let k = cdf.partition_point(|&c| c <= t).clamp(1, n) - 1;
-            let width = cdf[k + 1] - cdf[k];
-            let f = if width > 0.0 {
-                (t - cdf[k]) / width
-            } else {
-                0.5
-            };
-            (k, f.clamp(0.0, 1.0 - 1e-7))
+        let Some(c) = self.cells.sample([u[0] as f64, u[1] as f64]) else {
+            return ([0.0, 0.0, 1.0], 0.0);
         };
-        let total = self.marg[self.h];
-        let (y, fy) = find(&self.marg, u[1] as f64 * total);
-        let row = &self.cond[y * (self.w + 1)..(y + 1) * (self.w + 1)];
-        let (x, fx) = find(row, u[0] as f64 * row[self.w]);
         // Density in (s, t) ∈ [0, 1]²: the texel's share over its area 1/(w h).
-        let p_st = ((row[x + 1] - row[x]) / total * (self.w * self.h) as f64) as f32;
+        let p_st = (c.p * (self.w * self.h) as f64) as f32;
         let (s, t) = (
-            ((x as f64 + fx) / self.w as f64) as f32,
-            ((y as f64 + fy) / self.h as f64) as f32,
+            ((c.x as f64 + c.fx) / self.w as f64) as f32,
+            ((c.y as f64 + c.fy) / self.h as f64) as f32,
         );
         if self.equal_area {
             (equal_area_square_to_sphere([s, t]), p_st / (4.0 * PI))

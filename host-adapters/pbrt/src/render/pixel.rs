@@ -19,6 +19,7 @@
 //! a piecewise-constant table of |f| (32 cells per unit of radius, as pbrt-v4's `FilterSampler`) with weight
 //! f(p) / pdf(p). The pixel's value is Σ w L / Σ w (pbrt-v4's `RGBFilm`).
 
+use super::distrib::Distribution2D;
 use firemedium_core::rng::Rng;
 
 /// How many leading dimensions of a path the low-discrepancy samplers give (the rest are random).
@@ -222,7 +223,7 @@ pub enum Filter {
     Tabulated(Table),
 }
 
-/// A filter tabulated for importance sampling: |f| on a grid over [−r, r]², its marginal and conditional CDFs.
+/// A filter tabulated for importance sampling: |f| on a grid over [−r, r]², drawn cell by cell.
 #[derive(Debug, Clone)]
 pub struct Table {
     radius: [f64; 2],
@@ -230,14 +231,7 @@ pub struct Table {
     params: Params,
     nx: usize,
     ny: usize,
-    /// |f| per cell, rows of nx.
-    cells: Vec<f64>,
-    /// Per row: the CDF over its cells (nx + 1 entries each).
-    cond: Vec<f64>,
-    /// The CDF over the rows' sums (ny + 1 entries).
-    marg: Vec<f64>,
-    /// ∫ |f| over the domain.
-    total: f64,
+    cells: Distribution2D,
 }
 
 /// The parameters of the tabulated filters.
@@ -357,74 +351,42 @@ impl Table {
         let nx = ((32.0 * radius[0]).ceil() as usize).clamp(1, 4096);
         let ny = ((32.0 * radius[1]).ceil() as usize).clamp(1, 4096);
         let (cw, ch) = (2.0 * radius[0] / nx as f64, 2.0 * radius[1] / ny as f64);
-        let mut cells = Vec::with_capacity(nx * ny);
+        let mut weights = Vec::with_capacity(nx * ny);
         for j in 0..ny {
             for i in 0..nx {
                 let (x, y) = (
                     -radius[0] + (i as f64 + 0.5) * cw,
                     -radius[1] + (j as f64 + 0.5) * ch,
                 );
-                cells.push(f(&params, x, y).abs() * cw * ch);
+                weights.push(f(&params, x, y).abs());
             }
         }
-        let mut cond = Vec::with_capacity(ny * (nx + 1));
-        let mut marg = vec![0.0];
-        for j in 0..ny {
-            let mut acc = 0.0;
-            cond.push(0.0);
-            for i in 0..nx {
-                acc += cells[j * nx + i];
-                cond.push(acc);
-            }
-            marg.push(marg[j] + acc);
-        }
-        let total = marg[ny];
         Table {
             radius,
             f,
             params,
             nx,
             ny,
-            cells,
-            cond,
-            marg,
-            total,
+            cells: Distribution2D::new(&weights, nx),
         }
     }
 
     fn sample(&self, u: [f64; 2]) -> ([f64; 2], f64) {
-        if !(self.total > 0.0) {
+        let Some(c) = self.cells.sample(u) else {
             return ([0.0, 0.0], 1.0);
-        }
-        // Row by the marginal, then the cell in it, then uniformly within the cell.
-        let find = |cdf: &[f64], t: f64| -> (usize, f64) {
-            let n = cdf.len() - 1;
-            let k = cdf.partition_point(|&c| c <= t).clamp(1, n) - 1;
-            let w = cdf[k + 1] - cdf[k];
-            (
-                k,
-                if w > 0.0 {
-                    ((t - cdf[k]) / w).clamp(0.0, 1.0)
-                } else {
-                    0.5
-                },
-            )
         };
-        let (j, fy) = find(&self.marg, u[1] * self.total);
-        let row = &self.cond[j * (self.nx + 1)..(j + 1) * (self.nx + 1)];
-        let (i, fx) = find(row, u[0] * row[self.nx]);
         let (cw, ch) = (
             2.0 * self.radius[0] / self.nx as f64,
             2.0 * self.radius[1] / self.ny as f64,
         );
         let p = [
-            -self.radius[0] + (i as f64 + fx) * cw,
-            -self.radius[1] + (j as f64 + fy) * ch,
+            -self.radius[0] + (c.x as f64 + c.fx) * cw,
+            -self.radius[1] + (c.y as f64 + c.fy) * ch,
         ];
-        // pdf(p) = |f|(cell) / (∫|f| · cell area); weight f(p) / pdf(p), up to the constant ∫|f| that Σw L / Σw
-        // divides out.
-        let pdf = self.cells[j * self.nx + i] / (self.total * cw * ch);
-        let w = (self.f)(&self.params, p[0], p[1]) / (pdf * self.total).max(1e-300);
+        // pdf(p) = P(cell) / its area; the weight f(p) / pdf(p), up to the constant ∫|f| that Σw L / Σw divides
+        // out: f(p) / |f|(cell's centre).
+        let centre = c.p * self.cells.total();
+        let w = (self.f)(&self.params, p[0], p[1]) / centre.max(1e-300);
         (p, if w.is_finite() { w } else { 0.0 })
     }
 }

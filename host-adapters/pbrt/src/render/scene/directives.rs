@@ -167,12 +167,13 @@ impl Builder {
                     num(p, "iso", 100.0),
                     num(p, "maxcomponentvalue", f64::INFINITY),
                 );
+                // (Cameras go to ISO 3.3 million; daylight's locus is defined to 25 000 K and clamped there.)
                 let valid = iso > 0.0
-                    && iso.is_finite()
+                    && iso <= 1e7
                     && maxc > 0.0
-                    && (white == 0.0 || (white > 0.0 && white.is_finite()));
+                    && (white == 0.0 || (white > 0.0 && white <= 1e6));
                 if !valid {
-                    return Err(err(loc, format!("film: iso {iso}, maxcomponentvalue {maxc}, whitebalance {white}: expected iso > 0, a positive maximum and a temperature >= 0 K")));
+                    return Err(err(loc, format!("film: iso {iso}, maxcomponentvalue {maxc}, whitebalance {white}: expected 0 < iso <= 1e7, a positive maximum and 0 <= whitebalance <= 1e6 K")));
                 }
                 for (name, slot) in [
                     ("cropwindow", &mut self.crop),
