@@ -350,7 +350,7 @@ fn environment_maps_are_importance_sampled_without_bias() {
     // = 1 (Y = ρ L). (2) A small sun (under 1 % of the sky's solid angle, 99 % of its power): sampled by the map's
     // luminance, the floor's pixels spread by the cosine's variation alone at 16 spp, as under the half sky
     // (measured 0.18 and 0.16); uniform directions would miss the sun (0.069 sr, 0.55 % of the sphere) in 92 % of
-    // the pixels at 16 spp.
+    // the pixels at 16 spp. (3) The half sky asked for 100 lux: the floor's Y is ρ E / π.
     let dir = out_dir("envis");
     let (w, h) = (128, 64);
     let half: Vec<[f32; 3]> = (0..w * h)
@@ -368,10 +368,14 @@ fn environment_maps_are_importance_sampled_without_bias() {
             }
         })
         .collect();
-    for (name, px) in [("half", half), ("sun", sun)] {
+    for (name, px, extra) in [
+        ("half", half.clone(), ""),
+        ("sun", sun, ""),
+        ("lux", half, "\"float illuminance\" 100"),
+    ] {
         let map = dir.join(format!("{name}.exr"));
         firemedium::imageio::write_exr(&map, w, h, &px, None).unwrap();
-        let scene = format!("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"{name}.exr\"\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n");
+        let scene = format!("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"{name}.exr\" {extra}\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n");
         let f = dir.join(format!("{name}.pbrt"));
         std::fs::write(&f, scene).unwrap();
         let img = render(&f, &dir.join(format!("{name}-out.exr")), &[]);
@@ -384,6 +388,13 @@ fn environment_maps_are_importance_sampled_without_bias() {
             assert!(
                 (mean - 1.0).abs() < 0.01,
                 "half sky: floor Y {mean}, expected ρ L = 1"
+            );
+        } else if name == "lux" {
+            // "illuminance" 100 lux on the upward floor: its radiance is ρ E / π.
+            let want = 0.5 * 100.0 / std::f64::consts::PI;
+            assert!(
+                (mean / want - 1.0).abs() < 0.01,
+                "100 lx: floor Y {mean}, expected {want}"
             );
         } else {
             assert!(spread < 0.4, "sun: relative spread {spread} across pixels");

@@ -92,6 +92,38 @@ impl EnvSampler {
     }
 }
 
+/// The illuminance (lux, per unit of the map's luminance scale) a map gives a patch facing the map's +z: Σ over
+/// texels above the horizon of luminance × cos θ × the texel's solid angle. pbrt-v4 (`lights.cpp`) weights each
+/// texel of its equal-area map by 2π/(W H); the texels' solid angle is 4π/(W H), used here.
+pub fn upper_illuminance(img: &RgbImage) -> f64 {
+    let (w, h) = (img.w.max(1), img.h.max(1));
+    let mut e = 0.0;
+    for y in 0..h {
+        for x in 0..w {
+            let (s, t) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            let (z, d_omega) = if img.w == img.h {
+                (
+                    equal_area_square_to_sphere([s, t])[2] as f64,
+                    4.0 * std::f64::consts::PI / (w * h) as f64,
+                )
+            } else {
+                let theta = t as f64 * std::f64::consts::PI;
+                (
+                    theta.cos(),
+                    2.0 * std::f64::consts::PI * std::f64::consts::PI * theta.sin()
+                        / (w * h) as f64,
+                )
+            };
+            if z > 0.0 {
+                let c = img.px.get(x + w * y).copied().unwrap_or([0.0; 3]);
+                let lum = (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).max(0.0) as f64;
+                e += lum * z * d_omega;
+            }
+        }
+    }
+    e
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -334,7 +334,18 @@ impl Builder {
                                 let white = self.bins.d65();
                                 let basis = self.rgb_basis().map(|b| b * white * (1.0 / self.bins.luminance(&white)) as f32);
                                 let dist = std::sync::Arc::new(crate::render::envmap::EnvSampler::new(&img));
-                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: scale as f32, basis, dist }
+                                // `illuminance` in lux on a patch facing the map's +z: the map scaled to give it.
+                                let e_v = num(p, "illuminance", -1.0);
+                                let k = if e_v > 0.0 {
+                                    let e = crate::render::envmap::upper_illuminance(&img);
+                                    if !(e > 0.0) {
+                                        return Err(err(loc, format!("infinite light: \"illuminance\" {e_v} asked of a map that is black above its horizon")));
+                                    }
+                                    e_v / e
+                                } else {
+                                    1.0
+                                };
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: (scale * k) as f32, basis, dist }
                             }
                             None => {
                                 // `illuminance` in lux on an upward-facing patch under the uniform sky: π L.
