@@ -474,48 +474,61 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
     // find the fire by BSDF sampling alone; with it, NEE and those paths share the work by MIS. Both must give
     // the same image on average (light counted once, nothing lost) — here with the fire grid larger than its
     // spherical boundary, so the light also samples points where the medium is absent.
-    let dir = tmp("firelight");
-    let scene = format!(
-        "LookAt 3 -3 4  2 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 96\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nAttributeBegin\nTranslate 0 0 1.2\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.7\nAttributeEnd\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
-        inline_grid(6, 3e-7, 1700.0)
+    // Both on a diffuse floor and on a rough conductor one (its microfacet BRDF in NEE and in MIS).
+    for (name, floor) in [
+        (
+            "diffuse",
+            r#"Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]"#,
+        ),
+        (
+            "rough",
+            r#"Material "conductor" "rgb reflectance" [0.8 0.8 0.8] "float roughness" 0.3"#,
+        ),
+    ] {
+        let dir = tmp(&format!("firelight-{name}"));
+        let scene = format!(
+        "LookAt 3 -3 4  2 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 96\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nAttributeBegin\nTranslate 0 0 1.2\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.7\nAttributeEnd\n{}\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
+        inline_grid(6, 3e-7, 1700.0),
+        floor
     );
-    std::fs::write(dir.join("l.pbrt"), &scene).unwrap();
-    let path = dir.join("l.pbrt");
-    let (_, _, with) = read_exr(&render(&path, &["--stats"]));
-    std::fs::write(dir.join("o.pbrt"), &scene).unwrap();
-    let (_, _, without) = read_exr(&render(
-        &dir.join("o.pbrt"),
-        &["--fire-light", "off", "--spp", "384"],
-    ));
-    let (a, b) = (mean_y(&with), mean_y(&without));
-    // Noise of the mean without the light: from the pixel-to-pixel spread of (without − with), which is
-    // dominated by the light-less render's noise.
-    let n = with.len() as f64;
-    let d: Vec<f64> = with
-        .iter()
-        .zip(&without)
-        .map(|(p, q)| luminance(*q) - luminance(*p))
-        .collect();
-    let md = d.iter().sum::<f64>() / n;
-    let sd = (d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
-    eprintln!(
-        "fire light: mean Y {a:.6e} with, {b:.6e} without ({:+.3e}, σ {:.2e})",
-        b / a - 1.0,
-        sd / a
-    );
-    assert!(
-        a > 0.0 && with.iter().all(|p| luminance(*p) > 0.0),
-        "the floor is lit everywhere"
-    );
-    assert!(
-        (b - a).abs() < 4.0 * sd + 1e-3 * a,
-        "with {a}, without {b}, σ {sd}"
-    );
-    assert!(
-        sd / a < 0.02,
-        "the comparison should be sharp (σ {:.3})",
-        sd / a
-    );
+        std::fs::write(dir.join("l.pbrt"), &scene).unwrap();
+        let path = dir.join("l.pbrt");
+        let (_, _, with) = read_exr(&render(&path, &["--stats"]));
+        std::fs::write(dir.join("o.pbrt"), &scene).unwrap();
+        let (_, _, without) = read_exr(&render(
+            &dir.join("o.pbrt"),
+            &["--fire-light", "off", "--spp", "384"],
+        ));
+        let (a, b) = (mean_y(&with), mean_y(&without));
+        // Noise of the mean without the light: from the pixel-to-pixel spread of (without − with), which is
+        // dominated by the light-less render's noise.
+        let n = with.len() as f64;
+        let d: Vec<f64> = with
+            .iter()
+            .zip(&without)
+            .map(|(p, q)| luminance(*q) - luminance(*p))
+            .collect();
+        let md = d.iter().sum::<f64>() / n;
+        let sd = (d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+        eprintln!(
+            "fire light ({name}): mean Y {a:.6e} with, {b:.6e} without ({:+.3e}, σ {:.2e})",
+            b / a - 1.0,
+            sd / a
+        );
+        assert!(
+            a > 0.0 && with.iter().all(|p| luminance(*p) > 0.0),
+            "the floor is lit everywhere"
+        );
+        assert!(
+            (b - a).abs() < 4.0 * sd + 1e-3 * a,
+            "with {a}, without {b}, σ {sd}"
+        );
+        assert!(
+            sd / a < 0.02,
+            "the comparison should be sharp (σ {:.3})",
+            sd / a
+        );
+    }
 }
 
 #[test]

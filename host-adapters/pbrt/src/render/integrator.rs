@@ -24,6 +24,18 @@ fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
     )
 }
 
+/// `w` in the frame whose z is `n` (the microfacet models' local space)...
+fn to_local(n: Vec3A, w: Vec3A) -> Vec3A {
+    let (t, b) = frame(n);
+    Vec3A::new(w.dot(t), w.dot(b), w.dot(n))
+}
+
+/// ...and back.
+fn from_local(n: Vec3A, w: Vec3A) -> Vec3A {
+    let (t, b) = frame(n);
+    (t * w.x + b * w.y + n * w.z).normalize_or_zero()
+}
+
 fn cosine_dir(n: Vec3A, u: [f32; 2]) -> Vec3A {
     let r = u[0].sqrt();
     let phi = 2.0 * PI * u[1];
@@ -668,11 +680,32 @@ impl Integrator<'_> {
                     }
                 }
             }
+            // NEE at a rough conductor: the light's sample through the microfacet BRDF (MIS against BSDF sampling
+            // for the fire light, the one light whose emission BSDF-sampled paths also collect).
+            if let (Material::Conductor(r, Some(tr)), false) = (mat, sc.lights.is_empty()) {
+                let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
+                let p = h.p + ng * sc.eps;
+                if let Some((le, wi, pl)) = self.sample_light(li, p, side_medium(ng), rng) {
+                    let (lo, lw) = (to_local(n, wo), to_local(n, wi));
+                    if wi.dot(ng) > 0.0 && lw.z > 0.0 {
+                        let f = tr.brdf(lo, lw) * lw.z;
+                        let pb = tr.pdf(lo, lw);
+                        l += beta * *r * le * (f * light_mis_weight(pl, pb));
+                    }
+                }
+            }
             // Sample the BSDF.
             let u = Self::rng2(rng);
+            let mut glossy_pdf = None;
             let (wi, weight, is_spec) = match mat {
                 Material::Diffuse(t) => (cosine_dir(n, u), t.eval(h.uv), false),
-                Material::Conductor(r) => (d - n * (2.0 * d.dot(n)), *r, true),
+                Material::Conductor(r, None) => (d - n * (2.0 * d.dot(n)), *r, true),
+                Material::Conductor(r, Some(tr)) => {
+                    let lo = to_local(n, wo);
+                    let Some(lw) = tr.sample(lo, u) else { break };
+                    glossy_pdf = Some(tr.pdf(lo, lw));
+                    (from_local(n, lw), *r * (tr.g(lo, lw) / tr.g1(lo)), false)
+                }
                 Material::CoatedDiffuse(t, eta) => {
                     let f = fresnel(wo.dot(n), *eta);
                     if rng.next_f64() < f as f64 {
@@ -710,7 +743,11 @@ impl Integrator<'_> {
             }
             beta *= weight;
             specular = is_spec;
-            mis = (!is_spec).then(|| (h.p, self.diffuse_pdf(mat, wo, n) * wi.dot(n).max(0.0) / PI));
+            mis = (!is_spec).then(|| {
+                let pdf =
+                    glossy_pdf.unwrap_or(self.diffuse_pdf(mat, wo, n) * wi.dot(n).max(0.0) / PI);
+                (h.p, pdf)
+            });
             medium = side_medium(wi);
             o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
             d = wi;

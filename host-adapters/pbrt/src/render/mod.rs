@@ -7,6 +7,7 @@ pub mod envmap;
 pub mod film;
 pub mod integrator;
 pub mod media_presets;
+pub mod microfacet;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;

@@ -613,7 +613,17 @@ impl Builder {
             }
             "conductor" => {
                 let r = self.constant(p, "reflectance", self.bins.mask() * 0.9, RgbUse::Albedo)?;
-                Material::Conductor(r)
+                // pbrt-v4's Trowbridge–Reitz roughness (u and v default to "roughness"; remapped to α = √r).
+                let rough = num(p, "roughness", 0.0);
+                let (u, v) = (num(p, "uroughness", rough), num(p, "vroughness", rough));
+                if !(u >= 0.0 && v >= 0.0 && u.is_finite() && v.is_finite()) {
+                    return Err(err(loc, format!("conductor: roughness ({u}, {v}): expected finite values >= 0")));
+                }
+                if u != v {
+                    self.warn(loc, format!("conductor: anisotropic roughness ({u}, {v}) is rendered isotropic, with their mean"));
+                }
+                let tr = crate::render::microfacet::TrowbridgeReitz::from_roughness(((u + v) / 2.0) as f32, p.bool("remaproughness", true));
+                Material::Conductor(r, (!tr.smooth()).then_some(tr))
             }
             "dielectric" | "thindielectric" => {
                 Material::Dielectric(num(p, "eta", 1.5) as f32)

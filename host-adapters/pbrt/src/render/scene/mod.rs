@@ -81,8 +81,8 @@ impl Tex {
 #[derive(Debug, Clone)]
 pub enum Material {
     Diffuse(Tex),
-    /// Smooth mirror with this reflectance.
-    Conductor(S),
+    /// A mirror of this reflectance, smooth or with a Trowbridge–Reitz roughness.
+    Conductor(S, Option<crate::render::microfacet::TrowbridgeReitz>),
     /// Smooth glass of this index.
     Dielectric(f32),
     /// Diffuse base under a smooth dielectric coat.
