@@ -2,6 +2,7 @@
 //! (media through the plugin), `integrator` is `volpath`, and [`render`] runs it over tiles in parallel into an
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
+pub mod cloud;
 pub mod distrib;
 pub mod envmap;
 pub mod film;

@@ -438,7 +438,7 @@ impl Builder {
                 let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
                 Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
-            "fire" | "uniformgrid" | "nanovdb" => {
+            "fire" | "uniformgrid" | "nanovdb" | "cloud" => {
                 // Parameters pass to the plugin unchanged, but for the type, the plugin file (read by `load`'s
                 // pre-scan, which loaded the plugin), and relative paths.
                 let plugin = self.plugin(loc)?;
@@ -469,6 +469,34 @@ impl Builder {
                         (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
                     };
                     list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
+                }
+                if ty == "cloud" {
+                    // pbrt-v4's procedural cloud, baked into a grid the plugin renders as a pbrt grid medium.
+                    let take = |list: &mut Vec<LParam>, name: &str, def: f64| -> f64 {
+                        match list.iter().position(|p| p.name == name) {
+                            Some(i) => match list.remove(i).value {
+                                Value::Float(v) => v.first().copied().unwrap_or(def),
+                                _ => def,
+                            },
+                            None => def,
+                        }
+                    };
+                    let (dens, wisp, freq) = (take(&mut list, "density", 1.0), take(&mut list, "wispiness", 1.0), take(&mut list, "frequency", 5.0));
+                    if ![dens, wisp, freq].iter().all(|v| v.is_finite() && *v >= 0.0 && *v <= 1e6) {
+                        return Err(err(loc, format!("cloud medium \"{name}\": density {dens}, wispiness {wisp}, frequency {freq}: expected values from 0 to 1e6")));
+                    }
+                    let corner = |name: &str, def: f64| {
+                        list.iter()
+                            .find(|p| p.name == name)
+                            .and_then(|p| match &p.value { Value::Point3(v) if v.len() == 3 => Some(DVec3::new(v[0], v[1], v[2])), _ => None })
+                            .unwrap_or(DVec3::splat(def))
+                    };
+                    let (p0, p1) = (corner("p0", 0.0), corner("p1", 1.0));
+                    let n = crate::render::cloud::BAKE as i64;
+                    for axis in ["nx", "ny", "nz"] {
+                        list.push(LParam::int(axis, n));
+                    }
+                    list.push(LParam { name: "density".into(), value: Value::Float(crate::render::cloud::bake(p0, p1, dens, wisp, freq)), at: Some(loc.to_string()) });
                 }
                 if ty != "fire" {
                     list.push(LParam::string("mode", "pbrt"));

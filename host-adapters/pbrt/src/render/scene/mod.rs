@@ -343,7 +343,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
             let p = &ParamDict::new(p);
             match string(p, "type") {
                 Some("fire") => fire = true,
-                Some("uniformgrid" | "nanovdb") => {}
+                Some("uniformgrid" | "nanovdb" | "cloud") => {}
                 _ => continue,
             }
             first_medium.get_or_insert(loc);
