@@ -89,6 +89,8 @@ pub(super) struct Builder {
     pub(super) bins_params: Vec<LParam>,
     /// Threads the plugin may use to build a medium (`Overrides::threads`).
     pub(super) threads: Option<usize>,
+    /// Bytes the plugin media built so far hold (each new medium's `maxbytes` is what the budget has left).
+    pub(super) media_bytes: u64,
     /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
     pub(super) max_memory: u64,
     /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
@@ -493,6 +495,14 @@ impl Builder {
                     };
                     let (p0, p1) = (corner("p0", 0.0), corner("p1", 1.0));
                     let n = crate::render::cloud::BAKE as i64;
+                    // The bake (f64 here, f32 in the plugin) must fit in what the media built so far left.
+                    crate::budget::check(
+                        &format!("cloud medium \"{name}\": its {n}³ baked grid"),
+                        (n * n * n) as u64,
+                        12,
+                        self.max_memory.saturating_sub(self.media_bytes),
+                    )
+                    .map_err(|e| err(loc, e))?;
                     for axis in ["nx", "ny", "nz"] {
                         list.push(LParam::int(axis, n));
                     }
@@ -512,7 +522,9 @@ impl Builder {
                     }
                 }
                 if !list.iter().any(|p| p.name == "maxbytes") {
-                    list.push(LParam::float("maxbytes", self.max_memory as f64));
+                    // The budget is shared: each medium may use what the media built before it left.
+                    let left = self.max_memory.saturating_sub(self.media_bytes).max(1);
+                    list.push(LParam::float("maxbytes", left as f64));
                 }
                 let vol = plugin.create_volume(&list).map_err(|e| {
                     // An error about one parameter begins with where it was given: report it there.
@@ -528,6 +540,7 @@ impl Builder {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
                 let units = self.check_colour(name, ty == "fire", &vol, loc)?;
+                self.media_bytes = self.media_bytes.saturating_add(info.bytes);
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None });
                 Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units }
             }

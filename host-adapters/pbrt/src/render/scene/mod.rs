@@ -453,6 +453,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         // pbrt-v4's defaults: zsobol (rendered as padded Sobol here) and a Gaussian of radius 1.5, σ 0.5.
         sampler: crate::render::pixel::Sampler::PaddedSobol,
         film_response: Default::default(),
+        media_bytes: 0,
         seed: 0,
         pixel_jitter: true,
         crop: None,
