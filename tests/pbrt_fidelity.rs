@@ -672,3 +672,31 @@ fn a_rough_conductor_under_a_uniform_sky_reflects_its_albedo() {
     // takes more of the rest: 0.688.
     assert!(albedo < 0.8 && albedo > 0.6, "{albedo}");
 }
+
+#[test]
+fn the_memory_budget_is_shared_by_a_scenes_media() {
+    // Three procedural clouds, each baked into 128³ samples (25 MB while baked, 8.5 MB once built): under a 30 MB
+    // budget the first fits and the second does not, and the error names it (before, each medium had the whole
+    // budget to itself, so a few lines could build gigabytes).
+    let dir = out_dir("shared-budget");
+    let mut scene = String::from("Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n");
+    for i in 0..3 {
+        scene += &format!("MakeNamedMedium \"c{i}\" \"string type\" \"cloud\"\n");
+    }
+    std::fs::write(dir.join("c.pbrt"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(dir.join("c.pbrt"))
+        .args(["--max-memory", "0.03", "-q", "-o"])
+        .arg(dir.join("c.exr"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("c.pbrt:5:1")
+            && e.contains("cloud medium \"c1\"")
+            && e.contains("memory budget"),
+        "{e}"
+    );
+}
