@@ -271,6 +271,13 @@ fn an_orthographic_view_of_partial_shapes_covers_their_projected_area() {
             "\"sphere\" \"float radius\" 1 \"float zmin\" 0",
             pi,
         ),
+        // (A negative radius is the same sphere: clamping zmin to [−r, r] with r < 0 panicked, mutant 3168.)
+        (
+            "negative",
+            "0 0 30",
+            "\"sphere\" \"float radius\" -1 \"float zmin\" 0",
+            pi,
+        ),
         (
             "half",
             "0 0 30",

@@ -563,8 +563,13 @@ impl Builder {
         match ty {
             "sphere" => {
                 let r = num(p, "radius", 1.0);
-                // pbrt-v4: z clamped to [−r, r] and ordered; φmax clamped to [0°, 360°].
-                let (z0, z1) = (num(p, "zmin", -r).clamp(-r, r), num(p, "zmax", r).clamp(-r, r));
+                if !r.is_finite() {
+                    return Err(err(loc, format!("sphere: radius {r}: expected a finite number")));
+                }
+                // pbrt-v4: z clamped to [−r, r] and ordered (a negative radius is the same sphere); φmax clamped
+                // to [0°, 360°].
+                let ra = r.abs();
+                let (z0, z1) = (num(p, "zmin", -ra).clamp(-ra, ra), num(p, "zmax", ra).clamp(-ra, ra));
                 let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians();
                 self.add_prim(Geom::Sphere {
                     to_world,
