@@ -650,20 +650,7 @@ fn a_rough_conductor_under_a_uniform_sky_reflects_its_albedo() {
     // (roughness 0), it is the mirror: Y = 1.
     let dir = out_dir("rough");
     let tr = firemedium::render::microfacet::TrowbridgeReitz::from_roughness(0.25, true);
-    let q = 1000;
-    let mut albedo = 0.0f64;
-    for i in 0..q {
-        for j in 0..q {
-            let (ct, phi) = (
-                (i as f32 + 0.5) / q as f32,
-                (j as f32 + 0.5) / q as f32 * std::f32::consts::TAU,
-            );
-            let st = (1.0 - ct * ct).sqrt();
-            let wi = glam::Vec3A::new(st * phi.cos(), st * phi.sin(), ct);
-            albedo += (tr.brdf(glam::Vec3A::Z, wi) * ct) as f64;
-        }
-    }
-    albedo *= std::f64::consts::TAU / (q * q) as f64;
+    let albedo = tr.albedo_by_quadrature(glam::Vec3A::Z, 1000);
     for (name, roughness, want) in [("rough", 0.25, albedo), ("smooth", 0.0, 1.0)] {
         let scene = format!("LookAt 0 0 10  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"paddedsobol\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"conductor\" \"rgb reflectance\" [1 1 1] \"float roughness\" {roughness}\nShape \"trianglemesh\" \"point3 P\" [-5 -5 0 5 -5 0 5 5 0 -5 5 0] \"integer indices\" [0 1 2 0 2 3]\n");
         let f = dir.join(format!("{name}.pbrt"));

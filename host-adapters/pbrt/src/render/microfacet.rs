@@ -88,6 +88,24 @@ impl TrowbridgeReitz {
         d_wo / (4.0 * dot)
     }
 
+    /// The directional albedo ∫ f cos θi dωi of a white conductor seen from local `wo`, by a midpoint rule of
+    /// `q` × `q` cells in (cos θi, φ) — the reference the sampler and the renderer are tested against.
+    pub fn albedo_by_quadrature(&self, wo: Vec3A, q: usize) -> f64 {
+        let mut sum = 0.0f64;
+        for i in 0..q {
+            for j in 0..q {
+                let (ct, phi) = (
+                    (i as f32 + 0.5) / q as f32,
+                    (j as f32 + 0.5) / q as f32 * 2.0 * PI,
+                );
+                let st = (1.0 - ct * ct).sqrt();
+                let wi = Vec3A::new(st * phi.cos(), st * phi.sin(), ct);
+                sum += (self.brdf(wo, wi) * ct) as f64;
+            }
+        }
+        sum * 2.0 * std::f64::consts::PI / (q * q) as f64
+    }
+
     /// A reflected direction for local wo (z > 0) from the visible normals, or `None` below the surface.
     pub fn sample(&self, wo: Vec3A, u: [f32; 2]) -> Option<Vec3A> {
         // Stretch to the hemisphere configuration, sample the projected disk, unstretch (Heitz 2018).
@@ -164,20 +182,7 @@ mod tests {
             }
             // The directional albedo of a white rough mirror, sampled, against ∫ f cos θi dωi by quadrature.
             let albedo = sum / (k * k) as f64;
-            let q = 1000;
-            let mut want = 0.0f64;
-            for i in 0..q {
-                for j in 0..q {
-                    let (ct, phi) = (
-                        (i as f32 + 0.5) / q as f32,
-                        (j as f32 + 0.5) / q as f32 * 2.0 * PI,
-                    );
-                    let st = (1.0 - ct * ct).sqrt();
-                    let wi = Vec3A::new(st * phi.cos(), st * phi.sin(), ct);
-                    want += (tr.brdf(wo, wi) * ct) as f64;
-                }
-            }
-            want *= 2.0 * std::f64::consts::PI / (q * q) as f64;
+            let want = tr.albedo_by_quadrature(wo, 1000);
             assert!(
                 albedo <= 1.0 && (albedo / want - 1.0).abs() < 0.02,
                 "α {alpha}: albedo {albedo} sampled ({count} samples), {want} by quadrature"
