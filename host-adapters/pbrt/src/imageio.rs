@@ -313,6 +313,67 @@ pub fn write_exr(
     write_exr_as(path, w, h, rgb, fire_temperature, false, window)
 }
 
+/// Writes linear RGB plus one channel per spectral bucket, `S0.<centre>nm` (OpenEXR's spectral layout, as
+/// pbrt-v4's spectral film names them: centre with three decimals, the point as a comma), `values` holding each
+/// pixel's buckets in turn.
+#[allow(clippy::too_many_arguments)]
+pub fn write_spectral_exr(
+    path: &Path,
+    w: usize,
+    h: usize,
+    rgb: &[[f32; 3]],
+    centres: &[f64],
+    values: &[f32],
+    fp16: bool,
+    window: Window,
+) -> Result<(), String> {
+    use exr::prelude::*;
+    let nb = centres.len();
+    let samples = |v: Vec<f32>| {
+        if fp16 {
+            FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
+        } else {
+            FlatSamples::F32(v)
+        }
+    };
+    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, name)| AnyChannel::new(*name, samples(rgb.iter().map(|p| p[c]).collect())))
+        .collect();
+    for (k, l) in centres.iter().enumerate() {
+        let name = format!("S0.{l:.3}nm")
+            .replace('.', ",")
+            .replacen(',', ".", 1);
+        list.push(AnyChannel::new(
+            name.as_str(),
+            samples(
+                (0..w * h)
+                    .map(|i| values.get(i * nb + k).copied().unwrap_or(0.0))
+                    .collect(),
+            ),
+        ));
+    }
+    write_atomic(path, |tmp| {
+        let mut layer = Layer::new(
+            (w, h),
+            LayerAttributes::default(),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(list.into()),
+        );
+        let pos = |v: usize| i32::try_from(v).unwrap_or(i32::MAX);
+        layer.attributes.layer_position = Vec2(pos(window.origin.0), pos(window.origin.1));
+        let mut image = Image::from_layer(layer);
+        image.attributes.display_window =
+            IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
+        image
+            .write()
+            .non_parallel()
+            .to_file(tmp)
+            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+    })
+}
+
 /// Where an image lies on its full film: its first pixel's position, and the film's size (EXR's data window in its
 /// display window).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -99,6 +99,43 @@ impl Response {
     }
 }
 
+/// pbrt-v4's `spectral` film: `n` equal buckets over [lambdamin, lambdamax] nm, each pixel's mean spectral
+/// radiance in each (× the imaging ratio), written as EXR channels `S0.<centre>nm` beside R, G, B (the OpenEXR
+/// spectral layout, the decimal point as a comma). The renderer's bins are resampled into the buckets by overlap;
+/// where the buckets reach beyond the bins (pbrt-v4's default 360–830 nm against 380–780), the radiance is 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Buckets {
+    pub n: usize,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Buckets {
+    /// The buckets' centre wavelengths.
+    pub fn centres(&self) -> Vec<f64> {
+        (0..self.n)
+            .map(|i| self.lo + (i as f64 + 0.5) / self.n as f64 * (self.hi - self.lo))
+            .collect()
+    }
+
+    /// The mean of the bins' piecewise-constant spectrum `s` over each bucket.
+    pub fn resample(&self, bins: &crate::render::spectrum::Bins, s: &[f64]) -> Vec<f32> {
+        let width = (self.hi - self.lo) / self.n as f64;
+        (0..self.n)
+            .map(|k| {
+                let (a, b) = (self.lo + k as f64 * width, self.lo + (k + 1) as f64 * width);
+                let covered: f64 = (0..bins.n())
+                    .map(|i| {
+                        let (c, d) = bins.grid.edges(i);
+                        (b.min(d) - a.max(c)).max(0.0) * s[i]
+                    })
+                    .sum();
+                (covered / width) as f32
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -38,6 +38,8 @@ pub struct Image {
     /// bounds render part of it: the EXR's data window inside its display window).
     pub origin: (usize, usize),
     pub full: (usize, usize),
+    /// The spectral film's buckets: their centre wavelengths (nm) and, per pixel, their mean spectral radiance.
+    pub spectral: Option<(Vec<f64>, Vec<f32>)>,
 }
 
 impl Image {
@@ -53,6 +55,11 @@ impl Image {
             origin: self.origin,
             full: self.full,
         };
+        if let Some((centres, values)) = &self.spectral {
+            return crate::imageio::write_spectral_exr(
+                path, self.w, self.h, &self.rgb, centres, values, fp16, window,
+            );
+        }
         crate::imageio::write_exr_as(
             path,
             self.w,
@@ -85,6 +92,9 @@ fn hash(a: u64, b: u64, c: u64, d: u64) -> u64 {
     h
 }
 
+/// One pixel's result: its index in the image, XYZ, and the spectral film's buckets (empty without one).
+type PixelResult = (usize, DVec3, Vec<f32>);
+
 /// Renders the scene with `spp` samples per pixel; `progress` is called with the tiles done.
 pub fn render(
     scene: &scene::Scene,
@@ -103,7 +113,7 @@ pub fn render(
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
     let done = AtomicUsize::new(0);
-    let results: Vec<Option<Vec<(usize, DVec3)>>> = tiles
+    let results: Vec<Option<Vec<PixelResult>>> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
             if INTERRUPTED.load(Ordering::Relaxed) {
@@ -119,6 +129,8 @@ pub fn render(
                         return None;
                     }
                     let (mut sum, mut weights) = (DVec3::ZERO, 0.0);
+                    // The spectral film's radiance per bin (only when the film is spectral).
+                    let mut spectrum = [0.0f64; spectrum::MAX_CHANNELS];
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
@@ -136,13 +148,27 @@ pub fn render(
                         let l = integ.li(o, d, &mut rng);
                         sum += scene.response.clamp_sample(scene.bins.to_xyz(&l)) * w;
                         weights += w;
+                        if scene.spectral.is_some() {
+                            spectrum
+                                .iter_mut()
+                                .zip(l.0)
+                                .for_each(|(a, v)| *a += v as f64 * w);
+                        }
                     }
                     let sum = if weights != 0.0 {
                         scene.response.finish(sum * (scene.spp as f64 / weights))
                     } else {
                         DVec3::ZERO
                     };
-                    out.push((cx + w * cy, sum / scene.spp as f64));
+                    let buckets = match &scene.spectral {
+                        Some(b) if weights != 0.0 => {
+                            let k = scene.response.imaging_ratio / weights;
+                            b.resample(&scene.bins, &spectrum.map(|v| v * k))
+                        }
+                        Some(b) => vec![0.0; b.n],
+                        None => Vec::new(),
+                    };
+                    out.push((cx + w * cy, sum / scene.spp as f64, buckets));
                 }
             }
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -151,10 +177,17 @@ pub fn render(
         })
         .collect();
     let mut xyz = vec![DVec3::ZERO; w * h];
+    let nb = scene.spectral.as_ref().map_or(0, |b| b.n);
+    let mut buckets = vec![0f32; w * h * nb];
     let mut complete = true;
     for r in results {
         match r {
-            Some(px) => px.into_iter().for_each(|(i, v)| xyz[i] = v),
+            Some(px) => px.into_iter().for_each(|(i, v, b)| {
+                xyz[i] = v;
+                if nb > 0 {
+                    buckets[i * nb..(i + 1) * nb].copy_from_slice(&b);
+                }
+            }),
             None => complete = false,
         }
     }
@@ -175,6 +208,7 @@ pub fn render(
             complete,
             origin: (x0, y0),
             full: scene.res,
+            spectral: scene.spectral.as_ref().map(|b| (b.centres(), buckets)),
         },
         stats,
     )

@@ -73,6 +73,7 @@ pub(super) struct Builder {
     pub(super) sampler: crate::render::pixel::Sampler,
     pub(super) filter: crate::render::pixel::Filter,
     pub(super) film_response: FilmParams,
+    pub(super) spectral: Option<crate::render::film::Buckets>,
     /// `Option "integer seed"` and `Option "bool disablepixeljitter"`.
     pub(super) seed: u64,
     pub(super) pixel_jitter: bool,

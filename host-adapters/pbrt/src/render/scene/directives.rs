@@ -132,7 +132,7 @@ impl Builder {
             }
             Directive::Film(ty, params) => {
                 let p = &ParamDict::new(&params);
-                if ty != "rgb" && ty != "gbuffer" {
+                if ty == "gbuffer" {
                     self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
                 }
                 // 1 to 65 536 pixels a side, as --resolution (zero and negative were clamped to 1 silently, 1e9
@@ -151,6 +151,16 @@ impl Builder {
                 };
                 self.res = (side("xresolution", 1280.0)?, side("yresolution", 720.0)?);
                 self.film_name = string(p, "filename").map(String::from);
+                // pbrt-v4's spectral film: RGB plus `nbuckets` channels of spectral radiance over its range.
+                self.spectral = None;
+                if ty == "spectral" {
+                    let n = num(p, "nbuckets", 16.0);
+                    let (lo, hi) = (num(p, "lambdamin", 360.0), num(p, "lambdamax", 830.0));
+                    if !(n.fract() == 0.0 && (1.0..=1024.0).contains(&n) && lo > 0.0 && hi > lo && hi <= 1e5) {
+                        return Err(err(loc, format!("film \"spectral\": {n} buckets over {lo}–{hi} nm: expected 1 to 1024 buckets over 0 < lambdamin < lambdamax")));
+                    }
+                    self.spectral = Some(crate::render::film::Buckets { n: n as usize, lo, hi });
+                }
                 // The sensor (pbrt-v4's PixelSensor): cie1931 is the CIE XYZ matching functions; a named camera's
                 // measured curves are not carried yet, so it is rendered as cie1931 with its default 6500 K white.
                 let sensor = string(p, "sensor").unwrap_or("cie1931");

@@ -202,6 +202,8 @@ pub struct Scene {
     pub filter: crate::render::pixel::Filter,
     /// The film's response: imaging ratio, white balance, sample clamp, half floats.
     pub response: crate::render::film::Response,
+    /// pbrt-v4's `spectral` film: its buckets.
+    pub spectral: Option<crate::render::film::Buckets>,
     /// The pixels rendered, [x0, x1) × [y0, y1) of the `res` film (pbrt-v4's pixel bounds; all of it by default).
     pub bounds: [usize; 4],
     /// The scene's seed (`Option "integer seed"`; the command line's `--seed` wins) and whether pixel samples
@@ -453,6 +455,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         // pbrt-v4's defaults: zsobol (rendered as padded Sobol here) and a Gaussian of radius 1.5, σ 0.5.
         sampler: crate::render::pixel::Sampler::PaddedSobol,
         film_response: Default::default(),
+        spectral: None,
         media_bytes: 0,
         seed: 0,
         pixel_jitter: true,
@@ -501,7 +504,9 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         b.res = r;
     }
     let bounds = pixel_bounds(&b, ov, path)?;
-    // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room).
+    // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room), and a spectral
+    // film's buckets (twice: the tiles' and the image's).
+    let bucket_bytes = b.spectral.as_ref().map_or(0, |s| 8 * s.n as u64);
     crate::budget::check(
         &format!(
             "{}: the film of {}×{} pixels",
@@ -510,7 +515,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
             b.res.1
         ),
         (b.res.0 as u64) * (b.res.1 as u64),
-        64,
+        64 + bucket_bytes,
         ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     )?;
     let (w, h) = (b.res.0 as f64, b.res.1 as f64);
@@ -612,6 +617,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         sampler: b.sampler,
         filter: b.filter,
         response,
+        spectral: b.spectral,
         bounds,
         seed: b.seed,
         pixel_jitter: b.pixel_jitter,
