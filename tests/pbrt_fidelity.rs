@@ -21,17 +21,21 @@ fn out_dir(name: &str) -> PathBuf {
     d
 }
 
-/// Renders `scene` and returns its pixels (w, h, rgb).
-fn render(scene: &Path, out: &Path, extra: &[&str]) -> (usize, usize, Vec<[f32; 3]>) {
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+/// Runs `firemedium render scene -o out args…` and returns what it did (status, stderr).
+fn run_render(scene: &Path, out: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
         .arg(scene)
         .arg("-o")
         .arg(out)
-        .args(["-q", "--seed", "5"])
-        .args(extra)
+        .args(args)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// Renders `scene` quietly with seed 5 (and `extra`), which must succeed, and returns its pixels (w, h, rgb).
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> (usize, usize, Vec<[f32; 3]>) {
+    let o = run_render(scene, out, &[&["-q", "--seed", "5"], extra].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     read_exr(out)
 }
@@ -528,19 +532,11 @@ fn the_scenes_seed_option_is_the_default_seed() {
     let seeded = dir.join("seeded.pbrt");
     std::fs::write(&seeded, format!("Option \"integer seed\" 5\n{text}")).unwrap();
     let run = |scene: &Path, name: &str, seed: &str| {
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
-            .arg("render")
-            .arg(scene)
-            .arg("-o")
-            .arg(dir.join(name))
-            .args(["-q", "--spp", "2", "--resolution", "16x8"])
-            .args(if seed.is_empty() {
-                vec![]
-            } else {
-                vec!["--seed", seed]
-            })
-            .output()
-            .unwrap();
+        let mut args = vec!["-q", "--spp", "2", "--resolution", "16x8"];
+        if !seed.is_empty() {
+            args.extend(["--seed", seed]);
+        }
+        let o = run_render(scene, &dir.join(name), &args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         read_exr(&dir.join(name)).2
     };
@@ -603,14 +599,12 @@ fn pbrt_v4s_own_scenes_render_with_standin_assets() {
     let dir = out_dir("pbrt-v4-scenes");
     pbrt_v4_scenes_with_standins(&dir);
     let run = |name: &str| {
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
-            .arg("render")
-            .arg(dir.join(name))
-            .arg("-o")
-            .arg(dir.join(name).with_extension("exr"))
-            .args(["--resolution", "32x24", "--spp", "1"])
-            .output()
-            .unwrap()
+        let scene = dir.join(name);
+        run_render(
+            &scene,
+            &scene.with_extension("exr"),
+            &["--resolution", "32x24", "--spp", "1"],
+        )
     };
     for name in ["bunny-cloud.pbrt", "killeroo-simple.pbrt", "clouds.pbrt"] {
         let o = run(name);
@@ -678,13 +672,11 @@ fn the_memory_budget_is_shared_by_a_scenes_media() {
         scene += &format!("MakeNamedMedium \"c{i}\" \"string type\" \"cloud\"\n");
     }
     std::fs::write(dir.join("c.pbrt"), scene).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
-        .arg("render")
-        .arg(dir.join("c.pbrt"))
-        .args(["--max-memory", "0.03", "-q", "-o"])
-        .arg(dir.join("c.exr"))
-        .output()
-        .unwrap();
+    let o = run_render(
+        &dir.join("c.pbrt"),
+        &dir.join("c.exr"),
+        &["--max-memory", "0.03", "-q"],
+    );
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(
