@@ -4,61 +4,12 @@
 
 #[path = "common/image.rs"]
 mod image;
+#[path = "common/render.rs"]
+mod render;
 
 use image::read_exr;
+use render::{mean_rgb, out_dir, render, run_render, shared, y_of};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn shared(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel)
-}
-
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-pbrt-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// Runs `firemedium render scene -o out args…` and returns what it did (status, stderr).
-fn run_render(scene: &Path, out: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
-        .arg("render")
-        .arg(scene)
-        .arg("-o")
-        .arg(out)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// Renders `scene` quietly with seed 5 (and `extra`), which must succeed, and returns its pixels (w, h, rgb).
-fn render(scene: &Path, out: &Path, extra: &[&str]) -> (usize, usize, Vec<[f32; 3]>) {
-    let o = run_render(scene, out, &[&["-q", "--seed", "5"], extra].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    read_exr(out)
-}
-
-/// Mean linear-sRGB colour over a pixel rectangle [x0, x1) × [y0, y1).
-fn mean_rgb(img: &(usize, usize, Vec<[f32; 3]>), x: (usize, usize), y: (usize, usize)) -> [f64; 3] {
-    let mut s = [0.0; 3];
-    let mut n = 0.0;
-    for j in y.0..y.1 {
-        for i in x.0..x.1 {
-            let p = img.2[i + img.0 * j];
-            for c in 0..3 {
-                s[c] += p[c] as f64;
-            }
-            n += 1.0;
-        }
-    }
-    s.map(|v| v / n)
-}
-
-fn y_of(rgb: [f64; 3]) -> f64 {
-    0.2126729 * rgb[0] + 0.7151522 * rgb[1] + 0.0721750 * rgb[2]
-}
 
 /// The slab scenes' two regions, inside their edges: the grid's box [0, 1] (x) × [0, 1] (z) and the light's
 /// quad [1.2, 2.2] × [0, 1], seen from (1.1, −20, 0.5) looking along +y on a 64 × 32 film 4 × 2 units wide (16
@@ -643,7 +594,7 @@ fn a_rough_conductor_under_a_uniform_sky_reflects_its_albedo() {
     // normal incidence (below 1: single scattering loses what the masking hides), by quadrature here. Smooth
     // (roughness 0), it is the mirror: Y = 1.
     let dir = out_dir("rough");
-    let tr = firemedium::render::microfacet::TrowbridgeReitz::from_roughness(0.25, true);
+    let tr = firemedium::render::microfacet::TrowbridgeReitz::from_roughness(0.25, 0.25, true);
     let albedo = tr.albedo_by_quadrature(glam::Vec3A::Z, 1000);
     for (name, roughness, want) in [("rough", 0.25, albedo), ("smooth", 0.0, 1.0)] {
         let scene = format!("LookAt 0 0 10  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"paddedsobol\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"conductor\" \"rgb reflectance\" [1 1 1] \"float roughness\" {roughness}\nShape \"trianglemesh\" \"point3 P\" [-5 -5 0 5 -5 0 5 5 0 -5 5 0] \"integer indices\" [0 1 2 0 2 3]\n");

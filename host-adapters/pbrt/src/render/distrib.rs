@@ -45,6 +45,16 @@ impl Distribution2D {
         self.marg[self.ny]
     }
 
+    /// The probability of drawing cell (`x`, `y`) (0 outside the grid or when every weight is zero).
+    pub fn prob(&self, x: usize, y: usize) -> f64 {
+        let total = self.total();
+        if !(total > 0.0) || x >= self.nx || y >= self.ny {
+            return 0.0;
+        }
+        let row = &self.cond[y * (self.nx + 1)..(y + 1) * (self.nx + 1)];
+        (row[x + 1] - row[x]) / total
+    }
+
     /// The cell for `u` ∈ [0, 1)²; `None` when every weight is zero.
     pub fn sample(&self, u: [f64; 2]) -> Option<Cell> {
         let total = self.total();

@@ -3,11 +3,16 @@
 //! plugin's `integrate` call (or its scattering-event sampling when σ_s > 0, with Henyey–Greenstein phase
 //! sampling and NEE at the scattering point), and homogeneous media in closed form.
 //!
-//! Light is counted once: the fire's emission only where paths pass through it (the fire light, issue 6, adds
-//! sampling); area lights by NEE after diffuse bounces and by hitting them at depth 0 or after specular bounces.
+//! Surfaces scatter through pbrt-v4's BxDFs ([`super::bsdf`]) in the shading frame. Every light a path can hit
+//! by itself — area lights, environment maps, the fire — is reached both ways and weighted by the balance
+//! heuristic: next-event estimation at every non-specular vertex (surface or medium), and BSDF/phase sampling
+//! that finds it; delta lights (point, spot, distant) by next-event estimation only. A path that meets a
+//! dispersive dielectric keeps one bin from there on ([`super::material::Eta`]).
 
+use super::bsdf::{Lobes, Mode};
+use super::material;
 use super::pixel::Samples;
-use super::scene::{Light, Material, Medium, Scene};
+use super::scene::{Light, Medium, Scene};
 use super::shapes::{sample_area, Hit};
 use super::spectrum::S;
 use firemedium_loader::Ray as FRay;
@@ -34,14 +39,6 @@ fn to_local(n: Vec3A, w: Vec3A) -> Vec3A {
 fn from_local(n: Vec3A, w: Vec3A) -> Vec3A {
     let (t, b) = frame(n);
     (t * w.x + b * w.y + n * w.z).normalize_or_zero()
-}
-
-fn cosine_dir(n: Vec3A, u: [f32; 2]) -> Vec3A {
-    let r = u[0].sqrt();
-    let phi = 2.0 * PI * u[1];
-    let (t, b) = frame(n);
-    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u[0]).max(0.0).sqrt())
-        .normalize_or_zero()
 }
 
 fn uniform_sphere(u: [f32; 2]) -> Vec3A {
@@ -81,23 +78,6 @@ fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     (t * (sin * phi.cos()) + b * (sin * phi.sin()) + d * cos).normalize_or_zero()
 }
 
-fn fresnel(cos_i: f32, eta: f32) -> f32 {
-    let cos_i = cos_i.clamp(-1.0, 1.0);
-    let (eta, cos_i) = if cos_i < 0.0 {
-        (1.0 / eta, -cos_i)
-    } else {
-        (eta, cos_i)
-    };
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (rp * rp + rs * rs)
-}
-
 /// Radiance of an infinite light toward direction `-w` (seen looking along `w`); zero for other lights.
 fn env(light: &Light, w: Vec3A) -> S {
     match light {
@@ -122,6 +102,70 @@ fn env(light: &Light, w: Vec3A) -> S {
             (basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]) * *scale
         }
         _ => S::ZERO,
+    }
+}
+
+/// The density (per steradian, before choosing among the scene's lights) with which next-event estimation picks
+/// world direction `w` toward an infinite light; 0 for other lights.
+fn env_pdf(light: &Light, w: Vec3A) -> f32 {
+    match light {
+        Light::Infinite { .. } => 1.0 / (4.0 * PI),
+        Light::InfiniteMap { to_light, dist, .. } => {
+            dist.pdf((*to_light * w).normalize_or_zero().to_array())
+        }
+        _ => 0.0,
+    }
+}
+
+/// Where next-event estimation leaves from: a surface point (the side a direction leaves by picks the offset
+/// and the medium) or a point inside a medium.
+#[derive(Debug, Clone, Copy)]
+enum Spot {
+    Surface {
+        p: Vec3A,
+        ng: Vec3A,
+        eps: f32,
+        /// The shape's (inside, outside) media, or the medium the path is in when the shape has none.
+        media: Option<(Option<usize>, Option<usize>)>,
+        medium: Option<usize>,
+    },
+    Medium {
+        p: Vec3A,
+        medium: Option<usize>,
+    },
+}
+
+impl Spot {
+    fn p(&self) -> Vec3A {
+        match self {
+            Spot::Surface { p, .. } | Spot::Medium { p, .. } => *p,
+        }
+    }
+    /// The origin and medium of a ray leaving along `w`.
+    fn leave(&self, w: Vec3A) -> (Vec3A, Option<usize>) {
+        match *self {
+            Spot::Medium { p, medium } => (p, medium),
+            Spot::Surface {
+                p,
+                ng,
+                eps,
+                media,
+                medium,
+            } => {
+                let out = w.dot(ng) > 0.0;
+                let m = match media {
+                    Some((inside, outside)) => {
+                        if out {
+                            outside
+                        } else {
+                            inside
+                        }
+                    }
+                    None => medium,
+                };
+                (p + if out { ng } else { -ng } * eps, m)
+            }
+        }
     }
 }
 
@@ -308,20 +352,15 @@ impl Integrator<'_> {
         (tr, l)
     }
 
-    /// Radiance from one light toward point `p` (NEE), already divided by the light's selection probability:
+    /// Radiance from one light toward `spot` (NEE), already divided by the light's selection probability:
     /// (incident radiance × visibility, direction, the light's solid-angle pdf of that direction including the
-    /// selection probability — for MIS; 0 for lights that paths cannot hit by themselves).
-    fn sample_light(
-        &self,
-        li: usize,
-        p: Vec3A,
-        medium: Option<usize>,
-        rng: &mut Samples,
-    ) -> Option<(S, Vec3A, f32)> {
+    /// selection probability — for MIS; 0 for delta lights, which paths cannot hit by themselves).
+    fn sample_light(&self, li: usize, spot: &Spot, rng: &mut Samples) -> Option<(S, Vec3A, f32)> {
         let sc = self.scene;
         let u = Self::rng2(rng);
         let nl = sc.lights.len() as f32;
-        let (wi, dist, le) = match &sc.lights[li] {
+        let p = spot.p();
+        let (wi, dist, le, pl) = match &sc.lights[li] {
             Light::Fire { light, medium: fm } => {
                 let Medium::Plugin {
                     to_medium,
@@ -345,6 +384,7 @@ impl Integrator<'_> {
                 if wi == Vec3A::ZERO || !wi.is_finite() {
                     return None;
                 }
+                let (o, medium) = spot.leave(wi);
                 // Solid angle in medium space equals world solid angle for a similarity transform.
                 let pdf_dir = fire_pdf_direction(light, to_medium, p, wi)? as f32 / nl;
                 if !(pdf_dir > 0.0) {
@@ -352,7 +392,7 @@ impl Integrator<'_> {
                 }
                 // The fire's emission along wi, up to the first opaque surface.
                 let le = self
-                    .walk_media(p, wi, f32::INFINITY, medium, Some(*fm), rng)
+                    .walk_media(o, wi, f32::INFINITY, medium, Some(*fm), rng)
                     .1;
                 let l = (le / pdf_dir).finite_or_zero();
                 return (!l.is_black()).then_some((l, wi, pdf_dir));
@@ -360,7 +400,7 @@ impl Integrator<'_> {
             Light::Point { p: lp, i } => {
                 let v = *lp - p;
                 let d2 = v.length_squared();
-                (v.normalize_or_zero(), d2.sqrt(), *i / d2)
+                (v.normalize_or_zero(), d2.sqrt(), *i / d2, 0.0)
             }
             Light::Spot {
                 p: lp,
@@ -380,12 +420,12 @@ impl Integrator<'_> {
                 } else {
                     ((c - cos_total) / (cos_falloff - cos_total)).powi(4)
                 };
-                (w, d2.sqrt(), *i * (f / d2))
+                (w, d2.sqrt(), *i * (f / d2), 0.0)
             }
-            Light::Distant { to_light, l } => (*to_light, f32::INFINITY, *l),
+            Light::Distant { to_light, l } => (*to_light, f32::INFINITY, *l, 0.0),
             Light::Infinite { l } => {
                 let w = uniform_sphere(u);
-                (w, f32::INFINITY, *l * (4.0 * PI))
+                (w, f32::INFINITY, *l * (4.0 * PI), 1.0 / (4.0 * PI * nl))
             }
             Light::InfiniteMap { to_light, dist, .. } => {
                 // A direction by the map's luminance, taken from the map's space to the world's.
@@ -394,7 +434,7 @@ impl Integrator<'_> {
                     return None;
                 }
                 let w = (to_light.inverse() * Vec3A::from(dl)).normalize_or_zero();
-                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf)
+                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf, pdf / nl)
             }
             Light::Area { prim, l, twosided } => {
                 let (q, n, pdf_a) = sample_area(&sc.bvh.prims[*prim], u);
@@ -405,20 +445,44 @@ impl Integrator<'_> {
                 if cos_l <= 0.0 && !twosided {
                     return None;
                 }
-                (w, d2.sqrt(), *l * (cos_l.abs() / (d2 * pdf_a)))
+                let pdf_w = pdf_a * d2 / cos_l.abs();
+                (w, d2.sqrt(), *l / pdf_w, pdf_w / nl)
             }
         };
         if le.max() <= 0.0 || !wi.is_finite() {
             return None;
         }
+        let (o, medium) = spot.leave(wi);
         let t_max = if dist.is_finite() {
-            dist * (1.0 - 1e-4)
+            (dist - (o - p).length()).max(0.0) * (1.0 - 1e-4)
         } else {
             1e30
         };
-        let vis = self.walk_media(p, wi, t_max, medium, None, rng).0;
+        let vis = self.walk_media(o, wi, t_max, medium, None, rng).0;
         let l = (le * vis * nl).finite_or_zero();
-        (!l.is_black()).then_some((l, wi, 0.0))
+        (!l.is_black() && pl.is_finite()).then_some((l, wi, pl))
+    }
+
+    /// The solid-angle density with which next-event estimation picks the point `h` of area light `li` from
+    /// `origin` (including the light's selection probability).
+    fn area_pdf(&self, li: usize, origin: Vec3A, h: &Hit) -> f32 {
+        let sc = self.scene;
+        let Light::Area { prim, .. } = &sc.lights[li] else {
+            return 0.0;
+        };
+        let pdf_a = sample_area(&sc.bvh.prims[*prim], [0.5, 0.5]).2;
+        let v = h.p - origin;
+        let d = v.normalize_or_zero();
+        let cos_l = h.ng.dot(-d).abs();
+        if cos_l == 0.0 {
+            return 0.0;
+        }
+        let p = pdf_a * v.length_squared() / cos_l / sc.lights.len() as f32;
+        if p.is_finite() {
+            p
+        } else {
+            0.0
+        }
     }
 
     /// The MIS weight of emission that a path sampled with density `pdf_b` (solid angle) from `origin` along `d`
@@ -467,7 +531,7 @@ impl Integrator<'_> {
         let lights = &self.scene.lights;
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
-            if let Some((le, wi, pl)) = self.sample_light(li, p, medium, rng) {
+            if let Some((le, wi, pl)) = self.sample_light(li, &Spot::Medium { p, medium }, rng) {
                 let ph = hg((-d).dot(wi), g);
                 *l += beta * le * (ph * light_mis_weight(pl, ph));
             }
@@ -476,33 +540,19 @@ impl Integrator<'_> {
         (wi, hg((-d).dot(wi), g))
     }
 
-    /// The probability that the BSDF sampler picks its cosine-distributed diffuse lobe at this vertex.
-    fn diffuse_pdf(&self, m: &Material, wo: Vec3A, n: Vec3A) -> f32 {
-        match m {
-            Material::Diffuse(_) => 1.0,
-            Material::CoatedDiffuse(_, eta) => 1.0 - fresnel(wo.dot(n), *eta),
-            _ => 0.0,
-        }
-    }
-
-    fn diffuse_albedo(&self, m: &Material, h: &Hit) -> Option<S> {
-        match m {
-            Material::Diffuse(t) => Some(t.eval(h.uv)),
-            Material::CoatedDiffuse(t, _) => Some(t.eval(h.uv)),
-            _ => None,
-        }
-    }
-
     /// Radiance along a camera ray.
     pub fn li(&self, mut o: Vec3A, mut d: Vec3A, rng: &mut Samples) -> S {
         let sc = self.scene;
         let mut l = S::ZERO;
         let mut beta = self.mask;
         let mut medium = sc.camera.medium;
-        let mut specular = true;
         let mut depth = 0;
+        // The bin a dispersive dielectric made the path keep, and the product of the η² crossed (which scales
+        // radiance, not what the path carries, so Russian roulette undoes it).
+        let mut channel: Option<usize> = None;
+        let mut eta_scale = 1.0f32;
         // Origin and solid-angle pdf of the current direction when it was sampled from a BSDF or phase function
-        // (for MIS against the fire light); None for camera rays and specular bounces.
+        // (for MIS against the lights it may find); None for camera rays and specular bounces.
         let mut mis: Option<(Vec3A, f32)> = None;
         for _ in 0..(4 * sc.maxdepth + 64) {
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
@@ -548,7 +598,6 @@ impl Integrator<'_> {
                                     self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                                 (o, d, mis) = (p, wi, Some((p, pdf)));
                                 depth += 1;
-                                specular = false;
                                 continue;
                             }
                             firemedium_abi::FM_EVENT_ABSORBED => break,
@@ -583,7 +632,6 @@ impl Integrator<'_> {
                                 self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                             (o, d, mis) = (p, wi, Some((p, pdf)));
                             depth += 1;
-                            specular = false;
                             continue;
                         }
                         let mut w = S::ZERO;
@@ -615,42 +663,44 @@ impl Integrator<'_> {
                 }
             }
             let Some(h) = hit else {
-                if specular || depth == 0 {
-                    for light in &sc.lights {
-                        l += beta * env(light, d);
+                // Escaped: the infinite lights, weighted against their next-event estimation when the
+                // direction was sampled by a BSDF or phase function.
+                for light in &sc.lights {
+                    let le = env(light, d);
+                    if !le.is_black() {
+                        let w = mis.map_or(1.0, |(_, pb)| {
+                            let pl = env_pdf(light, d) / sc.lights.len() as f32;
+                            if pb + pl > 0.0 {
+                                pb / (pb + pl)
+                            } else {
+                                1.0
+                            }
+                        });
+                        l += beta * le * w;
                     }
                 }
                 break;
             };
             let prim = sc.bvh.prim(&h);
             if let Some(li) = prim.area_light {
-                if specular {
-                    if let Light::Area {
-                        l: le, twosided, ..
-                    } = &sc.lights[li]
-                    {
-                        if *twosided || h.ng.dot(-d) > 0.0 {
-                            l += beta * *le;
-                        }
+                if let Light::Area {
+                    l: le, twosided, ..
+                } = &sc.lights[li]
+                {
+                    if *twosided || h.ng.dot(-d) > 0.0 {
+                        let w = mis.map_or(1.0, |(origin, pb)| {
+                            let pl = self.area_pdf(li, origin, &h);
+                            if pb + pl > 0.0 {
+                                pb / (pb + pl)
+                            } else {
+                                1.0
+                            }
+                        });
+                        l += beta * *le * w;
                     }
                 }
             }
-            let Some(mi) = prim.material else {
-                // Only a medium boundary: pass through.
-                if let Some((inside, outside)) = prim.media {
-                    medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
-                }
-                o = h.p;
-                continue;
-            };
-            if depth >= sc.maxdepth {
-                break;
-            }
-            let mat = &sc.materials[mi];
             let wo = -d;
-            // Shading normal on the side of wo.
-            let n = if h.ns.dot(wo) < 0.0 { -h.ns } else { h.ns };
-            let ng = if h.ng.dot(wo) < 0.0 { -h.ng } else { h.ng };
             let side_medium = |w: Vec3A| match prim.media {
                 Some((inside, outside)) => {
                     if w.dot(h.ng) > 0.0 {
@@ -661,100 +711,91 @@ impl Integrator<'_> {
                 }
                 None => medium,
             };
-            // NEE (diffuse part).
-            if let Some(albedo) = self.diffuse_albedo(mat, &h) {
-                if !sc.lights.is_empty() {
-                    let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
-                    let p = h.p + ng * sc.eps;
-                    if let Some((le, wi, pl)) = self.sample_light(li, p, side_medium(ng), rng) {
-                        let cos = wi.dot(n);
-                        if cos > 0.0 && wi.dot(ng) > 0.0 {
-                            let coat = if let Material::CoatedDiffuse(_, eta) = mat {
-                                (1.0 - fresnel(wi.dot(n), *eta)) * (1.0 - fresnel(wo.dot(n), *eta))
-                            } else {
-                                1.0
-                            };
-                            let pb = self.diffuse_pdf(mat, wo, n) * cos / PI;
-                            l += beta * albedo * le * (cos / PI * coat * light_mis_weight(pl, pb));
-                        }
-                    }
+            let Some(mi) = material::resolve(&sc.materials, prim.material, h.p, wo, h.uv) else {
+                // Only a medium boundary (or a `mix` that chose `interface`): pass through.
+                if let Some((inside, outside)) = prim.media {
+                    medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
                 }
+                o = h.p;
+                continue;
+            };
+            if depth >= sc.maxdepth {
+                break;
             }
-            // NEE at a rough conductor: the light's sample through the microfacet BRDF (MIS against BSDF sampling
-            // for the fire light, the one light whose emission BSDF-sampled paths also collect).
-            if let (Material::Conductor(r, Some(tr)), false) = (mat, sc.lights.is_empty()) {
+            let mat = &sc.materials[mi];
+            let n = sc.bins.n();
+            // A dispersive index: the path keeps one bin (uniformly chosen; its weight × the bin count).
+            if channel.is_none() && mat.eta().is_some_and(|e| e.dispersive(n)) {
+                let c = ((rng.next_f64() * n as f64) as usize).min(n.max(1) - 1);
+                let mut keep = S::ZERO;
+                keep.0[c] = n as f32;
+                beta *= keep;
+                channel = Some(c);
+            }
+            let Some(bxdf) = mat.bxdf(h.uv, channel, n) else {
+                break;
+            };
+            let seed = rng.next_u64();
+            let wo_l = to_local(h.ns, wo);
+            if wo_l.z == 0.0 {
+                break;
+            }
+            // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.
+            if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
-                let p = h.p + ng * sc.eps;
-                if let Some((le, wi, pl)) = self.sample_light(li, p, side_medium(ng), rng) {
-                    let (lo, lw) = (to_local(n, wo), to_local(n, wi));
-                    if wi.dot(ng) > 0.0 && lw.z > 0.0 {
-                        let f = tr.brdf(lo, lw) * lw.z;
-                        let pb = tr.pdf(lo, lw);
-                        l += beta * *r * le * (f * light_mis_weight(pl, pb));
+                let spot = Spot::Surface {
+                    p: h.p,
+                    ng: h.ng,
+                    eps: sc.eps,
+                    media: prim.media,
+                    medium,
+                };
+                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng) {
+                    let wi_l = to_local(h.ns, wi);
+                    let f = bxdf.f(wo_l, wi_l, Mode::Radiance, seed) * wi_l.z.abs();
+                    if !f.is_black() {
+                        let pb = if pl > 0.0 {
+                            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
+                        } else {
+                            0.0
+                        };
+                        l += beta * f * le * light_mis_weight(pl, pb);
                     }
                 }
             }
             // Sample the BSDF.
+            let uc = rng.next_f64() as f32;
             let u = Self::rng2(rng);
-            let mut glossy_pdf = None;
-            let (wi, weight, is_spec) = match mat {
-                Material::Diffuse(t) => (cosine_dir(n, u), t.eval(h.uv), false),
-                Material::Conductor(r, None) => (d - n * (2.0 * d.dot(n)), *r, true),
-                Material::Conductor(r, Some(tr)) => {
-                    let lo = to_local(n, wo);
-                    let Some(lw) = tr.sample(lo, u) else { break };
-                    glossy_pdf = Some(tr.pdf(lo, lw));
-                    (from_local(n, lw), *r * (tr.g(lo, lw) / tr.g1(lo)), false)
-                }
-                Material::CoatedDiffuse(t, eta) => {
-                    let f = fresnel(wo.dot(n), *eta);
-                    if rng.next_f64() < f as f64 {
-                        (d - n * (2.0 * d.dot(n)), self.mask, true)
-                    } else {
-                        (
-                            cosine_dir(n, u),
-                            t.eval(h.uv) * (1.0 - f) / (1.0 - f).max(1e-6),
-                            false,
-                        )
-                    }
-                }
-                Material::Dielectric(eta) => {
-                    let cos_o = wo.dot(h.ns);
-                    let f = fresnel(cos_o, *eta);
-                    if rng.next_f64() < f as f64 {
-                        (d - n * (2.0 * d.dot(n)), self.mask, true)
-                    } else {
-                        // Refract (entering when wo is on the outside of h.ns).
-                        let (etap, nn) = if cos_o > 0.0 {
-                            (*eta, h.ns)
-                        } else {
-                            (1.0 / *eta, -h.ns)
-                        };
-                        let ci = wo.dot(nn);
-                        let s2 = (1.0 - ci * ci).max(0.0) / (etap * etap);
-                        let ct = (1.0 - s2).max(0.0).sqrt();
-                        let wt = (-wo / etap + nn * (ci / etap - ct)).normalize_or_zero();
-                        (wt, self.mask * (1.0 / (etap * etap)), true)
-                    }
-                }
+            let Some(bs) = bxdf.sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed) else {
+                break;
             };
+            let wi = from_local(h.ns, bs.wi);
             if !wi.is_finite() || wi == Vec3A::ZERO {
                 break;
             }
-            beta *= weight;
-            specular = is_spec;
-            mis = (!is_spec).then(|| {
-                let pdf =
-                    glossy_pdf.unwrap_or(self.diffuse_pdf(mat, wo, n) * wi.dot(n).max(0.0) / PI);
+            beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
+            if !beta.max().is_finite() {
+                break;
+            }
+            mis = (!bs.specular).then(|| {
+                let pdf = if bs.proportional {
+                    bxdf.pdf(wo_l, bs.wi, Mode::Radiance, Lobes::ALL, seed)
+                } else {
+                    bs.pdf
+                };
                 (h.p, pdf)
             });
+            if !bs.reflection {
+                eta_scale *= bs.etap * bs.etap;
+            }
             medium = side_medium(wi);
             o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
             d = wi;
             depth += 1;
-            // Russian roulette after three bounces.
+            // Russian roulette after three bounces, on the throughput without the radiance scaling that
+            // refraction applies (pbrt-v4's etaScale).
             if depth > 3 {
-                let q = beta.max().min(0.95);
+                let q = (beta * eta_scale).max().min(0.95);
                 if (rng.next_f64() as f32) > q {
                     break;
                 }

@@ -2,13 +2,17 @@
 //! (media through the plugin), `integrator` is `volpath`, and [`render`] runs it over tiles in parallel into an
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
+pub mod bsdf;
 pub mod cloud;
 pub mod distrib;
 pub mod envmap;
 pub mod film;
 pub mod integrator;
+pub mod layered;
+pub mod material;
 pub mod media_presets;
 pub mod microfacet;
+pub mod named_spectra;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;

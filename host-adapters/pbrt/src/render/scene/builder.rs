@@ -161,13 +161,23 @@ impl Builder {
                 self.bins.uplift([v[0], v[1], v[2]], usage)
             }
             ("spectrum", firemedium_pbrt_parser::Values::Numbers(v)) => self.bins.pairs(v),
+            ("spectrum", firemedium_pbrt_parser::Values::Strings(v)) => {
+                let n = v.first().map(String::as_str).unwrap_or("");
+                let pairs = crate::render::named_spectra::lookup(n).ok_or_else(|| {
+                    let near = firemedium_pbrt_parser::closest(n, crate::render::named_spectra::NAMES)
+                        .map(|c| format!(" (did you mean \"{c}\"?)"))
+                        .unwrap_or_default();
+                    err(&p.loc, format!("\"spectrum {name}\" \"{n}\": no such named spectrum{near}; the named spectra are {}", crate::render::named_spectra::NAMES.join(", ")))
+                })?;
+                self.bins.pairs(&pairs)
+            }
             ("blackbody", _) => self.bins.blackbody(p.numbers().unwrap_or(&[0.0])[0]),
             ("float", _) => S::splat(p.numbers().unwrap_or(&[0.0])[0] as f32) * self.bins.mask(),
             ("texture", _) => {
                 let n = p.strings().and_then(|v| v.first()).cloned().unwrap_or_default();
                 return self.textures.get(&n).cloned().map(Some).ok_or_else(|| err(&p.loc, format!("\"texture {name}\": no texture named \"{n}\"")));
             }
-            (t, _) => return Err(err(&p.loc, format!("\"{t} {name}\": named spectra are not supported; give rgb, (λ, value) pairs or blackbody"))),
+            (t, _) => return Err(err(&p.loc, format!("\"{t} {name}\": expected rgb, spectrum ((λ, value) pairs or a name), blackbody, float or texture"))),
         };
         Ok(Some(Tex::Const(s)))
     }
@@ -642,42 +652,5 @@ impl Builder {
         }
         self.check_bounds(first, ty, loc)?;
         Ok(())
-    }
-
-    pub(super) fn material(
-        &mut self,
-        ty: &str,
-        p: &ParamDict,
-        loc: &Loc,
-    ) -> Result<Option<usize>, Error> {
-        let m = match ty {
-            "interface" | "" => return Ok(None),
-            "diffuse" => {
-                Material::Diffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5), RgbUse::Albedo)?.unwrap_or(Tex::Const(S::ZERO)))
-            }
-            "coateddiffuse" => {
-                Material::CoatedDiffuse(self.spectrum(p, "reflectance", Some(self.bins.mask() * 0.5), RgbUse::Albedo)?.unwrap_or(Tex::Const(S::ZERO)), num(p, "eta", 1.5) as f32)
-            }
-            "conductor" => {
-                let r = self.constant(p, "reflectance", self.bins.mask() * 0.9, RgbUse::Albedo)?;
-                // pbrt-v4's Trowbridge–Reitz roughness (u and v default to "roughness"; remapped to α = √r).
-                let rough = num(p, "roughness", 0.0);
-                let (u, v) = (num(p, "uroughness", rough), num(p, "vroughness", rough));
-                if !(u >= 0.0 && v >= 0.0 && u.is_finite() && v.is_finite()) {
-                    return Err(err(loc, format!("conductor: roughness ({u}, {v}): expected finite values >= 0")));
-                }
-                if u != v {
-                    self.warn(loc, format!("conductor: anisotropic roughness ({u}, {v}) is rendered isotropic, with their mean"));
-                }
-                let tr = crate::render::microfacet::TrowbridgeReitz::from_roughness(((u + v) / 2.0) as f32, p.bool("remaproughness", true));
-                Material::Conductor(r, (!tr.smooth()).then_some(tr))
-            }
-            "dielectric" | "thindielectric" => {
-                Material::Dielectric(num(p, "eta", 1.5) as f32)
-            }
-            other => return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, conductor, dielectric, interface)"))),
-        };
-        self.materials.push(m);
-        Ok(Some(self.materials.len() - 1))
     }
 }

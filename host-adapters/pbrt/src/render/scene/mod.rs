@@ -5,6 +5,7 @@
 
 mod builder;
 mod directives;
+mod materials;
 
 use super::pbrt_v4::Kind;
 use super::shapes::Bvh;
@@ -77,17 +78,7 @@ impl Tex {
     }
 }
 
-/// Surface materials.
-#[derive(Debug, Clone)]
-pub enum Material {
-    Diffuse(Tex),
-    /// A mirror of this reflectance, smooth or with a Trowbridge–Reitz roughness.
-    Conductor(S, Option<crate::render::microfacet::TrowbridgeReitz>),
-    /// Smooth glass of this index.
-    Dielectric(f32),
-    /// Diffuse base under a smooth dielectric coat.
-    CoatedDiffuse(Tex, f32),
-}
+pub use crate::render::material::Material;
 
 /// Lights (area lights live on primitives).
 #[derive(Debug, Clone)]
