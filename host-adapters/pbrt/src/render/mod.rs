@@ -116,6 +116,7 @@ pub fn render(
     let tiles: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
+    let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
     let done = AtomicUsize::new(0);
     let results: Vec<Option<Vec<PixelResult>>> = tiles
         .par_iter()
@@ -139,7 +140,8 @@ pub fn render(
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
                         let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
-                        let mut rng = scene.sampler.samples(s, scene.spp, order, rng);
+                        let mut rng =
+                            sampler.samples(s, scene.spp, order, (x as u32, y as u32), rng);
                         let mut u = [rng.next_f64(), rng.next_f64()];
                         if !scene.pixel_jitter {
                             u = [0.5, 0.5];

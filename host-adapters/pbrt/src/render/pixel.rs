@@ -9,9 +9,11 @@
 //! dimensions from a (0, 2)-sequence in base 2 — the first two dimensions of Sobol's sequence — one pair of
 //! dimensions at a time, each pair with its own random permutation of the pixel's sample indices and its own
 //! Owen scrambling (Burley 2020's hash-based nested uniform scrambling, pbrt-v4's `FastOwenScrambler`): pbrt-v4's
-//! `paddedsobol`. `sobol`, `zsobol` and `pmj02bn` render so too (the same per-pixel stratification; pbrt-v4's
-//! `zsobol` also decorrelates neighbouring pixels by Morton order, `sobol` runs one sequence over the whole
-//! film). `halton` gives dimension d < 16 the radical inverse in the d-th prime of the permuted index, its digits
+//! `paddedsobol` (`pmj02bn` renders so too: the same per-pixel stratification). `zsobol`, pbrt-v4's default, runs
+//! one Owen-scrambled (0, 2)-sequence over the whole film with the pixels in Morton order and the base-4 digits of
+//! each index permuted per dimension (Ahmed & Wonka 2020): a pixel's samples are an aligned block of it, so
+//! stratified as `paddedsobol`'s, and neighbouring pixels' samples stratify each other (`sobol` renders as
+//! `zsobol`). `halton` gives dimension d < 16 the radical inverse in the d-th prime of the permuted index, its digits
 //! scrambled per dimension (the rest at random). Their measured convergence rates are in docs/RESULTS.md (`convergence` tests).
 //!
 //! **Filters.** A pixel sample u ∈ [0, 1)² becomes a film offset p = F⁻¹(u) from the pixel's centre, drawn from the
@@ -37,6 +39,15 @@ pub enum Sampler {
     PaddedSobol,
     /// Scrambled radical inverses in the primes.
     Halton,
+    /// pbrt-v4's `zsobol` (its default; Ahmed & Wonka 2020): one Owen-scrambled Sobol (0, 2)-sequence over the
+    /// whole film, pixels in Morton order, the base-4 digits of each sample's index randomly permuted per
+    /// dimension so neighbouring pixels' samples decorrelate. `log2_spp` and `digits` (base-4 digits of the
+    /// index) come from the film with [`Sampler::for_film`], `seed` from the render.
+    ZSobol {
+        log2_spp: u32,
+        digits: u32,
+        seed: u64,
+    },
 }
 
 /// The numbers one sample of one pixel draws, dimension by dimension.
@@ -44,31 +55,120 @@ pub enum Sampler {
 pub struct Samples {
     rng: Rng,
     sampler: Sampler,
-    /// The pixel's hash, the sample's index and the pixel's sample count.
+    /// The pixel's hash, its Morton code (x, y interleaved), the sample's index and the pixel's sample count.
     pixel: u64,
+    morton: u64,
     index: u64,
     spp: u64,
     dim: u32,
 }
 
 impl Sampler {
-    /// The stream of sample `s` of `spp` in the pixel hashed `pixel`, its random part from `rng`.
-    pub fn samples(&self, s: usize, spp: usize, pixel: u64, rng: Rng) -> Samples {
+    /// The stream of sample `s` of `spp` in the pixel hashed `pixel` at film position `xy`, its random part from
+    /// `rng`.
+    pub fn samples(&self, s: usize, spp: usize, pixel: u64, xy: (u32, u32), rng: Rng) -> Samples {
         Samples {
             rng,
             sampler: *self,
             pixel,
+            morton: morton2(xy.0, xy.1),
             index: s as u64,
             spp: spp.max(1) as u64,
             dim: 0,
         }
     }
+
+    /// The sampler for a film of `res` pixels (the full film, not a crop: a cropped render draws the full
+    /// render's numbers) with `spp` samples per pixel and the render's seed. Only `zsobol` depends on them.
+    pub fn for_film(&self, res: (usize, usize), spp: usize, seed: u64) -> Sampler {
+        match self {
+            Sampler::ZSobol { .. } => {
+                let log2_spp = spp.max(1).next_power_of_two().trailing_zeros();
+                let side = res.0.max(res.1).max(1).next_power_of_two().trailing_zeros();
+                Sampler::ZSobol {
+                    log2_spp,
+                    digits: side + log2_spp.div_ceil(2),
+                    seed,
+                }
+            }
+            s => *s,
+        }
+    }
+}
+
+/// Bits of x and y interleaved (x in the even bits), 32 bits of each.
+fn morton2(x: u32, y: u32) -> u64 {
+    let spread = |v: u32| {
+        let mut v = v as u64;
+        v = (v | (v << 16)) & 0x0000_FFFF_0000_FFFF;
+        v = (v | (v << 8)) & 0x00FF_00FF_00FF_00FF;
+        v = (v | (v << 4)) & 0x0F0F_0F0F_0F0F_0F0F;
+        v = (v | (v << 2)) & 0x3333_3333_3333_3333;
+        (v | (v << 1)) & 0x5555_5555_5555_5555
+    };
+    spread(x) | (spread(y) << 1)
+}
+
+/// pbrt-v4's `MixBits` (a 64-bit finaliser).
+fn mix_bits(mut v: u64) -> u64 {
+    v ^= v >> 31;
+    v = v.wrapping_mul(0x7fb5_d329_728e_a185);
+    v ^= v >> 27;
+    v = v.wrapping_mul(0x81da_def4_bc2d_d44d);
+    v ^ (v >> 33)
+}
+
+/// The 24 permutations of (0, 1, 2, 3), in lexicographic order.
+const PERMUTATIONS4: [[u8; 4]; 24] = {
+    let mut out = [[0u8; 4]; 24];
+    let mut n = 0;
+    let mut a = 0;
+    while a < 4 {
+        let mut b = 0;
+        while b < 4 {
+            let mut c = 0;
+            while c < 4 {
+                let d = 6 - a - b - c;
+                if a != b && a != c && b != c {
+                    out[n] = [a as u8, b as u8, c as u8, d as u8];
+                    n += 1;
+                }
+                c += 1;
+            }
+            b += 1;
+        }
+        a += 1;
+    }
+    out
+};
+
+/// The index into the film-wide Sobol sequence of Morton-ordered sample `morton_index` in dimension `dim`:
+/// pbrt-v4's `ZSobolSampler::GetSampleIndex`. Each base-4 digit is permuted by one of the 24 permutations, chosen
+/// by a hash of the digits above it and the dimension (a random nested permutation: the points of a pixel stay
+/// a scrambled aligned block — a (0, m, 2)-net — while pixels and dimensions decorrelate); with an odd
+/// log₂ spp the last digit is binary and flipped by a hashed bit.
+fn zsobol_index(morton_index: u64, dim: u64, log2_spp: u32, digits: u32) -> u64 {
+    let odd = log2_spp & 1 == 1;
+    let last = u32::from(odd);
+    let mut index = 0u64;
+    for i in (last..digits).rev() {
+        let shift = 2 * i - u32::from(odd);
+        let digit = ((morton_index >> shift) & 3) as usize;
+        let higher = morton_index.checked_shr(shift + 2).unwrap_or(0);
+        let p = ((mix_bits(higher ^ 0x5555_5555u64.wrapping_mul(dim)) >> 24) % 24) as usize;
+        index |= (PERMUTATIONS4[p][digit] as u64) << shift;
+    }
+    if odd {
+        let digit = morton_index & 1;
+        index |= digit ^ (mix_bits((morton_index >> 1) ^ 0x5555_5555u64.wrapping_mul(dim)) & 1);
+    }
+    index
 }
 
 impl Samples {
     /// Random numbers only (paths traced outside a pixel's samples).
     pub fn random(rng: Rng) -> Samples {
-        Sampler::Independent.samples(0, 1, 0, rng)
+        Sampler::Independent.samples(0, 1, 0, (0, 0), rng)
     }
 
     /// The next number in [0, 1).
@@ -98,6 +198,25 @@ impl Samples {
                 let i = permute_u64(self.index, self.spp, pair);
                 let v = if d % 2 == 0 { sobol0(i) } else { sobol1(i) };
                 to_unit(owen_scramble(v, hash2(pair, (d % 2) as u64) as u32))
+            }
+            Sampler::ZSobol {
+                log2_spp,
+                digits,
+                seed,
+            } => {
+                // Pair d/2 is pbrt-v4's Get2D at dimension 2·(d/2 + 1): one index per pair, its two axes Sobol's
+                // first two dimensions, each Owen-scrambled by half of a hash of the dimension and the seed.
+                let dimension = 2 * (d as u64 / 2 + 1);
+                let morton_index = (self.morton << log2_spp) | (self.index & ((1 << log2_spp) - 1));
+                let i = zsobol_index(morton_index, dimension, log2_spp, digits);
+                let bits = hash2(seed, dimension);
+                let v = if d % 2 == 0 { sobol0(i) } else { sobol1(i) };
+                let scramble = if d % 2 == 0 {
+                    bits as u32
+                } else {
+                    (bits >> 32) as u32
+                };
+                to_unit(owen_scramble(v, scramble))
             }
             Sampler::Halton => {
                 // One index permutation for all dimensions (the points are the sequence's, jointly), digits
@@ -406,7 +525,7 @@ mod tests {
     }
 
     fn first_two(s: &Sampler, k: usize, spp: usize, pixel: u64) -> [f64; 2] {
-        let mut st = s.samples(k, spp, pixel, Rng::new(k as u64));
+        let mut st = s.samples(k, spp, pixel, (0, 0), Rng::new(k as u64));
         [st.next_f64(), st.next_f64()]
     }
 
@@ -444,29 +563,73 @@ mod tests {
     fn sobol_pairs_are_02_nets() {
         // Any 2^m consecutive points of the (0, 2)-sequence, scrambled and permuted within the pixel's 2^m
         // samples, put exactly one point in each elementary interval of area 2^-m (here: every 2^a × 2^(m−a) grid).
-        let m = 6;
-        let n = 1usize << m;
-        for dim_pair in [0u32, 5] {
-            let pts: Vec<[f64; 2]> = (0..n)
-                .map(|k| {
-                    let mut st = Sampler::PaddedSobol.samples(k, n, 99, Rng::new(1));
-                    for _ in 0..2 * dim_pair {
-                        st.next_f64();
-                    }
-                    [st.next_f64(), st.next_f64()]
-                })
-                .collect();
-            for a in 0..=m {
+        // zsobol's pixel holds an aligned block of its film-wide sequence, so the same holds, odd or even log₂ spp.
+        let is_net = |pts: &[[f64; 2]], m: u32| {
+            (0..=m).all(|a| {
                 let (nx, ny) = (1usize << a, 1usize << (m - a));
-                let mut cells = vec![0; n];
-                for p in &pts {
+                let mut cells = vec![0; 1 << m];
+                for p in pts {
                     cells[(p[0] * nx as f64) as usize + nx * (p[1] * ny as f64) as usize] += 1;
                 }
-                assert!(
-                    cells.iter().all(|&c| c == 1),
-                    "pair {dim_pair}: {nx} × {ny}"
-                );
+                cells.iter().all(|&c| c == 1)
+            })
+        };
+        for m in [5u32, 6] {
+            let n = 1usize << m;
+            let zsobol = Sampler::ZSobol {
+                log2_spp: 0,
+                digits: 0,
+                seed: 0,
             }
+            .for_film((40, 30), n, 17);
+            for (sampler, xy) in [
+                (Sampler::PaddedSobol, (0, 0)),
+                (zsobol, (3, 7)),
+                (zsobol, (39, 29)),
+            ] {
+                for dim_pair in [0u32, 5] {
+                    let pts: Vec<[f64; 2]> = (0..n)
+                        .map(|k| {
+                            let mut st = sampler.samples(k, n, 99, xy, Rng::new(1));
+                            for _ in 0..2 * dim_pair {
+                                st.next_f64();
+                            }
+                            [st.next_f64(), st.next_f64()]
+                        })
+                        .collect();
+                    assert!(is_net(&pts, m), "{sampler:?} {xy:?}: pair {dim_pair}");
+                }
+            }
+        }
+        // Across pixels (zsobol's purpose): one sample in each of a 16 × 16 block of pixels, together, is a net
+        // too — neighbouring pixels' samples avoid each other. Padded Sobol's are independent per pixel.
+        let zsobol = Sampler::ZSobol {
+            log2_spp: 0,
+            digits: 0,
+            seed: 0,
+        }
+        .for_film((64, 64), 1, 5);
+        for dim_pair in [0u32, 3] {
+            let block = |sampler: Sampler| -> Vec<[f64; 2]> {
+                (0..256u32)
+                    .map(|p| {
+                        let (x, y) = (16 + p % 16, 32 + p / 16);
+                        let mut st = sampler.samples(
+                            0,
+                            1,
+                            hash2(x as u64, y as u64),
+                            (x, y),
+                            Rng::new(p as u64),
+                        );
+                        for _ in 0..2 * dim_pair {
+                            st.next_f64();
+                        }
+                        [st.next_f64(), st.next_f64()]
+                    })
+                    .collect()
+            };
+            assert!(is_net(&block(zsobol), 8), "zsobol, pair {dim_pair}");
+            assert!(!is_net(&block(Sampler::PaddedSobol), 8));
         }
     }
 
@@ -475,7 +638,18 @@ mod tests {
         // Unbiased renders need each dimension uniform over pixels and samples: its mean ½ and second moment ⅓
         // (4 000 pixels × 16 samples: σ of the mean ≈ 1.1e-3). A non-uniform digit scrambling put Halton's mean
         // off by 1e-2 and biased a render by 2 %.
-        for sampler in [Sampler::Independent, Sampler::PaddedSobol, Sampler::Halton] {
+        let zsobol = Sampler::ZSobol {
+            log2_spp: 0,
+            digits: 0,
+            seed: 0,
+        }
+        .for_film((64, 63), 16, 9);
+        for sampler in [
+            Sampler::Independent,
+            Sampler::PaddedSobol,
+            Sampler::Halton,
+            zsobol,
+        ] {
             for d in [0usize, 1, 2, 3, 7, 15, 16, 40, 63, 64, 70] {
                 let (mut m1, mut m2, mut n) = (0.0, 0.0, 0.0);
                 for pixel in 0..4000u64 {
@@ -484,6 +658,7 @@ mod tests {
                             k,
                             16,
                             hash2(pixel, 3),
+                            ((pixel % 64) as u32, (pixel / 64) as u32),
                             Rng::new(pixel * 16 + k as u64),
                         );
                         let v = (0..=d).map(|_| st.next_f64()).last().unwrap();
@@ -536,6 +711,7 @@ mod tests {
                             k,
                             n,
                             pixel * 7919 + 13,
+                            ((pixel % 8) as u32, (pixel / 8) as u32),
                             Rng::new(pixel * 1000 + k as u64),
                         );
                         let (x, y) = (st.next_f64(), st.next_f64());
@@ -569,7 +745,15 @@ mod tests {
             (f64, f64),
             (f64, f64),
         );
-        let cases: [Case; 4] = [
+        let zsobol = |n: usize| {
+            Sampler::ZSobol {
+                log2_spp: 0,
+                digits: 0,
+                seed: 0,
+            }
+            .for_film((8, 8), n, 3)
+        };
+        let cases: [Case; 5] = [
             (
                 "independent",
                 &|_| Sampler::Independent,
@@ -584,6 +768,7 @@ mod tests {
                 (-0.95, -0.6),
             ),
             ("halton", &|_| Sampler::Halton, (-1.3, -0.8), (-0.95, -0.55)),
+            ("zsobol", &zsobol, (-1.8, -1.3), (-0.95, -0.6)),
         ];
         for (name, s, want_smooth, want_disc) in cases {
             let (rs, rd) = (rate(s, &smooth, es), rate(s, &disc, ed));

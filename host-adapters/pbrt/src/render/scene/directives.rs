@@ -226,9 +226,15 @@ impl Builder {
                     self.sampler = match ty.as_str() {
                         "independent" => Sampler::Independent,
                         "halton" => Sampler::Halton,
-                        "zsobol" | "sobol" | "paddedsobol" | "pmj02bn" => {
-                            if ty != "paddedsobol" {
-                                self.warn(loc, format!("sampler \"{ty}\" is rendered as \"paddedsobol\" (Owen-scrambled Sobol pairs per pixel: the same stratification within a pixel)"));
+                        "zsobol" | "sobol" => {
+                            if ty == "sobol" {
+                                self.warn(loc, "sampler \"sobol\" is rendered as \"zsobol\" (one Owen-scrambled Sobol sequence over the film, pixels in Morton order: the same stratification within and across pixels)".to_string());
+                            }
+                            Sampler::ZSobol { log2_spp: 0, digits: 0, seed: 0 }
+                        }
+                        "paddedsobol" | "pmj02bn" => {
+                            if ty == "pmj02bn" {
+                                self.warn(loc, "sampler \"pmj02bn\" is rendered as \"paddedsobol\" (Owen-scrambled (0, 2)-sequence pairs per pixel: the same stratification within a pixel)".to_string());
                             }
                             Sampler::PaddedSobol
                         }

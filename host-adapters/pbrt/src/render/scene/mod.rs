@@ -443,8 +443,12 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         camera: None,
         res: (1280, 720),
         spp: 16,
-        // pbrt-v4's defaults: zsobol (rendered as padded Sobol here) and a Gaussian of radius 1.5, σ 0.5.
-        sampler: crate::render::pixel::Sampler::PaddedSobol,
+        // pbrt-v4's defaults: zsobol and a Gaussian of radius 1.5, σ 0.5.
+        sampler: crate::render::pixel::Sampler::ZSobol {
+            log2_spp: 0,
+            digits: 0,
+            seed: 0,
+        },
         film_response: Default::default(),
         spectral: None,
         media_bytes: 0,
@@ -596,6 +600,15 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     if let Some((_, xyz)) = b.film_xyz.take() {
         bins.xyz = xyz;
     }
+    // pbrt-v4's zsobol takes a power of two samples per pixel, rounding up with a warning.
+    let mut spp = ov.spp.unwrap_or(b.spp);
+    if matches!(b.sampler, crate::render::pixel::Sampler::ZSobol { .. }) && !spp.is_power_of_two() {
+        b.warnings.push(format!(
+            "sampler \"zsobol\": {spp} samples per pixel rounded up to {} (a power of two, as pbrt-v4)",
+            spp.next_power_of_two()
+        ));
+        spp = spp.next_power_of_two();
+    }
     Ok(Scene {
         bins,
         bvh: Bvh::new(b.prims),
@@ -604,7 +617,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         media: b.media,
         camera,
         res: b.res,
-        spp: ov.spp.unwrap_or(b.spp),
+        spp,
         sampler: b.sampler,
         filter: b.filter,
         response,
