@@ -272,6 +272,41 @@ fn an_orthographic_view_of_partial_shapes_covers_their_projected_area() {
 }
 
 #[test]
+fn a_loop_subdivided_octahedron_lies_between_its_corners_limits() {
+    // pbrt-v4's `loopsubdiv` of an octahedron of radius 2: its corners' limit points lie at radius 1 (valence 4:
+    // ½ v), the surface within radius 1, so seen from above (orthographic, 4 × 4 units on 64 × 64 pixels, an
+    // emitter of luminance 1) it covers at least the square of its corners' limits (area 2) and at most the disc
+    // of radius 1 (π): mean Y in [2/16, π/16]. An error in the transform, the indices or the rules leaves it.
+    let dir = out_dir("loop");
+    let octa = "\"point3 P\" [2 0 0  -2 0 0  0 2 0  0 -2 0  0 0 2  0 0 -2] \"integer indices\" [0 2 4 2 1 4 1 3 4 3 0 4 2 0 5 1 2 5 3 1 5 0 3 5]";
+    let scene = |levels: &str| {
+        format!("LookAt 0 0 30  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\nFilm \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 64\nSampler \"stratified\" \"integer xsamples\" 4 \"integer ysamples\" 4\nPixelFilter \"box\"\nWorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"loopsubdiv\" {levels} {octa}\n")
+    };
+    let f = dir.join("octa.pbrt");
+    std::fs::write(&f, scene("\"integer levels\" 4")).unwrap();
+    let y = y_of(mean_rgb(
+        &render(&f, &dir.join("octa.exr"), &[]),
+        (0, 64),
+        (0, 64),
+    ));
+    let pi = std::f64::consts::PI;
+    assert!(
+        (2.0 / 16.0..pi / 16.0).contains(&y),
+        "mean Y {y}: expected 0.125 to 0.196"
+    );
+    // The control octahedron itself would cover its square of area 8 (mean Y 0.5): the surface shrank.
+    eprintln!("loopsubdiv octahedron: mean Y {y}");
+    // An absurd level count is an error naming it, before any work.
+    std::fs::write(&f, scene("\"integer levels\" 40")).unwrap();
+    let o = run_render(&f, &dir.join("bad.exr"), &["-q"]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && msg.contains("levels") && msg.contains("40"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn a_homogeneous_preset_is_pbrt_v4s_measured_medium() {
     // "Ketchup" (Jensen et al. 2001, as pbrt-v4 lists it): σ'_s (0.18, 0.07, 0.03), σ_a (0.061, 0.97, 1.45) mm⁻¹,
     // as unbounded rgb spectra. The spectra's own colours (as reflectances under D65, scaled back) give the rgb.

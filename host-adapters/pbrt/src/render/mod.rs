@@ -19,6 +19,7 @@ pub mod ply;
 pub mod scene;
 pub mod shapes;
 pub mod spectrum;
+pub mod subdiv;
 
 use firemedium_core::cie;
 use firemedium_core::rng::Rng;

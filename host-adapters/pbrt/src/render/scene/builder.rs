@@ -297,6 +297,59 @@ impl Builder {
     /// An error unless `n` more primitives (with their BVH nodes) fit in the memory budget beside the scene's:
     /// checked before they are made (a mesh by its face count; an instance is one primitive over its object's
     /// shared BVH).
+    /// pbrt-v4's `loopsubdiv`: the control mesh `P`, `indices` subdivided `levels` times (default 3) and pushed
+    /// to the limit surface, as a triangle mesh with smooth normals.
+    #[allow(clippy::type_complexity)]
+    fn loop_subdivide(
+        &self,
+        p: &ParamDict,
+        pos: Vec<f64>,
+        idx: Vec<usize>,
+        loc: &Loc,
+    ) -> Result<(Vec<f64>, Vec<usize>, Option<Vec<f64>>, Option<Vec<f64>>), Error> {
+        use crate::render::subdiv;
+        let levels = num(p, "levels", 3.0);
+        if !(0.0..=subdiv::MAX_LEVELS as f64).contains(&levels) || levels.fract() != 0.0 {
+            return Err(err(
+                loc,
+                format!(
+                    "loopsubdiv: \"integer levels\" {levels}: expected 0 to {}",
+                    subdiv::MAX_LEVELS
+                ),
+            ));
+        }
+        let levels = levels as u32;
+        let nv = pos.len() / 3;
+        if pos.len() % 3 != 0 || idx.len() % 3 != 0 || idx.iter().any(|&i| i >= nv) {
+            return Err(err(
+                loc,
+                format!("loopsubdiv: indices must come in 3s and be below the {nv} vertices"),
+            ));
+        }
+        // Its final triangles, and the same again for the subdivision's working copies (edges, rings).
+        let tris = ((idx.len() / 3) as u64).saturating_mul(1u64 << (2 * levels));
+        self.room_for_prims(
+            usize::try_from(tris.saturating_mul(2)).unwrap_or(usize::MAX),
+            "loopsubdiv",
+            loc,
+        )?;
+        let control = subdiv::Mesh {
+            p: pos.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            tris: idx
+                .chunks(3)
+                .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32])
+                .collect(),
+        };
+        let m = subdiv::subdivide(&control, levels);
+        let n = subdiv::normals(&m);
+        Ok((
+            m.p.concat(),
+            m.tris.iter().flatten().map(|&i| i as usize).collect(),
+            Some(n.concat()),
+            None,
+        ))
+    }
+
     pub(super) fn room_for_prims(&self, n: usize, what: &str, loc: &Loc) -> Result<(), Error> {
         // A primitive, its BVH leaf reference and its share of the nodes: about 2.5 × its own size.
         let each = (std::mem::size_of::<Prim>() as u64) * 5 / 2;
@@ -600,7 +653,7 @@ impl Builder {
                 let (z0, z1) = (num(p, "zmin", -1.0), num(p, "zmax", 1.0));
                 self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: z0.min(z1) as f32, zmax: z0.max(z1) as f32, phimax });
             }
-            "trianglemesh" | "bilinearmesh" | "plymesh" => {
+            "trianglemesh" | "bilinearmesh" | "plymesh" | "loopsubdiv" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
                     let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
                     crate::render::ply::read(&self.dir.join(f), self.max_memory).map_err(|e| err(loc, e))?
@@ -618,7 +671,11 @@ impl Builder {
                         None if ty == "bilinearmesh" && pos.len() == 12 => vec![0, 1, 2, 3],
                         None => return Err(err(loc, format!("{ty}: missing \"integer indices\""))),
                     };
-                    (pos, idx, nums(p, "N").map(|v| v.to_vec()), nums(p, "uv").map(|v| v.to_vec()))
+                    if ty == "loopsubdiv" {
+                        self.loop_subdivide(p, pos, idx, loc)?
+                    } else {
+                        (pos, idx, nums(p, "N").map(|v| v.to_vec()), nums(p, "uv").map(|v| v.to_vec()))
+                    }
                 };
                 let nv = pos.len() / 3;
                 let per = if ty == "bilinearmesh" { 4 } else { 3 };
@@ -648,7 +705,7 @@ impl Builder {
                     }
                 }
             }
-            other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh)"))),
+            other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh, loopsubdiv)"))),
         }
         self.check_bounds(first, ty, loc)?;
         Ok(())
