@@ -674,6 +674,86 @@ fn the_memory_budget_is_shared_by_a_scenes_media() {
 }
 
 #[test]
+fn the_gbuffer_film_writes_the_visible_surface() {
+    // A camera at (0, 0, −2) looking along +z at the plane z = 3 + x/2 (world), a diffuse emitter of albedo 0.5
+    // and L = 1 (no other light, maxdepth 1: every sample sees exactly L). In camera space the plane is
+    // z = 5 + x/2, so at the image centre P = (0, 0, 5), the normal ∝ (−½, 0, 1) up to its side, and a pixel
+    // over (δ = 2 tan(22.5°)/32 in camera x per unit depth) the ray meets it at z = 5 / (1 − δ/2): dz/dx =
+    // 5 (δ/2) / (1 − δ/2), times pbrt-v4's footprint max(⅛, 1/√16) = ¼; dz/dy = 0. Albedo 0.5 in each of R, G, B,
+    // R, G, B = 1, and no variance. With "world", P is the world point (0, 0, 3).
+    let dir = out_dir("gbuffer");
+    let scene = |space: &str| {
+        format!("LookAt 0 0 -2  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"gbuffer\" \"integer xresolution\" 32 \"integer yresolution\" 32 {space}\nSampler \"zsobol\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-100 -100 -47  100 -100 53  100 100 53  -100 100 -47] \"integer indices\" [0 1 2 0 2 3]\n")
+    };
+    use exr::prelude::*;
+    let channels = |space: &str, name: &str| -> std::collections::HashMap<String, Vec<f32>> {
+        let f = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&f, scene(space)).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        render(&f, &out, &[]);
+        let img = read_all_flat_layers_from_file(&out).unwrap();
+        let layer = &img.layer_data[0];
+        let n = layer.size.area();
+        layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| {
+                let v = (0..n)
+                    .map(|i| c.sample_data.value_by_flat_index(i).to_f32())
+                    .collect();
+                (c.name.to_string(), v)
+            })
+            .collect()
+    };
+    let cam = channels("", "camera");
+    let mut names: Vec<&String> = cam.keys().collect();
+    names.sort();
+    assert_eq!(names.len(), 23, "{names:?}");
+    // The four pixels around the image's centre, averaged: the centre itself.
+    let at = |c: &std::collections::HashMap<String, Vec<f32>>, name: &str| -> f64 {
+        let v = &c[name];
+        [15 + 32 * 15, 16 + 32 * 15, 15 + 32 * 16, 16 + 32 * 16]
+            .iter()
+            .map(|&i| v[i] as f64)
+            .sum::<f64>()
+            / 4.0
+    };
+    let delta = 2.0 * (22.5f64).to_radians().tan() / 32.0;
+    let dzdx = 0.25 * 5.0 * (delta / 2.0) / (1.0 - delta / 2.0);
+    let n = [-0.5, 0.0, 1.0].map(|v: f64| v / 1.25f64.sqrt());
+    let close = |got: f64, want: f64, tol: f64, what: &str| {
+        assert!((got - want).abs() <= tol, "{what}: {got}, expected {want}");
+    };
+    for c in ["R", "G", "B"] {
+        close(at(&cam, c), 1.0, 0.01, c);
+        close(at(&cam, &format!("Albedo.{c}")), 0.5, 0.01, "albedo");
+        close(at(&cam, &format!("Variance.{c}")), 0.0, 1e-9, "variance");
+    }
+    close(at(&cam, "Px"), 0.0, 0.01, "Px");
+    close(at(&cam, "Py"), 0.0, 0.01, "Py");
+    close(at(&cam, "Pz"), 5.0, 0.01, "Pz");
+    close(at(&cam, "dzdx"), dzdx, 0.02 * dzdx, "dzdx");
+    close(at(&cam, "dzdy"), 0.0, 1e-4, "dzdy");
+    let sign = at(&cam, "Nz").signum();
+    for (k, c) in ["Nx", "Ny", "Nz"].iter().enumerate() {
+        close(at(&cam, c), sign * n[k], 1e-3, c);
+        close(at(&cam, &format!("Ns{}", &c[1..])), sign * n[k], 1e-3, "Ns");
+    }
+    let world = channels("\"string coordinatesystem\" \"world\"", "world");
+    close(at(&world, "Pz"), 3.0, 0.01, "world Pz");
+    // A space pbrt-v4 does not have is an error naming it.
+    let f = dir.join("bad.pbrt");
+    std::fs::write(&f, scene("\"string coordinatesystem\" \"screen\"")).unwrap();
+    let o = run_render(&f, &dir.join("bad.exr"), &["-q"]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && msg.contains("\"screen\"") && msg.contains("camera"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn the_spectral_film_writes_a_channel_per_bucket() {
     // slab_const.pbrt on pbrt-v4's spectral film (16 buckets over 380–780 nm here, 25 nm each): beside R, G, B,
     // channels S0.<centre>nm hold each pixel's mean spectral radiance over its bucket — for the thick 2000 K box,

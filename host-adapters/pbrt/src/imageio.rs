@@ -313,22 +313,21 @@ pub fn write_exr(
     write_exr_as(path, w, h, rgb, fire_temperature, false, window)
 }
 
-/// Writes linear RGB plus one channel per spectral bucket, `S0.<centre>nm` (OpenEXR's spectral layout, as
-/// pbrt-v4's spectral film names them: centre with three decimals, the point as a comma), `values` holding each
-/// pixel's buckets in turn.
+/// Writes linear RGB plus the channels `names` (a spectral film's buckets `S0.<centre>nm`, a gbuffer's
+/// `Albedo.R`, `Px`, …), `values` holding each pixel's channels in turn.
 #[allow(clippy::too_many_arguments)]
-pub fn write_spectral_exr(
+pub fn write_channels_exr(
     path: &Path,
     w: usize,
     h: usize,
     rgb: &[[f32; 3]],
-    centres: &[f64],
+    names: &[String],
     values: &[f32],
     fp16: bool,
     window: Window,
 ) -> Result<(), String> {
     use exr::prelude::*;
-    let nb = centres.len();
+    let nb = names.len();
     let samples = |v: Vec<f32>| {
         if fp16 {
             FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
@@ -341,10 +340,7 @@ pub fn write_spectral_exr(
         .enumerate()
         .map(|(c, name)| AnyChannel::new(*name, samples(rgb.iter().map(|p| p[c]).collect())))
         .collect();
-    for (k, l) in centres.iter().enumerate() {
-        let name = format!("S0.{l:.3}nm")
-            .replace('.', ",")
-            .replacen(',', ".", 1);
+    for (k, name) in names.iter().enumerate() {
         list.push(AnyChannel::new(
             name.as_str(),
             samples(

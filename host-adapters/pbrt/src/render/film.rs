@@ -136,6 +136,122 @@ impl Buckets {
     }
 }
 
+/// pbrt-v4's `gbuffer` film: beside R, G, B, per pixel the first visible surface's filter-weighted mean albedo,
+/// position, depth slopes and normals, in camera space (`"string coordinatesystem" "camera"`, the default) or
+/// world space, and the variance of the sensor values of the samples that saw a surface — the channels and the
+/// normalisation of pbrt-v4's `GBufferFilm::GetImage` (sums over samples with a surface divided by the weight of
+/// all samples; normals renormalised; |dz/dx|, |dz/dy|).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GBuffer {
+    /// World space instead of camera space.
+    pub world: bool,
+}
+
+/// The gbuffer film's channels after R, G, B, in pbrt-v4's order.
+pub const GBUFFER_CHANNELS: [&str; 20] = [
+    "Albedo.R",
+    "Albedo.G",
+    "Albedo.B",
+    "Px",
+    "Py",
+    "Pz",
+    "dzdx",
+    "dzdy",
+    "Nx",
+    "Ny",
+    "Nz",
+    "Nsx",
+    "Nsy",
+    "Nsz",
+    "Variance.R",
+    "Variance.G",
+    "Variance.B",
+    "RelativeVariance.R",
+    "RelativeVariance.G",
+    "RelativeVariance.B",
+];
+
+/// One sample's visible surface, in the gbuffer's space.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GSample {
+    pub albedo_rgb: DVec3,
+    pub p: DVec3,
+    pub n: DVec3,
+    pub ns: DVec3,
+    pub dzdx: f64,
+    pub dzdy: f64,
+}
+
+/// A pixel's gbuffer sums.
+#[derive(Debug, Clone, Default)]
+pub struct GPixel {
+    sum: GSample,
+    /// Welford's running mean and sum of squared deviations of the sensor values, per component.
+    n: f64,
+    mean: DVec3,
+    m2: DVec3,
+}
+
+impl GPixel {
+    /// Adds a sample of filter weight `w` that saw `v`, its sensor value `sensor`.
+    pub fn add(&mut self, w: f64, v: &GSample, sensor: DVec3) {
+        let s = &mut self.sum;
+        s.albedo_rgb += w * v.albedo_rgb;
+        s.p += w * v.p;
+        s.n += w * v.n;
+        s.ns += w * v.ns;
+        s.dzdx += w * v.dzdx;
+        s.dzdy += w * v.dzdy;
+        self.n += 1.0;
+        let delta = sensor - self.mean;
+        self.mean += delta / self.n;
+        self.m2 += delta * (sensor - self.mean);
+    }
+
+    /// The pixel's channels ([`GBUFFER_CHANNELS`]) given the weight of all its samples.
+    pub fn finish(&self, weights: f64) -> [f32; 20] {
+        let k = if weights != 0.0 { 1.0 / weights } else { 1.0 };
+        let s = &self.sum;
+        let (a, p) = (s.albedo_rgb * k, s.p * k);
+        let (n, ns) = (s.n.normalize_or_zero(), s.ns.normalize_or_zero());
+        let var = if self.n > 1.0 {
+            self.m2 / (self.n - 1.0)
+        } else {
+            DVec3::ZERO
+        };
+        let rel = |c: usize| {
+            if self.n < 1.0 || self.mean[c] == 0.0 {
+                0.0
+            } else {
+                var[c] / self.mean[c]
+            }
+        };
+        [
+            a.x,
+            a.y,
+            a.z,
+            p.x,
+            p.y,
+            p.z,
+            (s.dzdx * k).abs(),
+            (s.dzdy * k).abs(),
+            n.x,
+            n.y,
+            n.z,
+            ns.x,
+            ns.y,
+            ns.z,
+            var.x,
+            var.y,
+            var.z,
+            rel(0),
+            rel(1),
+            rel(2),
+        ]
+        .map(|v| if v.is_finite() { v as f32 } else { 0.0 })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,5 +287,34 @@ mod tests {
         let c = r.clamp_sample(xyz);
         assert!((firemedium_core::cie::xyz_to_linear_srgb(c).max_element() - 2.0).abs() < 1e-9);
         assert!((c / c.y - xyz / xyz.y).abs().max_element() < 1e-12);
+    }
+
+    #[test]
+    fn a_gbuffer_pixel_is_pbrt_v4s_weighted_means_and_variance() {
+        // Samples of weight 1, 1, 2 seeing surfaces; a fourth (weight 4) seeing nothing only adds to the weights.
+        let mut g = GPixel::default();
+        for (w, x, z) in [(1.0, 1.0, 2.0), (1.0, 2.0, 4.0), (2.0, 3.0, 6.0)] {
+            let v = GSample {
+                albedo_rgb: DVec3::splat(0.5),
+                p: DVec3::new(x, 0.0, z),
+                n: DVec3::new(0.0, 0.0, -2.0),
+                ns: DVec3::new(0.0, 1.0, -1.0),
+                dzdx: -0.25,
+                dzdy: 0.5,
+            };
+            g.add(w, &v, DVec3::new(x, 2.0 * x, 0.0));
+        }
+        let c = g.finish(8.0);
+        // Σ w v / Σ w over all samples (8): albedo 0.5·4/8, Px (1 + 2 + 6)/8, Pz (2 + 4 + 12)/8.
+        assert_eq!(&c[..3], &[0.25; 3]);
+        assert_eq!((c[3], c[5]), (9.0 / 8.0, 18.0 / 8.0));
+        assert_eq!((c[6], c[7]), (0.125, 0.25));
+        // Normals renormalised.
+        assert_eq!(&c[8..11], &[0.0, 0.0, -1.0]);
+        assert!((c[12] - 0.5f32.sqrt()).abs() < 1e-6);
+        // Sensor values 1, 2, 3 (unweighted, as pbrt-v4's VarianceEstimator): variance 1, relative variance
+        // variance / mean = ½; twice that in G; 0 where the mean is 0.
+        assert_eq!(&c[14..17], &[1.0, 4.0, 0.0]);
+        assert_eq!(&c[17..20], &[0.5, 1.0, 0.0]);
     }
 }

@@ -19,6 +19,16 @@ use firemedium_loader::Ray as FRay;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
 
+/// The surface a camera ray sees first (pbrt-v4's `VisibleSurface`), for the `gbuffer` film: world-space point,
+/// geometric and shading normals, and the material's directional albedo ρ(wo) (one-sample estimate).
+#[derive(Debug, Clone, Copy)]
+pub struct Visible {
+    pub p: Vec3A,
+    pub ng: Vec3A,
+    pub ns: Vec3A,
+    pub albedo: S,
+}
+
 fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
     let s = if n.z < 0.0 { -1.0 } else { 1.0 };
     let a = -1.0 / (s + n.z);
@@ -541,7 +551,20 @@ impl Integrator<'_> {
     }
 
     /// Radiance along a camera ray.
-    pub fn li(&self, mut o: Vec3A, mut d: Vec3A, rng: &mut Samples) -> S {
+    pub fn li(&self, o: Vec3A, d: Vec3A, rng: &mut Samples) -> S {
+        self.li_visible(o, d, rng, None)
+    }
+
+    /// Radiance along a camera ray and, when `visible` is given, the surface the ray sees first (pbrt-v4's
+    /// `VisibleSurface`: the first hit with a material, before any scattering; none when a medium scattered the
+    /// path first or the ray escaped).
+    pub fn li_visible(
+        &self,
+        mut o: Vec3A,
+        mut d: Vec3A,
+        rng: &mut Samples,
+        mut visible: Option<&mut Option<Visible>>,
+    ) -> S {
         let sc = self.scene;
         let mut l = S::ZERO;
         let mut beta = self.mask;
@@ -719,7 +742,9 @@ impl Integrator<'_> {
                 o = h.p;
                 continue;
             };
-            if depth >= sc.maxdepth {
+            // pbrt-v4 records the visible surface before it ends a path at its maximum depth.
+            let record = depth == 0 && visible.is_some();
+            if depth >= sc.maxdepth && !record {
                 break;
             }
             let mat = &sc.materials[mi];
@@ -738,6 +763,28 @@ impl Integrator<'_> {
             let seed = rng.next_u64();
             let wo_l = to_local(h.ns, wo);
             if wo_l.z == 0.0 {
+                break;
+            }
+            if depth == 0 {
+                if let Some(v) = visible.take() {
+                    // The albedo ρ(wo) = ∫ f |cos| dωi, estimated by one BSDF sample per camera sample (the
+                    // pixel's mean over its samples is pbrt-v4's `rho` by Monte Carlo).
+                    let (uc, u) = (rng.next_f64() as f32, Self::rng2(rng));
+                    let albedo = bxdf
+                        .sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed)
+                        .filter(|bs| bs.pdf > 0.0)
+                        .map_or(S::ZERO, |bs| {
+                            (bs.f * (bs.wi.z.abs() / bs.pdf)).finite_or_zero()
+                        });
+                    *v = Some(Visible {
+                        p: h.p,
+                        ng: h.ng,
+                        ns: h.ns,
+                        albedo,
+                    });
+                }
+            }
+            if depth >= sc.maxdepth {
                 break;
             }
             // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.

@@ -43,8 +43,9 @@ pub struct Image {
     /// bounds render part of it: the EXR's data window inside its display window).
     pub origin: (usize, usize),
     pub full: (usize, usize),
-    /// The spectral film's buckets: their centre wavelengths (nm) and, per pixel, their mean spectral radiance.
-    pub spectral: Option<(Vec<f64>, Vec<f32>)>,
+    /// Channels beside R, G, B, their names and, per pixel, their values (pixel-major): the spectral film's
+    /// buckets (`S0.<centre>nm`, mean spectral radiance) or the gbuffer film's channels.
+    pub extra: Option<(Vec<String>, Vec<f32>)>,
 }
 
 impl Image {
@@ -60,9 +61,9 @@ impl Image {
             origin: self.origin,
             full: self.full,
         };
-        if let Some((centres, values)) = &self.spectral {
-            return crate::imageio::write_spectral_exr(
-                path, self.w, self.h, &self.rgb, centres, values, fp16, window,
+        if let Some((names, values)) = &self.extra {
+            return crate::imageio::write_channels_exr(
+                path, self.w, self.h, &self.rgb, names, values, fp16, window,
             );
         }
         crate::imageio::write_exr_as(
@@ -118,6 +119,7 @@ pub fn render(
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
     let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
+    let gspace = scene.gbuffer.map(|g| GSpace::new(scene, g.world));
     let done = AtomicUsize::new(0);
     let results: Vec<Option<Vec<PixelResult>>> = tiles
         .par_iter()
@@ -137,6 +139,7 @@ pub fn render(
                     let (mut sum, mut weights) = (DVec3::ZERO, 0.0);
                     // The spectral film's radiance per bin (only when the film is spectral).
                     let mut spectrum = [0.0f64; spectrum::MAX_CHANNELS];
+                    let mut gpixel = film::GPixel::default();
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
@@ -152,8 +155,14 @@ pub fn render(
                         let (off, w) = scene.filter.sample(u);
                         let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
                         let (o, d) = camera_ray(scene, fx, fy, &mut rng);
-                        let l = integ.li(o, d, &mut rng);
-                        sum += scene.response.clamp_sample(scene.bins.to_xyz(&l)) * w;
+                        let mut visible = None;
+                        let want = gspace.as_ref().map(|_| &mut visible);
+                        let l = integ.li_visible(o, d, &mut rng, want);
+                        let sensor = scene.response.clamp_sample(scene.bins.to_xyz(&l));
+                        sum += sensor * w;
+                        if let (Some(g), Some(v)) = (&gspace, visible) {
+                            gpixel.add(w, &g.sample(scene, fx, fy, &v), sensor);
+                        }
                         weights += w;
                         if scene.spectral.is_some() {
                             spectrum
@@ -173,6 +182,7 @@ pub fn render(
                             b.resample(&scene.bins, &spectrum.map(|v| v * k))
                         }
                         Some(b) => vec![0.0; b.n],
+                        None if gspace.is_some() => gpixel.finish(weights).to_vec(),
                         None => Vec::new(),
                     };
                     out.push((cx + w * cy, sum / scene.spp as f64, buckets));
@@ -184,7 +194,22 @@ pub fn render(
         })
         .collect();
     let mut xyz = vec![DVec3::ZERO; w * h];
-    let nb = scene.spectral.as_ref().map_or(0, |b| b.n);
+    let names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
+        (Some(b), _) => Some(
+            b.centres()
+                .iter()
+                .map(|&l| spectral_channel_name(l))
+                .collect(),
+        ),
+        (None, Some(_)) => Some(
+            film::GBUFFER_CHANNELS
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+        ),
+        (None, None) => None,
+    };
+    let nb = names.as_ref().map_or(0, |n| n.len());
     let mut buckets = vec![0f32; w * h * nb];
     let mut complete = true;
     for r in results {
@@ -215,28 +240,120 @@ pub fn render(
             complete,
             origin: (x0, y0),
             full: scene.res,
-            spectral: scene.spectral.as_ref().map(|b| (b.centres(), buckets)),
+            extra: names.map(|n| (n, buckets)),
         },
         stats,
     )
 }
 
-/// The camera ray through film position (`fx`, `fy`) in pixels (origin top left), its lens sample from `rng`
-/// when the camera has a lens.
-pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Samples) -> (Vec3A, Vec3A) {
+/// The name of the spectral film's channel at `nm`: OpenEXR's spectral layout as pbrt-v4 writes it
+/// (`S0.<centre>nm`, the decimal point as a comma).
+fn spectral_channel_name(nm: f64) -> String {
+    format!("S0.{nm:.3}nm")
+        .replace('.', ",")
+        .replacen(',', ".", 1)
+}
+
+/// Where the gbuffer film's values live: the transform from world to its space (camera or world) and its normal
+/// matrix, and the scale pbrt-v4 puts on a pixel's footprint (`Camera::Approximate_dp_dxy`: max(⅛, 1/√spp), 1
+/// without pixel jitter).
+struct GSpace {
+    from_world: glam::DAffine3,
+    normals: glam::DMat3,
+    footprint: f64,
+}
+
+impl GSpace {
+    fn new(scene: &scene::Scene, world: bool) -> GSpace {
+        let from_world = if world {
+            glam::DAffine3::IDENTITY
+        } else {
+            scene.camera.to_world.inverse()
+        };
+        GSpace {
+            from_world,
+            normals: from_world.matrix3.inverse().transpose(),
+            footprint: if scene.pixel_jitter {
+                (1.0 / (scene.spp as f64).sqrt()).max(0.125)
+            } else {
+                1.0
+            },
+        }
+    }
+
+    /// One camera sample's visible surface in the gbuffer's space: the albedo as an rgb reflectance under D65
+    /// (pbrt-v4 multiplies it by the colour space's illuminant), and dz/dx, dz/dy from where the pinhole rays
+    /// one pixel over meet the surface's tangent plane.
+    fn sample(
+        &self,
+        scene: &scene::Scene,
+        fx: f64,
+        fy: f64,
+        v: &integrator::Visible,
+    ) -> film::GSample {
+        let p = v.p.as_dvec3();
+        let ng = v.ng.as_dvec3();
+        let dz = |fx: f64, fy: f64| {
+            let (o, d) = pinhole_ray(scene, fx, fy);
+            let den = ng.dot(d);
+            if den.abs() < 1e-12 {
+                return 0.0;
+            }
+            let q = o + d * (ng.dot(p - o) / den);
+            self.from_world
+                .transform_vector3((q - p) * self.footprint)
+                .z
+        };
+        let d65 = scene.bins.d65();
+        let mut lit = v.albedo;
+        for (a, e) in lit.0.iter_mut().zip(d65.0) {
+            *a *= e;
+        }
+        let white = scene.bins.luminance(&d65);
+        let albedo_xyz = scene.bins.to_xyz(&lit) / if white > 0.0 { white } else { 1.0 };
+        film::GSample {
+            albedo_rgb: cie::xyz_to_linear_srgb(albedo_xyz),
+            p: self.from_world.transform_point3(p),
+            n: (self.normals * ng).normalize_or_zero(),
+            ns: (self.normals * v.ns.as_dvec3()).normalize_or_zero(),
+            dzdx: dz(fx + 1.0, fy),
+            dzdy: dz(fx, fy + 1.0),
+        }
+    }
+}
+
+/// The camera ray through film position (`fx`, `fy`) without a lens, in world space (f64).
+fn pinhole_ray(scene: &scene::Scene, fx: f64, fy: f64) -> (DVec3, DVec3) {
+    let (org, dir) = camera_space_ray(scene, fx, fy);
+    let cam = &scene.camera;
+    (
+        cam.to_world.transform_point3(org),
+        cam.to_world.transform_vector3(dir).normalize(),
+    )
+}
+
+/// The pinhole (or orthographic) ray through film position (`fx`, `fy`) in camera space: origin, direction.
+fn camera_space_ray(scene: &scene::Scene, fx: f64, fy: f64) -> (DVec3, DVec3) {
     let cam = &scene.camera;
     let (w, h) = (scene.res.0 as f64, scene.res.1 as f64);
     let sx = cam.screen[0] + fx / w * (cam.screen[1] - cam.screen[0]);
     let sy = cam.screen[3] - fy / h * (cam.screen[3] - cam.screen[2]);
     // Perspective: through the pinhole toward the screen at z = 1; orthographic: parallel, from the screen.
-    let (mut org, mut dir) = if cam.orthographic {
+    if cam.orthographic {
         (DVec3::new(sx, sy, 0.0), DVec3::Z)
     } else {
         (
             DVec3::ZERO,
             DVec3::new(sx * cam.tan_half, sy * cam.tan_half, 1.0),
         )
-    };
+    }
+}
+
+/// The camera ray through film position (`fx`, `fy`) in pixels (origin top left), its lens sample from `rng`
+/// when the camera has a lens.
+pub fn camera_ray(scene: &scene::Scene, fx: f64, fy: f64, rng: &mut Samples) -> (Vec3A, Vec3A) {
+    let cam = &scene.camera;
+    let (mut org, mut dir) = camera_space_ray(scene, fx, fy);
     if cam.lens_radius > 0.0 {
         let (r, phi) = (
             rng.next_f64().sqrt() * cam.lens_radius,

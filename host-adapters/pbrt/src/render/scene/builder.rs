@@ -74,6 +74,7 @@ pub(super) struct Builder {
     pub(super) filter: crate::render::pixel::Filter,
     pub(super) film_response: FilmParams,
     pub(super) spectral: Option<crate::render::film::Buckets>,
+    pub(super) gbuffer: Option<crate::render::film::GBuffer>,
     /// `Option "integer seed"` and `Option "bool disablepixeljitter"`.
     pub(super) seed: u64,
     pub(super) pixel_jitter: bool,

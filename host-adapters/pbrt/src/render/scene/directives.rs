@@ -132,8 +132,18 @@ impl Builder {
             }
             Directive::Film(ty, params) => {
                 let p = &ParamDict::new(&params);
+                // pbrt-v4's gbuffer film: the visible surface's channels beside R, G, B, in camera or world space.
+                self.gbuffer = None;
                 if ty == "gbuffer" {
-                    self.warn(loc, format!("film \"{ty}\" is written as an rgb film"));
+                    let world = match string(p, "coordinatesystem").unwrap_or("camera") {
+                        "camera" => false,
+                        "world" => true,
+                        other => {
+                            let at = p.get("coordinatesystem").map_or(loc.clone(), |q| q.loc.clone());
+                            return Err(err(&at, format!("film \"gbuffer\": \"string coordinatesystem\" \"{other}\": expected \"camera\" or \"world\"")));
+                        }
+                    };
+                    self.gbuffer = Some(crate::render::film::GBuffer { world });
                 }
                 // 1 to 65 536 pixels a side, as --resolution (zero and negative were clamped to 1 silently, 1e9
                 // allocated until the process aborted); the film's bytes are checked against the budget in `load`.

@@ -195,6 +195,8 @@ pub struct Scene {
     pub response: crate::render::film::Response,
     /// pbrt-v4's `spectral` film: its buckets.
     pub spectral: Option<crate::render::film::Buckets>,
+    /// pbrt-v4's `gbuffer` film.
+    pub gbuffer: Option<crate::render::film::GBuffer>,
     /// The pixels rendered, [x0, x1) × [y0, y1) of the `res` film (pbrt-v4's pixel bounds; all of it by default).
     pub bounds: [usize; 4],
     /// The scene's seed (`Option "integer seed"`; the command line's `--seed` wins) and whether pixel samples
@@ -451,6 +453,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         },
         film_response: Default::default(),
         spectral: None,
+        gbuffer: None,
         media_bytes: 0,
         seed: 0,
         pixel_jitter: true,
@@ -501,7 +504,10 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let bounds = pixel_bounds(&b, ov, path)?;
     // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room), and a spectral
     // film's buckets (twice: the tiles' and the image's).
-    let bucket_bytes = b.spectral.as_ref().map_or(0, |s| 8 * s.n as u64);
+    let bucket_bytes = b.spectral.as_ref().map_or(0, |s| 8 * s.n as u64)
+        + b.gbuffer.map_or(0, |_| {
+            (8 + 4) * crate::render::film::GBUFFER_CHANNELS.len() as u64
+        });
     crate::budget::check(
         &format!(
             "{}: the film of {}×{} pixels",
@@ -622,6 +628,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         filter: b.filter,
         response,
         spectral: b.spectral,
+        gbuffer: b.gbuffer,
         bounds,
         seed: b.seed,
         pixel_jitter: b.pixel_jitter,
