@@ -674,6 +674,119 @@ fn the_memory_budget_is_shared_by_a_scenes_media() {
 }
 
 #[test]
+fn a_portal_lights_a_room_through_its_window_unbiased_and_with_less_noise() {
+    // A closed box [−1, 1]² × [0, 2] with a square hole of half-side a = 0.3 in its ceiling, under a uniform sky
+    // L = 1; direct light only (maxdepth 1). The floor's centre sees the sky through the hole: E = π L F with F
+    // the form factor to four a × a rectangles at height h = 2 (A = B = a/h, each
+    // (1/2π)[A/√(1+A²) atan(B/√(1+A²)) + B/√(1+B²) atan(A/√(1+B²))]), so a floor of reflectance ½ has L_o = ½ F.
+    // An orthographic view of the floor's centre (±5 cm: F varies by < 0.1 %) must show that mean with the
+    // portal (pbrt-v4's "point3 portal" on the hole) and without; with the portal far less noise (uniform sky
+    // sampling finds the hole with probability ~F/2).
+    let dir = out_dir("portal");
+    let (a, h) = (0.3f64, 2.0f64);
+    let term = |x: f64, y: f64| x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan();
+    let f = 4.0 * (term(a / h, a / h) + term(a / h, a / h)) / (2.0 * std::f64::consts::PI);
+    let want = 0.5 * f;
+    let quad = |p: [[f64; 3]; 4]| {
+        let v: Vec<String> = p.iter().flatten().map(|x| x.to_string()).collect();
+        format!(
+            "Shape \"trianglemesh\" \"point3 P\" [{}] \"integer indices\" [0 1 2 0 2 3]\n",
+            v.join(" ")
+        )
+    };
+    let mut room = String::new();
+    room += &quad([
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ]);
+    room += &quad([
+        [-1.0, -1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+        [-1.0, 1.0, 2.0],
+        [-1.0, -1.0, 2.0],
+    ]);
+    room += &quad([
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [1.0, 1.0, 2.0],
+        [1.0, -1.0, 2.0],
+    ]);
+    room += &quad([
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, -1.0, 2.0],
+        [-1.0, -1.0, 2.0],
+    ]);
+    room += &quad([
+        [-1.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [1.0, 1.0, 2.0],
+        [-1.0, 1.0, 2.0],
+    ]);
+    // The ceiling around the hole: four strips.
+    room += &quad([
+        [-1.0, -1.0, 2.0],
+        [1.0, -1.0, 2.0],
+        [1.0, -a, 2.0],
+        [-1.0, -a, 2.0],
+    ]);
+    room += &quad([
+        [-1.0, a, 2.0],
+        [1.0, a, 2.0],
+        [1.0, 1.0, 2.0],
+        [-1.0, 1.0, 2.0],
+    ]);
+    room += &quad([[-1.0, -a, 2.0], [-a, -a, 2.0], [-a, a, 2.0], [-1.0, a, 2.0]]);
+    room += &quad([[a, -a, 2.0], [1.0, -a, 2.0], [1.0, a, 2.0], [a, a, 2.0]]);
+    let scene = |portal: &str| {
+        format!("LookAt 0 0 1.9  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-0.05 0.05 -0.05 0.05]\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"zsobol\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1] {portal}\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n{room}")
+    };
+    let stats = |name: &str, portal: &str| {
+        let file = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&file, scene(portal)).unwrap();
+        let img = render(&file, &dir.join(format!("{name}.exr")), &[]);
+        let ys: Vec<f64> = img.2.iter().map(|p| y_of(p.map(|v| v as f64))).collect();
+        let mean = ys.iter().sum::<f64>() / ys.len() as f64;
+        let sd = (ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / ys.len() as f64).sqrt();
+        (mean, sd)
+    };
+    // The hole's corners, ordered so the portal faces up (n = (p₃ − p₀) × (p₁ − p₀) = +z): the sky is above.
+    let (mp, sp) = stats(
+        "portal",
+        &format!("\"point3 portal\" [-{a} -{a} 2  -{a} {a} 2  {a} {a} 2  {a} -{a} 2]"),
+    );
+    let (mu, su) = stats("uniform", "");
+    eprintln!("portal: floor {mp} (σ per pixel {sp}), without {mu} (σ {su}); closed form {want}");
+    assert!((mp / want - 1.0).abs() < 0.01, "portal: {mp} vs {want}");
+    assert!((mu / want - 1.0).abs() < 0.15, "uniform: {mu} vs {want}");
+    assert!(
+        sp < 0.1 * su,
+        "the portal's noise {sp} against the uniform sky's {su}"
+    );
+    // Facing down, the portal's light shines only downward: the sky seen from the floor is black.
+    let (md, _) = stats(
+        "down",
+        &format!("\"point3 portal\" [-{a} -{a} 2  {a} -{a} 2  {a} {a} 2  -{a} {a} 2]"),
+    );
+    assert!(md == 0.0, "a downward portal lit the floor: {md}");
+    // Not a rectangle: an error naming the parameter.
+    let bad = dir.join("bad.pbrt");
+    std::fs::write(
+        &bad,
+        scene("\"point3 portal\" [0 0 2  1 0 2  1 1 2  0 2 2]"),
+    )
+    .unwrap();
+    let o = run_render(&bad, &dir.join("bad.exr"), &["-q"]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && msg.contains("portal") && msg.contains("rectangle"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn the_gbuffer_film_writes_the_visible_surface() {
     // A camera at (0, 0, −2) looking along +z at the plane z = 3 + x/2 (world), a diffuse emitter of albedo 0.5
     // and L = 1 (no other light, maxdepth 1: every sample sees exactly L). In camera space the plane is

@@ -91,7 +91,15 @@ fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
 /// Radiance of an infinite light toward direction `-w` (seen looking along `w`); zero for other lights.
 fn env(light: &Light, w: Vec3A) -> S {
     match light {
-        Light::Infinite { l } => *l,
+        Light::Infinite {
+            portal: Some(portal),
+            ..
+        }
+        | Light::InfiniteMap {
+            portal: Some(portal),
+            ..
+        } if !(w.dot(portal.n) > 0.0) => S::ZERO,
+        Light::Infinite { l, .. } => *l,
         Light::InfiniteMap {
             img,
             to_light,
@@ -115,10 +123,18 @@ fn env(light: &Light, w: Vec3A) -> S {
     }
 }
 
-/// The density (per steradian, before choosing among the scene's lights) with which next-event estimation picks
-/// world direction `w` toward an infinite light; 0 for other lights.
-fn env_pdf(light: &Light, w: Vec3A) -> f32 {
+/// The density (per steradian, before choosing among the scene's lights) with which next-event estimation from
+/// `origin` picks world direction `w` toward an infinite light; 0 for other lights.
+fn env_pdf(light: &Light, origin: Vec3A, w: Vec3A) -> f32 {
     match light {
+        Light::Infinite {
+            portal: Some(portal),
+            ..
+        }
+        | Light::InfiniteMap {
+            portal: Some(portal),
+            ..
+        } => portal.pdf(origin, w),
         Light::Infinite { .. } => 1.0 / (4.0 * PI),
         Light::InfiniteMap { to_light, dist, .. } => {
             dist.pdf((*to_light * w).normalize_or_zero().to_array())
@@ -433,7 +449,18 @@ impl Integrator<'_> {
                 (w, d2.sqrt(), *i * (f / d2), 0.0)
             }
             Light::Distant { to_light, l } => (*to_light, f32::INFINITY, *l, 0.0),
-            Light::Infinite { l } => {
+            Light::Infinite {
+                portal: Some(portal),
+                ..
+            }
+            | Light::InfiniteMap {
+                portal: Some(portal),
+                ..
+            } => {
+                let (w, _, pdf) = portal.sample(p, u)?;
+                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf, pdf / nl)
+            }
+            Light::Infinite { l, .. } => {
                 let w = uniform_sphere(u);
                 (w, f32::INFINITY, *l * (4.0 * PI), 1.0 / (4.0 * PI * nl))
             }
@@ -691,8 +718,8 @@ impl Integrator<'_> {
                 for light in &sc.lights {
                     let le = env(light, d);
                     if !le.is_black() {
-                        let w = mis.map_or(1.0, |(_, pb)| {
-                            let pl = env_pdf(light, d) / sc.lights.len() as f32;
+                        let w = mis.map_or(1.0, |(origin, pb)| {
+                            let pl = env_pdf(light, origin, d) / sc.lights.len() as f32;
                             if pb + pl > 0.0 {
                                 pb / (pb + pl)
                             } else {

@@ -345,6 +345,19 @@ impl Builder {
                         Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.emitted(p, "L", true, scale * if e > 0.0 { e } else { 1.0 })? }
                     }
                     "infinite" => {
+                        // pbrt-v4's portal: four corners in the light's space, to the world by the light's transform.
+                        let portal = match nums(p, "portal") {
+                            None => None,
+                            Some(v) => {
+                                let at = p.get("portal").map_or(loc.clone(), |q| q.loc.clone());
+                                if v.len() != 12 {
+                                    return Err(err(&at, format!("infinite light: \"point3 portal\" has {} values: expected 4 points (12 values)", v.len())));
+                                }
+                                let m = self.st.ctm;
+                                let c = |i: usize| Vec3A::from(m.transform_point3(DVec3::new(v[3 * i], v[3 * i + 1], v[3 * i + 2])).as_vec3());
+                                Some(super::Portal::new([c(0), c(1), c(2), c(3)]).map_err(|e| err(&at, format!("infinite light: {e}")))?)
+                            }
+                        };
                         match string(p, "filename") {
                             Some(f) => {
                                 if p.has("L") {
@@ -371,12 +384,12 @@ impl Builder {
                                 } else {
                                     1.0
                                 };
-                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: (scale * k) as f32, basis, dist }
+                                Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: (scale * k) as f32, basis, dist, portal }
                             }
                             None => {
                                 // `illuminance` in lux on an upward-facing patch under the uniform sky: π L.
                                 let e = num(p, "illuminance", -1.0);
-                                Light::Infinite { l: self.emitted(p, "L", true, scale * if e > 0.0 { e / std::f64::consts::PI } else { 1.0 })? }
+                                Light::Infinite { l: self.emitted(p, "L", true, scale * if e > 0.0 { e / std::f64::consts::PI } else { 1.0 })?, portal }
                             }
                         }
                     }

@@ -101,6 +101,7 @@ pub enum Light {
     },
     Infinite {
         l: S,
+        portal: Option<Portal>,
     },
     /// An environment map: world → light-space rotation, linear RGB × scale, equal-area square (pbrt-v4) or
     /// lat-long (2:1) parameterisation.
@@ -111,6 +112,7 @@ pub enum Light {
         basis: [S; 3],
         /// Directions drawn by the map's luminance (pbrt-v4 importance-samples its image lights).
         dist: std::sync::Arc<crate::render::envmap::EnvSampler>,
+        portal: Option<Portal>,
     },
     /// The fire light of plugin medium `medium` (importance-samples its emission).
     Fire {
@@ -164,6 +166,76 @@ pub struct Camera {
     pub medium: Option<usize>,
     /// Parallel rays from the screen window (in camera-space units) instead of rays through a pinhole.
     pub orthographic: bool,
+}
+
+/// pbrt-v4's infinite-light `portal`: a rectangle (world space) through which the light enters the scene.
+/// The light shines only into the half-space the portal faces (directions w with w · n > 0, n = e₂ × e₁ from the
+/// edges p₀p₃ and p₀p₁, as pbrt-v4's `PortalImageInfiniteLight` frame), and next-event estimation samples
+/// points on the portal uniformly by area (pbrt-v4 samples its image over the portal: the same integral, another
+/// variance); directions that miss the portal are left to BSDF sampling, whose MIS weight is 1 there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Portal {
+    pub p0: Vec3A,
+    pub e1: Vec3A,
+    pub e2: Vec3A,
+    pub n: Vec3A,
+    pub area: f32,
+}
+
+impl Portal {
+    /// The portal through corners p₀…p₃ (in order), or why it is not one: pbrt-v4 asks for a planar rectangle.
+    pub fn new(p: [Vec3A; 4]) -> Result<Portal, String> {
+        let (e1, e2) = (p[1] - p[0], p[3] - p[0]);
+        let n = e2.cross(e1);
+        let area = n.length();
+        let planar = (p[2] - (p[0] + e1 + e2)).length() <= 1e-3 * e1.length().max(e2.length());
+        let square = e1.normalize_or_zero().dot(e2.normalize_or_zero()).abs() < 1e-3;
+        if !(area > 0.0 && area.is_finite() && planar && square) {
+            return Err(format!(
+                "\"point3 portal\" {:?}: expected the four corners of a rectangle, in order (as pbrt-v4)",
+                p.map(|v| v.to_array())
+            ));
+        }
+        Ok(Portal {
+            p0: p[0],
+            e1,
+            e2,
+            n: n / area,
+            area,
+        })
+    }
+
+    /// A point on the portal seen from `p`: direction, distance and solid-angle pdf; None behind it.
+    pub fn sample(&self, p: Vec3A, u: [f32; 2]) -> Option<(Vec3A, f32, f32)> {
+        let q = self.p0 + self.e1 * u[0] + self.e2 * u[1];
+        let v = q - p;
+        let d2 = v.length_squared();
+        let w = v / d2.sqrt();
+        let cos = w.dot(self.n);
+        (cos > 0.0 && d2 > 0.0).then(|| (w, d2.sqrt(), d2 / (self.area * cos)))
+    }
+
+    /// The solid-angle pdf with which [`Portal::sample`] from `p` draws direction `w`: 0 when `w` misses it.
+    pub fn pdf(&self, p: Vec3A, w: Vec3A) -> f32 {
+        let cos = w.dot(self.n);
+        if !(cos > 0.0) {
+            return 0.0;
+        }
+        let t = (self.p0 - p).dot(self.n) / cos;
+        if !(t > 0.0) {
+            return 0.0;
+        }
+        let r = p + w * t - self.p0;
+        let (a, b) = (
+            r.dot(self.e1) / self.e1.length_squared(),
+            r.dot(self.e2) / self.e2.length_squared(),
+        );
+        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
+            t * t / (self.area * cos)
+        } else {
+            0.0
+        }
+    }
 }
 
 /// What the plugin built for one medium.
