@@ -787,6 +787,91 @@ fn a_portal_lights_a_room_through_its_window_unbiased_and_with_less_noise() {
 }
 
 #[test]
+fn an_rgbgrid_emits_and_attenuates_as_pbrt_v4_defines_it() {
+    // pbrt-v4's rgbgrid on [0, 1]³, 64 × 4 × 4 voxels of σ_a = 5 (rgb 5 5 5: a flat unbounded spectrum), σ_s = 0,
+    // Le = (1, 1, 1) (an illuminant spectrum: D65 with ∫ D65 ȳ = ∫ ȳ, not photometrically scaled), seen
+    // orthographically along +x through its middle (y, z ∈ [0.4, 0.6], where the trilinear lookup is flat in y
+    // and z). Along x the lookup fades over the outer half-voxels: w(x) = min(1, ½ + 64 x, ½ + 64 (1 − x)), σ_a =
+    // 5w and Le = w, so L = ∫₀¹ e^{−∫₀ˣ 5w} 5 w² dx · (1, 1, 1)'s Le, and the film records Y = ∫ȳ · that.
+    let dir = out_dir("rgbgrid");
+    let n = 64 * 4 * 4;
+    let rgb = |v: f64| vec![format!("{v} {v} {v}"); n].join(" ");
+    let grid = |extra: &str| {
+        format!("MakeNamedMedium \"g\" \"string type\" \"rgbgrid\" \"integer nx\" 64 \"integer ny\" 4 \"integer nz\" 4 {extra}\n")
+    };
+    let view = "LookAt -5 0.5 0.5  0 0.5 0.5  0 0 1\nCamera \"orthographic\" \"float screenwindow\" [-0.1 0.1 -0.1 0.1]\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"zsobol\" \"integer pixelsamples\" 256\nPixelFilter \"box\"\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\n";
+    let boxed = "AttributeBegin\nMediumInterface \"g\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1] \"integer indices\" [0 2 1 0 3 2 4 5 6 4 6 7 0 1 5 0 5 4 3 7 6 3 6 2 0 4 7 0 7 3 1 2 6 1 6 5]\nAttributeEnd\n";
+    let emitter = format!(
+        "{view}{}{boxed}",
+        grid(&format!(
+            "\"rgb sigma_a\" [{}] \"rgb sigma_s\" [{}] \"rgb Le\" [{}]",
+            rgb(5.0),
+            rgb(0.0),
+            rgb(1.0)
+        ))
+    );
+    let f = dir.join("emit.pbrt");
+    std::fs::write(&f, emitter).unwrap();
+    let y = y_of(mean_rgb(
+        &render(&f, &dir.join("emit.exr"), &[]),
+        (0, 8),
+        (0, 8),
+    ));
+    let steps = 200_000;
+    let (mut tau, mut sum) = (0.0f64, 0.0f64);
+    for i in 0..steps {
+        let x = (i as f64 + 0.5) / steps as f64;
+        let w = (0.5 + 64.0 * x).min(0.5 + 64.0 * (1.0 - x)).min(1.0);
+        let dx = 1.0 / steps as f64;
+        sum += (-(tau + 0.5 * 5.0 * w * dx)).exp() * 5.0 * w * w * dx;
+        tau += 5.0 * w * dx;
+    }
+    let y_integral: f64 = firemedium_core::cie::cmf_table::CMF
+        .iter()
+        .map(|c| c[1])
+        .sum();
+    let want = y_integral * sum;
+    eprintln!("rgbgrid: Y {y}, pbrt-v4's definition {want} (∫ȳ {y_integral} × {sum})");
+    assert!(
+        (y / want - 1.0).abs() < 0.01,
+        "emitting rgbgrid: Y {y}, expected {want}"
+    );
+    // Without "sigma_a" pbrt-v4's σ_a is 1 in the whole box (no fade): a backlit box (an area light of Y = 1
+    // behind it) transmits e^{−1}; with "float scale" 2, e^{−2}.
+    for (scale, want) in [(1.0f64, (-1.0f64).exp()), (2.0, (-2.0f64).exp())] {
+        let light = "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\nShape \"trianglemesh\" \"point3 P\" [3 -5 -5 3 5 -5 3 5 5 3 -5 5] \"integer indices\" [0 1 2 0 2 3]\nAttributeEnd\n";
+        let text = format!(
+            "{view}{}{boxed}{light}",
+            grid(&format!(
+                "\"rgb sigma_s\" [{}] \"float scale\" {scale}",
+                rgb(0.0)
+            ))
+        );
+        let f = dir.join(format!("absorb{scale}.pbrt"));
+        std::fs::write(&f, text).unwrap();
+        let y = y_of(mean_rgb(
+            &render(&f, &dir.join(format!("absorb{scale}.exr")), &[]),
+            (0, 8),
+            (0, 8),
+        ));
+        assert!(
+            (y / want - 1.0).abs() < 0.01,
+            "scale {scale}: transmitted Y {y}, expected {want}"
+        );
+    }
+    // A grid whose size disagrees with nx·ny·nz is an error naming the counts.
+    let f = dir.join("bad.pbrt");
+    std::fs::write(
+        &f,
+        format!("{view}{}{boxed}", grid("\"rgb sigma_a\" [1 1 1]")),
+    )
+    .unwrap();
+    let o = run_render(&f, &dir.join("bad.exr"), &["-q"]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && msg.contains("3072"), "{msg}");
+}
+
+#[test]
 fn the_gbuffer_film_writes_the_visible_surface() {
     // A camera at (0, 0, −2) looking along +z at the plane z = 3 + x/2 (world), a diffuse emitter of albedo 0.5
     // and L = 1 (no other light, maxdepth 1: every sample sees exactly L). In camera space the plane is

@@ -332,6 +332,15 @@ impl Integrator<'_> {
                 }
                 (l, tr, None)
             }
+            Medium::RgbGrid(grid) => {
+                let speed = d.length();
+                if !(speed > 0.0) {
+                    return (S::ZERO, S::splat(1.0), None);
+                }
+                let (l, tr) =
+                    grid.segment(o, d / speed, t_end * speed, || rng.next_f64(), emission);
+                (l, tr, None)
+            }
         }
     }
 
@@ -693,6 +702,32 @@ impl Integrator<'_> {
                             };
                         }
                         beta *= w;
+                    }
+                } else if let Medium::RgbGrid(grid) = &sc.media[m] {
+                    let speed = d.length();
+                    let track = grid.track(o, d / speed, t_end * speed, || rng.next_f64());
+                    match track {
+                        super::rgbgrid::Track::Scattered { s, weight, emitted } => {
+                            l += beta * emitted;
+                            beta *= weight;
+                            if depth >= sc.maxdepth {
+                                break;
+                            }
+                            let p = o + d * (s / speed);
+                            let (wi, pdf) =
+                                self.scatter_vertex(p, d, grid.g as f32, medium, beta, &mut l, rng);
+                            (o, d, mis) = (p, wi, Some((p, pdf)));
+                            depth += 1;
+                            continue;
+                        }
+                        super::rgbgrid::Track::Passed { weight, emitted } => {
+                            l += beta * emitted;
+                            beta *= weight;
+                        }
+                        super::rgbgrid::Track::Absorbed { emitted } => {
+                            l += beta * emitted;
+                            break;
+                        }
                     }
                 } else {
                     let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);

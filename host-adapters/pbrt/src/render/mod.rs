@@ -16,6 +16,7 @@ pub mod named_spectra;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;
+pub mod rgbgrid;
 pub mod scene;
 pub mod shapes;
 pub mod spectrum;

@@ -207,7 +207,10 @@ pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
         (Kind::Medium, "homogeneous") => &[
             "sigma_a", "sigma_s", "scale", "g", "Le", "Lescale", "preset",
         ],
-        (Kind::Medium, "uniformgrid" | "nanovdb" | "rgbgrid" | "cloud") => &[],
+        (Kind::Medium, "uniformgrid" | "nanovdb" | "cloud") => &[],
+        (Kind::Medium, "rgbgrid") => &[
+            "sigma_a", "sigma_s", "Le", "Lescale", "scale", "g", "nx", "ny", "nz", "p0", "p1",
+        ],
         (Kind::Shape, "sphere") => &["radius", "zmin", "zmax", "phimax"],
         (Kind::Shape, "disk") => &["radius", "innerradius", "height", "phimax"],
         (Kind::Shape, "cylinder") => &["radius", "zmin", "zmax", "phimax"],

@@ -477,6 +477,172 @@ impl Builder {
         }
     }
 
+    /// pbrt-v4's `rgbgrid` medium (see [`crate::render::rgbgrid`]), its rgb grids made bin spectra per voxel.
+    fn rgbgrid(
+        &mut self,
+        name: &str,
+        params: &ParamDict,
+        to_medium: glam::DAffine3,
+        loc: &Loc,
+    ) -> Result<crate::render::rgbgrid::RgbGrid, Error> {
+        use crate::render::rgbgrid::{Grid, RgbGrid};
+        let what = format!("rgbgrid medium \"{name}\"");
+        let dims: Vec<usize> = ["nx", "ny", "nz"]
+            .iter()
+            .map(|k| {
+                let v = num(params, k, 1.0);
+                if v.fract() == 0.0 && (1.0..=1e6).contains(&v) {
+                    Ok(v as usize)
+                } else {
+                    Err(err(
+                        loc,
+                        format!("{what}: \"integer {k}\" {v}: expected 1 to 1000000"),
+                    ))
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let count = dims
+            .iter()
+            .try_fold(1usize, |a, &b| a.checked_mul(b))
+            .unwrap_or(usize::MAX);
+        // Three grids of bin spectra at most.
+        crate::budget::check(
+            &format!("{what}: {count} voxels"),
+            count as u64,
+            3 * std::mem::size_of::<S>() as u64,
+            self.max_memory.saturating_sub(self.media_bytes),
+        )
+        .map_err(|e| err(loc, e))?;
+        let rgbs = |key: &str| -> Result<Option<&[f64]>, Error> {
+            let Some(p) = params.get(key) else {
+                return Ok(None);
+            };
+            let firemedium_pbrt_parser::Values::Numbers(v) = &p.values else {
+                return Err(err(
+                    &p.loc,
+                    format!("{what}: \"{key}\": expected \"rgb {key}\" values"),
+                ));
+            };
+            if p.ty != "rgb" {
+                return Err(err(&p.loc, format!("{what}: \"{} {key}\": pbrt-v4's rgbgrid takes \"rgb {key}\" (one rgb per voxel)", p.ty)));
+            }
+            if v.len() != 3 * count {
+                return Err(err(
+                    &p.loc,
+                    format!(
+                        "{what}: \"rgb {key}\" has {} values: expected 3 × nx·ny·nz = {}",
+                        v.len(),
+                        3 * count
+                    ),
+                ));
+            }
+            if let Some((i, x)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !(x.is_finite() && **x >= 0.0))
+            {
+                return Err(err(
+                    &p.loc,
+                    format!("{what}: \"rgb {key}\" [{i}] = {x}: expected a finite value >= 0"),
+                ));
+            }
+            Ok(Some(v.as_slice()))
+        };
+        let (sa, ss, le) = (rgbs("sigma_a")?, rgbs("sigma_s")?, rgbs("Le")?);
+        if sa.is_none() && ss.is_none() {
+            return Err(err(
+                loc,
+                format!("{what}: give \"rgb sigma_a\" and/or \"rgb sigma_s\" (as pbrt-v4)"),
+            ));
+        }
+        if le.is_some() && sa.is_none() {
+            return Err(err(
+                loc,
+                format!("{what}: \"rgb Le\" needs \"rgb sigma_a\" (as pbrt-v4)"),
+            ));
+        }
+        let scale = num(params, "scale", 1.0) as f32;
+        // pbrt-v4's RGBIlluminantSpectrum: the fit times D65 with ∫ D65 ȳ = ∫ ȳ (the uplift gives ∫ s ȳ = 1 for
+        // white), not photometrically normalised; in the film's units (÷ its K: 683 beside a fire).
+        let y_integral: f64 = firemedium_core::cie::cmf_table::CMF
+            .iter()
+            .map(|c| c[1])
+            .sum::<f64>()
+            * firemedium_core::cie::cmf_table::CMF_STEP_NM;
+        let k = if self.has_fire {
+            firemedium_core::constants::LUMINOUS_EFFICACY
+        } else {
+            1.0
+        };
+        let le_scale = (num(params, "Lescale", 1.0) * y_integral / k) as f32;
+        let mut cache: std::collections::HashMap<([u64; 3], bool), S> =
+            std::collections::HashMap::new();
+        let mut spectra = |v: &[f64], illuminant: bool, k: f32| -> Vec<S> {
+            v.chunks(3)
+                .map(|c| {
+                    let key = ([c[0].to_bits(), c[1].to_bits(), c[2].to_bits()], illuminant);
+                    *cache.entry(key).or_insert_with(|| {
+                        let usage = if illuminant {
+                            RgbUse::Illuminant
+                        } else {
+                            RgbUse::Unbounded
+                        };
+                        self.bins.uplift([c[0], c[1], c[2]], usage) * k
+                    })
+                })
+                .collect()
+        };
+        let grid = |g: Option<Vec<S>>| match g {
+            Some(v) => Grid::Voxels(v),
+            None => Grid::Constant(self.bins.mask() * scale),
+        };
+        let sa = grid(sa.map(|v| spectra(v, false, scale)));
+        let ss = grid(ss.map(|v| spectra(v, false, scale)));
+        let le = le.map(|v| spectra(v, true, le_scale));
+        let n = self.bins.n();
+        let max = |g: &Grid| match g {
+            Grid::Voxels(v) => v
+                .iter()
+                .flat_map(|s| s.0[..n].iter().copied())
+                .fold(0.0f32, f32::max),
+            Grid::Constant(s) => s.max(),
+        };
+        let majorant = max(&sa) + max(&ss);
+        if !majorant.is_finite() {
+            return Err(err(
+                loc,
+                format!("{what}: σ_t reaches {majorant}: expected finite values (check \"scale\")"),
+            ));
+        }
+        let pt = |key: &str, def: [f64; 3]| {
+            nums(params, key)
+                .filter(|v| v.len() == 3)
+                .map_or(DVec3::from_array(def), |v| DVec3::new(v[0], v[1], v[2]))
+        };
+        let (p0, p1) = (pt("p0", [0.0; 3]), pt("p1", [1.0; 3]));
+        if !(p0.is_finite() && p1.is_finite() && (p1 - p0).abs().min_element() > 0.0) {
+            return Err(err(
+                loc,
+                format!("{what}: p0 {p0} and p1 {p1}: expected a box of positive size"),
+            ));
+        }
+        self.media_bytes = self
+            .media_bytes
+            .saturating_add((count * 3 * std::mem::size_of::<S>()) as u64);
+        Ok(RgbGrid {
+            n: [dims[0], dims[1], dims[2]],
+            p0,
+            p1,
+            sa,
+            ss,
+            le,
+            majorant,
+            to_medium,
+            g: num(params, "g", 0.0).clamp(-0.99, 0.99),
+            bins: n,
+        })
+    }
+
     pub(super) fn medium(
         &mut self,
         name: &str,
@@ -505,6 +671,7 @@ impl Builder {
                 let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
                 Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
             }
+            "rgbgrid" => Medium::RgbGrid(std::sync::Arc::new(self.rgbgrid(name, params, to_medium, loc)?)),
             "fire" | "uniformgrid" | "nanovdb" | "cloud" => {
                 // Parameters pass to the plugin unchanged, but for the type, the plugin file (read by `load`'s
                 // pre-scan, which loaded the plugin), and relative paths.

@@ -144,6 +144,8 @@ pub enum Medium {
     },
     /// pbrt's homogeneous medium.
     Homogeneous { sa: S, ss: S, le: S, g: f64 },
+    /// pbrt-v4's rgbgrid medium, rendered by the host.
+    RgbGrid(std::sync::Arc<crate::render::rgbgrid::RgbGrid>),
 }
 
 impl std::fmt::Debug for Medium {
@@ -151,6 +153,7 @@ impl std::fmt::Debug for Medium {
         match self {
             Medium::Plugin { name, .. } => write!(f, "Plugin({name})"),
             Medium::Homogeneous { .. } => write!(f, "Homogeneous"),
+            Medium::RgbGrid(g) => write!(f, "RgbGrid({:?})", g.n),
         }
     }
 }
