@@ -40,7 +40,7 @@ pub struct RgbGrid {
 #[derive(Debug)]
 pub enum Grid {
     Voxels(Vec<S>),
-    Constant(S),
+    Constant(Box<S>),
 }
 
 /// What delta tracking found along a segment: scattered at distance s, or left it; each with the spectral
@@ -95,7 +95,7 @@ impl RgbGrid {
         let u = (pm - self.p0) / (self.p1 - self.p0);
         let grid = |g: &Grid| match g {
             Grid::Voxels(v) => self.lookup(v, u),
-            Grid::Constant(s) => *s,
+            Grid::Constant(s) => **s,
         };
         let (sa, ss) = (grid(&self.sa), grid(&self.ss));
         let mut e = S::ZERO;

@@ -594,7 +594,7 @@ impl Builder {
         };
         let grid = |g: Option<Vec<S>>| match g {
             Some(v) => Grid::Voxels(v),
-            None => Grid::Constant(self.bins.mask() * scale),
+            None => Grid::Constant(Box::new(self.bins.mask() * scale)),
         };
         let sa = grid(sa.map(|v| spectra(v, false, scale)));
         let ss = grid(ss.map(|v| spectra(v, false, scale)));
