@@ -30,6 +30,9 @@ pub struct Response {
     pub max_component: f64,
     /// Half-float EXR channels (`savefp16`).
     pub fp16: bool,
+    /// A named camera sensor's per-bin XYZ weights (its curves through its calibration matrix), replacing the
+    /// CMFs' (`render::sensors`).
+    pub camera: Option<Vec<DVec3>>,
 }
 
 impl Default for Response {
@@ -39,6 +42,7 @@ impl Default for Response {
             white_balance: None,
             max_component: f64::INFINITY,
             fp16: false,
+            camera: None,
         }
     }
 }
@@ -73,6 +77,20 @@ impl Response {
             white_balance: (white_k > 0.0).then(|| white_balance(daylight_xy(white_k), D65_XY)),
             max_component,
             fp16,
+            camera: None,
+        }
+    }
+
+    /// A sample's XYZ as the sensor records it (before the imaging ratio): the bins' CIE weights, or a named
+    /// camera's.
+    pub fn sensor_xyz(
+        &self,
+        bins: &crate::render::spectrum::Bins,
+        s: &crate::render::spectrum::S,
+    ) -> DVec3 {
+        match &self.camera {
+            Some(w) => w.iter().zip(s.0.iter()).map(|(w, &v)| *w * v as f64).sum(),
+            None => bins.to_xyz(s),
         }
     }
 

@@ -18,6 +18,7 @@ pub mod pixel;
 pub mod ply;
 pub mod rgbgrid;
 pub mod scene;
+pub mod sensors;
 pub mod shapes;
 pub mod spectrum;
 pub mod subdiv;
@@ -159,7 +160,9 @@ pub fn render(
                         let mut visible = None;
                         let want = gspace.as_ref().map(|_| &mut visible);
                         let l = integ.li_visible(o, d, &mut rng, want);
-                        let sensor = scene.response.clamp_sample(scene.bins.to_xyz(&l));
+                        let sensor = scene
+                            .response
+                            .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
                         sum += sensor * w;
                         if let (Some(g), Some(v)) = (&gspace, visible) {
                             gpixel.add(w, &g.sample(scene, fx, fy, &v), sensor);

@@ -119,9 +119,30 @@ pub fn spectrum_to_xyz(radiance: impl Fn(f64) -> f64) -> DVec3 {
 /// bin means are the same); its colour weight is the rebuilt spectrum's, which tends to the CMF at the line as
 /// bins shrink, as the plain weight does. Fewer than three bins take the plain weights.
 pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
+    if grid.count() < 3 {
+        return bin_integrals(grid);
+    }
+    bin_weights_of(grid, cmf, LUMINOUS_EFFICACY)
+}
+
+/// [`bin_weights`] for any three response curves `f(λ)` (a camera's r̄, ḡ, b̄), each times `scale`: the weights
+/// with Σᵢ Lᵢ wᵢ = scale · ∫ q(λ) f(λ) dλ for the spectrum q rebuilt from the bin means. `f` is integrated over
+/// 1 nm pieces by 2-point Gauss (exact for curves cubic between whole nanometres, as the CMF table and
+/// pbrt-v4's 10 nm camera curves are). Fewer than three bins take the plain integrals.
+pub fn bin_weights_of(grid: &SpectralGrid, f: impl Fn(f64) -> DVec3, scale: f64) -> Vec<DVec3> {
     let n = grid.count();
     if n < 3 {
-        return bin_integrals(grid);
+        return (0..n)
+            .map(|i| {
+                let (lo, hi) = grid.edges(i);
+                let mut s = DVec3::ZERO;
+                for (x0, x1) in cmf_pieces(lo, hi) {
+                    let (mid, half) = (0.5 * (x0 + x1), 0.5 * (x1 - x0));
+                    s += (f(mid - half / 3f64.sqrt()) + f(mid + half / 3f64.sqrt())) * half;
+                }
+                scale * s
+            })
+            .collect();
     }
     let h = grid.width_nm();
     // The mean of xᵖ over the bin at offset o (in bins) from x = 0, x in bin widths.
@@ -145,7 +166,7 @@ pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
             for s in [-1.0, 1.0] {
                 let l = mid + s * half / 3f64.sqrt();
                 let x = (l - centre) / h;
-                let c = cmf(l) * half;
+                let c = f(l) * half;
                 moments[0] += c;
                 moments[1] += c * x;
                 moments[2] += c * x * x;
@@ -153,8 +174,7 @@ pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {
         }
         for k in 0..3 {
             let coef = inv.col(k);
-            w[s0 + k] += LUMINOUS_EFFICACY
-                * (coef.x * moments[0] + coef.y * moments[1] + coef.z * moments[2]);
+            w[s0 + k] += scale * (coef.x * moments[0] + coef.y * moments[1] + coef.z * moments[2]);
         }
     }
     w

@@ -33,6 +33,8 @@ pub(super) struct FilmParams {
     pub(super) white_k: f64,
     pub(super) max_component: f64,
     pub(super) fp16: bool,
+    /// A named camera sensor carried here (`render::sensors`); None: cie1931.
+    pub(super) camera: Option<&'static str>,
 }
 
 impl Default for FilmParams {
@@ -42,6 +44,7 @@ impl Default for FilmParams {
             white_k: 0.0,
             max_component: f64::INFINITY,
             fp16: false,
+            camera: None,
         }
     }
 }

@@ -171,12 +171,21 @@ impl Builder {
                     }
                     self.spectral = Some(crate::render::film::Buckets { n: n as usize, lo, hi });
                 }
-                // The sensor (pbrt-v4's PixelSensor): cie1931 is the CIE XYZ matching functions; a named camera's
-                // measured curves are not carried yet, so it is rendered as cie1931 with its default 6500 K white.
+                // The sensor (pbrt-v4's PixelSensor): cie1931 is the CIE XYZ matching functions; a named camera
+                // carried here is its measured curves and pbrt-v4's ColorChecker calibration; pbrt-v4's other
+                // cameras render as cie1931 with their default 6500 K white, warned; any other name is an error.
                 let sensor = string(p, "sensor").unwrap_or("cie1931");
+                let mut camera = None;
                 if sensor != "cie1931" {
                     let at = p.get("sensor").map_or(loc.clone(), |q| q.loc.clone());
-                    self.warn(&at, format!("film: sensor \"{sensor}\" is rendered with the cie1931 sensor (the camera's measured response curves are not carried yet), white-balanced as pbrt-v4 does for it"));
+                    const PBRT_V4: [&str; 17] = ["canon_eos_100d", "canon_eos_1dx_mkii", "canon_eos_200d", "canon_eos_200d_mkii", "canon_eos_5d", "canon_eos_5d_mkii", "canon_eos_5d_mkiii", "canon_eos_5d_mkiv", "canon_eos_5ds", "canon_eos_m", "hasselblad_l1d_20c", "nikon_d810", "nikon_d850", "sony_ilce_6400", "sony_ilce_7m3", "sony_ilce_7rm3", "sony_ilce_9"];
+                    camera = crate::render::sensors::NAMES.iter().copied().find(|n| *n == sensor);
+                    if camera.is_none() {
+                        if !PBRT_V4.contains(&sensor) {
+                            return Err(err(&at, format!("film: sensor \"{sensor}\" is not a pbrt-v4 sensor (cie1931, {})", PBRT_V4.join(", "))));
+                        }
+                        self.warn(&at, format!("film: sensor \"{sensor}\" is rendered with the cie1931 sensor (its measured curves are not carried here: {} are), white-balanced as pbrt-v4 does for it", crate::render::sensors::NAMES.join(", ")));
+                    }
                 }
                 let white = num(
                     p,
@@ -212,6 +221,7 @@ impl Builder {
                     white_k: white,
                     max_component: maxc,
                     fp16: p.bool("savefp16", false),
+                    camera,
                 };
                 self.finish(Kind::Film, &ty, "film", p)?;
             }

@@ -626,8 +626,28 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         ));
     }
     let f = b.film_response;
-    let response =
+    let mut response =
         crate::render::film::Response::new(f.iso, exposure, f.white_k, f.max_component, f.fp16);
+    if let Some(name) = f.camera {
+        // A named camera: its curves through pbrt-v4's calibration matrix, per bin and in the film's units (K:
+        // the film's ȳ weights over the CIE ones), replace the CMFs; the calibration white-balances.
+        let m = crate::render::sensors::xyz_from_sensor(name, f.white_k).ok_or_else(|| {
+            format!(
+                "{}: film: sensor \"{name}\": its calibration failed",
+                path.display()
+            )
+        })?;
+        let curves = crate::render::sensors::curves(name)
+            .ok_or_else(|| format!("{}: film: sensor \"{name}\" unknown", path.display()))?;
+        let cie = firemedium_core::cie::bin_weights_of(&bins.grid, firemedium_core::cie::cmf, 1.0);
+        let k = bins.xyz.iter().map(|w| w.y).sum::<f64>() / cie.iter().map(|w| w.y).sum::<f64>();
+        response.white_balance = None;
+        response.camera = Some(firemedium_core::cie::bin_weights_of(
+            &bins.grid,
+            |l| m * curves(l),
+            k,
+        ));
+    }
     b.finish(
         Kind::Camera,
         &camera_type,
