@@ -1,8 +1,15 @@
-//! Dense scalar grids and their lookup, in pbrt-v4's convention.
+//! Sparse scalar grids and their lookup, in pbrt-v4's convention.
 //!
-//! A [`Grid`] holds nx·ny·nz `f32` samples, x fastest (`x + nx·(y + ny·z)`), at the **cell centres** of an
-//! nx × ny × nz subdivision of the unit cube: sample (i, j, k) sits at ((i, j, k) + 0.5) / (nx, ny, nz).
-//! Lookups take a point in [0, 1]³ (the dataset maps medium space to it).
+//! A [`Grid`] holds the samples of an nx × ny × nz lattice at the **cell centres** of a subdivision of the unit
+//! cube: sample (i, j, k) sits at ((i, j, k) + 0.5) / (nx, ny, nz). Lookups take a point in [0, 1]³ (the dataset
+//! maps medium space to it).
+//!
+//! **Storage follows the data.** The lattice is cut into bricks of 8³ samples (OpenVDB's and NanoVDB's leaf
+//! size). A [`Topology`] — shared by every channel of a dataset — numbers the bricks that hold data (slots 1, 2,
+//! …) in a table over all bricks, with 0 for the rest; a grid stores 512 values per slot, x fastest within the
+//! brick, and in slot 0 its background, which every empty brick reads. A far-away second fire in the same box
+//! costs its own bricks and four bytes per brick of the box, not the box. Dense inputs keep only the bricks
+//! where some channel is non-zero, so every lookup gives the value the dense array gave, to the bit.
 //!
 //! - [`Interpolation::Trilinear`] (default): pbrt-v4's `SampledGrid::Lookup` — the eight samples around
 //!   p·n − 0.5, each sample outside the grid counting as **zero**. So within the last half voxel of every face
@@ -55,20 +62,21 @@ pub struct Stencil {
 }
 
 impl Stencil {
-    /// The stencil of `p` in [0, 1]³ on a grid of `dims`; `None` outside the bounds (value zero).
-    pub fn new(dims: [usize; 3], p: [f64; 3], interp: Interpolation) -> Option<Stencil> {
-        Stencil::with_margin(dims, p, interp, 0.0)
+    /// The stencil of `p` in [0, 1]³ on the grids of `topo`; `None` outside the bounds (value zero).
+    pub fn new(topo: &Topology, p: [f64; 3], interp: Interpolation) -> Option<Stencil> {
+        Stencil::with_margin(topo, p, interp, 0.0)
     }
 
     /// As [`Stencil::new`], but trilinear lookups continue `margin` voxels beyond the bounds, fading toward the
     /// zero outside (NanoVDB's sampler does this up to the next voxel centre).
     #[inline(always)]
     pub fn with_margin(
-        dims: [usize; 3],
+        topo: &Topology,
         p: [f64; 3],
         interp: Interpolation,
         margin: f64,
     ) -> Option<Stencil> {
+        let dims = topo.dims;
         for a in 0..3 {
             let m = margin / dims[a] as f64;
             if !(p[a] >= -m && p[a] <= 1.0 + m) {
@@ -81,21 +89,20 @@ impl Stencil {
             // the same corner order and products as the general path (so the same sums, bit for bit: the zero
             // weights it leaves out add +0).
             if (0..3).all(|a| base[a] >= 0 && base[a] + 1 < dims[a] as i64) {
-                let [nx, ny, _] = dims;
                 let [fx, fy, fz] = frac;
                 let [gx, gy, gz] = frac.map(|f| 1.0 - f);
-                let i0 = base[0] as usize + nx * (base[1] as usize + ny * base[2] as usize);
-                let (sy, sz) = (nx, nx * ny);
+                let [i, j, k] = base.map(|v| v as usize);
+                let at = |a: usize, b: usize, c: usize| topo.index(i + a, j + b, k + c);
                 return Some(Stencil {
                     idx: [
-                        i0,
-                        i0 + 1,
-                        i0 + sy,
-                        i0 + sy + 1,
-                        i0 + sz,
-                        i0 + sz + 1,
-                        i0 + sz + sy,
-                        i0 + sz + sy + 1,
+                        at(0, 0, 0),
+                        at(1, 0, 0),
+                        at(0, 1, 0),
+                        at(1, 1, 0),
+                        at(0, 0, 1),
+                        at(1, 0, 1),
+                        at(0, 1, 1),
+                        at(1, 1, 1),
                     ],
                     w: [
                         gx * gy * gz,
@@ -111,7 +118,7 @@ impl Stencil {
                 });
             }
         }
-        Some(Stencil::general(dims, p, interp))
+        Some(Stencil::general(topo, p, interp))
     }
 
     /// The trilinear cell of `p`: the lower corner's sample index and the fractions toward the upper one.
@@ -130,18 +137,19 @@ impl Stencil {
 
     /// The stencil near the grid's faces (samples outside count as zero) and for nearest lookups.
     #[inline(never)]
-    fn general(dims: [usize; 3], p: [f64; 3], interp: Interpolation) -> Stencil {
+    fn general(topo: &Topology, p: [f64; 3], interp: Interpolation) -> Stencil {
         let p = if interp == Interpolation::Nearest {
             p.map(|x| x.clamp(0.0, 1.0))
         } else {
             p
         };
+        let dims = topo.dims;
         let [nx, ny, nz] = dims;
         let mut st = Stencil::default();
         match interp {
             Interpolation::Nearest => {
                 let i = [0, 1, 2].map(|a| ((p[a] * dims[a] as f64) as usize).min(dims[a] - 1));
-                st.idx[0] = i[0] + nx * (i[1] + ny * i[2]);
+                st.idx[0] = topo.index(i[0], i[1], i[2]);
                 st.w[0] = 1.0;
                 st.n = 1;
             }
@@ -161,7 +169,7 @@ impl Stencil {
                         && q[1] < ny as i64
                         && q[2] < nz as i64
                     {
-                        st.idx[st.n] = q[0] as usize + nx * (q[1] as usize + ny * q[2] as usize);
+                        st.idx[st.n] = topo.index(q[0] as usize, q[1] as usize, q[2] as usize);
                         st.w[st.n] = w;
                         st.n += 1;
                     }
@@ -172,46 +180,326 @@ impl Stencil {
     }
 }
 
-/// A dense scalar grid, x fastest, cell-centred.
+/// Samples per brick edge (OpenVDB's leaf), and per brick.
+pub const BRICK: usize = 8;
+const BRICK_VOXELS: usize = BRICK * BRICK * BRICK;
+
+/// Which 8³ bricks of an nx × ny × nz lattice hold data: their slots (1, 2, …) in a table over all bricks, 0 for
+/// the empty ones. Shared by the grids of one dataset, so one [`Stencil`] indexes them all.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Grid {
+pub struct Topology {
     dims: [usize; 3],
-    data: Vec<f32>,
+    /// Where sample 0 sits in its brick on each axis (0–7): a sparse file's leaves, aligned to multiples of 8
+    /// in its own index space, stay whole bricks when the lattice starts elsewhere.
+    off: [usize; 3],
+    /// Bricks per axis.
+    nb: [usize; 3],
+    /// Per brick (x fastest), its slot; 0: empty (reads the grid's background).
+    slots: Vec<u32>,
+    /// Bricks with a slot.
+    active: usize,
 }
 
-impl Grid {
-    /// A grid of `dims` from `data` (len must equal the product; the caller validated it, so a mismatch is a
-    /// logic error and returns `None`).
-    pub fn new(dims: [usize; 3], data: Vec<f32>) -> Option<Grid> {
-        let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d))?;
-        (n == data.len() && n > 0).then_some(Grid { dims, data })
+impl Topology {
+    /// The topology of `dims` whose bricks are those `present` says hold data (called once per brick with its
+    /// brick coordinates). `None` when the table or the slot count does not fit (2³² − 1 slots; the table's
+    /// bytes are the caller's to check against its budget first, with [`Topology::table_bytes`]).
+    pub fn build(dims: [usize; 3], present: impl FnMut([usize; 3]) -> bool) -> Option<Topology> {
+        Topology::build_offset(dims, [0; 3], present)
+    }
+
+    /// As [`Topology::build`], sample 0 at `off` (each 0–7) within its brick: brick b covers samples
+    /// 8b − off … 8b − off + 7.
+    pub fn build_offset(
+        dims: [usize; 3],
+        off: [usize; 3],
+        mut present: impl FnMut([usize; 3]) -> bool,
+    ) -> Option<Topology> {
+        if off.iter().any(|&o| o >= BRICK) {
+            return None;
+        }
+        let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
+        let count = nb.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
+        if dims.contains(&0) {
+            return None;
+        }
+        let mut slots = crate::alloc::filled(count, 0u32)?;
+        let mut active = 0usize;
+        for bz in 0..nb[2] {
+            for by in 0..nb[1] {
+                for bx in 0..nb[0] {
+                    if present([bx, by, bz]) {
+                        active += 1;
+                        slots[bx + nb[0] * (by + nb[1] * bz)] = u32::try_from(active).ok()?;
+                    }
+                }
+            }
+        }
+        Some(Topology {
+            dims,
+            off,
+            nb,
+            slots,
+            active,
+        })
+    }
+
+    /// Every brick present (small dense grids: tests, generated grids).
+    pub fn full(dims: [usize; 3]) -> Option<Topology> {
+        Topology::build(dims, |_| true)
+    }
+
+    /// Bytes of the brick table of a `dims` lattice (4 per brick), `None` beyond `u64`.
+    pub fn table_bytes(dims: [usize; 3]) -> Option<u64> {
+        dims.iter()
+            .try_fold(4u64, |a, &n| a.checked_mul(n.div_ceil(BRICK) as u64 + 1))
+    }
+    /// Sample 0's place within its brick, per axis.
+    pub fn offset(&self) -> [usize; 3] {
+        self.off
     }
 
     /// (nx, ny, nz).
     pub fn dims(&self) -> [usize; 3] {
         self.dims
     }
-    /// The samples, x fastest.
-    pub fn data(&self) -> &[f32] {
-        &self.data
+    /// Bricks holding data.
+    pub fn active_bricks(&self) -> usize {
+        self.active
     }
-    /// Mutable samples (for policies and mappings applied at load time).
-    pub(crate) fn data_mut(&mut self) -> &mut [f32] {
-        &mut self.data
+    /// Bricks per axis.
+    pub fn bricks(&self) -> [usize; 3] {
+        self.nb
     }
-    /// Bytes held by the samples.
+    /// Bytes of the table.
     pub fn bytes(&self) -> usize {
-        self.data.len() * std::mem::size_of::<f32>()
+        self.slots.len() * std::mem::size_of::<u32>()
+    }
+    /// The slot of brick `b` (0: empty).
+    #[inline(always)]
+    pub fn slot(&self, b: [usize; 3]) -> usize {
+        self.slots[b[0] + self.nb[0] * (b[1] + self.nb[1] * b[2])] as usize
+    }
+    /// Where sample (i, j, k) (inside the lattice) is stored in a grid of this topology.
+    #[inline(always)]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        let (i, j, k) = (i + self.off[0], j + self.off[1], k + self.off[2]);
+        let slot = self.slot([i / BRICK, j / BRICK, k / BRICK]);
+        slot * BRICK_VOXELS + (i % BRICK) + BRICK * ((j % BRICK) + BRICK * (k % BRICK))
+    }
+    /// The brick holding sample (i, j, k).
+    #[inline(always)]
+    pub fn brick_of(&self, v: [usize; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|a| (v[a] + self.off[a]) / BRICK)
+    }
+    /// The samples [lo, hi) of brick `b` along axis `a`, inside the lattice.
+    #[inline]
+    pub fn brick_span(&self, b: usize, a: usize) -> (usize, usize) {
+        let lo = (b * BRICK).saturating_sub(self.off[a]);
+        let hi = ((b + 1) * BRICK - self.off[a]).min(self.dims[a]);
+        (lo, hi.max(lo))
+    }
+    /// The sample stored at `n` in a grid's values ([`Grid::values_mut`]), or `None` for the background and padding.
+    pub(crate) fn voxel_of(&self, n: usize) -> Option<[usize; 3]> {
+        let slot = n / BRICK_VOXELS;
+        if slot == 0 {
+            return None;
+        }
+        let b = self.slots.iter().position(|&s| s as usize == slot)?;
+        let nb = self.nb;
+        let brick = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
+        let l = n % BRICK_VOXELS;
+        let v = [
+            brick[0] * BRICK + l % BRICK,
+            brick[1] * BRICK + (l / BRICK) % BRICK,
+            brick[2] * BRICK + l / (BRICK * BRICK),
+        ];
+        let v = [0, 1, 2].map(|a| v[a].checked_sub(self.off[a]));
+        let v = [v[0]?, v[1]?, v[2]?];
+        (0..3).all(|a| v[a] < self.dims[a]).then_some(v)
+    }
+    /// Row (·, j, k) cut at brick boundaries: for each piece its samples [x0, x1) and where the first is
+    /// stored (below 512: an empty brick, the background).
+    #[inline]
+    fn row_pieces(&self, j: usize, k: usize, mut f: impl FnMut(usize, usize, usize)) {
+        let (jj, kk) = (j + self.off[1], k + self.off[2]);
+        let within = BRICK * ((jj % BRICK) + BRICK * (kk % BRICK));
+        let mut x0 = 0;
+        while x0 < self.dims[0] {
+            let xx = x0 + self.off[0];
+            let x1 = ((xx / BRICK + 1) * BRICK - self.off[0]).min(self.dims[0]);
+            let slot = self.slot([xx / BRICK, jj / BRICK, kk / BRICK]);
+            f(
+                x0,
+                x1,
+                if slot == 0 {
+                    0
+                } else {
+                    slot * BRICK_VOXELS + within + xx % BRICK
+                },
+            );
+            x0 = x1;
+        }
+    }
+
+    /// The values a grid of this topology stores: 512 per slot, slot 0 included.
+    pub fn values_len(&self) -> usize {
+        (self.active + 1) * BRICK_VOXELS
+    }
+}
+
+/// A scalar grid, cell-centred, stored by bricks (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    topo: std::sync::Arc<Topology>,
+    /// 512 values per slot, x fastest within the brick; slot 0 holds the background.
+    values: Vec<f32>,
+}
+
+impl Grid {
+    /// A grid of `dims` from dense samples `data` (x fastest; its length must equal the product), every brick
+    /// stored. `None` on a mismatch or when the allocator refuses.
+    pub fn new(dims: [usize; 3], data: Vec<f32>) -> Option<Grid> {
+        let n = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d))?;
+        if n != data.len() || n == 0 {
+            return None;
+        }
+        let topo = std::sync::Arc::new(Topology::full(dims)?);
+        Grid::from_dense(topo, &data, 0.0)
+    }
+
+    /// A grid of topology `topo` from dense samples `data` (x fastest, over `topo`'s dims): the bricks `topo`
+    /// holds are copied, the rest read `background`. `None` on a length mismatch or a refused allocation.
+    pub fn from_dense(
+        topo: std::sync::Arc<Topology>,
+        data: &[f32],
+        background: f32,
+    ) -> Option<Grid> {
+        let [nx, ny, nz] = topo.dims;
+        if data.len() != nx.checked_mul(ny)?.checked_mul(nz)? {
+            return None;
+        }
+        let mut g = Grid::filled(topo, background)?;
+        for k in 0..nz {
+            for j in 0..ny {
+                let row = &data[nx * (j + ny * k)..nx * (j + ny * k + 1)];
+                g.set_row(j, k, row);
+            }
+        }
+        Some(g)
+    }
+
+    /// A grid of topology `topo` with every sample `value` (stored bricks included), to be filled.
+    pub fn filled(topo: std::sync::Arc<Topology>, value: f32) -> Option<Grid> {
+        let values = crate::alloc::filled(topo.values_len(), value)?;
+        Some(Grid { topo, values })
+    }
+
+    /// Writes row (·, j, k) from `row` (nx values) into the bricks that hold it (the rest are left alone).
+    pub(crate) fn set_row(&mut self, j: usize, k: usize, row: &[f32]) {
+        let topo = self.topo.clone();
+        topo.row_pieces(j, k, |x0, x1, start| {
+            if start >= BRICK_VOXELS {
+                self.values[start..start + (x1 - x0)].copy_from_slice(&row[x0..x1]);
+            }
+        });
+    }
+
+    /// Sample (i, j, k) ← `v`, if its brick is stored; returns whether it was.
+    #[inline]
+    pub(crate) fn set(&mut self, i: usize, j: usize, k: usize, v: f32) -> bool {
+        let idx = self.topo.index(i, j, k);
+        if idx < BRICK_VOXELS {
+            return false;
+        }
+        self.values[idx] = v;
+        true
+    }
+
+    /// Copies row (·, j, k) into `out` (nx values).
+    pub(crate) fn row(&self, j: usize, k: usize, out: &mut [f32]) {
+        self.topo.row_pieces(j, k, |x0, x1, start| {
+            if start < BRICK_VOXELS {
+                out[x0..x1].fill(self.values[0]);
+            } else {
+                out[x0..x1].copy_from_slice(&self.values[start..start + (x1 - x0)]);
+            }
+        });
+    }
+
+    /// (nx, ny, nz).
+    pub fn dims(&self) -> [usize; 3] {
+        self.topo.dims
+    }
+    /// The bricks this grid (and its dataset's other grids) stores.
+    pub fn topology(&self) -> &std::sync::Arc<Topology> {
+        &self.topo
+    }
+    /// The value every empty brick reads.
+    pub fn background(&self) -> f32 {
+        self.values[0]
+    }
+    /// Bytes held by the samples (the brick table is its topology's, shared).
+    pub fn bytes(&self) -> usize {
+        self.values.len() * std::mem::size_of::<f32>()
+    }
+    /// The stored values (slot 0 first: the background), for load-time policies.
+    pub(crate) fn values_mut(&mut self) -> &mut [f32] {
+        &mut self.values
+    }
+    /// This grid in topology `topo` (which holds at least this grid's bricks), or `None` when it does not or the
+    /// allocator refuses.
+    pub(crate) fn rehome(&self, topo: std::sync::Arc<Topology>) -> Option<Grid> {
+        if topo.dims != self.topo.dims {
+            return None;
+        }
+        let mut g = Grid::filled(topo, self.background())?;
+        if g.topo.off != self.topo.off {
+            // Bricks that do not line up: row by row.
+            let [nx, ny, nz] = self.topo.dims;
+            let mut row = vec![0f32; nx];
+            for k in 0..nz {
+                for j in 0..ny {
+                    self.row(j, k, &mut row);
+                    g.set_row(j, k, &row);
+                }
+            }
+            return Some(g);
+        }
+        for (b, &from) in self.topo.slots.iter().enumerate() {
+            if from == 0 {
+                continue;
+            }
+            let to = g.topo.slots[b] as usize;
+            if to == 0 {
+                return None;
+            }
+            let (from, to) = (from as usize * BRICK_VOXELS, to * BRICK_VOXELS);
+            g.values[to..to + BRICK_VOXELS]
+                .copy_from_slice(&self.values[from..from + BRICK_VOXELS]);
+        }
+        Some(g)
+    }
+    /// The dense samples, x fastest (tests and small grids: nx·ny·nz values).
+    pub fn to_dense(&self) -> Vec<f32> {
+        let [nx, ny, nz] = self.topo.dims;
+        let mut out = vec![0f32; nx * ny * nz];
+        for k in 0..nz {
+            for j in 0..ny {
+                self.row(j, k, &mut out[nx * (j + ny * k)..nx * (j + ny * k + 1)]);
+            }
+        }
+        out
     }
 
     /// Sample (i, j, k) with signed indices; zero outside the grid.
     #[inline]
     pub fn at(&self, i: i64, j: i64, k: i64) -> f32 {
-        let [nx, ny, nz] = self.dims;
+        let [nx, ny, nz] = self.topo.dims;
         if i < 0 || j < 0 || k < 0 || i >= nx as i64 || j >= ny as i64 || k >= nz as i64 {
             return 0.0;
         }
-        self.data[i as usize + nx * (j as usize + ny * k as usize)]
+        self.values[self.topo.index(i as usize, j as usize, k as usize)]
     }
 
     /// Value at `p` in [0, 1]³ (see the module docs for the convention at the bounds).
@@ -230,12 +518,14 @@ impl Grid {
         {
             return 0.0;
         }
-        let idx = |a: usize| ((p[a] * self.dims[a] as f64) as i64).min(self.dims[a] as i64 - 1);
+        let dims = self.topo.dims;
+        let idx = |a: usize| ((p[a] * dims[a] as f64) as i64).min(dims[a] as i64 - 1);
         self.at(idx(0), idx(1), idx(2))
     }
 
     fn trilinear(&self, p: [f64; 3]) -> f32 {
         // Continuous sample coordinates; NaN or far-away points are outside.
+        let dims = self.topo.dims;
         let mut base = [0i64; 3];
         let mut frac = [0f32; 3];
         for a in 0..3 {
@@ -243,7 +533,7 @@ impl Grid {
             if !(0.0..=1.0).contains(&p[a]) {
                 return 0.0;
             }
-            let s = p[a] * self.dims[a] as f64 - 0.5;
+            let s = p[a] * dims[a] as f64 - 0.5;
             let f = floor(s);
             base[a] = f as i64;
             frac[a] = (s - f) as f32;
@@ -258,32 +548,67 @@ impl Grid {
         lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)
     }
 
-    /// The value a [`Stencil`] computed for this grid's dims interpolates.
+    /// The value a [`Stencil`] computed for this grid's topology interpolates.
     #[inline(always)]
     pub fn eval(&self, st: &Stencil) -> f32 {
         if st.n == 8 {
             // (The same sum, in the same order, unrolled.)
             let mut v = 0.0f32;
             for k in 0..8 {
-                v += st.w[k] * self.data[st.idx[k]];
+                v += st.w[k] * self.values[st.idx[k]];
             }
             return v;
         }
-        (0..st.n).map(|k| st.w[k] * self.data[st.idx[k]]).sum()
+        (0..st.n).map(|k| st.w[k] * self.values[st.idx[k]]).sum()
     }
 
-    /// Min, max, mean and non-zero fraction of the samples.
+    /// Min, max, mean and non-zero fraction of the nx·ny·nz samples (empty bricks count as their voxels of
+    /// background).
     pub fn stats(&self) -> GridStats {
         let mut acc = StatsAcc::new();
-        let chunks = self.data.chunks_exact(STATS_LANES);
-        let rest = chunks.remainder();
-        for c in chunks {
-            if let Ok(c) = c.try_into() {
-                acc.add_lanes(c);
+        let [nx, ny, nz] = self.topo.dims;
+        let mut empty = 0u64;
+        let mut row = [0f32; BRICK];
+        let _ = (nx, ny, nz);
+        let t = &self.topo;
+        for bz in 0..t.nb[2] {
+            for by in 0..t.nb[1] {
+                for bx in 0..t.nb[0] {
+                    let (sx, sy, sz) = (
+                        t.brick_span(bx, 0),
+                        t.brick_span(by, 1),
+                        t.brick_span(bz, 2),
+                    );
+                    let (w, h, d) = (sx.1 - sx.0, sy.1 - sy.0, sz.1 - sz.0);
+                    let slot = t.slot([bx, by, bz]);
+                    if slot == 0 {
+                        empty += (w * h * d) as u64;
+                        continue;
+                    }
+                    // The span's first sample within the brick, per axis.
+                    let o = [
+                        sx.0 + t.off[0] - bx * BRICK,
+                        sy.0 + t.off[1] - by * BRICK,
+                        sz.0 + t.off[2] - bz * BRICK,
+                    ];
+                    for z in 0..d {
+                        for y in 0..h {
+                            let start = slot * BRICK_VOXELS
+                                + o[0]
+                                + BRICK * (o[1] + y + BRICK * (o[2] + z));
+                            row[..w].copy_from_slice(&self.values[start..start + w]);
+                            if w == BRICK {
+                                acc.add_lanes(&row);
+                            } else {
+                                row[..w].iter().for_each(|&v| acc.add(v));
+                            }
+                        }
+                    }
+                }
             }
         }
-        for &v in rest {
-            acc.add(v);
+        if empty > 0 {
+            acc.add_repeated(self.values[0], empty);
         }
         acc.finish()
     }
@@ -332,6 +657,14 @@ impl StatsAcc {
         self.sums[0] += v as f64;
         self.counts[0] += (v != 0.0) as u64;
         self.n += 1;
+    }
+    /// `n` samples of value `v`.
+    pub(crate) fn add_repeated(&mut self, v: f32, n: u64) {
+        self.lo[0] = if v < self.lo[0] { v } else { self.lo[0] };
+        self.hi[0] = if v > self.hi[0] { v } else { self.hi[0] };
+        self.sums[0] += v as f64 * n as f64;
+        self.counts[0] += (v != 0.0) as u64 * n;
+        self.n += n;
     }
     pub(crate) fn finish(&self) -> GridStats {
         let n = self.n.max(1) as f64;
@@ -439,11 +772,109 @@ mod tests {
             x = (x * 3.7 + 0.123) % 1.0;
             let p = [x, (x * 7.1) % 1.0, (x * 13.3) % 1.0];
             for interp in [Interpolation::Trilinear, Interpolation::Nearest] {
-                let st = Stencil::new(g.dims(), p, interp).unwrap();
+                let st = Stencil::new(g.topology(), p, interp).unwrap();
                 assert!((g.eval(&st) - g.lookup(p, interp)).abs() < 1e-4, "{p:?}");
             }
         }
-        assert!(Stencil::new(g.dims(), [1.5, 0.5, 0.5], Interpolation::Trilinear).is_none());
+        assert!(Stencil::new(g.topology(), [1.5, 0.5, 0.5], Interpolation::Trilinear).is_none());
+    }
+
+    /// A random grid of `dims` whose 8³ bricks (at offset `off`) each hold data with probability `p`, as dense
+    /// samples, and the sparse grid storing only those bricks.
+    fn sparse_pair(dims: [usize; 3], off: [usize; 3], seed: u64, p: f64) -> (Grid, Grid) {
+        let mut rng = crate::rng::Rng::new(seed);
+        let probe = Topology::build_offset(dims, off, |_| false).unwrap();
+        let nb = probe.bricks();
+        let keep: Vec<bool> = (0..nb.iter().product::<usize>())
+            .map(|_| rng.next_f64() < p)
+            .collect();
+        let mut d = vec![0f32; dims.iter().product()];
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let b = probe.brick_of([i, j, k]);
+                    if keep[b[0] + nb[0] * (b[1] + nb[1] * b[2])] {
+                        d[i + dims[0] * (j + dims[1] * k)] = rng.next_f64() as f32 * 3.0;
+                    }
+                }
+            }
+        }
+        let dense = Grid::new(dims, d.clone()).unwrap();
+        let topo =
+            Topology::build_offset(dims, off, |b| keep[b[0] + nb[0] * (b[1] + nb[1] * b[2])])
+                .unwrap();
+        let sparse = Grid::from_dense(std::sync::Arc::new(topo), &d, 0.0).unwrap();
+        (dense, sparse)
+    }
+
+    #[test]
+    fn sparse_grids_look_up_as_dense_ones_bit_for_bit() {
+        // Random sparse trees (dims not multiples of 8, every brick offset) against the dense reference: every
+        // sample, trilinear and nearest lookups and stencils at random points (faces included), statistics, and
+        // the storage following the bricks kept.
+        let mut rng = crate::rng::Rng::new(5);
+        for (t, dims) in [[13usize, 9, 21], [8, 8, 8], [1, 17, 3], [30, 2, 11]]
+            .into_iter()
+            .enumerate()
+        {
+            for off in [[0, 0, 0], [3, 7, 1], [7, 0, 5]] {
+                let (dense, sparse) = sparse_pair(dims, off, 100 + t as u64, 0.5);
+                assert_eq!(sparse.to_dense(), dense.to_dense());
+                for k in -1..=dims[2] as i64 {
+                    for j in -1..=dims[1] as i64 {
+                        for i in -1..=dims[0] as i64 {
+                            assert_eq!(sparse.at(i, j, k).to_bits(), dense.at(i, j, k).to_bits());
+                        }
+                    }
+                }
+                for _ in 0..3000 {
+                    let p = [0, 1, 2].map(|_| rng.next_f64() * 1.2 - 0.1);
+                    for interp in [Interpolation::Trilinear, Interpolation::Nearest] {
+                        assert_eq!(
+                            sparse.lookup(p, interp).to_bits(),
+                            dense.lookup(p, interp).to_bits(),
+                            "{p:?}"
+                        );
+                        let (a, b) = (
+                            Stencil::with_margin(sparse.topology(), p, interp, 0.5),
+                            Stencil::with_margin(dense.topology(), p, interp, 0.5),
+                        );
+                        assert_eq!(
+                            a.map(|s| sparse.eval(&s).to_bits()),
+                            b.map(|s| dense.eval(&s).to_bits()),
+                            "{p:?}"
+                        );
+                    }
+                }
+                let (s0, s1) = (sparse.stats(), dense.stats());
+                assert_eq!((s0.min, s0.max), (s1.min, s1.max));
+                assert!((s0.mean - s1.mean).abs() <= 1e-12 * s1.mean.abs().max(1.0));
+                assert!((s0.nonzero_fraction - s1.nonzero_fraction).abs() < 1e-12);
+                let stored = sparse.topology().active_bricks();
+                assert_eq!(sparse.bytes(), (stored + 1) * 512 * 4);
+            }
+        }
+    }
+
+    #[test]
+    fn sparse_majorants_bound_the_data_as_the_dense_pass_does() {
+        // The brick-by-brick ranges of a sparse grid equal the dense slab pass's, brick for brick, at several
+        // majorant brick sizes; so every majorant is ≥ the data (the dense pass is tested against brute force).
+        for (t, dims) in [[37usize, 41, 39], [9, 64, 45]].into_iter().enumerate() {
+            // Few enough bricks stored (one in ten) to take the brick-by-brick path.
+            let (dense, sparse) = sparse_pair(dims, [5, 2, 6], 7 + t as u64, 0.1);
+            let stored: usize = sparse.topology().bricks().iter().product();
+            assert!(
+                sparse.topology().active_bricks() * 4 < stored,
+                "{} of {stored}",
+                sparse.topology().active_bricks()
+            );
+            for brick in [1, 4, 8, 16] {
+                let want = crate::majorant::brick_ranges(&dense.to_dense(), dims, brick);
+                let got = crate::majorant::grid_brick_ranges(&sparse, brick);
+                assert_eq!(got, want, "dims {dims:?} brick {brick}");
+            }
+        }
     }
 
     #[test]

@@ -168,15 +168,16 @@ impl FireLight {
                         None => band,
                         Some(s) => {
                             let chs = ds.channels();
-                            let d = chs[dch].grid.data()[idx].max(0.0) as f64;
-                            let t = tch.map(|q| chs[q].grid.data()[idx] as f64).unwrap_or(0.0);
+                            let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
+                            let d = at(dch).max(0.0) as f64;
+                            let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
                             let key = (t * 2.0).round() as i64;
                             let soot = *memo
                                 .entry(key)
                                 .or_insert_with(|| soot_power(key as f64 / 2.0));
                             let mut v = d * s.soot_scale * soot;
                             for (e, ch, scale) in &s.species {
-                                let nn = chs[*ch].grid.data()[idx].max(0.0) as f64 * scale;
+                                let nn = at(*ch).max(0.0) as f64 * scale;
                                 if nn > 0.0 {
                                     v += nn * s.intensity * line_power(e, t);
                                 }

@@ -80,7 +80,7 @@ impl MajorantGrid {
         let work: Vec<_> = ds.channels().iter().zip(known).collect();
         let per_channel = crate::dataset::par_map(work, |(ch, known)| match known {
             Some(r) if r.len() == nb => r,
-            _ => brick_ranges(ch.grid.data(), dims, brick),
+            _ => grid_brick_ranges(&ch.grid, brick),
         });
         let mut ranges = vec![(0.0, 0.0); nb * channels];
         for (c, r) in per_channel.iter().enumerate() {
@@ -145,9 +145,84 @@ impl MajorantGrid {
 /// Per brick (x fastest), the (min, max) of one grid: [`brick_ranges`]'s layout.
 pub(crate) type Ranges = Vec<(f32, f32)>;
 
+/// [`brick_ranges`] of a sparse grid. A grid storing most of its bricks is read slab by slab (the vectorised
+/// pass); a sparse one brick by brick: a brick whose widened range reaches only empty storage bricks takes their
+/// background (and 0 where it leaves the grid) without reading a voxel, the others are read voxel by voxel. The
+/// values are the same either way (tested against the dense pass).
+pub(crate) fn grid_brick_ranges(g: &crate::grid::Grid, brick: usize) -> Ranges {
+    let dims = g.dims();
+    let topo = g.topology();
+    let stored: usize = topo.bricks().iter().product();
+    if topo.active_bricks().saturating_mul(4) >= stored {
+        let [nx, ny, nz] = dims;
+        let mut acc = BrickRanges::new(dims, brick, 0..nz);
+        let mut slab = vec![0f32; nx * ny];
+        for z in 0..nz {
+            for y in 0..ny {
+                g.row(y, z, &mut slab[nx * y..nx * (y + 1)]);
+            }
+            acc.add_slab(z, &slab);
+        }
+        return acc.finish();
+    }
+    let brick = brick.max(1);
+    let counts = dims.map(|n| n.div_ceil(brick));
+    let bg = g.background();
+    let mut out = Vec::with_capacity(counts.iter().product());
+    for cz in 0..counts[2] {
+        for cy in 0..counts[1] {
+            for cx in 0..counts[0] {
+                let c = [cx, cy, cz];
+                // The widened voxel range [lo, hi] on each axis, inside the grid, and whether it leaves it.
+                let mut lo = [0usize; 3];
+                let mut hi = [0usize; 3];
+                let mut outside = false;
+                for a in 0..3 {
+                    let (l, h) = ((c[a] * brick) as i64 - 1, ((c[a] + 1) * brick) as i64);
+                    outside |= l < 0 || h >= dims[a] as i64;
+                    lo[a] = l.max(0) as usize;
+                    hi[a] = (h.min(dims[a] as i64 - 1)) as usize;
+                }
+                let (mut mn, mut mx) = if outside {
+                    (0.0f32, 0.0f32)
+                } else {
+                    (f32::INFINITY, f32::NEG_INFINITY)
+                };
+                let mut fold = |v: f32| {
+                    mn = if v < mn { v } else { mn };
+                    mx = if v > mx { v } else { mx };
+                };
+                let mut any_stored = false;
+                let (blo, bhi) = (topo.brick_of(lo), topo.brick_of(hi));
+                for bz in blo[2]..=bhi[2] {
+                    for by in blo[1]..=bhi[1] {
+                        for bx in blo[0]..=bhi[0] {
+                            any_stored |= topo.slot([bx, by, bz]) != 0;
+                        }
+                    }
+                }
+                if any_stored {
+                    for k in lo[2]..=hi[2] {
+                        for j in lo[1]..=hi[1] {
+                            for i in lo[0]..=hi[0] {
+                                fold(g.at(i as i64, j as i64, k as i64));
+                            }
+                        }
+                    }
+                } else {
+                    fold(bg);
+                }
+                out.push((mn, mx));
+            }
+        }
+    }
+    out
+}
+
 /// The (min, max) of `g` (x fastest, `dims`) over each brick of `brick`³ voxels widened by one voxel on every side,
 /// with 0 taken in where the widened brick reaches past the grid, bricks x fastest (see [`BrickRanges`]). Min and
 /// max are exact, so the values are the brute force's (tested).
+#[cfg(test)]
 pub(crate) fn brick_ranges(g: &[f32], dims: [usize; 3], brick: usize) -> Ranges {
     let mut acc = BrickRanges::new(dims, brick, 0..dims[2]);
     for (z, slab) in g.chunks_exact(dims[0] * dims[1]).enumerate() {

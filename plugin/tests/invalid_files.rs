@@ -285,11 +285,29 @@ fn mutated_files_never_panic() {
 #[test]
 fn grids_share_one_memory_cap() {
     // A mutant of the fuzz run (tools/mutants.py: a leaf moved far away) with every float grid asked for: their
-    // active box makes four 2176×128×768 grids (855 MB each). Each passed a 1 GB cap alone and the four together
-    // took 3.2 GB; they now share the cap, refused before anything is allocated.
+    // active box makes four 2176×128×768 grids (855 MB each, dense). Each passed a 1 GB cap alone and the four
+    // together took 3.2 GB; they share the cap, refused before anything is allocated.
+    //
+    // With sparse storage the far leaf costs its own brick, not the box: at 1 GB the four grids fit (and the
+    // mutant's corrupt block is what the load then reports); under a cap their bricks together exceed but one
+    // alone would not, they are still refused before anything is allocated.
     let file = path("fuzz/fuzz_vdb_grids_share_the_cap.vdb");
     let opts = LoadOptions {
         max_bytes: 1_000_000_000,
+        ..LoadOptions::default()
+    };
+    let e = {
+        let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
+        let sources: Vec<ChannelSource> = grids
+            .iter()
+            .filter(|g| g.loadable)
+            .map(|g| ChannelSource::new(&g.name, file.clone()))
+            .collect();
+        Dataset::load(&sources, &opts).unwrap_err().to_string()
+    };
+    assert!(e.contains("expected a stored block of 1024 bytes"), "{e}");
+    let opts = LoadOptions {
+        max_bytes: 20_000_000,
         ..LoadOptions::default()
     };
     let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
@@ -300,8 +318,11 @@ fn grids_share_one_memory_cap() {
         .collect();
     assert_eq!(sources.len(), 4);
     let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
+    // 4097 bricks (the background's included) of 2 KB per grid: 8.4 MB each where the dense box took 855 MB;
+    // the four together, 33.6 MB, exceed a 20 MB cap that one alone fits.
     assert!(
-        e.contains("needs 855638016 bytes, above the memory cap of 250000000 bytes"),
+        e.contains("4 grids of 4096 bricks")
+            && e.contains("needs 33562624 bytes, above the memory cap of 20000000 bytes"),
         "{e}"
     );
 }

@@ -60,6 +60,7 @@ pub(crate) fn read_dense(
     }
     t.expect_end(&format!("the {n} values of a {w}×{h}×{d} grid"))?;
     Ok(Loaded {
+        bricks: None,
         dims,
         data,
         bounds: None,
@@ -89,6 +90,7 @@ pub(crate) fn read_sparse(file: &str, text: &str, max_bytes: u64) -> Result<Load
     }
     t.expect_end(&format!("{count} voxels"))?;
     Ok(Loaded {
+        bricks: None,
         dims,
         data,
         bounds: None,

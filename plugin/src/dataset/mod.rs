@@ -71,7 +71,10 @@ pub(crate) fn par_map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Loaded {
     pub dims: [usize; 3],
+    /// Dense samples, x fastest (empty when `bricks` holds them).
     pub data: Vec<f32>,
+    /// The samples as bricks (sparse formats), sharing one topology with the file's other grids.
+    pub bricks: Option<Grid>,
     /// Medium-space bounds from the file's own transform, if it has one.
     pub bounds: Option<[DVec3; 2]>,
 }
@@ -141,6 +144,8 @@ pub struct Channel {
 pub struct Dataset {
     format: Format,
     dims: [usize; 3],
+    /// The bricks the channels store (shared by all).
+    topology: std::sync::Arc<crate::grid::Topology>,
     bounds: [DVec3; 2],
     channels: Vec<Channel>,
     interpolation: Interpolation,
@@ -308,6 +313,7 @@ impl Dataset {
                 Loaded {
                     dims,
                     data,
+                    bricks: None,
                     bounds: Some([p0, p1]),
                 },
                 "inline".to_string(),
@@ -353,8 +359,8 @@ impl Dataset {
             ));
         }
         let (first_idx, first_bounds, format) = (first.0, first.1.bounds, first.4);
-        // Checks, policies and statistics per channel, in parallel.
-        let channels = par_map(loaded, |(idx, l, file, seconds, _)| {
+        // Checks and policies per channel, in parallel, on the samples as loaded (dense or bricks).
+        let checked = par_map(loaded, |(idx, mut l, file, seconds, _)| {
             let src = &sources[idx];
             if l.dims != dims {
                 return Err(Error::invalid(
@@ -378,30 +384,99 @@ impl Dataset {
                     ),
                 ));
             }
-            let mut grid = Grid::new(l.dims, l.data).ok_or_else(|| {
-                Error::invalid("dataset", &src.name, "an empty grid", "at least one voxel")
-            })?;
-            let (replaced_nonfinite, replaced_negative, stats) =
-                apply_policies(&mut grid, &src.name, &file, &src.mapping, opts)?;
-            let bytes = grid.bytes();
-            Ok(Channel {
-                name: src.name.clone(),
-                grid,
-                stats,
-                report: ChannelReport {
-                    file,
-                    bytes,
-                    load_seconds: seconds,
-                    replaced_nonfinite,
-                    replaced_negative,
-                },
-            })
+            let (nonfinite, negative, stats) = match &mut l.bricks {
+                Some(g) => {
+                    let topo = g.topology().clone();
+                    let voxel = |n: usize| match topo.voxel_of(n) {
+                        Some([i, j, k]) => format!("channel '{}', voxel ({i}, {j}, {k})", src.name),
+                        None => format!("channel '{}', its background", src.name),
+                    };
+                    let (a, b, _) = apply_policies(
+                        g.values_mut(),
+                        &voxel,
+                        &src.name,
+                        &file,
+                        &src.mapping,
+                        opts,
+                    )?;
+                    (a, b, None)
+                }
+                None => {
+                    if l.data.is_empty() {
+                        return Err(Error::invalid(
+                            "dataset",
+                            &src.name,
+                            "an empty grid",
+                            "at least one voxel",
+                        ));
+                    }
+                    let voxel = |n: usize| {
+                        let (i, rest) = (n % dims[0], n / dims[0]);
+                        format!(
+                            "channel '{}', voxel ({}, {}, {})",
+                            src.name,
+                            i,
+                            rest % dims[1],
+                            rest / dims[1]
+                        )
+                    };
+                    let (a, b, st) =
+                        apply_policies(&mut l.data, &voxel, &src.name, &file, &src.mapping, opts)?;
+                    (a, b, Some(st))
+                }
+            };
+            Ok((idx, l, file, seconds, nonfinite, negative, stats))
         })
+        .into_iter()
+        .collect::<Result<Vec<_>, Error>>()?;
+        let topology = union_topology(
+            &checked.iter().map(|c| &c.1).collect::<Vec<_>>(),
+            dims,
+            opts.max_bytes,
+        )?;
+        // The grids on the shared topology (dense samples copied brick by brick, bricks re-homed when their
+        // file's topology is not the union), with their statistics.
+        let channels = par_map(
+            checked,
+            |(idx, l, file, seconds, nonfinite, negative, stats)| {
+                let src = &sources[idx];
+                let refused = || Error::TooLarge {
+                    file: file.clone(),
+                    what: format!(
+                        "channel '{}': {} bricks of 8³ f32",
+                        src.name,
+                        topology.active_bricks()
+                    ),
+                    bytes: topology.values_len() as u64 * 4,
+                    cap: opts.max_bytes,
+                };
+                let grid = match l.bricks {
+                    Some(g) if std::sync::Arc::ptr_eq(g.topology(), &topology) => g,
+                    Some(g) => g.rehome(topology.clone()).ok_or_else(refused)?,
+                    None => Grid::from_dense(topology.clone(), &l.data, 0.0).ok_or_else(refused)?,
+                };
+                let stats = stats.unwrap_or_else(|| grid.stats());
+                let bytes = grid.bytes();
+                Ok(Channel {
+                    name: src.name.clone(),
+                    grid,
+                    stats,
+                    report: ChannelReport {
+                        file,
+                        bytes,
+                        load_seconds: seconds,
+                        replaced_nonfinite: nonfinite,
+                        replaced_negative: negative,
+                    },
+                })
+            },
+        )
         .into_iter()
         .collect::<Result<Vec<_>, Error>>()?;
         Ok(Dataset {
             format,
             dims,
+            topology,
             bounds,
             channels,
             interpolation: Interpolation::Trilinear,
@@ -433,9 +508,13 @@ impl Dataset {
         self.interpolation = interp;
         self
     }
-    /// Bytes of all loaded samples.
+    /// Bytes of all loaded samples and their brick table.
     pub fn bytes(&self) -> usize {
-        self.channels.iter().map(|c| c.report.bytes).sum()
+        self.channels.iter().map(|c| c.report.bytes).sum::<usize>() + self.topology.bytes()
+    }
+    /// The bricks the channels store.
+    pub fn topology(&self) -> &std::sync::Arc<crate::grid::Topology> {
+        &self.topology
     }
 
     /// The unit-cube coordinates of medium-space point `p`.
@@ -447,12 +526,17 @@ impl Dataset {
     /// The interpolation stencil of medium-space point `p`, shared by every channel (`None` outside).
     #[inline]
     pub fn stencil(&self, p: DVec3) -> Option<crate::grid::Stencil> {
-        crate::grid::Stencil::new(self.dims, self.to_unit(p), self.interpolation)
+        crate::grid::Stencil::new(&self.topology, self.to_unit(p), self.interpolation)
     }
     /// The stencil of `p`, continuing `margin` voxels beyond the bounds (see [`crate::grid::Stencil::with_margin`]).
     #[inline]
     pub fn stencil_with_margin(&self, p: DVec3, margin: f64) -> Option<crate::grid::Stencil> {
-        crate::grid::Stencil::with_margin(self.dims, self.to_unit(p), self.interpolation, margin)
+        crate::grid::Stencil::with_margin(
+            &self.topology,
+            self.to_unit(p),
+            self.interpolation,
+            margin,
+        )
     }
     /// The interpolation used by [`Dataset::sample`].
     pub fn interpolation(&self) -> Interpolation {
@@ -477,25 +561,81 @@ impl Dataset {
     }
 }
 
-/// Applies the mapping and the NaN/negative policies; returns the replacement counts and the statistics of
-/// the result (gathered in the same pass over the grid).
+/// The bricks any channel holds: a dense channel's where it is non-zero, a sparse one's where its file stored
+/// them (one file's grids share theirs, which is then the union as it is). The table is checked against the
+/// cap first.
+fn union_topology(
+    loaded: &[&Loaded],
+    dims: [usize; 3],
+    max_bytes: u64,
+) -> Result<std::sync::Arc<crate::grid::Topology>, Error> {
+    use crate::grid::Topology;
+    let sparse: Vec<&Grid> = loaded.iter().filter_map(|l| l.bricks.as_ref()).collect();
+    if sparse.len() == loaded.len()
+        && sparse
+            .iter()
+            .all(|g| std::sync::Arc::ptr_eq(g.topology(), sparse[0].topology()))
+    {
+        return Ok(sparse[0].topology().clone());
+    }
+    let table = Topology::table_bytes(dims).unwrap_or(u64::MAX);
+    let too_large = || Error::TooLarge {
+        file: "dataset".to_string(),
+        what: format!(
+            "the brick table of a {}×{}×{} grid",
+            dims[0], dims[1], dims[2]
+        ),
+        bytes: table,
+        cap: max_bytes,
+    };
+    if table > max_bytes {
+        return Err(too_large());
+    }
+    // Bricks aligned as the first sparse grid's are (its file's leaves), else at sample 0.
+    let off = sparse.first().map_or([0; 3], |g| g.topology().offset());
+    let probe = Topology::build_offset(dims, off, |_| false).ok_or_else(too_large)?;
+    let [nx, ny, _] = dims;
+    Topology::build_offset(dims, off, |b| {
+        // The union brick's samples [lo, hi) per axis.
+        let span = [0, 1, 2].map(|a| probe.brick_span(b[a], a));
+        if (0..3).any(|a| span[a].0 >= span[a].1) {
+            return false;
+        }
+        loaded.iter().any(|l| match &l.bricks {
+            Some(g) => {
+                let t = g.topology();
+                let (blo, bhi) = (
+                    t.brick_of([span[0].0, span[1].0, span[2].0]),
+                    t.brick_of([span[0].1 - 1, span[1].1 - 1, span[2].1 - 1]),
+                );
+                (blo[2]..=bhi[2]).any(|z| {
+                    (blo[1]..=bhi[1]).any(|y| (blo[0]..=bhi[0]).any(|x| t.slot([x, y, z]) != 0))
+                })
+            }
+            None => (span[2].0..span[2].1).any(|k| {
+                (span[1].0..span[1].1).any(|j| {
+                    let row = nx * (j + ny * k);
+                    l.data[row + span[0].0..row + span[0].1]
+                        .iter()
+                        .any(|&v| v != 0.0)
+                })
+            }),
+        })
+    })
+    .map(std::sync::Arc::new)
+    .ok_or_else(too_large)
+}
+
+/// Applies the mapping and the NaN/negative policies to `values` (`voxel` names the sample at an index);
+/// returns the replacement counts and the statistics of the result (gathered in the same pass).
 fn apply_policies(
-    grid: &mut Grid,
+    values: &mut [f32],
+    voxel: &dyn Fn(usize) -> String,
     name: &str,
     file: &str,
     mapping: &Mapping,
     opts: &LoadOptions,
 ) -> Result<(usize, usize, crate::grid::GridStats), Error> {
-    let dims = grid.dims();
-    let voxel = |n: usize| {
-        let (i, rest) = (n % dims[0], n / dims[0]);
-        format!(
-            "channel '{name}', voxel ({}, {}, {})",
-            i,
-            rest % dims[1],
-            rest / dims[1]
-        )
-    };
     let identity = mapping.is_identity();
     // Negative values are refused only where they are unphysical; other grids (Mantaflow's `shadow` is −1
     // everywhere) keep what the file says.
@@ -506,7 +646,7 @@ fn apply_policies(
     // non-finite or negative value, or any group under a mapping, goes through the voxel-by-voxel rules.
     const L: usize = crate::grid::STATS_LANES;
     let mut stats = crate::grid::StatsAcc::new();
-    for (g, group) in grid.data_mut().chunks_mut(L).enumerate() {
+    for (g, group) in values.chunks_mut(L).enumerate() {
         if let (true, Ok(whole)) = (identity, <&[f32; L]>::try_from(&*group)) {
             let mut clean = true;
             for v in whole.iter() {

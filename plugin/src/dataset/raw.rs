@@ -108,6 +108,7 @@ pub(crate) fn read(
         data[i + dims[0] * (j + dims[1] * k)] = v as f32;
     }
     Ok(Loaded {
+        bricks: None,
         dims,
         data,
         bounds: None,

@@ -1,7 +1,7 @@
 //! Sparse VDB trees (OpenVDB and NanoVDB alike) made dense over the active region, so channels share one
 //! lattice and the fire samples a flat array.
 
-use super::{alloc_grid, Loaded};
+use super::Loaded;
 use crate::Error;
 use glam::DVec3;
 
@@ -118,13 +118,16 @@ pub(crate) fn missing_grid<'a>(
     )
 }
 
-/// Makes `trees` dense over the union of their active boxes; every voxel holds the tree's value there
-/// (leaf values, active or not, over tile values, over the background).
+/// Stores `trees` as 8³ bricks over the union of their active boxes, one topology for all: a brick is stored
+/// where some tree has a leaf or a tile other than its background; every voxel holds the tree's value there (leaf
+/// values, active or not, over tile values, over the background), as a dense grid over the box would — but
+/// memory follows the leaves, not the box (a fire and a far-away second copy cost two fires and a brick table).
 pub(crate) fn densify<S: LeafValues>(
     file: &str,
     trees: Vec<(&str, Tree, S)>,
     max_bytes: u64,
 ) -> Result<Vec<Loaded>, Error> {
+    use crate::grid::{Grid, Topology, BRICK};
     let (first_name, first) = (&trees[0].0, &trees[0].1);
     for (name, t, _) in &trees[1..] {
         if t.transform != first.transform {
@@ -166,75 +169,136 @@ pub(crate) fn densify<S: LeafValues>(
     let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
     let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
     let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
-    // One dense grid per tree, filled in parallel (each leaf's values decoded as it is placed). The cap covers
-    // them all: each gets its share (three grids of 1 GB each passed a 1 GB cap one by one).
-    let share = max_bytes / trees.len().max(1) as u64;
+    let too_large = |what: String, bytes: u64| Error::TooLarge {
+        file: file.to_string(),
+        what,
+        bytes,
+        cap: max_bytes,
+    };
+    let table = Topology::table_bytes(dims).unwrap_or(u64::MAX);
+    if table > max_bytes {
+        return Err(too_large(
+            format!(
+                "the brick table of a {}×{}×{} grid",
+                dims[0], dims[1], dims[2]
+            ),
+            table,
+        ));
+    }
+    // The bricks that a voxel range [a, b] (index space) covers, on bricks aligned as the file's leaves are
+    // (multiples of 8 in its index space): sample 0 of the box sits at lo mod 8 in its brick.
+    let off = lo.map(|v| v.rem_euclid(BRICK as i64) as usize);
+    let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
+    let mut mark = vec![false; 0];
+    let nbricks = nb
+        .iter()
+        .try_fold(1usize, |a, &b| a.checked_mul(b))
+        .unwrap_or(usize::MAX);
+    if crate::alloc::with_capacity::<bool>(nbricks).is_none() {
+        return Err(too_large("the brick table".to_string(), table));
+    }
+    mark.resize(nbricks, false);
+    let mut cover = |a: [i64; 3], b: [i64; 3]| {
+        let a = [0, 1, 2].map(|k| a[k].max(lo[k]));
+        let b = [0, 1, 2].map(|k| b[k].min(hi[k]));
+        if (0..3).any(|k| a[k] > b[k]) {
+            return;
+        }
+        let (ba, bb) = (
+            [0, 1, 2].map(|k| ((a[k] - lo[k]) as usize + off[k]) / BRICK),
+            [0, 1, 2].map(|k| ((b[k] - lo[k]) as usize + off[k]) / BRICK),
+        );
+        for z in ba[2]..=bb[2] {
+            for y in ba[1]..=bb[1] {
+                for x in ba[0]..=bb[0] {
+                    mark[x + nb[0] * (y + nb[1] * z)] = true;
+                }
+            }
+        }
+    };
+    for (_, t, _) in &trees {
+        for tile in written_tiles(t) {
+            let o = tile.origin.map(|v| v as i64);
+            cover(o, o.map(|v| v + tile.size as i64 - 1));
+        }
+        for leaf in &t.leaves {
+            let o = leaf.origin.map(|v| v as i64);
+            cover(o, o.map(|v| v + 7));
+        }
+    }
+    let topo = Topology::build_offset(dims, off, |b| mark[b[0] + nb[0] * (b[1] + nb[1] * b[2])])
+        .ok_or_else(|| too_large("the brick table".to_string(), table))?;
+    drop(mark);
+    let per = (topo.values_len() as u64).saturating_mul(4);
+    let all = per.saturating_mul(trees.len() as u64);
+    if all > max_bytes {
+        return Err(too_large(
+            format!(
+                "{} grids of {} bricks of 8³ f32 (a {}×{}×{} box)",
+                trees.len(),
+                topo.active_bricks(),
+                dims[0],
+                dims[1],
+                dims[2]
+            ),
+            all,
+        ));
+    }
+    let topo = std::sync::Arc::new(topo);
+    // One grid per tree, filled in parallel (each leaf's values decoded as it is placed).
     super::par_map(trees, |(_, t, mut source)| {
-        let mut data = alloc_grid(file, dims, share, t.background)?;
-        let put = |data: &mut [f32], p: [i64; 3], v: f32| {
+        let mut g = Grid::filled(topo.clone(), t.background).ok_or_else(|| {
+            too_large(
+                format!(
+                    "{} bricks of 8³ f32 (the allocator refused them)",
+                    topo.active_bricks()
+                ),
+                per,
+            )
+        })?;
+        let mut put = |p: [i64; 3], v: f32| {
             let q = [0, 1, 2].map(|k| p[k] - lo[k]);
             if (0..3).all(|k| q[k] >= 0 && (q[k] as usize) < dims[k]) {
-                data[q[0] as usize + dims[0] * (q[1] as usize + dims[1] * q[2] as usize)] = v;
+                g.set(q[0] as usize, q[1] as usize, q[2] as usize, v);
             }
         };
-        let mut tiles: Vec<&Tile> = t.tiles.iter().collect();
-        tiles.sort_by_key(|t| -t.size);
-        let max_tile = tiles.first().map_or(0, |t| t.size);
-        for tile in tiles {
+        for tile in written_tiles(&t) {
             let o = tile.origin.map(|v| v as i64);
             let a = [0, 1, 2].map(|k| o[k].max(lo[k]));
             let b = [0, 1, 2].map(|k| (o[k] + tile.size as i64 - 1).min(hi[k]));
-            // (A tile of the background value changes nothing, unless a larger tile wrote over it first.)
-            if tile.value.to_bits() == t.background.to_bits() && tile.size == max_tile {
-                continue;
-            }
-            if (0..3).any(|k| a[k] > b[k]) {
-                continue;
-            }
-            let q = [0, 1, 2].map(|k| (a[k] - lo[k]) as usize);
-            let len = (b[0] - a[0] + 1) as usize;
-            for z in 0..=(b[2] - a[2]) as usize {
-                for y in 0..=(b[1] - a[1]) as usize {
-                    let start = q[0] + dims[0] * (q[1] + y + dims[1] * (q[2] + z));
-                    if let Some(row) = data.get_mut(start..start + len) {
-                        row.fill(tile.value);
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        put([x, y, z], tile.value);
                     }
                 }
             }
         }
         for leaf in &t.leaves {
-            let o = leaf.origin.map(|v| v as i64);
             let values = source.values(leaf)?;
-            let whole: Option<&[f32; 512]> = values.try_into().ok();
-            if let (true, Some(values)) =
-                ((0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]), whole)
-            {
-                // The whole leaf inside the box (the common case): the grid's rows of 8 along x, each written
-                // at once (the leaf is z fastest; reading it across is cheap, it is 2 KB), no per-voxel checks.
-                let q = [0, 1, 2].map(|k| (o[k] - lo[k]) as usize);
-                for z in 0..8 {
-                    for y in 0..8 {
-                        let start = q[0] + dims[0] * (q[1] + y + dims[1] * (q[2] + z));
-                        let Some(row) = data.get_mut(start..start + 8) else {
-                            continue;
-                        };
-                        for (x, d) in row.iter_mut().enumerate() {
-                            *d = values[(x << 6) | (y << 3) | z];
-                        }
-                    }
-                }
-                continue;
-            }
             for (i, &v) in values.iter().enumerate() {
-                put(&mut data, leaf_voxel(leaf.origin, i), v);
+                put(leaf_voxel(leaf.origin, i), v);
             }
         }
         Ok(Loaded {
             dims,
-            data,
+            data: Vec::new(),
+            bricks: Some(g),
             bounds: Some([p0, p1]),
         })
     })
     .into_iter()
     .collect()
+}
+
+/// The tiles a tree writes over its background, largest first (a background tile of the largest size changes
+/// nothing; smaller ones may overwrite a larger tile, so they are written).
+fn written_tiles(t: &Tree) -> Vec<&Tile> {
+    let mut tiles: Vec<&Tile> = t.tiles.iter().collect();
+    tiles.sort_by_key(|t| -t.size);
+    let max_tile = tiles.first().map_or(0, |t| t.size);
+    tiles
+        .into_iter()
+        .filter(|tile| !(tile.value.to_bits() == t.background.to_bits() && tile.size == max_tile))
+        .collect()
 }

@@ -52,7 +52,7 @@ fn frame_sequence_loads_the_right_file() {
             },
         )
         .unwrap();
-        assert_eq!(ds.channels()[0].grid.data(), &[want]);
+        assert_eq!(ds.channels()[0].grid.to_dense(), &[want]);
         assert!(ds.channels()[0]
             .report
             .file
@@ -86,7 +86,7 @@ fn two_ascii_channels_share_a_grid_and_map() {
     let ds = Dataset::load(&[ChannelSource::new("density", &d), temp], &opts).unwrap();
     assert_eq!(ds.dims(), [2, 1, 1]);
     assert_eq!(
-        ds.channel("temperature").unwrap().grid.data(),
+        ds.channel("temperature").unwrap().grid.to_dense(),
         &[1000.0, 1500.0]
     );
     // The centre of voxel 1 is at x = 0.5 in medium space.
@@ -94,7 +94,8 @@ fn two_ascii_channels_share_a_grid_and_map() {
     assert_eq!(ds.sample(1, DVec3::new(-0.5, 0.5, 0.5)), 1000.0);
     assert_eq!(ds.sample(0, DVec3::new(2.0, 0.5, 0.5)), 0.0);
     let r = &ds.channels()[0].report;
-    assert_eq!(r.bytes, 8);
+    // Storage is by 8³ bricks: the one brick holding the two voxels, and the background's.
+    assert_eq!(r.bytes, 2 * 512 * 4);
     assert!(r.load_seconds >= 0.0);
     // Mismatched dims are an error naming both.
     let t3 = tmp("t3.txt", b"3 1 1\n1 2 3\n");
@@ -143,7 +144,7 @@ fn nan_and_negative_policies() {
         ..Default::default()
     };
     let ds = Dataset::load(&[ChannelSource::new("density", &f)], &opts).unwrap();
-    assert_eq!(ds.channels()[0].grid.data(), &[0.0, 0.0]);
+    assert_eq!(ds.channels()[0].grid.to_dense(), &[0.0, 0.0]);
     assert_eq!(
         (
             ds.channels()[0].report.replaced_nonfinite,

@@ -763,7 +763,8 @@ mod write_tests {
                 for y in 0..d[1] {
                     for x in 0..d[0] {
                         let s = src[(x + lo[0]) + dims[0] * ((y + lo[1]) + dims[1] * (z + lo[2]))];
-                        assert_eq!(g.data[x + d[0] * (y + d[1] * z)], s);
+                        let b = g.bricks.as_ref().expect("bricks");
+                        assert_eq!(b.at(x as i64, y as i64, z as i64), s);
                     }
                 }
             }

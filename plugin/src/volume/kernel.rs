@@ -814,7 +814,8 @@ mod tests {
                 }
             }
             let unit = [0, 1, 2].map(|a| (g[a] + 0.5) / dims[a] as f64);
-            let Some(st) = Stencil::with_margin(dims, unit, Interpolation::Trilinear, 0.5) else {
+            let Some(st) = Stencil::with_margin(d.topology(), unit, Interpolation::Trilinear, 0.5)
+            else {
                 continue;
             };
             let mut dt = [[0f32; 2]; BATCH];
@@ -860,14 +861,14 @@ mod tests {
             for (r, g) in ranges.iter().zip([&d, &t, &e1, &e2]) {
                 assert_eq!(
                     r,
-                    &crate::majorant::brick_ranges(g.data(), dims, brick),
+                    &crate::majorant::brick_ranges(&g.to_dense(), dims, brick),
                     "brick {brick}"
                 );
             }
             let (_, only_d) = Lattice::build(&d, None, &[], brick, u64::MAX).expect("small");
             assert_eq!(
                 only_d,
-                vec![crate::majorant::brick_ranges(d.data(), dims, brick)]
+                vec![crate::majorant::brick_ranges(&d.to_dense(), dims, brick)]
             );
         }
     }

@@ -1,6 +1,6 @@
 //! The grids the march kernel reads, laid out for it.
 //!
-//! The dataset keeps one dense array per channel (x fastest). A trilinear lookup of density and temperature
+//! The dataset keeps each channel in 8³ bricks (`grid`). A trilinear lookup of density and temperature
 //! there is sixteen scattered reads, and a cell on the grid's outer half voxel needs the general stencil,
 //! where pbrt-v4's lookup fades to zero at the faces. Here the same values are stored again:
 //!
@@ -60,12 +60,11 @@ impl Lattice {
         let threads = crate::par::threads(8);
         // Padded z-slabs 1..=nz hold data; split them over the threads.
         let per = nz.div_ceil(threads).max(1);
-        let d = density.data();
-        let t = temperature.map(|g| g.data());
+        let has_t = temperature.is_some();
         // The grids whose brick ranges are gathered, in the order returned.
-        let grids: Vec<&[f32]> = std::iter::once(d)
-            .chain(t)
-            .chain(extra.iter().map(|g| g.data()))
+        let grids: Vec<&Grid> = std::iter::once(density)
+            .chain(temperature)
+            .chain(extra.iter().copied())
             .collect();
         let grids = &grids;
         let mut ranges: Vec<BrickRanges> = grids
@@ -96,9 +95,19 @@ impl Lattice {
                         .iter()
                         .map(|_| BrickRanges::new([nx, ny, nz], brick, z0..z0 + n))
                         .collect();
+                    // Each grid's current z-slab, dense (the grids store bricks): read once, copied and ranged.
+                    let mut slabs: Vec<Vec<f32>> =
+                        grids.iter().map(|_| vec![0f32; nx * ny]).collect();
                     for z in 0..n {
+                        for (sl, g) in slabs.iter_mut().zip(grids) {
+                            for y in 0..ny {
+                                g.row(y, z0 + z, &mut sl[nx * y..nx * (y + 1)]);
+                            }
+                        }
+                        let (d, t) = (&slabs[0], has_t.then(|| &slabs[1]));
+                        let first_extra = 1 + has_t as usize;
                         for y in 0..ny {
-                            let src = nx * (y + ny * (z0 + z));
+                            let src = nx * y;
                             let dst = 1 + dims[0] * (y + 1) + slab * z;
                             let row = &mut mine[2 * dst..2 * (dst + nx)];
                             match t {
@@ -118,14 +127,13 @@ impl Lattice {
                                     }
                                 }
                             }
-                            for (dst_g, g) in mine_extra.iter_mut().zip(extra) {
-                                dst_g[dst..dst + nx].copy_from_slice(&g.data()[src..src + nx]);
+                            for (dst_g, sl) in mine_extra.iter_mut().zip(&slabs[first_extra..]) {
+                                dst_g[dst..dst + nx].copy_from_slice(&sl[src..src + nx]);
                             }
                         }
                         // The slab's brick ranges, from the values just read.
-                        let at = nx * ny * (z0 + z);
-                        for (a, g) in acc.iter_mut().zip(grids) {
-                            a.add_slab(z0 + z, &g[at..at + nx * ny]);
+                        for (a, sl) in acc.iter_mut().zip(&slabs) {
+                            a.add_slab(z0 + z, sl);
                         }
                     }
                     acc

@@ -1,6 +1,6 @@
 //! `firemedium info FILE`: what a voxel dataset file holds, as the voxel dataset component loads it.
 //!
-//! Prints the format, dims, bounds, voxel size, every channel with min/max/mean, non-zero ("active") fraction,
+//! Prints the format, dims, bounds, voxel size, the 8³ bricks stored, every channel with min/max/mean, non-zero ("active") fraction,
 //! bytes and load time, the grids it could not load (vector grids, …), and with `--sample x,y,z` the trilinear
 //! value of each channel at that medium-space point. A file the loader refuses prints its error on one line and
 //! exits with status 1.
@@ -67,6 +67,10 @@ struct Report {
     voxel_size: [f64; 3],
     channels: Vec<ChannelInfo>,
     skipped_grids: Vec<Skipped>,
+    /// 8³ bricks stored of those the box holds, and the bytes of their table.
+    bricks: usize,
+    bricks_in_box: usize,
+    brick_table_bytes: usize,
     bytes: usize,
     load_seconds: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -216,6 +220,9 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
                 kind: g.kind.clone(),
             })
             .collect(),
+        bricks: ds.topology().active_bricks(),
+        bricks_in_box: ds.topology().bricks().iter().product(),
+        brick_table_bytes: ds.topology().bytes(),
         bytes: ds.bytes(),
         load_seconds,
         sample,
@@ -260,6 +267,13 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
     for g in &report.skipped_grids {
         s += &format!("skipped   {} ({})\n", g.name, g.kind);
     }
+    s += &format!(
+        "storage   {} of the box's {} bricks of 8³ ({:.1} %), their table {} bytes\n",
+        report.bricks,
+        report.bricks_in_box,
+        100.0 * report.bricks as f64 / report.bricks_in_box.max(1) as f64,
+        report.brick_table_bytes
+    );
     s += &format!(
         "total     {} bytes, loaded in {:.4} s\n",
         report.bytes, report.load_seconds
