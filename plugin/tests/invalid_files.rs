@@ -307,7 +307,7 @@ fn grids_share_one_memory_cap() {
     };
     assert!(e.contains("expected a stored block of 1024 bytes"), "{e}");
     let opts = LoadOptions {
-        max_bytes: 20_000_000,
+        max_bytes: 4_000_000,
         ..LoadOptions::default()
     };
     let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
@@ -318,11 +318,11 @@ fn grids_share_one_memory_cap() {
         .collect();
     assert_eq!(sources.len(), 4);
     let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
-    // 4097 bricks (the background's included) of 2 KB per grid: 8.4 MB each where the dense box took 855 MB;
-    // the four together, 33.6 MB, exceed a 20 MB cap that one alone fits.
+    // 769 bricks (the background's included) of 2 KB per grid, 1.6 MB each where the dense box took 855 MB, and
+    // a brick table of 1.7 MB for the box: one grid fits a 4 MB cap, the four together (8.0 MB) do not.
     assert!(
-        e.contains("4 grids of 4096 bricks")
-            && e.contains("needs 33562624 bytes, above the memory cap of 20000000 bytes"),
+        e.contains("4 grids of 768 bricks")
+            && e.contains("needs 7970816 bytes, above the memory cap of 4000000 bytes"),
         "{e}"
     );
 }

@@ -230,11 +230,13 @@ pub(crate) fn densify<S: LeafValues>(
         .ok_or_else(|| too_large("the brick table".to_string(), table))?;
     drop(mark);
     let per = (topo.values_len() as u64).saturating_mul(4);
-    let all = per.saturating_mul(trees.len() as u64);
+    let all = per
+        .saturating_mul(trees.len() as u64)
+        .saturating_add(topo.bytes() as u64);
     if all > max_bytes {
         return Err(too_large(
             format!(
-                "{} grids of {} bricks of 8³ f32 (a {}×{}×{} box)",
+                "{} grids of {} bricks of 8³ f32 and their brick table (a {}×{}×{} box)",
                 trees.len(),
                 topo.active_bricks(),
                 dims[0],
@@ -291,14 +293,24 @@ pub(crate) fn densify<S: LeafValues>(
     .collect()
 }
 
-/// The tiles a tree writes over its background, largest first (a background tile of the largest size changes
-/// nothing; smaller ones may overwrite a larger tile, so they are written).
+/// The tiles a tree writes over its background, largest first: every tile of another value, and a background
+/// tile only where it lies inside a larger tile of another value (which it then overwrites) — elsewhere it
+/// changes nothing, and storing it would store the empty space between leaves (OpenVDB's internal nodes hold
+/// thousands of such inactive tiles).
 fn written_tiles(t: &Tree) -> Vec<&Tile> {
     let mut tiles: Vec<&Tile> = t.tiles.iter().collect();
     tiles.sort_by_key(|t| -t.size);
-    let max_tile = tiles.first().map_or(0, |t| t.size);
+    let is_bg = |tile: &Tile| tile.value.to_bits() == t.background.to_bits();
+    let valued: Vec<&Tile> = tiles.iter().copied().filter(|tile| !is_bg(tile)).collect();
+    let inside = |a: &Tile, b: &Tile| {
+        b.size > a.size
+            && (0..3).all(|k| {
+                let (a0, b0) = (a.origin[k] as i64, b.origin[k] as i64);
+                a0 >= b0 && a0 + a.size as i64 <= b0 + b.size as i64
+            })
+    };
     tiles
         .into_iter()
-        .filter(|tile| !(tile.value.to_bits() == t.background.to_bits() && tile.size == max_tile))
+        .filter(|tile| !is_bg(tile) || valued.iter().any(|v| inside(tile, v)))
         .collect()
 }

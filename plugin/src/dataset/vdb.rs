@@ -562,6 +562,48 @@ pub(crate) fn read(
 /// (the grids share the lattice, dims and `p0`), so reading it back gives the active box of the grids.
 /// Grids are `(name, dims, values x fastest)`; the background is 0.
 pub fn write(grids: &[(&str, [usize; 3], &[f32])], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+    let sparse: Vec<(&str, Vec<VdbLeaf>)> = grids
+        .iter()
+        .map(|&(name, dims, values)| (name, dense_leaves(dims, values)))
+        .collect();
+    write_sparse(&sparse, p0, voxel)
+}
+
+/// A leaf to write: its origin (index space, multiples of 8), active mask (words are x slabs, bits y·8 + z) and
+/// 512 values (z fastest).
+pub type VdbLeaf = ([i32; 3], [u64; 8], Vec<f32>);
+
+/// The leaves of a dense grid: one for every 8³ block holding a non-zero value, its non-zero voxels active.
+fn dense_leaves(dims: [usize; 3], values: &[f32]) -> Vec<VdbLeaf> {
+    let leaf_dims = dims.map(|d| d.div_ceil(8));
+    let at = |x: usize, y: usize, z: usize| values[x + dims[0] * (y + dims[1] * z)];
+    let mut leaves: Vec<VdbLeaf> = Vec::new();
+    for lz in 0..leaf_dims[2] {
+        for ly in 0..leaf_dims[1] {
+            for lx in 0..leaf_dims[0] {
+                let mut mask = [0u64; 8];
+                let mut vals = vec![0f32; 512];
+                for (i, v) in vals.iter_mut().enumerate() {
+                    let (x, y, z) = (8 * lx + (i >> 6), 8 * ly + ((i >> 3) & 7), 8 * lz + (i & 7));
+                    if x < dims[0] && y < dims[1] && z < dims[2] {
+                        *v = at(x, y, z);
+                        if *v != 0.0 {
+                            mask[i / 64] |= 1 << (i % 64);
+                        }
+                    }
+                }
+                if mask.iter().any(|&w| w != 0) {
+                    leaves.push(([8 * lx as i32, 8 * ly as i32, 8 * lz as i32], mask, vals));
+                }
+            }
+        }
+    }
+    leaves
+}
+
+/// As [`write`], for grids given as leaves anywhere in index space (a sparse fire: leaves far apart cost
+/// their own bytes, not the box between them). Voxel (i, j, k) is centred at `p0 + (i + ½) · voxel`.
+pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC.to_le_bytes());
     out.extend_from_slice(&224u32.to_le_bytes());
@@ -575,7 +617,7 @@ pub fn write(grids: &[(&str, [usize; 3], &[f32])], p0: DVec3, voxel: DVec3) -> V
         out.extend_from_slice(&(s.len() as u32).to_le_bytes());
         out.extend_from_slice(s.as_bytes());
     };
-    for &(name, dims, values) in grids {
+    for (name, leaves) in grids {
         put_str(&mut out, name);
         put_str(&mut out, "Tree_float_5_4_3");
         put_str(&mut out, "");
@@ -600,31 +642,8 @@ pub fn write(grids: &[(&str, [usize; 3], &[f32])], p0: DVec3, voxel: DVec3) -> V
         }
         out.extend_from_slice(&1i32.to_le_bytes()); // buffer count
         out.extend_from_slice(&0f32.to_le_bytes()); // background
-                                                    // Leaves holding a non-zero value, keyed by origin; grouped into 4- and 5-level nodes.
-        let leaf_dims = dims.map(|d| d.div_ceil(8));
-        let at = |x: usize, y: usize, z: usize| values[x + dims[0] * (y + dims[1] * z)];
-        let mut leaves: Vec<([i32; 3], [u64; 8], Vec<f32>)> = Vec::new();
-        for lz in 0..leaf_dims[2] {
-            for ly in 0..leaf_dims[1] {
-                for lx in 0..leaf_dims[0] {
-                    let mut mask = [0u64; 8];
-                    let mut vals = vec![0f32; 512];
-                    for (i, v) in vals.iter_mut().enumerate() {
-                        let (x, y, z) =
-                            (8 * lx + (i >> 6), 8 * ly + ((i >> 3) & 7), 8 * lz + (i & 7));
-                        if x < dims[0] && y < dims[1] && z < dims[2] {
-                            *v = at(x, y, z);
-                            if *v != 0.0 {
-                                mask[i / 64] |= 1 << (i % 64);
-                            }
-                        }
-                    }
-                    if mask.iter().any(|&w| w != 0) {
-                        leaves.push(([8 * lx as i32, 8 * ly as i32, 8 * lz as i32], mask, vals));
-                    }
-                }
-            }
-        }
+                                                    // The leaves, keyed by origin, grouped into 4- and 5-level nodes.
+        let mut leaves: Vec<&VdbLeaf> = leaves.iter().collect();
         // Node order: the root's children by origin, then each node's children by their index (x slowest).
         let key5 = |o: [i32; 3]| o.map(|v| v >> 12);
         let index4 = |o: [i32; 3]| {

@@ -1,0 +1,150 @@
+//! Production-scale sparse fires (issue 23): memory follows the active voxels, not the box.
+//!
+//! A small fire (a 24³ blob of soot at 1400–1700 K) written as an OpenVDB file alone, and again with a second
+//! copy 2040 voxels away on every axis (a 2060³ active box: dense storage of its two grids would take 70 GB). Rendered
+//! through `firemedium render` and the cdylib under a 1 GB memory budget, the far file must load and render,
+//! and the first copy's pixels must be the single fire's.
+
+#[path = "common/image.rs"]
+mod image;
+
+use image::read_exr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-sparse-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The blob's leaves (density, temperature) with origin `o` (index space, multiples of 8): 3³ leaves.
+fn blob(
+    o: [i32; 3],
+) -> (
+    Vec<firemedium_plugin::dataset::vdb::VdbLeaf>,
+    Vec<firemedium_plugin::dataset::vdb::VdbLeaf>,
+) {
+    let (mut d, mut t) = (Vec::new(), Vec::new());
+    for lz in 0..3 {
+        for ly in 0..3 {
+            for lx in 0..3 {
+                let origin = [o[0] + 8 * lx, o[1] + 8 * ly, o[2] + 8 * lz];
+                let (mut dv, mut tv) = (vec![0f32; 512], vec![0f32; 512]);
+                let mut mask = [0u64; 8];
+                for i in 0..512 {
+                    // Leaf voxel i: x = i >> 6, y = (i >> 3) & 7, z = i & 7 (z fastest).
+                    let p = [
+                        8 * lx + (i as i32 >> 6),
+                        8 * ly + ((i as i32 >> 3) & 7),
+                        8 * lz + (i as i32 & 7),
+                    ];
+                    let r = p
+                        .iter()
+                        .map(|&c| (c as f64 + 0.5 - 12.0).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                        / 10.0;
+                    if r < 1.0 {
+                        dv[i] = (4e-6 * (1.0 - r)) as f32;
+                        tv[i] = (1400.0 + 300.0 * (1.0 - r)) as f32;
+                        mask[i / 64] |= 1 << (i % 64);
+                    }
+                }
+                d.push((origin, mask, dv));
+                t.push((origin, mask, tv));
+            }
+        }
+    }
+    (d, t)
+}
+
+fn render(scene: &Path, out: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(scene)
+        .arg("-o")
+        .arg(out)
+        .args([
+            "-q",
+            "--seed",
+            "3",
+            "--fire-light",
+            "off",
+            "--max-memory",
+            "1",
+        ])
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
+    let dir = out_dir("far");
+    let voxel = glam::DVec3::splat(0.01);
+    let (d0, t0) = blob([0, 0, 0]);
+    let (d1, t1) = blob([2040, 2040, 2040]);
+    let single = firemedium_plugin::dataset::vdb::write_sparse(
+        &[("density", d0.clone()), ("temperature", t0.clone())],
+        glam::DVec3::ZERO,
+        voxel,
+    );
+    let far = firemedium_plugin::dataset::vdb::write_sparse(
+        &[
+            ("density", [d0, d1].concat()),
+            ("temperature", [t0, t1].concat()),
+        ],
+        glam::DVec3::ZERO,
+        voxel,
+    );
+    std::fs::write(dir.join("single.vdb"), &single).unwrap();
+    std::fs::write(dir.join("far.vdb"), &far).unwrap();
+    assert!(far.len() < 1_000_000, "a small file: {} bytes", far.len());
+    // Seen along +z from below, orthographic over the first blob; the medium's boundary is the first blob's
+    // box (rays enter both datasets at the same face, so their samples are the same points).
+    let scene = |file: &str| {
+        format!(
+            "LookAt 0.12 0.12 -1  0.12 0.12 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-0.12 0.12 -0.12 0.12]\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"stratified\" \"integer xsamples\" 1 \"integer ysamples\" 1 \"bool jitter\" false\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{file}\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 0.24 0 0 0 0.24 0 0.24 0.24 0 0 0 0.24 0.24 0 0.24 0 0.24 0.24 0.24 0.24 0.24] \"integer indices\" [0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5]\nAttributeEnd\n"
+        )
+    };
+    let mut images = Vec::new();
+    for name in ["single", "far"] {
+        let f = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&f, scene(&format!("{name}.vdb"))).unwrap();
+        let out = dir.join(format!("{name}.exr"));
+        let o = render(&f, &out);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        images.push(read_exr(&out));
+    }
+    // The fire is there (the blob's centre is bright) and the far copy changes none of its pixels.
+    let (a, b) = (&images[0].2, &images[1].2);
+    let centre = a[8 + 16 * 8];
+    assert!(centre[0] > 1.0, "the fire is visible: {centre:?}");
+    for (i, (p, q)) in a.iter().zip(b).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-4 * p[c].abs().max(1e-3),
+                "pixel {i}: {p:?} vs {q:?}"
+            );
+        }
+    }
+    // What the plugin says it stored: the two blobs' bricks, not the box.
+    let info = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .args(["info", "--json"])
+        .arg(dir.join("far.vdb"))
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    // The active box: voxels 2 … 2061 on each axis (the blobs' spheres of radius 10 around 12 and 2052).
+    assert_eq!(v["dims"], serde_json::json!([2060, 2060, 2060]));
+    eprintln!(
+        "far fire: {} bricks of {}, {} bytes",
+        v["bricks"], v["bricks_in_box"], v["bytes"]
+    );
+    assert_eq!(v["bricks"], 2 * 27);
+    assert!(v["bytes"].as_u64().unwrap() < 100_000_000, "{}", v["bytes"]);
+}
