@@ -183,9 +183,15 @@ impl Stencil {
 /// Samples per brick edge (OpenVDB's leaf), and per brick.
 pub const BRICK: usize = 8;
 const BRICK_VOXELS: usize = BRICK * BRICK * BRICK;
+/// Bricks per region edge of the top table, and per region.
+const REGION: usize = 16;
+const REGION_BRICKS: usize = REGION * REGION * REGION;
 
-/// Which 8³ bricks of an nx × ny × nz lattice hold data: their slots (1, 2, …) in a table over all bricks, 0 for
-/// the empty ones. Shared by the grids of one dataset, so one [`Stencil`] indexes them all.
+/// Which 8³ bricks of an nx × ny × nz lattice hold data: their slots (1, 2, …), 0 for the empty ones, in a
+/// two-level table — a top table over regions of 16³ bricks (128³ samples, OpenVDB's internal node) whose
+/// entries point to a block of 4096 slots for a region holding data and are 0 for an empty one — so the table
+/// too follows the data (a 2048³ box with two fires: a 16 KB top table and a block per region they touch).
+/// Shared by the grids of one dataset, so one [`Stencil`] indexes them all.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Topology {
     dims: [usize; 3],
@@ -194,8 +200,12 @@ pub struct Topology {
     off: [usize; 3],
     /// Bricks per axis.
     nb: [usize; 3],
-    /// Per brick (x fastest), its slot; 0: empty (reads the grid's background).
-    slots: Vec<u32>,
+    /// Regions of 16³ bricks per axis.
+    nr: [usize; 3],
+    /// Per region (x fastest), 1 + its block's index in `blocks`; 0: every brick empty.
+    top: Vec<u32>,
+    /// Per region with data, 4096 slots (its bricks, x fastest); 0: empty (reads the grid's background).
+    blocks: Vec<u32>,
     /// Bricks with a slot.
     active: usize,
 }
@@ -223,14 +233,36 @@ impl Topology {
         if dims.contains(&0) {
             return None;
         }
-        let mut slots = crate::alloc::filled(count, 0u32)?;
+        let _ = count;
+        let nr = nb.map(|n| n.div_ceil(REGION));
+        let regions = nr.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
+        let mut top = crate::alloc::filled(regions, 0u32)?;
+        let mut blocks: Vec<u32> = Vec::new();
+        let mut block = vec![0u32; REGION_BRICKS];
         let mut active = 0usize;
-        for bz in 0..nb[2] {
-            for by in 0..nb[1] {
-                for bx in 0..nb[0] {
-                    if present([bx, by, bz]) {
-                        active += 1;
-                        slots[bx + nb[0] * (by + nb[1] * bz)] = u32::try_from(active).ok()?;
+        for rz in 0..nr[2] {
+            for ry in 0..nr[1] {
+                for rx in 0..nr[0] {
+                    let mut any = false;
+                    block.fill(0);
+                    for lz in 0..REGION {
+                        for ly in 0..REGION {
+                            for lx in 0..REGION {
+                                let b = [rx * REGION + lx, ry * REGION + ly, rz * REGION + lz];
+                                if b[0] < nb[0] && b[1] < nb[1] && b[2] < nb[2] && present(b) {
+                                    active += 1;
+                                    any = true;
+                                    block[lx + REGION * (ly + REGION * lz)] =
+                                        u32::try_from(active).ok()?;
+                                }
+                            }
+                        }
+                    }
+                    if any {
+                        blocks.try_reserve(REGION_BRICKS).ok()?;
+                        blocks.extend_from_slice(&block);
+                        top[rx + nr[0] * (ry + nr[1] * rz)] =
+                            u32::try_from(blocks.len() / REGION_BRICKS).ok()?;
                     }
                 }
             }
@@ -239,7 +271,9 @@ impl Topology {
             dims,
             off,
             nb,
-            slots,
+            nr,
+            top,
+            blocks,
             active,
         })
     }
@@ -249,10 +283,12 @@ impl Topology {
         Topology::build(dims, |_| true)
     }
 
-    /// Bytes of the brick table of a `dims` lattice (4 per brick), `None` beyond `u64`.
+    /// Bytes of the top table of a `dims` lattice (4 per region of 16³ bricks, one more per axis for an
+    /// offset), `None` beyond `u64`; the blocks follow the data (16 KB per region holding some).
     pub fn table_bytes(dims: [usize; 3]) -> Option<u64> {
-        dims.iter()
-            .try_fold(4u64, |a, &n| a.checked_mul(n.div_ceil(BRICK) as u64 + 1))
+        dims.iter().try_fold(4u64, |a, &n| {
+            a.checked_mul(n.div_ceil(BRICK * REGION) as u64 + 1)
+        })
     }
     /// Sample 0's place within its brick, per axis.
     pub fn offset(&self) -> [usize; 3] {
@@ -273,12 +309,18 @@ impl Topology {
     }
     /// Bytes of the table.
     pub fn bytes(&self) -> usize {
-        self.slots.len() * std::mem::size_of::<u32>()
+        (self.top.len() + self.blocks.len()) * std::mem::size_of::<u32>()
     }
     /// The slot of brick `b` (0: empty).
     #[inline(always)]
     pub fn slot(&self, b: [usize; 3]) -> usize {
-        self.slots[b[0] + self.nb[0] * (b[1] + self.nb[1] * b[2])] as usize
+        let r = [b[0] / REGION, b[1] / REGION, b[2] / REGION];
+        let block = self.top[r[0] + self.nr[0] * (r[1] + self.nr[1] * r[2])] as usize;
+        if block == 0 {
+            return 0;
+        }
+        let l = (b[0] % REGION) + REGION * ((b[1] % REGION) + REGION * (b[2] % REGION));
+        self.blocks[(block - 1) * REGION_BRICKS + l] as usize
     }
     /// Where sample (i, j, k) (inside the lattice) is stored in a grid of this topology.
     #[inline(always)]
@@ -305,9 +347,13 @@ impl Topology {
         if slot == 0 {
             return None;
         }
-        let b = self.slots.iter().position(|&s| s as usize == slot)?;
-        let nb = self.nb;
-        let brick = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
+        let mut brick = None;
+        self.for_each_slot(|b, s| {
+            if s == slot {
+                brick = Some(b);
+            }
+        });
+        let brick = brick?;
         let l = n % BRICK_VOXELS;
         let v = [
             brick[0] * BRICK + l % BRICK,
@@ -339,6 +385,32 @@ impl Topology {
                 },
             );
             x0 = x1;
+        }
+    }
+
+    /// Calls `f` with every stored brick and its slot.
+    pub(crate) fn for_each_slot(&self, mut f: impl FnMut([usize; 3], usize)) {
+        for (r, &block) in self.top.iter().enumerate() {
+            if block == 0 {
+                continue;
+            }
+            let r = [
+                r % self.nr[0],
+                (r / self.nr[0]) % self.nr[1],
+                r / (self.nr[0] * self.nr[1]),
+            ];
+            let slots =
+                &self.blocks[(block as usize - 1) * REGION_BRICKS..block as usize * REGION_BRICKS];
+            for (l, &s) in slots.iter().enumerate() {
+                if s != 0 {
+                    let b = [
+                        r[0] * REGION + l % REGION,
+                        r[1] * REGION + (l / REGION) % REGION,
+                        r[2] * REGION + l / (REGION * REGION),
+                    ];
+                    f(b, s as usize);
+                }
+            }
         }
     }
 
@@ -466,19 +538,19 @@ impl Grid {
             }
             return Some(g);
         }
-        for (b, &from) in self.topo.slots.iter().enumerate() {
-            if from == 0 {
-                continue;
-            }
-            let to = g.topo.slots[b] as usize;
+        let mut ok = true;
+        let (from_topo, to_topo) = (self.topo.clone(), g.topo.clone());
+        from_topo.for_each_slot(|b, from| {
+            let to = to_topo.slot(b);
             if to == 0 {
-                return None;
+                ok = false;
+                return;
             }
-            let (from, to) = (from as usize * BRICK_VOXELS, to * BRICK_VOXELS);
+            let (from, to) = (from * BRICK_VOXELS, to * BRICK_VOXELS);
             g.values[to..to + BRICK_VOXELS]
                 .copy_from_slice(&self.values[from..from + BRICK_VOXELS]);
-        }
-        Some(g)
+        });
+        ok.then_some(g)
     }
     /// The dense samples, x fastest (tests and small grids: nx·ny·nz values).
     pub fn to_dense(&self) -> Vec<f32> {

@@ -319,10 +319,10 @@ fn grids_share_one_memory_cap() {
     assert_eq!(sources.len(), 4);
     let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
     // 769 bricks (the background's included) of 2 KB per grid, 1.6 MB each where the dense box took 855 MB, and
-    // a brick table of 1.7 MB for the box: one grid fits a 4 MB cap, the four together (8.0 MB) do not.
+    // a two-level brick table of 17 KB: one grid fits a 4 MB cap, the four together (6.3 MB) do not.
     assert!(
         e.contains("4 grids of 768 bricks")
-            && e.contains("needs 7970816 bytes, above the memory cap of 4000000 bytes"),
+            && e.contains("needs 6316440 bytes, above the memory cap of 4000000 bytes"),
         "{e}"
     );
 }

@@ -256,7 +256,7 @@ impl FireVolume {
         // ---- the march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below
         // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
         // as it copies them.
-        let brick = set.brick;
+        let brick = majorant_brick(set.brick, ds.topology());
         let lanes_wanted = set.f32_lanes && set.integrator == Integrator::March;
         let mut lattice = None;
         let mut known = vec![None; ds.channels().len()];
@@ -269,13 +269,29 @@ impl FireVolume {
                 .chain(co.species.iter().map(|sp| sp.ch))
                 .collect();
             let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
-            if let Some((lat, ranges)) = lattice::Lattice::build(
-                &ch[density].grid,
-                temperature.map(|k| &ch[k].grid),
-                &grids,
-                brick,
-                spare,
-            ) {
+            // The lattice is dense over the box: built only while it costs at most four times what its grids
+            // store (a fire far from its copy in a big box marches by stencils over the bricks instead).
+            let copied: u64 = std::iter::once(&ch[density].grid)
+                .chain(temperature.map(|k| &ch[k].grid))
+                .chain(grids.iter().copied())
+                .map(|g| g.bytes() as u64)
+                .sum();
+            let dense_ok = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
+                let voxels = p.iter().map(|&n| n as u64).product::<u64>();
+                voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
+            });
+            let built = dense_ok
+                .then(|| {
+                    lattice::Lattice::build(
+                        &ch[density].grid,
+                        temperature.map(|k| &ch[k].grid),
+                        &grids,
+                        brick,
+                        spare,
+                    )
+                })
+                .flatten();
+            if let Some((lat, ranges)) = built {
                 let order = std::iter::once(density).chain(temperature).chain(extra);
                 for (k, r) in order.zip(ranges) {
                     if known[k].is_none() {
@@ -637,6 +653,20 @@ impl Medium for FireVolume {
             }
         }
     }
+}
+
+/// The majorant bricks' edge for a dataset: `configured` (8 by default), doubled (up to 256) while the box
+/// would hold more than 16 majorant bricks per 8³ brick the dataset stores — a sparse fire in a big box keeps
+/// its majorant structures in proportion to its data; a dense one keeps the configured bricks (and so the same
+/// results, bit for bit).
+fn majorant_brick(configured: usize, topo: &crate::grid::Topology) -> usize {
+    let dims = topo.dims();
+    let active = topo.active_bricks().max(1);
+    let mut b = configured.max(1);
+    while b < 256 && dims.iter().map(|n| n.div_ceil(b)).product::<usize>() > 16 * active {
+        b *= 2;
+    }
+    b
 }
 
 #[cfg(test)]
