@@ -124,6 +124,21 @@ impl FireLight {
         // Per voxel: a weight and its dilated copy (4 + 4 bytes) and an occupancy bit with its rank; within
         // what the volume's budget (`maxbytes`) leaves after its grids and tables.
         let need = (n as u64).saturating_mul(9);
+        // The weights are per voxel of the box, so a sparse fire in a big box (a far-away second copy) would
+        // spend on empty space many times what its grids store: refused while the light is dense, so the memory
+        // a render takes follows the active voxels (the host then leaves the light out and says so).
+        let stored = ds.bytes() as u64;
+        if need > stored.saturating_mul(8).max(1 << 26) {
+            return Err(Error::invalid(
+                "light",
+                "fire",
+                format!(
+                    "a sparse fire in a {} × {} × {} box (its grids store {stored} bytes; the light's per-voxel weights would take {need})",
+                    dims[0], dims[1], dims[2]
+                ),
+                "a box whose per-voxel weights (9 bytes a voxel) stay within 8× what the grids store",
+            ));
+        }
         if need > vol.spare_bytes() {
             return Err(Error::TooLarge {
                 file: "fire light".into(),
