@@ -143,7 +143,10 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && e.contains("no fire light") && e.contains("sparse fire"), "{e}");
+    assert!(
+        o.status.success() && e.contains("no fire light") && e.contains("sparse fire"),
+        "{e}"
+    );
     // What the plugin says it stored: the two blobs' bricks, not the box.
     let info = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .args(["info", "--json"])

@@ -488,6 +488,17 @@ impl Grid {
         true
     }
 
+    /// The 512 stored values (x fastest) of the brick whose first sample is (i, j, k), when that sample starts
+    /// a stored brick.
+    pub(crate) fn brick_mut(&mut self, v: [usize; 3]) -> Option<&mut [f32]> {
+        let t = &self.topo;
+        if (0..3).any(|a| (v[a] + t.off[a]) % BRICK != 0 || v[a] >= t.dims[a]) {
+            return None;
+        }
+        let slot = t.slot(t.brick_of(v));
+        (slot != 0).then(|| &mut self.values[slot * BRICK_VOXELS..(slot + 1) * BRICK_VOXELS])
+    }
+
     /// Copies row (·, j, k) into `out` (nx values).
     pub(crate) fn row(&self, j: usize, k: usize, out: &mut [f32]) {
         self.topo.row_pieces(j, k, |x0, x1, start| {

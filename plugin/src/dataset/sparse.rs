@@ -258,7 +258,7 @@ pub(crate) fn densify<S: LeafValues>(
                 per,
             )
         })?;
-        let mut put = |p: [i64; 3], v: f32| {
+        let put = |g: &mut Grid, p: [i64; 3], v: f32| {
             let q = [0, 1, 2].map(|k| p[k] - lo[k]);
             if (0..3).all(|k| q[k] >= 0 && (q[k] as usize) < dims[k]) {
                 g.set(q[0] as usize, q[1] as usize, q[2] as usize, v);
@@ -271,15 +271,30 @@ pub(crate) fn densify<S: LeafValues>(
             for z in a[2]..=b[2] {
                 for y in a[1]..=b[1] {
                     for x in a[0]..=b[0] {
-                        put([x, y, z], tile.value);
+                        put(&mut g, [x, y, z], tile.value);
                     }
                 }
             }
         }
         for leaf in &t.leaves {
             let values = source.values(leaf)?;
+            let o = leaf.origin.map(|v| v as i64);
+            let whole: Option<&[f32; 512]> = values.try_into().ok();
+            // A whole leaf inside the box is one brick (the bricks are aligned as the leaves): its values
+            // transposed into place (the leaf is z fastest, the brick x fastest), no per-voxel lookups.
+            if let (true, Some(values)) =
+                ((0..3).all(|k| o[k] >= lo[k] && o[k] + 7 <= hi[k]), whole)
+            {
+                let q = [0, 1, 2].map(|k| (o[k] - lo[k]) as usize);
+                if let Some(brick) = g.brick_mut(q) {
+                    for (i, &v) in values.iter().enumerate() {
+                        brick[(i >> 6) + 8 * ((i >> 3) & 7) + 64 * (i & 7)] = v;
+                    }
+                    continue;
+                }
+            }
             for (i, &v) in values.iter().enumerate() {
-                put(leaf_voxel(leaf.origin, i), v);
+                put(&mut g, leaf_voxel(leaf.origin, i), v);
             }
         }
         Ok(Loaded {
