@@ -153,10 +153,12 @@ fn zsobol_index(morton_index: u64, dim: u64, log2_spp: u32, digits: u32) -> u64 
     let mut index = 0u64;
     for i in (last..digits).rev() {
         let shift = 2 * i - u32::from(odd);
-        let digit = ((morton_index >> shift) & 3) as usize;
+        let digit = (morton_index.checked_shr(shift).unwrap_or(0) & 3) as usize;
         let higher = morton_index.checked_shr(shift + 2).unwrap_or(0);
         let p = ((mix_bits(higher ^ 0x5555_5555u64.wrapping_mul(dim)) >> 24) % 24) as usize;
-        index |= (PERMUTATIONS4[p][digit] as u64) << shift;
+        index |= (PERMUTATIONS4[p][digit] as u64)
+            .checked_shl(shift)
+            .unwrap_or(0);
     }
     if odd {
         let digit = morton_index & 1;
@@ -207,7 +209,10 @@ impl Samples {
                 // Pair d/2 is pbrt-v4's Get2D at dimension 2·(d/2 + 1): one index per pair, its two axes Sobol's
                 // first two dimensions, each Owen-scrambled by half of a hash of the dimension and the seed.
                 let dimension = 2 * (d as u64 / 2 + 1);
-                let morton_index = (self.morton << log2_spp) | (self.index & ((1 << log2_spp) - 1));
+                // (Shifts past 64 bits, from absurd sample counts, keep the low bits: wrong but finite.)
+                let low = 1u64.checked_shl(log2_spp).map_or(u64::MAX, |v| v - 1);
+                let morton_index =
+                    self.morton.checked_shl(log2_spp).unwrap_or(0) | (self.index & low);
                 let i = zsobol_index(morton_index, dimension, log2_spp, digits);
                 let bits = hash2(seed, dimension);
                 let v = if d % 2 == 0 { sobol0(i) } else { sobol1(i) };
