@@ -229,11 +229,11 @@ impl Topology {
             return None;
         }
         let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
-        let count = nb.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
+        // (The brick count must fit: the slots are numbered in u32, the brick coordinates in usize.)
+        nb.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
         if dims.contains(&0) {
             return None;
         }
-        let _ = count;
         let nr = nb.map(|n| n.div_ceil(REGION));
         let regions = nr.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
         let mut top = crate::alloc::filled(regions, 0u32)?;
@@ -649,10 +649,8 @@ impl Grid {
     /// background).
     pub fn stats(&self) -> GridStats {
         let mut acc = StatsAcc::new();
-        let [nx, ny, nz] = self.topo.dims;
         let mut empty = 0u64;
         let mut row = [0f32; BRICK];
-        let _ = (nx, ny, nz);
         let t = &self.topo;
         for bz in 0..t.nb[2] {
             for by in 0..t.nb[1] {
