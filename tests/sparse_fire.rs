@@ -132,8 +132,8 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
             );
         }
     }
-    // With the fire light asked for (the default), the far fire renders too: the light — still dense over the
-    // box — is left out and said so, never allowed to take the box's memory.
+    // With the fire light (the default) the far fire renders too: the light weighs the stored bricks and
+    // their neighbours only, so it follows the data as the grids do (no warning, within the 1 GB budget).
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
         .arg(dir.join("far.pbrt"))
@@ -143,10 +143,7 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        o.status.success() && e.contains("no fire light") && e.contains("sparse fire"),
-        "{e}"
-    );
+    assert!(o.status.success() && !e.contains("warning"), "{e}");
     // What the plugin says it stored: the two blobs' bricks, not the box.
     let info = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .args(["info", "--json"])

@@ -52,19 +52,17 @@ pub struct FireLight {
     dims: [usize; 3],
     voxel: DVec3,
     total: f64,
-    cdf_z: Vec<f64>,
-    /// Per z: prefix sums over y (ny entries).
-    cdf_y: Vec<f64>,
-    /// Per (z, y): range into `xs`/`cdf_x`.
-    rows: Vec<(u32, u32)>,
-    xs: Vec<u32>,
-    cdf_x: Vec<f64>,
-    /// The weight of each entry of `xs`, in voxel order (x fastest).
-    ws: Vec<f32>,
-    /// One bit per voxel: emitting. With `rank` (the emitting voxels before each 64-bit word), a voxel's entry
-    /// in `ws` is rank + the set bits below it — a lookup in O(1) for the MIS density's walk.
-    occupied: Vec<u64>,
-    rank: Vec<u32>,
+    /// The bricks the weights cover: the dataset's stored bricks and their neighbours (trilinear emission
+    /// reaches a voxel beyond a brick, and the dilation one more), or every brick when a background emits.
+    topo: Arc<crate::grid::Topology>,
+    /// Per voxel of those bricks, its (dilated) weight, in the dataset grids' layout (slot 0: zeros).
+    weights: Vec<f32>,
+    /// The emitting voxels (their index in `weights`), and the running sum of their weights (the pdf's
+    /// inverse CDF).
+    emitting: Vec<u32>,
+    cdf: Vec<f64>,
+    /// Per slot of `topo`, its brick (so an index in `weights` gives its voxel).
+    slot_bricks: Vec<[u32; 3]>,
     power_w: f64,
     power_lm: f64,
     build_seconds: f64,
@@ -120,86 +118,100 @@ impl FireLight {
             )
         };
         let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
-        let n = dims[0] * dims[1] * dims[2];
-        // Per voxel: a weight and its dilated copy (4 + 4 bytes) and an occupancy bit with its rank; within
-        // what the volume's budget (`maxbytes`) leaves after its grids and tables.
-        let need = (n as u64).saturating_mul(9);
-        // The weights are per voxel of the box, so a sparse fire in a big box (a far-away second copy) would
-        // spend on empty space many times what its grids store: refused while the light is dense, so the memory
-        // a render takes follows the active voxels (the host then leaves the light out and says so).
-        let stored = ds.bytes() as u64;
-        if need > stored.saturating_mul(8).max(1 << 26) {
-            return Err(Error::invalid(
-                "light",
-                "fire",
-                format!(
-                    "a sparse fire in a {} × {} × {} box (its grids store {stored} bytes; the light's per-voxel weights would take {need})",
-                    dims[0], dims[1], dims[2]
-                ),
-                "a box whose per-voxel weights (9 bytes a voxel) stay within 8× what the grids store",
-            ));
-        }
+        // The bricks to weigh: the stored ones and their neighbours; all of them if a background emits (a
+        // grid whose empty bricks read a non-zero value).
+        let stored = ds.topology();
+        let background_emits = ds.channels().iter().any(|ch| ch.grid.background() != 0.0);
+        let topo = crate::grid::Topology::build_offset(dims, stored.offset(), |b| {
+            background_emits
+                || (0..27).any(|n| {
+                    let q = [n % 3, (n / 3) % 3, n / 9].map(|d| d as i64 - 1);
+                    let nb = stored.bricks();
+                    let c = [0, 1, 2].map(|a| b[a] as i64 + q[a]);
+                    (0..3).all(|a| c[a] >= 0 && (c[a] as usize) < nb[a])
+                        && stored.slot(c.map(|v| v as usize)) != 0
+                })
+        })
+        .ok_or_else(no_emission)?;
+        let topo = Arc::new(topo);
+        // Two weights per covered voxel while building (the weights and their dilation), within what the
+        // volume's budget (`maxbytes`) leaves after its grids and tables.
+        let n = topo.values_len();
+        let need = (n as u64).saturating_mul(8);
         if need > vol.spare_bytes() {
             return Err(Error::TooLarge {
                 file: "fire light".into(),
                 what: format!(
-                    "the weights of {} × {} × {} voxels",
-                    dims[0], dims[1], dims[2]
+                    "the weights of {} bricks of 8³ voxels",
+                    topo.active_bricks()
                 ),
                 bytes: need,
                 cap: vol.spare_bytes(),
             });
         }
-        let mut w = crate::alloc::filled(n, 0f32).ok_or_else(|| {
+        let too_many = || {
             Error::invalid(
                 "light",
                 "fire",
                 format!("{n} voxels"),
-                "a grid whose per-voxel weights (4 bytes each) the allocator can hold",
+                "a fire whose per-voxel weights (8 bytes each) the allocator can hold",
             )
-        })?;
+        };
+        let mut w = crate::alloc::filled(n, 0f32).ok_or_else(too_many)?;
         let (mut pw, mut plm) = (0.0, 0.0);
         // Soot power depends on T only: memoise per 0.5 K.
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
         let dch = vol.density_channel();
         let tch = vol.temperature_channel();
-        for k in 0..dims[2] {
-            for jy in 0..dims[1] {
-                for i in 0..dims[0] {
-                    let idx = i + dims[0] * (jy + dims[1] * k);
-                    let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
-                    vol.coefficients(p, &mut sa, &mut ss, &mut j);
-                    let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
-                    let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
-                    if !(lum > 0.0 || band > 0.0) {
-                        continue;
-                    }
-                    w[idx] = match weighting {
-                        Weighting::Luminance => lum,
-                        Weighting::Power => band,
-                    } as f32;
-                    plm += lum;
-                    pw += match &src {
-                        None => band,
-                        Some(s) => {
-                            let chs = ds.channels();
-                            let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
-                            let d = at(dch).max(0.0) as f64;
-                            let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
-                            let key = (t * 2.0).round() as i64;
-                            let soot = *memo
-                                .entry(key)
-                                .or_insert_with(|| soot_power(key as f64 / 2.0));
-                            let mut v = d * s.soot_scale * soot;
-                            for (e, ch, scale) in &s.species {
-                                let nn = at(*ch).max(0.0) as f64 * scale;
-                                if nn > 0.0 {
-                                    v += nn * s.intensity * line_power(e, t);
-                                }
-                            }
-                            v
+        let mut bricks: Vec<[usize; 3]> = Vec::with_capacity(topo.active_bricks());
+        let mut slot_bricks = vec![[0u32; 3]; topo.active_bricks() + 1];
+        topo.for_each_slot(|b, slot| {
+            bricks.push(b);
+            slot_bricks[slot] = b.map(|v| v as u32);
+        });
+        // (Indices into the weights are u32.)
+        if n > u32::MAX as usize {
+            return Err(too_many());
+        }
+        for b in &bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for jy in span[1].0..span[1].1 {
+                    for i in span[0].0..span[0].1 {
+                        let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
+                        vol.coefficients(p, &mut sa, &mut ss, &mut j);
+                        let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
+                        let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
+                        if !(lum > 0.0 || band > 0.0) {
+                            continue;
                         }
-                    };
+                        w[topo.index(i, jy, k)] = match weighting {
+                            Weighting::Luminance => lum,
+                            Weighting::Power => band,
+                        } as f32;
+                        plm += lum;
+                        pw += match &src {
+                            None => band,
+                            Some(s) => {
+                                let chs = ds.channels();
+                                let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
+                                let d = at(dch).max(0.0) as f64;
+                                let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
+                                let key = (t * 2.0).round() as i64;
+                                let soot = *memo
+                                    .entry(key)
+                                    .or_insert_with(|| soot_power(key as f64 / 2.0));
+                                let mut v = d * s.soot_scale * soot;
+                                for (e, ch, scale) in &s.species {
+                                    let nn = at(*ch).max(0.0) as f64 * scale;
+                                    if nn > 0.0 {
+                                        v += nn * s.intensity * line_power(e, t);
+                                    }
+                                }
+                                v
+                            }
+                        };
+                    }
                 }
             }
         }
@@ -207,52 +219,31 @@ impl FireLight {
         // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
         // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
         if ds.interpolation() == crate::grid::Interpolation::Trilinear {
-            w = dilate(&w, dims, 0.125);
+            w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
         }
         let vv = voxel.x * voxel.y * voxel.z;
         let power_w = 4.0 * std::f64::consts::PI * vv * pw;
         let power_lm = 4.0 * std::f64::consts::PI * vv * plm;
-        // Hierarchical CDFs.
-        let (nx, ny, nz) = (dims[0], dims[1], dims[2]);
-        let mut cdf_z = Vec::with_capacity(nz);
-        let mut cdf_y = Vec::with_capacity(nz * ny);
-        let mut rows = Vec::with_capacity(nz * ny);
-        let (mut xs, mut cdf_x, mut ws) = (Vec::new(), Vec::new(), Vec::new());
-        let mut tz = 0.0;
-        for k in 0..nz {
-            let mut ty = 0.0;
-            for jy in 0..ny {
-                let start = xs.len() as u32;
-                let mut tx = 0.0;
-                for i in 0..nx {
-                    let idx = i + nx * (jy + ny * k);
-                    if w[idx] > 0.0 {
-                        tx += w[idx] as f64;
-                        xs.push(i as u32);
-                        cdf_x.push(tx);
-                        ws.push(w[idx]);
+        // The emitting voxels, brick by brick, and their CDF.
+        let (mut emitting, mut cdf) = (Vec::new(), Vec::new());
+        let mut total = 0.0;
+        for b in &bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for jy in span[1].0..span[1].1 {
+                    for i in span[0].0..span[0].1 {
+                        let idx = topo.index(i, jy, k);
+                        let v = w[idx];
+                        if v > 0.0 {
+                            total += v as f64;
+                            emitting.push(idx as u32);
+                            cdf.push(total);
+                        }
                     }
                 }
-                rows.push((start, xs.len() as u32 - start));
-                ty += tx;
-                cdf_y.push(ty);
-            }
-            tz += ty;
-            cdf_z.push(tz);
-        }
-        let mut occupied = vec![0u64; (nx * ny * nz).div_ceil(64)];
-        for (idx, &v) in w.iter().enumerate() {
-            if v > 0.0 {
-                occupied[idx / 64] |= 1 << (idx % 64);
             }
         }
-        let mut rank = Vec::with_capacity(occupied.len());
-        let mut before = 0u32;
-        for m in &occupied {
-            rank.push(before);
-            before += m.count_ones();
-        }
-        if !(tz > 0.0) {
+        if !(total > 0.0) {
             return Err(no_emission());
         }
         Ok(FireLight {
@@ -260,15 +251,12 @@ impl FireLight {
             weighting,
             dims,
             voxel,
-            total: tz,
-            cdf_z,
-            cdf_y,
-            rows,
-            xs,
-            cdf_x,
-            ws,
-            occupied,
-            rank,
+            total,
+            topo,
+            weights: w,
+            emitting,
+            cdf,
+            slot_bricks,
             power_w,
             power_lm,
             build_seconds: start.elapsed().as_secs_f64(),
@@ -293,60 +281,43 @@ impl FireLight {
     }
     /// Emitting voxels.
     pub fn voxels(&self) -> usize {
-        self.ws.len()
+        self.emitting.len()
     }
     /// Bytes held by the distribution.
     pub fn bytes(&self) -> usize {
-        (self.cdf_z.len() + self.cdf_y.len() + self.cdf_x.len()) * 8
-            + self.rows.len() * 8
-            + self.xs.len() * 4
-            + self.ws.len() * 4
-            + self.occupied.len() * 8
-            + self.rank.len() * 4
+        self.weights.len() * 4
+            + self.emitting.len() * 4
+            + self.cdf.len() * 8
+            + self.slot_bricks.len() * 12
+            + self.topo.bytes()
     }
     /// Seconds to build.
     pub fn build_seconds(&self) -> f64 {
         self.build_seconds
     }
 
-    /// Samples a point from six uniform numbers (three choose the voxel, three place the point in it).
+    /// Samples a point from six uniform numbers (the first chooses the voxel by its weight, the last three
+    /// place the point in it).
     pub fn sample(&self, u: [f64; 6]) -> LightSample {
-        let ny = self.dims[1];
-        let k = first_above(&self.cdf_z, u[0] * self.total);
-        let zbase = if k == 0 { 0.0 } else { self.cdf_z[k - 1] };
-        let rowy = &self.cdf_y[k * ny..(k + 1) * ny];
-        let wz = self.cdf_z[k] - zbase;
-        let jy = first_above(rowy, u[1] * wz);
-        let ybase = if jy == 0 { 0.0 } else { rowy[jy - 1] };
-        let (start, len) = self.rows[k * ny + jy];
-        let xs = &self.xs[start as usize..(start + len) as usize];
-        let cx = &self.cdf_x[start as usize..(start + len) as usize];
-        let wy = rowy[jy] - ybase;
-        let m = first_above(cx, u[2] * wy);
-        let i = xs[m] as usize;
-        let wv = self.ws[start as usize + m] as f64;
+        let m = first_above(&self.cdf, u[0] * self.total);
+        let idx = self.emitting[m] as usize;
+        // The voxel stored at `idx`: its brick's corner, less the topology's offset, plus its place in the brick.
+        let (b, l) = (self.slot_bricks[idx / 512], idx % 512);
+        let off = self.topo.offset();
+        let local = [l % 8, (l / 8) % 8, l / 64];
+        let [i, jy, k] = [0, 1, 2].map(|a| (b[a] as usize * 8 + local[a] - off[a]) as f64);
+        let wv = self.weights[idx] as f64;
         let [p0, _] = self.vol.dataset().bounds();
-        let point = p0
-            + (DVec3::new(i as f64, jy as f64, k as f64) + DVec3::new(u[3], u[4], u[5]))
-                * self.voxel;
+        let point = p0 + (DVec3::new(i, jy, k) + DVec3::new(u[3], u[4], u[5])) * self.voxel;
         LightSample {
             point,
             pdf: wv / (self.total * self.voxel.x * self.voxel.y * self.voxel.z),
         }
     }
 
-    fn weight(&self, idx: usize) -> f64 {
-        let (word, bit) = (idx / 64, idx % 64);
-        let (Some(&m), Some(&r)) = (self.occupied.get(word), self.rank.get(word)) else {
-            return 0.0;
-        };
-        if m >> bit & 1 == 0 {
-            return 0.0;
-        }
-        let below = (m & ((1u64 << bit) - 1)).count_ones();
-        self.ws
-            .get(r as usize + below as usize)
-            .map_or(0.0, |&w| w as f64)
+    /// The weight of voxel `v` (inside the lattice).
+    fn weight(&self, v: [usize; 3]) -> f64 {
+        self.weights[self.topo.index(v[0], v[1], v[2])] as f64
     }
 
     /// Density of a medium-space point, per unit volume.
@@ -356,9 +327,8 @@ impl FireLight {
             return 0.0;
         }
         let q = ((p - p0) / self.voxel).floor();
-        let [i, j, k] = [0, 1, 2].map(|a| (q[a].max(0.0) as usize).min(self.dims[a] - 1));
-        self.weight(i + self.dims[0] * (j + self.dims[1] * k))
-            / (self.total * self.voxel.x * self.voxel.y * self.voxel.z)
+        let v = [0, 1, 2].map(|a| (q[a].max(0.0) as usize).min(self.dims[a] - 1));
+        self.weight(v) / (self.total * self.voxel.x * self.voxel.y * self.voxel.z)
     }
 
     /// Solid-angle density of the direction `d` from `o`: ∫ pdf(o + s d̂) s² ds over s ≥ 0.
@@ -371,8 +341,10 @@ impl FireLight {
         let ds = self.vol.dataset();
         let scale = 1.0 / (self.total * self.voxel.x * self.voxel.y * self.voxel.z);
         let mut sum = 0.0;
+        let [nx, ny, _] = self.dims;
         for seg in walk(ds.bounds(), self.dims, 1, o, dn, 0.0, f64::INFINITY) {
-            let w = self.weight(seg.brick);
+            let b = seg.brick;
+            let w = self.weight([b % nx, (b / nx) % ny, b / (nx * ny)]);
             if w > 0.0 {
                 sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
             }
@@ -381,24 +353,46 @@ impl FireLight {
     }
 }
 
-/// `max(w, f · max of the 26 neighbours)` per voxel (a separable 3×3×3 max filter).
-fn dilate(w: &[f32], dims: [usize; 3], f: f32) -> Vec<f32> {
-    let mut m = w.to_vec();
-    let strides = [1, dims[0], dims[0] * dims[1]];
+/// `max(w, f · max of the 26 neighbours)` per voxel of `bricks` (a separable 3×3×3 max filter over the
+/// topology's storage; voxels outside it count as 0, and every voxel a stored weight's dilation reaches is
+/// inside it, the bricks around the data being covered). `None` when the allocator refuses the copies.
+fn dilate(
+    w: &[f32],
+    topo: &crate::grid::Topology,
+    bricks: &[[usize; 3]],
+    f: f32,
+) -> Option<Vec<f32>> {
+    let dims = topo.dims();
+    let mut m = crate::alloc::filled(w.len(), 0f32)?;
+    m.copy_from_slice(w);
+    let mut src = crate::alloc::filled(w.len(), 0f32)?;
     for axis in 0..3 {
-        let src = m.clone();
-        let (stride, n) = (strides[axis], dims[axis]);
-        for (idx, out) in m.iter_mut().enumerate() {
-            let c = (idx / stride) % n;
-            if c > 0 {
-                *out = out.max(src[idx - stride]);
-            }
-            if c + 1 < n {
-                *out = out.max(src[idx + stride]);
+        src.copy_from_slice(&m);
+        for b in bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for jy in span[1].0..span[1].1 {
+                    for i in span[0].0..span[0].1 {
+                        let v = [i, jy, k];
+                        let idx = topo.index(i, jy, k);
+                        let mut out = m[idx];
+                        if v[axis] > 0 {
+                            let mut q = v;
+                            q[axis] -= 1;
+                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                        }
+                        if v[axis] + 1 < dims[axis] {
+                            let mut q = v;
+                            q[axis] += 1;
+                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                        }
+                        m[idx] = out;
+                    }
+                }
             }
         }
     }
-    w.iter().zip(&m).map(|(&a, &b)| a.max(f * b)).collect()
+    Some(w.iter().zip(&m).map(|(&a, &b)| a.max(f * b)).collect())
 }
 
 /// Full line emission per unit number density, W·sr⁻¹ (all shipped lines of `e` at T).

@@ -681,16 +681,6 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                     // A medium that does not emit is no light.
                     Err(firemedium_loader::Error::Status { message, .. })
                         if message.contains("no emitting voxel") => {}
-                    // A sparse fire in a big box: the (still dense) light is left out, said so; paths still
-                    // find the fire's emission by themselves.
-                    Err(firemedium_loader::Error::Status { message, .. })
-                        if message.contains("the light's per-voxel weights would take") =>
-                    {
-                        b.warnings.push(format!(
-                            "{}: medium {mi}: no fire light ({message}); surfaces see the fire through the paths that reach it",
-                            path.display()
-                        ));
-                    }
                     Err(e) => {
                         return Err(format!(
                             "{}: fire light of medium {mi}: {e}",
