@@ -342,11 +342,40 @@ impl FireLight {
         let scale = 1.0 / (self.total * self.voxel.x * self.voxel.y * self.voxel.z);
         let mut sum = 0.0;
         let [nx, ny, _] = self.dims;
-        for seg in walk(ds.bounds(), self.dims, 1, o, dn, 0.0, f64::INFINITY) {
-            let b = seg.brick;
-            let w = self.weight([b % nx, (b / nx) % ny, b / (nx * ny)]);
-            if w > 0.0 {
-                sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+        // Brick by brick (the weights' bricks, on a lattice extended by their offset so the walk's bricks are
+        // theirs), voxel by voxel only inside bricks that hold weights: a sparse fire in a big box costs its
+        // bricks along the ray, not the box's voxels. The pieces tile the ray as one voxel walk would.
+        let [p0, p1] = ds.bounds();
+        let off = self.topo.offset();
+        let shifted = [
+            p0 - DVec3::new(off[0] as f64, off[1] as f64, off[2] as f64) * self.voxel,
+            p1,
+        ];
+        let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
+        let nb = self.topo.bricks();
+        for bseg in walk(
+            shifted,
+            dims_v,
+            crate::grid::BRICK,
+            o,
+            dn,
+            0.0,
+            f64::INFINITY,
+        ) {
+            let b = bseg.brick;
+            if self
+                .topo
+                .slot([b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])])
+                == 0
+            {
+                continue;
+            }
+            for seg in walk(ds.bounds(), self.dims, 1, o, dn, bseg.t0, bseg.t1) {
+                let v = seg.brick;
+                let w = self.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
+                if w > 0.0 {
+                    sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                }
             }
         }
         sum * scale
@@ -524,6 +553,91 @@ mod tests {
             "{mean} ± {se} vs {}",
             light.power_lm()
         );
+    }
+
+    #[test]
+    fn the_brick_walk_gives_the_voxel_walks_direction_pdf_on_a_sparse_fire() {
+        // A ball of soot written as an OpenVDB file whose active box starts at index 11 (a leaf's voxel 3), so
+        // the weights' bricks are offset from the lattice, with a second ball 120 voxels away (empty bricks
+        // between them). The direction pdf walked brick by brick equals the plain voxel walk's.
+        let ball = |c: i32| -> (
+            Vec<crate::dataset::vdb::VdbLeaf>,
+            Vec<crate::dataset::vdb::VdbLeaf>,
+        ) {
+            let (mut d, mut t) = (Vec::new(), Vec::new());
+            for l in 0..27 {
+                let o = [8 + 8 * (l % 3), 8 + 8 * ((l / 3) % 3), 8 + 8 * (l / 9)].map(|v| v + c);
+                let (mut dv, mut tv, mut mask) = (vec![0f32; 512], vec![0f32; 512], [0u64; 8]);
+                for i in 0..512 {
+                    let p = [
+                        o[0] + (i as i32 >> 6),
+                        o[1] + ((i as i32 >> 3) & 7),
+                        o[2] + (i as i32 & 7),
+                    ];
+                    let r2: i32 = p.iter().map(|&x| (x - 20 - c) * (x - 20 - c)).sum();
+                    if r2 < 81 {
+                        (dv[i], tv[i]) = (4e-6, 1600.0);
+                        mask[i / 64] |= 1 << (i % 64);
+                    }
+                }
+                d.push((o, mask, dv));
+                t.push((o, mask, tv));
+            }
+            (d, t)
+        };
+        let (d0, t0) = ball(0);
+        let (d1, t1) = ball(120);
+        let bytes = crate::dataset::vdb::write_sparse(
+            &[
+                ("density", [d0, d1].concat()),
+                ("temperature", [t0, t1].concat()),
+            ],
+            DVec3::ZERO,
+            DVec3::splat(0.01),
+        );
+        let file =
+            std::env::temp_dir().join(format!("firemedium-light-walk-{}.vdb", std::process::id()));
+        std::fs::write(&file, bytes).unwrap();
+        let vol = Arc::new(
+            FireVolume::new(&[
+                Param::string("dataset", &file.to_string_lossy()),
+                Param::string("fuel", "propane"),
+            ])
+            .unwrap(),
+        );
+        let _ = std::fs::remove_file(&file);
+        let light = FireLight::new(vol, Weighting::Power).unwrap();
+        assert_ne!(light.topo.offset(), [0, 0, 0]);
+        let ds = light.vol.dataset();
+        let [p0, p1] = ds.bounds();
+        let [nx, ny, _] = light.dims;
+        let mut rng = crate::rng::Rng::new(4);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let o = p0
+                + (p1 - p0) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4
+                - (p1 - p0) * 0.2;
+            // Toward one of the balls (centres near 0.205 m and 1.405 m on every axis), within its radius.
+            let c = if rng.next_f64() < 0.5 { 0.205 } else { 1.405 };
+            let j = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
+            let d = DVec3::splat(c) + j * 0.12 - o;
+            let dn = d.normalize();
+            let mut want = 0.0;
+            for seg in walk(ds.bounds(), light.dims, 1, o, dn, 0.0, f64::INFINITY) {
+                let v = seg.brick;
+                let w = light.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
+                want += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+            }
+            let vv = light.voxel.x * light.voxel.y * light.voxel.z;
+            let want = want / (light.total * vv);
+            let got = light.pdf_direction(o, d);
+            checked += (want > 0.0) as usize;
+            assert!(
+                (got - want).abs() <= 1e-9 * want.max(1e-300),
+                "{got} vs {want}"
+            );
+        }
+        assert!(checked > 200, "{checked} rays met the fire");
     }
 
     #[test]
