@@ -292,32 +292,25 @@ fn grids_share_one_memory_cap() {
     // mutant's corrupt block is what the load then reports); under a cap their bricks together exceed but one
     // alone would not, they are still refused before anything is allocated.
     let file = path("fuzz/fuzz_vdb_grids_share_the_cap.vdb");
-    let opts = LoadOptions {
-        max_bytes: 1_000_000_000,
-        ..LoadOptions::default()
-    };
-    let e = {
+    // Every float grid of the file loaded under a cap: (grids asked for, the load's error).
+    let load_all = |max_bytes: u64| {
+        let opts = LoadOptions {
+            max_bytes,
+            ..LoadOptions::default()
+        };
         let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
         let sources: Vec<ChannelSource> = grids
             .iter()
             .filter(|g| g.loadable)
             .map(|g| ChannelSource::new(&g.name, file.clone()))
             .collect();
-        Dataset::load(&sources, &opts).unwrap_err().to_string()
+        let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
+        (sources.len(), e)
     };
+    let (_, e) = load_all(1_000_000_000);
     assert!(e.contains("expected a stored block of 1024 bytes"), "{e}");
-    let opts = LoadOptions {
-        max_bytes: 4_000_000,
-        ..LoadOptions::default()
-    };
-    let grids = firemedium_plugin::dataset::list_grids(&file, &opts).unwrap();
-    let sources: Vec<ChannelSource> = grids
-        .iter()
-        .filter(|g| g.loadable)
-        .map(|g| ChannelSource::new(&g.name, file.clone()))
-        .collect();
-    assert_eq!(sources.len(), 4);
-    let e = Dataset::load(&sources, &opts).unwrap_err().to_string();
+    let (n, e) = load_all(4_000_000);
+    assert_eq!(n, 4);
     // 769 bricks (the background's included) of 2 KB per grid, 1.6 MB each where the dense box took 855 MB, and
     // a two-level brick table of 17 KB: one grid fits a 4 MB cap, the four together (6.3 MB) do not.
     assert!(

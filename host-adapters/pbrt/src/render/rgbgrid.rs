@@ -129,6 +129,36 @@ impl RgbGrid {
         (s0 < s1 && s0.is_finite()).then_some((s0, s1, om, dm))
     }
 
+    /// The tentative collisions along o + s·w, s ∈ [0, s_max] (world distances), at the majorant's rate: `visit`
+    /// gets each one's distance, σ_a, σ_s and σ_a·Le (and the random numbers), until it returns a result or the
+    /// ray leaves the box. Bounded: an absurd majorant over a long box cannot hang a render.
+    fn collisions<R>(
+        &self,
+        o: Vec3A,
+        w: Vec3A,
+        s_max: f32,
+        u: &mut dyn FnMut() -> f64,
+        mut visit: impl FnMut(f64, S, S, S, &mut dyn FnMut() -> f64) -> Option<R>,
+    ) -> Option<R> {
+        let (s0, s1, om, dm) = self.clip(o, w, s_max)?;
+        let maj = self.majorant as f64;
+        if !(maj > 0.0) {
+            return None;
+        }
+        let mut s = s0;
+        for _ in 0..1_000_000 {
+            s += -(1.0 - u()).ln() / maj;
+            if s >= s1 {
+                break;
+            }
+            let (sa, ss, e) = self.at(om + dm * s);
+            if let Some(r) = visit(s, sa, ss, e, u) {
+                return Some(r);
+            }
+        }
+        None
+    }
+
     /// Transmittance and (with `emission`) emitted radiance along o + s·w, s ∈ [0, s_max] (world distances), by
     /// ratio tracking.
     pub fn segment(
@@ -141,31 +171,16 @@ impl RgbGrid {
     ) -> (S, S) {
         let mut tr = S::splat(1.0);
         let mut l = S::ZERO;
-        let Some((s0, s1, om, dm)) = self.clip(o, w, s_max) else {
-            return (l, tr);
-        };
-        let maj = self.majorant as f64;
-        if !(maj > 0.0) {
-            return (l, tr);
-        }
-        let mut s = s0;
-        // (Bounded: an absurd majorant over a long box cannot hang a render.)
-        for _ in 0..1_000_000 {
-            s += -(1.0 - u()).ln() / maj;
-            if s >= s1 {
-                break;
-            }
-            let (sa, ss, e) = self.at(om + dm * s);
+        let maj = self.majorant;
+        self.collisions(o, w, s_max, &mut u, |_, sa, ss, e, _| {
             for c in 0..self.bins {
                 if emission {
-                    l.0[c] += tr.0[c] * e.0[c] / self.majorant;
+                    l.0[c] += tr.0[c] * e.0[c] / maj;
                 }
-                tr.0[c] *= 1.0 - (sa.0[c] + ss.0[c]) / self.majorant;
+                tr.0[c] *= 1.0 - (sa.0[c] + ss.0[c]) / maj;
             }
-            if tr.max() <= 0.0 {
-                break;
-            }
-        }
+            (tr.max() <= 0.0).then_some(())
+        });
         (l, tr)
     }
 
@@ -173,49 +188,38 @@ impl RgbGrid {
     pub fn track(&self, o: Vec3A, w: Vec3A, s_max: f32, mut u: impl FnMut() -> f64) -> Track {
         let mut weight = S::splat(1.0);
         let mut emitted = S::ZERO;
-        let Some((s0, s1, om, dm)) = self.clip(o, w, s_max) else {
-            return Track::Passed { weight, emitted };
-        };
-        let maj = self.majorant as f64;
-        if !(maj > 0.0) {
-            return Track::Passed { weight, emitted };
-        }
-        let n = self.bins.max(1) as f32;
-        let mut s = s0;
-        for _ in 0..1_000_000 {
-            s += -(1.0 - u()).ln() / maj;
-            if s >= s1 {
-                break;
-            }
-            let (sa, ss, e) = self.at(om + dm * s);
-            for c in 0..self.bins {
-                emitted.0[c] += weight.0[c] * e.0[c] / self.majorant;
+        let (maj, bins) = (self.majorant, self.bins);
+        let n = bins.max(1) as f32;
+        let event = self.collisions(o, w, s_max, &mut u, |s, sa, ss, e, u| {
+            for c in 0..bins {
+                emitted.0[c] += weight.0[c] * e.0[c] / maj;
             }
             // Event probabilities from the bins' means (they sum to 1: σ_a + σ_s + σ_n = σ̄ in every bin).
-            let mean = |x: &S| x.0[..self.bins].iter().sum::<f32>() / n;
-            let (pa, ps) = (mean(&sa) / self.majorant, mean(&ss) / self.majorant);
+            let mean = |x: &S| x.0[..bins].iter().sum::<f32>() / n;
+            let (pa, ps) = (mean(&sa) / maj, mean(&ss) / maj);
             let x = u() as f32;
             if x < pa {
-                return Track::Absorbed { emitted };
+                return Some(Track::Absorbed { emitted });
             }
             if x < pa + ps {
-                for c in 0..self.bins {
-                    weight.0[c] *= ss.0[c] / (self.majorant * ps);
+                for c in 0..bins {
+                    weight.0[c] *= ss.0[c] / (maj * ps);
                 }
-                return Track::Scattered {
+                return Some(Track::Scattered {
                     s: s as f32,
                     weight,
                     emitted,
-                };
+                });
             }
             let pn = 1.0 - pa - ps;
             if !(pn > 0.0) {
-                return Track::Absorbed { emitted };
+                return Some(Track::Absorbed { emitted });
             }
-            for c in 0..self.bins {
-                weight.0[c] *= (self.majorant - sa.0[c] - ss.0[c]) / (self.majorant * pn);
+            for c in 0..bins {
+                weight.0[c] *= (maj - sa.0[c] - ss.0[c]) / (maj * pn);
             }
-        }
-        Track::Passed { weight, emitted }
+            None
+        });
+        event.unwrap_or(Track::Passed { weight, emitted })
     }
 }
