@@ -2,10 +2,11 @@
 //! image through a fire, each configuration timed in interleaved rounds (fastest and median reported, as the
 //! machine's speed drifts), and the f32 image compared with the f64 one pixel by pixel.
 //!
-//!     cargo run --release -p firemedium-plugin --example march_cost -- [DATASET.vdb] [PIXELS] [ROUNDS] [CONFIGURATION SUBSTRING] [BRICK]
+//!     cargo run --release -p firemedium-plugin --example march_cost -- [DATASET.vdb] [PIXELS] [ROUNDS] [CONFIGURATION SUBSTRING] [BRICK] [LATTICES]
 //!
-//! Default: the committed campfire (scenes/campfire/campfire.vdb), 96 pixels, 5 rounds. Results are in
-//! docs/RESULTS.md.
+//! Default: the committed campfire (scenes/campfire/campfire.vdb), 96 pixels, 5 rounds. LATTICES is a comma list
+//! of the volume's `lattice` values (auto, dense, bricks, off), each configuration run with each, interleaved;
+//! its f32 rows are compared with the f64 row of the same lattice. Results are in docs/RESULTS.md.
 
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume};
@@ -49,14 +50,35 @@ fn main() {
     .into_iter()
     .filter(|c| c.0.contains(only.as_str()))
     .collect();
+    let lattices: Vec<String> = args
+        .get(5)
+        .map_or("auto", String::as_str)
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    // Every configuration with every lattice, f64 and f32 rows of one configuration side by side.
+    let configs: Vec<(String, &str, &str, i64, &str)> = configs
+        .iter()
+        .flat_map(|c| lattices.iter().map(move |l| (c, l)))
+        .map(|((name, mode, precision, bins), l)| {
+            (
+                format!("{name}, lattice {l}"),
+                *mode,
+                *precision,
+                *bins,
+                l.as_str(),
+            )
+        })
+        .collect();
     let volumes: Vec<FireVolume> = configs
         .iter()
-        .map(|(_, mode, precision, bins)| {
+        .map(|(_, mode, precision, bins, lattice)| {
             let mut list = vec![
                 Param::string("filename", &file),
                 Param::string("colormode", mode),
                 Param::string("precision", precision),
                 Param::int("bins", *bins),
+                Param::string("lattice", lattice),
             ];
             if let Some(b) = args.get(4).and_then(|s| s.parse().ok()) {
                 list.push(Param::int("brick", b));
@@ -78,10 +100,12 @@ fn main() {
     println!("{file}, {size}² rays, one thread, {rounds} rounds");
     println!("| configuration | fastest s | median s | samples | ns per sample (fastest) | vs f64: max rel. diff | rel. RMS diff |");
     println!("|---|---|---|---|---|---|---|");
-    for (k, (name, _, _, _)) in configs.iter().enumerate() {
+    let n_lat = lattices.len();
+    for (k, (name, ..)) in configs.iter().enumerate() {
         let mut ts = times[k].clone();
         ts.sort_by(f64::total_cmp);
-        let reference = &images[k & !1];
+        // (The f64 row of the same configuration pair and lattice.)
+        let reference = &images[((k / n_lat) & !1) * n_lat + k % n_lat];
         let peak = reference.iter().fold(0f64, |m, &x| m.max(x));
         let (mut worst, mut sq, mut n) = (0f64, 0.0, 0usize);
         for (a, b) in images[k].iter().zip(reference) {

@@ -278,6 +278,76 @@ impl Topology {
         })
     }
 
+    /// As [`Topology::build_offset`], from the list of the bricks holding data (any order, repeats allowed;
+    /// those outside the lattice ignored): the same topology, in time and memory that follow the list rather
+    /// than the box.
+    pub fn from_bricks(
+        dims: [usize; 3],
+        off: [usize; 3],
+        mut bricks: Vec<[usize; 3]>,
+    ) -> Option<Topology> {
+        if off.iter().any(|&o| o >= BRICK) || dims.contains(&0) {
+            return None;
+        }
+        let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
+        nb.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
+        let nr = nb.map(|n| n.div_ceil(REGION));
+        let regions = nr.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
+        bricks.retain(|b| (0..3).all(|a| b[a] < nb[a]));
+        // Slots numbered as `build_offset` numbers them: regions x fastest, bricks x fastest within.
+        let key = |b: &[usize; 3]| {
+            let r = [b[0] / REGION, b[1] / REGION, b[2] / REGION];
+            let l = (b[0] % REGION) + REGION * ((b[1] % REGION) + REGION * (b[2] % REGION));
+            (r[0] + nr[0] * (r[1] + nr[1] * r[2]), l)
+        };
+        bricks.sort_unstable_by_key(key);
+        bricks.dedup();
+        let mut top = crate::alloc::filled(regions, 0u32)?;
+        let mut blocks: Vec<u32> = Vec::new();
+        for (n, b) in bricks.iter().enumerate() {
+            let (r, l) = key(b);
+            if top[r] == 0 {
+                blocks.try_reserve(REGION_BRICKS).ok()?;
+                blocks.resize(blocks.len() + REGION_BRICKS, 0);
+                top[r] = u32::try_from(blocks.len() / REGION_BRICKS).ok()?;
+            }
+            blocks[(top[r] as usize - 1) * REGION_BRICKS + l] = u32::try_from(n + 1).ok()?;
+        }
+        Some(Topology {
+            dims,
+            off,
+            nb,
+            nr,
+            top,
+            blocks,
+            active: bricks.len(),
+        })
+    }
+
+    /// The bricks b + `shift` + d of every stored brick b, for every offset d with each component in
+    /// `lo..=hi` (those below 0 left out): the list of a dilated topology for [`Topology::from_bricks`].
+    /// `None` when the allocator refuses it.
+    pub(crate) fn spread(&self, shift: [usize; 3], lo: i64, hi: i64) -> Option<Vec<[usize; 3]>> {
+        let side = (hi - lo + 1).max(0) as usize;
+        let mut list = Vec::new();
+        list.try_reserve(self.active.checked_mul(side * side * side)?)
+            .ok()?;
+        self.for_each_slot(|b, _| {
+            for z in lo..=hi {
+                for y in lo..=hi {
+                    for x in lo..=hi {
+                        let c = [x, y, z];
+                        let c = [0, 1, 2].map(|a| (b[a] + shift[a]) as i64 + c[a]);
+                        if c.iter().all(|&v| v >= 0) {
+                            list.push(c.map(|v| v as usize));
+                        }
+                    }
+                }
+            }
+        });
+        Some(list)
+    }
+
     /// Every brick present (small dense grids: tests, generated grids).
     pub fn full(dims: [usize; 3]) -> Option<Topology> {
         Topology::build(dims, |_| true)
@@ -886,6 +956,30 @@ mod tests {
                 .unwrap();
         let sparse = Grid::from_dense(std::sync::Arc::new(topo), &d, 0.0).unwrap();
         (dense, sparse)
+    }
+
+    #[test]
+    fn a_topology_from_its_brick_list_is_the_one_built_brick_by_brick() {
+        let mut rng = crate::rng::Rng::new(5);
+        for _ in 0..20 {
+            let dims = [0, 1, 2].map(|_| 1 + (rng.next_f64() * 300.0) as usize);
+            let off = [0, 1, 2].map(|_| (rng.next_f64() * 8.0) as usize);
+            let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
+            let p = rng.next_f64() * 0.05;
+            let keep: Vec<bool> = (0..nb[0] * nb[1] * nb[2])
+                .map(|_| rng.next_f64() < p)
+                .collect();
+            let want =
+                Topology::build_offset(dims, off, |b| keep[b[0] + nb[0] * (b[1] + nb[1] * b[2])])
+                    .unwrap();
+            // The list reversed, with repeats and a brick beyond the lattice.
+            let mut list: Vec<[usize; 3]> = Vec::new();
+            want.for_each_slot(|b, _| list.extend([b, b]));
+            list.reverse();
+            list.push([nb[0], 0, 0]);
+            let got = Topology::from_bricks(dims, off, list).unwrap();
+            assert_eq!(got, want);
+        }
     }
 
     #[test]

@@ -122,16 +122,13 @@ impl FireLight {
         // grid whose empty bricks read a non-zero value).
         let stored = ds.topology();
         let background_emits = ds.channels().iter().any(|ch| ch.grid.background() != 0.0);
-        let topo = crate::grid::Topology::build_offset(dims, stored.offset(), |b| {
-            background_emits
-                || (0..27).any(|n| {
-                    let q = [n % 3, (n / 3) % 3, n / 9].map(|d| d as i64 - 1);
-                    let nb = stored.bricks();
-                    let c = [0, 1, 2].map(|a| b[a] as i64 + q[a]);
-                    (0..3).all(|a| c[a] >= 0 && (c[a] as usize) < nb[a])
-                        && stored.slot(c.map(|v| v as usize)) != 0
-                })
-        })
+        let topo = if background_emits {
+            crate::grid::Topology::build_offset(dims, stored.offset(), |_| true)
+        } else {
+            stored
+                .spread([0; 3], -1, 1)
+                .and_then(|list| crate::grid::Topology::from_bricks(dims, stored.offset(), list))
+        }
         .ok_or_else(no_emission)?;
         let topo = Arc::new(topo);
         // Two weights per covered voxel while building (the weights and their dilation), within what the

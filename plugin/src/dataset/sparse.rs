@@ -188,47 +188,61 @@ pub(crate) fn densify<S: LeafValues>(
     // The bricks that a voxel range [a, b] (index space) covers, on bricks aligned as the file's leaves are
     // (multiples of 8 in its index space): sample 0 of the box sits at lo mod 8 in its brick.
     let off = lo.map(|v| v.rem_euclid(BRICK as i64) as usize);
-    let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
-    let mut mark = vec![false; 0];
-    let nbricks = nb
-        .iter()
-        .try_fold(1usize, |a, &b| a.checked_mul(b))
-        .unwrap_or(usize::MAX);
-    if crate::alloc::with_capacity::<bool>(nbricks).is_none() {
-        return Err(too_large("the brick table".to_string(), table));
-    }
-    mark.resize(nbricks, false);
-    let mut cover = |a: [i64; 3], b: [i64; 3]| {
+    // The bricks of a voxel range [a, b] (index space), clipped to the box: per axis, the first and last.
+    let bricks_of = |a: [i64; 3], b: [i64; 3]| {
         let a = [0, 1, 2].map(|k| a[k].max(lo[k]));
         let b = [0, 1, 2].map(|k| b[k].min(hi[k]));
         if (0..3).any(|k| a[k] > b[k]) {
-            return;
+            return None;
         }
-        let (ba, bb) = (
+        Some((
             [0, 1, 2].map(|k| ((a[k] - lo[k]) as usize + off[k]) / BRICK),
             [0, 1, 2].map(|k| ((b[k] - lo[k]) as usize + off[k]) / BRICK),
-        );
+        ))
+    };
+    // Every tile's and leaf's range, as the trees hold them.
+    let ranges = || {
+        trees.iter().flat_map(|(_, t, _)| {
+            let tiles = written_tiles(t).into_iter().map(|tile| {
+                let o = tile.origin.map(|v| v as i64);
+                (o, o.map(|v| v + tile.size as i64 - 1))
+            });
+            let leaves = t.leaves.iter().map(|leaf| {
+                let o = leaf.origin.map(|v| v as i64);
+                (o, o.map(|v| v + 7))
+            });
+            tiles.chain(leaves)
+        })
+    };
+    // The list of covered bricks, counted before it is made: each brick listed is stored, 2 KB per grid,
+    // so a count beyond the budget is refused here (a tile may cover a whole box).
+    let listed: u64 = ranges()
+        .filter_map(|(a, b)| bricks_of(a, b))
+        .map(|(ba, bb)| (0..3).map(|k| (bb[k] - ba[k] + 1) as u64).product::<u64>())
+        .fold(0, u64::saturating_add);
+    if listed.saturating_mul(4 * BRICK.pow(3) as u64) > max_bytes {
+        return Err(too_large(
+            format!(
+                "{listed} bricks of 8³ f32 (a {}×{}×{} box)",
+                dims[0], dims[1], dims[2]
+            ),
+            listed.saturating_mul(4 * BRICK.pow(3) as u64),
+        ));
+    }
+    let mut list: Vec<[usize; 3]> = crate::alloc::with_capacity(listed as usize)
+        .ok_or_else(|| too_large("the brick list".to_string(), listed.saturating_mul(24)))?;
+    for (ba, bb) in ranges().filter_map(|(a, b)| bricks_of(a, b)) {
         for z in ba[2]..=bb[2] {
             for y in ba[1]..=bb[1] {
                 for x in ba[0]..=bb[0] {
-                    mark[x + nb[0] * (y + nb[1] * z)] = true;
+                    list.push([x, y, z]);
                 }
             }
         }
-    };
-    for (_, t, _) in &trees {
-        for tile in written_tiles(t) {
-            let o = tile.origin.map(|v| v as i64);
-            cover(o, o.map(|v| v + tile.size as i64 - 1));
-        }
-        for leaf in &t.leaves {
-            let o = leaf.origin.map(|v| v as i64);
-            cover(o, o.map(|v| v + 7));
-        }
     }
-    let topo = Topology::build_offset(dims, off, |b| mark[b[0] + nb[0] * (b[1] + nb[1] * b[2])])
+    // (Time and memory follow the bricks listed, not the box.)
+    let topo = Topology::from_bricks(dims, off, list)
         .ok_or_else(|| too_large("the brick table".to_string(), table))?;
-    drop(mark);
     let per = (topo.values_len() as u64).saturating_mul(4);
     let all = per
         .saturating_mul(trees.len() as u64)

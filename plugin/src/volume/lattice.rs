@@ -13,19 +13,41 @@
 //!
 //! Further grids the march reads (Lescale, species) are padded the same way, one array each. Built only for
 //! the f32 march of a trilinear dataset; 8 bytes per padded voxel, plus 4 per further grid.
+//!
+//! Two layouts, one read:
+//!
+//! - **dense**: one padded array over the dataset's box ((n + 2)³ voxels);
+//! - **bricks**: a padded copy per brick whose cells touch data — 9³ voxels, the brick's 8³ and the first
+//!   voxel of the next on each axis, so that every cell (the 8 samples around a point) whose lower corner is in
+//!   the brick lies in its copy and the kernel reads it with the same four 16-byte loads, strides 9 and 81.
+//!   The copies are numbered by a [`Topology`] over the cells' lower corners (the samples shifted by one, so the
+//!   half-voxel margin below sample 0 has its bricks): the data's bricks and those just below them on each
+//!   axis. A cell in no copy has all eight corners in empty bricks and reads copy 0, the background. Memory
+//!   follows the data: a fire far from its copy in a 2048³ box costs its bricks, not the box.
+//!
+//! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks
+//! (`lattice` parameter; docs/RESULTS.md has both measured on the same fires).
 
-use crate::grid::Grid;
+use crate::grid::{Grid, Topology, BRICK};
 use crate::majorant::{BrickRanges, Ranges};
+
+/// Samples per side of a padded brick.
+pub(crate) const PADDED: usize = BRICK + 1;
+/// Samples of a padded brick.
+pub(crate) const PADDED_VOXELS: usize = PADDED * PADDED * PADDED;
 
 /// The padded, interleaved copy of the grids a march samples.
 #[derive(Debug, Clone)]
 pub(crate) struct Lattice {
     /// Padded dims (the dataset's + 2 on each axis).
     dims: [usize; 3],
-    /// `[d, T]` per padded voxel, x fastest (T = 0 when the volume has no temperature grid).
+    /// `[d, T]` per padded voxel, x fastest (T = 0 when the volume has no temperature grid); for the bricks,
+    /// `PADDED_VOXELS` per copy, copy 0 first.
     pairs: Vec<f32>,
     /// Further grids, one value per padded voxel each.
     extra: Vec<Vec<f32>>,
+    /// The bricks' table, for the brick layout.
+    bricks: Option<Topology>,
 }
 
 impl Lattice {
@@ -152,9 +174,159 @@ impl Lattice {
                 dims,
                 pairs,
                 extra: extra_v,
+                bricks: None,
             },
             ranges.into_iter().map(BrickRanges::finish).collect(),
         ))
+    }
+
+    /// The brick layout of the same grids (see the module docs); `None` when its table or bytes would exceed
+    /// `budget`, or the allocator refuses them (the volume then marches without it: the same results, slower).
+    pub(crate) fn build_bricks(
+        density: &Grid,
+        temperature: Option<&Grid>,
+        extra: &[&Grid],
+        budget: u64,
+    ) -> Option<Lattice> {
+        let data = density.topology();
+        let n = density.dims();
+        // Cell lower corners c ∈ [−1, n − 1] are numbered w = c + 1 ∈ [0, n]; the copies' bricks sit where the
+        // data's do (a data brick's cells are one copy), so w-brick b starts at sample 8b − off − 1.
+        let off = data.offset().map(|o| (o + BRICK - 1) % BRICK);
+        let grids: Vec<&Grid> = std::iter::once(density)
+            .chain(temperature)
+            .chain(extra.iter().copied())
+            .collect();
+        // A background other than 0 fills the box, and a copy on the box's faces must fade it to 0 outside.
+        let faces = grids.iter().any(|g| g.background() != 0.0);
+        let present = |b: [usize; 3]| {
+            // The samples this copy holds, [lo, lo + 8] per axis, within the lattice.
+            let mut span = [(0usize, 0usize); 3];
+            let mut face = false;
+            for a in 0..3 {
+                let lo = (BRICK * b[a]) as i64 - off[a] as i64 - 1;
+                let hi = lo + BRICK as i64;
+                face |= lo < 0 || hi >= n[a] as i64;
+                let (lo, hi) = (lo.max(0), hi.min(n[a] as i64 - 1));
+                if lo > hi {
+                    return false;
+                }
+                span[a] = (lo as usize, hi as usize);
+            }
+            if face && faces {
+                return true;
+            }
+            // The data bricks of its first and last sample on each axis (at most two per axis).
+            let lo = data.brick_of([span[0].0, span[1].0, span[2].0]);
+            let hi = data.brick_of([span[0].1, span[1].1, span[2].1]);
+            (lo[2]..=hi[2]).any(|z| {
+                (lo[1]..=hi[1]).any(|y| (lo[0]..=hi[0]).any(|x| data.slot([x, y, z]) != 0))
+            })
+        };
+        let dims = [0, 1, 2].map(|a| n[a] + 1);
+        let table = Topology::table_bytes(dims)?;
+        if table > budget {
+            return None;
+        }
+        let topo = if faces {
+            Topology::build_offset(dims, off, present)?
+        } else {
+            // The copies holding a stored brick's cells: its own (data brick b is copy b + s, s = 1 when the
+            // data's bricks start at sample 0) and those one below on any axis — from the list, not the box.
+            let s = data.offset().map(|o| (o == 0) as usize);
+            Topology::from_bricks(dims, off, data.spread(s, -1, 0)?)?
+        };
+        let copies = topo.active_bricks() + 1;
+        let voxels = copies.checked_mul(PADDED_VOXELS)?;
+        // (The kernel's offsets are 32-bit, as for the dense layout.)
+        if voxels.checked_mul(2)? >= u32::MAX as usize {
+            return None;
+        }
+        let bytes = (voxels as u64).saturating_mul(4 * (2 + extra.len() as u64));
+        if bytes.saturating_add(topo.bytes() as u64) > budget {
+            return None;
+        }
+        let mut pairs = crate::alloc::filled(2 * voxels, 0f32)?;
+        let mut extra_v: Vec<Vec<f32>> = extra
+            .iter()
+            .map(|_| crate::alloc::filled(voxels, 0f32))
+            .collect::<Option<_>>()?;
+        // Copy 0: the background of each grid (cells in no copy are inside the box, among empty bricks).
+        let bg: Vec<f32> = grids.iter().map(|g| g.background()).collect();
+        let first_extra = 1 + temperature.is_some() as usize;
+        for p in pairs[..2 * PADDED_VOXELS].chunks_exact_mut(2) {
+            p[0] = bg[0];
+            p[1] = if temperature.is_some() { bg[1] } else { 0.0 };
+        }
+        for (v, &b) in extra_v.iter_mut().zip(&bg[first_extra..]) {
+            v[..PADDED_VOXELS].fill(b);
+        }
+        // Each copy's brick, by copy number.
+        let mut of = crate::alloc::filled(copies, [0usize; 3])?;
+        topo.for_each_slot(|b, s| of[s] = b);
+        let fill = |b: [usize; 3], pairs: &mut [f32], extra: &mut [&mut [f32]]| {
+            let lo = [0, 1, 2].map(|a| (BRICK * b[a]) as i64 - off[a] as i64 - 1);
+            for z in 0..PADDED {
+                for y in 0..PADDED {
+                    for x in 0..PADDED {
+                        let (i, j, k) = (lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64);
+                        let l = x + PADDED * (y + PADDED * z);
+                        pairs[2 * l] = density.at(i, j, k);
+                        if let Some(t) = temperature {
+                            pairs[2 * l + 1] = t.at(i, j, k);
+                        }
+                        for (e, g) in extra.iter_mut().zip(&grids[first_extra..]) {
+                            e[l] = g.at(i, j, k);
+                        }
+                    }
+                }
+            }
+        };
+        // Copies split over the threads in contiguous runs.
+        let threads = crate::par::threads(8);
+        let per = (copies - 1).div_ceil(threads).max(1);
+        std::thread::scope(|s| {
+            let mut rest: &mut [f32] = &mut pairs[2 * PADDED_VOXELS..];
+            let mut rest_extra: Vec<&mut [f32]> = extra_v
+                .iter_mut()
+                .map(|v| &mut v[PADDED_VOXELS..])
+                .collect();
+            let mut first = 1;
+            while first < copies {
+                let m = per.min(copies - first);
+                let (mine, tail) = rest.split_at_mut(2 * PADDED_VOXELS * m);
+                rest = tail;
+                let mut mine_extra = Vec::with_capacity(rest_extra.len());
+                let mut tails = Vec::with_capacity(rest_extra.len());
+                for r in rest_extra {
+                    let (a, t) = r.split_at_mut(PADDED_VOXELS * m);
+                    mine_extra.push(a);
+                    tails.push(t);
+                }
+                rest_extra = tails;
+                let (of, fill) = (&of, &fill);
+                s.spawn(move || {
+                    for c in 0..m {
+                        let mut e: Vec<&mut [f32]> = mine_extra
+                            .iter_mut()
+                            .map(|v| &mut v[PADDED_VOXELS * c..PADDED_VOXELS * (c + 1)])
+                            .collect();
+                        fill(
+                            of[first + c],
+                            &mut mine[2 * PADDED_VOXELS * c..2 * PADDED_VOXELS * (c + 1)],
+                            &mut e,
+                        );
+                    }
+                });
+                first += m;
+            }
+        });
+        Some(Lattice {
+            dims: [PADDED; 3],
+            pairs,
+            extra: extra_v,
+            bricks: Some(topo),
+        })
     }
 
     /// The padded dims of a dataset of `dims`, if its `[d, T]` pairs stay below 2³² floats.
@@ -168,10 +340,15 @@ impl Lattice {
         (floats < u32::MAX as usize).then_some(p)
     }
 
-    /// Padded dims.
+    /// Padded dims (of one copy, for the bricks).
     #[inline(always)]
     pub(crate) fn dims(&self) -> [usize; 3] {
         self.dims
+    }
+    /// The copies' table, for the brick layout.
+    #[inline(always)]
+    pub(crate) fn bricks(&self) -> Option<&Topology> {
+        self.bricks.as_ref()
     }
     /// `[d, T]` per padded voxel.
     #[inline(always)]
@@ -186,5 +363,6 @@ impl Lattice {
     /// Bytes held.
     pub(crate) fn bytes(&self) -> usize {
         4 * (self.pairs.len() + self.extra.iter().map(Vec::len).sum::<usize>())
+            + self.bricks.as_ref().map_or(0, Topology::bytes)
     }
 }

@@ -269,36 +269,42 @@ impl FireVolume {
                 .chain(co.species.iter().map(|sp| sp.ch))
                 .collect();
             let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
-            // The lattice is dense over the box: built only while it costs at most four times what its grids
-            // store (a fire far from its copy in a big box marches by stencils over the bricks instead).
+            // Dense over the box while it costs at most four times what its grids store, else a copy per brick
+            // holding data (a fire far from its copy in a big box).
             let copied: u64 = std::iter::once(&ch[density].grid)
                 .chain(temperature.map(|k| &ch[k].grid))
                 .chain(grids.iter().copied())
                 .map(|g| g.bytes() as u64)
                 .sum();
-            let dense_ok = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
+            let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
                 let voxels = p.iter().map(|&n| n as u64).product::<u64>();
                 voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
             });
-            let built = dense_ok
-                .then(|| {
-                    lattice::Lattice::build(
-                        &ch[density].grid,
-                        temperature.map(|k| &ch[k].grid),
-                        &grids,
-                        brick,
-                        spare,
-                    )
-                })
-                .flatten();
-            if let Some((lat, ranges)) = built {
-                let order = std::iter::once(density).chain(temperature).chain(extra);
-                for (k, r) in order.zip(ranges) {
-                    if known[k].is_none() {
-                        known[k] = Some(r);
+            let dense = match set.lattice.as_str() {
+                "dense" => Some(true),
+                "bricks" => Some(false),
+                "off" => None,
+                _ => Some(dense_fits),
+            };
+            let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
+            match dense {
+                Some(true) => {
+                    if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare)
+                    {
+                        let order = std::iter::once(density).chain(temperature).chain(extra);
+                        for (k, r) in order.zip(ranges) {
+                            if known[k].is_none() {
+                                known[k] = Some(r);
+                            }
+                        }
+                        lattice = Some((lat, t4.elapsed().as_secs_f64()));
                     }
                 }
-                lattice = Some((lat, t4.elapsed().as_secs_f64()));
+                Some(false) => {
+                    lattice = lattice::Lattice::build_bricks(d, t, &grids, spare)
+                        .map(|lat| (lat, t4.elapsed().as_secs_f64()));
+                }
+                None => {}
             }
         }
 
@@ -424,8 +430,16 @@ impl FireVolume {
                 });
                 if let Some((lat, seconds)) = lattice {
                     vol.tables.push(TableReport {
-                        name: "march lattice (grids interleaved and padded; their brick ranges)"
-                            .into(),
+                        name: match lat.bricks() {
+                            None => {
+                                "march lattice (grids interleaved and padded; their brick ranges)"
+                                    .into()
+                            }
+                            Some(t) => format!(
+                                "march lattice (grids interleaved, a padded copy per brick: {} copies)",
+                                t.active_bricks()
+                            ),
+                        },
                         bytes: lat.bytes(),
                         seconds,
                     });

@@ -26,6 +26,8 @@ pub(super) struct Settings {
     pub brick: usize,
     /// `precision "f32"`: the march in f32 lanes where every product fits.
     pub f32_lanes: bool,
+    /// `lattice`: auto, dense, bricks or off.
+    pub lattice: String,
     pub integrator: Integrator,
     /// March step, voxels.
     pub stepsize: f64,
@@ -103,6 +105,7 @@ impl Settings {
         };
         let brick = r.int("brick")? as usize;
         let f32_lanes = r.string("precision")? == "f32";
+        let lattice = r.string("lattice")?;
         // Unset: the march for the paper's fire; ratio tracking for pbrt-v4's grids, as pbrt-v4 integrates them
         // (unbiased whatever the optical depth of a step: a 1-voxel grid σ_a = 1000 has τ = 500 per half-voxel
         // step, where the march's midpoint emission is 80× brighter than the surface layer pbrt-v4 sees).
@@ -134,6 +137,7 @@ impl Settings {
             sigma_s,
             brick,
             f32_lanes,
+            lattice,
             integrator,
             stepsize,
             cutoff,
