@@ -596,6 +596,22 @@ impl Grid {
     pub fn bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f32>()
     }
+    /// A grid of the same topology holding `f` of every stored value (the background's too); `None` when the
+    /// allocator refuses.
+    pub(crate) fn map(&self, f: impl FnMut(f32) -> f32) -> Option<Grid> {
+        let mut values = crate::alloc::with_capacity(self.values.len())?;
+        values.extend(self.values.iter().copied().map(f));
+        Some(Grid {
+            topo: self.topo.clone(),
+            values,
+        })
+    }
+    /// Whether slot `s` stores only `v` (512 values; slot 0 is the background).
+    pub(crate) fn slot_is(&self, s: usize, v: f32) -> bool {
+        self.values
+            .get(s * BRICK_VOXELS..(s + 1) * BRICK_VOXELS)
+            .is_some_and(|b| b.iter().all(|&x| x == v))
+    }
     /// The stored values (slot 0 first: the background), for load-time policies.
     pub(crate) fn values_mut(&mut self) -> &mut [f32] {
         &mut self.values

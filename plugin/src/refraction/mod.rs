@@ -35,7 +35,7 @@
 //! (n − 1).
 
 use crate::ciddor::{self, Air};
-use crate::grid::Grid;
+use crate::grid::{Grid, Topology, BRICK};
 use glam::{DVec3, Vec4};
 
 /// An index-of-refraction field: n(x) and ∇n(x) at medium-space points.
@@ -329,8 +329,16 @@ pub fn trace_verlet(
 /// The index field of a temperature grid (module docs).
 #[derive(Debug, Clone)]
 pub struct IndexGrid {
-    /// Per padded voxel: δ and its central-difference gradient (per medium unit), x fastest.
+    /// δ and its central-difference gradient (per medium unit) at the padded grid's samples, x fastest, in one
+    /// of two layouts: a dense array over the cells' lower corners shifted by one (w = c + 1 ∈ [0, dims + 1]),
+    /// or a `COPY` per brick of cells (copy 0: zeros, what cells in no copy read).
     data: Vec<Vec4>,
+    /// The copies' table, for the brick layout.
+    topo: Option<Topology>,
+    /// Strides of `data` along y and z (a copy's, or the dense array's).
+    sy: usize,
+    sz: usize,
+    /// The padded grid's dims (the temperature grid's + 2·PAD).
     dims: [usize; 3],
     p0: DVec3,
     size: DVec3,
@@ -339,10 +347,20 @@ pub struct IndexGrid {
 
 /// Rings of ambient voxels around the baked grid: δ falls to 0 over the first, the gradient over the second.
 const PAD: usize = 2;
+/// Samples per side of a copy: a brick's 8 cells need 9.
+const SIDE: usize = BRICK + 1;
+/// Samples of a copy.
+const COPY: usize = SIDE * SIDE * SIDE;
 
 impl IndexGrid {
     /// Bakes δ per voxel from `temperature` (K) over the box `p0..p1`, at vacuum wavelength `lambda_nm`, for
     /// `air` (its temperature is the ambient one), with (n − 1) exaggerated by `scale`.
+    ///
+    /// Stored as the march lattice is (`volume::lattice`): dense over the padded box, or — when that is larger
+    /// — a 9³ copy per brick of cells where δ or the force differs from zero (around the voxels hotter than
+    /// ambient), zero elsewhere, so a sparse fire's field follows its hot voxels, not its box. Both layouts
+    /// hold the same values and are read by the same lerps. `Err` with the bytes it would need when they
+    /// exceed `budget` (or the allocator refuses them).
     pub fn from_temperature(
         temperature: &Grid,
         p0: DVec3,
@@ -350,71 +368,181 @@ impl IndexGrid {
         lambda_nm: f64,
         air: &Air,
         scale: f64,
-    ) -> IndexGrid {
-        let [nx, ny, nz] = temperature.dims();
-        let voxel = (p1 - p0) / DVec3::new(nx as f64, ny as f64, nz as f64);
+        budget: u64,
+    ) -> Result<IndexGrid, u64> {
+        IndexGrid::build(temperature, [p0, p1], lambda_nm, air, scale, budget, None)
+    }
+
+    /// [`IndexGrid::from_temperature`], `dense` choosing the layout (`None`: the smaller).
+    fn build(
+        temperature: &Grid,
+        [p0, p1]: [DVec3; 2],
+        lambda_nm: f64,
+        air: &Air,
+        scale: f64,
+        budget: u64,
+        dense: Option<bool>,
+    ) -> Result<IndexGrid, u64> {
+        let n = temperature.dims();
+        let voxel = (p1 - p0) / DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
         let amb = ciddor::refractivity(lambda_nm, air);
         let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
-        let dims = [nx + 2 * PAD, ny + 2 * PAD, nz + 2 * PAD];
-        let mut delta = vec![0f32; dims[0] * dims[1] * dims[2]];
-        for k in 0..nz {
-            for j in 0..ny {
-                for i in 0..nx {
-                    let t = temperature.at(i as i64, j as i64, k as i64) as f64;
-                    if !(t > air.temperature_k) {
-                        continue;
-                    }
-                    // Memoised per 0.1 K (n − 1 changes by < 1e-4 relative over it at flame temperatures).
-                    let key = (t * 10.0).round() as i64;
-                    let r = *memo.entry(key).or_insert_with(|| {
-                        ciddor::refractivity(
-                            lambda_nm,
-                            &Air {
-                                temperature_k: key as f64 / 10.0,
-                                ..*air
-                            },
-                        )
-                    });
-                    delta[i + PAD + dims[0] * (j + PAD + dims[1] * (k + PAD))] =
-                        (scale * (r - amb)) as f32;
-                }
-            }
-        }
-        let at = |i: usize, j: usize, k: usize, a: usize, o: i64| -> f32 {
-            let mut c = [i as i64, j as i64, k as i64];
-            c[a] += o;
-            if c.iter().zip(dims).any(|(&c, d)| c < 0 || c >= d as i64) {
+        // δ of every stored temperature (0 at or below ambient: a simulation's empty voxels hold 0 K).
+        let mut delta_of = |t: f32| -> f32 {
+            let t = t as f64;
+            if !(t > air.temperature_k) {
                 return 0.0;
             }
-            delta[c[0] as usize + dims[0] * (c[1] as usize + dims[1] * c[2] as usize)]
+            // Memoised per 0.1 K (n − 1 changes by < 1e-4 relative over it at flame temperatures).
+            let key = (t * 10.0).round() as i64;
+            let r = *memo.entry(key).or_insert_with(|| {
+                ciddor::refractivity(
+                    lambda_nm,
+                    &Air {
+                        temperature_k: key as f64 / 10.0,
+                        ..*air
+                    },
+                )
+            });
+            (scale * (r - amb)) as f32
         };
+        let vec4s = |count: u64| count.saturating_mul(16);
+        let delta = temperature
+            .map(&mut delta_of)
+            .ok_or(temperature.bytes() as u64)?;
+        let dims = [0, 1, 2].map(|a| n[a] + 2 * PAD);
+        // The copies: those whose samples (padded P ∈ [8b − 1, 8b + 7]) come within one voxel of a stored
+        // brick with δ ≠ 0 (P = data + PAD, and the gradient reaches one voxel further); every copy when the
+        // background itself is hot.
+        let data_topo = delta.topology();
+        let wdims = dims.map(|d| d + 1);
+        let topo = if delta.background() != 0.0 {
+            Topology::full(wdims)
+        } else {
+            let mut list = Vec::new();
+            data_topo.for_each_slot(|b, s| {
+                if delta.slot_is(s, 0.0) {
+                    return;
+                }
+                let mut range = [(0usize, 0usize); 3];
+                for a in 0..3 {
+                    // P from lo + PAD − 1 to hi − 1 + PAD + 1; copies b with 8b − 1 ≤ the end, 8b + 7 ≥ the start.
+                    let (lo, hi) = data_topo.brick_span(b[a], a);
+                    range[a] = ((lo + PAD - 1) / BRICK, (hi + PAD + 1) / BRICK);
+                }
+                for z in range[2].0..=range[2].1 {
+                    for y in range[1].0..=range[1].1 {
+                        for x in range[0].0..=range[0].1 {
+                            list.push([x, y, z]);
+                        }
+                    }
+                }
+            });
+            Topology::from_bricks(wdims, [0; 3], list)
+        }
+        .ok_or(u64::MAX)?;
+        // The dense array over w ∈ [0, dims + 1] (a ring of zeros below and above the padded grid), unless the
+        // copies take less.
+        let dense_len = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d + 2));
+        let copies = topo.active_bricks() + 1;
+        let brick_len = copies.checked_mul(COPY);
+        let (len, topo) = match (dense_len, brick_len) {
+            (Some(d), Some(b)) if dense.unwrap_or(d <= b) => (d, None),
+            (_, Some(b)) => (b, Some(topo)),
+            (Some(d), None) => (d, None),
+            (None, None) => return Err(u64::MAX),
+        };
+        let bytes = vec4s(len as u64).saturating_add(topo.as_ref().map_or(0, |t| t.bytes() as u64));
+        if bytes > budget {
+            return Err(bytes);
+        }
+        let mut data = crate::alloc::filled(len, Vec4::ZERO).ok_or(bytes)?;
         // The force of the ray equation, ∇(n²/2), by central differences of φ = n²/2 − n_amb²/2 = n_amb δ + δ²/2:
         // interpolated, its integral along an axis telescopes to the change of φ, so a ray leaves a region of
         // parallel layers in the direction it entered (Snell's invariant), as with the exact gradient.
         let n_amb = 1.0 + scale * amb;
-        let phi = |i: usize, j: usize, k: usize, a: usize, o: i64| -> f64 {
-            let d = at(i, j, k, a, o) as f64;
-            n_amb * d + 0.5 * d * d
-        };
-        let mut data = Vec::with_capacity(delta.len());
-        for k in 0..dims[2] {
-            for j in 0..dims[1] {
-                for i in 0..dims[0] {
-                    let g = |a: usize| {
-                        ((phi(i, j, k, a, 1) - phi(i, j, k, a, -1)) / (2.0 * voxel[a])) as f32
-                    };
-                    data.push(Vec4::new(at(i, j, k, 0, 0), g(0), g(1), g(2)));
+        // Fills `out` (x fastest) with the samples w ∈ [lo, lo + side) (P = w − 1).
+        let fill = |lo: [usize; 3], side: [usize; 3], out: &mut [Vec4]| {
+            // δ over them and one more on each side: P from lo − 2 (data P − PAD).
+            let e = side.map(|s| s + 2);
+            let mut d = vec![0f32; e[0] * e[1] * e[2]];
+            let base = lo.map(|v| v as i64 - 2 - PAD as i64);
+            for z in 0..e[2] {
+                for y in 0..e[1] {
+                    for x in 0..e[0] {
+                        d[x + e[0] * (y + e[1] * z)] =
+                            delta.at(base[0] + x as i64, base[1] + y as i64, base[2] + z as i64);
+                    }
                 }
             }
-        }
+            let phi = |i: usize| {
+                let v = d[i] as f64;
+                n_amb * v + 0.5 * v * v
+            };
+            let step = [1, e[0], e[0] * e[1]];
+            for z in 0..side[2] {
+                for y in 0..side[1] {
+                    for x in 0..side[0] {
+                        // Samples off the padded grid stay zero (as its outside reads).
+                        let w = [lo[0] + x, lo[1] + y, lo[2] + z];
+                        if (0..3).any(|a| w[a] == 0 || w[a] > dims[a]) {
+                            continue;
+                        }
+                        let i = (x + 1) + e[0] * ((y + 1) + e[1] * (z + 1));
+                        let g = |a: usize| {
+                            ((phi(i + step[a]) - phi(i - step[a])) / (2.0 * voxel[a])) as f32
+                        };
+                        out[x + side[0] * (y + side[1] * z)] = Vec4::new(d[i], g(0), g(1), g(2));
+                    }
+                }
+            }
+        };
+        let threads = crate::par::threads(8);
+        let (sy, sz) = match &topo {
+            Some(topo) => {
+                let mut of = crate::alloc::filled(copies, [0usize; 3]).ok_or(bytes)?;
+                topo.for_each_slot(|b, s| of[s] = b);
+                let per = (copies - 1).div_ceil(threads).max(1);
+                std::thread::scope(|s| {
+                    for (k, chunk) in data[COPY..].chunks_mut(COPY * per).enumerate() {
+                        let (of, fill) = (&of, &fill);
+                        s.spawn(move || {
+                            for (c, out) in chunk.chunks_exact_mut(COPY).enumerate() {
+                                fill(of[1 + k * per + c].map(|v| BRICK * v), [SIDE; 3], out);
+                            }
+                        });
+                    }
+                });
+                (SIDE, SIDE * SIDE)
+            }
+            None => {
+                // z-slabs of the dense array over the threads.
+                let side = dims.map(|d| d + 2);
+                let slab = side[0] * side[1];
+                let per = side[2].div_ceil(threads).max(1);
+                std::thread::scope(|s| {
+                    for (k, chunk) in data.chunks_mut(slab * per).enumerate() {
+                        let fill = &fill;
+                        s.spawn(move || {
+                            let h = chunk.len() / slab;
+                            fill([0, 0, k * per], [side[0], side[1], h], chunk);
+                        });
+                    }
+                });
+                (side[0], slab)
+            }
+        };
         let pad = voxel * PAD as f64;
-        IndexGrid {
+        Ok(IndexGrid {
             data,
+            topo,
+            sy,
+            sz,
             dims,
             p0: p0 - pad,
             size: p1 - p0 + 2.0 * pad,
             n_amb,
-        }
+        })
     }
 
     /// The ambient index (outside the volume).
@@ -424,6 +552,7 @@ impl IndexGrid {
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.data.len() * std::mem::size_of::<Vec4>()
+            + self.topo.as_ref().map_or(0, Topology::bytes)
     }
     /// The box where n differs from ambient: the grid's, two voxels wider on every side.
     pub fn bounds(&self) -> [DVec3; 2] {
@@ -444,42 +573,22 @@ impl IndexGrid {
             crate::grid::floor(s.z),
         );
         let f = (s - fl).as_vec3();
-        let [i, j, k] = [fl.x as i64, fl.y as i64, fl.z as i64];
-        // The padding keeps every lookup inside the fire's box off the array's edges; only the outer half of the
-        // last ring reads past them (as zeros).
-        let corners = if i >= 0
-            && j >= 0
-            && k >= 0
-            && i + 1 < d[0] as i64
-            && j + 1 < d[1] as i64
-            && k + 1 < d[2] as i64
-        {
-            // All eight inside (everywhere but the outer half of the last ring): two rows of two pairs.
-            let o = i as usize + d[0] * (j as usize + d[1] * k as usize);
-            let (sy, sz) = (d[0], d[0] * d[1]);
-            let r = |o: usize| (self.data[o], self.data[o + 1]);
-            [r(o), r(o + sy), r(o + sz), r(o + sy + sz)]
-        } else {
-            let c = |di: i64, dj: i64, dk: i64| -> Vec4 {
-                let (a, b, cc) = (i + di, j + dj, k + dk);
-                if a < 0
-                    || b < 0
-                    || cc < 0
-                    || a >= d[0] as i64
-                    || b >= d[1] as i64
-                    || cc >= d[2] as i64
-                {
-                    return Vec4::ZERO;
-                }
-                self.data[a as usize + d[0] * (b as usize + d[1] * cc as usize)]
-            };
-            [
-                (c(0, 0, 0), c(1, 0, 0)),
-                (c(0, 1, 0), c(1, 1, 0)),
-                (c(0, 0, 1), c(1, 0, 1)),
-                (c(0, 1, 1), c(1, 1, 1)),
-            ]
+        // The cell's lower corner c ∈ [−1, d − 1] (u ∈ [0, 1]); its copy from w = c + 1, zeros when it has none.
+        let w = [fl.x + 1.0, fl.y + 1.0, fl.z + 1.0].map(|c| c as usize);
+        let (sy, sz) = (self.sy, self.sz);
+        let o = match &self.topo {
+            Some(t) => {
+                t.slot(w.map(|c| c / BRICK)) * COPY
+                    + (w[0] % BRICK)
+                    + SIDE * ((w[1] % BRICK) + SIDE * (w[2] % BRICK))
+            }
+            None => w[0] + sy * w[1] + sz * w[2],
         };
+        let r = |o: usize| match self.data.get(o..o + 2) {
+            Some(&[a, b]) => (a, b),
+            _ => (Vec4::ZERO, Vec4::ZERO),
+        };
+        let corners = [r(o), r(o + sy), r(o + sz), r(o + sy + sz)];
         let [x00, x10, x01, x11] = corners.map(|(a, b)| a.lerp(b, f.x));
         let v = x00.lerp(x10, f.y).lerp(x01.lerp(x11, f.y), f.z);
         (v.x as f64, DVec3::new(v.y as f64, v.z as f64, v.w as f64))

@@ -304,7 +304,7 @@ fn the_baked_grid_follows_ciddor_and_is_continuous() {
     let grid = Grid::new([n, n, n], t).unwrap();
     let (p0, p1) = (DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 3.0, 2.0));
     let amb = air(288.0);
-    let f = IndexGrid::from_temperature(&grid, p0, p1, 550.0, &amb, 1.0);
+    let f = IndexGrid::from_temperature(&grid, p0, p1, 550.0, &amb, 1.0, u64::MAX).unwrap();
     // At a voxel centre the index is Ciddor's at that voxel's temperature.
     let centre = |i: usize, j: usize, k: usize| {
         p0 + (DVec3::new(i as f64, j as f64, k as f64) + 0.5) / n as f64 * (p1 - p0)
@@ -354,7 +354,9 @@ fn the_index_gradient_converges_at_second_order() {
             }
         }
         let grid = Grid::new([res, res, res], t).unwrap();
-        let f = IndexGrid::from_temperature(&grid, DVec3::ZERO, DVec3::ONE, 550.0, &amb, 1.0);
+        let f =
+            IndexGrid::from_temperature(&grid, DVec3::ZERO, DVec3::ONE, 550.0, &amb, 1.0, u64::MAX)
+                .unwrap();
         let mut worst = 0.0f64;
         let mut scale = 0.0f64;
         for &p in &points {
@@ -374,4 +376,60 @@ fn the_index_gradient_converges_at_second_order() {
         assert!(w[0] / w[1] > 3.0, "{errs:?}");
     }
     assert!(errs[2] < 0.015, "{errs:?}");
+}
+
+#[test]
+fn the_brick_layout_holds_the_dense_fields_values() {
+    // Hot voxels in a few random bricks of a sparse 120 × 60 × 150 grid (sample 0 anywhere in its brick), the
+    // rest 0 K (no data): at random points — in the copies, between them and on the padded box's faces — the
+    // index and force of the copies equal the dense array's to the bit, with a fraction of the memory.
+    let mut rng = crate::rng::Rng::new(3);
+    for case in 0..4 {
+        let dims: [usize; 3] = [120, 60, 150];
+        let off = [case % 8, (3 * case) % 8, (5 * case) % 8];
+        let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(8));
+        let keep: Vec<bool> = (0..nb[0] * nb[1] * nb[2])
+            .map(|_| rng.next_f64() < 0.01)
+            .collect();
+        let topo = std::sync::Arc::new(
+            crate::grid::Topology::build_offset(dims, off, |b| {
+                keep[b[0] + nb[0] * (b[1] + nb[1] * b[2])]
+            })
+            .unwrap(),
+        );
+        let t: Vec<f32> = (0..dims[0] * dims[1] * dims[2])
+            .map(|_| 300.0 + 1500.0 * rng.next_f64() as f32)
+            .collect();
+        let grid = Grid::from_dense(topo, &t, 0.0).unwrap();
+        let amb = air(288.0);
+        let (p0, p1) = (DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 1.5, 3.0));
+        let build = |dense| {
+            IndexGrid::build(&grid, [p0, p1], 550.0, &amb, 50.0, u64::MAX, Some(dense)).unwrap()
+        };
+        let (d, b) = (build(true), build(false));
+        assert!(b.topo.is_some() && d.topo.is_none());
+        assert!(
+            b.bytes() * 2 < d.bytes(),
+            "{} vs {} bytes",
+            b.bytes(),
+            d.bytes()
+        );
+        let [c0, c1] = d.bounds();
+        let (mut bent, mut checked) = (0, 0);
+        for i in 0..40_000 {
+            let u = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+            let mut p = c0 + (u * 1.1 - DVec3::splat(0.05)) * (c1 - c0);
+            if i % 5 == 0 {
+                p.x = if i % 2 == 0 { c0.x } else { c1.x };
+            }
+            let (nd, fd) = d.n_force(p);
+            assert_eq!((nd, fd), b.n_force(p), "case {case} at {p}");
+            bent += (fd != DVec3::ZERO) as usize;
+            checked += 1;
+        }
+        assert!(
+            bent > 200 && checked == 40_000,
+            "{bent} points in a gradient"
+        );
+    }
 }

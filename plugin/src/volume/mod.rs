@@ -357,6 +357,10 @@ impl FireVolume {
                     )
                 })?;
                 let t2 = Instant::now();
+                // What the budget leaves after the grids, the tables and the lattice.
+                let left = spare
+                    .saturating_sub(tables.iter().map(|t| t.bytes as u64).sum())
+                    .saturating_sub(lattice.as_ref().map_or(0, |(l, _)| l.bytes() as u64));
                 let rf = crate::refraction::march::Refraction::build(
                     &ds.channels()[t_ch].grid,
                     ds.bounds(),
@@ -365,7 +369,16 @@ impl FireVolume {
                     rs.rk4,
                     step,
                     ds.voxel_size().min_element(),
-                );
+                    left,
+                )
+                .map_err(|bytes| Error::TooLarge {
+                    file: "refraction".into(),
+                    what:
+                        "the index field (16 bytes per voxel around the voxels hotter than ambient)"
+                            .into(),
+                    bytes,
+                    cap: left,
+                })?;
                 tables.push(TableReport {
                     name: "refraction index field".into(),
                     bytes: rf.field.bytes(),
