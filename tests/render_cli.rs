@@ -863,3 +863,62 @@ fn an_instance_renders_as_its_object_written_out_in_place() {
         mean_y(&b)
     );
 }
+
+#[test]
+fn the_fire_light_is_built_only_where_a_path_can_sample_it() {
+    // The plume behind its interface sphere, maxdepth 1: alone, or above a mirror floor, no path vertex samples
+    // a light (the mirror has no non-specular lobe), so the fire light is left out — saying why — and the image
+    // is that of `--fire-light off` to the bit; above a diffuse floor, or with maxdepth 0 off the record, the
+    // rule follows.
+    let dir = tmp("leave-out");
+    let nvdb =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let scene = |floor: &str, depth: u32| {
+        format!(
+            "LookAt 0 -3 0.4  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" {depth}\nWorldBegin\nMakeNamedMedium \"kaboom\" \"string type\" \"nanovdb\" \"string filename\" \"{}\" \"spectrum sigma_a\" [200 10 900 10] \"spectrum sigma_s\" [200 0 900 0] \"float Lescale\" 5 \"float temperaturecutoff\" 1 \"float temperaturescale\" 1.5\nAttributeBegin\nMediumInterface \"kaboom\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n{floor}",
+            nvdb.display()
+        )
+    };
+    let quad = "Shape \"trianglemesh\" \"point3 P\" [-5 -5 -1.1  5 -5 -1.1  5 5 -1.1  -5 5 -1.1] \"integer indices\" [0 1 2 0 2 3]\n";
+    let mirror = format!("Material \"conductor\" \"float roughness\" 0\n{quad}");
+    let diffuse = format!("Material \"diffuse\"\n{quad}");
+    let stats = |name: &str, text: String, extra: &[&str]| {
+        let f = dir.join(format!("{name}.pbrt"));
+        std::fs::write(&f, text).unwrap();
+        let out = dir.join(format!("{name}{}.exr", extra.len()));
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(&f)
+            .arg("-o")
+            .arg(&out)
+            .args(["--quiet", "--stats", "--seed", "4"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            std::fs::read(&out).unwrap(),
+        )
+    };
+    for (name, text) in [
+        ("alone", scene("", 1)),
+        ("mirror", scene(&mirror, 1)),
+        ("depth0", scene(&diffuse, 0)),
+    ] {
+        let (s, img) = stats(name, text.clone(), &[]);
+        assert!(
+            s.contains("0 lights")
+                && s.contains("fire light: left out (")
+                && !s.contains("emitting voxels"),
+            "{name}: {s}"
+        );
+        let (_, off) = stats(name, text, &["--fire-light", "off"]);
+        assert!(img == off, "{name}: the image must not change");
+    }
+    let (s, _) = stats("diffuse", scene(&diffuse, 1), &[]);
+    assert!(
+        s.contains("1 lights") && s.contains("emitting voxels") && !s.contains("left out"),
+        "{s}"
+    );
+}

@@ -169,6 +169,9 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
                     bytes as f64 / 1e6
                 );
             }
+            if let Some(why) = &m.light_left_out {
+                out += &format!("  fire light: left out ({why})\n");
+            }
         }
         out += &format!(
             "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s\n",

@@ -55,6 +55,15 @@ impl Roughness {
     fn at(&self, uv: Vec2) -> TrowbridgeReitz {
         TrowbridgeReitz::from_roughness(self.u.eval(uv), self.v.eval(uv), self.remap)
     }
+    /// Whether every hit is smooth: a constant roughness whose α is below 10⁻³ (a perfect mirror or glass).
+    pub fn always_smooth(&self) -> bool {
+        match (&self.u, &self.v) {
+            (FloatTex::Const(u), FloatTex::Const(v)) => {
+                TrowbridgeReitz::from_roughness(*u, *v, self.remap).smooth()
+            }
+            _ => false,
+        }
+    }
 }
 
 /// A dielectric's index: one value, or one per bin (dispersive).
@@ -164,6 +173,31 @@ pub enum Material {
         b: Option<usize>,
         amount: FloatTex,
     },
+}
+
+impl Material {
+    /// Whether a hit on this material can have a non-specular lobe, where next-event estimation samples the
+    /// lights (`all`: the scene's materials, which `mix` refers to; `interface`, `None` in a mix, never does).
+    pub fn may_be_non_specular(&self, all: &[Material]) -> bool {
+        self.non_specular_within(all, 0)
+    }
+    fn non_specular_within(&self, all: &[Material], depth: usize) -> bool {
+        match self {
+            Material::Conductor { rough, .. } | Material::Dielectric { rough, .. } => {
+                !rough.always_smooth()
+            }
+            Material::ThinDielectric { .. } => false,
+            // (A chain of mixes deeper than any scene writes is taken to reach a diffuse one.)
+            Material::Mix { a, b, .. } => {
+                depth > 32
+                    || [a, b].iter().any(|m| {
+                        m.and_then(|i| all.get(i))
+                            .is_some_and(|m| m.non_specular_within(all, depth + 1))
+                    })
+            }
+            _ => true,
+        }
+    }
 }
 
 /// A hash of a hit's point and outgoing direction to [0, 1) (`mix`'s choice, fixed per point and view).

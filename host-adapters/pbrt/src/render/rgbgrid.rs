@@ -54,6 +54,13 @@ pub enum Track {
 }
 
 impl RgbGrid {
+    /// Whether any voxel scatters (σ_s > 0 in some bin).
+    pub fn scatters(&self) -> bool {
+        match &self.ss {
+            Grid::Voxels(v) => v.iter().any(|s| s.max() > 0.0),
+            Grid::Constant(s) => s.max() > 0.0,
+        }
+    }
     fn lookup(&self, v: &[S], p: DVec3) -> S {
         // pbrt-v4's SampledGrid::Lookup: p ∈ [0, 1]³ of the box; samples at (i + ½)/n.
         let [nx, ny, nz] = self.n;

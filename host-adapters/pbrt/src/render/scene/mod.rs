@@ -241,6 +241,30 @@ impl Portal {
     }
 }
 
+/// Why no path of the scene can ask a light for a sample, if none can: `volpath` samples the lights (next-event
+/// estimation) only at a surface hit with a non-specular lobe or at a scattering event in a medium, and only
+/// below `maxdepth`. Then a fire light would be built for nothing (the fire's emission still reaches every path
+/// that crosses it).
+fn no_light_sampling(b: &builder::Builder) -> Option<String> {
+    if b.maxdepth == 0 {
+        return Some("maxdepth 0: no path vertex samples a light".into());
+    }
+    let scatters = b.media.iter().any(|m| match m {
+        Medium::Plugin { scatters, .. } => *scatters,
+        Medium::Homogeneous { ss, .. } => ss.max() > 0.0,
+        Medium::RgbGrid(g) => g.scatters(),
+    });
+    let surfaces = b.prims.iter().any(|p| {
+        p.material
+            .and_then(|m| b.materials.get(m))
+            .is_some_and(|m| m.may_be_non_specular(&b.materials))
+    });
+    (!scatters && !surfaces).then(|| {
+        "no surface with a non-specular lobe and no scattering medium: no path samples a light"
+            .into()
+    })
+}
+
 /// What the plugin built for one medium.
 #[derive(Debug, Clone)]
 pub struct MediumReport {
@@ -250,6 +274,8 @@ pub struct MediumReport {
     pub channels: u32,
     /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds).
     pub light: Option<(u64, f64, f64, u64, f64)>,
+    /// Why the fire light was left out, when it was.
+    pub light_left_out: Option<String>,
 }
 
 /// A render-ready scene.
@@ -654,8 +680,17 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         &format!("{camera_type} camera"),
         cp,
     )?;
-    // Fire lights: every plugin medium that emits gets one (unless switched off).
-    if !ov.no_fire_light {
+    // Fire lights: every plugin medium that emits gets one, unless switched off or no path can sample it.
+    let left_out = if ov.no_fire_light {
+        Some("--fire-light off".to_string())
+    } else {
+        no_light_sampling(&b)
+    };
+    if let Some(why) = &left_out {
+        for rep in &mut b.media_reports {
+            rep.light_left_out = Some(why.clone());
+        }
+    } else {
         let mut report = 0;
         for (mi, m) in b.media.iter().enumerate() {
             if let Medium::Plugin { vol, .. } = m {
