@@ -132,7 +132,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         get("light_power_w").parse::<f64>().unwrap() > 0.0
             && get("light_voxels").parse::<u64>().unwrap() > 1000
     );
-    assert_eq!(get("channels"), "30");
+    assert_eq!(get("channels"), "32");
     // ABI 0.3 from C: the Mantaflow frame's temperature range, 0 … 2.974609 × temperaturescale 1000 K.
     assert_eq!(get("temperature_status"), "0");
     assert_eq!(get("temperature_min"), "0");
@@ -149,7 +149,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             Param::float("sootscale", 1e-6),
         ])
         .unwrap();
-    let (mut l, mut t) = (vec![0f32; 30], vec![0f32; 30]);
+    let (mut l, mut t) = (vec![0f32; 32], vec![0f32; 32]);
     v.integrate(
         &[Ray {
             origin: [1.0, -1.0, 0.5],

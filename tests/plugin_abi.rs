@@ -89,22 +89,23 @@ fn loads_describes_and_integrates() {
 
     let v = p.create_volume(&fire_params()).unwrap();
     let info = v.info();
-    assert_eq!(info.channels, 30);
+    // The default spectrum: 32 bins over 400–780 nm (11.875 nm wide).
+    assert_eq!(info.channels, 32);
     assert_eq!(info.channel_space, firemedium_abi::FM_SPACE_SPECTRAL);
     assert!(info.bytes > 1_000_000 && info.build_seconds > 0.0);
     let xyz = v.channel_xyz().unwrap();
     assert!(
-        (xyz[15][1] - 683.0 * 10.0 * 0.995).abs() < 683.0 * 10.0 * 0.02,
+        (xyz[13][1] - 683.0 * 11.875 * 0.995).abs() < 683.0 * 11.875 * 0.02,
         "{:?}",
-        xyz[15]
-    ); // ȳ ≈ 1 at 555 nm
+        xyz[13]
+    ); // ȳ ≈ 0.995 at the bin's centre, 560.3 nm
        // The temperature range (ABI 0.3): the Mantaflow frame's 0 … 2.974609 × temperaturescale 1000.
     let [lo, hi] = v.temperature_range().unwrap().expect("a temperature grid");
     assert!(lo == 0.0 && (hi - 2974.609).abs() < 1e-3, "{lo} {hi}");
 
     // Same rays through the rlib, in process: the cdylib gives the same numbers.
     let rs = rays(64);
-    let c = 30;
+    let c = 32;
     let (mut l, mut t) = (vec![0f32; 64 * c], vec![0f32; 64 * c]);
     let mut exits = vec![Default::default(); 64];
     v.integrate(&rs, &mut l, Some(&mut t), Some(&mut exits))
@@ -261,7 +262,7 @@ fn the_fire_light_samples_through_the_abi() {
     let n = 2000;
     let mut rng = firemedium_plugin::rng::Rng::new(7);
     let u: Vec<[f64; 6]> = (0..n).map(|_| [(); 6].map(|_| rng.next_f64())).collect();
-    let (mut pts, mut pdf, mut em) = (vec![[0.0; 3]; n], vec![0.0; n], vec![0f32; n * 30]);
+    let (mut pts, mut pdf, mut em) = (vec![[0.0; 3]; n], vec![0.0; n], vec![0f32; n * 32]);
     light.sample(&u, &mut pts, &mut pdf, Some(&mut em)).unwrap();
     let mut again = vec![0.0; n];
     light.pdf(&pts, &mut again).unwrap();
@@ -277,7 +278,7 @@ fn the_fire_light_samples_through_the_abi() {
             "{:?}",
             pts[i]
         );
-        assert!(em[i * 30..(i + 1) * 30]
+        assert!(em[i * 32..(i + 1) * 32]
             .iter()
             .all(|e| e.is_finite() && *e >= 0.0));
     }

@@ -180,6 +180,9 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
             st.camera_rays,
             st.camera_rays as f64 / st.seconds.max(1e-9)
         );
+        if let Some(bytes) = crate::bench::perf::peak_rss() {
+            out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
+        }
     }
     if !img.complete {
         return Err((

@@ -3,6 +3,7 @@
 pub mod error;
 pub mod perf;
 pub mod stability;
+pub mod user_path;
 
 use clap::{Args, Subcommand};
 
@@ -16,8 +17,9 @@ pub struct BenchArgs {
 enum What {
     /// Stiff and extreme cases, expected vs measured; exits 1 if any fails.
     Stability,
-    /// Pegoraro & Parker's workload: 512², 1 spp, a 256³ fire, half-voxel steps; time, rays/s, samples/s,
-    /// memory, error against a converged reference; with refraction.
+    /// Pegoraro & Parker's workload (512², a 256³ fire, half-voxel steps) as a pbrt-v4 scene through
+    /// `firemedium render` and the cdylib, per sampler, against an 8×8 sub-pixel reference and a naive march;
+    /// `--kernel`: the march alone, in process (a micro-benchmark).
     Perf(PerfArgs),
     /// Error against render time of every estimator of the fire seen directly: march (spectral, rgb) at a
     /// ladder of steps, delta and ratio tracking at a ladder of samples; CSV + log–log plot (SVG, PNG).
@@ -78,13 +80,22 @@ pub struct PerfArgs {
     #[arg(long, default_value_t = 0.0625)]
     reference_step: f64,
     /// The reference's spectral bins over 380–780 nm, the whole support of the CIE ȳ table (its correction from
-    /// the default 30 bins over 400–700 nm, made at ½ voxel).
+    /// the default spectrum, made at ½ voxel).
     #[arg(long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(30..=4096))]
     reference_bins: u32,
     /// Time each configuration this many times and report the fastest run, load + render (the machine's speed
     /// drifts by tens of percent between runs; the fastest is the least disturbed).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeat: u32,
+    /// The march alone, in process, with its own camera (a kernel micro-benchmark: no scene, no renderer, no
+    /// ABI), against a reference at `--reference-step` with `--reference-bins`.
+    #[arg(long)]
+    kernel: bool,
+    /// The user-path reference's sub-pixels per side (stratified, at their centres) and march step (voxels).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=64))]
+    reference_subpixels: u32,
+    #[arg(long, default_value_t = 0.25)]
+    reference_path_step: f64,
 }
 
 pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
@@ -117,6 +128,9 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
 }
 
 fn perf_report(a: &PerfArgs) -> Result<String, String> {
+    if !a.kernel {
+        return user_path_report(a);
+    }
     use firemedium_plugin::params::Param;
     let file = match &a.dataset {
         Some(f) => f.clone(),
@@ -133,7 +147,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         a.repeat
     );
     // The reference, in f64 (so the error column holds the f32 lanes' rounding too), converged in each of the
-    // workload's discretisations: the march at `reference_step` with the default 30 bins over 400–700 nm, plus
+    // workload's discretisations: the march at `reference_step` with the default spectrum, plus
     // the spectral correction at ½ voxel from those bins to `reference_bins` bins over 380–780 nm — the whole
     // of ȳ, whose tail past 700 nm carries a fire's red (the errors are nearly independent: the step's is O(h²),
     // the spectrum's O(1/N²) plus the range's, and the difference of two ½-voxel images carries the step error
@@ -158,7 +172,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
         .map(|(r, (f, h))| r + (f - h))
         .collect();
     out += &format!(
-        "reference: march at {} voxel in f64 with 30 bins over 400–700 nm ({:.1} s) + the correction to {} bins over 380–780 nm at ½ voxel ({:.1} s); at ½ voxel with 30 bins over 400–700 nm (f64) the step alone is {:.2e} off it, the spectrum alone {:.2e} (the bins and the range; `spectral_bins` splits them)\n\n",
+        "reference: march at {} voxel in f64 with the default spectrum ({:.1} s) + the correction to {} bins over 380–780 nm at ½ voxel ({:.1} s); at ½ voxel with the default spectrum (f64) the step alone is {:.2e} off it, the spectrum alone {:.2e} (the bins and the range; `spectral_bins` splits them)\n\n",
         a.reference_step,
         fine_step.render_s,
         a.reference_bins,
@@ -176,19 +190,28 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
             Param::float("lambdamax", 780.0),
         ]
     };
+    let thesis = |extra: Vec<Param>| {
+        let mut list = vec![
+            Param::float("stepsize", 0.5),
+            Param::int("bins", 30),
+            Param::float("lambdamax", 700.0),
+        ];
+        list.extend(extra);
+        list
+    };
     let configs: Vec<(&str, Vec<Param>)> = vec![
         (
-            "march ½ voxel, spectral (30 bins, 400–700 nm: the default)",
-            vec![Param::float("stepsize", 0.5)],
+            "march ½ voxel, spectral (30 bins, 400–700 nm: the thesis's)",
+            thesis(vec![]),
         ),
-        ("march ½ voxel, spectral (32 bins, 400–780 nm)", wide(32)),
+        (
+            "march ½ voxel, spectral (32 bins, 400–780 nm: the default)",
+            wide(32),
+        ),
         ("march ½ voxel, spectral (16 bins, 400–780 nm)", wide(16)),
         (
             "march ½ voxel, spectral (30 bins, 400–700 nm), f64 (no lanes)",
-            vec![
-                Param::float("stepsize", 0.5),
-                Param::string("precision", "f64"),
-            ],
+            thesis(vec![Param::string("precision", "f64")]),
         ),
         (
             "march ½ voxel, rgb",
@@ -198,7 +221,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
             ],
         ),
         (
-            "march ½ voxel, spectral (30 bins, 400–700 nm), refraction",
+            "march ½ voxel, spectral (the default), refraction",
             vec![
                 Param::float("stepsize", 0.5),
                 Param::bool("refraction", true),
@@ -232,6 +255,153 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
     }
     if let Some(m) = perf::peak_rss() {
         out += &format!("\npeak memory (VmHWM) {:.0} MB\n", m as f64 / 1e6);
+    }
+    Ok(out)
+}
+
+/// The workload through `firemedium render` (see [`user_path`]).
+fn user_path_report(a: &PerfArgs) -> Result<String, String> {
+    use user_path::{naive, rel_rmse, render, scene, Rendered, Scratch};
+    let file = match &a.dataset {
+        Some(f) => f.clone(),
+        None => perf::dataset(&std::env::temp_dir(), a.grid as usize)?,
+    };
+    let file = file
+        .canonicalize()
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    let size = a.image as usize;
+    let bounds =
+        firemedium_plugin::volume::FireVolume::new(&[firemedium_plugin::params::Param::string(
+            "filename",
+            &file.to_string_lossy(),
+        )])
+        .map_err(|e| e.to_string())?
+        .bounds();
+    let dir = Scratch::new("perf")?;
+    let stratified = |n: u32| {
+        format!("Sampler \"stratified\" \"integer xsamples\" {n} \"integer ysamples\" {n} \"bool jitter\" false")
+    };
+    let centres = stratified(1);
+    let step = |h: f64| format!("\"float stepsize\" {h}");
+    let half = step(0.5);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut out = format!(
+        "dataset {} ({:.1} MB), {size}×{size} pixels, `firemedium render` (a child process, the cdylib) on {cores} threads unless said; fastest of {} alternating round(s)\n\n",
+        file.display(),
+        std::fs::metadata(&file).map_or(0.0, |m| m.len() as f64 / 1e6),
+        a.repeat
+    );
+    // The reference: sub-pixel centres, a finer step; its own step error from pixel-centre renders at its step
+    // and half of it.
+    let (r, rs) = (a.reference_subpixels, a.reference_path_step);
+    let reference = render(
+        &dir.0,
+        "reference",
+        &scene(&file, bounds, size, &stratified(r), &step(rs)),
+        &[],
+    )?;
+    let at = |h: f64, name: &str| {
+        render(
+            &dir.0,
+            name,
+            &scene(&file, bounds, size, &centres, &step(h)),
+            &[],
+        )
+    };
+    let (coarse, fine) = (
+        at(rs, "centres-ref-step")?,
+        at(0.5 * rs, "centres-half-ref-step")?,
+    );
+    let (subpix, ref_step) = (
+        rel_rmse(&coarse.y, &reference.y),
+        rel_rmse(&coarse.y, &fine.y),
+    );
+    out += &format!(
+        "reference: {r}×{r} sub-pixel centres at a {rs}-voxel step, default spectrum ({:.1} s); its step error ≈ {ref_step:.2e} (pixel centres at {rs} against {} voxel); pixel centres differ from it by {subpix:.2e} at {rs} voxel\n\n",
+        reference.render_s,
+        0.5 * rs
+    );
+    let configs: Vec<(&str, String, String, Vec<&str>)> = vec![
+        (
+            "pixel centres (stratified 1×1, no jitter), ½ voxel: the paper's workload",
+            centres.clone(),
+            half.clone(),
+            vec![],
+        ),
+        (
+            "the same on 1 thread",
+            centres.clone(),
+            half.clone(),
+            vec!["--threads", "1"],
+        ),
+        (
+            "pixel centres, ½ voxel, 16 bins over 400–780 nm",
+            centres.clone(),
+            format!("{half} \"integer bins\" 16 \"float lambdamin\" 400 \"float lambdamax\" 780"),
+            vec![],
+        ),
+        (
+            "zsobol, 16 spp, ½ voxel",
+            "Sampler \"zsobol\" \"integer pixelsamples\" 16".into(),
+            half.clone(),
+            vec![],
+        ),
+        (
+            "independent, 16 spp, ½ voxel",
+            "Sampler \"independent\" \"integer pixelsamples\" 16".into(),
+            half.clone(),
+            vec![],
+        ),
+    ];
+    let mut best: Vec<Option<Rendered>> = vec![None; configs.len()];
+    let mut base: Option<(f64, f64, Vec<f64>)> = None;
+    for _ in 0..a.repeat {
+        // Alternating: the baseline, then every configuration, each round.
+        let n = naive(&file, size)?;
+        if base.as_ref().map_or(true, |b| n.0 + n.1 < b.0 + b.1) {
+            base = Some(n);
+        }
+        for (k, (name, sampler, medium, extra)) in configs.iter().enumerate() {
+            let r = render(
+                &dir.0,
+                &format!("config{k}"),
+                &scene(&file, bounds, size, sampler, medium),
+                extra,
+            )
+            .map_err(|e| format!("{name}: {e}"))?;
+            if best[k].as_ref().map_or(true, |b| r.wall_s < b.wall_s) {
+                best[k] = Some(r);
+            }
+        }
+    }
+    let Some((nl, nr, ny)) = base else {
+        return Err("no round ran".into());
+    };
+    let naive_total = nl + nr;
+    out += "| configuration | load s | render s | total s (process) | rays/s | peak MB | rel. RMSE vs reference | total / naive |\n|---|---|---|---|---|---|---|---|\n";
+    out += &format!(
+        "| naive march (f64, no skipping, every coefficient at every step, 2 threads, in process) | {nl:.3} | {nr:.3} | {naive_total:.3} | {:.0} | — | {:.2e} | 1 |\n",
+        (size * size) as f64 / nr,
+        rel_rmse(&ny, &reference.y)
+    );
+    for ((name, ..), r) in configs.iter().zip(&best) {
+        let Some(r) = r else { continue };
+        out += &format!(
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.0} | {:.2e} | {:.2} |\n",
+            r.load_s,
+            r.render_s,
+            r.wall_s,
+            r.rays / r.render_s,
+            r.peak_mb,
+            rel_rmse(&r.y, &reference.y),
+            r.wall_s / naive_total
+        );
+    }
+    if let (Some(two), Some(one)) = (&best[0], &best[1]) {
+        out += &format!(
+            "\ntwo threads against one (render phase): {:.2}×\n",
+            one.render_s / two.render_s
+        );
     }
     Ok(out)
 }

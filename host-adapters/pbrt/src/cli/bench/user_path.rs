@@ -1,0 +1,186 @@
+//! `firemedium bench perf`, the user's path: Pegoraro & Parker's workload (a 512² image of a 256³ fire, half-voxel
+//! steps, emission–absorption) as a pbrt-v4 scene rendered by `firemedium render` — a child process loading the
+//! cdylib, as a user runs it — with each sampler a scene can ask for, against an 8 × 8 sub-pixel reference
+//! rendered the same way, and against a naive march written here as the baseline (f64, no empty-space skipping,
+//! a fixed half-voxel step from the box's entry, every coefficient evaluated at every step, 2 threads).
+
+use firemedium::metrics::{errors, luminance};
+use firemedium_plugin::params::Param;
+use firemedium_plugin::volume::FireVolume;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// What one `firemedium render` reported and wrote.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// Scene load and plugin build, the render, and the child's wall time (process start to exit).
+    pub load_s: f64,
+    pub render_s: f64,
+    pub wall_s: f64,
+    pub rays: f64,
+    pub peak_mb: f64,
+    /// Luminance per pixel.
+    pub y: Vec<f64>,
+}
+
+/// The workload's scene: `dataset` (whose medium-space box is `bounds`) with `medium` parameters appended
+/// (pbrt syntax), seen by a pinhole 2.2 fire sizes in front (−y) with a 30° field of view, behind an `interface`
+/// box, `volpath` maxdepth 1 (nothing but the fire), `sampler` (a pbrt `Sampler` directive), a box pixel filter
+/// (so a pixel is the mean over its area: the reference's sub-pixels average it).
+pub fn scene(
+    dataset: &Path,
+    bounds: [DVec3; 2],
+    size: usize,
+    sampler: &str,
+    medium: &str,
+) -> String {
+    let [b0, b1] = bounds;
+    let c = 0.5 * (b0 + b1);
+    let eye = c - DVec3::Y * (2.2 * (b1 - b0).max_element());
+    let p = |x: f64, y: f64, z: f64| format!("{x} {y} {z}");
+    let corners: Vec<String> = (0..8)
+        .map(|k| {
+            let q = |a: usize| if k >> a & 1 == 1 { b1[a] } else { b0[a] };
+            p(q(0), q(1), q(2))
+        })
+        .collect();
+    format!(
+        "LookAt {}  {}  0 0 1\nCamera \"perspective\" \"float fov\" 30\nPixelFilter \"box\"\nFilm \"rgb\" \"integer xresolution\" {size} \"integer yresolution\" {size}\n{sampler}\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{}\" {medium}\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [ {} ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]\nAttributeEnd\n",
+        p(eye.x, eye.y, eye.z),
+        p(c.x, c.y, c.z),
+        dataset.display(),
+        corners.join("  ")
+    )
+}
+
+/// Renders `scene` with `firemedium render` (this executable) and `extra` arguments into `dir`.
+pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> Result<Rendered, String> {
+    let file = dir.join(format!("{name}.pbrt"));
+    std::fs::write(&file, scene).map_err(|e| format!("{}: {e}", file.display()))?;
+    let out = dir.join(format!("{name}.exr"));
+    let exe = std::env::current_exe().map_err(|e| format!("this executable: {e}"))?;
+    let start = Instant::now();
+    let o = Command::new(exe)
+        .arg("render")
+        .arg(&file)
+        .arg("-o")
+        .arg(&out)
+        .args(["--quiet", "--stats"])
+        .args(extra)
+        .output()
+        .map_err(|e| format!("firemedium render: {e}"))?;
+    let wall_s = start.elapsed().as_secs_f64();
+    if !o.status.success() {
+        return Err(format!(
+            "firemedium render {}: {}",
+            file.display(),
+            String::from_utf8_lossy(&o.stderr)
+        ));
+    }
+    let text = String::from_utf8_lossy(&o.stdout);
+    // "scene: X s to load …", "render: X s on N threads, R camera rays, …", "peak memory: X MB".
+    let number = |prefix: &str, k: usize| -> Result<f64, String> {
+        text.lines()
+            .find_map(|l| l.strip_prefix(prefix))
+            .and_then(|l| l.split_whitespace().nth(k))
+            .and_then(|w| w.parse().ok())
+            .ok_or_else(|| format!("firemedium render --stats: no '{prefix}' line in:\n{text}"))
+    };
+    let img = firemedium::imageio::read(&out, false)?;
+    Ok(Rendered {
+        load_s: number("scene: ", 0)?,
+        render_s: number("render: ", 0)?,
+        wall_s,
+        rays: number("render: ", 5)?,
+        peak_mb: number("peak memory: ", 0)?,
+        y: img.px.iter().map(|&p| luminance(p)).collect(),
+    })
+}
+
+/// The naive baseline at pixel centres: (load s, render s, luminance per pixel). The same camera as [`scene`]
+/// (pbrt-v4's: raster x grows toward −x of the world here, as its `LookAt` with z up gives), one ray per pixel
+/// on 2 threads, a half-voxel step from where the ray enters the box to where it leaves it, each step's
+/// coefficients evaluated at its midpoint in f64 (`FireVolume::coefficients`: the trilinear lookup and the
+/// tables) and integrated exactly for constant coefficients (the paper's eq. 3), no early termination.
+pub fn naive(dataset: &Path, size: usize) -> Result<(f64, f64, Vec<f64>), String> {
+    let t0 = Instant::now();
+    let v = FireVolume::new(&[
+        Param::string("filename", &dataset.to_string_lossy()),
+        Param::string("precision", "f64"),
+        Param::float("stepsize", 0.5),
+    ])
+    .map_err(|e| e.to_string())?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let [b0, b1] = v.bounds();
+    let c = 0.5 * (b0 + b1);
+    let eye = c - DVec3::Y * (2.2 * (b1 - b0).max_element());
+    let half = 15f64.to_radians().tan();
+    let xyz = v.channel_xyz();
+    let n = v.channels();
+    let h = v.step_length();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let t1 = Instant::now();
+    let y: Vec<f64> = pool.install(|| {
+        (0..size * size)
+            .into_par_iter()
+            .map(|p| {
+                let (i, j) = (p % size, p / size);
+                let u = (1.0 - (i as f64 + 0.5) / size as f64 * 2.0) * half;
+                let w = (1.0 - (j as f64 + 0.5) / size as f64 * 2.0) * half;
+                let d = DVec3::new(u, 1.0, w).normalize();
+                let Some((a, b)) = firemedium_plugin::majorant::clip_box(eye, d, 0.0, 1e30, b0, b1)
+                else {
+                    return 0.0;
+                };
+                let (mut sa, mut ss, mut jj) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+                let (mut l, mut t) = (vec![0.0; n], vec![1.0; n]);
+                let mut s = a;
+                while s < b {
+                    let s1 = (s + h).min(b);
+                    v.coefficients(eye + d * (0.5 * (s + s1)), &mut sa, &mut ss, &mut jj);
+                    for k in 0..n {
+                        let st = sa[k] + ss[k];
+                        let tau = st * (s1 - s);
+                        if st > 0.0 {
+                            let e = (-tau).exp();
+                            l[k] += t[k] * jj[k] / st * (1.0 - e);
+                            t[k] *= e;
+                        }
+                    }
+                    s = s1;
+                }
+                (0..n).map(|k| l[k] * xyz[k].y).sum()
+            })
+            .collect()
+    });
+    Ok((load_s, t1.elapsed().as_secs_f64(), y))
+}
+
+/// Relative RMSE of `a` against `r` (over all pixels: √(Σ(a − r)²/Σr²)).
+pub fn rel_rmse(a: &[f64], r: &[f64]) -> f64 {
+    errors(a, r).0
+}
+
+/// A temporary directory for the bench's scenes and images, removed when dropped.
+pub struct Scratch(pub PathBuf);
+
+impl Scratch {
+    pub fn new(name: &str) -> Result<Scratch, String> {
+        let d =
+            std::env::temp_dir().join(format!("firemedium-bench-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).map_err(|e| format!("{}: {e}", d.display()))?;
+        Ok(Scratch(d))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
