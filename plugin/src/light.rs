@@ -338,7 +338,6 @@ impl FireLight {
         let ds = self.vol.dataset();
         let scale = 1.0 / (self.total * self.voxel.x * self.voxel.y * self.voxel.z);
         let mut sum = 0.0;
-        let [nx, ny, _] = self.dims;
         // Brick by brick (the weights' bricks, on a lattice extended by their offset so the walk's bricks are
         // theirs), voxel by voxel only inside bricks that hold weights: a sparse fire in a big box costs its
         // bricks along the ray, not the box's voxels. The pieces tile the ray as one voxel walk would.
@@ -350,6 +349,22 @@ impl FireLight {
         ];
         let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
         let nb = self.topo.bricks();
+        // A fire that fills its box (the weights' bricks at least an eighth of the box's): one voxel walk, the
+        // weight's brick looked up once per brick the ray crosses — what a brick walk saves would not pay for
+        // setting up a voxel walk per brick.
+        let box_bricks = nb.iter().product::<usize>();
+        if self.topo.active_bricks().saturating_mul(8) >= box_bricks {
+            for seg in walk(ds.bounds(), self.dims, 1, o, dn, 0.0, f64::INFINITY) {
+                let u = [0, 1, 2].map(|a| seg.cell[a] + off[a]);
+                let slot = self.topo.slot(u.map(|c| c / crate::grid::BRICK));
+                let l = u[0] % 8 + 8 * (u[1] % 8 + 8 * (u[2] % 8));
+                let w = self.weights.get(slot * 512 + l).copied().unwrap_or(0.0) as f64;
+                if w > 0.0 {
+                    sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                }
+            }
+            return sum * scale;
+        }
         for bseg in walk(
             shifted,
             dims_v,
@@ -359,17 +374,11 @@ impl FireLight {
             0.0,
             f64::INFINITY,
         ) {
-            let b = bseg.brick;
-            if self
-                .topo
-                .slot([b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])])
-                == 0
-            {
+            if self.topo.slot(bseg.cell) == 0 {
                 continue;
             }
             for seg in walk(ds.bounds(), self.dims, 1, o, dn, bseg.t0, bseg.t1) {
-                let v = seg.brick;
-                let w = self.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
+                let w = self.weight(seg.cell);
                 if w > 0.0 {
                     sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
                 }
@@ -582,59 +591,69 @@ mod tests {
             }
             (d, t)
         };
-        let (d0, t0) = ball(0);
-        let (d1, t1) = ball(120);
-        let bytes = crate::dataset::vdb::write_sparse(
-            &[
-                ("density", [d0, d1].concat()),
-                ("temperature", [t0, t1].concat()),
-            ],
-            DVec3::ZERO,
-            DVec3::splat(0.01),
-        );
-        let file =
-            std::env::temp_dir().join(format!("firemedium-light-walk-{}.vdb", std::process::id()));
-        std::fs::write(&file, bytes).unwrap();
-        let vol = Arc::new(
-            FireVolume::new(&[
-                Param::string("dataset", &file.to_string_lossy()),
-                Param::string("fuel", "propane"),
-            ])
-            .unwrap(),
-        );
-        let _ = std::fs::remove_file(&file);
-        let light = FireLight::new(vol, Weighting::Power).unwrap();
-        assert_ne!(light.topo.offset(), [0, 0, 0]);
-        let ds = light.vol.dataset();
-        let [p0, p1] = ds.bounds();
-        let [nx, ny, _] = light.dims;
-        let mut rng = crate::rng::Rng::new(4);
-        let mut checked = 0;
-        for _ in 0..300 {
-            let o = p0
-                + (p1 - p0) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4
-                - (p1 - p0) * 0.2;
-            // Toward one of the balls (centres near 0.205 m and 1.405 m on every axis), within its radius.
-            let c = if rng.next_f64() < 0.5 { 0.205 } else { 1.405 };
-            let j = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
-            let d = DVec3::splat(c) + j * 0.12 - o;
-            let dn = d.normalize();
-            let mut want = 0.0;
-            for seg in walk(ds.bounds(), light.dims, 1, o, dn, 0.0, f64::INFINITY) {
-                let v = seg.brick;
-                let w = light.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
-                want += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
-            }
-            let vv = light.voxel.x * light.voxel.y * light.voxel.z;
-            let want = want / (light.total * vv);
-            let got = light.pdf_direction(o, d);
-            checked += (want > 0.0) as usize;
-            assert!(
-                (got - want).abs() <= 1e-9 * want.max(1e-300),
-                "{got} vs {want}"
+        // Two balls (the weights' bricks an eighth of the box's or fewer: the brick walk) and the first alone
+        // (a fire filling its box: one voxel walk).
+        for far in [true, false] {
+            let (d0, t0) = ball(0);
+            let (d1, t1) = if far { ball(120) } else { (vec![], vec![]) };
+            let bytes = crate::dataset::vdb::write_sparse(
+                &[
+                    ("density", [d0, d1].concat()),
+                    ("temperature", [t0, t1].concat()),
+                ],
+                DVec3::ZERO,
+                DVec3::splat(0.01),
             );
+            let file = std::env::temp_dir()
+                .join(format!("firemedium-light-walk-{}.vdb", std::process::id()));
+            std::fs::write(&file, bytes).unwrap();
+            let vol = Arc::new(
+                FireVolume::new(&[
+                    Param::string("dataset", &file.to_string_lossy()),
+                    Param::string("fuel", "propane"),
+                ])
+                .unwrap(),
+            );
+            let _ = std::fs::remove_file(&file);
+            let light = FireLight::new(vol, Weighting::Power).unwrap();
+            assert_ne!(light.topo.offset(), [0, 0, 0]);
+            let box_bricks: usize = light.topo.bricks().iter().product();
+            assert_eq!(light.topo.active_bricks() * 8 >= box_bricks, !far);
+            let ds = light.vol.dataset();
+            let [p0, p1] = ds.bounds();
+            let [nx, ny, _] = light.dims;
+            let mut rng = crate::rng::Rng::new(4);
+            let mut checked = 0;
+            for _ in 0..300 {
+                let o = p0
+                    + (p1 - p0) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4
+                    - (p1 - p0) * 0.2;
+                // Toward one of the balls (centres near 0.205 m and 1.405 m on every axis), within its radius.
+                let c = if far && rng.next_f64() < 0.5 {
+                    1.405
+                } else {
+                    0.205
+                };
+                let j = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
+                let d = DVec3::splat(c) + j * 0.12 - o;
+                let dn = d.normalize();
+                let mut want = 0.0;
+                for seg in walk(ds.bounds(), light.dims, 1, o, dn, 0.0, f64::INFINITY) {
+                    let v = seg.brick;
+                    let w = light.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
+                    want += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                }
+                let vv = light.voxel.x * light.voxel.y * light.voxel.z;
+                let want = want / (light.total * vv);
+                let got = light.pdf_direction(o, d);
+                checked += (want > 0.0) as usize;
+                assert!(
+                    (got - want).abs() <= 1e-9 * want.max(1e-300),
+                    "{got} vs {want}"
+                );
+            }
+            assert!(checked > 200, "{checked} rays met the fire");
         }
-        assert!(checked > 200, "{checked} rays met the fire");
     }
 
     #[test]

@@ -53,6 +53,8 @@ pub struct Segment {
     pub t1: f64,
     /// Linear brick index (x fastest), for [`MajorantGrid::max`] and [`MajorantGrid::min`].
     pub brick: usize,
+    /// The brick's coordinates (its linear index, decoded without divisions).
+    pub cell: [usize; 3],
 }
 
 impl MajorantGrid {
@@ -447,8 +449,8 @@ impl Iterator for Segments {
             let b1 = n1 <= n0;
             let (m, am) = if b1 { (n1, 1) } else { (n0, 0) };
             let a = if n2 <= m { 2 } else { am };
-            let brick = self.cell[0] as usize
-                + self.counts[0] * (self.cell[1] as usize + self.counts[1] * self.cell[2] as usize);
+            let cell = self.cell.map(|c| c as usize);
+            let brick = cell[0] + self.counts[0] * (cell[1] + self.counts[1] * cell[2]);
             let mut t_end = self.next[a].min(self.tmax);
             let stepped = self.cell[a] + self.step[a];
             let leaves = stepped < 0 || stepped >= self.counts[a] as i64;
@@ -467,6 +469,7 @@ impl Iterator for Segments {
                     t0,
                     t1: t_end,
                     brick,
+                    cell,
                 });
             }
         }
