@@ -419,7 +419,10 @@ impl IndexGrid {
         let topo = if delta.background() != 0.0 {
             Topology::full(wdims)
         } else {
+            // (At most 27 copies per stored brick, each listed once per brick it borders.)
             let mut list = Vec::new();
+            list.try_reserve(data_topo.active_bricks().saturating_mul(27))
+                .map_err(|_| u64::MAX)?;
             data_topo.for_each_slot(|b, s| {
                 if delta.slot_is(s, 0.0) {
                     return;
