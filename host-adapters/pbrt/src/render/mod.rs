@@ -117,8 +117,16 @@ pub fn render(
         scene,
         mask: scene.bins.mask(),
     };
-    let tiles: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
+    let rows: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
+        .collect();
+    // Dealt out by stride: rayon splits the list into one contiguous run per thread, so with the tiles in row
+    // order the threads would march far-apart parts of the scene at once (and of a fire's grids, which do not
+    // fit the shared cache); dealt out, thread j takes tiles j, j + k, j + 2k, … and the threads stay side by
+    // side. (Pixels carry their index: the order changes no value.)
+    let k = rayon::current_num_threads().max(1);
+    let tiles: Vec<(usize, usize)> = (0..k)
+        .flat_map(|j| rows.iter().skip(j).step_by(k).copied())
         .collect();
     let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
     let gspace = scene.gbuffer.map(|g| GSpace::new(scene, g.world));
