@@ -62,6 +62,57 @@ pub struct RenderArgs {
     /// No warnings or progress.
     #[arg(long, short)]
     quiet: bool,
+    /// Frames to render, A-B or A-B:STEP (inclusive): `####` or `%04d` in dataset names and in the output name
+    /// take each frame's number; each frame has its own seed.
+    #[arg(long, value_name = "A-B[:STEP]", value_parser = parse_frames, conflicts_with = "frame", allow_hyphen_values = true)]
+    frames: Option<Frames>,
+    /// One frame (as --frames N-N).
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    frame: Option<i64>,
+    /// With --frames or --frame: leave out frames whose output EXR exists.
+    #[arg(long)]
+    skip_existing: bool,
+}
+
+/// The frames of `--frames`.
+#[derive(Debug, Clone)]
+pub struct Frames(pub Vec<i64>);
+
+/// `A-B` or `A-B:STEP` (A ≤ B, STEP ≥ 1, at most a million frames; negative numbers allowed: `-5--1`).
+pub fn parse_frames(s: &str) -> Result<Frames, String> {
+    let bad = || {
+        format!(
+            "'{s}': expected A-B or A-B:STEP (inclusive, A ≤ B, STEP ≥ 1), e.g. 1-240 or 1-240:2"
+        )
+    };
+    let (range, step) = match s.split_once(':') {
+        Some((r, st)) => (r, st.trim().parse::<i64>().map_err(|_| bad())?),
+        None => (s, 1),
+    };
+    // The dash between A and B: the first '-' after a digit (A may be negative).
+    let at = range
+        .char_indices()
+        .skip(1)
+        .find(|&(i, c)| c == '-' && range[..i].ends_with(|p: char| p.is_ascii_digit()))
+        .map(|(i, _)| i)
+        .ok_or_else(bad)?;
+    let a: i64 = range[..at].trim().parse().map_err(|_| bad())?;
+    let b: i64 = range[at + 1..].trim().parse().map_err(|_| bad())?;
+    if !(a <= b && step >= 1 && a.abs() <= 1_000_000_000 && b.abs() <= 1_000_000_000) {
+        return Err(bad());
+    }
+    let n = (b - a) / step + 1;
+    if n > 1_000_000 {
+        return Err(format!("'{s}': {n} frames; at most 1 000 000"));
+    }
+    Ok(Frames((0..n).map(|k| a + k * step).collect()))
+}
+
+/// The seed of frame `f` from the render's seed: the same seed for the same frame, another for each frame.
+fn frame_seed(seed: u64, f: i64) -> u64 {
+    seed ^ (f as u64)
+        .wrapping_add(1)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
 }
 
 /// Four values clap counted (`num_args = 4`).
@@ -73,7 +124,39 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     if a.spp == Some(0) {
         return Err((2, "--spp must be at least 1".into()));
     }
+    let frames: Option<Vec<i64>> = a.frames.clone().map(|f| f.0).or(a.frame.map(|f| vec![f]));
+    let Some(frames) = frames else {
+        if a.skip_existing {
+            return Err((2, "--skip-existing needs --frames or --frame".into()));
+        }
+        return render_frame(a, None);
+    };
+    let mut out = String::new();
+    for &f in &frames {
+        let start = std::time::Instant::now();
+        match render_frame(a, Some(f)) {
+            Ok(text) => {
+                out += &text;
+                // One line per finished frame, as it finishes (a farm's log follows the sequence).
+                if !a.quiet {
+                    eprintln!(
+                        "firemedium: frame {f} done in {:.2} s",
+                        start.elapsed().as_secs_f64()
+                    );
+                }
+            }
+            Err((0, skipped)) => out += &skipped,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(out)
+}
+
+/// Renders one frame (`None`: the scene as written) and writes its EXR and PNG; `Err((0, line))` for a frame
+/// left out by `--skip-existing`.
+fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, String)> {
     let ov = scene::Overrides {
+        frame,
         spp: a.spp,
         plugin: a.plugin.clone(),
         no_fire_light: a.fire_light == "off",
@@ -84,8 +167,51 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         threads: a.threads.map(usize::from),
         max_memory: a.max_memory.map(|gb| (gb * 1e9) as u64),
     };
+    // The output name: `-o` or the film's, with the frame's number in its pattern.
+    let named = |film: Option<&str>| -> Result<(PathBuf, PathBuf), (u8, String)> {
+        let (exr, _) = outputs(&a.scene, film, a.output.as_deref());
+        let Some(f) = frame else {
+            return Ok(outputs(&a.scene, film, Some(&exr)));
+        };
+        let patterned = firemedium_plugin::dataset::frame_path(&exr, Some(f))
+            .map_err(|e| (2, e.to_string()))?;
+        if patterned == exr && a.frames.as_ref().is_some_and(|v| v.0.len() > 1) {
+            return Err((
+                2,
+                format!(
+                    "--frames: the output name {} holds no #### or %04d for the frame number: every frame would overwrite it (-o fire.####.exr)",
+                    exr.display()
+                ),
+            ));
+        }
+        Ok(outputs(&a.scene, None, Some(&patterned)))
+    };
+    let exists = |exr: &Path| {
+        (a.skip_existing && exr.is_file()).then(|| {
+            (
+                0,
+                format!(
+                    "frame {}: {} exists, left out\n",
+                    frame.unwrap_or(0),
+                    exr.display()
+                ),
+            )
+        })
+    };
+    // (With `-o`, a frame left out is not even loaded.)
+    if a.output.is_some() {
+        if let Some(e) = exists(&named(None)?.0) {
+            return Err(e);
+        }
+    }
     let load_start = std::time::Instant::now();
     let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
+    let (exr, png) = named(sc.film_name.as_deref())?;
+    if let Some(e) = exists(&exr) {
+        return Err(e);
+    }
+    let seed = a.seed.unwrap_or(sc.seed);
+    let seed = frame.map_or(seed, |f| frame_seed(seed, f));
     let load_seconds = load_start.elapsed().as_secs_f64();
     if !a.quiet {
         for w in &sc.warnings {
@@ -97,7 +223,12 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     let [x0, x1, y0, y1] = sc.bounds;
     let tiles = (x1 - x0).div_ceil(16) * (y1 - y0).div_ceil(16);
     let bar = ProgressBar::new(tiles as u64);
-    let show = !a.quiet && std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let terminal = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
+    let show = !a.quiet && terminal;
+    // Off a terminal (a farm's log), progress as plain lines at every tenth of the tiles.
+    let lines = !a.quiet && !terminal;
+    let label = frame.map_or(String::new(), |f| format!("frame {f} "));
+    let tenth = std::sync::atomic::AtomicUsize::new(0);
     bar.set_draw_target(if show {
         ProgressDrawTarget::stderr()
     } else {
@@ -113,8 +244,12 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         .build()
         .map_err(|e| (1, format!("threads: {e}")))?;
     let (img, st) = pool.install(|| {
-        render::render(&sc, a.seed.unwrap_or(sc.seed), &|n, _| {
-            bar.set_position(n as u64)
+        render::render(&sc, seed, &|n, total| {
+            bar.set_position(n as u64);
+            let t = n * 10 / total.max(1);
+            if lines && t < 10 && t > tenth.fetch_max(t, std::sync::atomic::Ordering::Relaxed) {
+                eprintln!("firemedium: {label}{} % ({n}/{total} tiles)", t * 10);
+            }
         })
     });
     bar.finish_and_clear();
@@ -129,7 +264,6 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
             }
         }
     }
-    let (exr, png) = outputs(&a.scene, sc.film_name.as_deref(), a.output.as_deref());
     // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
     let fire_t = sc.fire_temperature();
     let tone = tonemap::Options {
@@ -217,4 +351,36 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
     };
     let png = exr.with_extension("png");
     (exr, png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_ranges_parse_with_steps_and_negative_numbers() {
+        let f = |s: &str| parse_frames(s).map(|f| f.0);
+        assert_eq!(f("1-5"), Ok(vec![1, 2, 3, 4, 5]));
+        assert_eq!(f("1-240:100"), Ok(vec![1, 101, 201]));
+        assert_eq!(f("7-7"), Ok(vec![7]));
+        assert_eq!(f("-5--3"), Ok(vec![-5, -4, -3]));
+        assert_eq!(f("-2-1:2"), Ok(vec![-2, 0]));
+        for bad in [
+            "5-3",
+            "1-5:0",
+            "1-5:-1",
+            "x-3",
+            "3",
+            "1-",
+            "-",
+            "1-2000000000",
+        ] {
+            assert!(f(bad).is_err(), "{bad}");
+        }
+        assert!(f("0-2000000").unwrap_err().contains("at most 1 000 000"));
+        // Every frame its own seed, the same for the same frame.
+        assert_ne!(frame_seed(7, 1), frame_seed(7, 2));
+        assert_eq!(frame_seed(7, 2), frame_seed(7, 2));
+        assert_ne!(frame_seed(7, -1), frame_seed(7, 0));
+    }
 }

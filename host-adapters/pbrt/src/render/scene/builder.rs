@@ -94,6 +94,8 @@ pub(super) struct Builder {
     pub(super) bins_params: Vec<LParam>,
     /// Threads the plugin may use to build a medium (`Overrides::threads`).
     pub(super) threads: Option<usize>,
+    /// The frame for every plugin medium (`--frames`), unless the scene sets one.
+    pub(super) frame: Option<i64>,
     /// Bytes the plugin media built so far hold (each new medium's `maxbytes` is what the budget has left).
     pub(super) media_bytes: u64,
     /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
@@ -754,6 +756,11 @@ impl Builder {
                 if let Some(n) = self.threads {
                     if !list.iter().any(|p| p.name == "threads") {
                         list.push(LParam::int("threads", n as i64));
+                    }
+                }
+                if let Some(f) = self.frame {
+                    if !list.iter().any(|p| p.name == "frame") {
+                        list.push(LParam::int("frame", f));
                     }
                 }
                 if !list.iter().any(|p| p.name == "maxbytes") {

@@ -422,6 +422,8 @@ pub struct Overrides {
     /// The memory budget in bytes (`None`: half the machine's memory, [`crate::budget::default_bytes`]): the
     /// film is checked against it, and each plugin grid (`maxbytes`, unless the scene sets it).
     pub max_memory: Option<u64>,
+    /// The frame number every plugin medium's dataset name takes (`####`, `%04d`), unless the scene sets one.
+    pub frame: Option<i64>,
 }
 
 /// Parses and builds the scene at `path`.
@@ -581,6 +583,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         has_fire: fire,
         film_xyz: None,
         threads: ov.threads,
+        frame: ov.frame,
         max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     };
     // pbrt's default material: diffuse 0.5.
