@@ -996,3 +996,118 @@ fn frames_render_a_sequence_one_seed_per_frame() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("expected A-B or A-B:STEP"));
 }
+
+#[test]
+fn tiles_merge_into_the_full_frame_bit_for_bit() {
+    // Four crop-window tiles of a small fire scene merge into the full render's pixels exactly; overlapping
+    // tiles, a tile of another seed and a missing tile are refused, naming the file.
+    let dir = tmp("merge");
+    let nvdb =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    std::fs::write(
+        dir.join("fire.pbrt"),
+        format!(
+            "LookAt 0 -3 0.3  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" 2\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [0.05 0.05 0.06]\nMakeNamedMedium \"kaboom\" \"string type\" \"nanovdb\" \"string filename\" \"{}\" \"spectrum sigma_a\" [200 10 900 10] \"spectrum sigma_s\" [200 5 900 5] \"float Lescale\" 5 \"float temperaturecutoff\" 1 \"float temperaturescale\" 1.5\nAttributeBegin\nMediumInterface \"kaboom\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+            nvdb.display()
+        ),
+    )
+    .unwrap();
+    let bin = env!("CARGO_BIN_EXE_firemedium");
+    let run = |args: &[&str]| {
+        Command::new(bin)
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let ok = |o: std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    ok(run(&[
+        "render",
+        "fire.pbrt",
+        "-q",
+        "--seed",
+        "5",
+        "-o",
+        "full.exr",
+    ]));
+    let quads = [
+        ("0", "0.5", "0", "0.5"),
+        ("0.5", "1", "0", "0.5"),
+        ("0", "0.5", "0.5", "1"),
+        ("0.5", "1", "0.5", "1"),
+    ];
+    let mut tiles = Vec::new();
+    for (k, (x0, x1, y0, y1)) in quads.iter().enumerate() {
+        let name = format!("tile{k}.exr");
+        ok(run(&[
+            "render",
+            "fire.pbrt",
+            "-q",
+            "--seed",
+            "5",
+            "--cropwindow",
+            x0,
+            x1,
+            y0,
+            y1,
+            "-o",
+            &name,
+        ]));
+        tiles.push(name);
+    }
+    let mut args = vec!["merge"];
+    args.extend(tiles.iter().rev().map(String::as_str));
+    args.extend(["-o", "merged.exr"]);
+    ok(run(&args));
+    let (full, merged) = (
+        read_exr(&dir.join("full.exr")),
+        read_exr(&dir.join("merged.exr")),
+    );
+    assert_eq!((merged.0, merged.1), (24, 16));
+    assert!(
+        full.2 == merged.2,
+        "the merged frame must equal the full render"
+    );
+    assert!(full.2.iter().any(|p| p[0] > 0.0));
+    // Refused: an overlap, another seed's tile, a gap.
+    let o = run(&[
+        "merge", &tiles[0], &tiles[0], &tiles[1], &tiles[2], &tiles[3], "-o", "x.exr",
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("overlaps"));
+    ok(run(&[
+        "render",
+        "fire.pbrt",
+        "-q",
+        "--seed",
+        "6",
+        "--cropwindow",
+        "0.5",
+        "1",
+        "0.5",
+        "1",
+        "-o",
+        "other.exr",
+    ]));
+    let o = run(&[
+        "merge",
+        &tiles[0],
+        &tiles[1],
+        &tiles[2],
+        "other.exr",
+        "-o",
+        "x.exr",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("other.exr") && e.contains("seed 5 vs 6"),
+        "{e}"
+    );
+    let o = run(&["merge", &tiles[0], &tiles[1], &tiles[2], "-o", "x.exr"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("leave pixel (12, 8)"),
+        "{e}"
+    );
+}

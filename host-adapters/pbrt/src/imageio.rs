@@ -310,7 +310,7 @@ pub fn write_exr(
         origin: (0, 0),
         full: (w, h),
     };
-    write_exr_as(path, w, h, rgb, fire_temperature, false, window)
+    write_exr_as(path, w, h, rgb, fire_temperature, false, window, &[])
 }
 
 /// Writes linear RGB plus the channels `names` (a spectral film's buckets `S0.<centre>nm`, a gbuffer's
@@ -325,6 +325,7 @@ pub fn write_channels_exr(
     values: &[f32],
     fp16: bool,
     window: Window,
+    meta: &[(String, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
     let nb = names.len();
@@ -362,6 +363,12 @@ pub fn write_channels_exr(
         let mut image = Image::from_layer(layer);
         image.attributes.display_window =
             IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
+        if !meta.is_empty() {
+            image.attributes.other.insert(
+                Text::from(RENDER_ATTRIBUTE),
+                AttributeValue::Text(Text::from(meta_text(meta).as_str())),
+            );
+        }
         image
             .write()
             .non_parallel()
@@ -378,8 +385,28 @@ pub struct Window {
     pub full: (usize, usize),
 }
 
+/// What a render was (name, value pairs: scene, frame, spp, seed).
+pub type Meta = Vec<(String, String)>;
+
+/// The EXR attribute that holds a render's [`Meta`], one `name=value` per line. One attribute: the EXR writer
+/// keeps attributes in a hash map, so several would be written in a different order by every process and the
+/// same render would not give the same bytes.
+pub const RENDER_ATTRIBUTE: &str = "firemediumRender";
+
+/// The render record's line that holds the fire's hottest temperature (K), as [`FIRE_TEMPERATURE_ATTRIBUTE`]
+/// does in an EXR without a record.
+const FIRE_TEMPERATURE_KEY: &str = "fire_temperature";
+
+fn meta_text(meta: &[(String, String)]) -> String {
+    meta.iter()
+        .map(|(k, v)| format!("{k}={}", v.replace('\n', " ")))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// As [`write_exr`], in half floats when `fp16` (pbrt-v4's `savefp16`; values above 65 504 become infinite), and
 /// placed at `window` on its film (a crop: the data window inside the display window).
+#[allow(clippy::too_many_arguments)]
 pub fn write_exr_as(
     path: &Path,
     w: usize,
@@ -388,6 +415,7 @@ pub fn write_exr_as(
     fire_temperature: Option<f64>,
     fp16: bool,
     window: Window,
+    meta: &[(String, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
     // The attribute, then one thread writes the blocks in order, so the same render gives the same bytes
@@ -405,10 +433,23 @@ pub fn write_exr_as(
                     Vec2(0, 0),
                     Vec2(window.full.0.max(1), window.full.1.max(1)),
                 );
-                if let Some(t) = fire_temperature {
+                // One attribute at most (see RENDER_ATTRIBUTE): with a render record, the fire temperature is
+                // one of its lines.
+                if meta.is_empty() {
+                    if let Some(t) = fire_temperature {
+                        image.attributes.other.insert(
+                            Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                            AttributeValue::F64(t),
+                        );
+                    }
+                } else {
+                    let mut record = meta.to_vec();
+                    if let Some(t) = fire_temperature {
+                        record.push((FIRE_TEMPERATURE_KEY.to_string(), format!("{t:e}")));
+                    }
                     image.attributes.other.insert(
-                        Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
-                        AttributeValue::F64(t),
+                        Text::from(RENDER_ATTRIBUTE),
+                        AttributeValue::Text(Text::from(meta_text(&record).as_str())),
                     );
                 }
                 image
@@ -430,24 +471,84 @@ pub fn write_exr_as(
     }
 }
 
+/// What an EXR says about its render: where its pixels lie on the film (data window in display window) and its
+/// [`Meta`] (scene, frame, spp, seed; empty for an EXR that did not come from `render`), sorted by name.
+pub fn read_meta(path: &Path) -> Result<(Window, Meta), String> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+    let h = meta
+        .headers
+        .first()
+        .ok_or_else(|| format!("{}: an EXR without a part", path.display()))?;
+    let display = h.shared_attributes.display_window;
+    let pos = h.own_attributes.layer_position;
+    let at = |v: i32, what: &str| {
+        usize::try_from(v).map_err(|_| {
+            format!(
+                "{}: {what} {v}: expected a window inside the film (from 0)",
+                path.display()
+            )
+        })
+    };
+    if display.position.0 != 0 || display.position.1 != 0 {
+        return Err(format!(
+            "{}: display window at ({}, {}): expected one starting at (0, 0)",
+            path.display(),
+            display.position.0,
+            display.position.1
+        ));
+    }
+    let window = Window {
+        origin: (at(pos.0, "data window x")?, at(pos.1, "data window y")?),
+        full: (display.size.0, display.size.1),
+    };
+    let key = exr::prelude::Text::from(RENDER_ATTRIBUTE);
+    let text = match h
+        .shared_attributes
+        .other
+        .get(&key)
+        .or_else(|| h.own_attributes.other.get(&key))
+    {
+        Some(exr::meta::attribute::AttributeValue::Text(t)) => t.to_string(),
+        _ => String::new(),
+    };
+    let mut attrs: Meta = text
+        .lines()
+        .filter_map(|l| l.split_once('='))
+        .filter(|(k, _)| *k != FIRE_TEMPERATURE_KEY)
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    attrs.sort();
+    Ok((window, attrs))
+}
+
 /// The fire temperature an EXR records (see [`write_exr`]), if any.
 pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, String> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
     // (Written as an image attribute; a reader may file an unknown attribute under the layer's.)
     let key = exr::prelude::Text::from(FIRE_TEMPERATURE_ATTRIBUTE);
+    let record = exr::prelude::Text::from(RENDER_ATTRIBUTE);
     Ok(meta.headers.first().and_then(|h| {
-        let v = h
-            .shared_attributes
-            .other
-            .get(&key)
-            .or_else(|| h.own_attributes.other.get(&key));
-        match v {
-            Some(exr::meta::attribute::AttributeValue::F64(t)) if t.is_finite() && *t > 0.0 => {
-                Some(*t)
+        let get = |k| {
+            h.shared_attributes
+                .other
+                .get(k)
+                .or_else(|| h.own_attributes.other.get(k))
+        };
+        let t = match (get(&key), get(&record)) {
+            (Some(exr::meta::attribute::AttributeValue::F64(t)), _) => Some(*t),
+            (_, Some(exr::meta::attribute::AttributeValue::Text(r))) => {
+                r.to_string().lines().find_map(|l| {
+                    l.strip_prefix(FIRE_TEMPERATURE_KEY)?
+                        .strip_prefix('=')?
+                        .parse()
+                        .ok()
+                })
             }
             _ => None,
-        }
+        };
+        t.filter(|t: &f64| t.is_finite() && *t > 0.0)
     }))
 }
 

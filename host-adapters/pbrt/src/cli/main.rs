@@ -14,6 +14,7 @@ mod bench;
 mod compare;
 mod gen;
 mod info;
+mod merge;
 mod physics;
 mod render;
 mod tonemap;
@@ -43,6 +44,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Error of renders against a reference over the pixels that see a surface (luminance MSE).
     Compare(compare::CompareArgs),
+    /// Assemble the tiles of one render (`render --cropwindow`/`--pixelbounds`) into the full frame.
+    Merge(merge::MergeArgs),
     /// What an observer sees of an absolute EXR: visual adaptation (von Kries + Naka–Rushton) to a PNG.
     Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Merge(args) => merge::run(&args),
         Command::Tonemap(args) => tonemap::run(&args),
         Command::Gen(args) => gen::run(&args),
         Command::Bench(args) => bench::run(&args),

@@ -276,6 +276,23 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, Strin
         adapt: a.adapt,
         ..Default::default()
     };
+    // What the image is a render of, for `firemedium merge` (no time: the same render gives the same bytes).
+    let mut img = img;
+    img.meta = vec![
+        (
+            "scene".to_string(),
+            std::fs::canonicalize(&a.scene)
+                .unwrap_or_else(|_| a.scene.clone())
+                .display()
+                .to_string(),
+        ),
+        ("seed".to_string(), seed.to_string()),
+        ("spp".to_string(), sc.spp.to_string()),
+        (
+            "frame".to_string(),
+            frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
+        ),
+    ];
     img.write_exr(&exr, fire_t, sc.response.fp16)
         .map_err(|e| (1, e))?;
     write_preview(&img, &png, &tone).map_err(|e| (1, e))?;

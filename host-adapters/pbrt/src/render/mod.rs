@@ -48,6 +48,9 @@ pub struct Image {
     /// Channels beside R, G, B, their names and, per pixel, their values (pixel-major): the spectral film's
     /// buckets (`S0.<centre>nm`, mean spectral radiance) or the gbuffer film's channels.
     pub extra: Option<(Vec<String>, Vec<f32>)>,
+    /// What the render was (scene, frame, spp, seed), written into the EXR ([`crate::imageio::RENDER_ATTRIBUTE`]):
+    /// what `firemedium merge` checks its tiles against.
+    pub meta: Vec<(String, String)>,
 }
 
 impl Image {
@@ -65,7 +68,7 @@ impl Image {
         };
         if let Some((names, values)) = &self.extra {
             return crate::imageio::write_channels_exr(
-                path, self.w, self.h, &self.rgb, names, values, fp16, window,
+                path, self.w, self.h, &self.rgb, names, values, fp16, window, &self.meta,
             );
         }
         crate::imageio::write_exr_as(
@@ -76,6 +79,7 @@ impl Image {
             fire_temperature,
             fp16,
             window,
+            &self.meta,
         )
     }
 }
@@ -253,6 +257,7 @@ pub fn render(
             origin: (x0, y0),
             full: scene.res,
             extra: names.map(|n| (n, buckets)),
+            meta: Vec::new(),
         },
         stats,
     )

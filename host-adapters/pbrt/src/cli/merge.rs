@@ -1,0 +1,155 @@
+//! `firemedium merge TILE.exr… -o FRAME.exr`: the tiles of one render (`render --cropwindow` / `--pixelbounds`,
+//! each an EXR whose data window sits in the film's display window) assembled into the full frame. Refused: tiles
+//! of different films, scenes, frames, sample counts or seeds (the render record each EXR carries), tiles that overlap,
+//! and a set that leaves pixels out. Pixels carry their own seeds, so the merged frame equals the full render's
+//! pixels bit for bit.
+
+use clap::Args;
+use firemedium::imageio;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The tiles (EXR), in any order.
+    #[arg(required = true)]
+    tiles: Vec<PathBuf>,
+    /// The frame to write (EXR; a PNG preview is not written).
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+}
+
+pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
+    // The first tile's film, attributes and name: every other tile must match them.
+    let mut frame: Option<(imageio::Window, imageio::Meta, &PathBuf)> = None;
+    let mut rgb: Vec<[f32; 3]> = Vec::new();
+    let mut owner: Vec<u32> = Vec::new();
+    let mut fire_t = None;
+    for (k, path) in a.tiles.iter().enumerate() {
+        let (win, meta) = imageio::read_meta(path).map_err(|e| (1, e))?;
+        match &frame {
+            None => {
+                let (w, h) = win.full;
+                let n = w
+                    .checked_mul(h)
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| (1, format!("{}: a film of {w}×{h} pixels", path.display())))?;
+                firemedium::budget::check(
+                    &format!("{}: the merged {w}×{h} frame", path.display()),
+                    n as u64,
+                    16,
+                    firemedium::budget::default_bytes(),
+                )
+                .map_err(|e| (1, e))?;
+                rgb = vec![[0.0; 3]; n];
+                owner = vec![0; n];
+                frame = Some((win, meta.clone(), path));
+            }
+            Some((first, first_meta, first_path)) => {
+                if first.full != win.full {
+                    return Err((
+                        1,
+                        format!(
+                            "{}: a film of {}×{} pixels, {} one of {}×{}: tiles of different renders",
+                            path.display(),
+                            win.full.0,
+                            win.full.1,
+                            first_path.display(),
+                            first.full.0,
+                            first.full.1
+                        ),
+                    ));
+                }
+                if *first_meta != meta {
+                    let differs: Vec<String> = first_meta
+                        .iter()
+                        .zip(&meta)
+                        .filter(|(x, y)| x != y)
+                        .map(|(x, y)| format!("{} {} vs {}", x.0, x.1, y.1))
+                        .collect();
+                    return Err((
+                        1,
+                        format!(
+                            "{}: not a tile of the render {} is a tile of ({}): tiles of different renders",
+                            path.display(),
+                            first_path.display(),
+                            if differs.is_empty() {
+                                "their attributes differ".to_string()
+                            } else {
+                                differs.join("; ")
+                            }
+                        ),
+                    ));
+                }
+            }
+        }
+        let img = imageio::read(path, false).map_err(|e| (1, e))?;
+        let (fw, fh) = win.full;
+        if win.origin.0 + img.w > fw || win.origin.1 + img.h > fh {
+            return Err((
+                1,
+                format!(
+                    "{}: {}×{} pixels at ({}, {}) reach past the {fw}×{fh} film",
+                    path.display(),
+                    img.w,
+                    img.h,
+                    win.origin.0,
+                    win.origin.1
+                ),
+            ));
+        }
+        for y in 0..img.h {
+            for x in 0..img.w {
+                let i = win.origin.0 + x + fw * (win.origin.1 + y);
+                if owner[i] != 0 {
+                    return Err((
+                        1,
+                        format!(
+                            "{} overlaps {} at pixel ({}, {})",
+                            path.display(),
+                            a.tiles[owner[i] as usize - 1].display(),
+                            win.origin.0 + x,
+                            win.origin.1 + y
+                        ),
+                    ));
+                }
+                owner[i] = k as u32 + 1;
+                rgb[i] = img.px[x + img.w * y];
+            }
+        }
+        if fire_t.is_none() {
+            fire_t = imageio::read_fire_temperature(path).map_err(|e| (1, e))?;
+        }
+    }
+    let Some((win, meta, _)) = frame else {
+        return Err((2, "no tiles".into()));
+    };
+    let (fw, _) = win.full;
+    if let Some(i) = owner.iter().position(|&o| o == 0) {
+        return Err((
+            1,
+            format!(
+                "the tiles leave pixel ({}, {}) of the {}×{} film out ({} of its pixels)",
+                i % fw,
+                i / fw,
+                win.full.0,
+                win.full.1,
+                owner.iter().filter(|&&o| o == 0).count()
+            ),
+        ));
+    }
+    let full = imageio::Window {
+        origin: (0, 0),
+        full: win.full,
+    };
+    imageio::write_exr_as(
+        &a.output, win.full.0, win.full.1, &rgb, fire_t, false, full, &meta,
+    )
+    .map_err(|e| (1, e))?;
+    Ok(format!(
+        "merged {} tiles into {} ({}×{})\n",
+        a.tiles.len(),
+        a.output.display(),
+        win.full.0,
+        win.full.1
+    ))
+}
