@@ -1111,3 +1111,98 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
         "{e}"
     );
 }
+
+#[test]
+fn log_json_records_each_event_as_a_line() {
+    // A farm reads `--log-json`: start, progress and done per frame, skipped frames, and the error that ends a
+    // render (here frame 33, whose dataset does not exist), one JSON object per line, appended.
+    let dir = tmp("logjson");
+    let bin = env!("CARGO_BIN_EXE_firemedium");
+    let run = |args: &[&str]| {
+        Command::new(bin)
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[
+        "gen",
+        "torch",
+        "--resolution",
+        "12",
+        "--frames",
+        "31-32",
+        "-o",
+        "t.####.vdb",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(
+        dir.join("s.pbrt"),
+        "LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 40 \"integer yresolution\" 40\nSampler \"independent\" \"integer pixelsamples\" 1\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"t.####.vdb\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "render",
+        "s.pbrt",
+        "--frames",
+        "31-32",
+        "-o",
+        "s.####.exr",
+        "-q",
+        "--log-json",
+        "log.jsonl",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&[
+        "render",
+        "s.pbrt",
+        "--frames",
+        "31-33",
+        "-o",
+        "s.####.exr",
+        "-q",
+        "--skip-existing",
+        "--log-json",
+        "log.jsonl",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let text = std::fs::read_to_string(dir.join("log.jsonl")).unwrap();
+    let events: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let of = |kind: &str| -> Vec<&serde_json::Value> {
+        events.iter().filter(|e| e["event"] == kind).collect()
+    };
+    let done: Vec<i64> = of("done")
+        .iter()
+        .map(|e| e["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(done, vec![31, 32], "{text}");
+    assert!(of("done")
+        .iter()
+        .all(|e| e["width"] == 40 && e["spp"] == 1 && e["seconds"].as_f64().unwrap() > 0.0));
+    // 40×40 pixels are 9 tiles: progress at most every tenth, some of them reported.
+    assert!(
+        of("progress")
+            .iter()
+            .any(|e| e["frame"] == 32 && e["tiles"] == 9),
+        "{text}"
+    );
+    let skipped: Vec<i64> = of("skipped")
+        .iter()
+        .map(|e| e["frame"].as_i64().unwrap())
+        .collect();
+    assert_eq!(skipped, vec![31, 32], "{text}");
+    let errors = of("error");
+    assert!(
+        errors.len() == 1
+            && errors[0]["code"] == 1
+            && errors[0]["message"]
+                .as_str()
+                .unwrap()
+                .contains("t.0033.vdb"),
+        "{text}"
+    );
+    assert_eq!(of("start").len(), 5, "{text}");
+}

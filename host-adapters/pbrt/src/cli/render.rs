@@ -72,6 +72,35 @@ pub struct RenderArgs {
     /// With --frames or --frame: leave out frames whose output EXR exists.
     #[arg(long)]
     skip_existing: bool,
+    /// Append one JSON object per event (start, progress, done, skipped, error) to FILE, a line each.
+    #[arg(long, value_name = "FILE")]
+    log_json: Option<PathBuf>,
+}
+
+/// `--log-json`: events as JSON lines appended to a file (a farm's scheduler reads them while the render runs).
+struct JsonLog(Option<std::sync::Mutex<std::fs::File>>);
+
+impl JsonLog {
+    fn open(path: Option<&Path>) -> Result<JsonLog, (u8, String)> {
+        let Some(path) = path else {
+            return Ok(JsonLog(None));
+        };
+        let f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|e| (2, format!("--log-json {}: {e}", path.display())))?;
+        Ok(JsonLog(Some(std::sync::Mutex::new(f))))
+    }
+    fn on(&self) -> bool {
+        self.0.is_some()
+    }
+    fn event(&self, v: serde_json::Value) {
+        if let Some(Ok(mut f)) = self.0.as_ref().map(|m| m.lock()) {
+            // (One write per line: appends of a line from several processes do not interleave.)
+            let _ = std::io::Write::write_all(&mut *f, format!("{v}\n").as_bytes());
+        }
+    }
 }
 
 /// The frames of `--frames`.
@@ -124,17 +153,26 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     if a.spp == Some(0) {
         return Err((2, "--spp must be at least 1".into()));
     }
+    let log = JsonLog::open(a.log_json.as_deref())?;
+    let logged = |r: Result<String, (u8, String)>| {
+        if let Err((code, message)) = &r {
+            if *code != 0 {
+                log.event(serde_json::json!({"event": "error", "code": code, "message": message}));
+            }
+        }
+        r
+    };
     let frames: Option<Vec<i64>> = a.frames.clone().map(|f| f.0).or(a.frame.map(|f| vec![f]));
     let Some(frames) = frames else {
         if a.skip_existing {
-            return Err((2, "--skip-existing needs --frames or --frame".into()));
+            return logged(Err((2, "--skip-existing needs --frames or --frame".into())));
         }
-        return render_frame(a, None);
+        return logged(render_frame(a, None, &log));
     };
     let mut out = String::new();
     for &f in &frames {
         let start = std::time::Instant::now();
-        match render_frame(a, Some(f)) {
+        match logged(render_frame(a, Some(f), &log)) {
             Ok(text) => {
                 out += &text;
                 // One line per finished frame, as it finishes (a farm's log follows the sequence).
@@ -154,7 +192,9 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
 
 /// Renders one frame (`None`: the scene as written) and writes its EXR and PNG; `Err((0, line))` for a frame
 /// left out by `--skip-existing`.
-fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, String)> {
+fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<String, (u8, String)> {
+    log.event(serde_json::json!({"event": "start", "frame": frame, "scene": a.scene.display().to_string()}));
+    let frame_start = std::time::Instant::now();
     let ov = scene::Overrides {
         frame,
         spp: a.spp,
@@ -188,6 +228,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, Strin
     };
     let exists = |exr: &Path| {
         (a.skip_existing && exr.is_file()).then(|| {
+            log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
             (
                 0,
                 format!(
@@ -227,6 +268,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, Strin
     let show = !a.quiet && terminal;
     // Off a terminal (a farm's log), progress as plain lines at every tenth of the tiles.
     let lines = !a.quiet && !terminal;
+    let report = lines || log.on();
     let label = frame.map_or(String::new(), |f| format!("frame {f} "));
     let tenth = std::sync::atomic::AtomicUsize::new(0);
     bar.set_draw_target(if show {
@@ -247,8 +289,11 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, Strin
         render::render(&sc, seed, &|n, total| {
             bar.set_position(n as u64);
             let t = n * 10 / total.max(1);
-            if lines && t < 10 && t > tenth.fetch_max(t, std::sync::atomic::Ordering::Relaxed) {
-                eprintln!("firemedium: {label}{} % ({n}/{total} tiles)", t * 10);
+            if report && t < 10 && t > tenth.fetch_max(t, std::sync::atomic::Ordering::Relaxed) {
+                if lines {
+                    eprintln!("firemedium: {label}{} % ({n}/{total} tiles)", t * 10);
+                }
+                log.event(serde_json::json!({"event": "progress", "frame": frame, "percent": t * 10, "tiles_done": n, "tiles": total}));
             }
         })
     });
@@ -345,6 +390,18 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>) -> Result<String, (u8, Strin
             ),
         ));
     }
+    log.event(serde_json::json!({
+        "event": "done",
+        "frame": frame,
+        "exr": exr.display().to_string(),
+        "png": png.display().to_string(),
+        "width": img.w,
+        "height": img.h,
+        "spp": sc.spp,
+        "seed": seed,
+        "render_seconds": st.seconds,
+        "seconds": frame_start.elapsed().as_secs_f64(),
+    }));
     Ok(out)
 }
 
