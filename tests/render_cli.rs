@@ -1110,6 +1110,21 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
         !o.status.success() && e.contains("leave pixel (12, 8)"),
         "{e}"
     );
+    // The record the EXRs carry (read back with the `exr` crate): what the render was.
+    let (win, meta) = firemedium::imageio::read_meta(&dir.join("merged.exr")).unwrap();
+    assert_eq!((win.origin, win.full), ((0, 0), (24, 16)));
+    let get = |k: &str| {
+        meta.iter()
+            .find(|m| m.0 == k)
+            .map(|m| m.1.clone())
+            .unwrap_or_default()
+    };
+    assert_eq!(
+        (get("seed"), get("spp"), get("frame")),
+        ("5".into(), "2".into(), "none".into())
+    );
+    assert!(get("scene").ends_with("fire.pbrt"));
+    assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
 }
 
 #[test]

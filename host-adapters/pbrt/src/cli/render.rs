@@ -334,6 +334,18 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         ("seed".to_string(), seed.to_string()),
         ("spp".to_string(), sc.spp.to_string()),
         (
+            // pbrt's camera-to-world matrix, row by row (3 × 4), for a compositor matching the render.
+            "camera_to_world".to_string(),
+            {
+                let m = sc.camera.to_world;
+                let (c, t) = (m.matrix3, m.translation);
+                (0..3)
+                    .map(|r| format!("{} {} {} {}", c.x_axis[r], c.y_axis[r], c.z_axis[r], t[r]))
+                    .collect::<Vec<_>>()
+                    .join("  ")
+            },
+        ),
+        (
             "frame".to_string(),
             frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
         ),
