@@ -15,6 +15,15 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// `firemedium ARGS` run in `dir`.
+fn firemedium_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 fn render(scene: &Path, extra: &[&str]) -> PathBuf {
     let out = scene.with_extension("exr");
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
@@ -927,14 +936,7 @@ fn the_fire_light_is_built_only_where_a_path_can_sample_it() {
 fn frames_render_a_sequence_one_seed_per_frame() {
     // Three frames of the generator's torch; `####` in the dataset and output names takes each frame.
     let dir = tmp("frames");
-    let bin = env!("CARGO_BIN_EXE_firemedium");
-    let run = |args: &[&str]| {
-        Command::new(bin)
-            .current_dir(&dir)
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| firemedium_in(&dir, args);
     let o = run(&[
         "gen",
         "torch",
@@ -1012,14 +1014,7 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
         ),
     )
     .unwrap();
-    let bin = env!("CARGO_BIN_EXE_firemedium");
-    let run = |args: &[&str]| {
-        Command::new(bin)
-            .current_dir(&dir)
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| firemedium_in(&dir, args);
     let ok = |o: std::process::Output| {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     };
@@ -1132,14 +1127,7 @@ fn log_json_records_each_event_as_a_line() {
     // A farm reads `--log-json`: start, progress and done per frame, skipped frames, and the error that ends a
     // render (here frame 33, whose dataset does not exist), one JSON object per line, appended.
     let dir = tmp("logjson");
-    let bin = env!("CARGO_BIN_EXE_firemedium");
-    let run = |args: &[&str]| {
-        Command::new(bin)
-            .current_dir(&dir)
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| firemedium_in(&dir, args);
     let o = run(&[
         "gen",
         "torch",

@@ -225,57 +225,27 @@ impl Topology {
         off: [usize; 3],
         mut present: impl FnMut([usize; 3]) -> bool,
     ) -> Option<Topology> {
-        if off.iter().any(|&o| o >= BRICK) {
+        if off.iter().any(|&o| o >= BRICK) || dims.contains(&0) {
             return None;
         }
         let nb = [0, 1, 2].map(|a| (dims[a] + off[a]).div_ceil(BRICK));
         // (The brick count must fit: the slots are numbered in u32, the brick coordinates in usize.)
         nb.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
-        if dims.contains(&0) {
-            return None;
-        }
-        let nr = nb.map(|n| n.div_ceil(REGION));
-        let regions = nr.iter().try_fold(1usize, |a, &b| a.checked_mul(b))?;
-        let mut top = crate::alloc::filled(regions, 0u32)?;
-        let mut blocks: Vec<u32> = Vec::new();
-        let mut block = vec![0u32; REGION_BRICKS];
-        let mut active = 0usize;
-        for rz in 0..nr[2] {
-            for ry in 0..nr[1] {
-                for rx in 0..nr[0] {
-                    let mut any = false;
-                    block.fill(0);
-                    for lz in 0..REGION {
-                        for ly in 0..REGION {
-                            for lx in 0..REGION {
-                                let b = [rx * REGION + lx, ry * REGION + ly, rz * REGION + lz];
-                                if b[0] < nb[0] && b[1] < nb[1] && b[2] < nb[2] && present(b) {
-                                    active += 1;
-                                    any = true;
-                                    block[lx + REGION * (ly + REGION * lz)] =
-                                        u32::try_from(active).ok()?;
-                                }
-                            }
+        // The bricks `present` names, listed (grown fallibly) for `from_bricks`, which numbers them.
+        let mut list: Vec<[usize; 3]> = Vec::new();
+        for z in 0..nb[2] {
+            for y in 0..nb[1] {
+                for x in 0..nb[0] {
+                    if present([x, y, z]) {
+                        if list.len() == list.capacity() {
+                            list.try_reserve(list.len().max(64)).ok()?;
                         }
-                    }
-                    if any {
-                        blocks.try_reserve(REGION_BRICKS).ok()?;
-                        blocks.extend_from_slice(&block);
-                        top[rx + nr[0] * (ry + nr[1] * rz)] =
-                            u32::try_from(blocks.len() / REGION_BRICKS).ok()?;
+                        list.push([x, y, z]);
                     }
                 }
             }
         }
-        Some(Topology {
-            dims,
-            off,
-            nb,
-            nr,
-            top,
-            blocks,
-            active,
-        })
+        Topology::from_bricks(dims, off, list)
     }
 
     /// As [`Topology::build_offset`], from the list of the bricks holding data (any order, repeats allowed;

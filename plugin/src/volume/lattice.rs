@@ -50,6 +50,30 @@ pub(crate) struct Lattice {
     bricks: Option<Topology>,
 }
 
+/// `pairs` (two floats per voxel) and each of `extra` (one per voxel) cut, in order, into runs of `counts[k]`
+/// units of `unit` voxels: one (pairs, extras) per run, for one thread each.
+fn runs<'a>(
+    mut pairs: &'a mut [f32],
+    mut extra: Vec<&'a mut [f32]>,
+    unit: usize,
+    counts: &[usize],
+) -> Vec<(&'a mut [f32], Vec<&'a mut [f32]>)> {
+    let mut out = Vec::with_capacity(counts.len());
+    for &n in counts {
+        let (mine, tail) = std::mem::take(&mut pairs).split_at_mut(2 * unit * n);
+        pairs = tail;
+        let (mut mine_extra, mut tails) = (Vec::new(), Vec::new());
+        for r in extra {
+            let (a, b) = r.split_at_mut(unit * n);
+            mine_extra.push(a);
+            tails.push(b);
+        }
+        extra = tails;
+        out.push((mine, mine_extra));
+    }
+    out
+}
+
 impl Lattice {
     /// The lattice of `density`, `temperature` (if any) and the `extra` grids, all on one lattice; `None` when
     /// it would hold 2³² floats or more (the kernel's offsets are 32-bit; such a volume marches without it).
@@ -95,23 +119,16 @@ impl Lattice {
             .collect();
         std::thread::scope(|s| {
             // Each thread takes whole padded slabs [1 + k·per, 1 + (k+1)·per).
-            let mut rest: &mut [f32] = &mut pairs[2 * slab..];
-            let mut rest_extra: Vec<&mut [f32]> =
-                extra_v.iter_mut().map(|v| &mut v[slab..]).collect();
-            let mut z0 = 0;
+            let counts: Vec<usize> = (0..nz).step_by(per).map(|z0| per.min(nz - z0)).collect();
+            let parts = runs(
+                &mut pairs[2 * slab..],
+                extra_v.iter_mut().map(|v| &mut v[slab..]).collect(),
+                slab,
+                &counts,
+            );
             let mut handles = Vec::new();
-            while z0 < nz {
-                let n = per.min(nz - z0);
-                let (mine, tail) = rest.split_at_mut(2 * slab * n);
-                rest = tail;
-                let mut mine_extra = Vec::with_capacity(rest_extra.len());
-                let mut tails = Vec::with_capacity(rest_extra.len());
-                for r in rest_extra {
-                    let (a, b) = r.split_at_mut(slab * n);
-                    mine_extra.push(a);
-                    tails.push(b);
-                }
-                rest_extra = tails;
+            for (k, (mine, mut mine_extra)) in parts.into_iter().enumerate() {
+                let (z0, n) = (k * per, counts[k]);
                 handles.push(s.spawn(move || {
                     let mut acc: Vec<BrickRanges> = grids
                         .iter()
@@ -160,7 +177,6 @@ impl Lattice {
                     }
                     acc
                 }));
-                z0 += n;
             }
             for h in handles {
                 let part = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
@@ -286,24 +302,21 @@ impl Lattice {
         let threads = crate::par::threads(8);
         let per = (copies - 1).div_ceil(threads).max(1);
         std::thread::scope(|s| {
-            let mut rest: &mut [f32] = &mut pairs[2 * PADDED_VOXELS..];
-            let mut rest_extra: Vec<&mut [f32]> = extra_v
-                .iter_mut()
-                .map(|v| &mut v[PADDED_VOXELS..])
+            let counts: Vec<usize> = (1..copies)
+                .step_by(per)
+                .map(|c| per.min(copies - c))
                 .collect();
-            let mut first = 1;
-            while first < copies {
-                let m = per.min(copies - first);
-                let (mine, tail) = rest.split_at_mut(2 * PADDED_VOXELS * m);
-                rest = tail;
-                let mut mine_extra = Vec::with_capacity(rest_extra.len());
-                let mut tails = Vec::with_capacity(rest_extra.len());
-                for r in rest_extra {
-                    let (a, t) = r.split_at_mut(PADDED_VOXELS * m);
-                    mine_extra.push(a);
-                    tails.push(t);
-                }
-                rest_extra = tails;
+            let parts = runs(
+                &mut pairs[2 * PADDED_VOXELS..],
+                extra_v
+                    .iter_mut()
+                    .map(|v| &mut v[PADDED_VOXELS..])
+                    .collect(),
+                PADDED_VOXELS,
+                &counts,
+            );
+            for (k, (mine, mut mine_extra)) in parts.into_iter().enumerate() {
+                let (first, m) = (1 + k * per, counts[k]);
                 let (of, fill) = (&of, &fill);
                 s.spawn(move || {
                     for c in 0..m {
@@ -318,7 +331,6 @@ impl Lattice {
                         );
                     }
                 });
-                first += m;
             }
         });
         Some(Lattice {
