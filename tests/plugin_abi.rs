@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 4));
+    assert_eq!(p.version(), (0, 5));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -308,4 +308,61 @@ fn the_fire_light_samples_through_the_abi() {
         light.sample(&u[..2], &mut pts[..2], &mut short, None),
         Err(Error::Buffer(_))
     ));
+}
+
+#[test]
+fn ray_times_blur_a_volume_with_velocity_and_nothing_else() {
+    // ABI 0.5: Mantaflow's own `velocity` vector grid (solver units, scaled down), the shutter over half a frame.
+    let p = plugin();
+    let with = |extra: &[Param]| {
+        let mut list = fire_params();
+        list.extend_from_slice(extra);
+        p.create_volume(&list).unwrap()
+    };
+    let blur = [
+        Param::string("velocitygrid", "velocity"),
+        Param::float("velocityscale", 0.05),
+        Param::float("shutterclose", 0.5),
+    ];
+    let moving = with(&blur);
+    let still = with(&[]);
+    let mut closed_params = blur.to_vec();
+    closed_params[2] = Param::float("shutterclose", 0.0);
+    let closed = with(&closed_params);
+    let rs = rays(64);
+    let c = 32;
+    let run = |v: &firemedium_loader::Volume, times: Option<&[f64]>| {
+        let (mut l, mut t) = (vec![0f32; 64 * c], vec![0f32; 64 * c]);
+        v.integrate_at(&rs, times, &mut l, Some(&mut t), None).unwrap();
+        let mut tr = vec![0f32; 64 * c];
+        v.transmittance_at(&rs, times, &mut tr).unwrap();
+        let mut ev = vec![Default::default(); 64];
+        let mut w = vec![0f32; 64 * c];
+        v.sample_scatter_at(&rs, times, &mut ev, &mut w, None).unwrap();
+        (l, t, tr)
+    };
+    let (zero, late) = (vec![0.0; 64], vec![0.4; 64]);
+    let base = run(&still, None);
+    // At time 0 every volume is the still one, bit for bit; without a velocity grid, or with the shutter
+    // closed, times change nothing.
+    assert!(run(&moving, Some(&zero)) == base);
+    assert!(run(&still, Some(&late)) == base);
+    assert!(run(&closed, Some(&late)) == base);
+    // At 0.4 frames the fire has moved (its rays see other radiance), and stays finite and physical.
+    let (l, t, tr) = run(&moving, Some(&late));
+    let changed = (0..64).filter(|&i| l[i * c + 29] != base.0[i * c + 29]).count();
+    assert!(changed > 10, "only {changed} of 64 rays changed");
+    assert!(l.iter().all(|x| x.is_finite() && *x >= 0.0));
+    assert!(t.iter().chain(&tr).all(|x| (0.0..=1.0).contains(x)));
+    // Times are checked: one per ray, finite.
+    let mut l = vec![0f32; 64 * c];
+    let e = moving.integrate_at(&rs, Some(&late[..3]), &mut l, None, None);
+    assert!(matches!(e, Err(Error::Buffer(_))), "{e:?}");
+    let mut nan = late.clone();
+    nan[7] = f64::NAN;
+    let e = moving
+        .integrate_at(&rs, Some(&nan), &mut l, None, None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("times[7] = NaN"), "{e}");
 }

@@ -247,6 +247,74 @@ fn mantaflow_fire_frames() {
     }
 }
 
+/// Mantaflow's half-precision `velocity` (Tree_vec3s_5_4_3_HalfFloat) read as three components (`velocity.x`,
+/// `.y`, `.z`): each component's extremes over the active voxels and the largest and mean magnitude are the
+/// sidecar's (OpenVDB's own statistics of the same file).
+#[test]
+fn mantaflow_velocity_vector_grid() {
+    let side = sidecar("vdb/mantaflow_fire.json");
+    for frame in ["mantaflow_fire_f030.vdb", "mantaflow_fire_f060.vdb"] {
+        let ds = load(
+            &format!("vdb/{frame}"),
+            &["velocity.x", "velocity.y", "velocity.z", "density"],
+        );
+        let grids = side["files"][frame]["grids"].as_array().unwrap();
+        let g = grids.iter().find(|g| g["name"] == "velocity").unwrap();
+        let st = &g["dense_stats"];
+        let dense: Vec<Vec<f32>> = (0..3).map(|c| ds.channels()[c].grid.to_dense()).collect();
+        for c in 0..3 {
+            // Every extreme has the sign that makes the grid's zeros irrelevant to it.
+            let lo = dense[c].iter().copied().fold(f32::MAX, f32::min) as f64;
+            let hi = dense[c].iter().copied().fold(f32::MIN, f32::max) as f64;
+            assert_eq!(
+                lo,
+                st["component_min_active"][c].as_f64().unwrap(),
+                "{frame} {c} min"
+            );
+            assert_eq!(
+                hi,
+                st["component_max_active"][c].as_f64().unwrap(),
+                "{frame} {c} max"
+            );
+        }
+        // Active voxels are the density's (the sidecar: the same count); their magnitudes.
+        let active = g["active_voxel_count"].as_u64().unwrap() as f64;
+        let dens = ds.channels()[3].grid.to_dense();
+        let (mut max, mut sum) = (0f64, 0f64);
+        for i in 0..dens.len() {
+            let m = (0..3)
+                .map(|c| (dense[c][i] as f64).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            max = max.max(m);
+            if dens[i] != 0.0 {
+                sum += m;
+            }
+        }
+        assert!(
+            (max / st["max_magnitude"].as_f64().unwrap() - 1.0).abs() < 1e-6,
+            "{frame} {max}"
+        );
+        let mean = st["mean_magnitude_active"].as_f64().unwrap();
+        // (The mean over the density's non-zero voxels: the velocity's active set, less voxels where the
+        // density is active at exactly zero — none here, as the counts agree.)
+        assert!(
+            (sum / active / mean - 1.0).abs() < 1e-3,
+            "{frame} mean {} vs {mean}",
+            sum / active
+        );
+    }
+    // A component of a float grid, or an axis that is not x, y, z, is a missing grid naming those present.
+    let err = Dataset::load(
+        &[ChannelSource::new(
+            "density.x",
+            data("vdb/mantaflow_fire_f030.vdb"),
+        )],
+        &LoadOptions::default(),
+    );
+    assert!(err.is_err());
+}
+
 #[test]
 fn nanovdb_ramp_plain_and_zip() {
     let side = sidecar("nvdb/ramp16.json");

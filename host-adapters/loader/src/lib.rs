@@ -256,7 +256,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 20] = [
+const ENTRIES: [&str; 23] = [
     "last_error",
     "param_count",
     "param_info",
@@ -277,6 +277,9 @@ const ENTRIES: [&str; 20] = [
     "volume_temperature_range",
     "volume_create_located",
     "volume_capped_rays",
+    "volume_integrate_at",
+    "volume_transmittance_at",
+    "volume_sample_scatter_at",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

@@ -127,6 +127,32 @@ impl Volume {
         transmittance: Option<&mut [f32]>,
         exits: Option<&mut [Exit]>,
     ) -> Result<(), Error> {
+        self.integrate_at(rays, None, radiance, transmittance, exits)
+    }
+
+    /// Checks that `times`, when given, has one entry per ray; its pointer (null for none).
+    fn times_ptr(times: Option<&[f64]>, rays: usize) -> Result<*const f64, Error> {
+        match times {
+            Some(t) if t.len() != rays => Err(Error::Buffer(format!(
+                "times: {} entries for {rays} rays",
+                t.len()
+            ))),
+            Some(t) => Ok(t.as_ptr()),
+            None => Ok(std::ptr::null()),
+        }
+    }
+
+    /// As [`integrate`](Self::integrate), each ray at its time (`times`: frames from the grids' time, one per
+    /// ray; `None`: time 0). A volume with motion blur is looked up where its velocity carried it from.
+    pub fn integrate_at(
+        &self,
+        rays: &[Ray],
+        times: Option<&[f64]>,
+        radiance: &mut [f32],
+        transmittance: Option<&mut [f32]>,
+        exits: Option<&mut [Exit]>,
+    ) -> Result<(), Error> {
+        let times = Self::times_ptr(times, rays.len())?;
         self.need("radiance", radiance.len(), rays.len())?;
         let t_ptr = match transmittance {
             Some(t) => {
@@ -148,9 +174,10 @@ impl Volume {
         };
         // SAFETY: buffers sized above; rays.len() rays.
         let s = unsafe {
-            (self.inner.api().volume_integrate)(
+            (self.inner.api().volume_integrate_at)(
                 self.handle,
                 rays.as_ptr(),
+                times,
                 rays.len(),
                 radiance.as_mut_ptr(),
                 t_ptr,
@@ -162,12 +189,24 @@ impl Volume {
 
     /// Transmittance along `rays` (`rays.len() × channels` floats).
     pub fn transmittance(&self, rays: &[Ray], transmittance: &mut [f32]) -> Result<(), Error> {
+        self.transmittance_at(rays, None, transmittance)
+    }
+
+    /// As [`transmittance`](Self::transmittance), each ray at its time (as [`integrate_at`](Self::integrate_at)).
+    pub fn transmittance_at(
+        &self,
+        rays: &[Ray],
+        times: Option<&[f64]>,
+        transmittance: &mut [f32],
+    ) -> Result<(), Error> {
+        let times = Self::times_ptr(times, rays.len())?;
         self.need("transmittance", transmittance.len(), rays.len())?;
-        // SAFETY: buffer sized above.
+        // SAFETY: buffer sized above; times null or one per ray (checked).
         let s = unsafe {
-            (self.inner.api().volume_transmittance)(
+            (self.inner.api().volume_transmittance_at)(
                 self.handle,
                 rays.as_ptr(),
+                times,
                 rays.len(),
                 transmittance.as_mut_ptr(),
             )
@@ -183,6 +222,20 @@ impl Volume {
         weights: &mut [f32],
         emitted: Option<&mut [f32]>,
     ) -> Result<(), Error> {
+        self.sample_scatter_at(rays, None, events, weights, emitted)
+    }
+
+    /// As [`sample_scatter`](Self::sample_scatter), each ray at its time (as
+    /// [`integrate_at`](Self::integrate_at)).
+    pub fn sample_scatter_at(
+        &self,
+        rays: &[Ray],
+        times: Option<&[f64]>,
+        events: &mut [Scatter],
+        weights: &mut [f32],
+        emitted: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        let times = Self::times_ptr(times, rays.len())?;
         if events.len() < rays.len() {
             return Err(Error::Buffer(format!(
                 "events: {} entries for {} rays",
@@ -200,9 +253,10 @@ impl Volume {
         };
         // SAFETY: buffers sized above.
         let s = unsafe {
-            (self.inner.api().volume_sample_scatter)(
+            (self.inner.api().volume_sample_scatter_at)(
                 self.handle,
                 rays.as_ptr(),
+                times,
                 rays.len(),
                 events.as_mut_ptr(),
                 weights.as_mut_ptr(),

@@ -615,10 +615,14 @@ pub struct Fields {
     pub temperature: Vec<f32>,
     /// Flame mass density (kg/m³), for species.
     pub flame: Vec<f32>,
+    /// The gas's velocity (m/s): the mass-weighted wind of the blobs there (0 where no mass); empty unless
+    /// asked for.
+    pub velocity: [Vec<f32>; 3],
 }
 
-/// Splats the blobs onto a grid of `res` voxels along the domain's longest side.
-pub fn voxelise(sim: &Sim, res: usize) -> Fields {
+/// Splats the blobs onto a grid of `res` voxels along the domain's longest side (and their wind, with
+/// `velocity`).
+pub fn voxelise(sim: &Sim, res: usize, velocity: bool) -> Fields {
     let m = &sim.model;
     let size = DVec3::new(2.0 * m.half_width, 2.0 * m.half_width, m.height);
     let voxel = size.max_element() / res as f64;
@@ -628,7 +632,9 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
     let slab = nx * ny;
     // Blob footprints: 3σ boxes in voxel indices.
     let kappa = m.kappa;
-    let blobs: Vec<(Blob, f64, [i64; 3], [i64; 3])> = sim
+    // Each blob with its σ, its footprint's index box and its wind.
+    type Footprint = (Blob, f64, [i64; 3], [i64; 3], DVec3);
+    let blobs: Vec<Footprint> = sim
         .blobs
         .iter()
         .map(|b| {
@@ -640,16 +646,23 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
                 s,
                 [lo.x as i64, lo.y as i64, lo.z as i64],
                 [hi.x as i64, hi.y as i64, hi.z as i64],
+                if velocity {
+                    sim.wind(b.x, b.t)
+                } else {
+                    DVec3::ZERO
+                },
             )
         })
         .collect();
-    // Per z-slice in parallel: sums of flame, smoke, and mass × temperature.
-    let slices: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = (0..nz)
+    // Per z-slice in parallel: sums of flame, smoke, mass × temperature (and mass × velocity).
+    type Slice = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<DVec3>);
+    let slices: Vec<Slice> = (0..nz)
         .into_par_iter()
         .map(|k| {
             let (mut f, mut s, mut mt) = (vec![0.0; slab], vec![0.0; slab], vec![0.0; slab]);
+            let mut mv = vec![DVec3::ZERO; if velocity { slab } else { 0 }];
             let z = p0.z + (k as f64 + 0.5) * voxel;
-            for (b, sg, lo, hi) in &blobs {
+            for (b, sg, lo, hi, v) in &blobs {
                 if (k as i64) < lo[2] || (k as i64) > hi[2] {
                     continue;
                 }
@@ -666,19 +679,24 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
                         f[idx] += b.m_flame * w;
                         s[idx] += b.m_smoke * w;
                         mt[idx] += (b.m_flame + b.m_smoke) * b.t * w;
+                        if velocity {
+                            mv[idx] += (b.m_flame + b.m_smoke) * w * *v;
+                        }
                     }
                 }
             }
-            (f, s, mt)
+            (f, s, mt, mv)
         })
         .collect();
     let n = nx * ny * nz;
     let (mut density, mut temperature, mut flame) = (vec![0f32; n], vec![0f32; n], vec![0f32; n]);
+    let nv = if velocity { n } else { 0 };
+    let mut vel = [vec![0f32; nv], vec![0f32; nv], vec![0f32; nv]];
     let peak = slices
         .iter()
-        .flat_map(|(f, s, _)| f.iter().zip(s).map(|(a, b)| a + b))
+        .flat_map(|(f, s, _, _)| f.iter().zip(s).map(|(a, b)| a + b))
         .fold(0.0f64, f64::max);
-    for (k, (f, s, mt)) in slices.into_iter().enumerate() {
+    for (k, (f, s, mt, mv)) in slices.into_iter().enumerate() {
         for idx in 0..slab {
             let rho = f[idx] + s[idx];
             let o = idx + slab * k;
@@ -687,6 +705,11 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
                 density[o] = (m.soot_yield * rho / RHO_SOOT) as f32;
                 temperature[o] = (mt[idx] / rho) as f32;
                 flame[o] = f[idx] as f32;
+                if velocity {
+                    for (a, g) in vel.iter_mut().enumerate() {
+                        g[o] = (mv[idx][a] / rho) as f32;
+                    }
+                }
             }
         }
     }
@@ -697,6 +720,7 @@ pub fn voxelise(sim: &Sim, res: usize) -> Fields {
         density,
         temperature,
         flame,
+        velocity: vel,
     }
 }
 
@@ -705,9 +729,10 @@ pub fn write_frame(
     sim: &Sim,
     res: usize,
     species: &[(String, f64)],
+    velocity: bool,
     path: &std::path::Path,
 ) -> Result<(usize, usize, f32, f32), String> {
-    let f = voxelise(sim, res);
+    let f = voxelise(sim, res, velocity);
     let peak_flame = f
         .flame
         .iter()
@@ -736,7 +761,18 @@ pub fn write_frame(
             sim.time
         ));
     }
-    let bytes = firemedium_plugin::dataset::vdb::write(&grids, f.p0, glam::DVec3::splat(f.voxel));
+    let [vx, vy, vz] = &f.velocity;
+    let vectors: Vec<firemedium_plugin::dataset::vdb::VdbVector> = if velocity {
+        vec![("vel", f.dims, [vx, vy, vz])]
+    } else {
+        Vec::new()
+    };
+    let bytes = firemedium_plugin::dataset::vdb::write_with_vectors(
+        &grids,
+        &vectors,
+        f.p0,
+        glam::DVec3::splat(f.voxel),
+    );
     crate::imageio::write_atomic(path, |tmp| {
         std::fs::write(tmp, &bytes).map_err(|e| format!("{}: cannot write: {e}", path.display()))
     })?;
@@ -859,7 +895,7 @@ mod tests {
         let run = |seed| {
             let mut sim = Sim::new(Kind::Torch, seed);
             sim.run_to(0.5);
-            let f = voxelise(&sim, 24);
+            let f = voxelise(&sim, 24, false);
             f.density
                 .iter()
                 .chain(&f.temperature)

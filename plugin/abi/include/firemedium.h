@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 4u
+#define FM_ABI_MINOR 5u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -148,6 +148,16 @@ typedef struct FmApi {
     /* ABI 0.4: how many rays' tracking stopped at the per-ray collision cap so far, into *out (each cut short
      * as if absorbed: a bias towards dark a host should report). */
     FmStatus (*volume_capped_rays)(const FmVolume *volume, uint64_t *out);
+    /* ABI 0.5: volume_integrate, volume_transmittance and volume_sample_scatter with a time per ray: times
+     * holds n doubles (frames from the grids' time, inside the volume's shutteropen..shutterclose) or is NULL
+     * (every ray at time 0). A volume with motion blur (a velocitygrid and an open shutter) is looked up where
+     * its velocity carried it from, x - v(x) * velocityscale / fps * time; any other volume ignores times. */
+    FmStatus (*volume_integrate_at)(const FmVolume *volume, const FmRay *rays, const double *times, size_t n,
+                                    float *radiance, float *transmittance, FmExit *exits);
+    FmStatus (*volume_transmittance_at)(const FmVolume *volume, const FmRay *rays, const double *times, size_t n,
+                                        float *transmittance);
+    FmStatus (*volume_sample_scatter_at)(const FmVolume *volume, const FmRay *rays, const double *times,
+                                         size_t n, FmScatter *events, float *weights, float *emitted);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 4;
+pub const ABI_MINOR: u32 = 5;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -351,6 +351,39 @@ pub struct FmApi {
     /// far, into `*out`: each was cut short as if absorbed, a bias towards dark that a host should report.
     pub volume_capped_rays:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
+    /// ABI 0.5: [`volume_integrate`](Self::volume_integrate) with a time per ray: `times` holds `n` doubles,
+    /// frames from the grids' time inside the volume's shutter (`shutteropen`, `shutterclose`), or is null
+    /// (every ray at time 0). A volume with motion blur (a `velocitygrid` and an open shutter) is looked up
+    /// where its velocity carried it from; any other volume ignores the times.
+    pub volume_integrate_at: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        times: *const f64,
+        n: usize,
+        radiance: *mut f32,
+        transmittance: *mut f32,
+        exits: *mut FmExit,
+    ) -> FmStatus,
+    /// ABI 0.5: [`volume_transmittance`](Self::volume_transmittance) with a time per ray (as
+    /// [`volume_integrate_at`](Self::volume_integrate_at)).
+    pub volume_transmittance_at: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        times: *const f64,
+        n: usize,
+        transmittance: *mut f32,
+    ) -> FmStatus,
+    /// ABI 0.5: [`volume_sample_scatter`](Self::volume_sample_scatter) with a time per ray (as
+    /// [`volume_integrate_at`](Self::volume_integrate_at)).
+    pub volume_sample_scatter_at: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        rays: *const FmRay,
+        times: *const f64,
+        n: usize,
+        events: *mut FmScatter,
+        weights: *mut f32,
+        emitted: *mut f32,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -384,7 +417,8 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
-        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and `volume_capped_rays`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 20 * 8);
+        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
+        // `volume_capped_rays`, 0.5 the three `_at` entries).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 23 * 8);
     }
 }

@@ -10,9 +10,60 @@ use crate::params::ParamReader;
 use crate::Error;
 use glam::DVec3;
 
-/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`); returns it and the index of a
-/// per-voxel Lescale channel.
-pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize>), Error> {
+/// Motion blur by the velocity grid (`velocitygrid`), when the shutter is open: the dataset's three velocity
+/// channels and what turns a velocity and a time into a displacement.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Motion {
+    /// Channels of the velocity's x, y and z.
+    pub channels: [usize; 3],
+    /// Medium units per frame per unit of the grid (`velocityscale / fps`).
+    pub per_frame: f64,
+    /// The shutter, in frames from the grids' time.
+    pub shutter: [f64; 2],
+}
+
+/// The velocity channels' names in a dataset.
+const VELOCITY: [&str; 3] = ["velocity.x", "velocity.y", "velocity.z"];
+
+/// The grid names `velocitygrid` gives (empty: none): one name is a vector grid or its components' float grids
+/// (`name.x` …, which the OpenVDB reader resolves either way); three are float grids.
+fn velocity_grids(r: &ParamReader) -> Result<Option<[String; 3]>, Error> {
+    let names: Vec<String> = r
+        .strings("velocitygrid")?
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|s| !s.is_empty())
+        .collect();
+    match names.as_slice() {
+        [] => Ok(None),
+        [one] => Ok(Some(["x", "y", "z"].map(|a| format!("{one}.{a}")))),
+        [x, y, z] => Ok(Some([x.clone(), y.clone(), z.clone()])),
+        _ => Err(Error::invalid(
+            "dataset",
+            "velocitygrid",
+            format!("{} names", names.len()),
+            "one name (a vector grid) or three (float grids x, y, z)",
+        )),
+    }
+}
+
+/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`); returns it, the index of a
+/// per-voxel Lescale channel and the motion blur (velocity is read only while the shutter is open).
+pub(crate) fn load(
+    r: &ParamReader,
+    pbrt: bool,
+) -> Result<(Dataset, Option<usize>, Option<Motion>), Error> {
+    let shutter = [r.float("shutteropen")?, r.float("shutterclose")?];
+    if shutter[1] < shutter[0] {
+        return Err(Error::invalid(
+            "dataset",
+            "shutterclose",
+            format!("{} (shutteropen {})", shutter[1], shutter[0]),
+            "a time at or after shutteropen",
+        ));
+    }
+    let velocity = velocity_grids(r)?.filter(|_| shutter[1] > shutter[0]);
+    let per_frame = r.float("velocityscale")? / r.float("fps")?;
     let pol = |name: &str| -> Result<Policy, Error> { Policy::from_name(name, &r.string(name)?) };
     let format = match r.string("format")?.as_str() {
         "" => None,
@@ -104,7 +155,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize
     }
     let inline_density = r.numbers("density")?;
     let lescale_values = r.numbers("Lescale")?;
-    let (mut ds, lescale) = if let Some(dens) = inline_density {
+    let (mut ds, lescale, motion) = if let Some(dens) = inline_density {
         let dims = [
             r.int("nx")? as usize,
             r.int("ny")? as usize,
@@ -129,9 +180,17 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize
             arrays.push(("Lescale", l));
         }
         let [b0, b1] = bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]);
+        if velocity.is_some() {
+            return Err(Error::invalid(
+                "dataset",
+                "velocitygrid",
+                "given for an inline grid",
+                "a dataset file holding the velocity grid",
+            ));
+        }
         let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
         let li = les.as_ref().map(|_| arrays.len() - 1);
-        (ds, li)
+        (ds, li, None)
     } else {
         let filename = match (r.string("filename")?, r.string("dataset")?) {
             (f, d) if !f.is_empty() && !d.is_empty() => {
@@ -205,10 +264,33 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<(Dataset, Option<usize
                 "one value for file datasets (arrays are for inline grids)",
             ));
         }
-        (Dataset::load(&sources, &opts)?, None)
+        let vfile = if filename.is_empty() {
+            &dfile
+        } else {
+            &filename
+        };
+        for (name, grid) in VELOCITY.iter().zip(velocity.iter().flatten()) {
+            sources.push(ChannelSource {
+                name: name.to_string(),
+                file: vfile.into(),
+                grid: Some(grid.clone()),
+                mapping: Mapping::default(),
+            });
+        }
+        let ds = Dataset::load(&sources, &opts)?;
+        let at = |n: &str| ds.channels().iter().position(|c| c.name == n);
+        let motion = match VELOCITY.map(at) {
+            [Some(x), Some(y), Some(z)] => Some(Motion {
+                channels: [x, y, z],
+                per_frame,
+                shutter,
+            }),
+            _ => None,
+        };
+        (ds, None, motion)
     };
     ds = ds.with_interpolation(interp);
-    Ok((ds, lescale))
+    Ok((ds, lescale, motion))
 }
 
 /// Whether `Lescale` is a per-voxel grid (pbrt-v4: any `Lescale` array of an inline grid is one, a single value

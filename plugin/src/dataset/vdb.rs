@@ -238,6 +238,21 @@ struct Ctx {
     half: bool,
     compression: u32,
     background: f32,
+    /// Values per voxel (1 for float grids, 3 for vector grids) and the one read (a vector grid's component).
+    comps: usize,
+    pick: usize,
+}
+
+/// One value of the grid's type (`comps` floats), its picked component kept.
+fn value(c: &mut Cursor, ctx: &Ctx, what: &str) -> Result<f32, Error> {
+    let mut v = 0.0;
+    for k in 0..ctx.comps {
+        let x = c.f32(what)?;
+        if k == ctx.pick {
+            v = x;
+        }
+    }
+    Ok(v)
 }
 
 /// A grid's leaf buffers (after its topology): every leaf in tree order, its value mask again, then its
@@ -277,9 +292,9 @@ fn read_values(
     let bg = ctx.background;
     let (mut inactive0, mut inactive1) = (if meta == 0 { bg } else { -bg }, bg);
     if meta == 2 || meta == 4 || meta == 5 {
-        inactive0 = c.f32("an inactive value")?;
+        inactive0 = value(c, ctx, "an inactive value")?;
         if meta == 5 {
-            inactive1 = c.f32("a second inactive value")?;
+            inactive1 = value(c, ctx, "a second inactive value")?;
         }
     }
     let selection = if (3..=5).contains(&meta) {
@@ -294,7 +309,7 @@ fn read_values(
         count
     };
     let elem = if ctx.half { 2 } else { 4 };
-    let nbytes = stored * elem;
+    let nbytes = stored * elem * ctx.comps;
     // Half values: OpenVDB's HalfReader writes nothing at all for zero values (full floats still carry
     // an empty block).
     let raw = if ctx.half && stored == 0 {
@@ -304,16 +319,18 @@ fn read_values(
     };
     // All stored values decoded at once (a loop over exact chunks, which compiles to plain loads), into `out`
     // (reused from leaf to leaf: no allocation per leaf).
+    // (A vector grid's values are `comps` components each: the picked one is kept.)
     out.clear();
+    let (k, n) = (ctx.pick, ctx.comps);
     if ctx.half {
         out.extend(
-            raw.chunks_exact(2)
-                .map(|b| half_to_f32(u16::from_le_bytes([b[0], b[1]]))),
+            raw.chunks_exact(2 * n)
+                .map(|b| half_to_f32(u16::from_le_bytes([b[2 * k], b[2 * k + 1]]))),
         );
     } else {
         out.extend(
-            raw.chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            raw.chunks_exact(4 * n)
+                .map(|b| f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]])),
         );
     }
     if out.len() < stored.min(count) {
@@ -436,13 +453,21 @@ fn read_tree<'a>(
     file: &'a str,
     bytes: &'a [u8],
     info: &GridInfo,
+    pick: Option<usize>,
 ) -> Result<(Tree, Buffers<'a>), Error> {
     let name = &info.name;
-    if info.tree_type != "Tree_float_5_4_3" {
+    let want = if pick.is_some() {
+        "Tree_vec3s_5_4_3"
+    } else {
+        "Tree_float_5_4_3"
+    };
+    if info.tree_type != want {
         return Err(Error::Unsupported {
             file: file.to_string(),
             what: format!("grid '{name}' of type {}", info.tree_type),
-            hint: "float grids (Tree_float_5_4_3, full or half precision) are read".into(),
+            hint: "float grids (Tree_float_5_4_3), and a vector grid's components (Tree_vec3s_5_4_3, asked for as \
+                   name.x, name.y, name.z), full or half precision, are read"
+                .into(),
         });
     }
     if !info.instance_parent.is_empty() {
@@ -469,12 +494,15 @@ fn read_tree<'a>(
         c.pos -= 4;
         return Err(c.err("a buffer count of 1", buffers));
     }
-    let background = c.f32("the background value")?;
-    let ctx = Ctx {
+    let mut ctx = Ctx {
         half: info.half,
         compression,
-        background,
+        background: 0.0,
+        comps: if pick.is_some() { 3 } else { 1 },
+        pick: pick.unwrap_or(0),
     };
+    let background = value(&mut c, &ctx, "the background value")?;
+    ctx.background = background;
     let (ntiles, nchildren) = (
         c.u32("the root tile count")?,
         c.u32("the root child count")?,
@@ -492,7 +520,7 @@ fn read_tree<'a>(
             c.i32("a tile origin")?,
             c.i32("a tile origin")?,
         ];
-        let value = c.f32("a tile value")?;
+        let value = value(&mut c, &ctx, "a tile value")?;
         let active = c.u8("a tile's active flag")? != 0;
         tiles.push(Tile {
             origin,
@@ -527,6 +555,21 @@ fn read_tree<'a>(
     ))
 }
 
+/// The grid `name` names: a grid of that name, else — for `base.x`, `base.y`, `base.z` (Houdini's names for a
+/// vector's components) — component 0, 1 or 2 of the vector grid `base`.
+fn find_grid<'h>(header: &'h Header, name: &str) -> Option<(&'h GridInfo, Option<usize>)> {
+    if let Some(g) = header.grids.iter().find(|g| g.name == name) {
+        return Some((g, None));
+    }
+    let (base, axis) = name.rsplit_once('.')?;
+    let pick = ["x", "y", "z"].iter().position(|&a| a == axis)?;
+    let g = header
+        .grids
+        .iter()
+        .find(|g| g.name == base && g.tree_type.starts_with("Tree_vec3s"))?;
+    Some((g, Some(pick)))
+}
+
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
 pub(crate) fn read(
     file: &str,
@@ -537,18 +580,18 @@ pub(crate) fn read(
     let header = read_header(file, bytes)?;
     let mut infos = Vec::new();
     for &name in names {
-        let Some(info) = header.grids.iter().find(|g| g.name == name) else {
+        let Some((info, pick)) = find_grid(&header, name) else {
             return Err(missing_grid(
                 file,
                 name,
                 header.grids.iter().map(|g| g.name.as_str()),
             ));
         };
-        infos.push((name, info));
+        infos.push((name, info, pick));
     }
     // The grids' trees are independent byte ranges: decoded in parallel.
-    let trees = super::par_map(infos, |(name, info)| {
-        read_tree(file, bytes, info).map(|(t, b)| (name, t, b))
+    let trees = super::par_map(infos, |(name, info, pick)| {
+        read_tree(file, bytes, info, pick).map(|(t, b)| (name, t, b))
     })
     .into_iter()
     .collect::<Result<Vec<_>, Error>>()?;
@@ -562,11 +605,51 @@ pub(crate) fn read(
 /// (the grids share the lattice, dims and `p0`), so reading it back gives the active box of the grids.
 /// Grids are `(name, dims, values x fastest)`; the background is 0.
 pub fn write(grids: &[(&str, [usize; 3], &[f32])], p0: DVec3, voxel: DVec3) -> Vec<u8> {
-    let sparse: Vec<(&str, Vec<VdbLeaf>)> = grids
+    write_with_vectors(grids, &[], p0, voxel)
+}
+
+/// A vector grid to write: its name, dims and its x, y and z components (dense, x fastest).
+pub type VdbVector<'a> = (&'a str, [usize; 3], [&'a [f32]; 3]);
+
+/// As [`write`], with vector grids (`Tree_vec3s_5_4_3`, as Houdini's `vel`) after the float grids: each given
+/// as its three components' dense arrays; a voxel is active where any component is non-zero.
+pub fn write_with_vectors(
+    grids: &[(&str, [usize; 3], &[f32])],
+    vectors: &[VdbVector],
+    p0: DVec3,
+    voxel: DVec3,
+) -> Vec<u8> {
+    let mut all: Vec<(&str, usize, Vec<VdbLeaf>)> = grids
         .iter()
-        .map(|&(name, dims, values)| (name, dense_leaves(dims, values)))
+        .map(|&(name, dims, values)| (name, 1, dense_leaves(dims, values)))
         .collect();
-    write_sparse(&sparse, p0, voxel)
+    for &(name, dims, [x, y, z]) in vectors {
+        // The leaves of the component-wise largest magnitude, their values then interleaved x, y, z.
+        let mag: Vec<f32> = (0..x.len())
+            .map(|i| x[i].abs().max(y[i].abs()).max(z[i].abs()))
+            .collect();
+        let leaves = dense_leaves(dims, &mag)
+            .into_iter()
+            .map(|(o, mask, _)| {
+                let mut vals = Vec::with_capacity(3 * 512);
+                for i in 0..512 {
+                    let (a, b, c) = (
+                        o[0] as usize + (i >> 6),
+                        o[1] as usize + ((i >> 3) & 7),
+                        o[2] as usize + (i & 7),
+                    );
+                    let inside = a < dims[0] && b < dims[1] && c < dims[2];
+                    let k = a + dims[0] * (b + dims[1] * c);
+                    for comp in [x, y, z] {
+                        vals.push(if inside { comp[k] } else { 0.0 });
+                    }
+                }
+                (o, mask, vals)
+            })
+            .collect();
+        all.push((name, 3, leaves));
+    }
+    write_grids(&all, p0, voxel)
 }
 
 /// A leaf to write: its origin (index space, multiples of 8), active mask (words are x slabs, bits y·8 + z) and
@@ -604,6 +687,15 @@ fn dense_leaves(dims: [usize; 3], values: &[f32]) -> Vec<VdbLeaf> {
 /// As [`write`], for grids given as leaves anywhere in index space (a sparse fire: leaves far apart cost
 /// their own bytes, not the box between them). Voxel (i, j, k) is centred at `p0 + (i + ½) · voxel`.
 pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+    let all: Vec<(&str, usize, Vec<VdbLeaf>)> = grids
+        .iter()
+        .map(|(name, leaves)| (*name, 1, leaves.clone()))
+        .collect();
+    write_grids(&all, p0, voxel)
+}
+
+/// The writer: grids of `comps` floats per voxel (1: float, 3: vec3s), their leaves' values `comps` per voxel.
+fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC.to_le_bytes());
     out.extend_from_slice(&224u32.to_le_bytes());
@@ -617,9 +709,17 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
         out.extend_from_slice(&(s.len() as u32).to_le_bytes());
         out.extend_from_slice(s.as_bytes());
     };
-    for (name, leaves) in grids {
+    for (name, comps, leaves) in grids {
+        let comps = *comps;
         put_str(&mut out, name);
-        put_str(&mut out, "Tree_float_5_4_3");
+        put_str(
+            &mut out,
+            if comps == 3 {
+                "Tree_vec3s_5_4_3"
+            } else {
+                "Tree_float_5_4_3"
+            },
+        );
         put_str(&mut out, "");
         let offsets_at = out.len();
         out.extend_from_slice(&[0u8; 24]);
@@ -641,8 +741,10 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
             }
         }
         out.extend_from_slice(&1i32.to_le_bytes()); // buffer count
-        out.extend_from_slice(&0f32.to_le_bytes()); // background
-                                                    // The leaves, keyed by origin, grouped into 4- and 5-level nodes.
+        for _ in 0..comps {
+            out.extend_from_slice(&0f32.to_le_bytes()); // background
+        }
+        // The leaves, keyed by origin, grouped into 4- and 5-level nodes.
         let mut leaves: Vec<&VdbLeaf> = leaves.iter().collect();
         // Node order: the root's children by origin, then each node's children by their index (x slowest).
         let key5 = |o: [i32; 3]| o.map(|v| v >> 12);
@@ -682,7 +784,7 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
             }
             put_mask(&mut out, &child5);
             put_mask(&mut out, &[0u64; 512]);
-            put_values(&mut out, &vec![0f32; 32768]);
+            put_values(&mut out, &vec![0f32; 32768 * comps]);
             let mut k4s: Vec<usize> = in5.iter().map(|&i| index4(leaves[i].0)).collect();
             k4s.dedup();
             for k4 in k4s {
@@ -698,7 +800,7 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
                 }
                 put_mask(&mut out, &child4);
                 put_mask(&mut out, &[0u64; 64]);
-                put_values(&mut out, &[0f32; 4096]);
+                put_values(&mut out, &vec![0f32; 4096 * comps]);
                 for &i in &in4 {
                     put_mask(&mut out, &leaves[i].1);
                 }

@@ -186,6 +186,9 @@ static API: FmApi = FmApi {
     volume_temperature_range,
     volume_create_located,
     volume_capped_rays,
+    volume_integrate_at,
+    volume_transmittance_at,
+    volume_sample_scatter_at,
 };
 
 /// The plugin's entry point: the static function table.

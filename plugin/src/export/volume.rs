@@ -183,9 +183,44 @@ pub(super) unsafe extern "C" fn volume_channel_xyz(
     })
 }
 
+/// `n` ray times at `p` (null: every ray at time 0, the grids' own).
+///
+/// # Safety
+/// `p` is null or points to `n` doubles.
+unsafe fn times(p: *const f64, n: usize, what: &str) -> Result<Vec<f64>, (FmStatus, String)> {
+    if p.is_null() {
+        return Ok(vec![0.0; n]);
+    }
+    // SAFETY: `p` is non-null and holds `n` doubles (caller contract); each one is checked finite.
+    Ok(unsafe { in_f64(p, n, 1, &format!("{what}: times")) }?.to_vec())
+}
+
 pub(super) unsafe extern "C" fn volume_integrate(
     volume: *const FmVolume,
     rays_ptr: *const FmRay,
+    n: usize,
+    radiance: *mut f32,
+    transmittance: *mut f32,
+    exits: *mut FmExit,
+) -> FmStatus {
+    // SAFETY: the caller's contract, as volume_integrate_at's without times.
+    unsafe {
+        volume_integrate_at(
+            volume,
+            rays_ptr,
+            std::ptr::null(),
+            n,
+            radiance,
+            transmittance,
+            exits,
+        )
+    }
+}
+
+pub(super) unsafe extern "C" fn volume_integrate_at(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    times_ptr: *const f64,
     n: usize,
     radiance: *mut f32,
     transmittance: *mut f32,
@@ -196,6 +231,8 @@ pub(super) unsafe extern "C" fn volume_integrate(
         let v = unsafe { vol(volume, "volume_integrate") }?;
         // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "volume_integrate") }?;
         let c = v.channels();
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let l_out = unsafe { out_f32(radiance, n, c) }?
@@ -213,9 +250,9 @@ pub(super) unsafe extern "C" fn volume_integrate(
             let ray = ray_of(r);
             // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
             let (p_exit, d_exit, t_exit) = if e_out.is_some() {
-                v.integrate_exit(&ray, &mut l, &mut t)
+                v.integrate_exit_at(&ray, ts[i], &mut l, &mut t)
             } else {
-                let te = v.integrate(&ray, &mut l, &mut t);
+                let te = v.integrate_at(&ray, ts[i], &mut l, &mut t);
                 (ray.o + ray.d * te, ray.d, te)
             };
             for k in 0..c {
@@ -244,18 +281,31 @@ pub(super) unsafe extern "C" fn volume_transmittance(
     n: usize,
     transmittance: *mut f32,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as volume_transmittance_at's without times.
+    unsafe { volume_transmittance_at(volume, rays_ptr, std::ptr::null(), n, transmittance) }
+}
+
+pub(super) unsafe extern "C" fn volume_transmittance_at(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    times_ptr: *const f64,
+    n: usize,
+    transmittance: *mut f32,
+) -> FmStatus {
     guard(|| {
         // SAFETY: the caller's buffers are as the ABI documents.
         let v = unsafe { vol(volume, "volume_transmittance") }?;
         // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "volume_transmittance") }?;
         let c = v.channels();
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let out = unsafe { out_f32(transmittance, n, c) }?
             .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
         let mut t = vec![0.0; c];
         for (i, r) in rs.iter().enumerate() {
-            v.transmittance(&ray_of(r), &mut t);
+            v.transmittance_at(&ray_of(r), ts[i], &mut t);
             for k in 0..c {
                 out[i * c + k] = t[k] as f32;
             }
@@ -272,11 +322,36 @@ pub(super) unsafe extern "C" fn volume_sample_scatter(
     weights: *mut f32,
     emitted: *mut f32,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as volume_sample_scatter_at's without times.
+    unsafe {
+        volume_sample_scatter_at(
+            volume,
+            rays_ptr,
+            std::ptr::null(),
+            n,
+            events,
+            weights,
+            emitted,
+        )
+    }
+}
+
+pub(super) unsafe extern "C" fn volume_sample_scatter_at(
+    volume: *const FmVolume,
+    rays_ptr: *const FmRay,
+    times_ptr: *const f64,
+    n: usize,
+    events: *mut FmScatter,
+    weights: *mut f32,
+    emitted: *mut f32,
+) -> FmStatus {
     guard(|| {
         // SAFETY: the caller's buffers are as the ABI documents.
         let v = unsafe { vol(volume, "volume_sample_scatter") }?;
         // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(rays_ptr, n) }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "volume_sample_scatter") }?;
         let c = v.channels();
         if events.is_null() && n > 0 {
             return Err(bad("volume_sample_scatter: events is null"));
@@ -295,7 +370,7 @@ pub(super) unsafe extern "C" fn volume_sample_scatter(
         let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
         for (i, r) in rs.iter().enumerate() {
             let ray = ray_of(r);
-            let e = v.sample_scatter(&ray, &mut l, &mut w);
+            let e = v.sample_scatter_at(&ray, ts[i], &mut l, &mut w);
             let (event, t) = match e {
                 Event::Escaped => (FM_EVENT_ESCAPED, ray.t1),
                 Event::Scattered(t) => (FM_EVENT_SCATTERED, t),

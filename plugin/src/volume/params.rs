@@ -55,6 +55,11 @@ pub static DATASET: Component = Component {
         p("temperaturescale", T::Float, "1", "", Range::Between(0.0, 1e9), "T = (t − temperatureoffset) · temperaturescale (pbrt-v4)."),
         p("temperatureoffset", T::Float, "0", "", Range::Between(-1e9, 1e9), "Subtracted from grid temperatures before scaling (pbrt-v4)."),
         p("temperaturecutoff", T::Float, "", "", Range::Between(-1e9, 1e9), "pbrt-v4 nanovdb's name for temperatureoffset."),
+        p("velocitygrid", T::String, "", "", Range::Any, "Velocity for motion blur: one name — a vector grid (Houdini `vel`, Mantaflow `velocity`, EmberGen) or the float grids name.x, name.y, name.z — or three float grids' names. Read only while the shutter is open."),
+        p("velocityscale", T::Float, "1", "", Range::Between(-1e6, 1e6), "Multiplier of the velocity grid's values (medium units per second after it)."),
+        p("fps", T::Float, "24", "frames/s", Range::Between(1e-6, 1e6), "Frames per second: the shutter is in frames, velocities per second (1: velocities per frame)."),
+        p("shutteropen", T::Float, "0", "frames", Range::Between(-1e6, 1e6), "When the shutter opens, relative to the time of the grids (pbrt-v4's camera `shutteropen`; the pbrt host passes its camera's)."),
+        p("shutterclose", T::Float, "0", "frames", Range::Between(-1e6, 1e6), "When it closes; equal to shutteropen: no motion blur (velocity is not read)."),
     ],
 };
 

@@ -26,6 +26,10 @@ pub struct GenArgs {
     /// A species grid following the flame, SYMBOL:PEAK (number density in m⁻³), e.g. Na:1e17; repeatable.
     #[arg(long, value_name = "SYM:N")]
     species: Vec<String>,
+    /// Also write the gas's velocity (m/s) as the vector grid `vel`, as Houdini does (for motion blur:
+    /// `"string velocitygrid" "vel"`).
+    #[arg(long)]
+    velocity: bool,
 }
 
 const SPECIES: [&str; 7] = ["Na", "Li", "K", "Ca", "Sr", "Ba", "Cu"];
@@ -95,7 +99,8 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
                 .replace("####", &format!("{frame:04}")),
         );
         let (bytes, active, tmax, fmax) =
-            write_frame(&sim, a.resolution as usize, &species, &path).map_err(|e| (1, e))?;
+            write_frame(&sim, a.resolution as usize, &species, a.velocity, &path)
+                .map_err(|e| (1, e))?;
         let (hot, cells, t_fuel, left) = sim.fuel_summary();
         out += &format!(
             "wrote {} ({} frame {frame}, t = {:.3} s): {} blobs, {active} active voxels, peak {tmax:.0} K, peak soot fraction {fmax:.3e}, {:.1} MB; fuel: {hot}/{cells} cells burning at {t_fuel:.0} K mean, {:.1} % left\n",

@@ -265,7 +265,14 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         }
     }
     for g in &report.skipped_grids {
-        s += &format!("skipped   {} ({})\n", g.name, g.kind);
+        if g.kind.starts_with("Tree_vec3s") {
+            s += &format!(
+                "skipped   {} ({}: a vector grid, e.g. a velocity for motion blur: \"string velocitygrid\" \"{}\")\n",
+                g.name, g.kind, g.name
+            );
+        } else {
+            s += &format!("skipped   {} ({})\n", g.name, g.kind);
+        }
     }
     s += &format!(
         "storage   {} of the box's {} bricks of 8³ ({:.1} %), their table {} bytes\n",

@@ -283,21 +283,23 @@ impl Integrator<'_> {
                 ..
             } => {
                 let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+                let time = [rng.time];
                 let (mut l, mut t) = (
                     [0f32; super::spectrum::MAX_CHANNELS],
                     [0f32; super::spectrum::MAX_CHANNELS],
                 );
                 let mut exit = [firemedium_loader::Exit::default()];
                 let ok = if emission {
-                    vol.integrate(
+                    vol.integrate_at(
                         std::slice::from_ref(&ray),
+                        Some(&time),
                         &mut l[..n],
                         Some(&mut t[..n]),
                         want_exit.then_some(&mut exit[..]),
                     )
                     .is_ok()
                 } else {
-                    vol.transmittance(std::slice::from_ref(&ray), &mut t[..n])
+                    vol.transmittance_at(std::slice::from_ref(&ray), Some(&time), &mut t[..n])
                         .is_ok()
                 };
                 if !ok {
@@ -635,8 +637,9 @@ impl Integrator<'_> {
                             [0f32; super::spectrum::MAX_CHANNELS],
                         );
                         if vol
-                            .sample_scatter(
+                            .sample_scatter_at(
                                 std::slice::from_ref(&ray),
+                                Some(&[rng.time]),
                                 &mut ev,
                                 &mut w[..n],
                                 Some(&mut e[..n]),

@@ -168,6 +168,11 @@ pub fn render(
                         // the pixel is Σ w L / Σ w).
                         let (off, w) = scene.filter.sample(u);
                         let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
+                        // The sample's time in the shutter (pbrt-v4's camera sample: after the film position,
+                        // before the lens), drawn only when a medium blurs by its velocity.
+                        if let Some([open, close]) = scene.shutter {
+                            rng.time = open + (close - open) * rng.next_f64();
+                        }
                         let (o, d) = camera_ray(scene, fx, fy, &mut rng);
                         let mut visible = None;
                         let want = gspace.as_ref().map(|_| &mut visible);

@@ -61,6 +61,9 @@ pub struct Samples {
     index: u64,
     spp: u64,
     dim: u32,
+    /// The sample's time in the shutter (frames; 0 unless the camera drew one): every medium lookup of the
+    /// sample's path is at this time.
+    pub time: f64,
 }
 
 impl Sampler {
@@ -75,6 +78,7 @@ impl Sampler {
             index: s as u64,
             spp: spp.max(1) as u64,
             dim: 0,
+            time: 0.0,
         }
     }
 

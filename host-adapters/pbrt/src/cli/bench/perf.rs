@@ -31,7 +31,7 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
     if !path.is_file() {
         let mut sim = Sim::new(Kind::Campfire, 1);
         sim.run_to(2.0);
-        write_frame(&sim, res, &[], &path)?;
+        write_frame(&sim, res, &[], false, &path)?;
     }
     Ok(path)
 }

@@ -96,6 +96,9 @@ pub(super) struct Builder {
     pub(super) threads: Option<usize>,
     /// The frame for every plugin medium (`--frames`), unless the scene sets one.
     pub(super) frame: Option<i64>,
+    /// The camera's shutter (frames) once a medium blurs by its velocity: each camera sample then draws a
+    /// time in it.
+    pub(super) shutter: Option<[f64; 2]>,
     /// Bytes the plugin media built so far hold (each new medium's `maxbytes` is what the budget has left).
     pub(super) media_bytes: u64,
     /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
@@ -105,6 +108,18 @@ pub(super) struct Builder {
     /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
     /// first medium in the film's units), and that medium's name; every further medium is checked against it.
     pub(super) film_xyz: Option<(String, Vec<DVec3>)>,
+}
+
+impl Builder {
+    /// The Camera directive's `shutteropen` and `shutterclose` (pbrt-v4's 0 and 1 when not given, or before
+    /// the camera).
+    fn camera_shutter(&self) -> [f64; 2] {
+        let Some((_, cp, ..)) = &self.camera else {
+            return [0.0, 1.0];
+        };
+        let cp = ParamDict::new(cp);
+        [num(&cp, "shutteropen", 0.0), num(&cp, "shutterclose", 1.0)]
+    }
 }
 
 pub(super) fn nums<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a [f64]> {
@@ -761,6 +776,27 @@ impl Builder {
                 if let Some(f) = self.frame {
                     if !list.iter().any(|p| p.name == "frame") {
                         list.push(LParam::int("frame", f));
+                    }
+                }
+                // Motion blur: a velocity grid sees the camera's shutter (unless the medium sets its own), and
+                // the camera then draws a time per sample.
+                let velocity = list.iter().any(|p| {
+                    p.name == "velocitygrid"
+                        && matches!(&p.value, Value::String(v) if v.iter().any(|s| !s.is_empty()))
+                });
+                if velocity {
+                    let camera = self.camera_shutter();
+                    let mut shutter = camera;
+                    for (k, n) in ["shutteropen", "shutterclose"].into_iter().enumerate() {
+                        match list.iter().find(|p| p.name == n).map(|p| &p.value) {
+                            Some(Value::Float(v)) if v.len() == 1 => shutter[k] = v[0],
+                            Some(_) => {}
+                            None => list.push(LParam::float(n, camera[k])),
+                        }
+                    }
+                    // The camera draws its times in its own shutter; the plugin holds each in the medium's.
+                    if shutter[1] > shutter[0] {
+                        self.shutter = Some(camera);
                     }
                 }
                 if !list.iter().any(|p| p.name == "maxbytes") {

@@ -304,6 +304,9 @@ pub struct Scene {
     /// spread over the pixel (`Option "bool disablepixeljitter" true`: all at its centre).
     pub seed: u64,
     pub pixel_jitter: bool,
+    /// The shutter (frames) when a medium blurs by its velocity: each camera sample draws its time in it (and
+    /// none is drawn otherwise, so a scene without motion blur samples as before).
+    pub shutter: Option<[f64; 2]>,
     pub maxdepth: usize,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -558,6 +561,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         spectral: None,
         gbuffer: None,
         media_bytes: 0,
+        shutter: None,
         seed: 0,
         pixel_jitter: true,
         crop: None,
@@ -765,6 +769,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         bounds,
         seed: b.seed,
         pixel_jitter: b.pixel_jitter,
+        shutter: b.shutter,
         maxdepth: b.maxdepth,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
