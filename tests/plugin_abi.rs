@@ -333,12 +333,14 @@ fn ray_times_blur_a_volume_with_velocity_and_nothing_else() {
     let c = 32;
     let run = |v: &firemedium_loader::Volume, times: Option<&[f64]>| {
         let (mut l, mut t) = (vec![0f32; 64 * c], vec![0f32; 64 * c]);
-        v.integrate_at(&rs, times, &mut l, Some(&mut t), None).unwrap();
+        v.integrate_at(&rs, times, &mut l, Some(&mut t), None)
+            .unwrap();
         let mut tr = vec![0f32; 64 * c];
         v.transmittance_at(&rs, times, &mut tr).unwrap();
         let mut ev = vec![Default::default(); 64];
         let mut w = vec![0f32; 64 * c];
-        v.sample_scatter_at(&rs, times, &mut ev, &mut w, None).unwrap();
+        v.sample_scatter_at(&rs, times, &mut ev, &mut w, None)
+            .unwrap();
         (l, t, tr)
     };
     let (zero, late) = (vec![0.0; 64], vec![0.4; 64]);
@@ -350,7 +352,9 @@ fn ray_times_blur_a_volume_with_velocity_and_nothing_else() {
     assert!(run(&closed, Some(&late)) == base);
     // At 0.4 frames the fire has moved (its rays see other radiance), and stays finite and physical.
     let (l, t, tr) = run(&moving, Some(&late));
-    let changed = (0..64).filter(|&i| l[i * c + 29] != base.0[i * c + 29]).count();
+    let changed = (0..64)
+        .filter(|&i| l[i * c + 29] != base.0[i * c + 29])
+        .count();
     assert!(changed > 10, "only {changed} of 64 rays changed");
     assert!(l.iter().all(|x| x.is_finite() && *x >= 0.0));
     assert!(t.iter().chain(&tr).all(|x| (0.0..=1.0).contains(x)));

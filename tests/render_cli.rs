@@ -24,6 +24,20 @@ fn firemedium_in(dir: &Path, args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// Whether two EXRs hold the same render: the same pixels, bit for bit, and the same record but for the render
+/// time (the one line two renders of a scene differ in).
+fn same_render(a: &Path, b: &Path) -> bool {
+    let record = |p: &Path| {
+        let (win, meta) = firemedium::imageio::read_meta(p).unwrap();
+        let meta: Vec<_> = meta
+            .into_iter()
+            .filter(|(k, _)| k != firemedium::imageio::RENDER_SECONDS)
+            .collect();
+        (win, meta)
+    };
+    read_exr(a) == read_exr(b) && record(a) == record(b)
+}
+
 fn render(scene: &Path, extra: &[&str]) -> PathBuf {
     let out = scene.with_extension("exr");
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
@@ -754,9 +768,9 @@ fn files_that_never_end_are_refused_not_read() {
 }
 
 #[test]
-fn the_same_render_gives_the_same_bytes_and_cleans_up_after_killed_writers() {
-    // Farms and caches compare files: two renders of one scene on 2 threads must be byte-identical (the EXR's
-    // blocks were written in completion order). A temporary left by a killed writer (its PID gone) is removed
+fn the_same_render_gives_the_same_pixels_and_cleans_up_after_killed_writers() {
+    // Farms and caches compare renders: two renders of one scene on 2 threads must hold the same pixels and record
+    // (the EXR's blocks were once written in completion order), their files differing in the render time alone. A temporary left by a killed writer (its PID gone) is removed
     // by the next write of the same file.
     let dir = tmp("bytes");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -782,12 +796,15 @@ fn the_same_render_gives_the_same_bytes_and_cleans_up_after_killed_writers() {
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        files.push(std::fs::read(&out).unwrap());
+        files.push(out);
     }
     assert!(
-        files[0] == files[1],
-        "two identical renders wrote different EXR bytes"
+        same_render(&files[0], &files[1]),
+        "two identical renders wrote different pixels or records"
     );
+    // The bytes differ only in the render time: the files are the same length or the time's digits apart.
+    let len = |p: &Path| std::fs::metadata(p).unwrap().len() as i64;
+    assert!((len(&files[0]) - len(&files[1])).abs() <= 4);
     assert!(!stale.exists(), "the stale temporary is still there");
 }
 
@@ -907,7 +924,7 @@ fn the_fire_light_is_built_only_where_a_path_can_sample_it() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         (
             String::from_utf8_lossy(&o.stdout).into_owned(),
-            std::fs::read(&out).unwrap(),
+            read_exr(&out),
         )
     };
     for (name, text) in [
@@ -961,10 +978,13 @@ fn frames_render_a_sequence_one_seed_per_frame() {
         err.contains("firemedium: frame 31 done in") && err.contains("% ("),
         "{err}"
     );
-    let frames: Vec<Vec<u8>> = (30..=32)
-        .map(|f| std::fs::read(dir.join(format!("seq.00{f}.exr"))).unwrap())
+    let frames: Vec<PathBuf> = (30..=32)
+        .map(|f| dir.join(format!("seq.00{f}.exr")))
         .collect();
-    assert!(frames[0] != frames[1] && frames[1] != frames[2]);
+    assert!(
+        read_exr(&frames[0]) != read_exr(&frames[1])
+            && read_exr(&frames[1]) != read_exr(&frames[2])
+    );
     // A frame rendered alone is the sequence's frame, byte for byte (its seed follows from the frame).
     let o = run(&[
         "render",
@@ -976,7 +996,7 @@ fn frames_render_a_sequence_one_seed_per_frame() {
         "-q",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(std::fs::read(dir.join("alone.exr")).unwrap() == frames[1]);
+    assert!(same_render(&dir.join("alone.exr"), &frames[1]));
     // Existing outputs are left out, saying so; a name without a pattern would overwrite itself.
     let o = run(&[
         "render",
@@ -1120,6 +1140,155 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     );
     assert!(get("scene").ends_with("fire.pbrt"));
     assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
+    assert_eq!(get("plugin_abi"), "0.5");
+    assert!(get("render_seconds").parse::<f64>().unwrap() > 0.0);
+}
+
+/// Every channel of an EXR's first part by name (the `exr` crate, as a compositor reads it), its size, and its
+/// attributes' names.
+fn exr_channels(path: &Path) -> (usize, usize, std::collections::HashMap<String, Vec<f32>>) {
+    use exr::prelude::*;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    let size = img.layer_data.size;
+    let map = img
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    (size.width(), size.height(), map)
+}
+
+#[test]
+fn aovs_split_the_beauty_and_merge_with_the_tiles() {
+    // A scattering, emitting plume above a grey floor under a dim sky: the fire's emission, the sky seen
+    // directly, and direct and indirect light all appear; the four sum to R, G, B. Alpha is 1 on the floor,
+    // 0 on the empty sky, between through the plume; depth, normal and albedo are the floor's.
+    let dir = tmp("aovs");
+    let nvdb =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    std::fs::write(
+        dir.join("aov.pbrt"),
+        format!(
+            "LookAt 0 -3 0.2  0 0 -0.2  0 0 1\nCamera \"perspective\" \"float fov\" 50\nFilm \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24 \"string filename\" \"aov.exr\"\nSampler \"zsobol\" \"integer pixelsamples\" 8\nIntegrator \"volpath\" \"integer maxdepth\" 3\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [0.05 0.05 0.06]\nMakeNamedMedium \"kaboom\" \"string type\" \"nanovdb\" \"string filename\" \"{}\" \"spectrum sigma_a\" [200 10 900 10] \"spectrum sigma_s\" [200 5 900 5] \"float Lescale\" 5 \"float temperaturecutoff\" 1 \"float temperaturescale\" 1.5\nAttributeBegin\nMediumInterface \"kaboom\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\nAttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-20 -20 -1.05  20 -20 -1.05  20 20 -1.05  -20 20 -1.05] \"integer indices\" [0 1 2 0 2 3]\nAttributeEnd\n",
+            nvdb.display()
+        ),
+    )
+    .unwrap();
+    let run = |args: &[&str]| firemedium_in(&dir, args);
+    let o = run(&["render", "aov.pbrt", "-q", "--aov", "all"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, ch) = exr_channels(&dir.join("aov.exr"));
+    for name in [
+        "R",
+        "G",
+        "B",
+        "A",
+        "fire.R",
+        "emission.G",
+        "direct.B",
+        "indirect.R",
+        "depth.Z",
+        "albedo.G",
+        "normal.Z",
+        "samples.Y",
+    ] {
+        assert!(ch.contains_key(name), "no channel {name}: {:?}", ch.keys());
+    }
+    let c = |n: &str| &ch[n];
+    // The four parts sum to the beauty, channel by channel.
+    let peak = c("R").iter().cloned().fold(0f32, f32::max);
+    for k in ["R", "G", "B"] {
+        for i in 0..w * h {
+            let sum: f32 = ["fire", "emission", "direct", "indirect"]
+                .iter()
+                .map(|p| c(&format!("{p}.{k}"))[i])
+                .sum();
+            let beauty = c(k)[i];
+            assert!(
+                (sum - beauty).abs() <= 1e-5 * peak + 1e-4 * beauty.abs(),
+                "pixel {i} {k}: parts {sum} vs beauty {beauty}"
+            );
+        }
+        for p in ["fire", "emission", "direct", "indirect"] {
+            let total: f32 = c(&format!("{p}.{k}")).iter().sum();
+            assert!(total > 0.0, "{p}.{k} is black");
+        }
+    }
+    // Floor pixels (the bottom row), sky pixels (the top corners: no plume there).
+    let floor = w / 2 + w * (h - 1);
+    let sky = 0;
+    assert_eq!(c("A")[floor], 1.0);
+    assert_eq!(c("A")[sky], 0.0);
+    let plume = w / 2 + w * (h / 3);
+    assert!(
+        c("A")[plume] > 0.0 && c("A")[plume] <= 1.0,
+        "{}",
+        c("A")[plume]
+    );
+    assert!(c("depth.Z")[floor].is_finite() && c("depth.Z")[floor] > 1.0);
+    assert!(c("depth.Z")[sky].is_infinite());
+    assert!(c("normal.Z")[floor] > 0.999, "{}", c("normal.Z")[floor]);
+    for k in ["R", "G", "B"] {
+        let a = c(&format!("albedo.{k}"))[floor];
+        assert!((a - 0.5).abs() < 0.02, "albedo.{k} {a}");
+    }
+    assert!(c("samples.Y").iter().all(|&n| n == 8.0));
+    // Two crop-window tiles with their AOVs merge into the full frame's channels, bit for bit.
+    for (name, y0, y1) in [("top.exr", "0", "0.5"), ("bottom.exr", "0.5", "1")] {
+        let o = run(&[
+            "render",
+            "aov.pbrt",
+            "-q",
+            "--aov",
+            "all",
+            "--cropwindow",
+            "0",
+            "1",
+            y0,
+            y1,
+            "-o",
+            name,
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let o = run(&["merge", "top.exr", "bottom.exr", "-o", "merged.exr"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, merged) = exr_channels(&dir.join("merged.exr"));
+    assert_eq!(merged.len(), ch.len());
+    for (name, v) in &ch {
+        let m = &merged[name];
+        assert!(
+            v.iter().zip(m).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "merged {name} differs"
+        );
+    }
+    // A tile without the AOVs is refused.
+    let o = run(&[
+        "render",
+        "aov.pbrt",
+        "-q",
+        "--cropwindow",
+        "0",
+        "1",
+        "0.5",
+        "1",
+        "-o",
+        "plain.exr",
+    ]);
+    assert!(o.status.success());
+    let o = run(&["merge", "top.exr", "plain.exr", "-o", "x.exr"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("plain.exr"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

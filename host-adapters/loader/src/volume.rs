@@ -118,6 +118,12 @@ impl Volume {
         Ok(())
     }
 
+    /// The ABI version (major, minor) of the plugin that made this volume.
+    pub fn abi_version(&self) -> (u32, u32) {
+        let api = self.inner.api();
+        (api.abi_major, api.abi_minor)
+    }
+
     /// Emitted radiance (and optionally transmittance and exit points) along `rays`; buffers hold
     /// `rays.len() × channels` floats, channel fastest.
     pub fn integrate(

@@ -69,6 +69,54 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
     decode(&file, &bytes, kind, srgb, budget)
 }
 
+/// An EXR's channels other than R, G and B (a spectral film's buckets, a gbuffer's, the AOVs): their names in
+/// the file's (alphabetical) order, and per pixel their values in that order (`names.len()` per pixel), the
+/// layout [`write_channels_exr`] takes. Its pixels must fit in the default memory budget, checked from the header.
+pub fn read_extra_channels(path: &Path) -> Result<(Vec<String>, Vec<f32>), String> {
+    use exr::prelude::*;
+    let file = path.display().to_string();
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+    for h in &meta.headers {
+        let n = (h.layer_size.width() as u64).saturating_mul(h.layer_size.height() as u64);
+        crate::budget::check(
+            &format!(
+                "{file}: {} channels of a {}×{} image",
+                h.channels.list.len(),
+                h.layer_size.width(),
+                h.layer_size.height()
+            ),
+            n.saturating_mul(h.channels.list.len() as u64),
+            8,
+            crate::budget::default_bytes(),
+        )?;
+    }
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+    let extra: Vec<&AnyChannel<FlatSamples>> = img
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .filter(|c| !["R", "G", "B"].contains(&c.name.to_string().as_str()))
+        .collect();
+    let n = img.layer_data.size.area();
+    let k = extra.len();
+    let mut values = vec![0f32; n * k];
+    for (j, c) in extra.iter().enumerate() {
+        for (i, v) in c.sample_data.values_as_f32().enumerate().take(n) {
+            values[i * k + j] = v;
+        }
+    }
+    Ok((extra.iter().map(|c| c.name.to_string()).collect(), values))
+}
+
 /// The image formats [`decode`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageKind {
@@ -392,6 +440,10 @@ pub type Meta = Vec<(String, String)>;
 /// keeps attributes in a hash map, so several would be written in a different order by every process and the
 /// same render would not give the same bytes.
 pub const RENDER_ATTRIBUTE: &str = "firemediumRender";
+
+/// The render record's line that holds the render's wall time (s): the one line in which two renders of the same
+/// scene, seed and samples differ (`merge` sums it over the tiles).
+pub const RENDER_SECONDS: &str = "render_seconds";
 
 /// The render record's line that holds the fire's hottest temperature (K), as [`FIRE_TEMPERATURE_ATTRIBUTE`]
 /// does in an EXR without a record.

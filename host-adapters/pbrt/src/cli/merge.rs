@@ -24,8 +24,18 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
     let mut rgb: Vec<[f32; 3]> = Vec::new();
     let mut owner: Vec<u32> = Vec::new();
     let mut fire_t = None;
+    // The tiles' render times, summed into the frame's record.
+    let mut seconds = 0.0;
+    // Channels beside R, G, B (AOVs, a spectral or gbuffer film's): the first tile's names, every tile's the
+    // same; per pixel their values.
+    let mut extra: Option<(Vec<String>, Vec<f32>)> = None;
     for (k, path) in a.tiles.iter().enumerate() {
         let (win, meta) = imageio::read_meta(path).map_err(|e| (1, e))?;
+        seconds += meta
+            .iter()
+            .find(|(k, _)| k == imageio::RENDER_SECONDS)
+            .and_then(|(_, v)| v.parse::<f64>().ok())
+            .unwrap_or(0.0);
         match &frame {
             None => {
                 let (w, h) = win.full;
@@ -59,10 +69,17 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                         ),
                     ));
                 }
-                if *first_meta != meta {
-                    let differs: Vec<String> = first_meta
+                // (The render time is the one line tiles of one render differ in.)
+                let timeless = |m: &imageio::Meta| -> imageio::Meta {
+                    m.iter()
+                        .filter(|(k, _)| k != imageio::RENDER_SECONDS)
+                        .cloned()
+                        .collect()
+                };
+                if timeless(first_meta) != timeless(&meta) {
+                    let differs: Vec<String> = timeless(first_meta)
                         .iter()
-                        .zip(&meta)
+                        .zip(&timeless(&meta))
                         .filter(|(x, y)| x != y)
                         .map(|(x, y)| format!("{} {} vs {}", x.0, x.1, y.1))
                         .collect();
@@ -97,9 +114,43 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                 ),
             ));
         }
+        let (names, values) = imageio::read_extra_channels(path).map_err(|e| (1, e))?;
+        let nk = names.len();
+        match &mut extra {
+            None => {
+                let n = fw * fh;
+                firemedium::budget::check(
+                    &format!(
+                        "{}: the merged frame's {nk} further channels",
+                        path.display()
+                    ),
+                    (n as u64).saturating_mul(nk as u64),
+                    4,
+                    firemedium::budget::default_bytes(),
+                )
+                .map_err(|e| (1, e))?;
+                extra = Some((names, vec![0.0; n * nk]));
+            }
+            Some((first, _)) if *first != names => {
+                return Err((
+                    1,
+                    format!(
+                        "{}: channels {} beside R, G, B, {} has {}: tiles of different renders",
+                        path.display(),
+                        names.join(" "),
+                        a.tiles[0].display(),
+                        first.join(" ")
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
+        let merged = &mut extra.as_mut().expect("set above").1;
         for y in 0..img.h {
             for x in 0..img.w {
                 let i = win.origin.0 + x + fw * (win.origin.1 + y);
+                let j = x + img.w * y;
+                merged[i * nk..(i + 1) * nk].copy_from_slice(&values[j * nk..(j + 1) * nk]);
                 if owner[i] != 0 {
                     return Err((
                         1,
@@ -120,9 +171,14 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
             fire_t = imageio::read_fire_temperature(path).map_err(|e| (1, e))?;
         }
     }
-    let Some((win, meta, _)) = frame else {
+    let Some((win, mut meta, _)) = frame else {
         return Err((2, "no tiles".into()));
     };
+    for (k, v) in meta.iter_mut() {
+        if k == imageio::RENDER_SECONDS {
+            *v = format!("{seconds:.6}");
+        }
+    }
     let (fw, _) = win.full;
     if let Some(i) = owner.iter().position(|&o| o == 0) {
         return Err((
@@ -141,9 +197,14 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
         origin: (0, 0),
         full: win.full,
     };
-    imageio::write_exr_as(
-        &a.output, win.full.0, win.full.1, &rgb, fire_t, false, full, &meta,
-    )
+    match extra {
+        Some((names, values)) if !names.is_empty() => imageio::write_channels_exr(
+            &a.output, win.full.0, win.full.1, &rgb, &names, &values, false, full, &meta,
+        ),
+        _ => imageio::write_exr_as(
+            &a.output, win.full.0, win.full.1, &rgb, fire_t, false, full, &meta,
+        ),
+    }
     .map_err(|e| (1, e))?;
     Ok(format!(
         "merged {} tiles into {} ({}×{})\n",

@@ -75,6 +75,19 @@ pub struct RenderArgs {
     /// Append one JSON object per event (start, progress, done, skipped, error) to FILE, a line each.
     #[arg(long, value_name = "FILE")]
     log_json: Option<PathBuf>,
+    /// Output variables written as layers of the EXR beside R, G, B: a comma-separated list of fire (the media's
+    /// emission seen from the camera), emission (lights seen from the camera), direct, indirect (these four sum
+    /// to the beauty), alpha (the A channel), depth, albedo, normal, samples — or all.
+    #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
+    aov: Option<Aovs>,
+}
+
+/// `--aov`'s list (a type of its own: clap would take a `Vec` for repeated flags).
+#[derive(Debug, Clone)]
+struct Aovs(Vec<firemedium::render::aov::Aov>);
+
+fn parse_aovs(s: &str) -> Result<Aovs, String> {
+    firemedium::render::aov::Aov::parse_list(s).map(Aovs)
 }
 
 /// `--log-json`: events as JSON lines appended to a file (a farm's scheduler reads them while the render runs).
@@ -206,6 +219,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         pixel_bounds: four(&a.pixelbounds),
         threads: a.threads.map(usize::from),
         max_memory: a.max_memory.map(|gb| (gb * 1e9) as u64),
+        aovs: a.aov.clone().map(|l| l.0).unwrap_or_default(),
     };
     // The output name: `-o` or the film's, with the frame's number in its pattern.
     let named = |film: Option<&str>| -> Result<(PathBuf, PathBuf), (u8, String)> {
@@ -321,7 +335,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         adapt: a.adapt,
         ..Default::default()
     };
-    // What the image is a render of, for `firemedium merge` (no time: the same render gives the same bytes).
+    // What the image is a render of (for `firemedium merge` and compositors), and how long it took (the one
+    // line two renders of the same scene differ in).
     let mut img = img;
     img.meta = vec![
         (
@@ -348,6 +363,39 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         (
             "frame".to_string(),
             frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
+        ),
+        (
+            "shutter".to_string(),
+            match sc.shutter {
+                Some([o, c]) => format!("{o} {c}"),
+                None => "closed".to_string(),
+            },
+        ),
+        (
+            "aovs".to_string(),
+            sc.aovs
+                .iter()
+                .map(|a| a.name())
+                .collect::<Vec<_>>()
+                .join(","),
+        ),
+        (
+            // The C ABI of the plugin that rendered the media (none without plugin media).
+            "plugin_abi".to_string(),
+            sc.media
+                .iter()
+                .find_map(|m| match m {
+                    scene::Medium::Plugin { vol, .. } => {
+                        let (major, minor) = vol.abi_version();
+                        Some(format!("{major}.{minor}"))
+                    }
+                    _ => None,
+                })
+                .unwrap_or_else(|| "none".to_string()),
+        ),
+        (
+            imageio::RENDER_SECONDS.to_string(),
+            format!("{:.6}", st.seconds),
         ),
     ];
     img.write_exr(&exr, fire_t, sc.response.fp16)

@@ -29,6 +29,43 @@ pub struct Visible {
     pub albedo: S,
 }
 
+/// Where a camera sample's light came from, for the AOVs: the radiance the path had gathered when it reached
+/// its first and its second scattering vertex (all of it so far was seen from the camera, then the first vertex's
+/// direct light), the lights it saw directly, and the coverage of its camera ray. Contributions come in that
+/// order along a path, so two marks split it: seen = first mark, direct = second − first, indirect = the rest.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Split {
+    /// The path's radiance at its first and second scattering vertex (none: the path ended before).
+    pub marks: [Option<S>; 2],
+    /// Lights (area, infinite) seen from the camera: the rest of what was seen is the media's emission.
+    pub emission: S,
+    /// 1 − the camera ray's transmittance when it escaped (none: a surface or a medium stopped it: 1).
+    pub alpha: Option<f32>,
+}
+
+impl Split {
+    /// Marks the radiance `l` gathered when the path reaches a scattering vertex at `depth`.
+    fn mark(split: &mut Option<&mut Split>, depth: usize, l: S) {
+        if let Some(sp) = split.as_deref_mut() {
+            if depth < 2 && sp.marks[depth].is_none() {
+                sp.marks[depth] = Some(l);
+            }
+        }
+    }
+    /// The path's radiance `l` in four parts: media emission seen from the camera, lights seen from the camera,
+    /// direct and indirect light (they sum to `l`, to rounding).
+    pub fn parts(&self, l: S) -> [S; 4] {
+        let first = self.marks[0].unwrap_or(l);
+        let second = self.marks[1].unwrap_or(l);
+        [
+            first - self.emission,
+            self.emission,
+            second - first,
+            l - second,
+        ]
+    }
+}
+
 fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
     let s = if n.z < 0.0 { -1.0 } else { 1.0 };
     let a = -1.0 / (s + n.z);
@@ -590,18 +627,20 @@ impl Integrator<'_> {
 
     /// Radiance along a camera ray.
     pub fn li(&self, o: Vec3A, d: Vec3A, rng: &mut Samples) -> S {
-        self.li_visible(o, d, rng, None)
+        self.li_visible(o, d, rng, None, None)
     }
 
     /// Radiance along a camera ray and, when `visible` is given, the surface the ray sees first (pbrt-v4's
     /// `VisibleSurface`: the first hit with a material, before any scattering; none when a medium scattered the
     /// path first or the ray escaped).
+    /// With `split`, where the radiance came from (the AOVs, [`Split`]).
     pub fn li_visible(
         &self,
         mut o: Vec3A,
         mut d: Vec3A,
         rng: &mut Samples,
         mut visible: Option<&mut Option<Visible>>,
+        mut split: Option<&mut Split>,
     ) -> S {
         let sc = self.scene;
         let mut l = S::ZERO;
@@ -656,6 +695,7 @@ impl Integrator<'_> {
                                     break;
                                 }
                                 let p = o + d * ev[0].t as f32;
+                                Split::mark(&mut split, depth, l);
                                 let (wi, pdf) =
                                     self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                                 (o, d, mis) = (p, wi, Some((p, pdf)));
@@ -690,6 +730,7 @@ impl Integrator<'_> {
                                 break;
                             }
                             let p = o + d * (s_hit / speed);
+                            Split::mark(&mut split, depth, l);
                             let (wi, pdf) =
                                 self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
                             (o, d, mis) = (p, wi, Some((p, pdf)));
@@ -717,6 +758,7 @@ impl Integrator<'_> {
                                 break;
                             }
                             let p = o + d * (s / speed);
+                            Split::mark(&mut split, depth, l);
                             let (wi, pdf) =
                                 self.scatter_vertex(p, d, grid.g as f32, medium, beta, &mut l, rng);
                             (o, d, mis) = (p, wi, Some((p, pdf)));
@@ -765,6 +807,19 @@ impl Integrator<'_> {
                             }
                         });
                         l += beta * le * w;
+                        if depth == 0 {
+                            if let Some(sp) = split.as_deref_mut() {
+                                sp.emission += beta * le * w;
+                            }
+                        }
+                    }
+                }
+                // The camera ray escaped: its coverage is what the media it crossed took.
+                if depth == 0 {
+                    if let Some(sp) = split.as_deref_mut() {
+                        let n = sc.bins.n().max(1) as f32;
+                        let t = beta.0[..sc.bins.n()].iter().sum::<f32>() / n;
+                        sp.alpha = Some((1.0 - t).clamp(0.0, 1.0));
                     }
                 }
                 break;
@@ -785,6 +840,11 @@ impl Integrator<'_> {
                             }
                         });
                         l += beta * *le * w;
+                        if depth == 0 {
+                            if let Some(sp) = split.as_deref_mut() {
+                                sp.emission += beta * *le * w;
+                            }
+                        }
                     }
                 }
             }
@@ -852,6 +912,7 @@ impl Integrator<'_> {
             if depth >= sc.maxdepth {
                 break;
             }
+            Split::mark(&mut split, depth, l);
             // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.
             if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();

@@ -2,6 +2,7 @@
 //! (media through the plugin), `integrator` is `volpath`, and [`render`] runs it over tiles in parallel into an
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
+pub mod aov;
 pub mod bsdf;
 pub mod cloud;
 pub mod distrib;
@@ -23,6 +24,7 @@ pub mod shapes;
 pub mod spectrum;
 pub mod subdiv;
 
+use aov::Aov;
 use firemedium_core::cie;
 use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
@@ -134,6 +136,11 @@ pub fn render(
         .collect();
     let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
     let gspace = scene.gbuffer.map(|g| GSpace::new(scene, g.world));
+    // AOVs of the visible surface need the integrator to report it.
+    let aov_surface = scene
+        .aovs
+        .iter()
+        .any(|a| matches!(a, Aov::Depth | Aov::Albedo | Aov::Normal));
     let done = AtomicUsize::new(0);
     let results: Vec<Option<Vec<PixelResult>>> = tiles
         .par_iter()
@@ -154,6 +161,7 @@ pub fn render(
                     // The spectral film's radiance per bin (only when the film is spectral).
                     let mut spectrum = [0.0f64; spectrum::MAX_CHANNELS];
                     let mut gpixel = film::GPixel::default();
+                    let mut apixel = aov::Pixel::default();
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
@@ -175,12 +183,19 @@ pub fn render(
                         }
                         let (o, d) = camera_ray(scene, fx, fy, &mut rng);
                         let mut visible = None;
-                        let want = gspace.as_ref().map(|_| &mut visible);
-                        let l = integ.li_visible(o, d, &mut rng, want);
-                        let sensor = scene
-                            .response
-                            .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
+                        let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
+                        let mut split = integrator::Split::default();
+                        let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
+                        let l = integ.li_visible(o, d, &mut rng, want, aovs);
+                        let raw = scene.response.sensor_xyz(&scene.bins, &l);
+                        let sensor = scene.response.clamp_sample(raw);
                         sum += sensor * w;
+                        if !scene.aovs.is_empty() {
+                            // The beauty's clamp, as a factor every part shares.
+                            let clamp = if sensor == raw { 1.0 } else { sensor.y / raw.y };
+                            let clamp = if clamp.is_finite() { clamp } else { 0.0 };
+                            apixel.add(scene, w, l, &split, clamp, visible.as_ref());
+                        }
                         if let (Some(g), Some(v)) = (&gspace, visible) {
                             gpixel.add(w, &g.sample(scene, fx, fy, &v), sensor);
                         }
@@ -206,6 +221,10 @@ pub fn render(
                         None if gspace.is_some() => gpixel.finish(weights).to_vec(),
                         None => Vec::new(),
                     };
+                    let mut buckets = buckets;
+                    if !scene.aovs.is_empty() {
+                        buckets.extend(apixel.finish(scene, &scene.aovs, weights));
+                    }
                     out.push((cx + w * cy, sum / scene.spp as f64, buckets));
                 }
             }
@@ -215,7 +234,7 @@ pub fn render(
         })
         .collect();
     let mut xyz = vec![DVec3::ZERO; w * h];
-    let names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
+    let mut names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
         (Some(b), _) => Some(
             b.centres()
                 .iter()
@@ -230,6 +249,11 @@ pub fn render(
         ),
         (None, None) => None,
     };
+    if !scene.aovs.is_empty() {
+        names
+            .get_or_insert_with(Vec::new)
+            .extend(aov::channel_names(&scene.aovs));
+    }
     let nb = names.as_ref().map_or(0, |n| n.len());
     let mut buckets = vec![0f32; w * h * nb];
     let mut complete = true;
@@ -326,15 +350,8 @@ impl GSpace {
                 .transform_vector3((q - p) * self.footprint)
                 .z
         };
-        let d65 = scene.bins.d65();
-        let mut lit = v.albedo;
-        for (a, e) in lit.0.iter_mut().zip(d65.0) {
-            *a *= e;
-        }
-        let white = scene.bins.luminance(&d65);
-        let albedo_xyz = scene.bins.to_xyz(&lit) / if white > 0.0 { white } else { 1.0 };
         film::GSample {
-            albedo_rgb: cie::xyz_to_linear_srgb(albedo_xyz),
+            albedo_rgb: aov::albedo_rgb(scene, &v.albedo),
             p: self.from_world.transform_point3(p),
             n: (self.normals * ng).normalize_or_zero(),
             ns: (self.normals * v.ns.as_dvec3()).normalize_or_zero(),

@@ -21,6 +21,12 @@ pub const MAX_CHANNELS: usize = 64;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct S(pub [f32; MAX_CHANNELS]);
 
+impl Default for S {
+    fn default() -> S {
+        S::ZERO
+    }
+}
+
 impl S {
     pub const ZERO: S = S([0.0; MAX_CHANNELS]);
     pub fn splat(v: f32) -> S {

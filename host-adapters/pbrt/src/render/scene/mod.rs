@@ -307,6 +307,8 @@ pub struct Scene {
     /// The shutter (frames) when a medium blurs by its velocity: each camera sample draws its time in it (and
     /// none is drawn otherwise, so a scene without motion blur samples as before).
     pub shutter: Option<[f64; 2]>,
+    /// Output variables written beside the beauty (`--aov`), in channel order.
+    pub aovs: Vec<crate::render::aov::Aov>,
     pub maxdepth: usize,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -427,6 +429,8 @@ pub struct Overrides {
     pub max_memory: Option<u64>,
     /// The frame number every plugin medium's dataset name takes (`####`, `%04d`), unless the scene sets one.
     pub frame: Option<i64>,
+    /// Output variables written beside the beauty (`--aov`).
+    pub aovs: Vec<crate::render::aov::Aov>,
 }
 
 /// Parses and builds the scene at `path`.
@@ -770,6 +774,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         seed: b.seed,
         pixel_jitter: b.pixel_jitter,
         shutter: b.shutter,
+        aovs: ov.aovs.clone(),
         maxdepth: b.maxdepth,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
