@@ -12,6 +12,8 @@
 mod args;
 mod bench;
 mod compare;
+mod diff;
+mod farm;
 mod gen;
 mod info;
 mod merge;
@@ -46,6 +48,10 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Assemble the tiles of one render (`render --cropwindow`/`--pixelbounds`) into the full frame.
     Merge(merge::MergeArgs),
+    /// Whether two EXRs hold the same render: every channel bit for bit, and the same render record.
+    Diff(diff::DiffArgs),
+    /// Render on a cluster: job scripts (and their submission) for frames × tiles, then their merge.
+    Farm(farm::FarmArgs),
     /// What an observer sees of an absolute EXR: visual adaptation (von Kries + Naka–Rushton) to a PNG.
     Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
@@ -65,7 +71,7 @@ fn main() -> ExitCode {
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
                 eprintln!(
-                    "firemedium: a subcommand is required (render, tonemap, compare, gen, info, physics, bench); see 'firemedium --help'"
+                    "firemedium: a subcommand is required (render, merge, diff, farm, tonemap, compare, gen, info, physics, bench); see 'firemedium --help'"
                 );
                 return ExitCode::from(2);
             }
@@ -82,6 +88,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Diff(args) => diff::run(&args),
+        Command::Farm(args) => farm::run(&args),
         Command::Tonemap(args) => tonemap::run(&args),
         Command::Gen(args) => gen::run(&args),
         Command::Bench(args) => bench::run(&args),

@@ -1,6 +1,6 @@
 //! `firemedium render SCENE.pbrt [-o OUT.exr] [--spp N] [--threads N] [--seed S] [--fire-light W] [--stats]`.
 
-use crate::args::parse_resolution;
+use crate::args::{parse_frames, parse_resolution, Frames};
 use clap::Args;
 use firemedium::render::{self, scene};
 use firemedium::tonemap;
@@ -114,40 +114,6 @@ impl JsonLog {
             let _ = std::io::Write::write_all(&mut *f, format!("{v}\n").as_bytes());
         }
     }
-}
-
-/// The frames of `--frames`.
-#[derive(Debug, Clone)]
-pub struct Frames(pub Vec<i64>);
-
-/// `A-B` or `A-B:STEP` (A ≤ B, STEP ≥ 1, at most a million frames; negative numbers allowed: `-5--1`).
-pub fn parse_frames(s: &str) -> Result<Frames, String> {
-    let bad = || {
-        format!(
-            "'{s}': expected A-B or A-B:STEP (inclusive, A ≤ B, STEP ≥ 1), e.g. 1-240 or 1-240:2"
-        )
-    };
-    let (range, step) = match s.split_once(':') {
-        Some((r, st)) => (r, st.trim().parse::<i64>().map_err(|_| bad())?),
-        None => (s, 1),
-    };
-    // The dash between A and B: the first '-' after a digit (A may be negative).
-    let at = range
-        .char_indices()
-        .skip(1)
-        .find(|&(i, c)| c == '-' && range[..i].ends_with(|p: char| p.is_ascii_digit()))
-        .map(|(i, _)| i)
-        .ok_or_else(bad)?;
-    let a: i64 = range[..at].trim().parse().map_err(|_| bad())?;
-    let b: i64 = range[at + 1..].trim().parse().map_err(|_| bad())?;
-    if !(a <= b && step >= 1 && a.abs() <= 1_000_000_000 && b.abs() <= 1_000_000_000) {
-        return Err(bad());
-    }
-    let n = (b - a) / step + 1;
-    if n > 1_000_000 {
-        return Err(format!("'{s}': {n} frames; at most 1 000 000"));
-    }
-    Ok(Frames((0..n).map(|k| a + k * step).collect()))
 }
 
 /// The seed of frame `f` from the render's seed: the same seed for the same frame, another for each frame.

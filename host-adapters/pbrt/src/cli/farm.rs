@@ -1,0 +1,319 @@
+//! `firemedium farm slurm SCENE --frames A-B --tiles N [--submit]`: a render cut into frames × tiles for a Slurm
+//! cluster. It writes, in a job folder, an sbatch job array with one task per frame × tile (each `firemedium
+//! render --frame F --cropwindow 0 1 y0 y1`: a horizontal band of the film), a merge job array with one task per
+//! frame (`firemedium merge` of its tiles into the frame's EXR), and `submit.sh`, which submits the merge to
+//! start after every render task succeeded (`--dependency=afterok`); `--submit` does what `submit.sh` does.
+//!
+//! Every task renders with the frame's own seed, and pixels carry their own seeds, so the merged frames equal a
+//! local `firemedium render --frames` bit for bit. The job folder and the binary must be on a filesystem every
+//! node sees (the scripts name them by absolute path).
+
+use crate::args::{parse_frames, parse_resolution, Frames};
+use clap::{Args, Subcommand};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+pub struct FarmArgs {
+    #[command(subcommand)]
+    scheduler: Scheduler,
+}
+
+#[derive(Debug, Subcommand)]
+enum Scheduler {
+    /// sbatch job arrays: one render task per frame × tile, then one merge task per frame.
+    Slurm(SlurmArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct SlurmArgs {
+    /// The pbrt-v4 scene file.
+    scene: PathBuf,
+    /// Frames to render, A-B or A-B:STEP (inclusive; `####` or `%04d` in dataset names take each frame).
+    #[arg(long, value_name = "A-B[:STEP]", value_parser = parse_frames, allow_hyphen_values = true)]
+    frames: Frames,
+    /// Tiles per frame: horizontal bands of the film, each a task.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    tiles: u32,
+    /// The Slurm partition (default: the cluster's default partition).
+    #[arg(long)]
+    partition: Option<String>,
+    /// CPUs per task (`--cpus-per-task`, and the render's `--threads`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    cpus: u16,
+    /// The frames' EXRs, a name holding #### or %04d (default: beside the scene, SCENE.####.exr).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// The job folder for the scripts, tiles and logs (default: beside the scene, SCENE.farm).
+    #[arg(long)]
+    dir: Option<PathBuf>,
+    /// Samples per pixel (default: the Sampler's).
+    #[arg(long)]
+    spp: Option<usize>,
+    /// Seed of the pixel samples (each frame's seed follows from it, as for `render --frames`).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Film resolution WxH instead of the scene's.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    resolution: Option<(usize, usize)>,
+    /// AOVs, as `render --aov` (merged with the tiles).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
+    /// Largest job array Slurm accepts (its `MaxArraySize` less one; 1000 by default).
+    #[arg(long, default_value_t = 1000)]
+    max_array: u64,
+    /// Submit the jobs (with `sbatch` from PATH, or this one) instead of only writing them.
+    #[arg(long)]
+    submit: bool,
+    /// The sbatch to submit with.
+    #[arg(long, default_value = "sbatch", requires = "submit")]
+    sbatch: PathBuf,
+}
+
+pub fn run(a: &FarmArgs) -> Result<String, (u8, String)> {
+    match &a.scheduler {
+        Scheduler::Slurm(s) => slurm(s),
+    }
+}
+
+/// `s` as one word of a POSIX shell command.
+fn quote(s: &str) -> String {
+    format!("'{}'", s.replace('\'', r"'\''"))
+}
+
+/// An absolute form of `p` (made from the working directory; the file need not exist yet).
+fn absolute(p: &Path) -> Result<PathBuf, (u8, String)> {
+    std::path::absolute(p).map_err(|e| (2, format!("{}: {e}", p.display())))
+}
+
+fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
+    if !a.scene.is_file() {
+        return Err((2, format!("{}: no such scene file", a.scene.display())));
+    }
+    let scene = absolute(&a.scene)?;
+    let stem = scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let beside = scene.parent().unwrap_or(Path::new("/")).to_path_buf();
+    let dir = absolute(
+        &a.dir
+            .clone()
+            .unwrap_or_else(|| beside.join(format!("{stem}.farm"))),
+    )?;
+    let output = absolute(
+        &a.output
+            .clone()
+            .unwrap_or_else(|| beside.join(format!("{stem}.####.exr"))),
+    )?;
+    let frames = &a.frames.0;
+    let outs: Vec<PathBuf> = frames
+        .iter()
+        .map(|&f| firemedium_plugin::dataset::frame_path(&output, Some(f)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| (2, e.to_string()))?;
+    if frames.len() > 1 && outs[0] == output {
+        return Err((
+            2,
+            format!(
+                "-o {}: the name holds no #### or %04d for the frame number: every frame would overwrite it",
+                output.display()
+            ),
+        ));
+    }
+    let tiles = a.tiles as u64;
+    let tasks = frames.len() as u64 * tiles;
+    if tasks > a.max_array {
+        return Err((
+            2,
+            format!(
+                "{} frames × {tiles} tiles = {tasks} tasks: more than the job array's {} (Slurm's MaxArraySize less one; \
+                 split --frames, or raise --max-array to your cluster's)",
+                frames.len(),
+                a.max_array
+            ),
+        ));
+    }
+    let exe = std::env::current_exe()
+        .map_err(|e| (1, format!("cannot find the firemedium executable: {e}")))?;
+    for sub in ["tiles", "logs"] {
+        std::fs::create_dir_all(dir.join(sub)).map_err(|e| {
+            (
+                1,
+                format!("{}: cannot create: {e}", dir.join(sub).display()),
+            )
+        })?;
+    }
+    let q = |p: &Path| quote(&p.display().to_string());
+    // What every render task passes on.
+    let mut pass = format!("--threads {}", a.cpus);
+    if let Some(n) = a.spp {
+        write!(pass, " --spp {n}").ok();
+    }
+    if let Some(s) = a.seed {
+        write!(pass, " --seed {s}").ok();
+    }
+    if let Some((w, h)) = a.resolution {
+        write!(pass, " --resolution {w}x{h}").ok();
+    }
+    if let Some(l) = &a.aov {
+        write!(pass, " --aov {}", quote(l)).ok();
+    }
+    let list = |v: &[String]| v.join(" ");
+    let frame_list = list(&frames.iter().map(|f| f.to_string()).collect::<Vec<_>>());
+    // Band k of the film: y from k/T to (k+1)/T (the same numbers for neighbours: no gap, no overlap).
+    let band = |k: u64| (k as f64 / tiles as f64).to_string();
+    let y0 = list(&(0..tiles).map(band).collect::<Vec<_>>());
+    let y1 = list(&(1..=tiles).map(band).collect::<Vec<_>>());
+    let partition = a
+        .partition
+        .as_ref()
+        .map(|p| format!("#SBATCH --partition={p}\n"))
+        .unwrap_or_default();
+    let tile_name = r#""$(printf 'f%s.t%03d.exr' "$F" "$K")""#;
+    let render = format!(
+        "#!/bin/bash\n\
+         # firemedium farm: {scene}, frames {first}..{last} ({nf}), {tiles} tiles each: one task per frame × tile.\n\
+         #SBATCH --job-name=firemedium-render\n\
+         #SBATCH --array=0-{last_task}\n\
+         #SBATCH --cpus-per-task={cpus}\n\
+         #SBATCH --output={logs}/render-%A_%a.log\n\
+         {partition}\
+         set -eu\n\
+         FRAMES=({frame_list})\n\
+         Y0=({y0})\n\
+         Y1=({y1})\n\
+         TASK=${{SLURM_ARRAY_TASK_ID:?run as a Slurm array task, or set SLURM_ARRAY_TASK_ID}}\n\
+         F=${{FRAMES[$((TASK / {tiles}))]}}\n\
+         K=$((TASK % {tiles}))\n\
+         exec {exe} render {qscene} --frame \"$F\" --cropwindow 0 1 \"${{Y0[$K]}}\" \"${{Y1[$K]}}\" {pass} -q \\\n\
+         \x20   --log-json {qlog} -o {qtiles}/{tile_name}\n",
+        scene = scene.display(),
+        first = frames[0],
+        last = frames[frames.len() - 1],
+        nf = frames.len(),
+        last_task = tasks - 1,
+        cpus = a.cpus,
+        logs = dir.join("logs").display(),
+        exe = q(&exe),
+        qscene = q(&scene),
+        qlog = q(&dir.join("logs/render.jsonl")),
+        qtiles = q(&dir.join("tiles")),
+    );
+    let outs_list = list(&outs.iter().map(|o| q(o)).collect::<Vec<_>>());
+    let merge = format!(
+        "#!/bin/bash\n\
+         # firemedium farm: each frame's {tiles} tiles merged into its EXR (after every render task succeeded).\n\
+         #SBATCH --job-name=firemedium-merge\n\
+         #SBATCH --array=0-{last_frame}\n\
+         #SBATCH --output={logs}/merge-%A_%a.log\n\
+         {partition}\
+         set -eu\n\
+         FRAMES=({frame_list})\n\
+         OUT=({outs_list})\n\
+         TASK=${{SLURM_ARRAY_TASK_ID:?run as a Slurm array task, or set SLURM_ARRAY_TASK_ID}}\n\
+         F=${{FRAMES[$TASK]}}\n\
+         TILES=()\n\
+         for ((K = 0; K < {tiles}; K++)); do TILES+=({qtiles}/{tile_name}); done\n\
+         exec {exe} merge \"${{TILES[@]}}\" -o \"${{OUT[$TASK]}}\"\n",
+        last_frame = frames.len() - 1,
+        logs = dir.join("logs").display(),
+        qtiles = q(&dir.join("tiles")),
+        exe = q(&exe),
+    );
+    let (render_path, merge_path) = (dir.join("render.sbatch"), dir.join("merge.sbatch"));
+    let submit = format!(
+        "#!/bin/bash\n\
+         # Submits the render array, then the merge array to start when every render task succeeded.\n\
+         set -eu\n\
+         R=$(sbatch --parsable {render})\n\
+         M=$(sbatch --parsable --dependency=afterok:${{R%%;*}} {merge})\n\
+         echo \"render job $R, merge job $M\"\n",
+        render = q(&render_path),
+        merge = q(&merge_path),
+    );
+    let submit_path = dir.join("submit.sh");
+    for (path, text) in [
+        (&render_path, &render),
+        (&merge_path, &merge),
+        (&submit_path, &submit),
+    ] {
+        write_script(path, text)?;
+    }
+    let mut out = format!(
+        "wrote {} ({tasks} render tasks: {} frames × {tiles} tiles), {} ({} merge tasks) and {}\n",
+        render_path.display(),
+        frames.len(),
+        merge_path.display(),
+        frames.len(),
+        submit_path.display()
+    );
+    if a.submit {
+        let render_id = sbatch(&a.sbatch, &[], &render_path)?;
+        let dep = format!("--dependency=afterok:{render_id}");
+        let merge_id = sbatch(&a.sbatch, &[&dep], &merge_path)?;
+        writeln!(
+            out,
+            "submitted render job {render_id} and merge job {merge_id} (frames: {})",
+            outs.first()
+                .map_or(String::new(), |o| o.display().to_string())
+                + if outs.len() > 1 { " …" } else { "" }
+        )
+        .ok();
+    } else {
+        writeln!(out, "submit with: {}", submit_path.display()).ok();
+    }
+    Ok(out)
+}
+
+/// Writes an executable script.
+fn write_script(path: &Path, text: &str) -> Result<(), (u8, String)> {
+    firemedium::imageio::write_atomic(path, |tmp| {
+        std::fs::write(tmp, text).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(tmp, std::fs::Permissions::from_mode(0o755))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        Ok(())
+    })
+    .map_err(|e| (1, e))
+}
+
+/// Submits `script` with `sbatch --parsable ARGS`; its job id.
+fn sbatch(sbatch: &Path, args: &[&str], script: &Path) -> Result<String, (u8, String)> {
+    let o = std::process::Command::new(sbatch)
+        .arg("--parsable")
+        .args(args)
+        .arg(script)
+        .output()
+        .map_err(|e| (1, format!("{}: cannot run: {e}", sbatch.display())))?;
+    let text = String::from_utf8_lossy(&o.stdout);
+    // `--parsable` prints "id" or "id;cluster".
+    let id = text.trim().split(';').next().unwrap_or("").to_string();
+    if !o.status.success() || id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
+        return Err((
+            1,
+            format!(
+                "{} {}: {} {}",
+                sbatch.display(),
+                script.display(),
+                o.status,
+                String::from_utf8_lossy(&o.stderr).trim()
+            ),
+        ));
+    }
+    Ok(id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quote;
+
+    #[test]
+    fn words_are_quoted_for_the_shell() {
+        assert_eq!(quote("a b"), "'a b'");
+        assert_eq!(quote("it's"), r"'it'\''s'");
+    }
+}

@@ -1,0 +1,219 @@
+//! `firemedium farm slurm` without a cluster: the job scripts it writes, run by bash as Slurm would run each array
+//! task (`SLURM_ARRAY_TASK_ID`), render the tiles and merge them into frames equal to a local `render --frames`
+//! bit for bit (`firemedium diff`); `--submit` hands the merge to sbatch with a dependency on the render array.
+//! The same flow on a real one-node Slurm cluster is `tests/slurm-e2e.sh` (run by `.ci/run`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("firemedium-farm-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(o: &std::process::Output) -> String {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+const SCENE: &str = "LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40 \"float shutteropen\" 0 \"float shutterclose\" 0.5\nFilm \"rgb\" \"integer xresolution\" 20 \"integer yresolution\" 15 \"string filename\" \"torch.####.exr\"\nSampler \"zsobol\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"torch.####.vdb\" \"string fuel\" \"propane\" \"string velocitygrid\" \"vel\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n";
+
+#[test]
+fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
+    let dir = tmp("scripts");
+    ok(&run_in(
+        &dir,
+        &[
+            "gen",
+            "torch",
+            "--resolution",
+            "16",
+            "--frames",
+            "30-31",
+            "--velocity",
+            "-o",
+            "torch.####.vdb",
+        ],
+    ));
+    std::fs::write(dir.join("torch.pbrt"), SCENE).unwrap();
+    let out = ok(&run_in(
+        &dir,
+        &[
+            "farm",
+            "slurm",
+            "torch.pbrt",
+            "--frames",
+            "30-31",
+            "--tiles",
+            "3",
+            "--aov",
+            "fire,alpha",
+            "--partition",
+            "render",
+        ],
+    ));
+    assert!(out.contains("6 render tasks: 2 frames × 3 tiles"), "{out}");
+    let farm = dir.join("torch.farm");
+    let render = std::fs::read_to_string(farm.join("render.sbatch")).unwrap();
+    for line in [
+        "#SBATCH --array=0-5",
+        "#SBATCH --partition=render",
+        "--aov 'fire,alpha'",
+    ] {
+        assert!(render.contains(line), "{line} not in\n{render}");
+    }
+    // Each array task as Slurm would start it.
+    let bash = |script: &str, task: usize| {
+        let o = Command::new("bash")
+            .arg(farm.join(script))
+            .env("SLURM_ARRAY_TASK_ID", task.to_string())
+            .output()
+            .unwrap();
+        ok(&o);
+    };
+    for task in 0..6 {
+        bash("render.sbatch", task);
+    }
+    for task in 0..2 {
+        bash("merge.sbatch", task);
+    }
+    ok(&run_in(
+        &dir,
+        &[
+            "render",
+            "torch.pbrt",
+            "--frames",
+            "30-31",
+            "--aov",
+            "fire,alpha",
+            "-q",
+            "-o",
+            "local.####.exr",
+        ],
+    ));
+    for f in ["0030", "0031"] {
+        let o = run_in(
+            &dir,
+            &["diff", &format!("torch.{f}.exr"), &format!("local.{f}.exr")],
+        );
+        let text = ok(&o);
+        assert!(
+            text.contains("the same render") && text.contains("7 channels"),
+            "{text}"
+        );
+    }
+    // diff tells renders apart: another frame differs in its record, then in its pixels.
+    let o = run_in(&dir, &["diff", "torch.0030.exr", "local.0031.exr"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("frame 30 vs 31"));
+    // A task started outside an array says so.
+    let o = Command::new("bash")
+        .arg(farm.join("render.sbatch"))
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .output()
+        .unwrap();
+    assert!(
+        !o.status.success()
+            && String::from_utf8_lossy(&o.stderr).contains("run as a Slurm array task")
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn submit_makes_the_merge_wait_for_every_render_task() {
+    let dir = tmp("submit");
+    std::fs::write(dir.join("s.pbrt"), SCENE).unwrap();
+    // A stand-in sbatch: records its arguments, answers a job id as `--parsable` does.
+    let fake = dir.join("sbatch");
+    std::fs::write(
+        &fake,
+        format!(
+            "#!/bin/sh\necho \"$@\" >> '{}'\nn=$(wc -l < '{}')\necho \"$((100 + n));cluster\"\n",
+            dir.join("calls").display(),
+            dir.join("calls").display()
+        ),
+    )
+    .unwrap();
+    Command::new("chmod").arg("+x").arg(&fake).status().unwrap();
+    let out = ok(&run_in(
+        &dir,
+        &[
+            "farm",
+            "slurm",
+            "s.pbrt",
+            "--frames",
+            "1-4:3",
+            "--tiles",
+            "2",
+            "--submit",
+            "--sbatch",
+            fake.to_str().unwrap(),
+        ],
+    ));
+    assert!(
+        out.contains("submitted render job 101 and merge job 102"),
+        "{out}"
+    );
+    let calls = std::fs::read_to_string(dir.join("calls")).unwrap();
+    let lines: Vec<&str> = calls.lines().collect();
+    assert!(
+        lines[0].starts_with("--parsable ") && lines[0].ends_with("render.sbatch"),
+        "{calls}"
+    );
+    assert!(
+        lines[1].contains("--dependency=afterok:101") && lines[1].ends_with("merge.sbatch"),
+        "{calls}"
+    );
+    let merge = std::fs::read_to_string(dir.join("s.farm/merge.sbatch")).unwrap();
+    assert!(
+        merge.contains("FRAMES=(1 4)") && merge.contains("s.0004.exr"),
+        "{merge}"
+    );
+    // Refused: more tasks than a job array holds, an output without a frame pattern, a failing sbatch.
+    let o = run_in(
+        &dir,
+        &[
+            "farm", "slurm", "s.pbrt", "--frames", "1-600", "--tiles", "2",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("1200 tasks"));
+    let o = run_in(
+        &dir,
+        &[
+            "farm", "slurm", "s.pbrt", "--frames", "1-2", "-o", "one.exr",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no #### or %04d"));
+    let o = run_in(
+        &dir,
+        &[
+            "farm",
+            "slurm",
+            "s.pbrt",
+            "--frames",
+            "1-2",
+            "--submit",
+            "--sbatch",
+            "/bin/false",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/bin/false"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
