@@ -103,7 +103,6 @@ impl<'a> Stepper<'a> {
 
 /// The straight march in f32 lanes (the same steps, at the same points, as the f64 march of `integrate`); compiled
 /// twice, for baseline x86-64 and for AVX2 + FMA (8 channels per instruction), chosen once at run time.
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub(super) fn march_lanes(
     v: &FireVolume,
     lt: &lanes::LaneTables,
@@ -111,9 +110,24 @@ pub(super) fn march_lanes(
     l: &mut [f64],
     t: &mut [f64],
 ) -> f64 {
+    march_lanes_mapped(v, lt, v, |p| p, ray, l, t)
+}
+
+/// As [`march_lanes`], with the ray clipped and its empty stretches skipped by `m`, and each step's coefficients
+/// taken at `map(p)` (motion blur's displaced lookups; the identity otherwise).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
+    v: &FireVolume,
+    lt: &lanes::LaneTables,
+    m: &dyn Medium,
+    map: M,
+    ray: &Ray,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> f64 {
     l.iter_mut().for_each(|v| *v = 0.0);
     t.iter_mut().for_each(|v| *v = 1.0);
-    let Some(span) = integrate::Span::new(v, ray) else {
+    let Some(span) = integrate::Span::new(m, ray) else {
         return ray.t1;
     };
     let mut rng = crate::rng::Rng::new(ray.seed);
@@ -123,7 +137,7 @@ pub(super) fn march_lanes(
     let mut samples = 0;
     integrate::march_steps(&span, &mut rng, &mut empty, |p, delta| {
         samples += 1;
-        v.lane_step(lt, p, delta, &mut ls) >= cutoff
+        v.lane_step(lt, map(p), delta, &mut ls) >= cutoff
     });
     EVALUATIONS.with(|n| n.set(n.get() + samples));
     ls.finish(l, t);

@@ -8,8 +8,8 @@
 //! the brick can be displaced to lies in a brick whose bound is counted. The march skips only bricks whose
 //! whole reach is empty.
 
-use super::integrate::{self, Medium, Ray, Scratch, Span};
-use super::march::Stepper;
+use super::integrate::{self, Medium, Ray, Scratch};
+use super::march;
 use super::FireVolume;
 use crate::dataset::params::Motion;
 use crate::majorant::MajorantGrid;
@@ -160,19 +160,11 @@ impl Advected<'_> {
             let mut sc = Scratch::new(self.v.channels());
             return integrate::integrate(self, ray, self.v.integrator, &mut sc, l, t);
         }
-        l.iter_mut().for_each(|x| *x = 0.0);
-        t.iter_mut().for_each(|x| *x = 1.0);
-        let Some(span) = Span::new(self, ray) else {
-            return ray.t1;
-        };
-        let mut rng = crate::rng::Rng::new(ray.seed);
-        let mut step = Stepper::new(self.v, true);
-        let mut empty = Vec::new();
-        integrate::march_steps(&span, &mut rng, &mut empty, |p, delta| {
-            !step.step(self.displaced(p), delta, l, t)
-        });
-        step.finish(l, t);
-        span.b
+        if let Some(lt) = &self.v.lanes {
+            return march::march_lanes_mapped(self.v, lt, self, |p| self.displaced(p), ray, l, t);
+        }
+        let mut sc = Scratch::new(self.v.channels());
+        integrate::integrate(self, ray, integrate::Integrator::March, &mut sc, l, t)
     }
 
     /// Transmittance only.
