@@ -327,6 +327,24 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             },
         ),
         (
+            // The projection: with camera_to_world, what a compositor needs to place 3D elements in the render.
+            "camera".to_string(),
+            {
+                let c = &sc.camera;
+                let [x0, x1, y0, y1] = c.screen;
+                if c.orthographic {
+                    format!("orthographic screenwindow {x0} {x1} {y0} {y1}")
+                } else {
+                    format!(
+                        "perspective fov {} screenwindow {x0} {x1} {y0} {y1} lensradius {} focaldistance {}",
+                        2.0 * c.tan_half.atan().to_degrees(),
+                        c.lens_radius,
+                        c.focal_distance
+                    )
+                }
+            },
+        ),
+        (
             "frame".to_string(),
             frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
         ),
