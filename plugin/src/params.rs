@@ -116,6 +116,15 @@ impl Param {
             at: None,
         }
     }
+    /// An `rgb` parameter.
+    pub fn rgb(name: &str, v: [f64; 3]) -> Param {
+        Param {
+            name: name.into(),
+            ty: ParamType::Rgb,
+            values: Values::Numbers(v.to_vec()),
+            at: None,
+        }
+    }
     /// An `integer` parameter.
     pub fn int(name: &str, v: i64) -> Param {
         Param {

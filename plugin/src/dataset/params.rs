@@ -129,11 +129,42 @@ pub(crate) fn load(
         (Some(o), None) | (None, Some(o)) => o,
         (None, None) => 0.0,
     };
-    let tmap = Mapping {
+    let mut tmap = Mapping {
         scale: r.float("temperaturescale")?,
         offset: 0.0,
         pbrt_offset: offset,
     };
+    // Art direction: the grid's range [a, b] onto kelvin [ka, kb], linearly — the same map as a scale and an
+    // offset, T = (t − (a − ka/s)) · s with s = (kb − ka)/(b − a).
+    if let Some(v) = r.numbers("temperatureremap")? {
+        let given = ["temperaturescale", "temperatureoffset", "temperaturecutoff"]
+            .into_iter()
+            .find(|n| r.opt_float(n).ok().flatten().is_some());
+        if let Some(n) = given {
+            return Err(Error::invalid(
+                "dataset",
+                "temperatureremap",
+                format!("given with {n}"),
+                "one way to map temperatures (the remap is a scale and an offset)",
+            ));
+        }
+        let ok = v.len() == 4 && v.iter().all(|x| x.is_finite()) && v[1] != v[0];
+        let s = if ok {
+            (v[3] - v[2]) / (v[1] - v[0])
+        } else {
+            f64::NAN
+        };
+        if !(s.is_finite() && s > 0.0 && s <= 1e9) {
+            return Err(Error::invalid(
+                "dataset",
+                "temperatureremap",
+                format!("{v:?}"),
+                "four numbers: the grid's range a b (a ≠ b) and the kelvin range ka < kb it maps onto, increasing together",
+            ));
+        }
+        tmap.scale = s;
+        tmap.pbrt_offset = v[0] - v[2] / s;
+    }
     let interp = if r.string("interpolation")? == "nearest" {
         Interpolation::Nearest
     } else {

@@ -44,6 +44,7 @@ pub(super) fn physical(
     basis: &Basis,
     optics: &SootOptics,
     (alpha, sootscale, intensity): (f64, f64, f64),
+    (smokescale, tint): (f64, Option<&SpectrumFn>),
     species: &[(String, Element, f64)],
     sigma_s: Option<&SpectrumFn>,
     ds: &Dataset,
@@ -60,19 +61,20 @@ pub(super) fn physical(
         move |l: f64| optics.kappa(l, 1.0, alpha)
     };
     let kap = kappa.clone();
-    let a = basis.absorb_split(&|l| sootscale * kap(l), &kinks);
+    let a = basis.absorb_split(&|l| smokescale * sootscale * kap(l), &kinks);
     let bb = basis.clone();
     let nodes = basis.nodes_split(&kinks);
+    // The emission: the unscaled smoke's absorption (Kirchhoff's law, before art direction) times the tint.
     let g: Vec<f64> = nodes
         .lambda
         .iter()
-        .map(|&l| intensity * sootscale * kappa(l))
+        .map(|&l| intensity * sootscale * kappa(l) * tint.map_or(1.0, |f| f(l)))
         .collect();
     let (a_t, j);
     if basis.mode == ColorMode::Rgb {
         // The Planck-mean absorption per band and the emission, from one table build.
         let f: Vec<f64> = (0..CMF.len())
-            .map(|i| sootscale * kappa(380.0 + i as f64))
+            .map(|i| smokescale * sootscale * kappa(380.0 + i as f64))
             .collect();
         let fallback = a.clone();
         let both = TTable::build(t_max, 2 * c, &move |t| {
@@ -103,7 +105,9 @@ pub(super) fn physical(
     }
     let species_settings = species;
     let species = species_tables(species, ds, basis, t_max, intensity, tables);
-    let source = Source {
+    // (The fire light's full-spectrum power follows the physics: with a tint, it reports its power over the
+    // bins instead.)
+    let source = tint.is_none().then(|| Source {
         soot: optics.clone(),
         alpha,
         soot_scale: sootscale * intensity,
@@ -113,9 +117,9 @@ pub(super) fn physical(
             .zip(&species)
             .map(|((_, e, _), sp)| (e.clone(), sp.ch, sp.scale))
             .collect(),
-    };
+    });
     let s = match sigma_s {
-        Some(f) => basis.absorb(&|l| f(l)),
+        Some(f) => basis.absorb(&|l| smokescale * f(l)),
         None => vec![0.0; c],
     };
     Coefficients {
@@ -125,7 +129,7 @@ pub(super) fn physical(
         j,
         t_emit: 0.0,
         species,
-        source: Some(source),
+        source,
     }
 }
 

@@ -47,6 +47,10 @@ pub(super) enum Emission {
         alpha: f64,
         sootscale: f64,
         intensity: f64,
+        /// Art direction: the smoke's absorption and scattering times `smokescale` (emission kept), and the
+        /// soot's emission times the `tint` spectrum.
+        smokescale: f64,
+        tint: Option<SpectrumFn>,
         /// (symbol, element, m⁻³ per unit of its grid).
         species: Vec<(String, Element, f64)>,
     },
@@ -219,7 +223,21 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
     };
     let alpha = r.float("alpha")?;
     let sootscale = r.float("sootscale")?;
-    let intensity = r.float("intensity")?;
+    // `firescale`: the compositing name of `intensity` (one of the two).
+    let intensity = match (r.opt_float("intensity")?, r.opt_float("firescale")?) {
+        (Some(_), Some(_)) => {
+            return Err(Error::invalid(
+                "volume",
+                "firescale",
+                "given with intensity",
+                "one of the two (they are the same)",
+            ))
+        }
+        (Some(v), None) | (None, Some(v)) => v,
+        (None, None) => 1.0,
+    };
+    let smokescale = r.float("smokescale")?;
+    let tint = spectrum_param(r, "tint", list, RgbUse::Unbounded)?;
     let syms: Vec<String> = r
         .strings("species")?
         .unwrap_or_default()
@@ -245,13 +263,24 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         alpha,
         sootscale,
         intensity,
+        smokescale,
+        tint,
         species,
     })
 }
 
 /// pbrt-v4's σ_a, scale, Lescale and Le.
 fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
-    for name in ["fuel", "fuelnk", "alpha", "sootscale", "species"] {
+    for name in [
+        "fuel",
+        "fuelnk",
+        "alpha",
+        "sootscale",
+        "species",
+        "smokescale",
+        "firescale",
+        "tint",
+    ] {
         if list.iter().any(|p| p.name == name) {
             return Err(Error::invalid(
                 "volume",
@@ -318,6 +347,8 @@ fn spectrum_param(
             ));
         }
         if p.ty == crate::params::ParamType::Rgb {
+            // (Read through the reader too: type-checked and marked used.)
+            r.numbers(name)?;
             if let Values::Numbers(v) = &p.values {
                 if v.len() != 3 || v.iter().any(|x| !x.is_finite() || *x < 0.0) {
                     return Err(Error::invalid(

@@ -900,3 +900,103 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
     assert!(lit > 100, "{lit} rays saw the fire");
     assert!(worst < 1e-5, "bricks vs no lattice: {worst:e}");
 }
+
+/// Art direction beside the physics: each control changes what it says and nothing else.
+#[test]
+fn smokescale_firescale_tint_and_remap_do_what_they_say() {
+    let p = DVec3::splat(0.5);
+    let coef = |extra: Vec<Param>| {
+        let v = slab_volume(
+            2e-6,
+            1600.0,
+            [vec![Param::floats("sigma_s", &[5.0])], extra].concat(),
+        );
+        let c = v.channels();
+        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        v.coefficients(p, &mut sa, &mut ss, &mut j);
+        (sa, ss, j)
+    };
+    let (sa, ss, j) = coef(vec![]);
+    assert!(sa.iter().chain(&ss).chain(&j).all(|&x| x > 0.0));
+    // smokescale 0: no absorption, no scattering, the same emission.
+    let (sa0, ss0, j0) = coef(vec![Param::float("smokescale", 0.0)]);
+    assert!(sa0.iter().chain(&ss0).all(|&x| x == 0.0));
+    assert_eq!(j0, j);
+    // smokescale 0.5: half of both, exactly.
+    let (sah, ssh, _) = coef(vec![Param::float("smokescale", 0.5)]);
+    for c in 0..sa.len() {
+        assert!((sah[c] / sa[c] - 0.5).abs() < 1e-12 && (ssh[c] / ss[c] - 0.5).abs() < 1e-12);
+    }
+    // firescale 2: twice the emission, the same absorption; given with intensity: refused.
+    let (sa2, _, j2) = coef(vec![Param::float("firescale", 2.0)]);
+    assert_eq!(sa2, sa);
+    for c in 0..j.len() {
+        assert!((j2[c] / j[c] - 2.0).abs() < 1e-12, "{} {}", j2[c], j[c]);
+    }
+    let both = FireVolume::new(&thesis_bins(vec![
+        Param::floats("density", &[1e-6]),
+        Param::floats("temperature", &[1500.0]),
+        Param::float("firescale", 2.0),
+        Param::float("intensity", 2.0),
+    ]));
+    assert!(both.unwrap_err().to_string().contains("firescale"));
+    // tint black: no emission; tint white (rgb 1 1 1): the blackbody's, to the rgb spectrum's flatness.
+    let (sat, _, jt) = coef(vec![Param::rgb("tint", [0.0, 0.0, 0.0])]);
+    assert!(jt.iter().all(|&x| x == 0.0));
+    assert_eq!(sat, sa);
+    let (_, _, jw) = coef(vec![Param::rgb("tint", [1.0, 1.0, 1.0])]);
+    for c in 0..j.len() {
+        assert!(
+            (jw[c] / j[c] - 1.0).abs() < 1e-3,
+            "bin {c}: {} vs {}",
+            jw[c],
+            j[c]
+        );
+    }
+    // A red tint keeps the red end and darkens the blue.
+    let (_, _, jr) = coef(vec![Param::rgb("tint", [1.0, 0.2, 0.2])]);
+    let last = j.len() - 1;
+    assert!(
+        jr[last] / j[last] > 0.8 && jr[0] / j[0] < 0.4,
+        "{} {}",
+        jr[last] / j[last],
+        jr[0] / j[0]
+    );
+    // temperatureremap a b ka kb is the scale and offset it stands for, bit for bit; with them, refused.
+    let remap = coef(vec![Param::floats(
+        "temperatureremap",
+        &[0.0, 2000.0, 1000.0, 2000.0],
+    )]);
+    let scaled = coef(vec![
+        Param::float("temperaturescale", 0.5),
+        Param::float("temperatureoffset", -2000.0),
+    ]);
+    assert_eq!(remap, scaled);
+    for bad in [
+        vec![
+            Param::floats("temperatureremap", &[0.0, 1.0, 1000.0, 2000.0]),
+            Param::float("temperaturescale", 2.0),
+        ],
+        vec![Param::floats(
+            "temperatureremap",
+            &[1.0, 1.0, 1000.0, 2000.0],
+        )],
+        vec![Param::floats(
+            "temperatureremap",
+            &[0.0, 1.0, 2000.0, 1000.0],
+        )],
+        vec![Param::floats("temperatureremap", &[0.0, 1.0, 2000.0])],
+    ] {
+        let r = FireVolume::new(&thesis_bins(
+            [
+                vec![
+                    Param::floats("density", &[1e-6]),
+                    Param::floats("temperature", &[1500.0]),
+                ],
+                bad,
+            ]
+            .concat(),
+        ));
+        assert!(r.unwrap_err().to_string().contains("temperatureremap"));
+    }
+}
