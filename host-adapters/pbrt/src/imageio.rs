@@ -371,6 +371,7 @@ pub fn write_channels_exr(
     rgb: &[[f32; 3]],
     names: &[String],
     values: &[f32],
+    fire_temperature: Option<f64>,
     fp16: bool,
     window: Window,
     meta: &[(String, String)],
@@ -411,10 +412,22 @@ pub fn write_channels_exr(
         let mut image = Image::from_layer(layer);
         image.attributes.display_window =
             IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
-        if !meta.is_empty() {
+        // As `write_exr_as`: the fire temperature in the record, or as its own attribute without one.
+        if meta.is_empty() {
+            if let Some(t) = fire_temperature {
+                image
+                    .attributes
+                    .other
+                    .insert(Text::from(FIRE_TEMPERATURE_ATTRIBUTE), AttributeValue::F64(t));
+            }
+        } else {
+            let mut record = meta.to_vec();
+            if let Some(t) = fire_temperature {
+                record.push((FIRE_TEMPERATURE_KEY.to_string(), format!("{t:e}")));
+            }
             image.attributes.other.insert(
                 Text::from(RENDER_ATTRIBUTE),
-                AttributeValue::Text(Text::from(meta_text(meta).as_str())),
+                AttributeValue::Text(Text::from(meta_text(&record).as_str())),
             );
         }
         image

@@ -40,6 +40,60 @@ pub enum Operator {
     NakaRushton,
     Exposure,
     Reinhard,
+    /// Sobotka's AgX display transform (Blender 4's default view), by Wrensch's fit.
+    Agx,
+    /// The ACES filmic curve, by Narkowicz's fit.
+    Aces,
+}
+
+impl Operator {
+    /// The name `--operator` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Operator::NakaRushton => "naka-rushton",
+            Operator::Exposure => "exposure",
+            Operator::Reinhard => "reinhard",
+            Operator::Agx => "agx",
+            Operator::Aces => "aces",
+        }
+    }
+}
+
+/// AgX (T. Sobotka, 2022) as B. Wrensch's minimal fit ("Minimal AgX Implementation", 2023): linear sRGB through
+/// the inset matrix, log2 over [−12.47393, 4.026069] EV normalised to [0, 1], a 6th-order polynomial fit of the
+/// default contrast sigmoid, the outset matrix, then display-encoded to linear (γ 2.2). Mid-grey 0.18 lands at
+/// 0.497 encoded; values 16× mid-grey and above reach the top; bright saturated colours go towards white along
+/// their hue rather than clipping per channel.
+fn agx(rgb: DVec3) -> DVec3 {
+    use glam::DMat3;
+    let inset = DMat3::from_cols(
+        DVec3::new(0.842479062253094, 0.0423282422610123, 0.0423756549057051),
+        DVec3::new(0.0784335999999992, 0.878468636469772, 0.0784336),
+        DVec3::new(0.0792237451477643, 0.0791661274605434, 0.879142973793104),
+    );
+    let outset = DMat3::from_cols(
+        DVec3::new(1.19687900512017, -0.0528968517574562, -0.0529716355144438),
+        DVec3::new(-0.0980208811401368, 1.15190312990417, -0.0980434501171241),
+        DVec3::new(-0.0990297440797205, -0.0989611768448433, 1.15107367264116),
+    );
+    const MIN_EV: f64 = -12.47393;
+    const MAX_EV: f64 = 4.026069;
+    let v = inset * rgb.max(DVec3::ZERO);
+    let x = v.to_array().map(|c| {
+        let e = if c > 0.0 { c.log2() } else { MIN_EV };
+        let x = (e.clamp(MIN_EV, MAX_EV) - MIN_EV) / (MAX_EV - MIN_EV);
+        let (x2, x4) = (x * x, x * x * x * x);
+        15.5 * x4 * x2 - 40.14 * x4 * x + 31.96 * x4 - 6.868 * x2 * x + 0.4298 * x2 + 0.1191 * x
+            - 0.00232
+    });
+    (outset * DVec3::from(x)).max(DVec3::ZERO).powf(2.2)
+}
+
+/// The ACES filmic curve as K. Narkowicz's fit ("ACES Filmic Tone Mapping Curve", 2016), per channel:
+/// x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14), with his 0.6 pre-exposure; mid-grey 0.18 lands at 0.109 linear.
+fn aces(rgb: DVec3) -> DVec3 {
+    let x = rgb.max(DVec3::ZERO) * 0.6;
+    (x * (x * 2.51 + 0.03)) / (x * (x * 2.43 + 0.59) + 0.14)
 }
 
 /// The white the observer is adapted to (von Kries).
@@ -207,6 +261,22 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                 })
                 .collect()
         }
+        Operator::Agx | Operator::Aces => {
+            // The adaptation luminance to mid-grey 0.18, or the image's 99th percentile to 2 — a stop above
+            // diffuse white: a fire's core in the curve's shoulder with its structure, the scene it lights in
+            // the curve's middle (chosen by looking at the gallery); then the curve per pixel.
+            let adapted: Vec<DVec3> = lms.iter().map(|&c| m_inv * c).collect();
+            let ys: Vec<f64> = adapted.iter().map(|v| v.y.max(0.0)).collect();
+            let s = match o.adapt {
+                Adapt::Luminance(l) => 0.18 / l,
+                Adapt::Image => 2.0 / percentile(&ys, 0.99).unwrap_or(1.0),
+            } * k;
+            let curve = if o.operator == Operator::Agx { agx } else { aces };
+            adapted
+                .iter()
+                .map(|&c| clamp(curve(to_srgb * (c * s))))
+                .collect()
+        }
         Operator::Exposure | Operator::Reinhard => {
             // Work on the adapted XYZ (von Kries applied), keeping colour ratios.
             let adapted: Vec<DVec3> = lms.iter().map(|&c| m_inv * c).collect();
@@ -321,6 +391,8 @@ mod tests {
             Operator::NakaRushton,
             Operator::Exposure,
             Operator::Reinhard,
+            Operator::Agx,
+            Operator::Aces,
         ] {
             for adapt in [Adapt::Image, Adapt::Luminance(DAY)] {
                 let o = Options {
@@ -343,6 +415,36 @@ mod tests {
                 let out = map(&[DVec3::ZERO; 4], &o);
                 assert!(out.iter().flatten().all(|c| *c == 0.0), "{op:?}");
             }
+        }
+    }
+
+    #[test]
+    fn the_display_curves_keep_their_published_points() {
+        // A D65 grey at the adaptation luminance is scene mid-grey 0.18: AgX puts it at 0.497 display-encoded
+        // (Wrensch's polynomial at (log2 0.18 + 12.47393) / 16.5), ACES at 0.109 linear (Narkowicz's fit at
+        // 0.6 · 0.18); both rise towards white and stay below it.
+        let grey = |op: Operator, y: f64| {
+            let o = Options {
+                operator: op,
+                white: White::D65,
+                adapt: Adapt::Luminance(100.0),
+                stops: 0.0,
+            };
+            map(&[cie_d65() * y], &o)[0]
+        };
+        let agx = grey(Operator::Agx, 100.0);
+        for c in agx {
+            assert!((c.powf(1.0 / 2.2) - 0.4967).abs() < 2e-3, "{agx:?}");
+        }
+        let aces = grey(Operator::Aces, 100.0);
+        for c in aces {
+            let x = 0.6 * 0.18;
+            let want = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14);
+            assert!((c - want).abs() < 1e-3, "{aces:?} vs {want}");
+        }
+        for op in [Operator::Agx, Operator::Aces] {
+            let (lo, hi) = (grey(op, 1e3)[1], grey(op, 1e6)[1]);
+            assert!(lo < hi && hi <= 1.0 && hi > 0.95, "{op:?}: {lo} {hi}");
         }
     }
 

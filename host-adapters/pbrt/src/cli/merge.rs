@@ -199,7 +199,7 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
     };
     match extra {
         Some((names, values)) if !names.is_empty() => imageio::write_channels_exr(
-            &a.output, win.full.0, win.full.1, &rgb, &names, &values, false, full, &meta,
+            &a.output, win.full.0, win.full.1, &rgb, &names, &values, fire_t, false, full, &meta,
         ),
         _ => imageio::write_exr_as(
             &a.output, win.full.0, win.full.1, &rgb, fire_t, false, full, &meta,

@@ -44,6 +44,10 @@ pub struct RenderArgs {
     #[arg(long = "fire-light", value_name = "power|luminance|off", default_value = "power",
           value_parser = ["power", "luminance", "off"])]
     fire_light: String,
+    /// The PNG preview's display transform: agx (default: Sobotka's AgX, the fire's core in its soft shoulder),
+    /// aces, naka-rushton (the paper's cone responses), exposure or reinhard — as `firemedium tonemap --operator`.
+    #[arg(long, value_enum, default_value = "agx")]
+    operator: PreviewOperator,
     /// The PNG preview's adaptation, as `firemedium tonemap --adapt`: image (default), night, indoor, day or a
     /// luminance in cd/m².
     #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
@@ -80,6 +84,28 @@ pub struct RenderArgs {
     /// to the beauty), alpha (the A channel), depth, albedo, normal, samples — or all.
     #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
     aov: Option<Aovs>,
+}
+
+/// The preview's display transform (`--operator`).
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum PreviewOperator {
+    Agx,
+    Aces,
+    NakaRushton,
+    Exposure,
+    Reinhard,
+}
+
+impl PreviewOperator {
+    fn operator(self) -> tonemap::Operator {
+        match self {
+            PreviewOperator::Agx => tonemap::Operator::Agx,
+            PreviewOperator::Aces => tonemap::Operator::Aces,
+            PreviewOperator::NakaRushton => tonemap::Operator::NakaRushton,
+            PreviewOperator::Exposure => tonemap::Operator::Exposure,
+            PreviewOperator::Reinhard => tonemap::Operator::Reinhard,
+        }
+    }
 }
 
 /// `--aov`'s list (a type of its own: clap would take a `Vec` for repeated flags).
@@ -299,7 +325,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             tonemap::WhiteArg::Given(w) => w,
         },
         adapt: a.adapt,
-        ..Default::default()
+        operator: a.operator.operator(),
+        stops: 0.0,
     };
     // What the image is a render of (for `firemedium merge` and compositors), and how long it took (the one
     // line two renders of the same scene differ in).

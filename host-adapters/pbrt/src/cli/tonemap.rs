@@ -13,8 +13,9 @@ pub struct TonemapArgs {
     /// The PNG to write.
     #[arg(short, long)]
     output: PathBuf,
-    /// naka-rushton (cone responses, P&P §3.8), exposure (linear + sRGB curve) or reinhard (2002 global).
-    #[arg(long, default_value = "naka-rushton", value_parser = ["naka-rushton", "exposure", "reinhard"])]
+    /// naka-rushton (cone responses, P&P §3.8), exposure (linear + sRGB curve), reinhard (2002 global), agx
+    /// (Sobotka's display transform: a soft shoulder towards white along each hue) or aces (the ACES filmic curve).
+    #[arg(long, default_value = "naka-rushton", value_parser = ["naka-rushton", "exposure", "reinhard", "agx", "aces"])]
     operator: String,
     /// What the eye is adapted to: image (from the image itself), night, indoor, day, or a luminance in cd/m².
     #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
@@ -53,6 +54,8 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
         operator: match a.operator.as_str() {
             "exposure" => Operator::Exposure,
             "reinhard" => Operator::Reinhard,
+            "agx" => Operator::Agx,
+            "aces" => Operator::Aces,
             _ => Operator::NakaRushton,
         },
         white,
@@ -62,13 +65,51 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
     let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
     imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16).map_err(|e| (1, e))?;
+    // How much of the flame the display flattens: of the pixels where the render's `fire` AOV (the fire seen from
+    // the camera) is at least 5 % of its 99th percentile, those with a channel at the display's top (8-bit 250 and
+    // above: clipped, or saturated so that steps of the input no longer show).
+    let (names, extra) = imageio::read_extra_channels(&a.input).map_err(|e| (1, e))?;
+    let clipped = ["fire.R", "fire.G", "fire.B"]
+        .map(|n| names.iter().position(|m| m == n))
+        .iter()
+        .all(Option::is_some)
+        .then(|| {
+            let k = names.len();
+            let at = |n: &str| names.iter().position(|m| m == n).unwrap_or(0);
+            let (r, g, b) = (at("fire.R"), at("fire.G"), at("fire.B"));
+            let lum: Vec<f64> = (0..img.w * img.h)
+                .map(|i| {
+                    let v = |c: usize| extra[i * k + c] as f64;
+                    0.2126 * v(r) + 0.7152 * v(g) + 0.0722 * v(b)
+                })
+                .collect();
+            let mut sorted = lum.clone();
+            sorted.sort_by(f64::total_cmp);
+            let p99 = sorted[((sorted.len() - 1) as f64 * 0.99) as usize];
+            let flame: Vec<usize> = (0..lum.len())
+                .filter(|&i| p99 > 0.0 && lum[i] >= 0.05 * p99)
+                .collect();
+            let top = 249.5 / 255.0;
+            let n = flame
+                .iter()
+                .filter(|&&i| px[i].iter().any(|&c| imageio::srgb_encode(c) >= top))
+                .count();
+            (n, flame.len())
+        });
     let white_text = match white {
         White::D65 => "D65".to_string(),
         White::Blackbody(t) => format!("blackbody {t:.0} K"),
         White::Chromaticity(x, y) => format!("x,y {x:.4},{y:.4}"),
     };
+    let clip_text = match clipped {
+        Some((n, of)) if of > 0 => format!(
+            "; flame pixels at the top: {n} of {of} ({:.1} %)",
+            100.0 * n as f64 / of as f64
+        ),
+        _ => String::new(),
+    };
     Ok(format!(
-        "wrote {} ({}×{}, {}-bit; {}, adapted to {}, white {white_text} ({from}), {:+} stops)\n",
+        "wrote {} ({}×{}, {}-bit; {}, adapted to {}, white {white_text} ({from}), {:+} stops{clip_text})\n",
         a.output.display(),
         img.w,
         img.h,

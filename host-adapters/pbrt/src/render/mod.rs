@@ -70,7 +70,16 @@ impl Image {
         };
         if let Some((names, values)) = &self.extra {
             return crate::imageio::write_channels_exr(
-                path, self.w, self.h, &self.rgb, names, values, fp16, window, &self.meta,
+                path,
+                self.w,
+                self.h,
+                &self.rgb,
+                names,
+                values,
+                fire_temperature,
+                fp16,
+                window,
+                &self.meta,
             );
         }
         crate::imageio::write_exr_as(
