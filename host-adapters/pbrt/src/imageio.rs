@@ -415,10 +415,10 @@ pub fn write_channels_exr(
         // As `write_exr_as`: the fire temperature in the record, or as its own attribute without one.
         if meta.is_empty() {
             if let Some(t) = fire_temperature {
-                image
-                    .attributes
-                    .other
-                    .insert(Text::from(FIRE_TEMPERATURE_ATTRIBUTE), AttributeValue::F64(t));
+                image.attributes.other.insert(
+                    Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                    AttributeValue::F64(t),
+                );
             }
         } else {
             let mut record = meta.to_vec();

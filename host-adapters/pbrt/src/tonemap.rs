@@ -271,7 +271,11 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                 Adapt::Luminance(l) => 0.18 / l,
                 Adapt::Image => 2.0 / percentile(&ys, 0.99).unwrap_or(1.0),
             } * k;
-            let curve = if o.operator == Operator::Agx { agx } else { aces };
+            let curve = if o.operator == Operator::Agx {
+                agx
+            } else {
+                aces
+            };
             adapted
                 .iter()
                 .map(|&c| clamp(curve(to_srgb * (c * s))))

@@ -44,7 +44,7 @@ pub(super) fn physical(
     basis: &Basis,
     optics: &SootOptics,
     (alpha, sootscale, intensity): (f64, f64, f64),
-    (smokescale, tint): (f64, Option<&SpectrumFn>),
+    (smokescale, tint, ramp): (f64, Option<&SpectrumFn>, Option<&super::settings::Ramp>),
     species: &[(String, Element, f64)],
     sigma_s: Option<&SpectrumFn>,
     ds: &Dataset,
@@ -70,6 +70,7 @@ pub(super) fn physical(
         .iter()
         .map(|&l| intensity * sootscale * kappa(l) * tint.map_or(1.0, |f| f(l)))
         .collect();
+    let art = Art::new(basis, ramp);
     let (a_t, j);
     if basis.mode == ColorMode::Rgb {
         // The Planck-mean absorption per band and the emission, from one table build.
@@ -78,7 +79,11 @@ pub(super) fn physical(
             .collect();
         let fallback = a.clone();
         let both = TTable::build(t_max, 2 * c, &move |t| {
-            bb.soot_rgb_rows(&nodes, &g, &f, &fallback, t)
+            let mut rows = bb.soot_rgb_rows(&nodes, &g, &f, &fallback, t);
+            let j = art.apply(t, &rows[c..]);
+            rows.truncate(c);
+            rows.extend(j);
+            rows
         });
         let (ta, tj) = both.split(c);
         let seconds = t0.elapsed().as_secs_f64();
@@ -95,7 +100,9 @@ pub(super) fn physical(
         a_t = Some(ta);
         j = tj;
     } else {
-        j = TTable::build(t_max, c, &move |t| bb.emit_planck(&nodes, &g, t));
+        j = TTable::build(t_max, c, &move |t| {
+            art.apply(t, &bb.emit_planck(&nodes, &g, t))
+        });
         tables.push(TableReport {
             name: "soot emission".into(),
             bytes: j.bytes(),
@@ -292,4 +299,70 @@ pub(super) fn brick_majorants(
                 * (1.0 + 1e-6)
         })
         .collect()
+}
+
+/// The colour ramp applied to an emission row (`colorramp`, `physical`): the ramp's colour at T, in the render's
+/// channels, scaled to the row's luminance, blended with the row. Without a ramp, or at `physical` 1, the row
+/// itself (bit for bit).
+struct Art {
+    /// (T, the key's colour in the channels, its luminance), and the channels' luminance weights.
+    keys: Vec<(f64, Vec<f64>, f64)>,
+    y: Vec<f64>,
+    physical: f64,
+}
+
+impl Art {
+    fn new(basis: &Basis, ramp: Option<&super::settings::Ramp>) -> Art {
+        let y: Vec<f64> = basis.xyz().iter().map(|w| w.y).collect();
+        let Some(ramp) = ramp.filter(|r| r.physical < 1.0) else {
+            return Art {
+                keys: Vec::new(),
+                y,
+                physical: 1.0,
+            };
+        };
+        let keys = ramp
+            .keys
+            .iter()
+            .map(|&(t, rgb)| {
+                let s = crate::rgb_spectrum::RgbSpectrum::new(
+                    rgb,
+                    crate::rgb_spectrum::RgbUse::Unbounded,
+                );
+                let ch = basis.emit(&|l| s.eval(l));
+                let lum = ch.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
+                (t, ch, lum)
+            })
+            .collect();
+        Art {
+            keys,
+            y,
+            physical: ramp.physical,
+        }
+    }
+
+    fn apply(&self, t: f64, row: &[f64]) -> Vec<f64> {
+        if self.keys.is_empty() {
+            return row.to_vec();
+        }
+        // The ramp's colour at t: linear between keys, the end keys' beyond.
+        let k = self.keys.partition_point(|(kt, _, _)| *kt <= t);
+        let (colour, lum): (Vec<f64>, f64) = if k == 0 || k == self.keys.len() {
+            let (_, c, l) = &self.keys[if k == 0 { 0 } else { k - 1 }];
+            (c.clone(), *l)
+        } else {
+            let ((t0, c0, l0), (t1, c1, l1)) = (&self.keys[k - 1], &self.keys[k]);
+            let f = (t - t0) / (t1 - t0);
+            (
+                c0.iter().zip(c1).map(|(a, b)| a + f * (b - a)).collect(),
+                l0 + f * (l1 - l0),
+            )
+        };
+        let y_row: f64 = row.iter().zip(&self.y).map(|(a, b)| a * b).sum();
+        let scale = if lum > 0.0 { y_row / lum } else { 0.0 };
+        row.iter()
+            .zip(&colour)
+            .map(|(&p, &c)| self.physical * p + (1.0 - self.physical) * c * scale)
+            .collect()
+    }
 }

@@ -51,6 +51,8 @@ pub(super) enum Emission {
         /// soot's emission times the `tint` spectrum.
         smokescale: f64,
         tint: Option<SpectrumFn>,
+        /// A colour ramp over temperature and how much of the physical colour stays (`physical`).
+        ramp: Option<Ramp>,
         /// (symbol, element, m⁻³ per unit of its grid).
         species: Vec<(String, Element, f64)>,
     },
@@ -238,6 +240,7 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
     };
     let smokescale = r.float("smokescale")?;
     let tint = spectrum_param(r, "tint", list, RgbUse::Unbounded)?;
+    let ramp = Ramp::read(r)?;
     let syms: Vec<String> = r
         .strings("species")?
         .unwrap_or_default()
@@ -265,8 +268,58 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         intensity,
         smokescale,
         tint,
+        ramp,
         species,
     })
+}
+
+/// Art direction: a colour ramp over temperature (`colorramp`: keys T r g b) that replaces the blackbody's
+/// chromaticity and keeps its luminance, blended with the physical colour by `physical` (1: physical, 0: the ramp).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Ramp {
+    /// (T in K, linear sRGB), T increasing.
+    pub(super) keys: Vec<(f64, [f64; 3])>,
+    pub(super) physical: f64,
+}
+
+impl Ramp {
+    fn read(r: &ParamReader) -> Result<Option<Ramp>, Error> {
+        let physical = r.opt_float("physical")?;
+        let Some(v) = r.numbers("colorramp")? else {
+            if physical.is_some() {
+                return Err(Error::invalid(
+                    "volume",
+                    "physical",
+                    "given without a colorramp",
+                    "a colorramp to blend the physical colour with",
+                ));
+            }
+            return Ok(None);
+        };
+        let keys: Vec<(f64, [f64; 3])> = v
+            .chunks_exact(4)
+            .map(|k| (k[0], [k[1], k[2], k[3]]))
+            .collect();
+        let ok = v.len() % 4 == 0
+            && !keys.is_empty()
+            && v.iter().all(|x| x.is_finite())
+            && keys
+                .iter()
+                .all(|(t, c)| *t >= 0.0 && c.iter().all(|x| *x >= 0.0))
+            && keys.windows(2).all(|w| w[0].0 < w[1].0);
+        if !ok {
+            return Err(Error::invalid(
+                "volume",
+                "colorramp",
+                format!("{} values", v.len()),
+                "keys of four numbers: a temperature in K (increasing) and a linear sRGB colour (≥ 0)",
+            ));
+        }
+        Ok(Some(Ramp {
+            keys,
+            physical: physical.unwrap_or(0.0),
+        }))
+    }
 }
 
 /// pbrt-v4's σ_a, scale, Lescale and Le.
@@ -280,6 +333,8 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         "smokescale",
         "firescale",
         "tint",
+        "colorramp",
+        "physical",
     ] {
         if list.iter().any(|p| p.name == name) {
             return Err(Error::invalid(

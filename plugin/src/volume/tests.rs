@@ -1000,3 +1000,77 @@ fn smokescale_firescale_tint_and_remap_do_what_they_say() {
         assert!(r.unwrap_err().to_string().contains("temperatureremap"));
     }
 }
+
+/// The colour ramp: at `physical` 1 the physical tables bit for bit; at 0 the ramp's colour at the emission's own
+/// luminance; between, the blend.
+#[test]
+fn a_colour_ramp_replaces_the_chromaticity_and_keeps_the_luminance() {
+    let p = DVec3::splat(0.5);
+    let emission = |extra: Vec<Param>| {
+        let v = slab_volume(2e-6, 1600.0, extra);
+        let c = v.channels();
+        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        v.coefficients(p, &mut sa, &mut ss, &mut j);
+        let xyz = v.channel_xyz();
+        let y: f64 = j.iter().zip(&xyz).map(|(a, w)| a * w.y).sum();
+        (sa, j, y, xyz)
+    };
+    // Blue below 1500 K, green above 1700 K: 1600 K is their mean.
+    let ramp = Param::floats("colorramp", &[1500.0, 0.0, 0.0, 1.0, 1700.0, 0.0, 1.0, 0.0]);
+    let (sa, j, y, xyz) = emission(vec![]);
+    let (sa1, j1, _, _) = emission(vec![ramp.clone(), Param::float("physical", 1.0)]);
+    assert_eq!(
+        (sa1, j1),
+        (sa.clone(), j.clone()),
+        "physical 1 is the physics"
+    );
+    let (sa0, j0, y0, _) = emission(vec![ramp.clone()]);
+    assert_eq!(sa0, sa, "the ramp leaves absorption alone");
+    assert!((y0 / y - 1.0).abs() < 1e-5, "luminance kept: {y0} vs {y}");
+    // Its colour: the mean of blue and green's spectra at the same luminance — no red end left.
+    let last = j.len() - 1;
+    assert!(
+        j0[last] < 0.05 * j[last],
+        "red end {} vs {}",
+        j0[last],
+        j[last]
+    );
+    let chroma = |j: &[f64]| {
+        let s: glam::DVec3 = j.iter().zip(&xyz).map(|(a, w)| *w * *a).sum();
+        (s.x / (s.x + s.y + s.z), s.y / (s.x + s.y + s.z))
+    };
+    let (x0, _) = chroma(&j0);
+    let (xb, _) = chroma(&j);
+    assert!(x0 < 0.3 && xb > 0.5, "ramp x {x0}, blackbody x {xb}");
+    // Half and half: the mean of the two, channel by channel.
+    let (_, jh, _, _) = emission(vec![ramp.clone(), Param::float("physical", 0.5)]);
+    for c in 0..j.len() {
+        assert!(
+            (jh[c] - 0.5 * (j[c] + j0[c])).abs() <= 1e-6 * j[c].max(j0[c]),
+            "bin {c}"
+        );
+    }
+    // Bad ramps and a lone `physical` are refused.
+    for bad in [
+        vec![Param::floats("colorramp", &[1500.0, 0.0, 0.0])],
+        vec![Param::floats(
+            "colorramp",
+            &[1500.0, 0.0, 0.0, 1.0, 1400.0, 1.0, 0.0, 0.0],
+        )],
+        vec![Param::floats("colorramp", &[1500.0, -1.0, 0.0, 1.0])],
+        vec![Param::float("physical", 0.5)],
+    ] {
+        let name = bad[0].name.clone();
+        let r = FireVolume::new(&thesis_bins(
+            [
+                vec![
+                    Param::floats("density", &[1e-6]),
+                    Param::floats("temperature", &[1500.0]),
+                ],
+                bad,
+            ]
+            .concat(),
+        ));
+        assert!(r.unwrap_err().to_string().contains(&name));
+    }
+}
