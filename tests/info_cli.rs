@@ -64,6 +64,8 @@ fn info_json_on_the_mantaflow_fire() {
         .map(|s| s["name"].as_str().unwrap())
         .collect();
     assert_eq!(skipped, ["velocity", "shadow", "flame"]);
+    // Blender's cache says where it comes from: its flame grid is the fire's temperature (`source "blender"`).
+    assert_eq!(v["source"][0], "blender");
     let s = &v["sample"]["values"];
     assert_eq!(s[0][0], "density");
     assert!(s[0][1].as_f64().unwrap() > 0.5, "{s}");

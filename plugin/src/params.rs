@@ -413,6 +413,11 @@ impl<'a> ParamReader<'a> {
         }
     }
 
+    /// Whether the list gives `name` (without reading it: it is not marked used).
+    pub fn list_has(&self, name: &str) -> bool {
+        self.list.iter().any(|p| p.name == name)
+    }
+
     /// A single float if given (no default).
     pub fn opt_float(&self, name: &str) -> Result<Option<f64>, Error> {
         match self.numbers(name)? {

@@ -424,3 +424,77 @@ fn missing_grid_names_the_ones_present() {
     .to_string();
     assert!(e.contains("'density', 'temperature'"), "{e}");
 }
+
+/// `source "blender"` on Blender's own cache: the fire's temperature is its flame grid as Cycles maps it,
+/// 1000 K · (1.5 + 1.5 · flame) where flame > 0 (Blender's default ignition and maximum), 0 elsewhere — the
+/// hottest voxel from the sidecar's flame maximum; the file's own `temperature` grid (Mantaflow's heat, 0–3) is
+/// not read.
+#[test]
+fn the_blender_source_reads_the_flame_as_cycles_does() {
+    use firemedium_plugin::params::Param;
+    use firemedium_plugin::volume::FireVolume;
+    let side = sidecar("vdb/mantaflow_fire.json");
+    let file = data("vdb/mantaflow_fire_f060.vdb");
+    let grids = side["files"]["mantaflow_fire_f060.vdb"]["grids"]
+        .as_array()
+        .unwrap();
+    let flame_max = grids.iter().find(|g| g["name"] == "flame").unwrap()["max_active"]
+        .as_f64()
+        .unwrap();
+    let build = |extra: Vec<Param>| {
+        let mut list = vec![
+            Param::string("filename", &file.display().to_string()),
+            Param::float("sootscale", 1e-6),
+        ];
+        list.extend(extra);
+        FireVolume::new(&list)
+    };
+    let v = build(vec![Param::string("source", "blender")]).unwrap();
+    let [lo, hi] = v.temperature_range().unwrap();
+    let want = 1000.0 * (1.5 + 1.5 * flame_max);
+    assert!(
+        lo == 0.0 && (hi / want - 1.0).abs() < 1e-6,
+        "{lo} {hi} vs {want}"
+    );
+    let names: Vec<&str> = v
+        .dataset()
+        .channels()
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect();
+    assert_eq!(names, ["density", "temperature"]);
+    // The domain's own settings.
+    let v = build(vec![
+        Param::string("source", "blender"),
+        Param::float("flameignition", 1.0),
+        Param::float("flamemax", 2.0),
+    ])
+    .unwrap();
+    let hi = v.temperature_range().unwrap()[1];
+    assert!(
+        (hi / (1000.0 * (1.0 + flame_max)) - 1.0).abs() < 1e-6,
+        "{hi}"
+    );
+    // Its mapping is its own; the flame settings belong to it.
+    for (extra, name) in [
+        (
+            vec![
+                Param::string("source", "blender"),
+                Param::float("temperaturescale", 1000.0),
+            ],
+            "temperaturescale",
+        ),
+        (vec![Param::float("flamemax", 2.0)], "flamemax"),
+        (
+            vec![
+                Param::string("source", "blender"),
+                Param::float("flameignition", 2.0),
+                Param::float("flamemax", 2.0),
+            ],
+            "flamemax",
+        ),
+    ] {
+        let e = build(extra).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+}

@@ -122,6 +122,8 @@ pub struct Mapping {
     pub offset: f64,
     /// Subtracted before scaling (pbrt's `temperatureoffset`).
     pub pbrt_offset: f64,
+    /// Values at or below this map to 0, whatever the rest does (Blender's flame: no flame, no fire).
+    pub zero_at_or_below: Option<f64>,
 }
 
 impl Default for Mapping {
@@ -130,6 +132,7 @@ impl Default for Mapping {
             scale: 1.0,
             offset: 0.0,
             pbrt_offset: 0.0,
+            zero_at_or_below: None,
         }
     }
 }
@@ -139,6 +142,9 @@ impl Mapping {
         *self == Mapping::default()
     }
     pub(super) fn apply(&self, v: f32) -> f32 {
+        if self.zero_at_or_below.is_some_and(|z| v as f64 <= z) {
+            return 0.0;
+        }
         ((v as f64 - self.pbrt_offset) * self.scale + self.offset) as f32
     }
 }

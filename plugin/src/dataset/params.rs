@@ -133,7 +133,57 @@ pub(crate) fn load(
         scale: r.float("temperaturescale")?,
         offset: 0.0,
         pbrt_offset: offset,
+        zero_at_or_below: None,
     };
+    // Where the grids come from: Blender's fluid cache gives the fire's temperature as its flame grid, which
+    // Cycles maps to 1000 K · (ignition + flame · (maximum − ignition)) where there is flame (Blender's defaults:
+    // ignition 1.5, maximum 3.0).
+    let source = r.string("source")?;
+    let blender = source == "blender";
+    if blender {
+        let given = [
+            "temperaturescale",
+            "temperatureoffset",
+            "temperaturecutoff",
+            "temperatureremap",
+        ]
+        .into_iter()
+        .find(|n| r.list_has(n));
+        if let Some(n) = given {
+            return Err(Error::invalid(
+                "dataset",
+                n,
+                "given with source \"blender\"",
+                "the blender source's own mapping (set flameignition and flamemax to the domain's)",
+            ));
+        }
+        let (ign, max) = (r.float("flameignition")?, r.float("flamemax")?);
+        if !(max > ign) {
+            return Err(Error::invalid(
+                "dataset",
+                "flamemax",
+                format!("{max} (flameignition {ign})"),
+                "a maximum above the ignition temperature",
+            ));
+        }
+        tmap = Mapping {
+            scale: 1000.0 * (max - ign),
+            offset: 1000.0 * ign,
+            pbrt_offset: 0.0,
+            zero_at_or_below: Some(0.0),
+        };
+    } else if r.list_has("flameignition") || r.list_has("flamemax") {
+        return Err(Error::invalid(
+            "dataset",
+            if r.list_has("flameignition") {
+                "flameignition"
+            } else {
+                "flamemax"
+            },
+            "given without source \"blender\"",
+            "source \"blender\" (they are its domain's flame settings)",
+        ));
+    }
     // Art direction: the grid's range [a, b] onto kelvin [ka, kb], linearly — the same map as a scale and an
     // offset, T = (t − (a − ka/s)) · s with s = (kb − ka)/(b − a).
     if let Some(v) = r.numbers("temperatureremap")? {
@@ -256,7 +306,11 @@ pub(crate) fn load(
             grid: Some(r.string("densitygrid")?),
             mapping: Mapping::default(),
         }];
-        let tgrid = r.string("temperaturegrid")?;
+        let tgrid = if blender && !r.list_has("temperaturegrid") {
+            "flame".to_string()
+        } else {
+            r.string("temperaturegrid")?
+        };
         let tfile = if !temperaturefile.is_empty() {
             temperaturefile
         } else {

@@ -78,6 +78,7 @@ fn two_ascii_channels_share_a_grid_and_map() {
         scale: 1000.0,
         offset: 0.0,
         pbrt_offset: 0.5,
+        zero_at_or_below: None,
     };
     let opts = LoadOptions {
         bounds: Some([DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0)]),

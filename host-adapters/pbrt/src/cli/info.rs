@@ -73,8 +73,33 @@ struct Report {
     brick_table_bytes: usize,
     bytes: usize,
     load_seconds: f64,
+    /// The `source` the grids look like (kelvin, blender), and why; none when they look like neither.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    source: Option<(String, String)>,
     #[serde(skip_serializing_if = "Option::is_none")]
     sample: Option<SampleInfo>,
+}
+
+/// The `source` a file's grids look like: Blender's Mantaflow cache (a `flame` grid beside `density`, with its
+/// `shadow` or vector `velocity`), or density and temperature in kelvin (a temperature grid reaching 500 K).
+fn looks_like(entries: &[dataset::GridEntry], ds: &Dataset) -> Option<(String, String)> {
+    let has = |n: &str| entries.iter().any(|g| g.name == n);
+    if has("density") && has("flame") && (has("shadow") || has("velocity")) {
+        return Some((
+            "blender".into(),
+            "a Mantaflow domain cache (density, flame, shadow/velocity): \"string source\" \"blender\" reads its flame as Cycles does".into(),
+        ));
+    }
+    let t = ds.channels().iter().find(|c| c.name == "temperature")?;
+    (has("density") && t.stats.max >= 500.0).then(|| {
+        (
+            "kelvin".into(),
+            format!(
+                "density and temperature in kelvin (up to {:.0} K): the default",
+                t.stats.max
+            ),
+        )
+    })
 }
 
 #[derive(Debug, Serialize)]
@@ -225,6 +250,7 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         brick_table_bytes: ds.topology().bytes(),
         bytes: ds.bytes(),
         load_seconds,
+        source: looks_like(&entries, &ds),
         sample,
     };
     if args.json {
@@ -285,6 +311,9 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         "total     {} bytes, loaded in {:.4} s\n",
         report.bytes, report.load_seconds
     );
+    if let Some((name, why)) = &report.source {
+        s += &format!("source    {name}: {why}\n");
+    }
     if let Some(smp) = &report.sample {
         s += &format!(
             "sample at ({}, {}, {}):",
