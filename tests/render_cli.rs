@@ -612,6 +612,7 @@ fn every_scene_renders_at_a_tiny_resolution() {
         names,
         [
             "adaptation",
+            "art",
             "campfire",
             "fuels",
             "mantaflow",
