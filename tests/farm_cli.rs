@@ -59,18 +59,23 @@ fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
             "--frames",
             "30-31",
             "--tiles",
-            "3",
+            "15",
             "--aov",
             "fire,alpha",
             "--partition",
             "render",
         ],
     ));
-    assert!(out.contains("6 render tasks: 2 frames × 3 tiles"), "{out}");
+    // As many bands as the film (20 × 15) has rows: one row each, none empty, none lost.
+    assert!(
+        out.contains("30 render tasks: 2 frames × 15 tiles"),
+        "{out}"
+    );
     let farm = dir.join("torch.farm");
     let render = std::fs::read_to_string(farm.join("render.sbatch")).unwrap();
     for line in [
-        "#SBATCH --array=0-5",
+        "#SBATCH --array=0-29",
+        "--pixelbounds 0 20",
         "#SBATCH --partition=render",
         "--aov 'fire,alpha'",
     ] {
@@ -85,7 +90,7 @@ fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
             .unwrap();
         ok(&o);
     };
-    for task in 0..6 {
+    for task in 0..30 {
         bash("render.sbatch", task);
     }
     for task in 0..2 {
@@ -192,6 +197,14 @@ fn submit_makes_the_merge_wait_for_every_render_task() {
     );
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("1200 tasks"));
+    let o = run_in(
+        &dir,
+        &[
+            "farm", "slurm", "s.pbrt", "--frames", "1-2", "--tiles", "16",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("film's 15 rows"));
     let o = run_in(
         &dir,
         &[

@@ -581,9 +581,14 @@ pub(crate) fn read(
     let mut infos = Vec::new();
     for &name in names {
         let Some((info, pick)) = find_grid(&header, name) else {
+            // (A velocity's component may come from a vector grid: say so.)
+            let wanted = match name.rsplit_once('.') {
+                Some((base, "x" | "y" | "z")) => format!("{name}' or a vector grid '{base}"),
+                _ => name.to_string(),
+            };
             return Err(missing_grid(
                 file,
-                name,
+                &wanted,
                 header.grids.iter().map(|g| g.name.as_str()),
             ));
         };

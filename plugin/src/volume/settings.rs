@@ -300,8 +300,10 @@ impl Ramp {
             .chunks_exact(4)
             .map(|k| (k[0], [k[1], k[2], k[3]]))
             .collect();
+        // (At most 1024 keys: each is a spectrum fitted to its colour.)
         let ok = v.len() % 4 == 0
             && !keys.is_empty()
+            && keys.len() <= 1024
             && v.iter().all(|x| x.is_finite())
             && keys
                 .iter()
@@ -312,7 +314,7 @@ impl Ramp {
                 "volume",
                 "colorramp",
                 format!("{} values", v.len()),
-                "keys of four numbers: a temperature in K (increasing) and a linear sRGB colour (≥ 0)",
+                "1 to 1024 keys of four numbers: a temperature in K (increasing) and a linear sRGB colour (≥ 0)",
             ));
         }
         Ok(Some(Ramp {

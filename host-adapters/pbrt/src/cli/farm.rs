@@ -1,6 +1,7 @@
 //! `firemedium farm slurm SCENE --frames A-B --tiles N [--submit]`: a render cut into frames × tiles for a Slurm
 //! cluster. It writes, in a job folder, an sbatch job array with one task per frame × tile (each `firemedium
-//! render --frame F --cropwindow 0 1 y0 y1`: a horizontal band of the film), a merge job array with one task per
+//! render --frame F --pixelbounds 0 W y0 y1`: a horizontal band of the film's rows, the film's size read from the
+//! scene by parsing alone), a merge job array with one task per
 //! frame (`firemedium merge` of its tiles into the frame's EXR), and `submit.sh`, which submits the merge to
 //! start after every render task succeeded (`--dependency=afterok`); `--submit` does what `submit.sh` does.
 //!
@@ -121,6 +122,20 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
             ),
         ));
     }
+    // Bands of whole rows: no more tiles than the film has rows (an empty band would fail its task).
+    let (cols, rows) = match a.resolution {
+        Some(r) => r,
+        None => firemedium::render::scene::film_resolution(&scene).map_err(|e| (1, e))?,
+    };
+    if a.tiles as usize > rows {
+        return Err((
+            2,
+            format!(
+                "--tiles {}: more bands than the film's {rows} rows (each tile is a band of whole rows)",
+                a.tiles
+            ),
+        ));
+    }
     let tiles = a.tiles as u64;
     let tasks = frames.len() as u64 * tiles;
     if tasks > a.max_array {
@@ -161,8 +176,9 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
     }
     let list = |v: &[String]| v.join(" ");
     let frame_list = list(&frames.iter().map(|f| f.to_string()).collect::<Vec<_>>());
-    // Band k of the film: y from k/T to (k+1)/T (the same numbers for neighbours: no gap, no overlap).
-    let band = |k: u64| (k as f64 / tiles as f64).to_string();
+    // Band k of the film: rows ⌊k·H/T⌋ to ⌊(k+1)·H/T⌋ (pixel bounds: whole numbers, so neighbours meet exactly
+    // — crop-window fractions would go through ⌈H·y⌉ and its rounding — and none is empty while T ≤ H).
+    let band = |k: u64| (k * rows as u64 / tiles).to_string();
     let y0 = list(&(0..tiles).map(band).collect::<Vec<_>>());
     let y1 = list(&(1..=tiles).map(band).collect::<Vec<_>>());
     let partition = a
@@ -186,7 +202,7 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
          TASK=${{SLURM_ARRAY_TASK_ID:?run as a Slurm array task, or set SLURM_ARRAY_TASK_ID}}\n\
          F=${{FRAMES[$((TASK / {tiles}))]}}\n\
          K=$((TASK % {tiles}))\n\
-         exec {exe} render {qscene} --frame \"$F\" --cropwindow 0 1 \"${{Y0[$K]}}\" \"${{Y1[$K]}}\" {pass} -q \\\n\
+         exec {exe} render {qscene} --frame \"$F\" --pixelbounds 0 {cols} \"${{Y0[$K]}}\" \"${{Y1[$K]}}\" {pass} -q \\\n\
          \x20   --log-json {qlog} -o {qtiles}/{tile_name}\n",
         scene = scene.display(),
         first = frames[0],

@@ -433,6 +433,31 @@ pub struct Overrides {
     pub aovs: Vec<crate::render::aov::Aov>,
 }
 
+/// The film's resolution the scene at `path` asks for (pbrt-v4's 1280 × 720 when its Film does not say), read by
+/// parsing alone — nothing is loaded or built (a farm cuts the film into tiles before any node renders it).
+pub fn film_resolution(path: &Path) -> Result<(usize, usize), Error> {
+    let mut c = Collect::default();
+    parse_file(path, &mut c).map_err(|e| e.to_string())?;
+    let mut res = (1280, 720);
+    for (d, loc) in &c.0 {
+        if let Directive::Film(_, params) = d {
+            let p = ParamDict::new(params);
+            let side = |name: &str, default: f64| -> Result<usize, Error> {
+                let v = p.float(name, default);
+                if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
+                    Ok(v as usize)
+                } else {
+                    Err(format!(
+                        "{loc}: film: \"integer {name}\" {v}: expected 1 to 65536 pixels"
+                    ))
+                }
+            };
+            res = (side("xresolution", 1280.0)?, side("yresolution", 720.0)?);
+        }
+    }
+    Ok(res)
+}
+
 /// Parses and builds the scene at `path`.
 pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut c = Collect::default();
