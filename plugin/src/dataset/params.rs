@@ -47,12 +47,20 @@ fn velocity_grids(r: &ParamReader) -> Result<Option<[String; 3]>, Error> {
     }
 }
 
-/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`); returns it, the index of a
-/// per-voxel Lescale channel and the motion blur (velocity is read only while the shutter is open).
-pub(crate) fn load(
-    r: &ParamReader,
-    pbrt: bool,
-) -> Result<(Dataset, Option<usize>, Option<Motion>), Error> {
+/// What [`load`] gives a volume.
+pub(crate) struct Loaded {
+    pub ds: Dataset,
+    /// The channel that scales emission per voxel: pbrt-v4's inline `Lescale`, or the `emissiongrid`.
+    pub lescale: Option<usize>,
+    /// Whether that channel is an emission grid: the fire's emission follows it instead of the density
+    /// (j = e · J(T), not d · J(T)).
+    pub emission_grid: bool,
+    /// Motion blur (velocity is read only while the shutter is open).
+    pub motion: Option<Motion>,
+}
+
+/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`).
+pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     let shutter = [r.float("shutteropen")?, r.float("shutterclose")?];
     if shutter[1] < shutter[0] {
         return Err(Error::invalid(
@@ -236,7 +244,7 @@ pub(crate) fn load(
     }
     let inline_density = r.numbers("density")?;
     let lescale_values = r.numbers("Lescale")?;
-    let (mut ds, lescale, motion) = if let Some(dens) = inline_density {
+    let (mut ds, lescale, emission_grid, motion) = if let Some(dens) = inline_density {
         let dims = [
             r.int("nx")? as usize,
             r.int("ny")? as usize,
@@ -269,9 +277,17 @@ pub(crate) fn load(
                 "a dataset file holding the velocity grid",
             ));
         }
+        if r.list_has("emissiongrid") {
+            return Err(Error::invalid(
+                "dataset",
+                "emissiongrid",
+                "given for an inline grid",
+                "a dataset file holding the emission grid",
+            ));
+        }
         let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
         let li = les.as_ref().map(|_| arrays.len() - 1);
-        (ds, li, None)
+        (ds, li, false, None)
     } else {
         let filename = match (r.string("filename")?, r.string("dataset")?) {
             (f, d) if !f.is_empty() && !d.is_empty() => {
@@ -354,6 +370,24 @@ pub(crate) fn load(
         } else {
             &filename
         };
+        // An emission grid (Houdini's or Blender's `flame`, `heat`, `burn`): the fire's emission follows it.
+        let egrid = r.string("emissiongrid")?;
+        if !egrid.is_empty() {
+            if pbrt {
+                return Err(Error::invalid(
+                    "volume",
+                    "emissiongrid",
+                    "given",
+                    "mode \"physical\" (pbrt mode takes Lescale)",
+                ));
+            }
+            sources.push(ChannelSource {
+                name: "emission".into(),
+                file: vfile.into(),
+                grid: Some(egrid.clone()),
+                mapping: Mapping::default(),
+            });
+        }
         for (name, grid) in VELOCITY.iter().zip(velocity.iter().flatten()) {
             sources.push(ChannelSource {
                 name: name.to_string(),
@@ -364,6 +398,7 @@ pub(crate) fn load(
         }
         let ds = Dataset::load(&sources, &opts)?;
         let at = |n: &str| ds.channels().iter().position(|c| c.name == n);
+        let emission = at("emission").filter(|_| !egrid.is_empty());
         let motion = match VELOCITY.map(at) {
             [Some(x), Some(y), Some(z)] => Some(Motion {
                 channels: [x, y, z],
@@ -372,10 +407,15 @@ pub(crate) fn load(
             }),
             _ => None,
         };
-        (ds, None, motion)
+        (ds, emission, emission.is_some(), motion)
     };
     ds = ds.with_interpolation(interp);
-    Ok((ds, lescale, motion))
+    Ok(Loaded {
+        ds,
+        lescale,
+        emission_grid,
+        motion,
+    })
 }
 
 /// Whether `Lescale` is a per-voxel grid (pbrt-v4: any `Lescale` array of an inline grid is one, a single value

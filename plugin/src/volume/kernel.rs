@@ -545,7 +545,11 @@ pub(super) fn march<
         let mut thin = [false; BATCH];
         for b in 0..BATCH {
             let emits = all | (tt[b] > t_emit);
-            dl[b] = if emits { d[b] * x.les[b] } else { 0.0 };
+            dl[b] = if emits && inside[b] {
+                v.emitting(d[b], x.les[b])
+            } else {
+                0.0
+            };
             thin[b] = d[b] * sigma_max * deltas[b] < THIN;
         }
         // 4. The steps, in order.
@@ -558,7 +562,7 @@ pub(super) fn march<
                 }
                 samples += 1;
                 let mut bound = d[b] * sigma_max * deltas[b];
-                let mut any = d[b] > 0.0;
+                let mut any = d[b] > 0.0 || dl[b] > 0.0;
                 for s in 0..ns {
                     let n = x.n[s][b];
                     if let (true, Some((st, et, smax))) = (n > 0.0, sp_tabs[s]) {
@@ -584,7 +588,7 @@ pub(super) fn march<
                 // No soot: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for bit); a sample
                 // outside (d = −1) is not counted.
                 samples += inside[b] as u64;
-                if !(d[b] > 0.0) {
+                if !(d[b] > 0.0 || dl[b] > 0.0) {
                     continue;
                 }
                 thin[b]

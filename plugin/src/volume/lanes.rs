@@ -66,12 +66,12 @@ pub(crate) struct Sample {
 
 impl LaneTables {
     /// The lane march's constants for volume `v` (its tables built, `c` channels), or `None` when a product
-    /// could leave `f32`'s range: `dmax`, `lesmax`, `nmax` (per species) the largest grid values a lookup can
-    /// return, `step` the march step.
+    /// could leave `f32`'s range: `dmax`, `dlmax` (the emitting density), `nmax` (per species) the largest values
+    /// a lookup can give, `step` the march step.
     pub(crate) fn build(
         v: &FireVolume,
         dmax: f64,
-        lesmax: f64,
+        dlmax: f64,
         nmax: &[f64],
         step: f64,
     ) -> Option<LaneTables> {
@@ -91,7 +91,7 @@ impl LaneTables {
         let smax = sigma.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
             + v.a_t.as_ref().map_or(0.0, TTable::max);
         let mut species_sigma_max = [0f32; MAX_SPECIES];
-        let mut checks = vec![dmax * smax * step, dmax * lesmax * v.j.max() * step];
+        let mut checks = vec![dmax * smax * step, dlmax * v.j.max() * step];
         for (sp, &n) in v.species.iter().zip(nmax) {
             let n = n * sp.scale;
             checks.extend([n, n * sp.sigma.max() * step, n * sp.j.max() * step]);

@@ -39,16 +39,16 @@ impl FireVolume {
         for (k, sp) in self.species.iter().enumerate() {
             n[k] = (ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale) as f32;
         }
-        // No soot and no species here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1 exactly, so it
-        // is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
-        if d == 0.0 && n.iter().all(|&x| x == 0.0) {
+        let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
+        // No soot, no species and no emission grid here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1
+        // exactly, so it is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
+        if d == 0.0 && n.iter().all(|&x| x == 0.0) && !(self.emission_grid && les > 0.0) {
             return 1.0;
         }
         let t = self.temperature.map_or(0.0, |i| ch[i].grid.eval(&st));
-        let les = self.lescale.map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
         let emits = t as f64 > self.t_emit || self.temperature.is_none();
         let LaneScratch { sig, jj, l, t: tr } = ls;
-        let dl = if emits { d * les } else { 0.0 };
+        let dl = if emits { self.emitting(d, les) } else { 0.0 };
         lt.coefficients(self, lanes::Sample { d, t, dl }, &n, sig, jj);
         lanes::step(sig, jj, delta as f32, l, tr)
     }

@@ -114,6 +114,8 @@ pub struct FireVolume {
     density: usize,
     temperature: Option<usize>,
     lescale: Option<usize>,
+    /// The `lescale` channel is an emission grid: emission follows it, not the density (j = e · J(T)).
+    emission_grid: bool,
     species: Vec<SpeciesChannel>,
     basis: Basis,
     mode: Mode,
@@ -185,9 +187,9 @@ impl FireVolume {
         let threads = r.int("threads")? as usize;
         let budget = r.float("maxbytes")? as u64;
         crate::par::with_budget(threads, || {
-            let (ds, lescale, motion) = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
+            let loaded = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
             r.finish()?;
-            Self::build(set, ds, lescale, motion, budget, start)
+            Self::build(set, loaded, budget, start)
         })
     }
 
@@ -195,12 +197,16 @@ impl FireVolume {
     /// grids leave of it.
     fn build(
         set: Settings,
-        ds: Dataset,
-        lescale: Option<usize>,
-        motion: Option<crate::dataset::params::Motion>,
+        loaded: crate::dataset::params::Loaded,
         budget: u64,
         start: Instant,
     ) -> Result<FireVolume, Error> {
+        let crate::dataset::params::Loaded {
+            ds,
+            lescale,
+            emission_grid,
+            motion,
+        } = loaded;
         let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
         let density = channel("density").unwrap_or(0);
@@ -214,7 +220,7 @@ impl FireVolume {
             .unwrap_or(0.0)
             .max(0.0);
         let mut tables = Vec::new();
-        let co = match &set.emission {
+        let mut co = match &set.emission {
             Emission::Physical {
                 optics,
                 alpha,
@@ -252,6 +258,11 @@ impl FireVolume {
                 &mut tables,
             )?,
         };
+        // (The fire light's full-spectrum power assumes emission follows the soot: with an emission grid it reports
+        // its power over the bins.)
+        if emission_grid {
+            co.source = None;
+        }
         if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {
             return Err(Error::invalid(
                 "volume",
@@ -319,7 +330,18 @@ impl FireVolume {
         // ---- majorants
         let t1 = Instant::now();
         let majorant = MajorantGrid::with_ranges(&ds, brick, known);
-        let brick_sigma = coefficients::brick_majorants(&majorant, &co, density, temperature, c);
+        let mut brick_sigma =
+            coefficients::brick_majorants(&majorant, &co, density, temperature, c);
+        // An emission grid emits where there may be no smoke: tracking's estimators add j/σ̄ at tentative
+        // collisions, so σ̄ must not be 0 where j is not — a floor of one collision per voxel there.
+        if let Some(e) = lescale.filter(|_| emission_grid) {
+            let floor = 1.0 / ds.voxel_size().min_element();
+            for (b, s) in brick_sigma.iter_mut().enumerate() {
+                if majorant.max(b, e) > 0.0 {
+                    *s = s.max(floor);
+                }
+            }
+        }
         let nb = brick_sigma.len();
         // An optical depth above 1e12 per voxel is no fire: a voxel value far outside the data's range, or a
         // scale far too large. Tracking through it would take ~1e12 collisions per voxel.
@@ -339,10 +361,12 @@ impl FireVolume {
                 format!("at most {MAX_OPTICAL_DEPTH_PER_VOXEL:e} per voxel (a voxel value far outside the data's range, or sootscale, scale, sigma_a or sigma_s far too large?)"),
             ));
         }
+        let emitter = lescale.filter(|_| emission_grid);
         let brick_empty: Vec<bool> = (0..nb)
             .map(|b| {
                 majorant.max(b, density) <= 0.0
                     && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
+                    && emitter.map_or(true, |e| majorant.max(b, e) <= 0.0)
             })
             .collect();
         tables.push(TableReport {
@@ -412,6 +436,8 @@ impl FireVolume {
         // The largest value a lookup can return, from the bricks' ranges (for the lane march's range check).
         let max = |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
         let (dmax, lesmax) = (max(density), lescale.map_or(1.0, max));
+        // The largest emitting density: d · Lescale, or the emission grid itself.
+        let dlmax = if emission_grid { lesmax } else { dmax * lesmax };
         let nmax: Vec<f64> = co.species.iter().map(|sp| max(sp.ch)).collect();
         let [b0, b1] = ds.bounds();
         let (clip_box, margin) = if set.mode == Mode::Pbrt && ds.format() == Format::NanoVdb {
@@ -425,6 +451,7 @@ impl FireVolume {
             density,
             temperature,
             lescale,
+            emission_grid,
             species: co.species,
             basis,
             mode: set.mode,
@@ -456,7 +483,7 @@ impl FireVolume {
         };
         if lanes_wanted {
             let t3 = Instant::now();
-            vol.lanes = lanes::LaneTables::build(&vol, dmax, lesmax, &nmax, step);
+            vol.lanes = lanes::LaneTables::build(&vol, dmax, dlmax, &nmax, step);
             if let Some(lt) = &vol.lanes {
                 vol.tables.push(TableReport {
                     name: "march lanes (σ per unit density; the tables are shared)".into(),
@@ -569,6 +596,15 @@ impl FireVolume {
     /// a host should report).
     pub fn capped_rays(&self) -> u64 {
         self.capped.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+    /// The density that emits at a sample of soot density `d` and Lescale (or emission grid) value `les`.
+    #[inline(always)]
+    pub(super) fn emitting<T: std::ops::Mul<Output = T>>(&self, d: T, les: T) -> T {
+        if self.emission_grid {
+            les
+        } else {
+            d * les
+        }
     }
     /// Whether `p` can hold medium: inside the clip box and not in an empty brick.
     #[inline]
@@ -712,7 +748,7 @@ impl Medium for FireVolume {
             sa[c] = d * at.map(|(tab, l)| tab.at(l, c) as f64).unwrap_or(self.a[c]);
             ss[c] = d * self.s[c];
             j[c] = if emits {
-                d * les * self.j.at(loc, c) as f64
+                self.emitting(d, les) * self.j.at(loc, c) as f64
             } else {
                 0.0
             };

@@ -59,6 +59,7 @@ pub static DATASET: Component = Component {
         p("flameignition", T::Float, "1.5", "1000 K", Range::Between(0.0, 100.0), "source blender: the domain's flame Ignition (Blender's default 1.5)."),
         p("flamemax", T::Float, "3", "1000 K", Range::Between(0.0, 100.0), "source blender: the domain's flame Maximum (Blender's default 3.0)."),
         p("temperatureremap", T::Float, "", "", Range::Any, "Art direction: a b ka kb maps the grid's values a..b linearly onto ka..kb kelvin (instead of temperaturescale and temperatureoffset)."),
+        p("emissiongrid", T::String, "", "", Range::Any, "A grid the fire's emission follows instead of the soot density (Houdini's or Blender's flame, heat, burn; Arnold's emission channel): j = e · σ_a(λ, per unit density) · B(T). Not the density: emission no longer equals absorption times Planck (Kirchhoff)."),
         p("velocitygrid", T::String, "", "", Range::Any, "Velocity for motion blur: one name — a vector grid (Houdini `vel`, Mantaflow `velocity`, EmberGen) or the float grids name.x, name.y, name.z — or three float grids' names. Read only while the shutter is open."),
         p("velocityscale", T::Float, "1", "", Range::Between(-1e6, 1e6), "Multiplier of the velocity grid's values (medium units per second after it)."),
         p("fps", T::Float, "24", "frames/s", Range::Between(1e-6, 1e6), "Frames per second: the shutter is in frames, velocities per second (1: velocities per frame)."),

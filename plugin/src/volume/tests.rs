@@ -1074,3 +1074,105 @@ fn a_colour_ramp_replaces_the_chromaticity_and_keeps_the_luminance() {
         assert!(r.unwrap_err().to_string().contains(&name));
     }
 }
+
+/// An emission grid: the fire's emission follows it, not the soot. Pointed at the density grid it changes
+/// nothing; a flame where there is no smoke emits without absorbing, and tracking finds that emission as the
+/// march does.
+#[test]
+fn an_emission_grid_emits_where_it_says() {
+    let n = 24usize;
+    let (mut d, mut fl) = (vec![0f32; n * n * n], vec![0f32; n * n * n]);
+    for i in 0..n * n * n {
+        let c = [i % n, (i / n) % n, i / (n * n)].map(|k| (k as f64 + 0.5) / n as f64);
+        let blob = |x: f64, amp: f64| {
+            let r2 = (c[0] - x).powi(2) + (c[1] - 0.5).powi(2) + (c[2] - 0.5).powi(2);
+            (amp * (-r2 / (2.0 * 0.08f64.powi(2))).exp()) as f32
+        };
+        d[i] = blob(0.3, 1e-6);
+        fl[i] = blob(0.7, 2e-6);
+    }
+    let t = vec![1600f32; n * n * n];
+    let bytes = crate::dataset::vdb::write(
+        &[
+            ("density", [n; 3], &d),
+            ("temperature", [n; 3], &t),
+            ("flame", [n; 3], &fl),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(1.0 / n as f64),
+    );
+    let file = std::env::temp_dir().join(format!("firemedium-emission-{}.vdb", std::process::id()));
+    std::fs::write(&file, bytes).unwrap();
+    let build = |extra: Vec<Param>| {
+        let mut list = vec![Param::string("filename", &file.display().to_string())];
+        list.extend(extra);
+        FireVolume::new(&thesis_bins(list)).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let plain = build(vec![]);
+    let same = build(vec![Param::string("emissiongrid", "density")]);
+    let flame = build(vec![Param::string("emissiongrid", "flame")]);
+    let ratio = build(vec![
+        Param::string("emissiongrid", "flame"),
+        Param::string("integrator", "ratio"),
+    ]);
+    std::fs::remove_file(&file).unwrap();
+    let c = plain.channels();
+    let ray = |x: f64, seed: u64| Ray {
+        o: DVec3::new(x, 0.5, -0.5),
+        d: DVec3::Z,
+        t0: 0.0,
+        t1: 3.0,
+        seed,
+    };
+    let run = |v: &FireVolume, r: &Ray| {
+        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+        v.integrate(r, &mut l, &mut t);
+        (l, t)
+    };
+    let sum = |x: &[f64]| x.iter().sum::<f64>();
+    // The density as its own emission grid: the same radiance (to f32 lanes' rounding), the same transmittance.
+    for x in [0.3, 0.5, 0.7] {
+        let ((l0, t0), (l1, t1)) = (run(&plain, &ray(x, 1)), run(&same, &ray(x, 1)));
+        assert_eq!(t0, t1);
+        assert!(
+            (sum(&l1) - sum(&l0)).abs() <= 1e-5 * sum(&l0).max(1e-30),
+            "x {x}: {} vs {}",
+            sum(&l1),
+            sum(&l0)
+        );
+    }
+    // Through the flame alone (no smoke): it emits, absorbing nothing; without the grid, nothing is there.
+    let (lf, tf) = run(&flame, &ray(0.7, 1));
+    let (lp, tp) = run(&plain, &ray(0.7, 1));
+    // (The smoke's Gaussian tail, 5σ away, absorbs 2e-5 there and emits as little.)
+    assert!(
+        sum(&lf) > 0.0 && tf.iter().all(|&x| x > 0.9999),
+        "{} {:?}",
+        sum(&lf),
+        &tf[..3]
+    );
+    assert!(sum(&lp) < 1e-3 * sum(&lf) && tp.iter().all(|&x| x > 0.9999));
+    // Through the smoke alone: only the flame's far tail emits — absorption without emission.
+    let (ls, ts) = run(&flame, &ray(0.3, 1));
+    assert!(
+        sum(&ls) < 1e-5 * sum(&lf) && ts[0] < 0.9,
+        "{} {}",
+        sum(&ls),
+        ts[0]
+    );
+    // Ratio tracking through the smokeless flame: collisions over the floor majorant find its emission.
+    let k = 4000;
+    let (mut m, mut m2) = (0.0, 0.0);
+    for s in 0..k {
+        let v = sum(&run(&ratio, &ray(0.7, s)).0);
+        m += v;
+        m2 += v * v;
+    }
+    let mean = m / k as f64;
+    let se = ((m2 / k as f64 - mean * mean) / k as f64).sqrt();
+    assert!(
+        (mean - sum(&lf)).abs() < 4.0 * se + 1e-3 * sum(&lf),
+        "{mean} ± {se} vs {}",
+        sum(&lf)
+    );
+}
