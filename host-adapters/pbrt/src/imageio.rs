@@ -412,24 +412,7 @@ pub fn write_channels_exr(
         let mut image = Image::from_layer(layer);
         image.attributes.display_window =
             IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
-        // As `write_exr_as`: the fire temperature in the record, or as its own attribute without one.
-        if meta.is_empty() {
-            if let Some(t) = fire_temperature {
-                image.attributes.other.insert(
-                    Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
-                    AttributeValue::F64(t),
-                );
-            }
-        } else {
-            let mut record = meta.to_vec();
-            if let Some(t) = fire_temperature {
-                record.push((FIRE_TEMPERATURE_KEY.to_string(), format!("{t:e}")));
-            }
-            image.attributes.other.insert(
-                Text::from(RENDER_ATTRIBUTE),
-                AttributeValue::Text(Text::from(meta_text(&record).as_str())),
-            );
-        }
+        record_attribute(&mut image.attributes.other, meta, fire_temperature);
         image
             .write()
             .non_parallel()
@@ -469,6 +452,33 @@ fn meta_text(meta: &[(String, String)]) -> String {
         .join("\n")
 }
 
+/// The EXR's one attribute of ours (see [`RENDER_ATTRIBUTE`]): the render record with the fire temperature as one
+/// of its lines, or — without a record — the fire temperature as its own attribute.
+fn record_attribute(
+    other: &mut std::collections::HashMap<exr::prelude::Text, exr::meta::attribute::AttributeValue>,
+    meta: &[(String, String)],
+    fire_temperature: Option<f64>,
+) {
+    use exr::prelude::*;
+    if meta.is_empty() {
+        if let Some(t) = fire_temperature {
+            other.insert(
+                Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
+                AttributeValue::F64(t),
+            );
+        }
+        return;
+    }
+    let mut record = meta.to_vec();
+    if let Some(t) = fire_temperature {
+        record.push((FIRE_TEMPERATURE_KEY.to_string(), format!("{t:e}")));
+    }
+    other.insert(
+        Text::from(RENDER_ATTRIBUTE),
+        AttributeValue::Text(Text::from(meta_text(&record).as_str())),
+    );
+}
+
 /// As [`write_exr`], in half floats when `fp16` (pbrt-v4's `savefp16`; values above 65 504 become infinite), and
 /// placed at `window` on its film (a crop: the data window inside the display window).
 #[allow(clippy::too_many_arguments)]
@@ -498,25 +508,7 @@ pub fn write_exr_as(
                     Vec2(0, 0),
                     Vec2(window.full.0.max(1), window.full.1.max(1)),
                 );
-                // One attribute at most (see RENDER_ATTRIBUTE): with a render record, the fire temperature is
-                // one of its lines.
-                if meta.is_empty() {
-                    if let Some(t) = fire_temperature {
-                        image.attributes.other.insert(
-                            Text::from(FIRE_TEMPERATURE_ATTRIBUTE),
-                            AttributeValue::F64(t),
-                        );
-                    }
-                } else {
-                    let mut record = meta.to_vec();
-                    if let Some(t) = fire_temperature {
-                        record.push((FIRE_TEMPERATURE_KEY.to_string(), format!("{t:e}")));
-                    }
-                    image.attributes.other.insert(
-                        Text::from(RENDER_ATTRIBUTE),
-                        AttributeValue::Text(Text::from(meta_text(&record).as_str())),
-                    );
-                }
+                record_attribute(&mut image.attributes.other, meta, fire_temperature);
                 image
                     .write()
                     .non_parallel()

@@ -597,6 +597,38 @@ impl FireVolume {
     pub fn capped_rays(&self) -> u64 {
         self.capped.0.load(std::sync::atomic::Ordering::Relaxed)
     }
+    /// [`Medium::majorants`] over the volume's bricks with the bounds `sigma` (one per brick).
+    pub(super) fn majorants_over(
+        &self,
+        sigma: &[f64],
+        o: DVec3,
+        d: DVec3,
+        t0: f64,
+        t1: f64,
+        f: &mut dyn FnMut(f64, f64, f64) -> bool,
+    ) {
+        for seg in self.majorant.segments(o, d, t0, t1) {
+            if !f(seg.t0, seg.t1, sigma[seg.brick]) {
+                return;
+            }
+        }
+    }
+    /// [`Medium::empty_spans`] over the volume's bricks, `empty` saying which hold nothing (σ = j = 0).
+    pub(super) fn empty_spans_over(
+        &self,
+        empty: &[bool],
+        o: DVec3,
+        d: DVec3,
+        t0: f64,
+        t1: f64,
+        f: &mut dyn FnMut(f64, f64),
+    ) {
+        for seg in self.majorant.segments(o, d, t0, t1) {
+            if empty[seg.brick] {
+                f(seg.t0, seg.t1);
+            }
+        }
+    }
     /// The density that emits at a sample of soot density `d` and Lescale (or emission grid) value `les`.
     #[inline(always)]
     pub(super) fn emitting<T: std::ops::Mul<Output = T>>(&self, d: T, les: T) -> T {
@@ -772,11 +804,7 @@ impl Medium for FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        for seg in self.majorant.segments(o, d, t0, t1) {
-            if !f(seg.t0, seg.t1, self.brick_sigma[seg.brick]) {
-                return;
-            }
-        }
+        self.majorants_over(&self.brick_sigma, o, d, t0, t1, f)
     }
     fn collision_cap_hit(&self) {
         self.capped
@@ -784,12 +812,7 @@ impl Medium for FireVolume {
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
-        // (Lescale multiplies the soot emission, which is zero where the density is: no need to look at it.)
-        for seg in self.majorant.segments(o, d, t0, t1) {
-            if self.brick_empty[seg.brick] {
-                f(seg.t0, seg.t1);
-            }
-        }
+        self.empty_spans_over(&self.brick_empty, o, d, t0, t1, f)
     }
 }
 

@@ -211,18 +211,12 @@ impl Medium for Advected<'_> {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        for seg in self.v.majorant.segments(o, d, t0, t1) {
-            if !f(seg.t0, seg.t1, self.blur.brick_sigma[seg.brick]) {
-                return;
-            }
-        }
+        self.v
+            .majorants_over(&self.blur.brick_sigma, o, d, t0, t1, f)
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
-        for seg in self.v.majorant.segments(o, d, t0, t1) {
-            if self.blur.brick_empty[seg.brick] {
-                f(seg.t0, seg.t1);
-            }
-        }
+        self.v
+            .empty_spans_over(&self.blur.brick_empty, o, d, t0, t1, f)
     }
     fn collision_cap_hit(&self) {
         Medium::collision_cap_hit(self.v)
