@@ -134,6 +134,22 @@ class Harness:
             p = os.path.join(ROOT, "scenes", name, "scene.pbrt")
             if os.path.isfile(p):
                 s["scene"].append((name, open(p).read()))
+        # A scene with this phase's parameters: Blender's cache as its source, its velocity blurring it over an
+        # open shutter, its flame as the emission grid, and the art-direction controls.
+        vdb = os.path.join(ROOT, "tests", "data", "valid", "vdb", "mantaflow_fire_f060.vdb")
+        s["scene"].append(("mantaflow", (
+            'LookAt 1 -4 1.5  1 1 1.2  0 0 1\n'
+            'Camera "perspective" "float fov" 40 "float shutteropen" 0 "float shutterclose" 0.5\n'
+            'Film "rgb" "integer xresolution" 16 "integer yresolution" 12\n'
+            'Sampler "zsobol" "integer pixelsamples" 1\nIntegrator "volpath" "integer maxdepth" 2\nWorldBegin\n'
+            f'MakeNamedMedium "f" "string type" "fire" "string filename" "{vdb}" "string source" "blender"\n'
+            '  "string velocitygrid" "velocity" "float velocityscale" 0.05 "float fps" 24 "string emissiongrid" "flame"\n'
+            '  "float smokescale" 0.5 "rgb tint" [1 0.8 0.6] "float colorramp" [1000 1 0.2 0.1 2000 1 0.8 0.4]\n'
+            '  "float physical" 0.3\n'
+            'AttributeBegin\nMediumInterface "f" ""\nMaterial "interface"\nShape "sphere" "float radius" 3\n'
+            'AttributeEnd\nAttributeBegin\nMaterial "diffuse"\n'
+            'Shape "trianglemesh" "point3 P" [-9 -9 0 9 -9 0 9 9 0 -9 9 0] "integer indices" [0 1 2 0 2 3]\n'
+            'AttributeEnd\n')))
         # An EXR and a PNG written by the binary itself (a tiny render and its preview).
         img = os.path.join(self.work, "seed")
         os.makedirs(img, exist_ok=True)
