@@ -304,6 +304,25 @@ fn mantaflow_velocity_vector_grid() {
             sum / active
         );
     }
+    // `auto` finds Mantaflow's `velocity` (the names tried: vel, v, velocity), value for value.
+    let named = load(
+        "vdb/mantaflow_fire_f030.vdb",
+        &["velocity.x", "velocity.y", "velocity.z"],
+    );
+    let auto = load(
+        "vdb/mantaflow_fire_f030.vdb",
+        &["auto.x", "auto.y", "auto.z"],
+    );
+    for c in 0..3 {
+        assert!(named.channels()[c].grid.to_dense() == auto.channels()[c].grid.to_dense());
+    }
+    let none = Dataset::load(
+        &[ChannelSource::new("auto.x", data("vdb/ramp_16.vdb"))],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(none.contains("'vel' or 'v' or 'velocity'"), "{none}");
     // A component of a float grid, or an axis that is not x, y, z, is a missing grid naming those present.
     let err = Dataset::load(
         &[ChannelSource::new(

@@ -563,12 +563,24 @@ fn find_grid<'h>(header: &'h Header, name: &str) -> Option<(&'h GridInfo, Option
     }
     let (base, axis) = name.rsplit_once('.')?;
     let pick = ["x", "y", "z"].iter().position(|&a| a == axis)?;
+    // `auto`: the velocity under the names the tools write — Houdini's `vel`, `v`, Blender's and EmberGen's
+    // `velocity` — as a vector grid or split into floats.
+    if base == AUTO_VELOCITY && !header.grids.iter().any(|g| g.name == base) {
+        return VELOCITY_NAMES
+            .iter()
+            .find_map(|b| find_grid(header, &format!("{b}.{axis}")));
+    }
     let g = header
         .grids
         .iter()
         .find(|g| g.name == base && g.tree_type.starts_with("Tree_vec3s"))?;
     Some((g, Some(pick)))
 }
+
+/// The `velocitygrid` that finds the velocity under any of [`VELOCITY_NAMES`].
+pub(crate) const AUTO_VELOCITY: &str = "auto";
+/// The velocity's names in the tools' files, in the order `auto` tries them.
+pub(crate) const VELOCITY_NAMES: [&str; 3] = ["vel", "v", "velocity"];
 
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
 pub(crate) fn read(
@@ -583,6 +595,10 @@ pub(crate) fn read(
         let Some((info, pick)) = find_grid(&header, name) else {
             // (A velocity's component may come from a vector grid: say so.)
             let wanted = match name.rsplit_once('.') {
+                Some((AUTO_VELOCITY, "x" | "y" | "z")) => format!(
+                    "{}' (a vector grid, or split into .x, .y, .z",
+                    VELOCITY_NAMES.join("' or '")
+                ),
                 Some((base, "x" | "y" | "z")) => format!("{name}' or a vector grid '{base}"),
                 _ => name.to_string(),
             };
