@@ -441,6 +441,32 @@ pub const RENDER_ATTRIBUTE: &str = "firemediumRender";
 /// scene, seed and samples differ (`merge` sums it over the tiles).
 pub const RENDER_SECONDS: &str = "render_seconds";
 
+/// How two render records differ, the render time aside (the one line two renders of one scene differ in):
+/// `None` when they are records of the same render, else the differing lines as `name a vs b`, `; `-separated.
+pub fn record_differences(a: &[(String, String)], b: &[(String, String)]) -> Option<String> {
+    let timeless = |m: &[(String, String)]| -> Meta {
+        m.iter()
+            .filter(|(k, _)| k != RENDER_SECONDS)
+            .cloned()
+            .collect()
+    };
+    let (a, b) = (timeless(a), timeless(b));
+    if a == b {
+        return None;
+    }
+    let differs: Vec<String> = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| x != y)
+        .map(|(x, y)| format!("{} {} vs {}", x.0, x.1, y.1))
+        .collect();
+    Some(if differs.is_empty() {
+        format!("{} vs {} entries", a.len(), b.len())
+    } else {
+        differs.join("; ")
+    })
+}
+
 /// The render record's line that holds the fire's hottest temperature (K), as [`FIRE_TEMPERATURE_ATTRIBUTE`]
 /// does in an EXR without a record.
 const FIRE_TEMPERATURE_KEY: &str = "fire_temperature";

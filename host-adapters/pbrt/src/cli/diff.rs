@@ -33,30 +33,13 @@ pub fn run(a: &DiffArgs) -> Result<String, (u8, String)> {
             ),
         ));
     }
-    let timeless = |m: imageio::Meta| -> imageio::Meta {
-        m.into_iter()
-            .filter(|(k, _)| k != imageio::RENDER_SECONDS)
-            .collect()
-    };
-    let (ma, mb) = (timeless(ma), timeless(mb));
-    if ma != mb {
-        let differs: Vec<String> = ma
-            .iter()
-            .zip(&mb)
-            .filter(|(x, y)| x != y)
-            .map(|(x, y)| format!("{} {} vs {}", x.0, x.1, y.1))
-            .collect();
+    if let Some(differs) = imageio::record_differences(&ma, &mb) {
         return Err((
             1,
             format!(
-                "{} and {} are records of different renders: {}",
+                "{} and {} are records of different renders: {differs}",
                 pa.display(),
                 pb.display(),
-                if differs.is_empty() {
-                    format!("{} vs {} entries", ma.len(), mb.len())
-                } else {
-                    differs.join("; ")
-                }
             ),
         ));
     }

@@ -69,31 +69,13 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                         ),
                     ));
                 }
-                // (The render time is the one line tiles of one render differ in.)
-                let timeless = |m: &imageio::Meta| -> imageio::Meta {
-                    m.iter()
-                        .filter(|(k, _)| k != imageio::RENDER_SECONDS)
-                        .cloned()
-                        .collect()
-                };
-                if timeless(first_meta) != timeless(&meta) {
-                    let differs: Vec<String> = timeless(first_meta)
-                        .iter()
-                        .zip(&timeless(&meta))
-                        .filter(|(x, y)| x != y)
-                        .map(|(x, y)| format!("{} {} vs {}", x.0, x.1, y.1))
-                        .collect();
+                if let Some(differs) = imageio::record_differences(first_meta, &meta) {
                     return Err((
                         1,
                         format!(
-                            "{}: not a tile of the render {} is a tile of ({}): tiles of different renders",
+                            "{}: not a tile of the render {} is a tile of ({differs}): tiles of different renders",
                             path.display(),
                             first_path.display(),
-                            if differs.is_empty() {
-                                "their attributes differ".to_string()
-                            } else {
-                                differs.join("; ")
-                            }
                         ),
                     ));
                 }
