@@ -53,15 +53,7 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
         file: path.display().to_string(),
         message: e.to_string(),
     };
-    // Only regular files, read to the length they had when opened: a device (/dev/zero) never ends and a FIFO
-    // blocks its reader forever (it is checked before it is opened: opening one blocks too).
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(Error::Io {
-            file: path.display().to_string(),
-            message: "not a regular file (a directory, device or FIFO): datasets are read from files of a known size".into(),
-        });
-    }
+    open_regular(path)?;
     let alloc = |len: u64| -> Result<Vec<u8>, Error> {
         usize::try_from(len)
             .ok()
@@ -113,6 +105,26 @@ pub(super) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
     Ok(buf)
 }
 
+/// `path` opened for reading, with its length: only regular files, read to the length they had when opened —
+/// a device (/dev/zero) never ends and a FIFO blocks its reader forever (it is checked before it is opened:
+/// opening one blocks too).
+pub(super) fn open_regular(path: &Path) -> Result<(std::fs::File, u64), Error> {
+    let io = |e: std::io::Error| Error::Io {
+        file: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(Error::Io {
+            file: path.display().to_string(),
+            message: "not a regular file (a directory, device or FIFO): datasets are read from files of a known size".into(),
+        });
+    }
+    let f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    Ok((f, len))
+}
+
 pub(super) fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {
     std::str::from_utf8(bytes).map_err(|e| {
         Error::format(
@@ -157,27 +169,33 @@ pub fn list_grids(path: &Path, opts: &LoadOptions) -> Result<Vec<GridEntry>, Err
     let path = frame_path(path, opts.frame)?;
     let file = path.display().to_string();
     Ok(match format_of(&path, opts)? {
-        Format::Vdb => vdb::read_header(&file, &read_file(&path)?)?
-            .grids
-            .into_iter()
-            .map(|g| GridEntry {
-                loadable: g.tree_type == "Tree_float_5_4_3" && g.instance_parent_is_empty(),
-                kind: g.tree_type.clone() + if g.half { " (half)" } else { "" },
-                name: g.name,
-            })
-            .collect(),
-        Format::NanoVdb => nanovdb::grid_names(&file, &read_file(&path)?)?
-            .into_iter()
-            .map(|(name, float)| GridEntry {
-                name,
-                kind: if float {
-                    "float".into()
-                } else {
-                    "other".into()
-                },
-                loadable: float,
-            })
-            .collect(),
+        Format::Vdb => {
+            let (f, len) = open_regular(&path)?;
+            vdb::read_header_from(&file, Bytes::File { file: &f, len })?
+                .grids
+                .into_iter()
+                .map(|g| GridEntry {
+                    loadable: g.tree_type == "Tree_float_5_4_3" && g.instance_parent_is_empty(),
+                    kind: g.tree_type.clone() + if g.half { " (half)" } else { "" },
+                    name: g.name,
+                })
+                .collect()
+        }
+        Format::NanoVdb => {
+            let (f, len) = open_regular(&path)?;
+            nanovdb::grid_names(&file, Bytes::File { file: &f, len })?
+                .into_iter()
+                .map(|(name, float)| GridEntry {
+                    name,
+                    kind: if float {
+                        "float".into()
+                    } else {
+                        "other".into()
+                    },
+                    loadable: float,
+                })
+                .collect()
+        }
         _ => {
             read_file(&path)?;
             vec![GridEntry {

@@ -46,6 +46,7 @@ use glam::DVec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use cursor::Bytes;
 use files::{as_text, read_file};
 pub use files::{format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
@@ -151,11 +152,11 @@ pub struct Dataset {
     interpolation: Interpolation,
 }
 
-/// Decodes `bytes` of `format` into the grids `names` (single-grid formats: exactly one name).
+/// Decodes `src` of `format` into the grids `names` (single-grid formats: exactly one name).
 fn decode(
     format: Format,
     file: &str,
-    bytes: &[u8],
+    src: Bytes,
     names: &[&str],
     opts: &LoadOptions,
 ) -> Result<Vec<Loaded>, Error> {
@@ -171,22 +172,22 @@ fn decode(
         ));
     }
     Ok(match format {
-        Format::Vdb => vdb::read(file, bytes, names, opts.max_bytes)?,
-        Format::NanoVdb => nanovdb::read(file, bytes, names, opts.max_bytes)?,
+        Format::Vdb => vdb::read(file, src, names, opts.max_bytes)?,
+        Format::NanoVdb => nanovdb::read(file, src, names, opts.max_bytes)?,
         Format::AsciiDense => vec![ascii::read_dense(
             file,
-            as_text(file, bytes)?,
+            as_text(file, &src.all(file)?)?,
             opts.order,
             opts.max_bytes,
         )?],
         Format::AsciiSparse => vec![ascii::read_sparse(
             file,
-            as_text(file, bytes)?,
+            as_text(file, &src.all(file)?)?,
             opts.max_bytes,
         )?],
         Format::Raw | Format::Raw2 => vec![raw::read(
             file,
-            bytes,
+            &src.all(file)?,
             format == Format::Raw2,
             opts.raw_dims,
             opts.raw_coords,
@@ -223,7 +224,7 @@ impl Dataset {
             ));
         }
         let start = Instant::now();
-        let grids = decode(format, label, bytes, names, opts)?;
+        let grids = decode(format, label, Bytes::Slice(bytes), names, opts)?;
         let seconds = start.elapsed().as_secs_f64() / names.len() as f64;
         let sources: Vec<ChannelSource> =
             names.iter().map(|n| ChannelSource::new(n, label)).collect();
@@ -259,9 +260,15 @@ impl Dataset {
                 .filter(|&j| !done[j] && sources[j].file == src.file)
                 .collect();
             let start = Instant::now();
-            let bytes = read_file(&path)?;
+            // Sparse files are read by offset, only the grids named; the others whole, in parallel parts.
             let names: Vec<&str> = group.iter().map(|&j| sources[j].grid_name()).collect();
-            let grids = decode(format, &file, &bytes, &names, opts)?;
+            let grids = if let Format::Vdb | Format::NanoVdb = format {
+                let (f, len) = files::open_regular(&path)?;
+                decode(format, &file, Bytes::File { file: &f, len }, &names, opts)?
+            } else {
+                let bytes = read_file(&path)?;
+                decode(format, &file, Bytes::Slice(&bytes), &names, opts)?
+            };
             let seconds = start.elapsed().as_secs_f64() / group.len() as f64;
             for (j, g) in group.into_iter().zip(grids) {
                 done[j] = true;

@@ -11,7 +11,7 @@
 //! Every offset is checked to land on a node of the right level inside the buffer before it is followed.
 
 use super::compress::zlib;
-use super::cursor::Cursor;
+use super::cursor::{Bytes, Cursor};
 use super::sparse::{bit, densify, missing_grid, InLeaves, Leaf, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
@@ -34,17 +34,20 @@ struct GridEntry {
 }
 
 /// Names and types of every grid in the file, with where its buffer starts.
-fn table(file: &str, bytes: &[u8]) -> Result<Vec<GridEntry>, Error> {
-    let mut c = Cursor::new(file, bytes);
+fn table(file: &str, src: Bytes) -> Result<Vec<GridEntry>, Error> {
+    let mut c = Cursor::over(file, src);
     let mut out = Vec::new();
     while c.remaining() > 0 {
         let at = c.pos;
-        let magic = c.bytes(8, "the NanoVDB magic")?;
-        if !FILE_MAGICS.iter().any(|m| &m[..] == magic) {
+        let magic: [u8; 8] = c
+            .bytes(8, "the NanoVDB magic")?
+            .try_into()
+            .unwrap_or([0; 8]);
+        if !FILE_MAGICS.iter().any(|m| **m == magic) {
             c.pos = at;
             return Err(c.err(
                 "the NanoVDB magic 'NanoVDB0'",
-                format!("{:?}", String::from_utf8_lossy(magic)),
+                format!("{:?}", String::from_utf8_lossy(&magic)),
             ));
         }
         let version = c.u32("the NanoVDB version")?;
@@ -101,17 +104,16 @@ fn table(file: &str, bytes: &[u8]) -> Result<Vec<GridEntry>, Error> {
 }
 
 /// Names of the grids in the file and whether each is a float grid.
-pub fn grid_names(file: &str, bytes: &[u8]) -> Result<Vec<(String, bool)>, Error> {
-    Ok(table(file, bytes)?
+pub(crate) fn grid_names(file: &str, src: Bytes) -> Result<Vec<(String, bool)>, Error> {
+    Ok(table(file, src)?
         .into_iter()
         .map(|g| (g.name, g.grid_type == 1))
         .collect())
 }
 
-/// The grid's uncompressed buffer.
-fn buffer(file: &str, bytes: &[u8], g: &GridEntry, max_bytes: u64) -> Result<Vec<u8>, Error> {
-    let body = &bytes[g.offset..g.offset + g.file_size as usize];
-    if g.grid_size > max_bytes {
+/// The grid's uncompressed buffer (from a file, its bytes alone are read).
+fn buffer(file: &str, src: &Bytes, g: &GridEntry, max_bytes: u64) -> Result<Vec<u8>, Error> {
+    if g.grid_size.max(g.file_size) > max_bytes {
         return Err(Error::TooLarge {
             file: file.to_string(),
             what: format!("grid '{}'", g.name),
@@ -119,8 +121,10 @@ fn buffer(file: &str, bytes: &[u8], g: &GridEntry, max_bytes: u64) -> Result<Vec
             cap: max_bytes,
         });
     }
+    // (`table` checked that the grid's bytes lie within the file.)
+    let body = src.read(file, g.offset as u64, g.file_size as usize)?;
     match g.codec {
-        0 if g.grid_size == g.file_size => Ok(body.to_vec()),
+        0 if g.grid_size == g.file_size => Ok(body.into_owned()),
         0 => Err(Error::format(
             file,
             format!("grid '{}'", g.name),
@@ -128,7 +132,7 @@ fn buffer(file: &str, bytes: &[u8], g: &GridEntry, max_bytes: u64) -> Result<Vec
             format!("{} bytes", g.file_size),
         )),
         1 => {
-            let mut c = Cursor::new(file, body);
+            let mut c = Cursor::new(file, &body);
             let size = c.u64("the compressed size")?;
             if size > c.remaining() as u64 {
                 return Err(Error::format(
@@ -348,11 +352,11 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
 pub(crate) fn read(
     file: &str,
-    bytes: &[u8],
+    src: Bytes,
     names: &[&str],
     max_bytes: u64,
 ) -> Result<Vec<Loaded>, Error> {
-    let entries = table(file, bytes)?;
+    let entries = table(file, src.clone())?;
     let mut trees = Vec::new();
     for &name in names {
         let Some(g) = entries.iter().find(|g| g.name == name) else {
@@ -369,7 +373,7 @@ pub(crate) fn read(
                 hint: "float grids (type 1) are read".into(),
             });
         }
-        let buf = buffer(file, bytes, g, max_bytes)?;
+        let buf = buffer(file, &src, g, max_bytes)?;
         trees.push((name, tree(file, name, &buf)?, InLeaves));
     }
     densify(file, trees, max_bytes)

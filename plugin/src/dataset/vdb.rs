@@ -12,7 +12,7 @@
 //! affine maps. Rotated or perspective maps are an error (give the rotation in the scene instead).
 
 use super::compress::{blosc, half_to_f32, zlib};
-use super::cursor::Cursor;
+use super::cursor::{Bytes, Cursor};
 use super::sparse::{bit, densify, missing_grid, Leaf, LeafValues, Tile, Transform, Tree};
 use super::Loaded;
 use crate::Error;
@@ -89,7 +89,12 @@ fn skip_metadata(c: &mut Cursor, whose: &str) -> Result<(), Error> {
 
 /// Reads the header and the grid table.
 pub fn read_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
-    let mut c = Cursor::new(file, bytes);
+    read_header_from(file, Bytes::Slice(bytes))
+}
+
+/// [`read_header`] from bytes in memory or an open file (whose grids are skipped, not read).
+pub(crate) fn read_header_from(file: &str, src: Bytes) -> Result<Header, Error> {
+    let mut c = Cursor::over(file, src);
     let magic = c.i64("the OpenVDB magic number")?;
     if magic != MAGIC {
         return Err(Error::format(
@@ -141,11 +146,11 @@ pub fn read_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
         let end_pos = c.i64("the grid end offset")?;
         // Each descriptor is followed by its grid; the next descriptor starts at this grid's end.
         let ordered = (c.pos as i64) <= grid_pos && grid_pos <= block_pos && block_pos <= end_pos;
-        if !ordered || end_pos as u64 > bytes.len() as u64 {
+        if !ordered || end_pos as u64 > c.len() as u64 {
             return Err(Error::format(
                 file,
                 format!("grid '{name}' descriptor"),
-                format!("offsets ordered after the descriptor (byte {}) and within the file of {} bytes", c.pos, bytes.len()),
+                format!("offsets ordered after the descriptor (byte {}) and within the file of {} bytes", c.pos, c.len()),
                 format!("grid {grid_pos}, blocks {block_pos}, end {end_pos}"),
             ));
         }
@@ -451,7 +456,7 @@ fn read_internal(
 /// A grid's topology (tiles, leaf origins and masks) and where its leaf values are.
 fn read_tree<'a>(
     file: &'a str,
-    bytes: &'a [u8],
+    src: &Bytes<'a>,
     info: &GridInfo,
     pick: Option<usize>,
 ) -> Result<(Tree, Buffers<'a>), Error> {
@@ -477,7 +482,7 @@ fn read_tree<'a>(
             hint: "load the parent grid".into(),
         });
     }
-    let mut c = Cursor::new(file, bytes);
+    let mut c = Cursor::over(file, src.clone());
     c.seek(info.grid_pos, &format!("grid '{name}'"))?;
     let compression = c.u32("the grid's compression flags")?;
     if compression & !0x7 != 0 {
@@ -582,14 +587,16 @@ pub(crate) const AUTO_VELOCITY: &str = "auto";
 /// The velocity's names in the tools' files, in the order `auto` tries them.
 pub(crate) const VELOCITY_NAMES: [&str; 3] = ["vel", "v", "velocity"];
 
-/// Reads the float grids `names` and makes them dense over the union of their active boxes.
+/// Reads the float grids `names` into bricks over the union of their active boxes. From a file, only their
+/// descriptors and trees are read (the grids it does not name are skipped), their leaf values streamed as they
+/// are placed.
 pub(crate) fn read(
     file: &str,
-    bytes: &[u8],
+    src: Bytes,
     names: &[&str],
     max_bytes: u64,
 ) -> Result<Vec<Loaded>, Error> {
-    let header = read_header(file, bytes)?;
+    let header = read_header_from(file, src.clone())?;
     let mut infos = Vec::new();
     for &name in names {
         let Some((info, pick)) = find_grid(&header, name) else {
@@ -612,7 +619,7 @@ pub(crate) fn read(
     }
     // The grids' trees are independent byte ranges: decoded in parallel.
     let trees = super::par_map(infos, |(name, info, pick)| {
-        read_tree(file, bytes, info, pick).map(|(t, b)| (name, t, b))
+        read_tree(file, &src, info, pick).map(|(t, b)| (name, t, b))
     })
     .into_iter()
     .collect::<Result<Vec<_>, Error>>()?;
@@ -876,7 +883,13 @@ mod write_tests {
         );
         let header = read_header("t.vdb", &bytes).unwrap();
         assert_eq!(header.grids.len(), 2);
-        let got = read("t.vdb", &bytes, &["density", "temperature"], u64::MAX).unwrap();
+        let got = read(
+            "t.vdb",
+            Bytes::Slice(&bytes),
+            &["density", "temperature"],
+            u64::MAX,
+        )
+        .unwrap();
         // The union of the active boxes: from the blob's lowest voxel to the corner.
         let lo = [0usize, 1, 2].map(|k| {
             (0..n)
