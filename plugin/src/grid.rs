@@ -9,7 +9,9 @@
 //! …) in a table over all bricks, with 0 for the rest; a grid stores 512 values per slot, x fastest within the
 //! brick, and in slot 0 its background, which every empty brick reads. A far-away second fire in the same box
 //! costs its own bricks and four bytes per brick of the box, not the box. Dense inputs keep only the bricks
-//! where some channel is non-zero, so every lookup gives the value the dense array gave, to the bit.
+//! where some channel is non-zero, so every lookup gives the value the dense array gave, to the bit. Bricks
+//! under an OpenVDB tile — one value throughout, in every channel — share one block of values per distinct
+//! value ([`Topology::share`]): each keeps its slot, its storage is the block's.
 //!
 //! - [`Interpolation::Trilinear`] (default): pbrt-v4's `SampledGrid::Lookup` — the eight samples around
 //!   p·n − 0.5, each sample outside the grid counting as **zero**. So within the last half voxel of every face
@@ -208,6 +210,11 @@ pub struct Topology {
     blocks: Vec<u32>,
     /// Bricks with a slot.
     active: usize,
+    /// Per slot, the block of 512 values its grids store it in (see [`Topology::share`]); empty: the slot's own
+    /// (block = slot).
+    store: Vec<u32>,
+    /// Blocks of values a grid stores, the background's aside.
+    blocks_stored: usize,
 }
 
 impl Topology {
@@ -291,7 +298,49 @@ impl Topology {
             top,
             blocks,
             active: bricks.len(),
+            store: Vec::new(),
+            blocks_stored: bricks.len(),
         })
+    }
+
+    /// This topology with the bricks `class` puts in a class (a constant brick: the same value throughout in
+    /// every grid, as an OpenVDB tile) sharing one block of values per class: a tile costs its table entries,
+    /// not 2 KB per brick per grid. Every brick keeps its own slot (derived structures — the march's copies, the
+    /// fire light's weights — are built per slot); only the grids' storage is shared, so a shared block must be
+    /// written with its class's value alone. `None` when the allocator refuses the map.
+    pub fn share(mut self, mut class: impl FnMut([usize; 3]) -> Option<u32>) -> Option<Topology> {
+        let mut store = crate::alloc::filled(self.active + 1, 0u32)?;
+        let mut class_block: std::collections::HashMap<u32, u32> = Default::default();
+        let mut next = 0u32;
+        let mut shared = false;
+        self.for_each_slot(|b, s| {
+            store[s] = match class(b) {
+                Some(c) => *class_block.entry(c).or_insert_with(|| {
+                    next += 1;
+                    next
+                }),
+                None => {
+                    next += 1;
+                    next
+                }
+            };
+            shared |= store[s] as usize != s;
+        });
+        if shared {
+            self.blocks_stored = next as usize;
+            self.store = store;
+        }
+        Some(self)
+    }
+
+    /// The block of values slot `s` is stored in.
+    #[inline(always)]
+    fn block(&self, s: usize) -> usize {
+        if self.store.is_empty() {
+            s
+        } else {
+            self.store[s] as usize
+        }
     }
 
     /// The bricks b + `shift` + d of every stored brick b, for every offset d with each component in
@@ -349,7 +398,12 @@ impl Topology {
     }
     /// Bytes of the table.
     pub fn bytes(&self) -> usize {
-        (self.top.len() + self.blocks.len()) * std::mem::size_of::<u32>()
+        (self.top.len() + self.blocks.len() + self.store.len()) * std::mem::size_of::<u32>()
+    }
+    /// Blocks of 512 values a grid stores besides its background's: one per stored brick, less what constant
+    /// bricks share ([`Topology::share`]).
+    pub fn blocks_stored(&self) -> usize {
+        self.blocks_stored
     }
     /// The slot of brick `b` (0: empty).
     #[inline(always)]
@@ -367,7 +421,7 @@ impl Topology {
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
         let (i, j, k) = (i + self.off[0], j + self.off[1], k + self.off[2]);
         let slot = self.slot([i / BRICK, j / BRICK, k / BRICK]);
-        slot * BRICK_VOXELS + (i % BRICK) + BRICK * ((j % BRICK) + BRICK * (k % BRICK))
+        self.block(slot) * BRICK_VOXELS + (i % BRICK) + BRICK * ((j % BRICK) + BRICK * (k % BRICK))
     }
     /// The brick holding sample (i, j, k).
     #[inline(always)]
@@ -383,13 +437,14 @@ impl Topology {
     }
     /// The sample stored at `n` in a grid's values ([`Grid::values_mut`]), or `None` for the background and padding.
     pub(crate) fn voxel_of(&self, n: usize) -> Option<[usize; 3]> {
-        let slot = n / BRICK_VOXELS;
-        if slot == 0 {
+        let block = n / BRICK_VOXELS;
+        if block == 0 {
             return None;
         }
+        // (A shared block: the first brick stored in it.)
         let mut brick = None;
         self.for_each_slot(|b, s| {
-            if s == slot {
+            if brick.is_none() && self.block(s) == block {
                 brick = Some(b);
             }
         });
@@ -421,7 +476,7 @@ impl Topology {
                 if slot == 0 {
                     0
                 } else {
-                    slot * BRICK_VOXELS + within + xx % BRICK
+                    self.block(slot) * BRICK_VOXELS + within + xx % BRICK
                 },
             );
             x0 = x1;
@@ -454,9 +509,9 @@ impl Topology {
         }
     }
 
-    /// The values a grid of this topology stores: 512 per slot, slot 0 included.
+    /// The values a grid of this topology stores: 512 per block, the background's included.
     pub fn values_len(&self) -> usize {
-        (self.active + 1) * BRICK_VOXELS
+        (self.blocks_stored + 1) * BRICK_VOXELS
     }
 }
 
@@ -535,8 +590,17 @@ impl Grid {
         if (0..3).any(|a| (v[a] + t.off[a]) % BRICK != 0 || v[a] >= t.dims[a]) {
             return None;
         }
-        let slot = t.slot(t.brick_of(v));
-        (slot != 0).then(|| &mut self.values[slot * BRICK_VOXELS..(slot + 1) * BRICK_VOXELS])
+        let b = t.block(t.slot(t.brick_of(v)));
+        (b != 0).then(|| &mut self.values[b * BRICK_VOXELS..(b + 1) * BRICK_VOXELS])
+    }
+
+    /// The 512 stored values of brick `b` (brick coordinates; a shared block for a constant brick), when stored.
+    pub(crate) fn brick_values_mut(&mut self, b: [usize; 3]) -> Option<&mut [f32]> {
+        if (0..3).any(|a| b[a] >= self.topo.nb[a]) {
+            return None;
+        }
+        let k = self.topo.block(self.topo.slot(b));
+        (k != 0).then(|| &mut self.values[k * BRICK_VOXELS..(k + 1) * BRICK_VOXELS])
     }
 
     /// Copies row (·, j, k) into `out` (nx values).
@@ -578,6 +642,7 @@ impl Grid {
     }
     /// Whether slot `s` stores only `v` (512 values; slot 0 is the background).
     pub(crate) fn slot_is(&self, s: usize, v: f32) -> bool {
+        let s = self.topo.block(s);
         self.values
             .get(s * BRICK_VOXELS..(s + 1) * BRICK_VOXELS)
             .is_some_and(|b| b.iter().all(|&x| x == v))
@@ -613,7 +678,10 @@ impl Grid {
                 ok = false;
                 return;
             }
-            let (from, to) = (from * BRICK_VOXELS, to * BRICK_VOXELS);
+            let (from, to) = (
+                from_topo.block(from) * BRICK_VOXELS,
+                to_topo.block(to) * BRICK_VOXELS,
+            );
             g.values[to..to + BRICK_VOXELS]
                 .copy_from_slice(&self.values[from..from + BRICK_VOXELS]);
         });
@@ -730,7 +798,7 @@ impl Grid {
                     ];
                     for z in 0..d {
                         for y in 0..h {
-                            let start = slot * BRICK_VOXELS
+                            let start = t.block(slot) * BRICK_VOXELS
                                 + o[0]
                                 + BRICK * (o[1] + y + BRICK * (o[2] + z));
                             row[..w].copy_from_slice(&self.values[start..start + w]);

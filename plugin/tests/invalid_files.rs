@@ -309,13 +309,14 @@ fn grids_share_one_memory_cap() {
     };
     let (_, e) = load_all(1_000_000_000);
     assert!(e.contains("expected a stored block of 1024 bytes"), "{e}");
-    let (n, e) = load_all(4_000_000);
+    let (n, e) = load_all(2_000_000);
     assert_eq!(n, 4);
-    // 769 bricks (the background's included) of 2 KB per grid, 1.6 MB each where the dense box took 855 MB, and
-    // a two-level brick table of 17 KB: one grid fits a 4 MB cap, the four together (6.3 MB) do not.
+    // 768 bricks, those under the mutant's constant tiles sharing blocks: 279 blocks of 2 KB per grid (the
+    // background's besides), 0.57 MB each where the dense box took 855 MB, and a two-level brick table: one grid
+    // fits a 2 MB cap, the four together (2.3 MB) do not.
     assert!(
-        e.contains("4 grids of 768 bricks")
-            && e.contains("needs 6316440 bytes, above the memory cap of 4000000 bytes"),
+        e.contains("4 grids of 279 blocks")
+            && e.contains("needs 2313628 bytes, above the memory cap of 2000000 bytes"),
         "{e}"
     );
 }

@@ -214,21 +214,93 @@ pub(crate) fn densify<S: LeafValues>(
             tiles.chain(leaves)
         })
     };
-    // The list of covered bricks, counted before it is made: each brick listed is stored, 2 KB per grid,
-    // so a count beyond the budget is refused here (a tile may cover a whole box).
+    // The list of covered bricks, counted before it is made: a brick a leaf touches is stored (2 KB per grid,
+    // checked below), a brick under tiles alone costs its bookkeeping (a tile may cover a whole box: a count
+    // beyond the budget is refused here, before any brick is visited).
     let listed: u64 = ranges()
         .filter_map(|(a, b)| bricks_of(a, b))
         .map(|(ba, bb)| (0..3).map(|k| (bb[k] - ba[k] + 1) as u64).product::<u64>())
         .fold(0, u64::saturating_add);
-    if listed.saturating_mul(4 * BRICK.pow(3) as u64) > max_bytes {
+    let per_listed = 128 + 4 * trees.len() as u64;
+    if listed.saturating_mul(per_listed) > max_bytes {
         return Err(too_large(
             format!(
-                "{listed} bricks of 8³ f32 (a {}×{}×{} box)",
+                "the table of {listed} bricks of 8³ (a {}×{}×{} box)",
                 dims[0], dims[1], dims[2]
             ),
-            listed.saturating_mul(4 * BRICK.pow(3) as u64),
+            listed.saturating_mul(per_listed),
         ));
     }
+    // Bricks a leaf touches hold varying values. Bricks under tiles alone are constant in every grid — each
+    // grid's tile value there (the smallest tile covering it: tiles are written largest first), or its
+    // background — and bricks with the same values share one block of storage (`Topology::share`). A tile
+    // that covers a brick only in part (not OpenVDB's alignment) makes it vary.
+    let mut varied: std::collections::HashSet<[usize; 3]> = Default::default();
+    for (_, t, _) in &trees {
+        for leaf in &t.leaves {
+            let o = leaf.origin.map(|v| v as i64);
+            if let Some((ba, bb)) = bricks_of(o, o.map(|v| v + 7)) {
+                for z in ba[2]..=bb[2] {
+                    for y in ba[1]..=bb[1] {
+                        for x in ba[0]..=bb[0] {
+                            varied.insert([x, y, z]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let backgrounds: Vec<f32> = trees.iter().map(|t| t.1.background).collect();
+    let mut constant: std::collections::HashMap<[usize; 3], Vec<f32>> = Default::default();
+    // The voxels [a, b] of brick `c` inside the box.
+    let brick_voxels = |c: [usize; 3]| {
+        let a = [0, 1, 2].map(|k| (lo[k] + (BRICK * c[k]) as i64 - off[k] as i64).max(lo[k]));
+        let b = [0, 1, 2]
+            .map(|k| (lo[k] + (BRICK * c[k] + BRICK - 1) as i64 - off[k] as i64).min(hi[k]));
+        (a, b)
+    };
+    for (n, (_, t, _)) in trees.iter().enumerate() {
+        for tile in written_tiles(t) {
+            let o = tile.origin.map(|v| v as i64);
+            let e = o.map(|v| v + tile.size as i64 - 1);
+            let Some((ba, bb)) = bricks_of(o, e) else {
+                continue;
+            };
+            for z in ba[2]..=bb[2] {
+                for y in ba[1]..=bb[1] {
+                    for x in ba[0]..=bb[0] {
+                        let c = [x, y, z];
+                        if varied.contains(&c) {
+                            continue;
+                        }
+                        let (va, vb) = brick_voxels(c);
+                        if (0..3).all(|k| o[k] <= va[k] && vb[k] <= e[k]) {
+                            constant.entry(c).or_insert_with(|| backgrounds.clone())[n] =
+                                tile.value;
+                        } else {
+                            constant.remove(&c);
+                            varied.insert(c);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // One class per distinct tuple of values (by their bits).
+    let mut classes: std::collections::HashMap<Vec<u32>, u32> = Default::default();
+    let mut class_values: Vec<Vec<f32>> = Vec::new();
+    let class_of: std::collections::HashMap<[usize; 3], u32> = constant
+        .iter()
+        .map(|(c, v)| {
+            let key: Vec<u32> = v.iter().map(|x| x.to_bits()).collect();
+            let id = *classes.entry(key).or_insert_with(|| {
+                class_values.push(v.clone());
+                class_values.len() as u32 - 1
+            });
+            (*c, id)
+        })
+        .collect();
+    drop(constant);
     let mut list: Vec<[usize; 3]> = crate::alloc::with_capacity(listed as usize)
         .ok_or_else(|| too_large("the brick list".to_string(), listed.saturating_mul(24)))?;
     for (ba, bb) in ranges().filter_map(|(a, b)| bricks_of(a, b)) {
@@ -242,7 +314,13 @@ pub(crate) fn densify<S: LeafValues>(
     }
     // (Time and memory follow the bricks listed, not the box.)
     let topo = Topology::from_bricks(dims, off, list)
+        .and_then(|t| t.share(|b| class_of.get(&b).copied()))
         .ok_or_else(|| too_large("the brick table".to_string(), table))?;
+    // A representative brick of each class, to write its shared block.
+    let mut class_brick = vec![None; class_values.len()];
+    for (c, &id) in &class_of {
+        class_brick[id as usize].get_or_insert(*c);
+    }
     let per = (topo.values_len() as u64).saturating_mul(4);
     let all = per
         .saturating_mul(trees.len() as u64)
@@ -250,9 +328,9 @@ pub(crate) fn densify<S: LeafValues>(
     if all > max_bytes {
         return Err(too_large(
             format!(
-                "{} grids of {} bricks of 8³ f32 and their brick table (a {}×{}×{} box)",
+                "{} grids of {} blocks of 8³ f32 and their brick table (a {}×{}×{} box)",
                 trees.len(),
-                topo.active_bricks(),
+                topo.blocks_stored(),
                 dims[0],
                 dims[1],
                 dims[2]
@@ -262,12 +340,13 @@ pub(crate) fn densify<S: LeafValues>(
     }
     let topo = std::sync::Arc::new(topo);
     // One grid per tree, filled in parallel (each leaf's values decoded as it is placed).
-    super::par_map(trees, |(_, t, mut source)| {
+    let trees: Vec<_> = trees.into_iter().enumerate().collect();
+    super::par_map(trees, |(n, (_, t, mut source))| {
         let mut g = Grid::filled(topo.clone(), t.background).ok_or_else(|| {
             too_large(
                 format!(
-                    "{} bricks of 8³ f32 (the allocator refused them)",
-                    topo.active_bricks()
+                    "{} blocks of 8³ f32 (the allocator refused them)",
+                    topo.blocks_stored()
                 ),
                 per,
             )
@@ -278,14 +357,35 @@ pub(crate) fn densify<S: LeafValues>(
                 g.set(q[0] as usize, q[1] as usize, q[2] as usize, v);
             }
         };
+        // Constant bricks: their class's block, once.
+        for (values, c) in class_values.iter().zip(&class_brick) {
+            if let Some(block) = c.and_then(|c| g.brick_values_mut(c)) {
+                block.fill(values[n]);
+            }
+        }
+        // Tiles over the bricks that vary, voxel by voxel (the rest are the blocks above).
         for tile in written_tiles(&t) {
             let o = tile.origin.map(|v| v as i64);
-            let a = [0, 1, 2].map(|k| o[k].max(lo[k]));
-            let b = [0, 1, 2].map(|k| (o[k] + tile.size as i64 - 1).min(hi[k]));
-            for z in a[2]..=b[2] {
-                for y in a[1]..=b[1] {
-                    for x in a[0]..=b[0] {
-                        put(&mut g, [x, y, z], tile.value);
+            let e = o.map(|v| v + tile.size as i64 - 1);
+            let Some((ba, bb)) = bricks_of(o, e) else {
+                continue;
+            };
+            for bz in ba[2]..=bb[2] {
+                for by in ba[1]..=bb[1] {
+                    for bx in ba[0]..=bb[0] {
+                        if !varied.contains(&[bx, by, bz]) {
+                            continue;
+                        }
+                        let (va, vb) = brick_voxels([bx, by, bz]);
+                        let a = [0, 1, 2].map(|k| o[k].max(va[k]));
+                        let b = [0, 1, 2].map(|k| e[k].min(vb[k]));
+                        for z in a[2]..=b[2] {
+                            for y in a[1]..=b[1] {
+                                for x in a[0]..=b[0] {
+                                    put(&mut g, [x, y, z], tile.value);
+                                }
+                            }
+                        }
                     }
                 }
             }

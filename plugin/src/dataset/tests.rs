@@ -1,6 +1,7 @@
 //! The dataset component against small files it writes itself: every format, policies, mappings, frames.
 
 use super::*;
+use vdb::VdbLeaf;
 
 #[test]
 fn a_large_file_read_in_parts_is_the_file() {
@@ -362,4 +363,86 @@ fn sparse_files_are_streamed_by_offset_as_they_decode_from_memory() {
         );
         assert!(a.channels()[0].grid.to_dense().iter().any(|&v| v > 0.0));
     }
+}
+
+#[test]
+fn constant_tiles_share_one_block_per_value() {
+    // A fog volume as OpenVDB's prune leaves it: a 128³ tile (density 0.5, temperature 1500 K), an 8³ tile of
+    // density beside it over a leaf of temperature, and a leaf of density beyond.
+    let ramp = |o: [i32; 3], k: f32| -> VdbLeaf {
+        let vals: Vec<f32> = (0..512).map(|i| k + i as f32).collect();
+        (o, [u64::MAX; 8], vals)
+    };
+    let bytes = vdb::write_tiled(
+        &[
+            (
+                "density",
+                vec![ramp([136, 0, 0], 1.0)],
+                vec![([0, 0, 0], 128, 0.5), ([128, 0, 0], 8, 0.25)],
+            ),
+            (
+                "temperature",
+                vec![ramp([128, 0, 0], 1000.0)],
+                vec![([0, 0, 0], 128, 1500.0)],
+            ),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(0.1),
+    );
+    assert!(bytes.len() < 400_000, "{}", bytes.len()); // (mostly the nodes' tables of tile values)
+    let ds = Dataset::from_bytes(
+        Format::Vdb,
+        "fog.vdb",
+        &bytes,
+        &["density", "temperature"],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(ds.dims(), [144, 128, 128]);
+    let leaf = |i: i64, j: i64, k: i64, o: i64, base: f32| base + (64 * (i - o) + 8 * j + k) as f32;
+    let want_d = |i: i64, j: i64, k: i64| match i {
+        _ if i < 128 => 0.5,
+        _ if j >= 8 || k >= 8 => 0.0,
+        _ if i < 136 => 0.25,
+        _ => leaf(i, j, k, 136, 1.0),
+    };
+    let want_t = |i: i64, j: i64, k: i64| match i {
+        _ if i < 128 => 1500.0,
+        _ if j >= 8 || k >= 8 || i >= 136 => 0.0,
+        _ => leaf(i, j, k, 128, 1000.0),
+    };
+    let (d, t) = (&ds.channels()[0].grid, &ds.channels()[1].grid);
+    for k in 0..128 {
+        for j in 0..128 {
+            for i in 0..144 {
+                assert_eq!(d.at(i, j, k), want_d(i, j, k), "density ({i}, {j}, {k})");
+                assert_eq!(
+                    t.at(i, j, k),
+                    want_t(i, j, k),
+                    "temperature ({i}, {j}, {k})"
+                );
+            }
+        }
+    }
+    // 4 096 bricks under the big tile share one block; the two bricks a leaf touches have their own.
+    let topo = d.topology();
+    assert_eq!(topo.active_bricks(), 4096 + 2);
+    assert_eq!(topo.blocks_stored(), 3);
+    assert_eq!(d.bytes(), 4 * 512 * 4);
+    // Interpolation across a shared block's faces reads the neighbours' values (a dense copy agrees).
+    let dense = Grid::new(ds.dims(), d.to_dense()).unwrap();
+    for p in [
+        [0.5, 0.5, 0.5],
+        [0.886, 0.03, 0.02],
+        [0.89, 0.031, 0.031],
+        [0.999, 0.01, 0.01],
+    ] {
+        assert_eq!(
+            d.lookup(p, Interpolation::Trilinear),
+            dense.lookup(p, Interpolation::Trilinear),
+            "{p:?}"
+        );
+    }
+    let s = d.stats();
+    assert_eq!(s.max, leaf(143, 7, 7, 136, 1.0));
 }

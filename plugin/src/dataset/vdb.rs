@@ -647,9 +647,9 @@ pub fn write_with_vectors(
     p0: DVec3,
     voxel: DVec3,
 ) -> Vec<u8> {
-    let mut all: Vec<(&str, usize, Vec<VdbLeaf>)> = grids
+    let mut all: Vec<WriteGrid> = grids
         .iter()
-        .map(|&(name, dims, values)| (name, 1, dense_leaves(dims, values)))
+        .map(|&(name, dims, values)| (name, 1, dense_leaves(dims, values), Vec::new()))
         .collect();
     for &(name, dims, [x, y, z]) in vectors {
         // The leaves of the component-wise largest magnitude, their values then interleaved x, y, z.
@@ -675,7 +675,7 @@ pub fn write_with_vectors(
                 (o, mask, vals)
             })
             .collect();
-        all.push((name, 3, leaves));
+        all.push((name, 3, leaves, Vec::new()));
     }
     write_grids(&all, p0, voxel)
 }
@@ -715,15 +715,37 @@ fn dense_leaves(dims: [usize; 3], values: &[f32]) -> Vec<VdbLeaf> {
 /// As [`write`], for grids given as leaves anywhere in index space (a sparse fire: leaves far apart cost
 /// their own bytes, not the box between them). Voxel (i, j, k) is centred at `p0 + (i + ½) · voxel`.
 pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
-    let all: Vec<(&str, usize, Vec<VdbLeaf>)> = grids
+    let all: Vec<WriteGrid> = grids
         .iter()
-        .map(|(name, leaves)| (*name, 1, leaves.clone()))
+        .map(|(name, leaves)| (*name, 1, leaves.clone(), Vec::new()))
         .collect();
     write_grids(&all, p0, voxel)
 }
 
-/// The writer: grids of `comps` floats per voxel (1: float, 3: vec3s), their leaves' values `comps` per voxel.
-fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+/// An active constant tile: origin (a multiple of its size), size (8: a tile of a 4-level node, 128: of a
+/// 5-level node), value.
+pub type VdbTile = ([i32; 3], i32, f32);
+
+/// As [`write_sparse`], with active constant tiles beside the leaves (a tile must not overlap a leaf, as in
+/// OpenVDB's trees): a fog volume's interior, as OpenVDB's `prune` leaves it.
+pub fn write_tiled(
+    grids: &[(&str, Vec<VdbLeaf>, Vec<VdbTile>)],
+    p0: DVec3,
+    voxel: DVec3,
+) -> Vec<u8> {
+    let all: Vec<WriteGrid> = grids
+        .iter()
+        .map(|(name, leaves, tiles)| (*name, 1, leaves.clone(), tiles.clone()))
+        .collect();
+    write_grids(&all, p0, voxel)
+}
+
+/// A grid to write: name, floats per voxel, leaves, tiles.
+type WriteGrid<'a> = (&'a str, usize, Vec<VdbLeaf>, Vec<VdbTile>);
+
+/// The writer: grids of `comps` floats per voxel (1: float, 3: vec3s), their leaves' values `comps` per voxel,
+/// and tiles (float grids).
+fn write_grids(grids: &[WriteGrid], p0: DVec3, voxel: DVec3) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC.to_le_bytes());
     out.extend_from_slice(&224u32.to_le_bytes());
@@ -737,7 +759,7 @@ fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -
         out.extend_from_slice(&(s.len() as u32).to_le_bytes());
         out.extend_from_slice(s.as_bytes());
     };
-    for (name, comps, leaves) in grids {
+    for (name, comps, leaves, tiles) in grids {
         let comps = *comps;
         put_str(&mut out, name);
         put_str(
@@ -783,8 +805,14 @@ fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -
             (((o[0] >> 3) & 15) << 8 | ((o[1] >> 3) & 15) << 4 | ((o[2] >> 3) & 15)) as usize
         };
         leaves.sort_by_key(|(o, _, _)| (key5(*o), index4(*o), index_leaf(*o)));
-        let mut roots: Vec<[i32; 3]> = leaves.iter().map(|(o, _, _)| key5(*o)).collect();
+        let mut roots: Vec<[i32; 3]> = leaves
+            .iter()
+            .map(|(o, _, _)| key5(*o))
+            .chain(tiles.iter().map(|t| key5(t.0)))
+            .collect();
+        roots.sort();
         roots.dedup();
+
         out.extend_from_slice(&0u32.to_le_bytes()); // root tiles
         out.extend_from_slice(&(roots.len() as u32).to_le_bytes());
         let put_values = |out: &mut Vec<u8>, vals: &[f32]| {
@@ -805,16 +833,27 @@ fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -
             let in5: Vec<usize> = (0..leaves.len())
                 .filter(|&i| key5(leaves[i].0) == *r)
                 .collect();
+            let t5: Vec<&VdbTile> = tiles.iter().filter(|t| key5(t.0) == *r).collect();
             let mut child5 = vec![0u64; 512];
-            for &i in &in5 {
-                let k = index4(leaves[i].0);
+            let (mut active5, mut values5) = (vec![0u64; 512], vec![0f32; 32768 * comps]);
+            for k in in5
+                .iter()
+                .map(|&i| index4(leaves[i].0))
+                .chain(t5.iter().filter(|t| t.1 == 8).map(|t| index4(t.0)))
+            {
                 child5[k / 64] |= 1 << (k % 64);
             }
+            for t in t5.iter().filter(|t| t.1 == 128) {
+                let k = index4(t.0);
+                active5[k / 64] |= 1 << (k % 64);
+                values5[k] = t.2;
+            }
             put_mask(&mut out, &child5);
-            put_mask(&mut out, &[0u64; 512]);
-            put_values(&mut out, &vec![0f32; 32768 * comps]);
-            let mut k4s: Vec<usize> = in5.iter().map(|&i| index4(leaves[i].0)).collect();
-            k4s.dedup();
+            put_mask(&mut out, &active5);
+            put_values(&mut out, &values5);
+            let k4s: Vec<usize> = (0..32768)
+                .filter(|&k| child5[k / 64] >> (k % 64) & 1 == 1)
+                .collect();
             for k4 in k4s {
                 let in4: Vec<usize> = in5
                     .iter()
@@ -826,9 +865,15 @@ fn write_grids(grids: &[(&str, usize, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -
                     let k = index_leaf(leaves[i].0);
                     child4[k / 64] |= 1 << (k % 64);
                 }
+                let (mut active4, mut values4) = ([0u64; 64], vec![0f32; 4096 * comps]);
+                for t in t5.iter().filter(|t| t.1 == 8 && index4(t.0) == k4) {
+                    let k = index_leaf(t.0);
+                    active4[k / 64] |= 1 << (k % 64);
+                    values4[k] = t.2;
+                }
                 put_mask(&mut out, &child4);
-                put_mask(&mut out, &[0u64; 64]);
-                put_values(&mut out, &vec![0f32; 4096 * comps]);
+                put_mask(&mut out, &active4);
+                put_values(&mut out, &values4);
                 for &i in &in4 {
                     put_mask(&mut out, &leaves[i].1);
                 }

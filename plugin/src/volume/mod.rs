@@ -288,13 +288,11 @@ impl FireVolume {
                 .chain(co.species.iter().map(|sp| sp.ch))
                 .collect();
             let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
-            // Dense over the box while it costs at most four times what its grids store, else a copy per brick
-            // holding data (a fire far from its copy in a big box).
-            let copied: u64 = std::iter::once(&ch[density].grid)
-                .chain(temperature.map(|k| &ch[k].grid))
-                .chain(grids.iter().copied())
-                .map(|g| g.bytes() as u64)
-                .sum();
+            // Dense over the box while it costs at most four times what its grids store per stored brick (512
+            // values each: constant tiles sharing blocks count as the bricks they cover, which the copies would
+            // hold), else a copy per brick holding data (a fire far from its copy in a big box).
+            let per_grid = (ds.topology().active_bricks() as u64 + 1) * 4 * 512;
+            let copied = per_grid * (2 + grids.len() as u64 - temperature.is_none() as u64);
             let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
                 let voxels = p.iter().map(|&n| n as u64).product::<u64>();
                 voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)

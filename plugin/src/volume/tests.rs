@@ -1176,3 +1176,72 @@ fn an_emission_grid_emits_where_it_says() {
         sum(&lf)
     );
 }
+
+/// A fog volume of OpenVDB tiles (one block of values shared by 4 096 bricks) marches as its dense copy does.
+#[test]
+fn shared_tile_blocks_march_as_the_dense_lattice() {
+    let leaf = |o: [i32; 3], k: f32| -> crate::dataset::vdb::VdbLeaf {
+        (
+            o,
+            [u64::MAX; 8],
+            (0..512).map(|i| k * (1.0 + (i % 7) as f32)).collect(),
+        )
+    };
+    let bytes = crate::dataset::vdb::write_tiled(
+        &[
+            (
+                "density",
+                vec![leaf([128, 0, 0], 2e-6)],
+                vec![([0, 0, 0], 128, 1e-6), ([128, 8, 0], 8, 3e-6)],
+            ),
+            (
+                "temperature",
+                vec![leaf([128, 0, 0], 300.0)],
+                vec![([0, 0, 0], 128, 1500.0), ([128, 8, 0], 8, 1900.0)],
+            ),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(0.01),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-tiles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("fog.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let build = |lattice: &str| {
+        FireVolume::new(&[
+            Param::string("filename", &file.display().to_string()),
+            Param::string("lattice", lattice),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (bricks, dense, off) = (build("bricks"), build("dense"), build("off"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(dense.dataset().topology().blocks_stored(), 3);
+    let mut rng = crate::rng::Rng::new(9);
+    let (mut lit, mut worst) = (0, 0f64);
+    for seed in 0..200 {
+        let mut u = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let to = u() * DVec3::new(1.36, 1.28, 1.28);
+        let from =
+            DVec3::new(0.68, 0.64, 0.64) + (u() - DVec3::splat(0.5)).normalize_or(DVec3::X) * 3.0;
+        let ray = Ray {
+            o: from,
+            d: (to - from).normalize(),
+            t0: 0.0,
+            t1: 10.0,
+            seed,
+        };
+        let (lb, tb) = run(&bricks, &ray);
+        let (ld, td) = run(&dense, &ray);
+        let (lo, _) = run(&off, &ray);
+        assert_eq!((&lb, &tb), (&ld, &td), "ray {seed}: bricks vs dense");
+        let y: f64 = ld.iter().sum();
+        if y > 0.0 {
+            lit += 1;
+            worst = worst.max((y - lo.iter().sum::<f64>()).abs() / y);
+        }
+    }
+    assert!(lit > 150, "{lit} of 200 rays crossed the fog");
+    assert!(worst < 1e-5, "lattice vs stencils: {worst:e}");
+}

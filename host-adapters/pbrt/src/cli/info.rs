@@ -69,6 +69,8 @@ struct Report {
     skipped_grids: Vec<Skipped>,
     /// 8³ bricks stored of those the box holds, and the bytes of their table.
     bricks: usize,
+    /// Blocks of 512 values each grid stores for them (fewer than `bricks` when constant tiles share).
+    blocks: usize,
     bricks_in_box: usize,
     brick_table_bytes: usize,
     bytes: usize,
@@ -246,6 +248,7 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
             })
             .collect(),
         bricks: ds.topology().active_bricks(),
+        blocks: ds.topology().blocks_stored(),
         bricks_in_box: ds.topology().bricks().iter().product(),
         brick_table_bytes: ds.topology().bytes(),
         bytes: ds.bytes(),
@@ -301,10 +304,18 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         }
     }
     s += &format!(
-        "storage   {} of the box's {} bricks of 8³ ({:.1} %), their table {} bytes\n",
+        "storage   {} of the box's {} bricks of 8³ ({:.1} %){}, their table {} bytes\n",
         report.bricks,
         report.bricks_in_box,
         100.0 * report.bricks as f64 / report.bricks_in_box.max(1) as f64,
+        if report.blocks < report.bricks {
+            format!(
+                " in {} blocks of values (constant tiles share one per value)",
+                report.blocks
+            )
+        } else {
+            String::new()
+        },
         report.brick_table_bytes
     );
     s += &format!(
