@@ -186,3 +186,110 @@ fn the_committed_campfire_is_what_the_generator_makes() {
         "regenerate it: firemedium gen campfire --resolution 96 -o scenes/campfire/campfire.vdb"
     );
 }
+
+#[test]
+fn each_tools_conventions_render_with_the_source_alone() {
+    // The same fire written as Houdini, Blender and EmberGen write theirs, rendered with only "string source"
+    // set, against firemedium's own kelvin file: Houdini's relative temperature and EmberGen's names give the
+    // same image to f32 rounding. Blender's flame holds no temperature below its ignition (1500 K): its image
+    // lacks the glow of the cooler gas (on this coarse 32³ fire, peaking at 1674 K, much of it) and gains none.
+    let dir = tmp("styles");
+    let render = |style: &str, source: &str| {
+        let vdb = dir.join(format!("{style}.vdb"));
+        ok(&run(&[
+            "gen",
+            "campfire",
+            "--resolution",
+            "32",
+            "--style",
+            style,
+            "-o",
+            vdb.to_str().unwrap(),
+        ]));
+        let scene = dir.join(format!("{style}.pbrt"));
+        std::fs::write(
+            &scene,
+            format!(
+                "LookAt 0 -2.2 0.4  0 0 0.35  0 0 1\nCamera \"perspective\" \"float fov\" 30\n\
+                 Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\n\
+                 Sampler \"zsobol\" \"integer pixelsamples\" 4\nIntegrator \"volpath\" \"integer maxdepth\" 1\n\
+                 WorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{}\" \
+                 \"string fuel\" \"propane\" {source}\nAttributeBegin\nMediumInterface \"fire\" \"\"\n\
+                 Material \"interface\"\nShape \"sphere\" \"float radius\" 1.2\nAttributeEnd\n",
+                vdb.display()
+            ),
+        )
+        .unwrap();
+        let exr = dir.join(format!("{style}.exr"));
+        ok(&run(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--seed",
+            "1",
+            "--fire-light",
+            "off",
+            "-q",
+            "-o",
+            exr.to_str().unwrap(),
+        ]));
+        firemedium::imageio::read(&exr, false).unwrap()
+    };
+    let reference = render("kelvin", "");
+    let sum = |im: &firemedium::imageio::RgbImage| -> f64 {
+        im.px.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum()
+    };
+    let total = sum(&reference);
+    assert!(total > 0.0);
+    for (style, tol) in [("houdini", 1e-4), ("embergen", 0.0)] {
+        let im = render(style, &format!("\"string source\" \"{style}\""));
+        let diff: f64 = im
+            .px
+            .iter()
+            .zip(&reference.px)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs() as f64).sum::<f64>())
+            .sum();
+        assert!(
+            diff <= tol * total,
+            "{style}: differs by {:.3e} of the image",
+            diff / total
+        );
+    }
+    let blender = render("blender", "\"string source\" \"blender\"");
+    let peak = reference
+        .px
+        .iter()
+        .map(|p| p[0] + p[1] + p[2])
+        .fold(0f32, f32::max);
+    for (a, b) in blender.px.iter().zip(&reference.px) {
+        let (sa, sb) = (a[0] + a[1] + a[2], b[0] + b[1] + b[2]);
+        assert!(sa <= sb * 1.0001 + 1e-6 * peak, "{a:?} above {b:?}");
+    }
+    let kept = sum(&blender) / total;
+    assert!(kept > 0.4 && kept < 1.0, "blender keeps {kept}");
+    // A preset's names missing from the file: the error lists what the file holds.
+    let scene = dir.join("embergen.pbrt");
+    let text = std::fs::read_to_string(&scene).unwrap().replace(
+        "\"string source\" \"embergen\"",
+        "\"string source\" \"houdini\"",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let o = run(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        dir.join("x.exr").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("'density'")
+            && e.contains("'smoke'")
+            && e.contains("'flames'"),
+        "{e}"
+    );
+    // Without the source, Houdini's relative temperature (peak 0.33) emits nothing visible.
+    let dark = render("houdini", "");
+    assert!(sum(&dark) < 1e-6 * total, "{}", sum(&dark) / total);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -725,11 +725,57 @@ pub fn voxelise(sim: &Sim, res: usize, velocity: bool) -> Fields {
 }
 
 /// Writes one voxelised frame; returns (bytes written, active voxels, peak temperature, peak soot fraction).
+/// Whose conventions a written file follows: grid names and temperature units as each tool writes them (so a
+/// scene reads it with `"string source"` alone).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// density, temperature in K, `vel`: firemedium's own (and the thesis's, pbrt-v4's).
+    Kelvin,
+    /// Houdini's Pyro: density, temperature in units of 5000 K (its Pyro shader's blackbody default), flame
+    /// (0–1), `vel`.
+    Houdini,
+    /// Blender's Mantaflow cache: density, flame as Cycles reads it (T = 1000 K · (1.5 + 1.5 · flame) where
+    /// flame > 0: the domain's default ignition 1.5 and maximum 3.0; cooler gas has no flame), `velocity`.
+    Blender,
+    /// EmberGen: smoke, temperature in K, flames (0–1), `velocity`.
+    Embergen,
+}
+
+impl Style {
+    /// The styles by name.
+    pub const NAMES: [&'static str; 4] = ["kelvin", "houdini", "blender", "embergen"];
+
+    /// The style called `name`.
+    pub fn from_name(name: &str) -> Option<Style> {
+        Some(match name {
+            "kelvin" => Style::Kelvin,
+            "houdini" => Style::Houdini,
+            "blender" => Style::Blender,
+            "embergen" => Style::Embergen,
+            _ => return None,
+        })
+    }
+}
+
+/// Writes frame `sim` at resolution `res` in firemedium's own conventions (see [`write_frame_as`]).
 pub fn write_frame(
     sim: &Sim,
     res: usize,
     species: &[(String, f64)],
     velocity: bool,
+    path: &std::path::Path,
+) -> Result<(usize, usize, f32, f32), String> {
+    write_frame_as(sim, res, species, velocity, Style::Kelvin, path)
+}
+
+/// Writes frame `sim` at resolution `res` as OpenVDB in `style`'s conventions, with `species` grids following
+/// the flame and the velocity when asked: (bytes, active voxels, peak K, peak soot fraction).
+pub fn write_frame_as(
+    sim: &Sim,
+    res: usize,
+    species: &[(String, f64)],
+    velocity: bool,
+    style: Style,
     path: &std::path::Path,
 ) -> Result<(usize, usize, f32, f32), String> {
     let f = voxelise(sim, res, velocity);
@@ -746,10 +792,39 @@ pub fn write_frame(
             (sym.clone(), f.flame.iter().map(|v| v * scale).collect())
         })
         .collect();
-    let mut grids: Vec<(&str, [usize; 3], &[f32])> = vec![
-        ("density", f.dims, &f.density),
-        ("temperature", f.dims, &f.temperature),
-    ];
+    // The tool's temperature and flame (the flame normalised to its peak).
+    let flame: Vec<f32> = f.flame.iter().map(|v| v / peak_flame).collect();
+    let (ign, max) = (1.5f32, 3.0f32);
+    let tool_t: Vec<f32> = match style {
+        Style::Kelvin | Style::Embergen => Vec::new(),
+        Style::Houdini => f
+            .temperature
+            .iter()
+            .map(|t| t / firemedium_plugin::dataset::HOUDINI_KELVIN as f32)
+            .collect(),
+        Style::Blender => f
+            .temperature
+            .iter()
+            .map(|t| ((t / 1000.0 - ign) / (max - ign)).max(0.0))
+            .collect(),
+    };
+    let mut grids: Vec<(&str, [usize; 3], &[f32])> = match style {
+        Style::Kelvin => vec![
+            ("density", f.dims, &f.density),
+            ("temperature", f.dims, &f.temperature),
+        ],
+        Style::Houdini => vec![
+            ("density", f.dims, &f.density),
+            ("temperature", f.dims, &tool_t),
+            ("flame", f.dims, &flame),
+        ],
+        Style::Blender => vec![("density", f.dims, &f.density), ("flame", f.dims, &tool_t)],
+        Style::Embergen => vec![
+            ("smoke", f.dims, &f.density),
+            ("temperature", f.dims, &f.temperature),
+            ("flames", f.dims, &flame),
+        ],
+    };
     for (sym, data) in &species_data {
         grids.push((sym.as_str(), f.dims, data));
     }
@@ -763,7 +838,11 @@ pub fn write_frame(
     }
     let [vx, vy, vz] = &f.velocity;
     let vectors: Vec<firemedium_plugin::dataset::vdb::VdbVector> = if velocity {
-        vec![("vel", f.dims, [vx, vy, vz])]
+        let name = match style {
+            Style::Kelvin | Style::Houdini => "vel",
+            Style::Blender | Style::Embergen => "velocity",
+        };
+        vec![(name, f.dims, [vx, vy, vz])]
     } else {
         Vec::new()
     };

@@ -50,6 +50,7 @@ use cursor::Bytes;
 use files::{as_text, read_file};
 pub use files::{format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
+pub use params::HOUDINI_KELVIN;
 pub use raw::{RawCoords, RawValue};
 
 /// `f` over `items`, one thread per item (a dataset has a handful of grids; each is independent work of tens

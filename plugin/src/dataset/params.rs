@@ -25,6 +25,43 @@ pub(crate) struct Motion {
 /// The velocity channels' names in a dataset.
 const VELOCITY: [&str; 3] = ["velocity.x", "velocity.y", "velocity.z"];
 
+/// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
+pub const HOUDINI_KELVIN: f64 = 5000.0;
+
+/// The names a tool writes a channel under, in the order tried (`source` presets): (density, temperature).
+fn preset_names(source: &str) -> Option<(&'static [&'static str], &'static [&'static str])> {
+    match source {
+        // Houdini's Pyro: density, temperature (older setups: heat).
+        "houdini" => Some((&["density"], &["temperature", "heat"])),
+        // EmberGen: smoke, temperature (kelvin), flames, fuel, velocity.
+        "embergen" => Some((&["smoke", "density"], &["temperature"])),
+        _ => None,
+    }
+}
+
+/// The grid a preset reads for `param`: the one the scene names, else the first of `names` the file holds
+/// (an error listing them and the file's grids when it holds none).
+fn preset_grid(
+    r: &ParamReader,
+    param: &str,
+    names: &[&str],
+    file: &str,
+    opts: &LoadOptions,
+) -> Result<String, Error> {
+    if r.list_has(param) {
+        return r.string(param);
+    }
+    let grids = super::list_grids(std::path::Path::new(file), opts)?;
+    match names.iter().find(|n| grids.iter().any(|g| g.name == **n)) {
+        Some(n) => Ok(n.to_string()),
+        None => Err(super::sparse::missing_grid(
+            file,
+            &names.join("' or '"),
+            grids.iter().map(|g| g.name.as_str()),
+        )),
+    }
+}
+
 /// The grid names `velocitygrid` gives (empty: none): one name is a vector grid or its components' float grids
 /// (`name.x` …, which the OpenVDB reader resolves either way); three are float grids.
 fn velocity_grids(r: &ParamReader) -> Result<Option<[String; 3]>, Error> {
@@ -148,7 +185,11 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     // ignition 1.5, maximum 3.0).
     let source = r.string("source")?;
     let blender = source == "blender";
-    if blender {
+    // Houdini's Pyro shader maps its temperature field linearly onto kelvin, 0 → 0 K and 1 → its blackbody's
+    // "temperature high", 5000 K by default (SideFX, Pyro Shader / Blackbody COP docs); EmberGen's grids hold
+    // kelvin already, under their own names.
+    let relative = (source == "houdini").then_some(HOUDINI_KELVIN);
+    if blender || relative.is_some() {
         let given = [
             "temperaturescale",
             "temperatureoffset",
@@ -161,10 +202,24 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
             return Err(Error::invalid(
                 "dataset",
                 n,
-                "given with source \"blender\"",
-                "the blender source's own mapping (set flameignition and flamemax to the domain's)",
+                format!("given with source \"{source}\""),
+                if blender {
+                    "the blender source's own mapping (set flameignition and flamemax to the domain's)".to_string()
+                } else {
+                    format!("the {source} source's own mapping (temperature × {HOUDINI_KELVIN} K), or source \"kelvin\" with a mapping of your own")
+                },
             ));
         }
+    }
+    if let Some(k) = relative {
+        tmap = Mapping {
+            scale: k,
+            offset: 0.0,
+            pbrt_offset: 0.0,
+            zero_at_or_below: None,
+        };
+    }
+    if blender {
         let (ign, max) = (r.float("flameignition")?, r.float("flamemax")?);
         if !(max > ign) {
             return Err(Error::invalid(
@@ -316,22 +371,27 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         if dfile.is_empty() {
             return Err(Error::invalid("dataset", "filename", "unset", "a dataset file (filename or densityfile), or inline \"float density\" with nx ny nz"));
         }
-        let mut sources = vec![ChannelSource {
-            name: "density".into(),
-            file: dfile.clone().into(),
-            grid: Some(r.string("densitygrid")?),
-            mapping: Mapping::default(),
-        }];
-        let tgrid = if blender && !r.list_has("temperaturegrid") {
-            "flame".to_string()
-        } else {
-            r.string("temperaturegrid")?
-        };
         let tfile = if !temperaturefile.is_empty() {
             temperaturefile
         } else {
             filename.clone()
         };
+        let (dgrid, tgrid) = match preset_names(&source) {
+            Some((d, t)) => (
+                preset_grid(r, "densitygrid", d, &dfile, &opts)?,
+                preset_grid(r, "temperaturegrid", t, &tfile, &opts)?,
+            ),
+            None if blender && !r.list_has("temperaturegrid") => {
+                (r.string("densitygrid")?, "flame".to_string())
+            }
+            None => (r.string("densitygrid")?, r.string("temperaturegrid")?),
+        };
+        let mut sources = vec![ChannelSource {
+            name: "density".into(),
+            file: dfile.clone().into(),
+            grid: Some(dgrid),
+            mapping: Mapping::default(),
+        }];
         let single = matches!(
             opts.format
                 .or_else(|| Format::from_extension(std::path::Path::new(&tfile))),

@@ -1,7 +1,7 @@
 //! `firemedium gen KIND -o OUT.vdb`: a fire dataset from the blob model (`crate::gen`), written as OpenVDB.
 
 use clap::Args;
-use firemedium::gen::{write_frame, Kind, Sim};
+use firemedium::gen::{write_frame_as, Kind, Sim, Style};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -30,6 +30,11 @@ pub struct GenArgs {
     /// `"string velocitygrid" "vel"`).
     #[arg(long)]
     velocity: bool,
+    /// Write the grids as a tool does, to be read with `"string source"` alone: kelvin (density, temperature in
+    /// K), houdini (density, temperature in units of 5000 K, flame), blender (density, flame as Cycles maps it to
+    /// kelvin), embergen (smoke, temperature in K, flames).
+    #[arg(long, default_value = "kelvin", value_parser = clap::builder::PossibleValuesParser::new(Style::NAMES))]
+    style: String,
 }
 
 const SPECIES: [&str; 7] = ["Na", "Li", "K", "Ca", "Sr", "Ba", "Cu"];
@@ -88,6 +93,7 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
         }
         None => (a.frame, a.frame),
     };
+    let style = Style::from_name(&a.style).unwrap_or(Style::Kelvin);
     let start = std::time::Instant::now();
     let mut sim = Sim::new(kind, a.seed);
     let mut out = String::new();
@@ -98,9 +104,15 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
                 .to_string_lossy()
                 .replace("####", &format!("{frame:04}")),
         );
-        let (bytes, active, tmax, fmax) =
-            write_frame(&sim, a.resolution as usize, &species, a.velocity, &path)
-                .map_err(|e| (1, e))?;
+        let (bytes, active, tmax, fmax) = write_frame_as(
+            &sim,
+            a.resolution as usize,
+            &species,
+            a.velocity,
+            style,
+            &path,
+        )
+        .map_err(|e| (1, e))?;
         let (hot, cells, t_fuel, left) = sim.fuel_summary();
         out += &format!(
             "wrote {} ({} frame {frame}, t = {:.3} s): {} blobs, {active} active voxels, peak {tmax:.0} K, peak soot fraction {fmax:.3e}, {:.1} MB; fuel: {hot}/{cells} cells burning at {t_fuel:.0} K mean, {:.1} % left\n",

@@ -818,6 +818,13 @@ impl Builder {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
                 let units = self.check_colour(name, ty == "fire", &vol, loc)?;
+                // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
+                // fire black: say so, with the presets that read each tool's units.
+                if let (true, Ok(Some([_, hi]))) = (ty == "fire", vol.temperature_range()) {
+                    if hi > 0.0 && hi < 500.0 {
+                        self.warn(loc, format!("medium \"{name}\": its temperature peaks at {hi:.3} K, too cool to glow visibly (below 500 K): if the grid is not in kelvin, set \"string source\" (\"houdini\": × 5000 K; \"blender\": a Mantaflow flame grid) or \"float temperatureremap\" [a b ka kb]"));
+                    }
+                }
                 self.media_bytes = self.media_bytes.saturating_add(info.bytes);
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
                 Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units }
