@@ -94,7 +94,12 @@ pub(crate) struct Loaded {
     pub emission_grid: bool,
     /// Motion blur (velocity is read only while the shutter is open).
     pub motion: Option<Motion>,
+    /// The scatter colour's r, g, b channels (`scattercolorgrid`: Houdini's `Cd`).
+    pub scatter_color: Option<[usize; 3]>,
 }
+
+/// The dataset's channels of the scatter colour (`scattercolorgrid`).
+pub(crate) const SCATTER_COLOR: [&str; 3] = ["scattercolor.r", "scattercolor.g", "scattercolor.b"];
 
 /// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`).
 pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
@@ -299,7 +304,8 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     }
     let inline_density = r.numbers("density")?;
     let lescale_values = r.numbers("Lescale")?;
-    let (mut ds, lescale, emission_grid, motion) = if let Some(dens) = inline_density {
+    let (mut ds, lescale, emission_grid, motion, scatter_color) = if let Some(dens) = inline_density
+    {
         let dims = [
             r.int("nx")? as usize,
             r.int("ny")? as usize,
@@ -332,17 +338,19 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 "a dataset file holding the velocity grid",
             ));
         }
-        if r.list_has("emissiongrid") {
-            return Err(Error::invalid(
-                "dataset",
-                "emissiongrid",
-                "given for an inline grid",
-                "a dataset file holding the emission grid",
-            ));
+        for name in ["emissiongrid", "scattercolorgrid"] {
+            if r.list_has(name) {
+                return Err(Error::invalid(
+                    "dataset",
+                    name,
+                    "given for an inline grid",
+                    "a dataset file holding the grid",
+                ));
+            }
         }
         let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
         let li = les.as_ref().map(|_| arrays.len() - 1);
-        (ds, li, false, None)
+        (ds, li, false, None, None)
     } else {
         let filename = match (r.string("filename")?, r.string("dataset")?) {
             (f, d) if !f.is_empty() && !d.is_empty() => {
@@ -448,6 +456,18 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 mapping: Mapping::default(),
             });
         }
+        // The scatter colour (Houdini's `Cd`, a vector grid, or its components as float grids).
+        let cd = r.string("scattercolorgrid")?;
+        if !cd.is_empty() {
+            for (name, axis) in SCATTER_COLOR.iter().zip(["x", "y", "z"]) {
+                sources.push(ChannelSource {
+                    name: name.to_string(),
+                    file: vfile.into(),
+                    grid: Some(format!("{cd}.{axis}")),
+                    mapping: Mapping::default(),
+                });
+            }
+        }
         for (name, grid) in VELOCITY.iter().zip(velocity.iter().flatten()) {
             sources.push(ChannelSource {
                 name: name.to_string(),
@@ -467,7 +487,11 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
             }),
             _ => None,
         };
-        (ds, emission, emission.is_some(), motion)
+        let scatter = match SCATTER_COLOR.map(at) {
+            [Some(r), Some(g), Some(b)] => Some([r, g, b]),
+            _ => None,
+        };
+        (ds, emission, emission.is_some(), motion, scatter)
     };
     ds = ds.with_interpolation(interp);
     Ok(Loaded {
@@ -475,6 +499,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         lescale,
         emission_grid,
         motion,
+        scatter_color,
     })
 }
 

@@ -133,6 +133,8 @@ pub struct FireVolume {
     brick_empty: Vec<bool>,
     /// Velocity motion blur (a velocity grid and an open shutter).
     blur: Option<motion::Blur>,
+    /// The scatter colour grid's channels and, per channel, the weights of its r, g, b.
+    scatter_color: Option<([usize; 3], Vec<[f64; 3]>)>,
     /// Where rays are clipped: the dataset bounds, or pbrt-v4 nanovdb's world box [T(i_min), T(i_max + 1)]
     /// (shifted half a voxel up), with lookups fading over the half voxel beyond the last samples.
     clip_box: [DVec3; 2],
@@ -206,6 +208,7 @@ impl FireVolume {
             lescale,
             emission_grid,
             motion,
+            scatter_color,
         } = loaded;
         let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
@@ -444,6 +447,7 @@ impl FireVolume {
         } else {
             ([b0, b1], 0.0)
         };
+        let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
         let mut vol = FireVolume {
             ds,
             density,
@@ -462,6 +466,7 @@ impl FireVolume {
             brick_sigma,
             brick_empty,
             blur,
+            scatter_color,
             clip_box,
             margin,
             step,
@@ -783,6 +788,16 @@ impl Medium for FireVolume {
                 0.0
             };
         }
+        // The scatter colour: what it does not scatter is absorbed (σ_t kept, so the majorants and the march
+        // stand).
+        if let Some((k, w)) = &self.scatter_color {
+            let rgb = k.map(|i| (ch[i].grid.eval(&st) as f64).clamp(0.0, 1.0));
+            for c in 0..sa.len() {
+                let albedo = w[c][0] * rgb[0] + w[c][1] * rgb[1] + w[c][2] * rgb[2];
+                sa[c] += ss[c] * (1.0 - albedo);
+                ss[c] *= albedo;
+            }
+        }
         for sp in &self.species {
             let n = ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale;
             if n > 0.0 {
@@ -812,6 +827,26 @@ impl Medium for FireVolume {
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
         self.empty_spans_over(&self.brick_empty, o, d, t0, t1, f)
     }
+}
+
+/// Per channel, the weights of a scatter colour's r, g, b: the channel itself in rgb mode; in spectral bins the
+/// bin means of the smooth rgb→spectrum fits of the three primaries (albedo fits, pbrt-v4's), normalised to sum
+/// to 1 at every wavelength — so white is 1 in every bin and any colour in [0, 1]³ an albedo in [0, 1].
+fn scatter_weights(basis: &Basis) -> Vec<[f64; 3]> {
+    use firemedium_core::rgb_spectrum::{RgbSpectrum, RgbUse};
+    if basis.mode == ColorMode::Rgb {
+        return vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    let prim = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        .map(|rgb| RgbSpectrum::new(rgb, RgbUse::Albedo));
+    let part = |k: usize, l: f64| {
+        let v = prim.map(|p| p.eval(l).max(1e-12));
+        v[k] / (v[0] + v[1] + v[2])
+    };
+    let per: Vec<Vec<f64>> = (0..3).map(|k| basis.absorb(&|l| part(k, l))).collect();
+    (0..basis.channels())
+        .map(|c| [per[0][c], per[1][c], per[2][c]])
+        .collect()
 }
 
 /// The majorant bricks' edge for a dataset: `configured` (8 by default), doubled (up to 256) while the box

@@ -1245,3 +1245,70 @@ fn shared_tile_blocks_march_as_the_dense_lattice() {
     assert!(lit > 150, "{lit} of 200 rays crossed the fog");
     assert!(worst < 1e-5, "lattice vs stencils: {worst:e}");
 }
+
+/// The scatter colour grid (Houdini's `Cd`) tints what scatters and absorbs the rest: white changes nothing,
+/// black removes scattering, red keeps the long wavelengths' — and σ_t never moves.
+#[test]
+fn a_scatter_colour_grid_tints_the_albedo_and_keeps_extinction() {
+    let n = 8usize;
+    let d = vec![2e-6f32; n * n * n];
+    let t = vec![1500f32; n * n * n];
+    let dir = std::env::temp_dir().join(format!("firemedium-cd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, rgb: [f32; 3]| {
+        let [r, g, b] = rgb.map(|v| vec![v; n * n * n]);
+        let bytes = crate::dataset::vdb::write_with_vectors(
+            &[("density", [n; 3], &d), ("temperature", [n; 3], &t)],
+            &[("Cd", [n; 3], [&r, &g, &b])],
+            DVec3::ZERO,
+            DVec3::splat(0.1),
+        );
+        let f = dir.join(format!("{name}.vdb"));
+        std::fs::write(&f, bytes).unwrap();
+        f
+    };
+    let coef = |file: &std::path::Path, cd: bool| {
+        let mut list = vec![
+            Param::string("filename", &file.display().to_string()),
+            Param::floats("sigma_s", &[3.0]),
+        ];
+        if cd {
+            list.push(Param::string("scattercolorgrid", "Cd"));
+        }
+        let v = FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"));
+        let c = v.channels();
+        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        v.coefficients(DVec3::splat(0.4), &mut sa, &mut ss, &mut j);
+        (sa, ss, j)
+    };
+    let white = write("white", [1.0; 3]);
+    let (sa0, ss0, j0) = coef(&white, false);
+    assert!(ss0.iter().all(|&s| s > 0.0));
+    let (sa, ss, j) = coef(&white, true);
+    for c in 0..sa.len() {
+        assert!(
+            (sa[c] - sa0[c]).abs() <= 1e-12 * sa0[c],
+            "bin {c}: white changes σ_a"
+        );
+        assert!(
+            (ss[c] - ss0[c]).abs() <= 1e-12 * ss0[c],
+            "bin {c}: white changes σ_s"
+        );
+    }
+    assert_eq!(j, j0, "the colour never touches emission");
+    let (sa, ss, _) = coef(&write("black", [0.0; 3]), true);
+    for c in 0..sa.len() {
+        assert_eq!(ss[c], 0.0);
+        assert!(
+            (sa[c] - (sa0[c] + ss0[c])).abs() <= 1e-12 * sa[c],
+            "bin {c}: σ_t kept"
+        );
+    }
+    let (sa, ss, _) = coef(&write("red", [1.0, 0.0, 0.0]), true);
+    // (The default 32 bins over 400–780 nm: bin 21 holds 650 nm, bin 0 400 nm.)
+    assert!(ss[21] > 0.9 * ss0[21] && ss[0] < 0.2 * ss0[0], "{ss:?}");
+    for c in 0..sa.len() {
+        assert!((sa[c] + ss[c] - sa0[c] - ss0[c]).abs() <= 1e-12 * (sa0[c] + ss0[c]));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
