@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 5));
+    assert_eq!(p.version(), (0, 6));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -369,4 +369,48 @@ fn ray_times_blur_a_volume_with_velocity_and_nothing_else() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("times[7] = NaN"), "{e}");
+}
+
+#[test]
+fn an_art_directed_colour_is_seen_against_d65() {
+    // ABI 0.6: the white a viewer adapts to — the hottest temperature of a physically coloured fire; none for a
+    // fire coloured by a ramp (the artist's colours are meant for a D65 display), nor without temperature.
+    let p = plugin();
+    let make = |extra: Vec<Param>| {
+        let mut list = vec![
+            Param::int("nx", 2),
+            Param::int("ny", 1),
+            Param::int("nz", 1),
+            Param {
+                name: "density".into(),
+                value: Value::Float(vec![1e-6, 1e-6]),
+                at: None,
+            },
+            Param {
+                name: "temperature".into(),
+                value: Value::Float(vec![1200.0, 1800.0]),
+                at: None,
+            },
+        ];
+        list.extend(extra);
+        p.create_volume(&list).unwrap()
+    };
+    assert_eq!(make(vec![]).white_temperature().unwrap(), Some(1800.0));
+    let ramp = Param {
+        name: "colorramp".into(),
+        value: Value::Float(vec![1000.0, 0.0, 0.5, 1.0]),
+        at: None,
+    };
+    assert_eq!(make(vec![ramp.clone()]).white_temperature().unwrap(), None);
+    let physical = Param::float("physical", 1.0);
+    assert_eq!(
+        make(vec![ramp, physical]).white_temperature().unwrap(),
+        Some(1800.0)
+    );
+    assert_eq!(
+        make(vec![Param::string("look", "gasburner")])
+            .white_temperature()
+            .unwrap(),
+        None
+    );
 }

@@ -256,7 +256,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 23] = [
+const ENTRIES: [&str; 24] = [
     "last_error",
     "param_count",
     "param_info",
@@ -280,6 +280,7 @@ const ENTRIES: [&str; 23] = [
     "volume_integrate_at",
     "volume_transmittance_at",
     "volume_sample_scatter_at",
+    "volume_white_temperature",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

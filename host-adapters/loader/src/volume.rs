@@ -85,6 +85,17 @@ impl Volume {
         Ok((out != [0.0, 0.0]).then_some(out))
     }
 
+    /// The temperature whose blackbody a viewer adapts to for this volume (K): its hottest when its colour is
+    /// the physics', `None` when its colour is art-directed (a tint or a colour ramp: seen against D65) or it has
+    /// no temperature grid (ABI 0.6).
+    pub fn white_temperature(&self) -> Result<Option<f64>, Error> {
+        let mut out = 0.0f64;
+        // SAFETY: a live handle and a writable double.
+        let s = unsafe { (self.inner.api().volume_white_temperature)(self.handle, &mut out) };
+        self.inner.check(s)?;
+        Ok((out > 0.0).then_some(out))
+    }
+
     /// How many rays' tracking stopped at the plugin's per-ray collision cap so far (each cut short as if
     /// absorbed; report it).
     pub fn capped_rays(&self) -> Result<u64, Error> {

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 5u
+#define FM_ABI_MINOR 6u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -158,6 +158,10 @@ typedef struct FmApi {
                                         float *transmittance);
     FmStatus (*volume_sample_scatter_at)(const FmVolume *volume, const FmRay *rays, const double *times,
                                          size_t n, FmScatter *events, float *weights, float *emitted);
+    /* ABI 0.6: the temperature (K) whose blackbody a viewer adapts to for this volume, into *out: its hottest
+     * temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a tint,
+     * or a colorramp short of physical 1: meant to be seen against a D65 white) or it has no temperature grid. */
+    FmStatus (*volume_white_temperature)(const FmVolume *volume, double *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

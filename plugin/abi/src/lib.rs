@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 5;
+pub const ABI_MINOR: u32 = 6;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -384,6 +384,12 @@ pub struct FmApi {
         weights: *mut f32,
         emitted: *mut f32,
     ) -> FmStatus,
+    /// ABI 0.6: the temperature (K) whose blackbody a viewer adapts to for this volume, into `*out`: its hottest
+    /// temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a
+    /// `tint`, or a `colorramp` short of `physical` 1: meant to be seen against a D65 white) or it has no
+    /// temperature grid.
+    pub volume_white_temperature:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
 }
 
 /// The entry point's type.

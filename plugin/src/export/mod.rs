@@ -189,6 +189,7 @@ static API: FmApi = FmApi {
     volume_integrate_at,
     volume_transmittance_at,
     volume_sample_scatter_at,
+    volume_white_temperature,
 };
 
 /// The plugin's entry point: the static function table.

@@ -453,6 +453,20 @@ pub(super) unsafe extern "C" fn volume_temperature_range(
     })
 }
 
+pub(super) unsafe extern "C" fn volume_white_temperature(
+    volume: *const FmVolume,
+    out: *mut f64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: contract of the handle.
+        let v = unsafe { vol(volume, "volume_white_temperature") }?;
+        // SAFETY: room for one double (contract).
+        let o = unsafe { out_f64(out, 1, 1, "volume_white_temperature: out") }?;
+        o[0] = v.white_temperature().unwrap_or(0.0);
+        Ok(())
+    })
+}
+
 pub(super) unsafe extern "C" fn volume_capped_rays(
     volume: *const FmVolume,
     out: *mut u64,

@@ -326,9 +326,11 @@ impl Art {
             .keys
             .iter()
             .map(|&(t, rgb)| {
+                // An emitter's colour (pbrt-v4's RGBIlluminantSpectrum: the fit times D65, so white is D65's
+                // white); the fit alone is a reflectance's, whose violet end reads purple in emission.
                 let s = crate::rgb_spectrum::RgbSpectrum::new(
                     rgb,
-                    crate::rgb_spectrum::RgbUse::Unbounded,
+                    crate::rgb_spectrum::RgbUse::Illuminant,
                 );
                 let ch = basis.emit(&|l| s.eval(l));
                 let lum = ch.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();

@@ -36,6 +36,7 @@ mod integrate;
 mod kernel;
 mod lanes;
 mod lattice;
+mod looks;
 mod march;
 mod motion;
 pub mod params;
@@ -133,6 +134,8 @@ pub struct FireVolume {
     brick_empty: Vec<bool>,
     /// Velocity motion blur (a velocity grid and an open shutter).
     blur: Option<motion::Blur>,
+    /// The fire's colour is the physics' (no tint, no colour ramp short of `physical` 1).
+    physical_colour: bool,
     /// The scatter colour grid's channels and, per channel, the weights of its r, g, b.
     scatter_color: Option<([usize; 3], Vec<[f64; 3]>)>,
     /// Where rays are clipped: the dataset bounds, or pbrt-v4 nanovdb's world box [T(i_min), T(i_max + 1)]
@@ -182,9 +185,12 @@ impl FireVolume {
 
     fn new_unlocated(list: &[Param]) -> Result<FireVolume, Error> {
         let start = Instant::now();
+        let list = &*looks::expand(list);
         let comps = settings::components();
         let r = ParamReader::new("volume", list, &comps);
         r.check_names()?;
+        // (The look was expanded into the list above; reading it checks its name.)
+        r.string("look")?;
         let set = Settings::read(&r, list)?;
         let threads = r.int("threads")? as usize;
         let budget = r.float("maxbytes")? as u64;
@@ -448,6 +454,12 @@ impl FireVolume {
             ([b0, b1], 0.0)
         };
         let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
+        let physical_colour = match &set.emission {
+            Emission::Physical { tint, ramp, .. } => {
+                tint.is_none() && ramp.as_ref().map_or(true, |r| r.physical >= 1.0)
+            }
+            _ => true,
+        };
         let mut vol = FireVolume {
             ds,
             density,
@@ -467,6 +479,7 @@ impl FireVolume {
             brick_empty,
             blur,
             scatter_color,
+            physical_colour,
             clip_box,
             margin,
             step,
@@ -687,6 +700,14 @@ impl FireVolume {
     pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
         let mut sc = Scratch::new(self.channels());
         integrate::sample_scatter(self, ray, &mut sc, l, w)
+    }
+
+    /// The temperature (K) whose blackbody a viewer adapts to: the hottest when the colour is the physics',
+    /// `None` when it is art-directed (a tint or a colour ramp: meant for a D65 white) or there is no temperature.
+    pub fn white_temperature(&self) -> Option<f64> {
+        self.temperature_range()
+            .map(|[_, hi]| hi)
+            .filter(|&t| self.physical_colour && t > 0.0)
     }
 
     /// The volume's motion blur: the shutter (frames) and the largest displacement (medium units); `None`

@@ -75,6 +75,7 @@ pub static VOLUME: Component = Component {
     doc: "Soot absorption and blackbody emission (Pegoraro & Parker 2006 eq. 5–6), atomic lines (eq. 7–12), optional scattering, integrated along rays (eq. 1–3).",
     params: &[
         p("mode", T::String, "physical", "", Range::Choices(&["physical", "pbrt"]), "physical: the paper's fire; pbrt: pbrt-v4 uniformgrid/nanovdb semantics (σ spectra × density, peak-normalised blackbody × Lescale above 100 K)."),
+        p("look", T::String, "", "", Range::Choices(&super::looks::CHOICES), "A named set of this table's parameters, each overridden by the scene's own: candle (smokescale 0.3), campfire (sigma_s 2e6, g 0.6: soot aggregates' albedo ≈ 0.2), gasburner (sootscale 0.02, smokescale 0, a blue colorramp with physical 0: art direction for the reaction zone's chemiluminescence), explosion (fuel acetylene, smokescale 3, sigma_s 2e6, g 0.6)."),
         p("fuel", T::String, "propane", "", Range::Choices(&["propane", "acetylene", "custom"]), "Soot optical constants (Dalzell & Sarofim 1969), or `fuelnk`."),
         p("fuelnk", T::Float, "", "nm, 1, 1", Range::Any, "Custom soot optical constants: (λ nm, n, k) triples, λ increasing."),
         p("alpha", T::Float, "1.39", "", Range::Between(0.0, 4.0), "Soot exponent: 1.39 (Hottel, λ in µm) or 1 (Rayleigh, λ in m); 0 with constant n, k is a grey absorber."),

@@ -1042,6 +1042,20 @@ fn a_colour_ramp_replaces_the_chromaticity_and_keeps_the_luminance() {
     let (x0, _) = chroma(&j0);
     let (xb, _) = chroma(&j);
     assert!(x0 < 0.3 && xb > 0.5, "ramp x {x0}, blackbody x {xb}");
+    // A key's colour is an emitter's (the fit times D65, as pbrt-v4's RGBIlluminantSpectrum): one key of
+    // linear sRGB (0, 0.6, 1) renders as that colour, to the bins' resolution.
+    let (_, jc, _, _) = emission(vec![Param::floats("colorramp", &[1600.0, 0.0, 0.6, 1.0])]);
+    let s: glam::DVec3 = jc.iter().zip(&xyz).map(|(a, w)| *w * *a).sum();
+    let rgb = glam::DVec3::new(
+        3.2404542 * s.x - 1.5371385 * s.y - 0.4985314 * s.z,
+        -0.9692660 * s.x + 1.8760108 * s.y + 0.0415560 * s.z,
+        0.0556434 * s.x - 0.2040259 * s.y + 1.0572252 * s.z,
+    );
+    let rgb = rgb / rgb.z;
+    assert!(
+        rgb.x.abs() < 0.03 && (rgb.y - 0.6).abs() < 0.03,
+        "a (0, 0.6, 1) key renders as {rgb:?}"
+    );
     // Half and half: the mean of the two, channel by channel.
     let (_, jh, _, _) = emission(vec![ramp.clone(), Param::float("physical", 0.5)]);
     for c in 0..j.len() {

@@ -53,7 +53,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
     adapt: tonemap::Adapt,
     /// The PNG preview's white, as `firemedium tonemap --white`: fire (default: the blackbody at the hottest
-    /// fire temperature, D65 without a fire), d65, a temperature (1800K) or a chromaticity (x,y).
+    /// temperature of the fires coloured by the physics; D65 without one — a fire coloured by a tint or a colour
+    /// ramp is meant for a D65 white), d65, a temperature (1800K) or a chromaticity (x,y).
     #[arg(long, default_value = "fire", value_parser = tonemap::parse_white)]
     white: tonemap::WhiteArg,
     /// The memory budget in GB (default: half the machine's memory): the film, images read and each of the

@@ -317,15 +317,15 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The hottest temperature (K) of the scene's fire media, if any has a temperature grid.
+    /// The hottest temperature (K) of the scene's fire media whose colour is the physics' (a tint or a colour
+    /// ramp is meant to be seen against D65), if any has a temperature grid.
     pub fn fire_temperature(&self) -> Option<f64> {
         self.media
             .iter()
             .filter_map(|m| match m {
-                Medium::Plugin { vol, .. } => vol.temperature_range().ok().flatten(),
+                Medium::Plugin { vol, .. } => vol.white_temperature().ok().flatten(),
                 _ => None,
             })
-            .map(|[_, hi]| hi)
             .filter(|t| *t > 0.0)
             .reduce(f64::max)
     }
