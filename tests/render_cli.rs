@@ -605,7 +605,9 @@ fn every_scene_renders_at_a_tiny_resolution() {
         // (Not hidden files: tools/mutants.py writes its mutants beside the scenes for a moment.)
         v.retain(|p| {
             p.extension().is_some_and(|x| x == "pbrt")
-                && !p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'))
+                && !p
+                    .file_name()
+                    .is_some_and(|n| n.to_string_lossy().starts_with('.'))
         });
         v.sort();
         v
@@ -1162,7 +1164,7 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     );
     assert!(get("scene").ends_with("fire.pbrt"));
     assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
-    assert_eq!(get("plugin_abi"), "0.5");
+    assert_eq!(get("plugin_abi"), "0.6");
     assert!(
         get("camera").starts_with("perspective fov 40")
             && get("camera").contains("screenwindow -1.5 1.5 -1 1"),

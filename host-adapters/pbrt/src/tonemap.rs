@@ -10,9 +10,12 @@
 //! ```
 //!
 //! M is Hunt–Pointer–Estévez normalised to D65 (M · XYZ_D65 = (1, 1, 1)), so after von Kries a pixel of the
-//! white's chromaticity at luminance Y has L = M = S = Y. σ is the mean of each cone's response over the image
-//! (Pegoraro's choice), or one adaptation luminance in cd/m² for all three cones (`night`, `indoor`, `day` or a
-//! number): a grey at that luminance maps to R = ½. The white W is the blackbody at the fire's hottest
+//! white's chromaticity at luminance Y has L = M = S = Y. σ is the paper's (§3.8) "average of the LMS cone
+//! response values throughout the image" — one value for all three cones, taken from the scene as it arrives,
+//! before von Kries (the paper's order: the white point adapts the signal, the response adapts to the scene; a σ
+//! per cone from the balanced signal would cancel the white balance, every `--white` giving the same picture) —
+//! or one adaptation luminance in cd/m² (`night`, `indoor`, `day` or a number): a grey at that luminance maps to
+//! R = ½. The white W is the blackbody at the fire's hottest
 //! temperature (the thesis; a render records it in its EXR), a given temperature, a given chromaticity, or D65
 //! (no von Kries). A flame much brighter than σ saturates every cone towards 1 — near white, as at night; with σ
 //! near the flame's own luminance the cones stay in their proportional range and the orange shows, as in
@@ -249,9 +252,15 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
             let sigma = match o.adapt {
                 Adapt::Luminance(l) => DVec3::splat(l),
                 Adapt::Image => {
-                    let n = lms.len().max(1) as f64;
-                    let mean = lms.iter().fold(DVec3::ZERO, |a, &b| a + b) / n;
-                    DVec3::select(mean.cmpgt(DVec3::ZERO), mean, DVec3::ONE)
+                    // The mean cone response of the unbalanced scene (M · XYZ, clipped at 0 as above).
+                    let n = xyz.len().max(1) as f64;
+                    let sum = xyz
+                        .iter()
+                        .filter(|p| p.is_finite())
+                        .map(|&p| (m * p).max(DVec3::ZERO))
+                        .fold(DVec3::ZERO, |a, b| a + b);
+                    let mean = (sum.x + sum.y + sum.z) / (3.0 * n);
+                    DVec3::splat(if mean > 0.0 { mean } else { 1.0 })
                 }
             } / k;
             lms.iter()
@@ -386,6 +395,30 @@ mod tests {
             &nr(White::Chromaticity(x, y), Adapt::Luminance(100.0)),
         )[0];
         assert!((out[0] - out[2]).abs() < 1e-4, "{out:?}");
+    }
+
+    #[test]
+    fn adapted_to_the_image_the_white_still_matters_and_maps_to_neutral() {
+        // A fire-lit image: a 1800 K flame pixel among dimmer ones of the same colour and a D65 grey. Adapted to
+        // the image's own mean (the default), the white balance must not cancel: 1800 K and D65 whites give
+        // different pictures, and under the 1800 K white the flame's colour is grey.
+        let flame = white_xyz(White::Blackbody(1800.0));
+        let px = vec![flame * 5e3, flame * 40.0, flame * 3.0, cie_d65() * 10.0];
+        let warm = map(&px, &nr(White::Blackbody(1800.0), Adapt::Image));
+        let d65 = map(&px, &nr(White::D65, Adapt::Image));
+        for (i, (a, b)) in warm.iter().zip(&d65).enumerate() {
+            if i < 3 {
+                let enc = a.map(srgb_encode);
+                assert!(
+                    (enc[0] - enc[1]).abs() < 1.0 / 255.0 && (enc[1] - enc[2]).abs() < 1.0 / 255.0,
+                    "pixel {i} under its own white: {enc:?}"
+                );
+                assert!(
+                    b[0] > 0.0 && b[0] > 2.0 * b[2],
+                    "pixel {i} under D65 is orange: {b:?}"
+                );
+            }
+        }
     }
 
     #[test]
