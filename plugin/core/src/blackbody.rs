@@ -246,13 +246,28 @@ mod tests {
 
     #[test]
     fn medium_index_scales_by_n_squared() {
-        let b = spectral_radiance(1800.0, 600.0);
-        assert!(
-            rel(
-                spectral_radiance_in_medium(1800.0, 600.0, 1.000_3),
-                1.000_3f64.powi(2) * b
-            ) < 1e-15
+        // Planck's law written inside the medium — light speed c/n, the wavelength there λ/n, per unit of that
+        // wavelength — then carried to a density per unit vacuum wavelength (dλ = n dλ_medium): derived from the
+        // constants here, not from the function under test. n = 1.5 (glass) makes the factor unmistakable.
+        use crate::constants::{BOLTZMANN as K, PLANCK as H, SPEED_OF_LIGHT as C};
+        for (t, l_nm, n) in [
+            (1800.0, 600.0, 1.0003),
+            (2500.0, 450.0, 1.5),
+            (900.0, 1000.0, 1.33),
+        ] {
+            let (cm, lm) = (C / n, l_nm * 1e-9 / n);
+            let per_medium_m =
+                2.0 * H * cm * cm / lm.powi(5) / ((H * cm / (lm * K * t)).exp() - 1.0);
+            let per_vacuum_nm = per_medium_m / n * 1e-9;
+            let got = spectral_radiance_in_medium(t, l_nm, n);
+            assert!(
+                rel(got, per_vacuum_nm) < 1e-12,
+                "T {t} λ {l_nm} n {n}: {got} vs {per_vacuum_nm}"
+            );
+        }
+        assert_eq!(
+            spectral_radiance_in_medium(1800.0, 600.0, 1.0),
+            spectral_radiance(1800.0, 600.0)
         );
-        assert_eq!(spectral_radiance_in_medium(1800.0, 600.0, 1.0), b);
     }
 }

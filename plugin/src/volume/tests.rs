@@ -485,15 +485,6 @@ pub(crate) fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
 #[test]
 fn sodium_flame_glows_at_589() {
     let n = 64;
-    let list = vec![
-        Param::floats("density", &vec![0.0; n]),
-        Param::floats("temperature", &vec![2000.0; n]),
-        Param::int("nx", 4),
-        Param::int("ny", 4),
-        Param::int("nz", 4),
-        Param::string("interpolation", "nearest"),
-        Param::strings("species", &["Na"]),
-    ];
     // Species grids come from files or the dataset; inline species are not a pbrt concept, so use a file.
     let dir = std::env::temp_dir().join(format!("firemedium-vol-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -503,23 +494,39 @@ fn sodium_flame_glows_at_589() {
         std::fs::write(&p, format!("4 4 4\n{}\n", body.join(" "))).unwrap();
         p.display().to_string()
     };
-    let list2 = vec![
-        Param::string("densityfile", &f("d.txt", 0.0)),
-        Param::string("temperaturefile", &f("t.txt", 2000.0)),
-        Param::strings("species", &["Na"]),
-        Param::strings("speciesfiles", &[&f("na.txt", 1.0)]),
-        Param::float("speciesscale", 1e16),
-        Param::string("interpolation", "nearest"),
-    ];
-    let _ = list;
-    let v = FireVolume::new(&thesis_bins(list2)).unwrap_or_else(|e| panic!("{e}"));
-    let (l, t) = run(&v, &ray_x(0));
-    let brightest = (0..30).max_by(|&a, &b| l[a].total_cmp(&l[b])).unwrap();
-    assert_eq!(brightest, 18, "{l:?}");
-    assert!(l[18] > 0.0 && t[18] < 1.0 && t[0] == 1.0);
-    // Kirchhoff in the 589 bin: L ≤ B(2000 K, 589 nm) and → B as N grows.
-    let b = crate::blackbody::spectral_radiance(2000.0, 589.0);
-    assert!(l[18] < b);
+    let (d, t, na) = (f("d.txt", 0.0), f("t.txt", 2000.0), f("na.txt", 1.0));
+    let volume = |scale: f64| {
+        let list = vec![
+            Param::string("densityfile", &d),
+            Param::string("temperaturefile", &t),
+            Param::strings("species", &["Na"]),
+            Param::strings("speciesfiles", &[&na]),
+            Param::float("speciesscale", scale),
+            Param::string("interpolation", "nearest"),
+        ];
+        FireVolume::new(&thesis_bins(list)).unwrap_or_else(|e| panic!("{e}"))
+    };
+    // Planck at the D lines (589.0 and 589.6 nm, D2 twice D1's strength: 589.2 nm between them), not the bin's
+    // mean — the line emits at its own wavelength (B rises 1.2 %/nm there at 2000 K).
+    let b_line = crate::blackbody::spectral_radiance(2000.0, 589.2);
+    for (scale, thick) in [(1e16, false), (1e20, true)] {
+        let v = volume(scale);
+        let (l, t) = run(&v, &ray_x(0));
+        let brightest = (0..30).max_by(|&a, &b| l[a].total_cmp(&l[b])).unwrap();
+        assert_eq!(brightest, 18, "{l:?}");
+        assert!(l[18] > 0.0 && t[18] < 1.0 && t[0] == 1.0);
+        // Kirchhoff for an isothermal slab: L = (1 − T) · B, whatever the depth — an independent value (the
+        // transmittance the march reports and Planck's law), to the march's step error; and a thick slab is
+        // the blackbody.
+        let kirchhoff = (1.0 - t[18]) * b_line;
+        assert!(
+            (l[18] / kirchhoff - 1.0).abs() < 3e-3,
+            "N {scale:e}: L {} vs (1 − T) B {kirchhoff} (T {})",
+            l[18],
+            t[18]
+        );
+        assert_eq!(thick, t[18] < 1e-3, "N {scale:e}: T {}", t[18]);
+    }
 }
 
 #[test]
