@@ -69,22 +69,30 @@ fn readme_physics_command_prints_the_documented_json() {
         (x - 0.5857).abs() < 1e-3 && (y - 0.3931).abs() < 1e-3,
         "({x}, {y})"
     );
-    let xyz = &v["blackbody_xyz"];
-    let big_y = xyz["Y"].as_f64().unwrap();
-    assert!(
-        rel(
-            x,
-            xyz["X"].as_f64().unwrap()
-                / (xyz["X"].as_f64().unwrap() + big_y + xyz["Z"].as_f64().unwrap())
-        ) < 1e-12
-    );
-    // sRGB = M · XYZ: the red channel of a 1500 K blackbody dominates.
+    // Luminance against an independent value: the 1948 candela — a full radiator at the freezing point of
+    // platinum (2042 K) has 60 cd/cm², 6.0e5 cd/m² (today's K_m = 683 lm/W and the CIE 1931 ȳ agree to 0.3 %).
+    let hot = firemedium(&["physics", "--temperature", "2042", "--json"]);
+    let h: Value = serde_json::from_slice(&hot.stdout).expect("stdout is JSON");
+    let y_pt = h["blackbody_xyz"]["Y"].as_f64().unwrap();
+    assert!(rel(y_pt, 6.0e5) < 0.01, "Y at 2042 K: {y_pt} cd/m²");
+    // And colour: a 1500 K radiator is red-dominated in linear sRGB; one at 6504 K (D65's correlated colour
+    // temperature) is close to neutral — a little magenta, as the Planckian locus at 6504 K, (0.3135, 0.3236),
+    // lies 0.005 below D65's (0.3127, 0.3290).
     let rgb = &v["blackbody_srgb_linear"];
-    let r = rgb["r"].as_f64().unwrap();
-    let want_r = 3.2404542 * xyz["X"].as_f64().unwrap()
-        - 1.5371385 * big_y
-        - 0.4985314 * xyz["Z"].as_f64().unwrap();
-    assert!(rel(r, want_r) < 1e-12 && r > rgb["g"].as_f64().unwrap());
+    let (r, g) = (rgb["r"].as_f64().unwrap(), rgb["g"].as_f64().unwrap());
+    assert!(r > 2.0 * g, "1500 K: r {r}, g {g}");
+    let d65 = firemedium(&["physics", "--temperature", "6504", "--json"]);
+    let d: Value = serde_json::from_slice(&d65.stdout).expect("stdout is JSON");
+    let c = &d["blackbody_srgb_linear"];
+    let (r, g, b) = (
+        c["r"].as_f64().unwrap(),
+        c["g"].as_f64().unwrap(),
+        c["b"].as_f64().unwrap(),
+    );
+    assert!(
+        (r / g - 1.0).abs() < 0.08 && (b / g - 1.0).abs() < 0.08 && r > g && b > g,
+        "6504 K: ({r}, {g}, {b})"
+    );
 }
 
 #[test]
