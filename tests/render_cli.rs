@@ -641,6 +641,7 @@ fn every_scene_renders_at_a_tiny_resolution() {
         [
             "adaptation",
             "art",
+            "bluecore",
             "campfire",
             "fuels",
             "looks",

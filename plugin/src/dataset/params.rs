@@ -96,6 +96,8 @@ pub(crate) struct Loaded {
     pub motion: Option<Motion>,
     /// The scatter colour's r, g, b channels (`scattercolorgrid`: Houdini's `Cd`).
     pub scatter_color: Option<[usize; 3]>,
+    /// The reaction zone's heat release rate (`reactiongrid`, W/m³): the blue core's chemiluminescence.
+    pub reaction: Option<usize>,
 }
 
 /// The dataset's channels of the scatter colour (`scattercolorgrid`).
@@ -304,7 +306,8 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     }
     let inline_density = r.numbers("density")?;
     let lescale_values = r.numbers("Lescale")?;
-    let (mut ds, lescale, emission_grid, motion, scatter_color) = if let Some(dens) = inline_density
+    let (mut ds, lescale, emission_grid, motion, scatter_color, reaction) = if let Some(dens) =
+        inline_density
     {
         let dims = [
             r.int("nx")? as usize,
@@ -338,7 +341,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 "a dataset file holding the velocity grid",
             ));
         }
-        for name in ["emissiongrid", "scattercolorgrid"] {
+        for name in ["emissiongrid", "scattercolorgrid", "reactiongrid"] {
             if r.list_has(name) {
                 return Err(Error::invalid(
                     "dataset",
@@ -350,7 +353,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         }
         let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
         let li = les.as_ref().map(|_| arrays.len() - 1);
-        (ds, li, false, None, None)
+        (ds, li, false, None, None, None)
     } else {
         let filename = match (r.string("filename")?, r.string("dataset")?) {
             (f, d) if !f.is_empty() && !d.is_empty() => {
@@ -456,6 +459,24 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 mapping: Mapping::default(),
             });
         }
+        // The heat release rate of the reaction zone (the blue core).
+        let rgrid = r.string("reactiongrid")?;
+        if !rgrid.is_empty() {
+            if pbrt {
+                return Err(Error::invalid(
+                    "volume",
+                    "reactiongrid",
+                    "given",
+                    "mode \"physical\" (the blue core is the physical model's)",
+                ));
+            }
+            sources.push(ChannelSource {
+                name: "reaction".into(),
+                file: vfile.into(),
+                grid: Some(rgrid.clone()),
+                mapping: Mapping::default(),
+            });
+        }
         // The scatter colour (Houdini's `Cd`, a vector grid, or its components as float grids).
         let cd = r.string("scattercolorgrid")?;
         if !cd.is_empty() {
@@ -491,7 +512,8 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
             [Some(r), Some(g), Some(b)] => Some([r, g, b]),
             _ => None,
         };
-        (ds, emission, emission.is_some(), motion, scatter)
+        let reaction = at("reaction").filter(|_| !rgrid.is_empty());
+        (ds, emission, emission.is_some(), motion, scatter, reaction)
     };
     ds = ds.with_interpolation(interp);
     Ok(Loaded {
@@ -500,6 +522,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         emission_grid,
         motion,
         scatter_color,
+        reaction,
     })
 }
 

@@ -215,6 +215,7 @@ impl FireVolume {
             emission_grid,
             motion,
             scatter_color,
+            reaction,
         } = loaded;
         let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
@@ -270,6 +271,21 @@ impl FireVolume {
         // (The fire light's full-spectrum power assumes emission follows the soot: with an emission grid it reports
         // its power over the bins.)
         if emission_grid {
+            co.source = None;
+        }
+        // The blue core: the reaction zone's chemiluminescence, a channel that emits (yield · heat release / 4π
+        // times the CH*/C₂* band spectrum, per channel) and absorbs nothing — the species' machinery, with
+        // tables that do not depend on temperature.
+        if let Some(ch) = reaction {
+            let shape = basis.emit(&firemedium_core::chemiluminescence::spectrum);
+            let zeros = vec![0.0; c];
+            co.species.push(SpeciesChannel {
+                ch,
+                scale: set.chemiluminescence / (4.0 * std::f64::consts::PI),
+                sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
+                j: tables::TTable::build(0.0, c, &|_| shape.clone()),
+            });
+            // (The light's full-spectrum power follows the soot and atoms: with the blue core, over the bins.)
             co.source = None;
         }
         if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {

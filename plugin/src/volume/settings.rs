@@ -33,6 +33,8 @@ pub(super) struct Settings {
     pub stepsize: f64,
     pub cutoff: f64,
     pub g: f64,
+    /// The fraction of the heat release the reaction zone emits as light (`chemiluminescence`).
+    pub chemiluminescence: f64,
     /// The index of air and the ray integrator, when `refraction` is on.
     pub refraction: Option<RefractionSettings>,
     #[cfg(test)]
@@ -122,6 +124,7 @@ impl Settings {
         let stepsize = r.float("stepsize")?;
         let cutoff = r.float("cutoff")?;
         let g = r.float("g")?;
+        let chemiluminescence = r.float("chemiluminescence")?;
         // Refraction's parameters are validated whether or not it is on.
         let on = r.bool("refraction")?;
         let air = Air {
@@ -148,6 +151,7 @@ impl Settings {
             stepsize,
             cutoff,
             g,
+            chemiluminescence,
             refraction: on.then_some(refraction),
             #[cfg(test)]
             fault,

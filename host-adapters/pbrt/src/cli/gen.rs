@@ -30,6 +30,10 @@ pub struct GenArgs {
     /// `"string velocitygrid" "vel"`).
     #[arg(long)]
     velocity: bool,
+    /// Also write the reaction's heat release rate (W/m³) as the grid `reaction`: the blue core's source
+    /// (`"string reactiongrid" "reaction"`).
+    #[arg(long)]
+    reaction: bool,
     /// Write the grids as a tool does, to be read with `"string source"` alone: kelvin (density, temperature in
     /// K), houdini (density, temperature in units of 5000 K, flame), blender (density, flame as Cycles maps it to
     /// kelvin), embergen (smoke, temperature in K, flames).
@@ -108,7 +112,7 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
             &sim,
             a.resolution as usize,
             &species,
-            a.velocity,
+            (a.velocity, a.reaction),
             style,
             &path,
         )
