@@ -8,7 +8,7 @@
 //! value.
 
 use super::text::Tokens;
-use super::{alloc_grid, AxisOrder, Loaded};
+use super::{AxisOrder, Loaded};
 use crate::Error;
 
 const MAX_DIM: i64 = 1 << 20;
@@ -44,27 +44,25 @@ pub(crate) fn read_dense(
             format!("a claim of {claimed} values"),
         ));
     }
-    let mut data = alloc_grid(file, dims, max_bytes, 0.0)?;
-    let n = data.len();
-    for idx in 0..n {
-        let v = t.number(&format!("value {} of {n} (w·h·d = {w}·{h}·{d})", idx + 1))?;
-        let dest = match order {
-            AxisOrder::XFastest => idx,
-            AxisOrder::ZFastest => {
-                let (z, rest) = (idx % d, idx / d);
-                let (y, x) = (rest % h, rest / h);
-                x + w * (y + h * z)
-            }
-        };
-        data[dest] = v as f32;
-    }
-    t.expect_end(&format!("the {n} values of a {w}×{h}×{d} grid"))?;
-    Ok(Loaded {
-        bricks: None,
-        dims,
-        data,
-        bounds: None,
-    })
+    let n = w * h * d;
+    let body = t.clone();
+    // The values, parsed again for each of the bricking's two passes (the grid is never dense).
+    let values = |put: &mut dyn FnMut([usize; 3], f32)| -> Result<(), Error> {
+        let mut t = body.clone();
+        for idx in 0..n {
+            let v = t.number_of(|| format!("value {} of {n} (w·h·d = {w}·{h}·{d})", idx + 1))?;
+            let ijk = match order {
+                AxisOrder::XFastest => [idx % w, (idx / w) % h, idx / (w * h)],
+                AxisOrder::ZFastest => {
+                    let (z, rest) = (idx % d, idx / d);
+                    [rest / h, rest % h, z]
+                }
+            };
+            put(ijk, v as f32);
+        }
+        t.expect_end(&format!("the {n} values of a {w}×{h}×{d} grid"))
+    };
+    super::sparse::brick_as_read(file, dims, 0.0, max_bytes, &values)
 }
 
 /// Reads a sparse (Uintah) ASCII grid.
@@ -74,27 +72,28 @@ pub(crate) fn read_sparse(file: &str, text: &str, max_bytes: u64) -> Result<Load
     let total = dims.iter().map(|&d| d as i64).product::<i64>();
     let count = t.integer("the voxel count", 0, total)?;
     let background = t.number("the background value")? as f32;
-    let mut data = alloc_grid(file, dims, max_bytes, background)?;
-    for n in 0..count {
-        let mut ijk = [0usize; 3];
-        for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-            let what = format!(
-                "coordinate {axis} of voxel {} of {count} (0..{})",
-                n + 1,
-                dims[a] - 1
-            );
-            ijk[a] = t.integer(&what, 0, dims[a] as i64 - 1)? as usize;
+    let body = t.clone();
+    // The voxels, parsed again for each of the bricking's two passes (the grid is never dense).
+    let voxels = |put: &mut dyn FnMut([usize; 3], f32)| -> Result<(), Error> {
+        let mut t = body.clone();
+        for n in 0..count {
+            let mut ijk = [0usize; 3];
+            for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+                let what = || {
+                    format!(
+                        "coordinate {axis} of voxel {} of {count} (0..{})",
+                        n + 1,
+                        dims[a] - 1
+                    )
+                };
+                ijk[a] = t.integer_of(what, 0, dims[a] as i64 - 1)? as usize;
+            }
+            let v = t.number_of(|| format!("the value of voxel {} of {count}", n + 1))?;
+            put(ijk, v as f32);
         }
-        let v = t.number(&format!("the value of voxel {} of {count}", n + 1))?;
-        data[ijk[0] + dims[0] * (ijk[1] + dims[1] * ijk[2])] = v as f32;
-    }
-    t.expect_end(&format!("{count} voxels"))?;
-    Ok(Loaded {
-        bricks: None,
-        dims,
-        data,
-        bounds: None,
-    })
+        t.expect_end(&format!("{count} voxels"))
+    };
+    super::sparse::brick_as_read(file, dims, background, max_bytes, &voxels)
 }
 
 #[cfg(test)]
@@ -109,14 +108,18 @@ mod tests {
         let text = "2 2 2\n0 1 2 3\n4 5 6 7\n";
         let x = read_dense("f.txt", text, AxisOrder::XFastest, CAP).unwrap();
         assert_eq!(x.dims, [2, 2, 2]);
-        assert_eq!(x.data, vec![0., 1., 2., 3., 4., 5., 6., 7.]);
+        assert_eq!(
+            x.bricks.unwrap().to_dense(),
+            vec![0., 1., 2., 3., 4., 5., 6., 7.]
+        );
         let z = read_dense("f.txt", text, AxisOrder::ZFastest, CAP).unwrap();
+        let z = z.bricks.unwrap().to_dense();
         // File value n sits at x = n/4, y = (n/2)%2, z = n%2; stored x fastest.
         // (x,y,z)=(1,0,0) is file value 4 → stored index 1.
-        assert_eq!(z.data[1], 4.0);
-        assert_eq!(z.data[2], 2.0); // (0,1,0) ← file 2
-        assert_eq!(z.data[4], 1.0); // (0,0,1) ← file 1
-        assert_eq!(z.data[7], 7.0);
+        assert_eq!(z[1], 4.0);
+        assert_eq!(z[2], 2.0); // (0,1,0) ← file 2
+        assert_eq!(z[4], 1.0); // (0,0,1) ← file 1
+        assert_eq!(z[7], 7.0);
     }
 
     #[test]
@@ -190,7 +193,10 @@ mod tests {
     fn sparse_with_background() {
         let text = "3 2 1\n2\n0.5\n0 0 0 7\n2 1 0 9\n";
         let g = read_sparse("s.txt", text, CAP).unwrap();
-        assert_eq!(g.data, vec![7.0, 0.5, 0.5, 0.5, 0.5, 9.0]);
+        assert_eq!(
+            g.bricks.unwrap().to_dense(),
+            vec![7.0, 0.5, 0.5, 0.5, 0.5, 9.0]
+        );
         let e = read_sparse("s.txt", "3 2 1\n1\n0\n3 0 0 1\n", CAP)
             .unwrap_err()
             .to_string();

@@ -315,6 +315,8 @@ impl Dataset {
                     ),
                 ));
             }
+            // (Dense, then bricked with the other channels: the array already lives in the host's parameters,
+            // and a small grid is smaller dense than as 2 KB bricks.)
             let data = alloc_grid("inline", dims, opts.max_bytes, 0.0).map(|_| values.to_vec())?;
             loaded.push((
                 i,

@@ -10,7 +10,7 @@
 //! 0-based x, y, z. Every coordinate is checked against the dims.
 
 use super::cursor::Cursor;
-use super::{alloc_grid, Loaded};
+use super::Loaded;
 use crate::Error;
 
 /// Coordinate convention of a raw file.
@@ -73,46 +73,46 @@ pub(crate) fn read(
             format!("{} bytes", bytes.len()),
         ));
     }
-    let mut data = alloc_grid(file, dims, max_bytes, 0.0)?;
     let base = if coords == RawCoords::Thesis { 1 } else { 0 };
-    for n in 0..count {
-        let at = c.pos;
-        let (p, q, r) = (c.i32("x")?, c.i32("coordinate")?, c.i32("coordinate")?);
-        let (x, y, z) = match coords {
-            RawCoords::Thesis => (p, r, q),
-            RawCoords::Xyz => (p, q, r),
-        };
-        let ijk = [x - base, y - base, z - base];
-        if (0..3).any(|a| ijk[a] < 0 || ijk[a] as usize >= dims[a]) {
-            let conv = if base == 1 {
-                "1-based x z y"
-            } else {
-                "0-based x y z"
+    let start = c.pos;
+    // The records, replayed for each of the bricking's two passes (the grid is never dense).
+    let records = |put: &mut dyn FnMut([usize; 3], f32)| -> Result<(), Error> {
+        let mut c = Cursor::new(file, bytes);
+        c.pos = start;
+        for n in 0..count {
+            let at = c.pos;
+            let (p, q, r) = (c.i32("x")?, c.i32("coordinate")?, c.i32("coordinate")?);
+            let (x, y, z) = match coords {
+                RawCoords::Thesis => (p, r, q),
+                RawCoords::Xyz => (p, q, r),
             };
-            return Err(Error::format(
-                file,
-                format!("byte {at} (voxel {} of {count})", n + 1),
-                format!(
-                    "{conv} coordinates within {}×{}×{}",
-                    dims[0], dims[1], dims[2]
-                ),
-                format!("({p}, {q}, {r})"),
-            ));
+            let ijk = [x - base, y - base, z - base];
+            if (0..3).any(|a| ijk[a] < 0 || ijk[a] as usize >= dims[a]) {
+                let conv = if base == 1 {
+                    "1-based x z y"
+                } else {
+                    "0-based x y z"
+                };
+                return Err(Error::format(
+                    file,
+                    format!("byte {at} (voxel {} of {count})", n + 1),
+                    format!(
+                        "{conv} coordinates within {}×{}×{}",
+                        dims[0], dims[1], dims[2]
+                    ),
+                    format!("({p}, {q}, {r})"),
+                ));
+            }
+            let rgba = [c.f64("r")?, c.f64("g")?, c.f64("b")?, c.f64("a")?];
+            let v = match value {
+                RawValue::Red => rgba[0] / 256.0,
+                RawValue::MaxRgb => rgba[0].max(rgba[1]).max(rgba[2]) / 256.0,
+            };
+            put(ijk.map(|v| v as usize), v as f32);
         }
-        let rgba = [c.f64("r")?, c.f64("g")?, c.f64("b")?, c.f64("a")?];
-        let v = match value {
-            RawValue::Red => rgba[0] / 256.0,
-            RawValue::MaxRgb => rgba[0].max(rgba[1]).max(rgba[2]) / 256.0,
-        };
-        let [i, j, k] = ijk.map(|v| v as usize);
-        data[i + dims[0] * (j + dims[1] * k)] = v as f32;
-    }
-    Ok(Loaded {
-        bricks: None,
-        dims,
-        data,
-        bounds: None,
-    })
+        Ok(())
+    };
+    super::sparse::brick_as_read(file, dims, 0.0, max_bytes, &records)
 }
 
 /// Writes a raw file (tests and tools): `header` dims, then the voxels as given (coordinates verbatim).
@@ -153,8 +153,9 @@ mod tests {
         )
         .unwrap();
         assert_eq!(red.dims, [3, 2, 2]);
-        assert_eq!(red.data[2 + 3 * 2], 0.5); // (2, 0, 1)
-        assert_eq!(red.data.iter().filter(|&&v| v != 0.0).count(), 1);
+        let red = red.bricks.unwrap().to_dense();
+        assert_eq!(red[2 + 3 * 2], 0.5); // (2, 0, 1)
+        assert_eq!(red.iter().filter(|&&v| v != 0.0).count(), 1);
         let max = read(
             "a.raw2",
             &f,
@@ -165,7 +166,7 @@ mod tests {
             CAP,
         )
         .unwrap();
-        assert_eq!(max.data[2 + 3 * 2], 200.0 / 256.0);
+        assert_eq!(max.bricks.unwrap().to_dense()[2 + 3 * 2], 200.0 / 256.0);
         let xyz = read(
             "a.raw2",
             &encode(Some([3, 2, 2]), &[([2, 0, 1], [64.0, 0.0, 0.0, 1.0])]),
@@ -176,7 +177,7 @@ mod tests {
             CAP,
         )
         .unwrap();
-        assert_eq!(xyz.data[2 + 3 * 2], 0.25);
+        assert_eq!(xyz.bricks.unwrap().to_dense()[2 + 3 * 2], 0.25);
     }
 
     #[test]
@@ -193,7 +194,11 @@ mod tests {
         )
         .unwrap();
         assert_eq!(g.dims, [256; 3]);
-        assert_eq!(*g.data.last().unwrap(), 1.0);
+        // One brick stored (the corner's), not 256³ values.
+        let grid = g.bricks.unwrap();
+        assert_eq!(grid.topology().active_bricks(), 1);
+        assert_eq!(grid.at(255, 255, 255), 1.0);
+        assert_eq!(grid.at(0, 0, 0), 0.0);
     }
 
     #[test]

@@ -443,3 +443,90 @@ fn written_tiles(t: &Tree) -> Vec<&Tile> {
         .filter(|tile| !is_bg(tile) || valued.iter().any(|v| inside(tile, v)))
         .collect()
 }
+
+/// A replay of a file's voxel writes: calls its argument with (voxel, value) for each, in file order.
+pub(crate) type VoxelWrites<'a> = dyn Fn(&mut dyn FnMut([usize; 3], f32)) -> Result<(), Error> + 'a;
+
+/// A grid of `dims` bricked as a file is read, never dense: `visit` replays the file's voxel writes (`put(voxel,
+/// value)`, in file order, a later write winning) and is run twice — once to list the bricks a non-zero value
+/// touches, once to fill them. Voxels never written hold `background` (a non-zero background stores every
+/// brick, as the dense array did). Memory: the stored bricks and their table, checked against `max_bytes`
+/// before anything is allocated.
+pub(crate) fn brick_as_read(
+    file: &str,
+    dims: [usize; 3],
+    background: f32,
+    max_bytes: u64,
+    visit: &VoxelWrites,
+) -> Result<Loaded, Error> {
+    use crate::grid::{Grid, Topology, BRICK};
+    let too_large = |what: String, bytes: u64| Error::TooLarge {
+        file: file.to_string(),
+        what,
+        bytes,
+        cap: max_bytes,
+    };
+    let table = Topology::table_bytes(dims).unwrap_or(u64::MAX);
+    if table > max_bytes {
+        return Err(too_large(
+            format!(
+                "the brick table of a {}×{}×{} grid",
+                dims[0], dims[1], dims[2]
+            ),
+            table,
+        ));
+    }
+    let topo = if background != 0.0 {
+        Topology::full(dims)
+    } else {
+        let mut list: Vec<[usize; 3]> = Vec::new();
+        let mut last = [usize::MAX; 3];
+        let mut refused = false;
+        visit(&mut |v, x| {
+            let b = v.map(|c| c / BRICK);
+            if x != 0.0 && b != last && !refused {
+                last = b;
+                if list.len() == list.capacity() && list.try_reserve(list.len().max(64)).is_err() {
+                    refused = true;
+                    return;
+                }
+                list.push(b);
+            }
+        })?;
+        if refused {
+            return Err(too_large("the list of bricks".to_string(), u64::MAX));
+        }
+        Topology::from_bricks(dims, [0; 3], list)
+    }
+    .ok_or_else(|| too_large("the brick table".to_string(), table))?;
+    let bytes = (topo.values_len() as u64)
+        .saturating_mul(4)
+        .saturating_add(topo.bytes() as u64);
+    if bytes > max_bytes {
+        return Err(too_large(
+            format!(
+                "{} bricks of 8³ f32 (a {}×{}×{} grid) and their table",
+                topo.active_bricks(),
+                dims[0],
+                dims[1],
+                dims[2]
+            ),
+            bytes,
+        ));
+    }
+    let mut g = Grid::filled(std::sync::Arc::new(topo), background).ok_or_else(|| {
+        too_large(
+            "the grid's bricks (the allocator refused them)".to_string(),
+            bytes,
+        )
+    })?;
+    visit(&mut |[i, j, k], x| {
+        g.set(i, j, k, x);
+    })?;
+    Ok(Loaded {
+        dims,
+        data: Vec::new(),
+        bricks: Some(g),
+        bounds: None,
+    })
+}

@@ -446,3 +446,47 @@ fn constant_tiles_share_one_block_per_value() {
     let s = d.stats();
     assert_eq!(s.max, leaf(143, 7, 7, 136, 1.0));
 }
+
+#[test]
+fn an_ascii_grid_on_one_long_line_loads_and_errors_name_the_column() {
+    // 40³ values on one line (the column of every token was counted from the line's start: quadratic, and a
+    // 160³ grid on one line never finished loading); a bad value at the end is reported at its column.
+    let n = 40;
+    let mut vals: Vec<String> = (0..n * n * n)
+        .map(|i| {
+            if i % 97 == 0 {
+                "0.5".into()
+            } else {
+                "0".into()
+            }
+        })
+        .collect();
+    let text = format!("{n} {n} {n}\n{}\n", vals.join(" "));
+    let path = tmp("long-line.txt", text.as_bytes());
+    let ds = Dataset::load(
+        &[ChannelSource::new("density", &path)],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let g = &ds.channels()[0].grid;
+    assert_eq!(g.at(0, 0, 0), 0.5);
+    assert_eq!(g.at(97 % 40, (97 / 40) % 40, 0), 0.5);
+    assert_eq!(g.at(1, 0, 0), 0.0);
+    // Stored as bricks where the values are, never dense.
+    assert!(g.topology().active_bricks() <= 125);
+    let last = vals.len() - 1;
+    vals[last] = "x".into();
+    let text = format!("{n} {n} {n}\n{}\n", vals.join(" "));
+    let col = text.lines().nth(1).unwrap().len();
+    let path = tmp("long-line-bad.txt", text.as_bytes());
+    let e = Dataset::load(
+        &[ChannelSource::new("density", &path)],
+        &LoadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains(&format!("line 2, column {col}")) && e.contains("'x'"),
+        "{e}"
+    );
+}

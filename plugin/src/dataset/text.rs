@@ -2,6 +2,10 @@
 
 use crate::Error;
 
+/// A place in the text: byte offset, line, the byte its line starts at.
+type Place = (usize, usize, usize);
+
+#[derive(Clone)]
 pub(crate) struct Tokens<'a> {
     file: &'a str,
     text: &'a str,
@@ -21,15 +25,17 @@ impl<'a> Tokens<'a> {
         }
     }
 
-    fn at(&self, pos: usize, line: usize, line_start: usize) -> String {
+    /// "line L, column C" of a place, counted only when an error names it (counting the column for every token
+    /// made a file of one long line quadratic: an 8 MB line of values never finished loading).
+    fn at(&self, (pos, line, line_start): Place) -> String {
         format!(
             "line {line}, column {}",
             self.text[line_start..pos].chars().count() + 1
         )
     }
 
-    /// The next token and its position, or `None` at the end.
-    pub fn next_token(&mut self) -> Option<(&'a str, String)> {
+    /// The next token and where it starts, or `None` at the end.
+    fn next_token(&mut self) -> Option<(&'a str, Place)> {
         let bytes = self.text.as_bytes();
         while self.pos < bytes.len() && bytes[self.pos].is_ascii_whitespace() {
             if bytes[self.pos] == b'\n' {
@@ -48,14 +54,14 @@ impl<'a> Tokens<'a> {
         // Token boundaries are ASCII whitespace, so slicing stays on char boundaries.
         Some((
             &self.text[start..self.pos],
-            self.at(start, self.line, self.line_start),
+            (start, self.line, self.line_start),
         ))
     }
 
     fn end_error(&self, what: &str) -> Error {
         Error::format(
             self.file,
-            self.at(self.pos, self.line, self.line_start),
+            self.at((self.pos, self.line, self.line_start)),
             what.to_string(),
             "the end of the file",
         )
@@ -63,20 +69,27 @@ impl<'a> Tokens<'a> {
 
     /// The next token as an f64 (finite or not: policies judge values later).
     pub fn number(&mut self, what: &str) -> Result<f64, Error> {
-        let (tok, at) = self.next_token().ok_or_else(|| self.end_error(what))?;
+        self.number_of(|| what.to_string())
+    }
+
+    /// [`number`](Self::number), the expectation's text made only for an error (a grid's values are millions).
+    pub fn number_of(&mut self, what: impl FnOnce() -> String) -> Result<f64, Error> {
+        let Some((tok, at)) = self.next_token() else {
+            return Err(self.end_error(&what()));
+        };
         match tok.parse::<f64>() {
             // Grid values are stored as f32: 1e39 would become inf and be reported as "found inf".
             Ok(v) if v.is_finite() && v.abs() > f32::MAX as f64 => Err(Error::format(
                 self.file,
-                at,
-                format!("{what} within f32's range (±3.4e38)"),
+                self.at(at),
+                format!("{} within f32's range (±3.4e38)", what()),
                 format!("'{}'", shorten(tok)),
             )),
             Ok(v) => Ok(v),
             Err(_) => Err(Error::format(
                 self.file,
-                at,
-                what.to_string(),
+                self.at(at),
+                what(),
                 format!("'{}'", shorten(tok)),
             )),
         }
@@ -84,13 +97,25 @@ impl<'a> Tokens<'a> {
 
     /// The next token as an integer in [lo, hi].
     pub fn integer(&mut self, what: &str, lo: i64, hi: i64) -> Result<i64, Error> {
-        let (tok, at) = self.next_token().ok_or_else(|| self.end_error(what))?;
+        self.integer_of(|| what.to_string(), lo, hi)
+    }
+
+    /// [`integer`](Self::integer), the expectation's text made only for an error.
+    pub fn integer_of(
+        &mut self,
+        what: impl FnOnce() -> String,
+        lo: i64,
+        hi: i64,
+    ) -> Result<i64, Error> {
+        let Some((tok, at)) = self.next_token() else {
+            return Err(self.end_error(&what()));
+        };
         match tok.parse::<i64>() {
             Ok(v) if (lo..=hi).contains(&v) => Ok(v),
             _ => Err(Error::format(
                 self.file,
-                at,
-                format!("{what} (an integer from {lo} to {hi})"),
+                self.at(at),
+                format!("{} (an integer from {lo} to {hi})", what()),
                 format!("'{}'", shorten(tok)),
             )),
         }
@@ -102,7 +127,7 @@ impl<'a> Tokens<'a> {
             None => Ok(()),
             Some((tok, at)) => Err(Error::format(
                 self.file,
-                at,
+                self.at(at),
                 format!("the end of the file after {after}"),
                 format!("'{}'", shorten(tok)),
             )),
