@@ -11,7 +11,7 @@
 //! costs its own bricks and four bytes per brick of the box, not the box. Dense inputs keep only the bricks
 //! where some channel is non-zero, so every lookup gives the value the dense array gave, to the bit. Bricks
 //! under an OpenVDB tile — one value throughout, in every channel — share one block of values per distinct
-//! value ([`Topology::share`]): each keeps its slot, its storage is the block's.
+//! value ([`Topology::share`]): the brick table points them all at it.
 //!
 //! - [`Interpolation::Trilinear`] (default): pbrt-v4's `SampledGrid::Lookup` — the eight samples around
 //!   p·n − 0.5, each sample outside the grid counting as **zero**. So within the last half voxel of every face
@@ -210,9 +210,6 @@ pub struct Topology {
     blocks: Vec<u32>,
     /// Bricks with a slot.
     active: usize,
-    /// Per slot, the block of 512 values its grids store it in (see [`Topology::share`]); empty: the slot's own
-    /// (block = slot).
-    store: Vec<u32>,
     /// Blocks of values a grid stores, the background's aside.
     blocks_stored: usize,
 }
@@ -298,16 +295,17 @@ impl Topology {
             top,
             blocks,
             active: bricks.len(),
-            store: Vec::new(),
             blocks_stored: bricks.len(),
         })
     }
 
     /// This topology with the bricks `class` puts in a class (a constant brick: the same value throughout in
     /// every grid, as an OpenVDB tile) sharing one block of values per class: a tile costs its table entries,
-    /// not 2 KB per brick per grid. Every brick keeps its own slot (derived structures — the march's copies, the
-    /// fire light's weights — are built per slot); only the grids' storage is shared, so a shared block must be
-    /// written with its class's value alone. `None` when the allocator refuses the map.
+    /// not 2 KB per brick per grid. The table then holds blocks, not one slot per brick — lookups stay one table
+    /// read — so [`for_each_slot`](Self::for_each_slot) gives a shared block for each of its bricks: structures
+    /// kept per brick (the march's copies, the fire light's weights) are built over their own topologies, made
+    /// from the brick list, as they are; and a shared block must be written with its class's value alone.
+    /// `None` when the allocator refuses the map.
     pub fn share(mut self, mut class: impl FnMut([usize; 3]) -> Option<u32>) -> Option<Topology> {
         let mut store = crate::alloc::filled(self.active + 1, 0u32)?;
         let mut class_block: std::collections::HashMap<u32, u32> = Default::default();
@@ -328,19 +326,11 @@ impl Topology {
         });
         if shared {
             self.blocks_stored = next as usize;
-            self.store = store;
+            for e in self.blocks.iter_mut().filter(|e| **e != 0) {
+                *e = store[*e as usize];
+            }
         }
         Some(self)
-    }
-
-    /// The block of values slot `s` is stored in.
-    #[inline(always)]
-    fn block(&self, s: usize) -> usize {
-        if self.store.is_empty() {
-            s
-        } else {
-            self.store[s] as usize
-        }
     }
 
     /// The bricks b + `shift` + d of every stored brick b, for every offset d with each component in
@@ -398,7 +388,7 @@ impl Topology {
     }
     /// Bytes of the table.
     pub fn bytes(&self) -> usize {
-        (self.top.len() + self.blocks.len() + self.store.len()) * std::mem::size_of::<u32>()
+        (self.top.len() + self.blocks.len()) * std::mem::size_of::<u32>()
     }
     /// Blocks of 512 values a grid stores besides its background's: one per stored brick, less what constant
     /// bricks share ([`Topology::share`]).
@@ -421,7 +411,7 @@ impl Topology {
     pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
         let (i, j, k) = (i + self.off[0], j + self.off[1], k + self.off[2]);
         let slot = self.slot([i / BRICK, j / BRICK, k / BRICK]);
-        self.block(slot) * BRICK_VOXELS + (i % BRICK) + BRICK * ((j % BRICK) + BRICK * (k % BRICK))
+        slot * BRICK_VOXELS + (i % BRICK) + BRICK * ((j % BRICK) + BRICK * (k % BRICK))
     }
     /// The brick holding sample (i, j, k).
     #[inline(always)]
@@ -444,7 +434,7 @@ impl Topology {
         // (A shared block: the first brick stored in it.)
         let mut brick = None;
         self.for_each_slot(|b, s| {
-            if brick.is_none() && self.block(s) == block {
+            if brick.is_none() && s == block {
                 brick = Some(b);
             }
         });
@@ -476,7 +466,7 @@ impl Topology {
                 if slot == 0 {
                     0
                 } else {
-                    self.block(slot) * BRICK_VOXELS + within + xx % BRICK
+                    slot * BRICK_VOXELS + within + xx % BRICK
                 },
             );
             x0 = x1;
@@ -590,7 +580,7 @@ impl Grid {
         if (0..3).any(|a| (v[a] + t.off[a]) % BRICK != 0 || v[a] >= t.dims[a]) {
             return None;
         }
-        let b = t.block(t.slot(t.brick_of(v)));
+        let b = t.slot(t.brick_of(v));
         (b != 0).then(|| &mut self.values[b * BRICK_VOXELS..(b + 1) * BRICK_VOXELS])
     }
 
@@ -599,7 +589,7 @@ impl Grid {
         if (0..3).any(|a| b[a] >= self.topo.nb[a]) {
             return None;
         }
-        let k = self.topo.block(self.topo.slot(b));
+        let k = self.topo.slot(b);
         (k != 0).then(|| &mut self.values[k * BRICK_VOXELS..(k + 1) * BRICK_VOXELS])
     }
 
@@ -642,7 +632,6 @@ impl Grid {
     }
     /// Whether slot `s` stores only `v` (512 values; slot 0 is the background).
     pub(crate) fn slot_is(&self, s: usize, v: f32) -> bool {
-        let s = self.topo.block(s);
         self.values
             .get(s * BRICK_VOXELS..(s + 1) * BRICK_VOXELS)
             .is_some_and(|b| b.iter().all(|&x| x == v))
@@ -678,10 +667,7 @@ impl Grid {
                 ok = false;
                 return;
             }
-            let (from, to) = (
-                from_topo.block(from) * BRICK_VOXELS,
-                to_topo.block(to) * BRICK_VOXELS,
-            );
+            let (from, to) = (from * BRICK_VOXELS, to * BRICK_VOXELS);
             g.values[to..to + BRICK_VOXELS]
                 .copy_from_slice(&self.values[from..from + BRICK_VOXELS]);
         });
@@ -798,7 +784,7 @@ impl Grid {
                     ];
                     for z in 0..d {
                         for y in 0..h {
-                            let start = t.block(slot) * BRICK_VOXELS
+                            let start = slot * BRICK_VOXELS
                                 + o[0]
                                 + BRICK * (o[1] + y + BRICK * (o[2] + z));
                             row[..w].copy_from_slice(&self.values[start..start + w]);

@@ -316,7 +316,7 @@ fn grids_share_one_memory_cap() {
     // fits a 2 MB cap, the four together (2.3 MB) do not.
     assert!(
         e.contains("4 grids of 279 blocks")
-            && e.contains("needs 2313628 bytes, above the memory cap of 2000000 bytes"),
+            && e.contains("needs 2310552 bytes, above the memory cap of 2000000 bytes"),
         "{e}"
     );
 }
