@@ -470,7 +470,7 @@ fn an_ascii_grid_on_one_long_line_loads_and_errors_name_the_column() {
     .unwrap();
     let g = &ds.channels()[0].grid;
     assert_eq!(g.at(0, 0, 0), 0.5);
-    assert_eq!(g.at(97 % 40, (97 / 40) % 40, 0), 0.5);
+    assert_eq!(g.at(97 % 40, 97 / 40, 0), 0.5);
     assert_eq!(g.at(1, 0, 0), 0.0);
     // Stored as bricks where the values are, never dense.
     assert!(g.topology().active_bricks() <= 125);
