@@ -175,16 +175,7 @@ pub(crate) fn densify<S: LeafValues>(
         bytes,
         cap: max_bytes,
     };
-    let table = Topology::table_bytes(dims).unwrap_or(u64::MAX);
-    if table > max_bytes {
-        return Err(too_large(
-            format!(
-                "the brick table of a {}×{}×{} grid",
-                dims[0], dims[1], dims[2]
-            ),
-            table,
-        ));
-    }
+    let table = table_within(file, dims, max_bytes)?;
     // The bricks that a voxel range [a, b] (index space) covers, on bricks aligned as the file's leaves are
     // (multiples of 8 in its index space): sample 0 of the box sits at lo mod 8 in its brick.
     let off = lo.map(|v| v.rem_euclid(BRICK as i64) as usize);
@@ -444,6 +435,23 @@ fn written_tiles(t: &Tree) -> Vec<&Tile> {
         .collect()
 }
 
+/// The bytes of a `dims` lattice's brick table, or the error naming them when they exceed `max_bytes`.
+fn table_within(file: &str, dims: [usize; 3], max_bytes: u64) -> Result<u64, Error> {
+    let table = crate::grid::Topology::table_bytes(dims).unwrap_or(u64::MAX);
+    if table > max_bytes {
+        return Err(Error::TooLarge {
+            file: file.to_string(),
+            what: format!(
+                "the brick table of a {}×{}×{} grid",
+                dims[0], dims[1], dims[2]
+            ),
+            bytes: table,
+            cap: max_bytes,
+        });
+    }
+    Ok(table)
+}
+
 /// A replay of a file's voxel writes: calls its argument with (voxel, value) for each, in file order.
 pub(crate) type VoxelWrites<'a> = dyn Fn(&mut dyn FnMut([usize; 3], f32)) -> Result<(), Error> + 'a;
 
@@ -466,16 +474,7 @@ pub(crate) fn brick_as_read(
         bytes,
         cap: max_bytes,
     };
-    let table = Topology::table_bytes(dims).unwrap_or(u64::MAX);
-    if table > max_bytes {
-        return Err(too_large(
-            format!(
-                "the brick table of a {}×{}×{} grid",
-                dims[0], dims[1], dims[2]
-            ),
-            table,
-        ));
-    }
+    let table = table_within(file, dims, max_bytes)?;
     let topo = if background != 0.0 {
         Topology::full(dims)
     } else {
