@@ -219,10 +219,7 @@ fn species_tables(
     intensity: f64,
     tables: &mut Vec<TableReport>,
 ) -> Vec<SpeciesChannel> {
-    let fine = SpectralGrid::new(380.0, 780.0, 400).unwrap_or_default();
-    let fine_w: Vec<DVec3> = (0..400)
-        .map(|i| cie::cmf_integral(380.0 + i as f64, 381.0 + i as f64))
-        .collect();
+    let (fine, fine_w) = fine_cmf();
     let mut out = Vec::new();
     for (sym, e, scale) in species {
         let ch = ds
@@ -255,6 +252,15 @@ fn species_tables(
         });
     }
     out
+}
+
+/// The 1 nm grid over the CMFs that rgb mode bins lines on, and each bin's ∫ x̄ȳz̄.
+pub(super) fn fine_cmf() -> (SpectralGrid, Vec<DVec3>) {
+    let fine = SpectralGrid::new(380.0, 780.0, 400).unwrap_or_default();
+    let w = (0..400)
+        .map(|i| cie::cmf_integral(380.0 + i as f64, 381.0 + i as f64))
+        .collect();
+    (fine, w)
 }
 
 /// The largest σ_t of each majorant brick over all channels: its largest density times the largest σ_a + σ_s

@@ -36,6 +36,7 @@ mod integrate;
 mod kernel;
 mod lanes;
 mod lattice;
+mod lines;
 mod looks;
 mod march;
 mod motion;
@@ -155,6 +156,8 @@ pub struct FireVolume {
     lanes: Option<lanes::LaneTables>,
     /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
     lattice: Option<lattice::Lattice>,
+    /// Atomic lines that can be optically thick, integrated across their profiles (`lineshape "voigt"`).
+    lines: Option<lines::ThickLines>,
     /// Rays whose tracking stopped at the collision cap (see `integrate::MAX_COLLISIONS`).
     capped: CapCounter,
     /// Bytes the budget (`maxbytes`) leaves for what is derived from the volume later (its fire light).
@@ -230,6 +233,7 @@ impl FireVolume {
             .unwrap_or(0.0)
             .max(0.0);
         let mut tables = Vec::new();
+        let mut thick = None;
         let mut co = match &set.emission {
             Emission::Physical {
                 optics,
@@ -240,17 +244,74 @@ impl FireVolume {
                 tint,
                 ramp,
                 species,
-            } => coefficients::physical(
-                &basis,
-                optics,
-                (*alpha, *sootscale, *intensity),
-                (*smokescale, tint.as_ref(), ramp.as_ref()),
-                species,
-                set.sigma_s.as_ref(),
-                &ds,
-                t_max,
-                &mut tables,
-            ),
+            } => {
+                // Lines that can be thick leave the tables for the line model (`lines`).
+                let mut thin = species.clone();
+                if set.voigt && !species.is_empty() {
+                    let t0 = Instant::now();
+                    let sigma_s = set.sigma_s.as_ref();
+                    let continuum = |l: f64| {
+                        let k = optics.kappa(l, 1.0, *alpha) * sootscale;
+                        [
+                            smokescale * k,
+                            smokescale * sigma_s.map_or(0.0, |f| f(l)),
+                            intensity * k * tint.as_ref().map_or(1.0, |f| f(l)),
+                        ]
+                    };
+                    let t_range = temperature
+                        .map(|i| {
+                            let st = &ds.channels()[i].stats;
+                            [st.min as f64, st.max as f64]
+                        })
+                        .unwrap_or([0.0, 0.0]);
+                    let inp = lines::Input {
+                        species,
+                        ds: &ds,
+                        basis: &basis,
+                        broadening: set.linebroadening,
+                        intensity: *intensity,
+                        continuum: &continuum,
+                        t_range,
+                    };
+                    let marks = lines::select(&inp);
+                    thick = lines::ThickLines::new(&inp, &marks, t_max);
+                    for ((_, e, _), m) in thin.iter_mut().zip(&marks) {
+                        let keep: Vec<bool> = m.iter().map(|x| !x).collect();
+                        let lines = e.lines().to_vec();
+                        *e = e.with_lines(&|l| {
+                            lines
+                                .iter()
+                                .zip(&keep)
+                                .any(|(x, &k)| k && x.lambda_nm == l.lambda_nm)
+                        });
+                    }
+                    if let Some(tl) = &thick {
+                        tables.push(TableReport {
+                            name: format!("thick lines ({} wavelengths across them)", tl.nodes()),
+                            bytes: tl.bytes(),
+                            seconds: t0.elapsed().as_secs_f64(),
+                        });
+                    }
+                }
+                let mut co = coefficients::physical(
+                    &basis,
+                    optics,
+                    (*alpha, *sootscale, *intensity),
+                    (*smokescale, tint.as_ref(), ramp.as_ref()),
+                    &thin,
+                    set.sigma_s.as_ref(),
+                    &ds,
+                    t_max,
+                    &mut tables,
+                );
+                // (The light's power counts every line.)
+                if let Some(src) = &mut co.source {
+                    for ((e, _, _), (_, full, _)) in src.species.iter_mut().zip(species) {
+                        *e = full.clone();
+                    }
+                }
+                co
+            }
             Emission::Pbrt {
                 scale,
                 sigma_a,
@@ -508,6 +569,7 @@ impl FireVolume {
             refraction,
             lanes: None,
             lattice: None,
+            lines: thick,
             capped: CapCounter::default(),
             spare: 0,
             #[cfg(test)]
@@ -693,7 +755,44 @@ impl FireVolume {
     /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
     pub fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
         self.fault_check();
-        march::integrate(self, ray, l, t)
+        let te = march::integrate(self, ray, l, t);
+        self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
+        te
+    }
+    /// The thick lines' part of a result along `ray` up to `end` (see [`lines`]), in the medium as `adv` sees it.
+    fn thick_lines(
+        &self,
+        adv: Option<&motion::Advected>,
+        ray: &Ray,
+        end: f64,
+        l: Option<&mut [f64]>,
+        t: &mut [f64],
+        fold: lines::Fold,
+    ) {
+        if let Some(tl) = &self.lines {
+            match adv {
+                Some(a) => tl.apply(self, ray, end, false, &|p| a.displaced(p), l, t, fold),
+                None => tl.apply(self, ray, end, true, &|p| p, l, t, fold),
+            }
+        }
+    }
+    /// `sample_scatter`'s event with the thick lines folded in (emission before the event, their mean
+    /// transmittance on the weights).
+    fn scatter_lines(
+        &self,
+        adv: Option<&motion::Advected>,
+        ray: &Ray,
+        ev: Event,
+        l: &mut [f64],
+        w: &mut [f64],
+    ) -> Event {
+        let end = match ev {
+            Event::Scattered(t) => t,
+            Event::Escaped => ray.t1,
+            Event::Absorbed => return ev,
+        };
+        self.thick_lines(adv, ray, end, Some(l), w, lines::Fold::Scale);
+        ev
     }
     /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
     /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
@@ -704,18 +803,23 @@ impl FireVolume {
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
         self.fault_check();
-        crate::refraction::march::integrate_exit(self, rf, ray, l, t)
+        let exit = crate::refraction::march::integrate_exit(self, rf, ray, l, t);
+        // (Along the straight chord: the bend is a fraction of a degree.)
+        self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
+        exit
     }
 
     /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
     pub fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
         let mut sc = Scratch::new(self.channels());
-        integrate::transmittance(self, ray, self.integrator, &mut sc, t)
+        integrate::transmittance(self, ray, self.integrator, &mut sc, t);
+        self.thick_lines(None, ray, ray.t1, None, t, lines::Fold::Add);
     }
     /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights.
     pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
         let mut sc = Scratch::new(self.channels());
-        integrate::sample_scatter(self, ray, &mut sc, l, w)
+        let ev = integrate::sample_scatter(self, ray, &mut sc, l, w);
+        self.scatter_lines(None, ray, ev, l, w)
     }
 
     /// The temperature (K) whose blackbody a viewer adapts to: the hottest when the colour is the physics',
@@ -738,7 +842,9 @@ impl FireVolume {
         match self.advected(time) {
             Some(a) => {
                 self.fault_check();
-                a.integrate(ray, l, t)
+                let te = a.integrate(ray, l, t);
+                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
+                te
             }
             None => self.integrate(ray, l, t),
         }
@@ -756,6 +862,7 @@ impl FireVolume {
             Some(a) if self.refraction.is_none() => {
                 self.fault_check();
                 let te = a.integrate(ray, l, t);
+                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
                 (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
             }
             _ => self.integrate_exit(ray, l, t),
@@ -764,14 +871,20 @@ impl FireVolume {
     /// As [`transmittance`](Self::transmittance) at time `time`.
     pub fn transmittance_at(&self, ray: &Ray, time: f64, t: &mut [f64]) {
         match self.advected(time) {
-            Some(a) => a.transmittance(ray, t),
+            Some(a) => {
+                a.transmittance(ray, t);
+                self.thick_lines(Some(&a), ray, ray.t1, None, t, lines::Fold::Add);
+            }
             None => self.transmittance(ray, t),
         }
     }
     /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
     pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
         match self.advected(time) {
-            Some(a) => a.sample_scatter(ray, l, w),
+            Some(a) => {
+                let ev = a.sample_scatter(ray, l, w);
+                self.scatter_lines(Some(&a), ray, ev, l, w)
+            }
             None => self.sample_scatter(ray, l, w),
         }
     }
@@ -779,8 +892,17 @@ impl FireVolume {
         self.blur.as_ref().and_then(|b| b.at(self, time))
     }
     /// σ_a, σ_s and j per channel at medium-space point `p` (zeros outside).
+    /// (Atomic lines as their bins' means, thick or not: what a channel's coefficient is.)
     pub fn coefficients(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
-        Medium::eval(self, p, sa, ss, j)
+        Medium::eval(self, p, sa, ss, j);
+        if let Some(tl) = &self.lines {
+            if let Some(st) = self.ds.stencil_with_margin(p, self.margin) {
+                let ch = self.ds.channels();
+                let value = |k: usize| ch[k].grid.eval(&st) as f64;
+                let t = self.temperature.map_or(0.0, value);
+                tl.add_boxed(t, &value, sa, j);
+            }
+        }
     }
 }
 

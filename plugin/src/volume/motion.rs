@@ -135,7 +135,7 @@ pub(super) struct Advected<'a> {
 impl Advected<'_> {
     /// Where a lookup at `p` reads the grids: p − v(p) · shift.
     #[inline]
-    fn displaced(&self, p: DVec3) -> DVec3 {
+    pub(super) fn displaced(&self, p: DVec3) -> DVec3 {
         let Some(st) = self.v.ds.stencil_with_margin(p, self.v.margin) else {
             return p;
         };

@@ -35,6 +35,10 @@ pub(super) struct Settings {
     pub g: f64,
     /// The fraction of the heat release the reaction zone emits as light (`chemiluminescence`).
     pub chemiluminescence: f64,
+    /// Atomic lines by their Voigt profile where they can be thick (`lineshape`), else boxed over a bin.
+    pub voigt: bool,
+    /// Collisional FWHM at 2500 K, cm⁻¹ (`linebroadening`).
+    pub linebroadening: f64,
     /// The index of air and the ray integrator, when `refraction` is on.
     pub refraction: Option<RefractionSettings>,
     #[cfg(test)]
@@ -125,6 +129,8 @@ impl Settings {
         let cutoff = r.float("cutoff")?;
         let g = r.float("g")?;
         let chemiluminescence = r.float("chemiluminescence")?;
+        let voigt = r.string("lineshape")? == "voigt";
+        let linebroadening = r.float("linebroadening")?;
         // Refraction's parameters are validated whether or not it is on.
         let on = r.bool("refraction")?;
         let air = Air {
@@ -152,6 +158,8 @@ impl Settings {
             cutoff,
             g,
             chemiluminescence,
+            voigt,
+            linebroadening,
             refraction: on.then_some(refraction),
             #[cfg(test)]
             fault,

@@ -21,7 +21,16 @@ pub(super) struct TTable {
 impl TTable {
     /// Tabulates `f(T) -> C values` for T in [0, t_max], in parallel.
     pub(super) fn build(t_max: f64, c: usize, f: &(dyn Fn(f64) -> Vec<f64> + Sync)) -> TTable {
-        let rows = ((t_max / 0.5).ceil() as usize + 2).clamp(2, 65_536);
+        Self::build_step(t_max, 0.5, c, f)
+    }
+    /// As [`build`](Self::build) with rows at most `step` K apart.
+    pub(super) fn build_step(
+        t_max: f64,
+        step: f64,
+        c: usize,
+        f: &(dyn Fn(f64) -> Vec<f64> + Sync),
+    ) -> TTable {
+        let rows = ((t_max / step).ceil() as usize + 2).clamp(2, 65_536);
         let dt = if t_max > 0.0 {
             t_max / (rows - 2) as f64
         } else {

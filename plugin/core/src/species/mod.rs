@@ -11,8 +11,9 @@
 //!   space, which never overflows.
 //! - Kirchhoff: j = σ_a B_λ(T) holds identically (shared/data/README.md), to rounding.
 //!
-//! Lines are binned with φ = 1/Δλ of the bin holding the line's vacuum wavelength (the thesis's choice; no
-//! Doppler or pressure profile).
+//! Lines are binned with φ = 1/Δλ of the bin holding the line's vacuum wavelength (the thesis's choice), right
+//! while a line is optically thin; [`profile`] gives their true shape (Voigt), which the fire volume integrates
+//! where a line can become thick.
 //!
 //! ## Partition function
 //! Z(T) = Σ_j g_j e^{−E_j/kT} by a **direct sum over the levels this table ships**: the ground level plus every
@@ -27,6 +28,7 @@
 //! vacuum with [`crate::ciddor::air_to_vacuum_nm`] (standard air).
 
 pub mod line_table;
+pub mod profile;
 
 use crate::ciddor::air_to_vacuum_nm;
 use crate::constants::{
@@ -174,6 +176,14 @@ impl Element {
     /// The element's lines (vacuum wavelengths).
     pub fn lines(&self) -> &[Line] {
         &self.lines
+    }
+    /// The same element with only the lines `keep` accepts (the levels, and so Z(T), unchanged).
+    pub fn with_lines(&self, keep: &dyn Fn(&Line) -> bool) -> Element {
+        Element {
+            symbol: self.symbol,
+            lines: self.lines.iter().copied().filter(|l| keep(l)).collect(),
+            levels: self.levels.clone(),
+        }
     }
     /// The levels summed in the partition function.
     pub fn levels(&self) -> &[Level] {
