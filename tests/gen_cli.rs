@@ -169,22 +169,31 @@ fn bad_arguments_exit_2_with_one_line() {
 }
 
 #[test]
-fn the_committed_campfire_is_what_the_generator_makes() {
-    // scenes/campfire/campfire.vdb was written by the command in its README; the generator is deterministic.
+fn the_committed_campfires_are_what_the_generator_makes() {
+    // scenes/campfire/campfire.vdb and campfire-warped.vdb were written by the commands in its README; the
+    // generator is deterministic.
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire");
-    let out = tmp("campfire").join("campfire.vdb");
-    ok(&run(&[
-        "gen",
-        "campfire",
-        "--resolution",
-        "96",
-        "-o",
-        out.to_str().unwrap(),
-    ]));
-    assert!(
-        std::fs::read(&out).unwrap() == std::fs::read(root.join("campfire.vdb")).unwrap(),
-        "regenerate it: firemedium gen campfire --resolution 96 -o scenes/campfire/campfire.vdb"
-    );
+    for (name, extra) in [
+        ("campfire.vdb", &[][..]),
+        ("campfire-warped.vdb", &["--warp", "0.1"][..]),
+    ] {
+        let out = tmp("campfire").join(name);
+        let mut args = vec![
+            "gen",
+            "campfire",
+            "--resolution",
+            "96",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&run(&args));
+        assert!(
+            std::fs::read(&out).unwrap() == std::fs::read(root.join(name)).unwrap(),
+            "regenerate it: firemedium {} (scenes/campfire/README.md)",
+            args.join(" ")
+        );
+    }
 }
 
 #[test]

@@ -34,6 +34,15 @@ pub struct GenArgs {
     /// (`"string reactiongrid" "reaction"`).
     #[arg(long)]
     reaction: bool,
+    /// Warped blobs (Stam & Fiume §4): evaluate each blob's kernel at points traced back through the turbulent
+    /// wind for SECONDS, so blobs stretch and curl with the wind instead of staying round (0 < SECONDS ≤ 10;
+    /// ~0.1–0.5 s at the fires' scales).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_warp)]
+    warp: Option<f64>,
+    /// With --warp: the warped kernel's σ is σ − η·SECONDS (η in m/s, ≥ 0; at least half of σ), the paper's
+    /// allowance for the spread the advection itself causes.
+    #[arg(long, value_name = "ETA", default_value_t = 0.0, requires = "warp", value_parser = parse_spread)]
+    warp_spread: f64,
     /// Write the grids as a tool does, to be read with `"string source"` alone: kelvin (density, temperature in
     /// K), houdini (density, temperature in units of 5000 K, flame), blender (density, flame as Cycles maps it to
     /// kelvin), embergen (smoke, temperature in K, flames).
@@ -53,6 +62,24 @@ fn parse_species(s: &str) -> Result<(String, f64), String> {
         return Err(bad());
     }
     Ok((sym.to_string(), n))
+}
+
+fn parse_warp(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 10.0 => Ok(t),
+        _ => Err(format!(
+            "--warp '{s}': expected a back-trace time in seconds, 0 < t ≤ 10, e.g. 0.25"
+        )),
+    }
+}
+
+fn parse_spread(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(e) if (0.0..=1e3).contains(&e) => Ok(e),
+        _ => Err(format!(
+            "--warp-spread '{s}': expected η in m/s, 0 ≤ η ≤ 1000, e.g. 0.05"
+        )),
+    }
 }
 
 fn parse_frames(s: &str) -> Result<(u32, u32), String> {
@@ -100,6 +127,7 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
     let style = Style::from_name(&a.style).unwrap_or(Style::Kelvin);
     let start = std::time::Instant::now();
     let mut sim = Sim::new(kind, a.seed);
+    sim.warp = a.warp.map(|t| (t, a.warp_spread));
     let mut out = String::new();
     for frame in first..=last {
         sim.run_to(frame as f64 / 24.0);
