@@ -32,6 +32,7 @@
 
 mod basis;
 mod coefficients;
+mod diffusion;
 mod integrate;
 mod kernel;
 mod lanes;
@@ -156,6 +157,8 @@ pub struct FireVolume {
     lanes: Option<lanes::LaneTables>,
     /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
     lattice: Option<lattice::Lattice>,
+    /// The fire's light in its smoke by diffusion (`multiplescattering "diffusion"`): read as emission.
+    diffusion: Option<diffusion::Diffusion>,
     /// Atomic lines that can be optically thick, integrated across their profiles (`lineshape "voigt"`).
     lines: Option<lines::ThickLines>,
     /// Rays whose tracking stopped at the collision cap (see `integrate::MAX_COLLISIONS`).
@@ -362,7 +365,9 @@ impl FireVolume {
         // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
         // as it copies them.
         let brick = majorant_brick(set.brick, ds.topology());
-        let lanes_wanted = set.f32_lanes && set.integrator == Integrator::March;
+        // (With diffusion the emission reads the coarse fluence grid: the f64 march.)
+        let lanes_wanted =
+            set.f32_lanes && set.integrator == Integrator::March && set.diffusion.is_none();
         let mut lattice = None;
         let mut known = vec![None; ds.channels().len()];
         if lanes_wanted && ds.interpolation() == crate::grid::Interpolation::Trilinear {
@@ -570,6 +575,7 @@ impl FireVolume {
             lanes: None,
             lattice: None,
             lines: thick,
+            diffusion: None,
             capped: CapCounter::default(),
             spare: 0,
             #[cfg(test)]
@@ -602,6 +608,35 @@ impl FireVolume {
                     vol.lattice = Some(lat);
                 }
             }
+        }
+        if let Some(res) = set.diffusion.filter(|_| vol.s.iter().any(|&v| v > 0.0)) {
+            let t5 = Instant::now();
+            // The solve's peak: three cell arrays per channel, five per solving thread.
+            let cells = {
+                let size = vol.clip_box[1] - vol.clip_box[0];
+                let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
+                [0, 1, 2]
+                    .map(|k| ((size[k] / h).ceil() as u64).max(1))
+                    .iter()
+                    .product::<u64>()
+            };
+            let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
+            let left = spare.saturating_sub(vol.tables.iter().map(|t| t.bytes as u64).sum());
+            if need > left {
+                return Err(Error::invalid(
+                    "volume",
+                    "diffusionresolution",
+                    format!("{res} ({cells} cells, {need} bytes to solve)"),
+                    format!("a grid within the memory budget's {left} bytes left"),
+                ));
+            }
+            let df = diffusion::Diffusion::build(&vol, res, vol.g)?;
+            vol.tables.push(TableReport {
+                name: format!("diffusion ({} iterations)", df.iterations),
+                bytes: df.bytes(),
+                seconds: t5.elapsed().as_secs_f64(),
+            });
+            vol.diffusion = Some(df);
         }
         vol.spare = spare.saturating_sub(vol.tables.iter().map(|t| t.bytes as u64).sum());
         vol.build_seconds = start.elapsed().as_secs_f64();
@@ -640,9 +675,10 @@ impl FireVolume {
     pub fn g(&self) -> f64 {
         self.g
     }
-    /// Whether any scattering is configured.
+    /// Whether the host should sample scattering events: scattering is configured and not resolved by
+    /// diffusion (where the smoke's scattered light is emission).
     pub fn scatters(&self) -> bool {
-        self.s.iter().any(|&v| v > 0.0)
+        self.diffusion.is_none() && self.s.iter().any(|&v| v > 0.0)
     }
     /// March step length, medium units.
     pub fn step_length(&self) -> f64 {
@@ -966,6 +1002,9 @@ impl Medium for FireVolume {
                     j[c] += n * sp.j.at(l, c) as f64;
                 }
             }
+        }
+        if let Some(df) = &self.diffusion {
+            df.add(p, ss, j);
         }
     }
     fn majorants(

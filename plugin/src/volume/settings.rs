@@ -35,6 +35,8 @@ pub(super) struct Settings {
     pub g: f64,
     /// The fraction of the heat release the reaction zone emits as light (`chemiluminescence`).
     pub chemiluminescence: f64,
+    /// Multiple scattering by diffusion at this many cells along the longest side (`multiplescattering`).
+    pub diffusion: Option<usize>,
     /// Atomic lines by their Voigt profile where they can be thick (`lineshape`), else boxed over a bin.
     pub voigt: bool,
     /// Collisional FWHM at 2500 K, cm⁻¹ (`linebroadening`).
@@ -130,6 +132,8 @@ impl Settings {
         let g = r.float("g")?;
         let chemiluminescence = r.float("chemiluminescence")?;
         let voigt = r.string("lineshape")? == "voigt";
+        let diffusion = (r.string("multiplescattering")? == "diffusion")
+            .then_some(r.int("diffusionresolution")? as usize);
         let linebroadening = r.float("linebroadening")?;
         // Refraction's parameters are validated whether or not it is on.
         let on = r.bool("refraction")?;
@@ -160,6 +164,7 @@ impl Settings {
             chemiluminescence,
             voigt,
             linebroadening,
+            diffusion,
             refraction: on.then_some(refraction),
             #[cfg(test)]
             fault,
