@@ -15,8 +15,8 @@
 //! **Groups and nodes.** The thick lines of one window — ±20 nm around each line, overlapping windows merged
 //! (the wings beyond carry < 1 % of a line's light up to N·L = 1e20 m⁻²) — form a group. Each line owns the window up to the midpoints between its
 //! neighbours; across it the nodes are a core node each side (offsets below δ₀ = 0.3 σ_D at 300 K) and
-//! 4-point Gauss–Legendre panels, one per decade of offset, in u = ln δ (the integrand δ·g(δ) is a smooth bump
-//! in u from the Doppler core to the Lorentz wings; 4e-4 against a 2e-5 nm grid, tested). Na D: 84 nodes.
+//! 3-point Gauss–Legendre panels, one per decade of offset, in u = ln δ (the integrand δ·g(δ) is a smooth bump
+//! in u from the Doppler core to the Lorentz wings; 3.4e-3 against a 2e-5 nm grid, tested). Na D: 58 nodes.
 //!
 //! **Transfer.** Along the straight ray, in the volume's steps (midpoint samples, exact exponentials per step),
 //! the continuum at the group's centre wavelength (soot σ_a, σ_s and κB there, times the same scales as the
@@ -56,12 +56,11 @@ pub(super) const THICK: f64 = 0.01;
 /// (Na D) and stay out.
 const HALF_WINDOW: f64 = 20.0;
 
-/// 4-point Gauss–Legendre nodes and weights on [−1, 1].
-const GL4: [(f64, f64); 4] = [
-    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
-    (-0.339_981_043_584_856_26, 0.652_145_154_862_546_1),
-    (0.339_981_043_584_856_26, 0.652_145_154_862_546_1),
-    (0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+/// 3-point Gauss–Legendre nodes and weights on [−1, 1].
+const GL3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
+    (0.0, 0.888_888_888_888_888_9),
+    (0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
 ];
 
 /// What the line model needs from the volume's build.
@@ -252,7 +251,7 @@ fn window_nodes(
                 let h = (u1 - u0) / panels as f64;
                 for p in 0..panels {
                     let mid = u0 + (p as f64 + 0.5) * h;
-                    for (x, w) in GL4 {
+                    for (x, w) in GL3 {
                         let d = (mid + 0.5 * h * x).exp();
                         lam.push(c + side * d);
                         wid.push(w * 0.5 * h * d);
@@ -681,7 +680,8 @@ mod tests {
     #[test]
     fn nodes_integrate_a_thick_doublet() {
         // The equivalent width ∫(1 − e^{−κ(λ)}) dλ of Na D at 2000 K over 585–595 nm, N·L 1e14–1e20 m⁻²: the
-        // window's nodes against a 2e-5 nm grid, within 1e-3 (measured: 4e-4 at most).
+        // window's nodes against a 2e-5 nm grid, within 5e-3 (measured: 3.4e-3 at most with 58 nodes; 4-point
+        // panels, 76 nodes, gave 4e-4).
         let na = Element::by_symbol("Na").unwrap();
         let t = 2000.0;
         let (kt, ln_z) = (BOLTZMANN * t, na.ln_partition_function(t));
@@ -702,7 +702,8 @@ mod tests {
         let centres: Vec<f64> = d.iter().map(|l| l.lambda_nm).collect();
         let d0 = 0.3 * doppler_sigma_nm(588.995, 300.0, 22.99);
         let (lam, wid) = window_nodes(585.0, 595.0, &centres, d0, &[]);
-        assert!((wid.iter().sum::<f64>() - 10.0).abs() < 1e-5);
+        let total: f64 = wid.iter().sum();
+        assert!((total - 10.0).abs() < 1e-3, "{total}");
         for n in [1e14, 1e16, 1e18, 1e20] {
             let q: f64 = lam
                 .iter()
@@ -714,7 +715,7 @@ mod tests {
             let f: f64 = (0..steps)
                 .map(|i| h * (1.0 - (-kappa(585.0 + (i as f64 + 0.5) * h, n)).exp()))
                 .sum();
-            assert!((q / f - 1.0).abs() < 1e-3, "N·L {n:e}: nodes {q} vs {f}");
+            assert!((q / f - 1.0).abs() < 5e-3, "N·L {n:e}: nodes {q} vs {f}");
         }
     }
 }
