@@ -121,6 +121,30 @@ fn bad_arguments_exit_2_with_one_line() {
     let err =
         String::from_utf8_lossy(&firemedium(&["physics", "--temperature=-3"]).stderr).to_string();
     assert!(err.contains("--temperature") && err.contains("-3"), "{err}");
+    // A negative number after a space is a value too, refused by its range (not "unexpected argument").
+    let err = String::from_utf8_lossy(&firemedium(&["physics", "--temperature", "-5"]).stderr)
+        .to_string();
+    assert!(
+        err.contains("--temperature -5: expected a temperature in K"),
+        "{err}"
+    );
+    // Missing arguments are named, with the usage.
+    let out = firemedium(&["compare"]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        err.contains("<SCENE>")
+            && err.contains("usage: firemedium compare")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    // A scene that cannot be read: its name, without a position it does not have.
+    let out = firemedium(&["render", "/no/such/scene.pbrt"]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        err.contains("cannot read /no/such/scene.pbrt") && !err.contains(":0:0"),
+        "{err}"
+    );
 }
 
 #[test]

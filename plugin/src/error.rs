@@ -90,6 +90,9 @@ impl fmt::Display for Error {
                 if let Some(at) = at {
                     write!(f, "{at}: ")?;
                 }
+                if value.is_empty() {
+                    return write!(f, "{component}: unknown parameter '{name}' ({expected})");
+                }
                 write!(
                     f,
                     "{component}: parameter '{name}' = {value}: expected {expected}"

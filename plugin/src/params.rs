@@ -518,12 +518,11 @@ impl<'a> ParamReader<'a> {
                     })
                     .min();
                 let hint = match best {
-                    Some((d, n)) if d <= 3.max(p.name.len() / 3) => {
-                        format!("a known parameter (did you mean '{n}'?)")
-                    }
-                    _ => "a known parameter (see docs/params.md)".to_string(),
+                    Some((d, n)) if d <= 3.max(p.name.len() / 3) => format!("did you mean '{n}'?"),
+                    _ => "docs/params.md lists the known ones".to_string(),
                 };
-                return Err(Error::invalid(self.component, &p.name, "unknown", hint));
+                // (An empty value: the parameter's name is the problem — "unknown parameter".)
+                return Err(Error::invalid(self.component, &p.name, "", hint));
             }
         }
         Ok(())
@@ -669,7 +668,10 @@ mod tests {
             "{e}"
         );
         let e = r.finish().unwrap_err().to_string();
-        assert_eq!(e, "volume: parameter 'stepsise' = unknown: expected a known parameter (did you mean 'stepsize'?)");
+        assert_eq!(
+            e,
+            "volume: unknown parameter 'stepsise' (did you mean 'stepsize'?)"
+        );
         let list = vec![Param::float("stepsize", f64::NAN)];
         assert!(ParamReader::new("volume", &list, &[&T])
             .float("stepsize")

@@ -62,7 +62,12 @@ impl ParseError {
 
 impl fmt::Display for ParseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.loc, self.message)
+        // Line 0: the error is about the file itself (it cannot be read), whose message names it.
+        if self.loc.line == 0 {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "{}: {}", self.loc, self.message)
+        }
     }
 }
 

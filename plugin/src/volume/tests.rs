@@ -626,7 +626,10 @@ fn parameter_errors_suggest_and_explain() {
     };
     let mut l = base();
     l.push(Param::float("stepsise", 0.5));
-    assert_eq!(FireVolume::new(&l).unwrap_err().to_string(), "volume: parameter 'stepsise' = unknown: expected a known parameter (did you mean 'stepsize'?)");
+    assert_eq!(
+        FireVolume::new(&l).unwrap_err().to_string(),
+        "volume: unknown parameter 'stepsise' (did you mean 'stepsize'?)"
+    );
     let mut l = base();
     l.push(Param::spectrum("sigma_a", &[1.0]));
     assert!(FireVolume::new(&l)

@@ -48,8 +48,11 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
             Err((
                 1,
                 format!(
-                    "{}: {}×{} pixels, the scene (and the reference) are {w}×{h}",
+                    "{} is {}×{} pixels where the scene renders {w}×{h}: compare images of one size, and give \
+                     --resolution {}x{} if they were rendered at that size",
                     p.display(),
+                    img.w,
+                    img.h,
                     img.w,
                     img.h
                 ),

@@ -75,10 +75,7 @@ fn main() -> ExitCode {
                 );
                 return ExitCode::from(2);
             }
-            // One line: clap's first line names the argument and the problem.
-            let text = e.render().to_string();
-            let line = text.lines().next().unwrap_or("error: invalid arguments");
-            eprintln!("firemedium: {}", line.trim_start_matches("error: "));
+            eprintln!("firemedium: {}", one_line(&e.render().to_string()));
             return ExitCode::from(2);
         }
     };
@@ -106,5 +103,40 @@ fn main() -> ExitCode {
             eprintln!("firemedium: {}", msg.replace('\n', " "));
             ExitCode::from(status)
         }
+    }
+}
+
+/// clap's error as one line: its first paragraph (the problem, and the arguments it names on the lines below)
+/// and its usage line — "the following required arguments were not provided: <SCENE> <REFERENCE> (usage:
+/// firemedium compare <SCENE> <REFERENCE> <IMAGES>...)".
+fn one_line(text: &str) -> String {
+    let mut lines = text.lines();
+    let mut out: Vec<&str> = Vec::new();
+    for l in lines.by_ref() {
+        if l.trim().is_empty() {
+            break;
+        }
+        out.push(l.trim());
+    }
+    let mut msg = out.join(" ");
+    msg = msg.trim_start_matches("error: ").to_string();
+    if msg.is_empty() {
+        msg = "invalid arguments".into();
+    }
+    if let Some(usage) = lines.find_map(|l| l.trim().strip_prefix("Usage: ")) {
+        msg += &format!(" (usage: {usage}; see --help)");
+    }
+    msg
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn clap_errors_become_one_line_naming_the_arguments_and_the_usage() {
+        let text = "error: the following required arguments were not provided:\n  <SCENE>\n  <REFERENCE>\n\nUsage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            super::one_line(text),
+            "the following required arguments were not provided: <SCENE> <REFERENCE> (usage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...; see --help)"
+        );
     }
 }

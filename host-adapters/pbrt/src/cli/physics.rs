@@ -12,6 +12,8 @@ use firemedium_core::{blackbody, ciddor, cie, soot};
 use serde::Serialize;
 
 #[derive(Debug, Args)]
+// (Negative numbers are values: `--temperature -5` is refused by its range, not taken for a flag.)
+#[command(allow_negative_numbers = true)]
 pub struct PhysicsArgs {
     /// Gas temperature, K.
     #[arg(long, value_name = "K", default_value_t = 1500.0)]

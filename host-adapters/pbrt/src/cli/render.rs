@@ -10,6 +10,8 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
+// (Negative numbers are values: `--temperature -5` is refused by its range, not taken for a flag.)
+#[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// The pbrt-v4 scene file.
     scene: PathBuf,

@@ -7,6 +7,8 @@ use firemedium::tonemap::{self, Adapt, Operator, Options, White, WhiteArg};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
+// (Negative numbers are values: `--temperature -5` is refused by its range, not taken for a flag.)
+#[command(allow_negative_numbers = true)]
 pub struct TonemapArgs {
     /// The absolute render (EXR, linear sRGB in cd/m²-scaled units, as `render` writes).
     input: PathBuf,

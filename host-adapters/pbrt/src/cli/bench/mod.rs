@@ -58,9 +58,10 @@ pub struct ErrorArgs {
     /// The surface scene's resolution.
     #[arg(long, default_value = "80x60", value_parser = crate::args::parse_resolution)]
     surface_resolution: (usize, usize),
-    /// The surface ladder's largest spp, and its reference's spp.
+    /// The surface ladder's largest samples per pixel (1, 2, 4, … up to it).
     #[arg(long, default_value_t = 64)]
     surface_max_spp: usize,
+    /// Samples per pixel of the surface scene's reference render (the error's baseline).
     #[arg(long, default_value_t = 1024)]
     surface_reference_spp: usize,
 }
@@ -91,9 +92,10 @@ pub struct PerfArgs {
     /// ABI), against a reference at `--reference-step` with `--reference-bins`.
     #[arg(long)]
     kernel: bool,
-    /// The user-path reference's sub-pixels per side (stratified, at their centres) and march step (voxels).
+    /// The user-path reference's sub-pixels per side (stratified, at their centres).
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=64))]
     reference_subpixels: u32,
+    /// The user-path reference's march step, voxels.
     #[arg(long, default_value_t = 0.25)]
     reference_path_step: f64,
 }
