@@ -687,7 +687,7 @@ mod tests {
             .finish()
             .unwrap_err()
             .to_string();
-        assert!(e.contains("see docs/params.md"), "{e}");
+        assert!(e.contains("docs/params.md lists the known ones"), "{e}");
     }
 
     #[test]
