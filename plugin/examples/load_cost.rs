@@ -31,7 +31,7 @@ fn main() {
         };
         let s = t.elapsed().as_secs_f64();
         all.push(s);
-        if best.as_ref().map_or(true, |b| s < b.0) {
+        if best.as_ref().is_none_or(|b| s < b.0) {
             best = Some((s, v));
         }
     }

@@ -114,7 +114,7 @@ pub(super) fn physical(
     let species = species_tables(species, ds, basis, t_max, intensity, tables);
     // (The fire light's full-spectrum power follows the physics: with a tint or a ramp, it reports its power over
     // the bins instead.)
-    let physical_colour = tint.is_none() && ramp.map_or(true, |r| r.physical >= 1.0);
+    let physical_colour = tint.is_none() && ramp.is_none_or(|r| r.physical >= 1.0);
     let source = physical_colour.then(|| Source {
         soot: optics.clone(),
         alpha,

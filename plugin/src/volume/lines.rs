@@ -332,7 +332,7 @@ impl ThickLines {
         for (s, l) in members {
             let mass = atomic_mass_u(inp.species[*s].1.symbol()).unwrap_or(1.0);
             d0 = d0.min(0.3 * doppler_sigma_nm(l.lambda_nm, 300.0, mass));
-            if centres.last().map_or(true, |&c| l.lambda_nm - c > 1e-3) {
+            if centres.last().is_none_or(|&c| l.lambda_nm - c > 1e-3) {
                 centres.push(l.lambda_nm);
             }
         }

@@ -455,7 +455,7 @@ impl FireVolume {
             .map(|b| {
                 majorant.max(b, density) <= 0.0
                     && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
-                    && emitter.map_or(true, |e| majorant.max(b, e) <= 0.0)
+                    && emitter.is_none_or(|e| majorant.max(b, e) <= 0.0)
             })
             .collect();
         tables.push(TableReport {
@@ -538,7 +538,7 @@ impl FireVolume {
         let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
         let physical_colour = match &set.emission {
             Emission::Physical { tint, ramp, .. } => {
-                tint.is_none() && ramp.as_ref().map_or(true, |r| r.physical >= 1.0)
+                tint.is_none() && ramp.as_ref().is_none_or(|r| r.physical >= 1.0)
             }
             _ => true,
         };

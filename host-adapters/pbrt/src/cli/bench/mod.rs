@@ -360,7 +360,7 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
     for _ in 0..a.repeat {
         // Alternating: the baseline, then every configuration, each round.
         let n = naive(&file, size)?;
-        if base.as_ref().map_or(true, |b| n.0 + n.1 < b.0 + b.1) {
+        if base.as_ref().is_none_or(|b| n.0 + n.1 < b.0 + b.1) {
             base = Some(n);
         }
         for (k, (name, sampler, medium, extra)) in configs.iter().enumerate() {
@@ -371,7 +371,7 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
                 extra,
             )
             .map_err(|e| format!("{name}: {e}"))?;
-            if best[k].as_ref().map_or(true, |b| r.wall_s < b.wall_s) {
+            if best[k].as_ref().is_none_or(|b| r.wall_s < b.wall_s) {
                 best[k] = Some(r);
             }
         }
