@@ -46,6 +46,7 @@ use crate::constants::BOLTZMANN;
 use crate::dataset::Dataset;
 use crate::species::profile::{atomic_mass_u, doppler_sigma_nm, line_profile_nm};
 use crate::species::{line_cross_sections, Element, Line};
+use crate::Error;
 use glam::DVec3;
 
 /// The centre optical depth (over the fire's diagonal, at its largest number density) from which a line is
@@ -76,10 +77,18 @@ pub(super) struct Input<'a> {
     pub continuum: &'a dyn Fn(f64) -> [f64; 3],
     /// The temperature grid's range, K.
     pub t_range: [f64; 2],
+    /// Bytes the tables may take.
+    pub budget: u64,
 }
 
 /// A window's [λ₀, λ₁] (nm) and its lines (species index, line).
 type Window = ([f64; 2], Vec<(usize, Line)>);
+
+/// The line tables' temperature step: 2 K, or coarser for a hotter grid (at most 4096 rows; the populations
+/// and widths change smoothly in T).
+fn step(t_max: f64) -> f64 {
+    (t_max / 4096.0).max(2.0)
+}
 
 /// The thick-capable lines of each species (per line of its element).
 pub(super) fn select(inp: &Input) -> Vec<Vec<bool>> {
@@ -265,7 +274,11 @@ fn window_nodes(
 
 impl ThickLines {
     /// The groups of the lines `thick` marks (see [`select`]); `None` when there are none.
-    pub(super) fn new(inp: &Input, thick: &[Vec<bool>], t_max: f64) -> Option<ThickLines> {
+    pub(super) fn new(
+        inp: &Input,
+        thick: &[Vec<bool>],
+        t_max: f64,
+    ) -> Result<Option<ThickLines>, Error> {
         // (species index, line) of every thick line.
         let mut all: Vec<(usize, Line)> = Vec::new();
         for (s, ((_, e, _), marks)) in inp.species.iter().zip(thick).enumerate() {
@@ -276,7 +289,30 @@ impl ThickLines {
             }
         }
         if all.is_empty() {
-            return None;
+            return Ok(None);
+        }
+        // The tables' bytes before they are built: at most 44 nodes a line (a core node and three per decade
+        // of offset each side, from 0.3 σ_D of the heaviest atom at 300 K to 20 nm), two values a node, per row,
+        // twice (the lanes and the contiguous rows), and the bins' means.
+        let rows = (t_max / step(t_max)).ceil() + 2.0;
+        let need = rows
+            * 8.0
+            * (2.0 * 44.0 * all.len() as f64
+                + 2.0 * inp.basis.channels() as f64 * inp.species.len() as f64);
+        if need > inp.budget as f64 {
+            return Err(Error::invalid(
+                "volume",
+                "lineshape",
+                format!(
+                    "\"voigt\" for {} optically thick lines up to {t_max:.0} K ({:.0} MB of tables)",
+                    all.len(),
+                    need / 1e6
+                ),
+                format!(
+                    "tables within the memory budget's {:.0} MB left (lineshape \"box\", or a smaller maxbytes use)",
+                    inp.budget as f64 / 1e6
+                ),
+            ));
         }
         all.sort_by(|a, b| a.1.lambda_nm.total_cmp(&b.1.lambda_nm));
         // Windows: ±20 nm around each line, overlapping ones merged.
@@ -311,7 +347,7 @@ impl ThickLines {
                 });
                 let (basis, intensity) = (inp.basis.clone(), inp.intensity);
                 let (fine, fw) = super::coefficients::fine_cmf();
-                let tab = TTable::build_step(t_max, 2.0, 2 * c, &move |t| {
+                let tab = TTable::build_step(t_max, step(t_max), 2 * c, &move |t| {
                     let (mut s, j) = basis.lines(&only, t, &fine, &fw);
                     s.extend(j.into_iter().map(|v| v * intensity));
                     s
@@ -319,11 +355,11 @@ impl ThickLines {
                 GroupSpecies::new(channel(inp.ds, sym), *scale, tab, 0)
             })
             .collect();
-        Some(ThickLines {
+        Ok(Some(ThickLines {
             groups,
             boxed,
             channels: c,
-        })
+        }))
     }
 
     fn group(inp: &Input, w: [f64; 2], members: &[(usize, Line)], t_max: f64) -> Group {
@@ -375,7 +411,7 @@ impl ThickLines {
             let mass = atomic_mass_u(e.symbol()).unwrap_or(1.0);
             let broadening = inp.broadening;
             let k = lam.len();
-            let tab = TTable::build_step(t_max, 2.0, 2 * k, &move |t| {
+            let tab = TTable::build_step(t_max, step(t_max), 2 * k, &move |t| {
                 let mut row = vec![0.0; 2 * k];
                 if !(t > 0.0) {
                     return row;

@@ -275,9 +275,10 @@ impl FireVolume {
                         intensity: *intensity,
                         continuum: &continuum,
                         t_range,
+                        budget: spare,
                     };
                     let marks = lines::select(&inp);
-                    thick = lines::ThickLines::new(&inp, &marks, t_max);
+                    thick = lines::ThickLines::new(&inp, &marks, t_max)?;
                     for ((_, e, _), m) in thin.iter_mut().zip(&marks) {
                         let keep: Vec<bool> = m.iter().map(|x| !x).collect();
                         let lines = e.lines().to_vec();

@@ -1460,13 +1460,14 @@ fn sodium_slab(dir: &std::path::Path, n: f64, t: f64, fv: f64, extra: Vec<Param>
     sodium_layers(dir, n, [t, t], fv, extra)
 }
 
-fn sodium_layers(
+/// The parameters of [`sodium_layers`]'s volume.
+fn sodium_params(
     dir: &std::path::Path,
     n: f64,
     [t_front, t_back]: [f64; 2],
     fv: f64,
     extra: Vec<Param>,
-) -> FireVolume {
+) -> Vec<Param> {
     std::fs::create_dir_all(dir).unwrap();
     let f = |name: &str, v: &dyn Fn(usize) -> f64| {
         let p = dir.join(name);
@@ -1490,7 +1491,17 @@ fn sodium_layers(
         Param::string("interpolation", "nearest"),
     ];
     list.extend(extra);
-    FireVolume::new(&thesis_bins(list)).unwrap_or_else(|e| panic!("{e}"))
+    thesis_bins(list)
+}
+
+fn sodium_layers(
+    dir: &std::path::Path,
+    n: f64,
+    temps: [f64; 2],
+    fv: f64,
+    extra: Vec<Param>,
+) -> FireVolume {
+    FireVolume::new(&sodium_params(dir, n, temps, fv, extra)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Line-by-line: the bin [lo, lo + 10] nm's mean radiance and transmittance through `length` m of sodium at
@@ -1752,4 +1763,21 @@ fn diffusion_approaches_the_path_traced_smoke() {
             mc[ch]
         );
     }
+}
+
+#[test]
+fn thick_line_tables_beyond_the_memory_budget_are_an_error_before_they_are_built() {
+    // Two thick D lines at 2000 K want ~1.9 MB of tables: a 1 MB budget refuses them by name, with the way out.
+    let dir = std::env::temp_dir().join(format!("firemedium-linebudget-{}", std::process::id()));
+    let list = |maxbytes: f64| {
+        let extra = vec![Param::float("maxbytes", maxbytes)];
+        sodium_params(&dir, 1e18, [2000.0; 2], 0.0, extra)
+    };
+    let e = FireVolume::new(&list(1e6)).unwrap_err().to_string();
+    assert!(
+        e.contains("lineshape") && e.contains("\"box\"") && e.contains("MB"),
+        "{e}"
+    );
+    assert!(FireVolume::new(&list(1e8)).is_ok());
+    std::fs::remove_dir_all(&dir).ok();
 }
