@@ -3,13 +3,15 @@
 //! bit for bit (`firemedium diff`); `--submit` hands the merge to sbatch with a dependency on the render array.
 //! The same flow on a real one-node Slurm cluster is `tests/slurm-e2e.sh` (run by `.ci/run`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-farm-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+fn tmp(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("farm", name)
 }
 
 fn run_in(dir: &Path, args: &[&str]) -> std::process::Output {

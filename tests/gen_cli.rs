@@ -11,10 +11,12 @@ fn run(args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-gen-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+fn tmp(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("gen", name)
 }
 
 fn ok(o: &Output) -> String {
@@ -177,7 +179,8 @@ fn the_committed_campfires_are_what_the_generator_makes() {
         ("campfire.vdb", &[][..]),
         ("campfire-warped.vdb", &["--warp", "0.1"][..]),
     ] {
-        let out = tmp("campfire").join(name);
+        let dir = tmp("campfire");
+        let out = dir.join(name);
         let mut args = vec![
             "gen",
             "campfire",

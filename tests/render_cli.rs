@@ -9,10 +9,12 @@ use std::process::Command;
 mod image;
 use image::{luminance, mean_y, read_exr};
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-render-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+fn tmp(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("render", name)
 }
 
 /// `firemedium ARGS` run in `dir`.

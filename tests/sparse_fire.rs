@@ -9,13 +9,15 @@
 mod image;
 
 use image::read_exr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-sparse-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+fn out_dir(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("sparse", name)
 }
 
 /// The blob's leaves (density, temperature) with origin `o` (index space, multiples of 8): 3³ leaves.

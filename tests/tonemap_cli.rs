@@ -12,10 +12,12 @@ fn run(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-tonemap-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "common/scratch.rs"]
+mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+fn tmp(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("tonemap", name)
 }
 
 /// 8-bit RGB PNG pixels in [0, 1] (sRGB-encoded).

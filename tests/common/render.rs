@@ -12,10 +12,12 @@ pub fn shared(rel: &str) -> PathBuf {
         .join(rel)
 }
 
-pub fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "scratch.rs"]
+pub mod scratch;
+
+/// The test's scratch folder (removed when it passes).
+pub fn out_dir(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new("test", name)
 }
 
 /// Runs `firemedium render scene -o out args…` and returns what it did (status, stderr).
