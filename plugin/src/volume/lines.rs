@@ -711,30 +711,21 @@ fn channel(ds: &Dataset, sym: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::species::profile::line_profile_nm;
 
     #[test]
     fn nodes_integrate_a_thick_doublet() {
         // The equivalent width ∫(1 − e^{−κ(λ)}) dλ of Na D at 2000 K over 585–595 nm, N·L 1e14–1e20 m⁻²: the
         // window's nodes against a 2e-5 nm grid, within 5e-3 (measured: 3.4e-3 at most with 58 nodes; 4-point
         // panels, 76 nodes, gave 4e-4).
+        let sigma = crate::volume::tests::sodium_d_kappa(2000.0);
+        let kappa = |lam: f64, n: f64| n * sigma(lam);
         let na = Element::by_symbol("Na").unwrap();
-        let t = 2000.0;
-        let (kt, ln_z) = (BOLTZMANN * t, na.ln_partition_function(t));
         let d: Vec<Line> = na
             .lines()
             .iter()
             .filter(|l| (585.0..595.0).contains(&l.lambda_nm))
             .copied()
             .collect();
-        let kappa = |lam: f64, n: f64| -> f64 {
-            d.iter()
-                .map(|ln| {
-                    let phi = line_profile_nm(lam - ln.lambda_nm, ln.lambda_nm, t, 22.99, 0.08);
-                    n * line_cross_sections(ln, kt, ln_z, phi * 1e9).0
-                })
-                .sum()
-        };
         let centres: Vec<f64> = d.iter().map(|l| l.lambda_nm).collect();
         let d0 = 0.3 * doppler_sigma_nm(588.995, 300.0, 22.99);
         let (lam, wid) = window_nodes(585.0, 595.0, &centres, d0, &[]);

@@ -484,30 +484,8 @@ pub(crate) fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
 
 #[test]
 fn sodium_flame_glows_at_589() {
-    let n = 64;
-    // Species grids come from files or the dataset; inline species are not a pbrt concept, so use a file.
+    // (Species grids come from files or the dataset: inline species are not a pbrt concept.)
     let dir = std::env::temp_dir().join(format!("firemedium-vol-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let f = |name: &str, v: f64| {
-        let p = dir.join(name);
-        let body: Vec<String> = (0..n).map(|_| v.to_string()).collect();
-        std::fs::write(&p, format!("4 4 4\n{}\n", body.join(" "))).unwrap();
-        p.display().to_string()
-    };
-    let (d, t, na) = (f("d.txt", 0.0), f("t.txt", 2000.0), f("na.txt", 1.0));
-    let v_params = |scale: f64| {
-        vec![
-            Param::string("densityfile", &d),
-            Param::string("temperaturefile", &t),
-            Param::strings("species", &["Na"]),
-            Param::strings("speciesfiles", &[&na]),
-            Param::float("speciesscale", scale),
-            Param::string("interpolation", "nearest"),
-        ]
-    };
-    let volume = |scale: f64| {
-        FireVolume::new(&thesis_bins(v_params(scale))).unwrap_or_else(|e| panic!("{e}"))
-    };
     // Planck at the D lines (589.0 and 589.6 nm, D2 twice D1's strength: 589.2 nm between them), not the bin's
     // mean — the line emits at its own wavelength (B rises 1.2 %/nm there at 2000 K).
     let b_line = crate::blackbody::spectral_radiance(2000.0, 589.2);
@@ -519,12 +497,8 @@ fn sodium_flame_glows_at_589() {
         (1e16, "voigt", false),
         (1e20, "voigt", false),
     ] {
-        let mut v = volume(scale);
-        if shape == "box" {
-            let mut list = v_params(scale);
-            list.push(Param::string("lineshape", "box"));
-            v = FireVolume::new(&thesis_bins(list)).unwrap_or_else(|e| panic!("{e}"));
-        }
+        let extra = vec![Param::string("lineshape", shape)];
+        let v = sodium_layers(&dir, scale, [2000.0; 2], 0.0, extra);
         let (l, t) = run(&v, &ray_x(0));
         let brightest = (0..30).max_by(|&a, &b| l[a].total_cmp(&l[b])).unwrap();
         assert_eq!(brightest, 18, "{l:?}");
@@ -544,6 +518,7 @@ fn sodium_flame_glows_at_589() {
             assert!((0.8..0.9).contains(&t[18]), "T {}", t[18]);
         }
     }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -1504,10 +1479,9 @@ fn sodium_layers(
     FireVolume::new(&sodium_params(dir, n, temps, fv, extra)).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Line-by-line: the bin [lo, lo + 10] nm's mean radiance and transmittance through `length` m of sodium at
-/// `n` m⁻³ and T (no continuum), on a uniform 2e-5 nm grid — B at each wavelength, the Voigt profile of each D
-/// line.
-fn sodium_line_by_line(n: f64, t: f64, length: f64, lo: f64) -> (f64, f64) {
+/// The line-by-line absorption cross-section of sodium's D doublet at T: σ(λ) per atom (m²) from each line's
+/// Voigt profile (the defaults' mass and collisional width) — the references of the line model's tests.
+pub(crate) fn sodium_d_kappa(t: f64) -> impl Fn(f64) -> f64 {
     use crate::species::line_cross_sections;
     use crate::species::profile::line_profile_nm;
     let na = Element::by_symbol("Na").unwrap();
@@ -1519,19 +1493,28 @@ fn sodium_line_by_line(n: f64, t: f64, length: f64, lo: f64) -> (f64, f64) {
         .copied()
         .collect();
     assert_eq!(lines.len(), 2);
+    move |lam: f64| {
+        lines
+            .iter()
+            .map(|ln| {
+                let phi = line_profile_nm(lam - ln.lambda_nm, ln.lambda_nm, t, 22.990, 0.08);
+                line_cross_sections(ln, kt, ln_z, phi * 1e9).0
+            })
+            .sum()
+    }
+}
+
+/// Line-by-line: the bin [lo, lo + 10] nm's mean radiance and transmittance through `length` m of sodium at
+/// `n` m⁻³ and T (no continuum), on a uniform 2e-5 nm grid — B at each wavelength, the Voigt profile of each D
+/// line.
+fn sodium_line_by_line(n: f64, t: f64, length: f64, lo: f64) -> (f64, f64) {
+    let kappa = sodium_d_kappa(t);
     let steps = 500_000;
     let h = 10.0 / steps as f64;
     let (mut l, mut tr) = (0.0, 0.0);
     for i in 0..steps {
         let lam = lo + (i as f64 + 0.5) * h;
-        let kappa: f64 = lines
-            .iter()
-            .map(|ln| {
-                let phi = line_profile_nm(lam - ln.lambda_nm, ln.lambda_nm, t, 22.990, 0.08);
-                n * line_cross_sections(ln, kt, ln_z, phi * 1e9).0
-            })
-            .sum();
-        let trans = (-kappa * length).exp();
+        let trans = (-n * kappa(lam) * length).exp();
         l += spectral_radiance(t, lam) * (1.0 - trans) * h;
         tr += trans * h;
     }
@@ -1589,32 +1572,15 @@ fn cold_sodium_in_front_of_hot_reverses_the_line_as_line_by_line() {
     // temperature) — the nodes' transfer within 1 %. The box model cannot see the reversal: it absorbs the
     // hot line with the cold line's bin-mean σ, far too little where the line is thick and too much in the
     // wings.
-    use crate::species::line_cross_sections;
-    use crate::species::profile::line_profile_nm;
     let dir = std::env::temp_dir().join(format!("firemedium-reversal-{}", std::process::id()));
     let (t1, t2, n) = (1200.0, 2200.0, 1e18);
-    let na = Element::by_symbol("Na").unwrap();
-    let d: Vec<_> = na
-        .lines()
-        .iter()
-        .filter(|l| (588.0..591.0).contains(&l.lambda_nm))
-        .copied()
-        .collect();
-    let kappa = |lam: f64, t: f64| -> f64 {
-        let (kt, ln_z) = (crate::constants::BOLTZMANN * t, na.ln_partition_function(t));
-        d.iter()
-            .map(|ln| {
-                let phi = line_profile_nm(lam - ln.lambda_nm, ln.lambda_nm, t, 22.990, 0.08);
-                n * line_cross_sections(ln, kt, ln_z, phi * 1e9).0
-            })
-            .sum()
-    };
+    let (k1, k2) = (sodium_d_kappa(t1), sodium_d_kappa(t2));
     let steps = 500_000;
     let h = 10.0 / steps as f64;
     let (mut want_l, mut want_t) = (0.0, 0.0);
     for i in 0..steps {
         let lam = 580.0 + (i as f64 + 0.5) * h;
-        let (tr1, tr2) = ((-0.5 * kappa(lam, t1)).exp(), (-0.5 * kappa(lam, t2)).exp());
+        let (tr1, tr2) = ((-0.5 * n * k1(lam)).exp(), (-0.5 * n * k2(lam)).exp());
         want_l += (spectral_radiance(t1, lam) * (1.0 - tr1)
             + tr1 * spectral_radiance(t2, lam) * (1.0 - tr2))
             * h
