@@ -28,6 +28,7 @@ pub use firemedium_core::{
 
 mod alloc;
 pub mod dataset;
+mod embers;
 pub mod error;
 #[allow(unsafe_code)]
 // The C ABI: the plugin's one module with `unsafe`, every block with a `// SAFETY:` line.

@@ -63,6 +63,11 @@ pub struct FireLight {
     cdf: Vec<f64>,
     /// Per slot of `topo`, its brick (so an index in `weights` gives its voxel).
     slot_bricks: Vec<[u32; 3]>,
+    /// The voxels' share of `total` (the embers', if any, follow it).
+    fire_total: f64,
+    /// Per ember, the probability of picking it, and the running sum of the embers' weights from `fire_total`.
+    ember_p: Vec<f64>,
+    ember_cdf: Vec<f64>,
     power_w: f64,
     power_lm: f64,
     build_seconds: f64,
@@ -89,7 +94,7 @@ impl FireLight {
         let start = Instant::now();
         // Nothing to sample: refused before a weight per voxel is allocated (a 16-byte raw file claiming 600³
         // voxels and no temperature built a 3.4 GB light).
-        if !vol.can_emit() {
+        if !vol.can_emit() && vol.embers().is_none_or(|e| e.len() == 0) {
             return Err(no_emission());
         }
         let ds = vol.dataset();
@@ -240,9 +245,40 @@ impl FireLight {
                 }
             }
         }
+        // The embers, by the same measure: an ember is a Lambertian sphere, π r² L per steradian on average, the
+        // power j V of a voxel — in the voxels' units, divided by a voxel's volume.
+        let fire_total = total;
+        let (mut power_w, mut power_lm) = (power_w, power_lm);
+        let (mut ember_w, mut ember_cdf) = (Vec::new(), Vec::new());
+        if let Some(em) = vol.embers() {
+            let n = em.len();
+            ember_w = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
+            ember_cdf = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
+            let intensity = src.as_ref().map_or(1.0, |s| s.intensity);
+            let eps = em.emissivity();
+            let mut l = vec![0.0; c];
+            for i in 0..n {
+                em.radiance(i, 0.0, &mut l);
+                let r = em.radius(i);
+                let area = std::f64::consts::PI * r * r;
+                let lum: f64 = (0..c).map(|q| l[q] * xyz[q].y).sum();
+                let band: f64 = (0..c).map(|q| l[q] * widths[q]).sum();
+                ember_w[i] =
+                    area * match weighting {
+                        Weighting::Luminance => lum,
+                        Weighting::Power => band,
+                    } / vv;
+                total += ember_w[i];
+                ember_cdf[i] = total;
+                power_lm += 4.0 * std::f64::consts::PI * area * lum;
+                power_w += intensity
+                    * firemedium_core::ember::radiated_power(eps, r, em.temperature(i, 0.0));
+            }
+        }
         if !(total > 0.0) {
             return Err(no_emission());
         }
+        let ember_p = ember_w.iter().map(|w| w / total).collect();
         Ok(FireLight {
             vol,
             weighting,
@@ -254,6 +290,9 @@ impl FireLight {
             emitting,
             cdf,
             slot_bricks,
+            fire_total,
+            ember_p,
+            ember_cdf,
             power_w,
             power_lm,
             build_seconds: start.elapsed().as_secs_f64(),
@@ -293,10 +332,28 @@ impl FireLight {
         self.build_seconds
     }
 
-    /// Samples a point from six uniform numbers (the first chooses the voxel by its weight, the last three
-    /// place the point in it).
+    /// Samples a point from six uniform numbers (the first chooses the voxel — or ember — by its weight, the
+    /// last three place the point in it), at time 0.
     pub fn sample(&self, u: [f64; 6]) -> LightSample {
-        let m = first_above(&self.cdf, u[0] * self.total);
+        self.sample_at(u, 0.0)
+    }
+    /// As [`sample`](Self::sample) at `time` (frames: where the embers are then; the voxels do not move).
+    pub fn sample_at(&self, u: [f64; 6], time: f64) -> LightSample {
+        let target = u[0] * self.total;
+        if target >= self.fire_total && !self.ember_cdf.is_empty() {
+            if let Some(em) = self.vol.embers() {
+                let i = first_above(&self.ember_cdf, target);
+                let point = em.sample_ball(i, [u[3], u[4], u[5]], time);
+                return LightSample {
+                    point,
+                    pdf: self.pdf_at(point, time),
+                };
+            }
+        }
+        let m = first_above(
+            &self.cdf,
+            target.min(self.fire_total * (1.0 - f64::EPSILON)),
+        );
         let idx = self.emitting[m] as usize;
         // The voxel stored at `idx`: its brick's corner, less the topology's offset, plus its place in the brick.
         let (b, l) = (self.slot_bricks[idx / 512], idx % 512);
@@ -308,8 +365,21 @@ impl FireLight {
         let point = p0 + (DVec3::new(i, jy, k) + DVec3::new(u[3], u[4], u[5])) * self.voxel;
         LightSample {
             point,
-            pdf: wv / (self.total * self.voxel.x * self.voxel.y * self.voxel.z),
+            pdf: wv / (self.total * self.voxel.x * self.voxel.y * self.voxel.z)
+                + self.ember_density(point, time),
         }
+    }
+
+    /// The embers' part of the density per unit volume at `p` and `time`.
+    fn ember_density(&self, p: DVec3, time: f64) -> f64 {
+        let mut d = 0.0;
+        if let Some(em) = self.vol.embers().filter(|_| !self.ember_p.is_empty()) {
+            em.containing(p, time, &mut |i| {
+                let r = em.radius(i);
+                d += self.ember_p[i] / (4.0 / 3.0 * std::f64::consts::PI * r * r * r);
+            });
+        }
+        d
     }
 
     /// The weight of voxel `v` (inside the lattice).
@@ -317,24 +387,41 @@ impl FireLight {
         self.weights[self.topo.index(v[0], v[1], v[2])] as f64
     }
 
-    /// Density of a medium-space point, per unit volume.
+    /// Density of a medium-space point, per unit volume (embers at time 0).
     pub fn pdf(&self, p: DVec3) -> f64 {
+        self.pdf_at(p, 0.0)
+    }
+    /// As [`pdf`](Self::pdf) at `time` (frames).
+    pub fn pdf_at(&self, p: DVec3, time: f64) -> f64 {
+        let embers = self.ember_density(p, time);
         let [p0, p1] = self.vol.dataset().bounds();
         if !(p.cmpge(p0).all() && p.cmplt(p1).all()) {
-            return 0.0;
+            return embers;
         }
         let q = ((p - p0) / self.voxel).floor();
         let v = [0, 1, 2].map(|a| (q[a].max(0.0) as usize).min(self.dims[a] - 1));
-        self.weight(v) / (self.total * self.voxel.x * self.voxel.y * self.voxel.z)
+        self.weight(v) / (self.total * self.voxel.x * self.voxel.y * self.voxel.z) + embers
     }
 
-    /// Solid-angle density of the direction `d` from `o`: ∫ pdf(o + s d̂) s² ds over s ≥ 0.
+    /// Solid-angle density of the direction `d` from `o`: ∫ pdf(o + s d̂) s² ds over s ≥ 0 (embers at time 0).
     pub fn pdf_direction(&self, o: DVec3, d: DVec3) -> f64 {
+        self.pdf_direction_at(o, d, 0.0)
+    }
+    /// As [`pdf_direction`](Self::pdf_direction) at `time` (frames).
+    pub fn pdf_direction_at(&self, o: DVec3, d: DVec3, time: f64) -> f64 {
         let len = d.length();
         if !(len > 0.0 && len.is_finite() && o.is_finite()) {
             return 0.0;
         }
         let dn = d / len;
+        let embers = match self.vol.embers().filter(|_| !self.ember_p.is_empty()) {
+            Some(em) => em.chord_moment(o, dn, time, &self.ember_p),
+            None => 0.0,
+        };
+        self.voxel_direction(o, dn) + embers
+    }
+    /// The voxels' part of [`pdf_direction`](Self::pdf_direction) along the unit direction `dn`.
+    fn voxel_direction(&self, o: DVec3, dn: DVec3) -> f64 {
         let ds = self.vol.dataset();
         let scale = 1.0 / (self.total * self.voxel.x * self.voxel.y * self.voxel.z);
         let mut sum = 0.0;

@@ -256,7 +256,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 24] = [
+const ENTRIES: [&str; 27] = [
     "last_error",
     "param_count",
     "param_info",
@@ -281,6 +281,9 @@ const ENTRIES: [&str; 24] = [
     "volume_transmittance_at",
     "volume_sample_scatter_at",
     "volume_white_temperature",
+    "light_sample_at",
+    "light_pdf_at",
+    "light_pdf_direction_at",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

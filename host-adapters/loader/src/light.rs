@@ -37,7 +37,7 @@ impl Light {
     }
 
     /// Samples one point per 6 uniform numbers: (medium-space point, pdf per unit volume), and the emission
-    /// coefficient per channel into `emission` (`u.len() × channels`), if given.
+    /// coefficient per channel into `emission` (`u.len() × channels`), if given. At time 0.
     pub fn sample(
         &self,
         u: &[[f64; 6]],
@@ -45,7 +45,21 @@ impl Light {
         pdf: &mut [f64],
         emission: Option<&mut [f32]>,
     ) -> Result<(), Error> {
+        self.sample_at(u, None, points, pdf, emission)
+    }
+
+    /// As [`sample`](Self::sample) with a time per sample (frames from the grids' time; `None`: time 0): a
+    /// volume's embers are sampled where they are then.
+    pub fn sample_at(
+        &self,
+        u: &[[f64; 6]],
+        times: Option<&[f64]>,
+        points: &mut [[f64; 3]],
+        pdf: &mut [f64],
+        emission: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
         let n = u.len();
+        let t_ptr = times_ptr(times, n, "light sample")?;
         if points.len() < n || pdf.len() < n {
             return Err(Error::Buffer(format!(
                 "light sample: {} points and {} pdfs for {n} samples",
@@ -66,9 +80,10 @@ impl Light {
         };
         // SAFETY: buffers sized above; [f64; 3] and [f64; 6] are contiguous doubles.
         let s = unsafe {
-            (self.inner.api().light_sample)(
+            (self.inner.api().light_sample_at)(
                 self.handle,
                 u.as_ptr() as *const f64,
+                t_ptr,
                 n,
                 points.as_mut_ptr() as *mut f64,
                 pdf.as_mut_ptr(),
@@ -78,8 +93,19 @@ impl Light {
         self.inner.check(s)
     }
 
-    /// Density per unit volume of medium-space points.
+    /// Density per unit volume of medium-space points (at time 0).
     pub fn pdf(&self, points: &[[f64; 3]], pdf: &mut [f64]) -> Result<(), Error> {
+        self.pdf_at(points, None, pdf)
+    }
+
+    /// As [`pdf`](Self::pdf) with a time per point.
+    pub fn pdf_at(
+        &self,
+        points: &[[f64; 3]],
+        times: Option<&[f64]>,
+        pdf: &mut [f64],
+    ) -> Result<(), Error> {
+        let t_ptr = times_ptr(times, points.len(), "light pdf")?;
         if pdf.len() < points.len() {
             return Err(Error::Buffer(
                 "light pdf: output shorter than the points".into(),
@@ -87,9 +113,10 @@ impl Light {
         }
         // SAFETY: sized above.
         let s = unsafe {
-            (self.inner.api().light_pdf)(
+            (self.inner.api().light_pdf_at)(
                 self.handle,
                 points.as_ptr() as *const f64,
+                t_ptr,
                 points.len(),
                 pdf.as_mut_ptr(),
             )
@@ -97,13 +124,25 @@ impl Light {
         self.inner.check(s)
     }
 
-    /// Solid-angle density of directions seen from origins (medium space).
+    /// Solid-angle density of directions seen from origins (medium space), at time 0.
     pub fn pdf_direction(
         &self,
         origins: &[[f64; 3]],
         directions: &[[f64; 3]],
         pdf: &mut [f64],
     ) -> Result<(), Error> {
+        self.pdf_direction_at(origins, directions, None, pdf)
+    }
+
+    /// As [`pdf_direction`](Self::pdf_direction) with a time per direction.
+    pub fn pdf_direction_at(
+        &self,
+        origins: &[[f64; 3]],
+        directions: &[[f64; 3]],
+        times: Option<&[f64]>,
+        pdf: &mut [f64],
+    ) -> Result<(), Error> {
+        let t_ptr = times_ptr(times, origins.len(), "light pdf_direction")?;
         if directions.len() < origins.len() || pdf.len() < origins.len() {
             return Err(Error::Buffer(
                 "light pdf_direction: buffers shorter than the origins".into(),
@@ -111,14 +150,27 @@ impl Light {
         }
         // SAFETY: sized above.
         let s = unsafe {
-            (self.inner.api().light_pdf_direction)(
+            (self.inner.api().light_pdf_direction_at)(
                 self.handle,
                 origins.as_ptr() as *const f64,
                 directions.as_ptr() as *const f64,
+                t_ptr,
                 origins.len(),
                 pdf.as_mut_ptr(),
             )
         };
         self.inner.check(s)
+    }
+}
+
+/// The times' pointer for `n` entries (null for none), checked long enough.
+fn times_ptr(times: Option<&[f64]>, n: usize, what: &str) -> Result<*const f64, Error> {
+    match times {
+        None => Ok(std::ptr::null()),
+        Some(t) if t.len() >= n => Ok(t.as_ptr()),
+        Some(t) => Err(Error::Buffer(format!(
+            "{what}: {} times for {n} entries",
+            t.len()
+        ))),
     }
 }

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 6u
+#define FM_ABI_MINOR 7u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -162,6 +162,18 @@ typedef struct FmApi {
      * temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a tint,
      * or a colorramp short of physical 1: meant to be seen against a D65 white) or it has no temperature grid. */
     FmStatus (*volume_white_temperature)(const FmVolume *volume, double *out);
+    /* ABI 0.7: light_sample, light_pdf and light_pdf_direction with a time per entry: times holds n doubles
+     * (frames from the grids' time) or is NULL (time 0). A volume's embers move while the shutter is open; the
+     * light samples them where they are at that time, and the densities are those of a sample drawn then. u
+     * holds 6 doubles per sample, points 3 per sample, origins and directions 3 per entry; emission (n *
+     * channels floats, may be NULL) is the volume's j at the point (an ember is a surface: its light reaches a
+     * host through volume_integrate_at along the sampled direction). */
+    FmStatus (*light_sample_at)(const FmLight *light, const double *u, const double *times, size_t n,
+                                double *points, double *pdf, float *emission);
+    FmStatus (*light_pdf_at)(const FmLight *light, const double *points, const double *times, size_t n,
+                             double *pdf);
+    FmStatus (*light_pdf_direction_at)(const FmLight *light, const double *origins, const double *directions,
+                                       const double *times, size_t n, double *pdf);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

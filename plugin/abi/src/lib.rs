@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 6;
+pub const ABI_MINOR: u32 = 7;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -390,6 +390,37 @@ pub struct FmApi {
     /// temperature grid.
     pub volume_white_temperature:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
+    /// ABI 0.7: [`light_sample`](Self::light_sample) with a time per sample (`times`: `n` doubles, frames from
+    /// the grids' time, or null for time 0): a volume's embers move while the shutter is open, and the light
+    /// samples them where they are then. The emission output is the volume's j at the point (an ember is a
+    /// surface: its light reaches a host through `volume_integrate_at` along the point's direction).
+    pub light_sample_at: unsafe extern "C" fn(
+        light: *const FmLight,
+        u: *const f64,
+        times: *const f64,
+        n: usize,
+        points: *mut f64,
+        pdf: *mut f64,
+        emission: *mut f32,
+    ) -> FmStatus,
+    /// ABI 0.7: [`light_pdf`](Self::light_pdf) with a time per point (as [`light_sample_at`](Self::light_sample_at)).
+    pub light_pdf_at: unsafe extern "C" fn(
+        light: *const FmLight,
+        points: *const f64,
+        times: *const f64,
+        n: usize,
+        pdf: *mut f64,
+    ) -> FmStatus,
+    /// ABI 0.7: [`light_pdf_direction`](Self::light_pdf_direction) with a time per direction (as
+    /// [`light_sample_at`](Self::light_sample_at)): the density a sample drawn at that time has.
+    pub light_pdf_direction_at: unsafe extern "C" fn(
+        light: *const FmLight,
+        origins: *const f64,
+        directions: *const f64,
+        times: *const f64,
+        n: usize,
+        pdf: *mut f64,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.

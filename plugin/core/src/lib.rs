@@ -8,6 +8,7 @@
 //! | [`constants`] | CODATA 2018 constants | CODATA 2018 |
 //! | [`blackbody`] | absolute Planck spectral radiance | P&P eq. 6 |
 //! | [`chemiluminescence`] | the blue core: CH* and C₂* band emission of the reaction zone | Selle; Pearse & Gaydon 1976 |
+//! | [`ember`] | embers: grey spheres cooling by radiation (Stefan–Boltzmann) | Selle; lumped heat balance |
 //! | [`soot`] | soot absorption coefficient | P&P eq. 5, Dalzell & Sarofim 1969 |
 //! | [`species`] | atomic line absorption and emission | P&P eq. 7–12, NIST ASD |
 //! | [`ciddor`] | refractive index of air | Ciddor 1996 |
@@ -28,6 +29,7 @@ pub mod chemiluminescence;
 pub mod ciddor;
 pub mod cie;
 pub mod constants;
+pub mod ember;
 pub mod error;
 pub mod quadrature;
 pub mod rgb_spectrum;

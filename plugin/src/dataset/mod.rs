@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use cursor::Bytes;
-use files::{as_text, read_file};
+pub(crate) use files::{as_text, open_regular, read_file};
 pub use files::{format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
 pub use params::HOUDINI_KELVIN;

@@ -3,7 +3,8 @@
 //! arrays, with the policies and the memory cap.
 
 use super::{
-    AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Mapping, Policy, RawCoords, RawValue,
+    frame_path, AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Mapping, Policy, RawCoords,
+    RawValue,
 };
 use crate::grid::Interpolation;
 use crate::params::ParamReader;
@@ -98,6 +99,48 @@ pub(crate) struct Loaded {
     pub scatter_color: Option<[usize; 3]>,
     /// The reaction zone's heat release rate (`reactiongrid`, W/m³): the blue core's chemiluminescence.
     pub reaction: Option<usize>,
+    /// The `embers` particle file, read.
+    pub embers: Option<EmberFile>,
+}
+
+/// An `embers` file's particles, and the shutter and frame rate they move in.
+pub(crate) struct EmberFile {
+    pub file: String,
+    pub particles: Vec<crate::embers::Particle>,
+    /// Frames from the grids' time.
+    pub shutter: [f64; 2],
+    pub fps: f64,
+}
+
+/// The `embers` file (frame-substituted), read and checked; `None` when not given.
+fn read_embers(
+    r: &ParamReader,
+    opts: &LoadOptions,
+    shutter: [f64; 2],
+) -> Result<Option<EmberFile>, Error> {
+    let name = r.string("embers")?;
+    if name.is_empty() {
+        return Ok(None);
+    }
+    let path = frame_path(std::path::Path::new(&name), opts.frame)?;
+    let file = path.display().to_string();
+    let (_, len) = crate::dataset::open_regular(&path)?;
+    if len > opts.max_bytes {
+        return Err(Error::TooLarge {
+            file,
+            what: "the embers file".into(),
+            bytes: len,
+            cap: opts.max_bytes,
+        });
+    }
+    let bytes = crate::dataset::read_file(&path)?;
+    let particles = crate::embers::read::parse(&file, &bytes, opts.max_bytes)?;
+    Ok(Some(EmberFile {
+        file,
+        particles,
+        shutter,
+        fps: r.float("fps")?,
+    }))
 }
 
 /// The dataset's channels of the scatter colour (`scattercolorgrid`).
@@ -516,6 +559,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         (ds, emission, emission.is_some(), motion, scatter, reaction)
     };
     ds = ds.with_interpolation(interp);
+    let embers = read_embers(r, &opts, shutter)?;
     Ok(Loaded {
         ds,
         lescale,
@@ -523,6 +567,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         motion,
         scatter_color,
         reaction,
+        embers,
     })
 }
 

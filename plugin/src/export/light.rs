@@ -1,7 +1,7 @@
 //! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
 
 use super::params::read_params;
-use super::volume::out_f32;
+use super::volume::{out_f32, times};
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
 use crate::volume::FireVolume;
@@ -150,11 +150,26 @@ pub(super) unsafe extern "C" fn light_sample(
     pdf: *mut f64,
     emission: *mut f32,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as light_sample_at's without times.
+    unsafe { light_sample_at(l, u, std::ptr::null(), n, points, pdf, emission) }
+}
+
+pub(super) unsafe extern "C" fn light_sample_at(
+    l: *const FmLight,
+    u: *const f64,
+    times_ptr: *const f64,
+    n: usize,
+    points: *mut f64,
+    pdf: *mut f64,
+    emission: *mut f32,
+) -> FmStatus {
     guard(|| {
         // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_sample") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let us = unsafe { in_f64(u, n, 6, "light_sample: u") }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "light_sample") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pts = unsafe { out_f64(points, n, 3, "light_sample: points") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
@@ -164,16 +179,9 @@ pub(super) unsafe extern "C" fn light_sample(
         let mut em = unsafe { out_f32(emission, n, c) }?;
         let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
         for i in 0..n {
-            let uu = [
-                us[6 * i],
-                us[6 * i + 1],
-                us[6 * i + 2],
-                us[6 * i + 3],
-                us[6 * i + 4],
-                us[6 * i + 5],
-            ]
-            .map(|x| x.clamp(0.0, 1.0 - f64::EPSILON));
-            let smp = lt.sample(uu);
+            let uu: [f64; 6] =
+                std::array::from_fn(|k| us[6 * i + k].clamp(0.0, 1.0 - f64::EPSILON));
+            let smp = lt.sample_at(uu, ts[i]);
             pts[3 * i..3 * i + 3].copy_from_slice(&smp.point.to_array());
             pd[i] = smp.pdf;
             if let Some(e) = em.as_deref_mut() {
@@ -193,15 +201,29 @@ pub(super) unsafe extern "C" fn light_pdf(
     n: usize,
     pdf: *mut f64,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as light_pdf_at's without times.
+    unsafe { light_pdf_at(l, points, std::ptr::null(), n, pdf) }
+}
+
+pub(super) unsafe extern "C" fn light_pdf_at(
+    l: *const FmLight,
+    points: *const f64,
+    times_ptr: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
     guard(|| {
         // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_pdf") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pts = unsafe { in_f64(points, n, 3, "light_pdf: points") }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "light_pdf") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_pdf: pdf") }?;
         for i in 0..n {
-            pd[i] = lt.pdf(DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]));
+            let p = DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
+            pd[i] = lt.pdf_at(p, ts[i]);
         }
         Ok(())
     })
@@ -214,6 +236,18 @@ pub(super) unsafe extern "C" fn light_pdf_direction(
     n: usize,
     pdf: *mut f64,
 ) -> FmStatus {
+    // SAFETY: the caller's contract, as light_pdf_direction_at's without times.
+    unsafe { light_pdf_direction_at(l, origins, directions, std::ptr::null(), n, pdf) }
+}
+
+pub(super) unsafe extern "C" fn light_pdf_direction_at(
+    l: *const FmLight,
+    origins: *const f64,
+    directions: *const f64,
+    times_ptr: *const f64,
+    n: usize,
+    pdf: *mut f64,
+) -> FmStatus {
     guard(|| {
         // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
         let lt = unsafe { light(l, "light_pdf_direction") }?;
@@ -221,12 +255,15 @@ pub(super) unsafe extern "C" fn light_pdf_direction(
         let o = unsafe { in_f64(origins, n, 3, "light_pdf_direction: origins") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let d = unsafe { in_f64(directions, n, 3, "light_pdf_direction: directions") }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "light_pdf_direction") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
         for i in 0..n {
-            pd[i] = lt.pdf_direction(
+            pd[i] = lt.pdf_direction_at(
                 DVec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]),
                 DVec3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]),
+                ts[i],
             );
         }
         Ok(())

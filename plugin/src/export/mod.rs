@@ -190,6 +190,9 @@ static API: FmApi = FmApi {
     volume_transmittance_at,
     volume_sample_scatter_at,
     volume_white_temperature,
+    light_sample_at,
+    light_pdf_at,
+    light_pdf_direction_at,
 };
 
 /// The plugin's entry point: the static function table.

@@ -187,7 +187,11 @@ pub(super) unsafe extern "C" fn volume_channel_xyz(
 ///
 /// # Safety
 /// `p` is null or points to `n` doubles.
-unsafe fn times(p: *const f64, n: usize, what: &str) -> Result<Vec<f64>, (FmStatus, String)> {
+pub(super) unsafe fn times(
+    p: *const f64,
+    n: usize,
+    what: &str,
+) -> Result<Vec<f64>, (FmStatus, String)> {
     if p.is_null() {
         return Ok(vec![0.0; n]);
     }

@@ -136,6 +136,8 @@ pub struct FireVolume {
     brick_empty: Vec<bool>,
     /// Velocity motion blur (a velocity grid and an open shutter).
     blur: Option<motion::Blur>,
+    /// The `embers` particles: opaque grey spheres (see [`crate::embers`]).
+    embers: Option<crate::embers::Embers>,
     /// The fire's colour is the physics' (no tint, no colour ramp short of `physical` 1).
     physical_colour: bool,
     /// The scatter colour grid's channels and, per channel, the weights of its r, g, b.
@@ -222,6 +224,7 @@ impl FireVolume {
             motion,
             scatter_color,
             reaction,
+            embers,
         } = loaded;
         let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
@@ -478,6 +481,40 @@ impl FireVolume {
             b
         });
 
+        // ---- embers
+        let embers = match embers {
+            None => None,
+            Some(ef) => {
+                let Emission::Physical { intensity, .. } = &set.emission else {
+                    return Err(Error::invalid(
+                        "dataset",
+                        "embers",
+                        format!("\"{}\" for a pbrt-v4 medium", ef.file),
+                        "a fire (\"string type\" \"fire\"): embers glow by their temperature",
+                    ));
+                };
+                let t6 = Instant::now();
+                let nodes = basis.nodes();
+                let g = vec![set.ember.emissivity * intensity; nodes.lambda.len()];
+                let left = spare.saturating_sub(tables.iter().map(|t| t.bytes as u64).sum());
+                let em = crate::embers::Embers::new(
+                    &ef.file,
+                    &ef.particles,
+                    set.ember,
+                    ef.shutter,
+                    ef.fps,
+                    &|t| basis.emit_planck(&nodes, &g, t),
+                    left,
+                )?;
+                tables.push(TableReport {
+                    name: format!("embers ({} particles and their grid)", em.len()),
+                    bytes: em.bytes(),
+                    seconds: t6.elapsed().as_secs_f64(),
+                });
+                Some(em)
+            }
+        };
+
         // ---- refraction
         let step = set.stepsize * ds.voxel_size().min_element();
         let refraction = match &set.refraction {
@@ -561,6 +598,7 @@ impl FireVolume {
             brick_sigma,
             brick_empty,
             blur,
+            embers,
             scatter_color,
             physical_colour,
             clip_box,
@@ -789,8 +827,130 @@ impl FireVolume {
     #[cfg(not(test))]
     fn fault_check(&self) {}
 
-    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
+    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter (where
+    /// an ember stopped the ray, if one did).
     pub fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let te = self.integrate_fire(&cut, l, t);
+        self.ember_seen(hit, 0.0, Some(l), t).unwrap_or(te)
+    }
+    /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
+    /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
+    /// parameter is then the entry parameter plus arc length / |d|. (Embers are met along the straight chord.)
+    pub fn integrate_exit(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let exit = self.integrate_exit_fire(&cut, l, t);
+        match self.ember_seen(hit, 0.0, Some(l), t) {
+            Some(th) => (ray.o + ray.d * th, exit.1, th),
+            None => exit,
+        }
+    }
+    /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
+    pub fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        self.transmittance_fire(&cut, t);
+        self.ember_seen(hit, 0.0, None, t);
+    }
+    /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights. A ray
+    /// that reaches an ember collects its radiance and ends there ([`Event::Absorbed`]).
+    pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let ev = self.sample_scatter_fire(&cut, l, w);
+        self.ember_event(ev, hit, 0.0, l, w)
+    }
+    /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
+    /// fire is looked up where the velocity carried it from (`motion`), and embers are where their velocity
+    /// carried them. Without motion blur or embers, or at time 0, the same as `integrate`.
+    pub fn integrate_at(&self, ray: &Ray, time: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let te = self.integrate_at_fire(&cut, time, l, t);
+        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+    }
+    /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
+    /// grids' time: a refracting volume ignores `time` here but for its embers.)
+    pub fn integrate_exit_at(
+        &self,
+        ray: &Ray,
+        time: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> (DVec3, DVec3, f64) {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let exit = self.integrate_exit_at_fire(&cut, time, l, t);
+        match self.ember_seen(hit, time, Some(l), t) {
+            Some(th) => (ray.o + ray.d * th, exit.1, th),
+            None => exit,
+        }
+    }
+    /// As [`transmittance`](Self::transmittance) at time `time`.
+    pub fn transmittance_at(&self, ray: &Ray, time: f64, t: &mut [f64]) {
+        let (cut, hit) = self.ember_cut(ray, time);
+        self.transmittance_at_fire(&cut, time, t);
+        self.ember_seen(hit, time, None, t);
+    }
+    /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
+    pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let ev = self.sample_scatter_at_fire(&cut, time, l, w);
+        self.ember_event(ev, hit, time, l, w)
+    }
+    /// `ray` up to the first ember it meets at `time`, and that ember's (parameter, index).
+    fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
+        let hit = self
+            .embers
+            .as_ref()
+            .and_then(|e| e.hit(ray.o, ray.d, ray.t0, ray.t1, time));
+        let mut cut = *ray;
+        if let Some((th, _)) = hit {
+            cut.t1 = th.max(ray.t0);
+        }
+        (cut, hit)
+    }
+    /// An ember met at the end of a cut ray: its radiance seen through `t` added to `l`, and nothing passes
+    /// it; returns where it was met.
+    fn ember_seen(
+        &self,
+        hit: Option<(f64, usize)>,
+        time: f64,
+        l: Option<&mut [f64]>,
+        t: &mut [f64],
+    ) -> Option<f64> {
+        let (Some((th, i)), Some(em)) = (hit, &self.embers) else {
+            return None;
+        };
+        if let Some(l) = l {
+            let mut e = vec![0.0; t.len()];
+            em.radiance(i, time, &mut e);
+            for c in 0..t.len() {
+                l[c] += t[c] * e[c];
+            }
+        }
+        t.iter_mut().for_each(|v| *v = 0.0);
+        Some(th)
+    }
+    /// A scattering event on a cut ray: one that reached the ember collects its radiance and ends there.
+    fn ember_event(
+        &self,
+        ev: Event,
+        hit: Option<(f64, usize)>,
+        time: f64,
+        l: &mut [f64],
+        w: &mut [f64],
+    ) -> Event {
+        match ev {
+            Event::Escaped if hit.is_some() => {
+                self.ember_seen(hit, time, Some(l), w);
+                Event::Absorbed
+            }
+            _ => ev,
+        }
+    }
+    /// The volume's embers, if it has any.
+    pub(crate) fn embers(&self) -> Option<&crate::embers::Embers> {
+        self.embers.as_ref()
+    }
+    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
+    fn integrate_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
         self.fault_check();
         let te = march::integrate(self, ray, l, t);
         self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
@@ -834,9 +994,9 @@ impl FireVolume {
     /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
     /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
     /// parameter is then the entry parameter plus arc length / |d|.
-    pub fn integrate_exit(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
+    fn integrate_exit_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
         let Some(rf) = &self.refraction else {
-            let te = self.integrate(ray, l, t);
+            let te = self.integrate_fire(ray, l, t);
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
         self.fault_check();
@@ -847,13 +1007,13 @@ impl FireVolume {
     }
 
     /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
-    pub fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
+    fn transmittance_fire(&self, ray: &Ray, t: &mut [f64]) {
         let mut sc = Scratch::new(self.channels());
         integrate::transmittance(self, ray, self.integrator, &mut sc, t);
         self.thick_lines(None, ray, ray.t1, None, t, lines::Fold::Add);
     }
     /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights.
-    pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
+    fn sample_scatter_fire(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
         let mut sc = Scratch::new(self.channels());
         let ev = integrate::sample_scatter(self, ray, &mut sc, l, w);
         self.scatter_lines(None, ray, ev, l, w)
@@ -875,7 +1035,7 @@ impl FireVolume {
     /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
     /// fire is looked up where the velocity carried it from (`motion`). Without motion blur, or at time 0, the
     /// same as `integrate`.
-    pub fn integrate_at(&self, ray: &Ray, time: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+    fn integrate_at_fire(&self, ray: &Ray, time: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
         match self.advected(time) {
             Some(a) => {
                 self.fault_check();
@@ -883,12 +1043,12 @@ impl FireVolume {
                 self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
                 te
             }
-            None => self.integrate(ray, l, t),
+            None => self.integrate_fire(ray, l, t),
         }
     }
     /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
     /// grids' time: a refracting volume ignores `time` here.)
-    pub fn integrate_exit_at(
+    fn integrate_exit_at_fire(
         &self,
         ray: &Ray,
         time: f64,
@@ -902,27 +1062,27 @@ impl FireVolume {
                 self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
                 (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
             }
-            _ => self.integrate_exit(ray, l, t),
+            _ => self.integrate_exit_fire(ray, l, t),
         }
     }
     /// As [`transmittance`](Self::transmittance) at time `time`.
-    pub fn transmittance_at(&self, ray: &Ray, time: f64, t: &mut [f64]) {
+    fn transmittance_at_fire(&self, ray: &Ray, time: f64, t: &mut [f64]) {
         match self.advected(time) {
             Some(a) => {
                 a.transmittance(ray, t);
                 self.thick_lines(Some(&a), ray, ray.t1, None, t, lines::Fold::Add);
             }
-            None => self.transmittance(ray, t),
+            None => self.transmittance_fire(ray, t),
         }
     }
     /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
-    pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
+    fn sample_scatter_at_fire(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
         match self.advected(time) {
             Some(a) => {
                 let ev = a.sample_scatter(ray, l, w);
                 self.scatter_lines(Some(&a), ray, ev, l, w)
             }
-            None => self.sample_scatter(ray, l, w),
+            None => self.sample_scatter_fire(ray, l, w),
         }
     }
     fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {

@@ -43,6 +43,8 @@ pub(super) struct Settings {
     pub linebroadening: f64,
     /// The index of air and the ray integrator, when `refraction` is on.
     pub refraction: Option<RefractionSettings>,
+    /// The embers' char and the air around them.
+    pub ember: crate::embers::Material,
     #[cfg(test)]
     pub fault: String,
 }
@@ -149,6 +151,12 @@ impl Settings {
             scale: r.float("refractionscale")?,
             rk4: r.string("refractionintegrator")? == "rk4",
         };
+        let ember = crate::embers::Material {
+            emissivity: r.float("emberemissivity")?,
+            density: r.float("emberdensity")?,
+            heat_capacity: r.float("emberheatcapacity")?,
+            ambient: r.float("ambienttemperature")?,
+        };
         Ok(Settings {
             mode,
             basis,
@@ -166,6 +174,7 @@ impl Settings {
             linebroadening,
             diffusion,
             refraction: on.then_some(refraction),
+            ember,
             #[cfg(test)]
             fault,
         })

@@ -255,17 +255,18 @@ fn plugin_ray(to_medium: &DAffine3, o: Vec3A, d: Vec3A, t_end: f32, seed: u64) -
 }
 
 /// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
-/// from `o`; None if the plugin refused the query.
+/// from `o` at `time` (frames: the embers move); None if the plugin refused the query.
 fn fire_pdf_direction(
     light: &firemedium_loader::Light,
     to_medium: &DAffine3,
     o: Vec3A,
     d: Vec3A,
+    time: f64,
 ) -> Option<f64> {
     let (om, dm) = to_space(to_medium, o, d);
     let mut pd = [0.0f64];
     light
-        .pdf_direction(&[om.to_array()], &[dm.to_array()], &mut pd)
+        .pdf_direction_at(&[om.to_array()], &[dm.to_array()], Some(&[time]), &mut pd)
         .ok()?;
     Some(pd[0])
 }
@@ -449,7 +450,9 @@ impl Integrator<'_> {
                 // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
                 let uu = [(); 6].map(|_| rng.next_f64());
                 let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
-                light.sample(&[uu], &mut pt, &mut pdf, None).ok()?;
+                light
+                    .sample_at(&[uu], Some(&[rng.time]), &mut pt, &mut pdf, None)
+                    .ok()?;
                 if !(pdf[0] > 0.0) {
                     return None;
                 }
@@ -460,7 +463,7 @@ impl Integrator<'_> {
                 }
                 let (o, medium) = spot.leave(wi);
                 // Solid angle in medium space equals world solid angle for a similarity transform.
-                let pdf_dir = fire_pdf_direction(light, to_medium, p, wi)? as f32 / nl;
+                let pdf_dir = fire_pdf_direction(light, to_medium, p, wi, rng.time)? as f32 / nl;
                 if !(pdf_dir > 0.0) {
                     return None;
                 }
@@ -573,7 +576,7 @@ impl Integrator<'_> {
     /// The MIS weight of emission that a path sampled with density `pdf_b` (solid angle) from `origin` along `d`
     /// collects in medium `m`: pdf_b / (pdf_b + the fire light's directional pdf), or 1 when `m` has no fire
     /// light or the path was not sampled by a BSDF/phase function (camera rays, specular bounces).
-    fn emission_weight(&self, m: usize, mis: Option<(Vec3A, f32)>, d: Vec3A) -> f32 {
+    fn emission_weight(&self, m: usize, mis: Option<(Vec3A, f32)>, d: Vec3A, time: f64) -> f32 {
         let Some((origin, pdf_b)) = mis else {
             return 1.0;
         };
@@ -584,7 +587,7 @@ impl Integrator<'_> {
         for l in &sc.lights {
             if let Light::Fire { light, medium } = l {
                 if *medium == m {
-                    let Some(pd) = fire_pdf_direction(light, to_medium, origin, d) else {
+                    let Some(pd) = fire_pdf_direction(light, to_medium, origin, d, time) else {
                         return 1.0;
                     };
                     let pl = pd as f32 / sc.lights.len() as f32;
@@ -687,7 +690,7 @@ impl Integrator<'_> {
                         {
                             break;
                         }
-                        l += beta * S(e) * (*units * self.emission_weight(m, mis, d));
+                        l += beta * S(e) * (*units * self.emission_weight(m, mis, d, rng.time));
                         match ev[0].event {
                             firemedium_abi::FM_EVENT_SCATTERED => {
                                 beta *= S(w);
@@ -776,7 +779,7 @@ impl Integrator<'_> {
                     }
                 } else {
                     let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
-                    l += beta * le * self.emission_weight(m, mis, d);
+                    l += beta * le * self.emission_weight(m, mis, d, rng.time);
                     beta *= tr;
                     // A refracting fire bent the ray: continue from where it left, in its new direction (the
                     // surface hit found along the straight line no longer applies).

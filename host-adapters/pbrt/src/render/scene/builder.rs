@@ -705,7 +705,7 @@ impl Builder {
                     }
                     let value = match (&p.values, p.ty.as_str()) {
                         (firemedium_pbrt_parser::Values::Strings(v), _) => {
-                            let files = ["filename", "dataset", "densityfile", "temperaturefile", "speciesfiles"];
+                            let files = ["filename", "dataset", "densityfile", "temperaturefile", "speciesfiles", "embers"];
                             Value::String(v.iter().map(|s| if files.contains(&p.name.as_str()) && !Path::new(s).is_absolute() { self.dir.join(s).display().to_string() } else { s.clone() }).collect())
                         }
                         (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
@@ -778,10 +778,10 @@ impl Builder {
                         list.push(LParam::int("frame", f));
                     }
                 }
-                // Motion blur: a velocity grid sees the camera's shutter (unless the medium sets its own), and
-                // the camera then draws a time per sample.
+                // Motion blur: a velocity grid or embers (which move by their own velocities) see the camera's
+                // shutter (unless the medium sets its own), and the camera then draws a time per sample.
                 let velocity = list.iter().any(|p| {
-                    p.name == "velocitygrid"
+                    (p.name == "velocitygrid" || p.name == "embers")
                         && matches!(&p.value, Value::String(v) if v.iter().any(|s| !s.is_empty()))
                 });
                 if velocity {
