@@ -172,11 +172,12 @@ fn bad_arguments_exit_2_with_one_line() {
 
 #[test]
 fn the_committed_campfires_are_what_the_generator_makes() {
-    // scenes/campfire/campfire.vdb and campfire-warped.vdb were written by the commands in its README; the
-    // generator is deterministic.
+    // scenes/campfire/campfire.vdb, campfire.embers.ply and campfire-warped.vdb were written by the commands in
+    // its README; the generator is deterministic, and its embers draw on their own random numbers (the grids are
+    // the same with and without them).
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire");
     for (name, extra) in [
-        ("campfire.vdb", &[][..]),
+        ("campfire.vdb", &["--embers", "200"][..]),
         ("campfire-warped.vdb", &["--warp", "0.1"][..]),
     ] {
         let dir = tmp("campfire");
@@ -196,6 +197,15 @@ fn the_committed_campfires_are_what_the_generator_makes() {
             "regenerate it: firemedium {} (scenes/campfire/README.md)",
             args.join(" ")
         );
+        if extra.contains(&"--embers") {
+            let embers = "campfire.embers.ply";
+            assert!(
+                std::fs::read(dir.join(embers)).unwrap()
+                    == std::fs::read(root.join(embers)).unwrap(),
+                "regenerate it: firemedium {} (scenes/campfire/README.md)",
+                args.join(" ")
+            );
+        }
     }
 }
 

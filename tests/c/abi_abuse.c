@@ -94,6 +94,13 @@ int main(int argc, char **argv) {
     expect_failure("light_pdf(null light)", api->light_pdf(NULL, x, 1, x));
     expect_failure("light_pdf(NaN point)", api->light_pdf(light, x, 1, x + 8));
     expect_failure("light_pdf_direction(null pdf)", api->light_pdf_direction(light, x, x, 1, NULL));
+    {
+        double good_u[6] = {0.5, 0.5, 0.5, 0.5, 0.5, 0.5}, nan_time[1] = {NAN}, dir[3] = {1, 0, 0}, o3[3] = {-1, 0, 0};
+        expect_failure("light_sample_at(NaN time)", api->light_sample_at(light, good_u, nan_time, 1, x, x + 3, NULL));
+        expect_failure("light_pdf_at(null light)", api->light_pdf_at(NULL, o3, NULL, 1, x));
+        expect_failure("light_pdf_direction_at(NaN time)", api->light_pdf_direction_at(light, o3, dir, nan_time, 1, x));
+        expect_failure("light_pdf_direction_at(null pdf)", api->light_pdf_direction_at(light, o3, dir, NULL, 1, NULL));
+    }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);
 

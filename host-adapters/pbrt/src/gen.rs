@@ -177,9 +177,41 @@ pub struct Sim {
     /// Warped blobs (§4) when voxelising: the back-trace time t₀ (s) and the spread η (m/s) — `None`: round
     /// kernels.
     pub warp: Option<(f64, f64)>,
+    /// Embers thrown from the burning fuel, per second (`None`: none, and no random number is drawn for them).
+    pub ember_rate: Option<f64>,
+    pub embers: Vec<Ember>,
+    /// Embers thrown so far.
+    pub embers_born: usize,
     rng: Rng,
+    ember_rng: Rng,
     noise: Noise,
 }
+
+/// An ember in flight: thrown from a burning fuel cell, carried by drag towards the gas's velocity, falling,
+/// cooling by radiation (`firemedium_core::ember`, the plugin's defaults for char).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ember {
+    pub x: DVec3,
+    pub v: DVec3,
+    /// Radius, m.
+    pub r: f64,
+    /// Temperature at birth, K.
+    pub t0: f64,
+    /// Seconds since birth.
+    pub age: f64,
+}
+
+impl Ember {
+    /// Its temperature now (K).
+    pub fn temperature(&self) -> f64 {
+        use firemedium_core::ember::*;
+        let k = cooling_constant(CHAR_EMISSIVITY, CHAR_DENSITY, CHAR_HEAT_CAPACITY, self.r);
+        cooled_temperature(self.t0, self.age, k, T_AMB)
+    }
+}
+
+/// Embers cooler than this are dropped (below the Draper point, 798 K, a dull red at most).
+pub const EMBER_DEAD_K: f64 = 700.0;
 
 fn cylinder_cells(
     a: DVec3,
@@ -439,7 +471,11 @@ impl Sim {
             blobs: Vec::new(),
             time: 0.0,
             warp: None,
+            ember_rate: None,
+            embers: Vec::new(),
+            embers_born: 0,
             rng: Rng::new(seed ^ 0x5EED_F1AE),
+            ember_rng: Rng::new(seed ^ 0xE3BE_25F1),
             noise: Noise { seed },
         }
     }
@@ -548,10 +584,99 @@ impl Sim {
             }
         }
         ledger.smoke_produced = ledger.flame_to_smoke;
+        if let Some(rate) = self.ember_rate {
+            self.step_embers(rate, &born);
+        }
         kept.extend(born);
         self.blobs = kept;
         self.time += dt;
         ledger
+    }
+
+    /// The gas's temperature at `x`: the blobs' temperatures weighted by their kernels, fading to ambient
+    /// outside them (weights summing below 1 keep that share of ambient).
+    fn gas_temperature(&self, x: DVec3) -> f64 {
+        let kappa = self.model.kappa;
+        let (mut w, mut wt) = (0.0, 0.0);
+        for b in &self.blobs {
+            let s = b.sigma(kappa);
+            let d2 = (x - b.x).length_squared();
+            if d2 < 9.0 * s * s {
+                let k = (-0.5 * d2 / (s * s)).exp();
+                w += k;
+                wt += k * (b.t - T_AMB);
+            }
+        }
+        T_AMB + wt / w.max(1.0)
+    }
+
+    /// One step of the embers: new ones thrown from the cells that burnt this step (`born`: their flame
+    /// blobs, by mass), then each moved by gravity and quadratic drag (C_d 0.47, air at the gas's temperature:
+    /// ρ = 353 K·kg/m³ / T) towards the wind, and aged; those that land, leave the domain or cool below
+    /// [`EMBER_DEAD_K`] are dropped.
+    fn step_embers(&mut self, rate: f64, born: &[Blob]) {
+        use firemedium_core::ember::CHAR_DENSITY;
+        let m = self.model.clone();
+        let dt = m.dt;
+        let total: f64 = born.iter().map(|b| b.m_flame).sum();
+        if total > 0.0 {
+            // Expected rate·dt embers this step, shared by the cells by the mass they burnt.
+            let mut carry = self.ember_rng.next_f64();
+            for b in born {
+                carry += rate * dt * b.m_flame / total;
+                while carry >= 1.0 {
+                    carry -= 1.0;
+                    let g = &mut self.ember_rng;
+                    let r = 0.5e-3 * (3.0f64 / 0.5).powf(g.next_f64());
+                    let a = 2.0 * std::f64::consts::PI * g.next_f64();
+                    // A pop throws it up at 2–5 m/s and out at up to 1.5 m/s.
+                    let out = DVec3::new(a.cos(), a.sin(), 0.0) * (0.5 + g.next_f64());
+                    let v = out + DVec3::Z * (2.0 + 3.0 * g.next_f64());
+                    // Born at the gas's temperature where the fuel burns (a millimetre of char reaches it in the
+                    // flame within a fraction of a second), then cooled by radiation alone once thrown.
+                    let t0 = b.t;
+                    self.embers_born += 1;
+                    self.embers.push(Ember {
+                        x: b.x,
+                        v,
+                        r,
+                        t0,
+                        age: 0.0,
+                    });
+                }
+            }
+        }
+        let lo = DVec3::new(-m.half_width, -m.half_width, 0.0);
+        let hi = DVec3::new(m.half_width, m.half_width, m.height);
+        let moved: Vec<Ember> = self
+            .embers
+            .par_iter()
+            .map(|e| {
+                let accel = |x: DVec3, v: DVec3| {
+                    let tg = self.gas_temperature(x);
+                    let rho_air = 353.0 / tg;
+                    let w = v - self.wind(x, tg);
+                    -DVec3::Z * 9.81 * (1.0 - rho_air / CHAR_DENSITY)
+                        - w * (w.length() * 3.0 * 0.47 * rho_air / (8.0 * CHAR_DENSITY * e.r))
+                };
+                // Midpoint in (x, v).
+                let a0 = accel(e.x, e.v);
+                let (xm, vm) = (e.x + e.v * (0.5 * dt), e.v + a0 * (0.5 * dt));
+                let am = accel(xm, vm);
+                Ember {
+                    x: e.x + vm * dt,
+                    v: e.v + am * dt,
+                    age: e.age + dt,
+                    ..*e
+                }
+            })
+            .collect();
+        self.embers = moved
+            .into_iter()
+            .filter(|e| {
+                e.x.cmpge(lo).all() && e.x.cmple(hi).all() && e.temperature() > EMBER_DEAD_K
+            })
+            .collect();
     }
 
     /// The fuel: (cells above 500 K, cells, their mean temperature, fraction of the fuel left).
@@ -1051,9 +1176,89 @@ pub fn write_frame_as(
     Ok((bytes.len(), active, tmax, fmax))
 }
 
+/// The embers as a binary PLY (the plugin's `embers` file): x, y, z, radius (m), temperature (K, at birth),
+/// vx, vy, vz (m/s) and age (s), one float each.
+pub fn embers_ply(embers: &[Ember]) -> Vec<u8> {
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment firemedium gen: embers (temperature at birth, cooled by the renderer over age)\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty float radius\nproperty float temperature\nproperty float vx\nproperty float vy\nproperty float vz\nproperty float age\nend_header\n",
+        embers.len()
+    )
+    .into_bytes();
+    for e in embers {
+        for v in [e.x.x, e.x.y, e.x.z, e.r, e.t0, e.v.x, e.v.y, e.v.z, e.age] {
+            b.extend((v as f32).to_le_bytes());
+        }
+    }
+    b
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn embers_are_thrown_at_their_rate_and_kept_while_they_glow_inside_the_domain() {
+        let (rate, t) = (60.0, 1.0);
+        let mut sim = Sim::new(Kind::Campfire, 3);
+        sim.ember_rate = Some(rate);
+        sim.run_to(t);
+        // About rate × t: each step that burns fuel throws floor(U + rate·dt) embers (none before the first
+        // cell burns).
+        let n = sim.embers_born as f64;
+        assert!(n > 0.5 * rate * t && n < 1.05 * rate * t, "{n} thrown");
+        let m = &sim.model;
+        assert!(!sim.embers.is_empty() && sim.embers.len() < sim.embers_born);
+        for e in &sim.embers {
+            assert!(e.x.z >= 0.0 && e.x.z <= m.height && e.x.x.abs() <= m.half_width);
+            assert!(e.temperature() > EMBER_DEAD_K && e.temperature() <= e.t0);
+            assert!(e.age > 0.0 && e.age <= t + 1e-9);
+            assert!((0.5e-3..=3.0e-3).contains(&e.r));
+        }
+        // The same seed, the same embers; and the blobs do not see them.
+        let mut again = Sim::new(Kind::Campfire, 3);
+        again.ember_rate = Some(rate);
+        again.run_to(t);
+        assert_eq!(again.embers, sim.embers);
+        let mut none = Sim::new(Kind::Campfire, 3);
+        none.run_to(t);
+        assert_eq!(none.blobs.len(), sim.blobs.len());
+        assert!(none
+            .blobs
+            .iter()
+            .zip(&sim.blobs)
+            .all(|(a, b)| a.x == b.x && a.t == b.t));
+        // The PLY the plugin reads: a header and 36 bytes per ember.
+        let ply = embers_ply(&sim.embers);
+        let head = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        assert_eq!(ply.len() - head, 36 * sim.embers.len());
+    }
+
+    #[test]
+    fn an_ember_in_still_air_falls_as_quadratic_drag_says() {
+        // Gravity against quadratic drag from rest: v(t) = v_t tanh(g' t / v_t), g' = g (1 − ρ_a/ρ_p),
+        // v_t = sqrt(8 ρ_p r g' / (3 C_d ρ_a)), air at 293.15 K (no blobs: the gas is ambient and still).
+        let mut sim = Sim::new(Kind::Campfire, 1);
+        sim.model.turbulence = 0.0;
+        sim.model.dt = 1e-3;
+        let r = 1e-3;
+        sim.embers.push(Ember {
+            x: DVec3::new(0.0, 0.0, 1.55),
+            v: DVec3::ZERO,
+            r,
+            t0: 5000.0,
+            age: 0.0,
+        });
+        for _ in 0..300 {
+            sim.step_embers(0.0, &[]);
+        }
+        let rho_a = 353.0 / T_AMB;
+        let rho_p = firemedium_core::ember::CHAR_DENSITY;
+        let g = 9.81 * (1.0 - rho_a / rho_p);
+        let vt = (8.0 * rho_p * r * g / (3.0 * 0.47 * rho_a)).sqrt();
+        let want = vt * (g * 0.3 / vt).tanh();
+        let e = sim.embers.first().expect("still falling");
+        assert!((-e.v.z / want - 1.0).abs() < 1e-4, "{} vs {want}", -e.v.z);
+    }
 
     #[test]
     fn flame_production_equals_fuel_consumption_every_step() {

@@ -455,7 +455,8 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
-        // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 24 * 8);
+        // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
+        // three `_at` entries).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 27 * 8);
     }
 }

@@ -18,6 +18,13 @@
 
 use crate::constants::STEFAN_BOLTZMANN;
 
+/// Total emissivity of wood char (0.85–0.95; the plugin's `emberemissivity` default).
+pub const CHAR_EMISSIVITY: f64 = 0.9;
+/// Apparent density of softwood char, kg/m³ (200–300; `emberdensity`).
+pub const CHAR_DENSITY: f64 = 250.0;
+/// Specific heat of char at 600–1200 K, J/(kg·K) (1.0–1.5 k; Gupta, Yang & Kozinski 2003; `emberheatcapacity`).
+pub const CHAR_HEAT_CAPACITY: f64 = 1200.0;
+
 /// The cooling constant k = 3εσ/(ρ c r) (K⁻³ s⁻¹) of a sphere of radius `r` (m), emissivity `eps`, density
 /// `rho` (kg/m³) and specific heat `c` (J/(kg·K)). 0 when any input is not positive and finite.
 pub fn cooling_constant(eps: f64, rho: f64, c: f64, r: f64) -> f64 {
@@ -200,7 +207,7 @@ mod tests {
         assert_eq!(cooled_temperature(250.0, 1.0, k, 300.0), 250.0);
         assert_eq!(cooled_temperature(1000.0, -1e9, k, 0.0), 1e6);
         let t = cooled_temperature(1000.0, 1e30, k, 300.0);
-        assert!(t >= 300.0 && t < 300.001, "{t}");
+        assert!((300.0..300.001).contains(&t), "{t}");
         assert_eq!(cooling_constant(0.9, 0.0, 1000.0, 1e-3), 0.0);
         assert_eq!(cooling_constant(0.0, 200.0, 1000.0, 1e-3), 0.0);
     }

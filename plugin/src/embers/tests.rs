@@ -394,6 +394,7 @@ fn the_light_estimates_an_embers_solid_angle_integral() {
         * 2.0
         * std::f64::consts::PI
         * (1.0 - (1.0 - sin_a * sin_a).sqrt());
+    eprintln!("{mean} ± {se} vs {want}: {:+.2e}", mean / want - 1.0);
     assert!(
         (mean - want).abs() < 4.0 * se + 1e-3 * want,
         "{mean} ± {se} vs {want}"
@@ -422,4 +423,76 @@ fn embers_need_a_fire() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("/no/such/embers.csv"), "{e}");
+}
+
+#[test]
+fn the_parameters_defaults_are_the_generators_char() {
+    use firemedium_core::ember::{CHAR_DENSITY, CHAR_EMISSIVITY, CHAR_HEAT_CAPACITY};
+    let default = |name: &str| -> f64 {
+        let row = crate::volume::params::VOLUME
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap();
+        row.default.parse().unwrap()
+    };
+    assert_eq!(default("emberemissivity"), CHAR_EMISSIVITY);
+    assert_eq!(default("emberdensity"), CHAR_DENSITY);
+    assert_eq!(default("emberheatcapacity"), CHAR_HEAT_CAPACITY);
+}
+
+#[test]
+fn mutated_particle_files_are_errors_or_particles_never_panics() {
+    // Bytes flipped, runs deleted or repeated, digits and signs inserted, files cut: every result is the
+    // particles or an error naming the file, within the budget.
+    let ascii = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty float radius\nproperty float temperature\nend_header\n0 0 0 0.02 1000\n1 2 3 0.004 800\n";
+    let seeds: Vec<(&str, Vec<u8>)> = vec![
+        ("m.csv", CSV.as_bytes().to_vec()),
+        ("m.ply", ascii.as_bytes().to_vec()),
+        ("b.ply", ply_binary(false, &two())),
+    ];
+    let mut rng = firemedium_core::rng::Rng::new(27);
+    let mut pick = |n: usize| (rng.next_f64() * n as f64) as usize % n.max(1);
+    let (mut ok, mut err) = (0, 0);
+    for round in 0..6000 {
+        let (name, seed) = &seeds[round % seeds.len()];
+        let mut b = seed.clone();
+        for _ in 0..1 + pick(4) {
+            let at = pick(b.len().max(1));
+            match pick(6) {
+                0 if !b.is_empty() => {
+                    let i = at.min(b.len() - 1);
+                    b[i] ^= 1 << pick(8);
+                }
+                1 => b.truncate(at),
+                2 => b.insert(at.min(b.len()), b"-9e99.0,\n"[pick(9)]),
+                3 if !b.is_empty() => {
+                    let end = (at + pick(16)).min(b.len());
+                    b.drain(at.min(end)..end);
+                }
+                4 => {
+                    let end = (at + pick(32)).min(b.len());
+                    let run = b[at.min(end)..end].to_vec();
+                    b.splice(
+                        at.min(b.len())..at.min(b.len()),
+                        run.into_iter().cycle().take(64),
+                    );
+                }
+                _ => b.insert(at.min(b.len()), b'9'),
+            }
+        }
+        match parse(name, &b, 1 << 16) {
+            Ok(p) => {
+                ok += 1;
+                assert!(p
+                    .iter()
+                    .all(|q| q.r > 0.0 && q.t.is_finite() && q.p.is_finite()));
+            }
+            Err(e) => {
+                err += 1;
+                assert!(e.to_string().contains(name), "{e}");
+            }
+        }
+    }
+    assert!(ok > 100 && err > 100, "{ok} read, {err} refused");
 }

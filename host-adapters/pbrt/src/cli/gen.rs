@@ -43,6 +43,11 @@ pub struct GenArgs {
     /// allowance for the spread the advection itself causes.
     #[arg(long, value_name = "ETA", default_value_t = 0.0, requires = "warp", value_parser = parse_spread)]
     warp_spread: f64,
+    /// Embers thrown from the burning fuel, RATE per second on average (0 < RATE ≤ 100000): carried by drag
+    /// and gravity, cooling by radiation; written beside the grids as a binary PLY (OUT with `.vdb` replaced by
+    /// `.embers.ply`) for the fire's `"string embers"`.
+    #[arg(long, value_name = "RATE", value_parser = parse_rate)]
+    embers: Option<f64>,
     /// Write the grids as a tool does, to be read with `"string source"` alone: kelvin (density, temperature in
     /// K), houdini (density, temperature in units of 5000 K, flame), blender (density, flame as Cycles maps it to
     /// kelvin), embergen (smoke, temperature in K, flames).
@@ -80,6 +85,24 @@ fn parse_spread(s: &str) -> Result<f64, String> {
             "--warp-spread '{s}': expected η in m/s, 0 ≤ η ≤ 1000, e.g. 0.05"
         )),
     }
+}
+
+fn parse_rate(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(r) if r > 0.0 && r <= 1e5 => Ok(r),
+        _ => Err(format!(
+            "--embers '{s}': expected embers per second, 0 < RATE ≤ 100000, e.g. 40"
+        )),
+    }
+}
+
+/// Where the embers of the grids at `path` go: `.vdb` replaced by `.embers.ply` (appended if absent).
+pub fn embers_path(path: &std::path::Path) -> PathBuf {
+    let s = path.to_string_lossy();
+    PathBuf::from(match s.strip_suffix(".vdb") {
+        Some(stem) => format!("{stem}.embers.ply"),
+        None => format!("{s}.embers.ply"),
+    })
 }
 
 fn parse_frames(s: &str) -> Result<(u32, u32), String> {
@@ -128,6 +151,7 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
     let start = std::time::Instant::now();
     let mut sim = Sim::new(kind, a.seed);
     sim.warp = a.warp.map(|t| (t, a.warp_spread));
+    sim.ember_rate = a.embers;
     let mut out = String::new();
     for frame in first..=last {
         sim.run_to(frame as f64 / 24.0);
@@ -145,9 +169,22 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
             &path,
         )
         .map_err(|e| (1, e))?;
+        let embers = match a.embers {
+            Some(_) => {
+                let ep = embers_path(&path);
+                let bytes = firemedium::gen::embers_ply(&sim.embers);
+                firemedium::imageio::write_atomic(&ep, |tmp| {
+                    std::fs::write(tmp, &bytes)
+                        .map_err(|e| format!("{}: cannot write: {e}", ep.display()))
+                })
+                .map_err(|e| (1, e))?;
+                format!("; {} embers in {}", sim.embers.len(), ep.display())
+            }
+            None => String::new(),
+        };
         let (hot, cells, t_fuel, left) = sim.fuel_summary();
         out += &format!(
-            "wrote {} ({} frame {frame}, t = {:.3} s): {} blobs, {active} active voxels, peak {tmax:.0} K, peak soot fraction {fmax:.3e}, {:.1} MB; fuel: {hot}/{cells} cells burning at {t_fuel:.0} K mean, {:.1} % left\n",
+            "wrote {} ({} frame {frame}, t = {:.3} s): {} blobs, {active} active voxels, peak {tmax:.0} K, peak soot fraction {fmax:.3e}, {:.1} MB; fuel: {hot}/{cells} cells burning at {t_fuel:.0} K mean, {:.1} % left{embers}\n",
             path.display(),
             kind.name(),
             sim.time,
