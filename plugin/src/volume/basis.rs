@@ -5,7 +5,7 @@
 
 use super::ColorMode;
 use crate::blackbody::spectral_radiance;
-use crate::cie::{self, cmf_table::CMF};
+use crate::cie::{self, cmf_table::CMF, LineSplit};
 use crate::species::Element;
 use crate::spectrum::SpectralGrid;
 use glam::DVec3;
@@ -16,6 +16,9 @@ pub(super) struct Basis {
     pub(super) mode: ColorMode,
     /// Photometric factor: 683 lm/W (physical) or 1/∫ȳ (pbrt).
     pub(super) k: f64,
+    /// Spectral bins share each atomic line with a neighbour so the film sees its own wavelength's luminance
+    /// (`linecolour "ownwavelength"`, [`LineSplit`]).
+    pub(super) line_split: bool,
 }
 
 impl Basis {
@@ -164,18 +167,31 @@ impl Basis {
         out.extend(e);
         out
     }
-    /// Per-unit-N line cross-sections of `e` at T: (σ̂ m², ĵ per channel).
-    pub(super) fn lines(
-        &self,
-        e: &Element,
-        t: f64,
-        fine: &SpectralGrid,
-        fine_w: &[DVec3],
-    ) -> (Vec<f64>, Vec<f64>) {
+    /// What [`lines`](Self::lines) needs besides the element: the rgb bands' fine grid and its CMF weights, and
+    /// the spectral bins' line split.
+    pub(super) fn line_aux(&self) -> LineAux {
+        let (fine, fine_w) = super::coefficients::fine_cmf();
+        let split = match self.mode {
+            ColorMode::Spectral(g) if self.line_split => Some(LineSplit::new(&g)),
+            _ => None,
+        };
+        LineAux {
+            fine,
+            fine_w,
+            split,
+        }
+    }
+    /// Per-unit-N line cross-sections of `e` at T: (σ̂ m², ĵ per channel). Spectral bins take each line's box
+    /// shared between two bins so that the film sees it at its own wavelength's luminance ([`LineSplit`]).
+    pub(super) fn lines(&self, e: &Element, t: f64, aux: &LineAux) -> (Vec<f64>, Vec<f64>) {
+        let (fine, fine_w) = (&aux.fine, &aux.fine_w);
         match self.mode {
             ColorMode::Spectral(g) => {
                 let (mut sa, mut j) = (vec![0.0; g.count()], vec![0.0; g.count()]);
-                e.add_binned_cross_sections(t, &g, &mut sa, &mut j);
+                match &aux.split {
+                    Some(split) => e.add_split_cross_sections(t, &g, split, &mut sa, &mut j),
+                    None => e.add_binned_cross_sections(t, &g, &mut sa, &mut j),
+                }
                 (sa, j)
             }
             ColorMode::Rgb => {
@@ -217,6 +233,14 @@ impl Basis {
             ColorMode::Rgb => vec![DVec3::X, DVec3::Y, DVec3::Z],
         }
     }
+}
+
+/// What [`Basis::lines`] reads besides an element (built once per volume: the split integrates the CMFs).
+#[derive(Debug, Clone)]
+pub(super) struct LineAux {
+    fine: SpectralGrid,
+    fine_w: Vec<DVec3>,
+    pub(super) split: Option<LineSplit>,
 }
 
 /// Quadrature nodes of a basis (see [`Basis::nodes`]).

@@ -219,7 +219,7 @@ fn species_tables(
     intensity: f64,
     tables: &mut Vec<TableReport>,
 ) -> Vec<SpeciesChannel> {
-    let (fine, fine_w) = fine_cmf();
+    let aux = basis.line_aux();
     let mut out = Vec::new();
     for (sym, e, scale) in species {
         let ch = ds
@@ -229,11 +229,11 @@ fn species_tables(
             .unwrap_or(0);
         let t0 = Instant::now();
         let c = basis.channels();
-        let (e1, b1, fw1) = (e.clone(), basis.clone(), fine_w.clone());
-        let sigma = TTable::build(t_max, c, &move |t| b1.lines(&e1, t, &fine, &fw1).0);
-        let (e2, b2, fw2) = (e.clone(), basis.clone(), fine_w.clone());
+        let (e1, b1, a1) = (e.clone(), basis.clone(), aux.clone());
+        let sigma = TTable::build(t_max, c, &move |t| b1.lines(&e1, t, &a1).0);
+        let (e2, b2, a2) = (e.clone(), basis.clone(), aux.clone());
         let j = TTable::build(t_max, c, &move |t| {
-            b2.lines(&e2, t, &fine, &fw2)
+            b2.lines(&e2, t, &a2)
                 .1
                 .into_iter()
                 .map(|v| v * intensity)

@@ -346,9 +346,9 @@ impl ThickLines {
                         .any(|(x, &m)| m && x.lambda_nm == l.lambda_nm)
                 });
                 let (basis, intensity) = (inp.basis.clone(), inp.intensity);
-                let (fine, fw) = super::coefficients::fine_cmf();
+                let aux = basis.line_aux();
                 let tab = TTable::build_step(t_max, step(t_max), 2 * c, &move |t| {
-                    let (mut s, j) = basis.lines(&only, t, &fine, &fw);
+                    let (mut s, j) = basis.lines(&only, t, &aux);
                     s.extend(j.into_iter().map(|v| v * intensity));
                     s
                 });
@@ -385,9 +385,28 @@ impl ThickLines {
         let mut fold = Vec::new();
         match inp.basis.mode {
             ColorMode::Spectral(g) => {
+                // Each node's light shared as a line at its wavelength would be (`LineSplit`: the film sees its
+                // own luminance), its transmittance in its own bin.
+                let split = inp.basis.line_split.then(|| crate::cie::LineSplit::new(&g));
                 for (k, (&l, &dw)) in lambda.iter().zip(&width).enumerate() {
-                    if let Some(b) = g.bin_of(l) {
-                        fold.push((k, b, dw / g.width_nm(), dw / g.width_nm()));
+                    let Some(b) = g.bin_of(l) else { continue };
+                    let parts = match &split {
+                        Some(s) => s.split(l).unwrap_or([(b, 1.0), (b, 0.0)]),
+                        None => [(b, 1.0), (b, 0.0)],
+                    };
+                    {
+                        // (The transmittance once, in the node's bin.)
+                        let mut q_left = dw / g.width_nm();
+                        for (bin, f) in parts {
+                            let q = if bin == b {
+                                std::mem::take(&mut q_left)
+                            } else {
+                                0.0
+                            };
+                            if f > 0.0 || q > 0.0 {
+                                fold.push((k, bin, f * dw / g.width_nm(), q));
+                            }
+                        }
                     }
                 }
             }

@@ -214,7 +214,12 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
     } else {
         crate::constants::LUMINOUS_EFFICACY
     };
-    Ok(Basis { mode: mode_c, k })
+    let line_split = r.string("linecolour")? == "ownwavelength";
+    Ok(Basis {
+        mode: mode_c,
+        k,
+        line_split,
+    })
 }
 
 /// Soot optics (a named fuel or a custom (λ, n, k) table), its scales, and the species.

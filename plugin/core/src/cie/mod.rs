@@ -321,3 +321,131 @@ mod tests {
         assert!((lms - DVec3::ONE).abs().max_element() < 2e-3, "{lms}");
     }
 }
+
+/// Where a narrow line's energy goes among spectral bins so that the film's bin weights ([`bin_weights`]) see it
+/// at its own wavelength's luminance: a line inside bin k is a box over k alone, whose luminance is the bin's
+/// mean ȳ (Na D at 589 nm +7 % with 10 nm bins, Ca 422.7 nm −41 % with the default 32 bins over 400–780 nm). Split
+/// between k and a neighbour n with fractions 1 − t and t (t ∈ [0, 1], energy kept), t chosen so that the
+/// luminance is 683 ȳ(λ) exactly — with the neighbour on the line's side of the bin's centre if that brackets it,
+/// else the other; where neither does (a line at ȳ's peak, brighter than every bin's mean), the tent between the
+/// two nearest bin centres. The chromaticity follows within a few thousandths (tested).
+#[derive(Debug, Clone)]
+pub struct LineSplit {
+    grid: SpectralGrid,
+    /// Luminance per unit bin value and nm of width, per bin.
+    y: Vec<f64>,
+}
+
+impl LineSplit {
+    /// The split for `grid`'s bins.
+    pub fn new(grid: &SpectralGrid) -> LineSplit {
+        let w = grid.width_nm();
+        LineSplit {
+            grid: *grid,
+            y: bin_weights(grid).iter().map(|v| v.y / w).collect(),
+        }
+    }
+
+    /// (bin, fraction) twice, fractions ≥ 0 summing to 1, for a line at `lambda_nm`; `None` outside the bins.
+    pub fn split(&self, lambda_nm: f64) -> Option<[(usize, f64); 2]> {
+        let g = &self.grid;
+        let k = g.bin_of(lambda_nm)?;
+        let n = g.count();
+        let c = g.centre(k);
+        let side = if lambda_nm >= c {
+            k + 1
+        } else {
+            k.wrapping_sub(1)
+        };
+        let other = if lambda_nm >= c {
+            k.wrapping_sub(1)
+        } else {
+            k + 1
+        };
+        let target = LUMINOUS_EFFICACY * cmf(lambda_nm).y;
+        for nb in [side, other] {
+            if nb >= n {
+                continue;
+            }
+            let (yk, yn) = (self.y[k], self.y[nb]);
+            if yn != yk {
+                let t = (target - yk) / (yn - yk);
+                if (0.0..=1.0).contains(&t) {
+                    return Some([(k, 1.0 - t), (nb, t)]);
+                }
+            }
+        }
+        if side >= n {
+            return Some([(k, 1.0), (k, 0.0)]);
+        }
+        let f = ((lambda_nm - c) / (g.centre(side) - c)).clamp(0.0, 1.0);
+        Some([(k, 1.0 - f), (side, f)])
+    }
+}
+
+#[cfg(test)]
+mod line_split_tests {
+    use super::*;
+    use crate::species::{line_cross_sections, Element};
+
+    #[test]
+    fn split_lines_keep_their_energy_and_show_their_own_colour() {
+        // Every visible line of the seven species at 2000 K, in the thesis's 30 bins and the default 32: each
+        // split is two non-negative fractions summing to 1; a species' lines together take their own
+        // wavelengths' luminance within 0.5 % and chromaticity within 0.004, where a bin's mean gave up to 41 %
+        // and 0.05.
+        for (lo, hi, n) in [(400.0, 700.0, 30), (400.0, 780.0, 32), (380.0, 780.0, 40)] {
+            let g = SpectralGrid::new(lo, hi, n).unwrap();
+            let split = LineSplit::new(&g);
+            let w = bin_weights(&g);
+            let per_nm: Vec<DVec3> = w.iter().map(|v| *v / g.width_nm()).collect();
+            let (mut worst_y, mut worst_xy) = (0.0f64, 0.0f64);
+            for sym in ["Na", "Li", "K", "Ca", "Sr", "Ba", "Cu"] {
+                let e = Element::by_symbol(sym).unwrap();
+                let kt = crate::constants::BOLTZMANN * 2000.0;
+                let lz = e.ln_partition_function(2000.0);
+                let (mut exact, mut got) = (DVec3::ZERO, DVec3::ZERO);
+                for l in e.lines() {
+                    let Some(parts) = split.split(l.lambda_nm) else {
+                        assert!(g.bin_of(l.lambda_nm).is_none());
+                        continue;
+                    };
+                    assert!(parts.iter().all(|p| p.1 >= 0.0 && p.0 < n));
+                    assert!((parts[0].1 + parts[1].1 - 1.0).abs() < 1e-12);
+                    let (_, j) = line_cross_sections(l, kt, lz, 1.0);
+                    exact += cmf(l.lambda_nm) * (LUMINOUS_EFFICACY * j);
+                    got += parts
+                        .iter()
+                        .map(|&(b, f)| per_nm[b] * (f * j))
+                        .sum::<DVec3>();
+                }
+                if exact.y == 0.0 {
+                    continue;
+                }
+                let c = |v: DVec3| DVec3::new(v.x, v.y, 0.0) / v.element_sum();
+                worst_y = worst_y.max((got.y / exact.y - 1.0).abs());
+                worst_xy = worst_xy.max((c(got) - c(exact)).length());
+            }
+            assert!(
+                worst_y < 5e-3 && worst_xy < 4e-3,
+                "{n} bins: Y {worst_y}, xy {worst_xy}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_split_line_is_its_own_luminance_where_two_bins_bracket_it() {
+        let g = SpectralGrid::new(400.0, 700.0, 30).unwrap();
+        let split = LineSplit::new(&g);
+        let w = bin_weights(&g);
+        for lam in [422.67, 460.7, 510.55, 589.0, 670.8] {
+            let parts = split.split(lam).unwrap();
+            let y: f64 = parts.iter().map(|&(b, f)| w[b].y / g.width_nm() * f).sum();
+            assert!(
+                (y / (683.0 * cmf(lam).y) - 1.0).abs() < 1e-9,
+                "{lam} nm: {y}"
+            );
+        }
+        assert!(split.split(399.0).is_none() && split.split(700.5).is_none());
+    }
+}

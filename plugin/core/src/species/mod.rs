@@ -231,6 +231,35 @@ impl Element {
             emission[bin] += j;
         }
     }
+
+    /// As [`add_binned_cross_sections`](Self::add_binned_cross_sections), each line's box shared between two
+    /// bins as `split` says (absorption and emission alike: Kirchhoff holds in each bin, and the film sees the
+    /// line at its own wavelength's luminance — [`crate::cie::LineSplit`]).
+    pub fn add_split_cross_sections(
+        &self,
+        t_k: f64,
+        grid: &SpectralGrid,
+        split: &crate::cie::LineSplit,
+        absorption: &mut [f64],
+        emission: &mut [f64],
+    ) {
+        let t = t_k.max(T_MIN);
+        let kt = BOLTZMANN * t;
+        let ln_z = self.ln_partition_function(t);
+        let phi = 1.0 / (grid.width_nm() * 1e-9); // m⁻¹
+        for line in &self.lines {
+            let Some(parts) = split.split(line.lambda_nm) else {
+                continue;
+            };
+            let (sa, j) = line_cross_sections(line, kt, ln_z, phi);
+            for (bin, f) in parts {
+                if f > 0.0 {
+                    absorption[bin] += sa * f;
+                    emission[bin] += j * f;
+                }
+            }
+        }
+    }
 }
 
 /// (σ_a/N in m², j/N in W·sr⁻¹·nm⁻¹) of one line with line shape `phi` (m⁻¹), at kT (J), given ln Z.
