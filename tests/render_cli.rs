@@ -645,6 +645,7 @@ fn every_scene_renders_at_a_tiny_resolution() {
             "art",
             "bluecore",
             "campfire",
+            "diffusion",
             "fuels",
             "looks",
             "mantaflow",
