@@ -260,3 +260,79 @@ fn every_entry_refuses_bad_arguments_from_c() {
         "{text}"
     );
 }
+
+#[test]
+fn the_c_example_host_renders_the_campfire() {
+    // plugin/abi/examples/fire_pixel.c, compiled as a user would (-Wall -Wextra -Werror), run on the default
+    // scene's fire: its brightest ray is the loader's, to the digit it prints, and its fire-light estimate is
+    // positive and finite.
+    let include = root().join("plugin/abi/include");
+    let exe = tmp("fire_pixel");
+    gcc(&[
+        "-std=c99",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-I",
+        include.to_str().unwrap(),
+        root()
+            .join("plugin/abi/examples/fire_pixel.c")
+            .to_str()
+            .unwrap(),
+        "-ldl",
+        "-o",
+        exe.to_str().unwrap(),
+    ]);
+    let fire = root().join("scenes/campfire/campfire.vdb");
+    let out = Command::new(&exe)
+        .arg(plugin_path())
+        .arg(&fire)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let value = |key: &str| -> f64 {
+        text.lines()
+            .find_map(|l| l.strip_prefix(key).map(|v| v.trim().parse().unwrap()))
+            .unwrap_or_else(|| panic!("no {key} in\n{text}"))
+    };
+    // The same fan through the loader: the brightest of its nine rays.
+    // SAFETY: the plugin built for this test.
+    let plugin = unsafe { Plugin::load(plugin_path()) }.unwrap();
+    let v = plugin
+        .create_volume(&[
+            Param::string("dataset", fire.to_str().unwrap()),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap();
+    let info = v.info();
+    let c = info.channels as usize;
+    let xyz = v.channel_xyz().unwrap();
+    let (lo, hi) = (info.bounds_min, info.bounds_max);
+    let z = lo[2] + 0.3 * (hi[2] - lo[2]);
+    let rays: Vec<Ray> = (0..9)
+        .map(|i| Ray {
+            origin: [
+                lo[0] + (hi[0] - lo[0]) * (i as f64 + 0.5) / 9.0,
+                lo[1] - 1.0,
+                z,
+            ],
+            direction: [0.0, 1.0, 0.0],
+            tmin: 0.0,
+            tmax: 1e30,
+            seed: i,
+        })
+        .collect();
+    let mut l = vec![0f32; 9 * c];
+    v.integrate(&rays, &mut l, None, None).unwrap();
+    let brightest = (0..9)
+        .map(|i| (0..c).map(|k| l[i * c + k] as f64 * xyz[k][1]).sum::<f64>())
+        .fold(0.0, f64::max);
+    assert!(brightest > 0.0 && (value("brightest ") / brightest - 1.0).abs() < 1e-6);
+    let e = value("scalar_illuminance ");
+    assert!(e.is_finite() && e > 0.0, "{e}");
+}

@@ -1631,3 +1631,61 @@ fn the_diffusion_scene_agrees_with_its_path_traced_twin() {
         "floor {floor_d} vs {floor_p}"
     );
 }
+
+#[test]
+fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
+    // tools/install.sh's layout — PREFIX/bin/firemedium, PREFIX/lib/firemedium/<plugin> — copied from the build,
+    // run from an unrelated directory with no plugin variables: it finds its plugin relative to itself, renders
+    // the default scene, and writes where it is told.
+    let dir = tmp("install");
+    let exe = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let lib = firemedium_loader::library_file_name();
+    let plugin = exe.parent().unwrap().join(&lib);
+    std::fs::create_dir_all(dir.join("prefix/bin")).unwrap();
+    std::fs::create_dir_all(dir.join("prefix/lib/firemedium")).unwrap();
+    std::fs::create_dir_all(dir.join("elsewhere")).unwrap();
+    let installed = dir.join("prefix/bin").join(exe.file_name().unwrap());
+    std::fs::copy(&exe, &installed).unwrap();
+    std::fs::copy(&plugin, dir.join("prefix/lib/firemedium").join(&lib)).unwrap();
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire/scene.pbrt");
+    let o = Command::new(&installed)
+        .current_dir(dir.join("elsewhere"))
+        .env_remove("FIREMEDIUM_PLUGIN")
+        .env_remove("FIREMEDIUM_PLUGIN_PATH")
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--resolution",
+            "32x18",
+            "--spp",
+            "1",
+        ])
+        .args(["-o", "here.exr", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("elsewhere/here.exr").is_file() && dir.join("elsewhere/here.png").is_file());
+    // Without the plugin beside it, the message says where it looked.
+    std::fs::remove_file(dir.join("prefix/lib/firemedium").join(&lib)).unwrap();
+    let o = Command::new(&installed)
+        .current_dir(dir.join("elsewhere"))
+        .env_remove("FIREMEDIUM_PLUGIN")
+        .env_remove("FIREMEDIUM_PLUGIN_PATH")
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--resolution",
+            "32x18",
+            "--spp",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("no firemedium plugin found")
+            && e.contains("lib/firemedium"),
+        "{e}"
+    );
+}

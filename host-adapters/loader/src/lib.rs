@@ -357,7 +357,9 @@ impl Plugin {
     }
 
     /// Finds the plugin: the file `FIREMEDIUM_PLUGIN` names, else the library file in each directory of
-    /// `FIREMEDIUM_PLUGIN_PATH` (`:`-separated; `;` on Windows), then beside the running executable.
+    /// `FIREMEDIUM_PLUGIN_PATH` (`:`-separated; `;` on Windows), then relative to the running executable:
+    /// beside it, in `../lib/firemedium` (an installed layout: `tools/install.sh`), in its `deps` (Cargo's tests)
+    /// and one folder up (Cargo's examples, in `target/release/examples`).
     ///
     /// # Safety
     ///
@@ -375,7 +377,11 @@ impl Plugin {
             .and_then(|e| e.parent().map(Path::to_path_buf))
         {
             dirs.push(d.clone());
+            dirs.push(d.join("../lib/firemedium"));
             dirs.push(d.join("deps"));
+            if let Some(up) = d.parent() {
+                dirs.push(up.to_path_buf());
+            }
         }
         // SAFETY: the caller vouches for the environment's files (this function's contract).
         unsafe { Plugin::find(&dirs) }

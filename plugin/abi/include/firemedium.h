@@ -8,7 +8,9 @@
  * Usage: dlopen the plugin, dlsym FIREMEDIUM_ENTRY_SYMBOL, call it, check abi_major == FM_ABI_MAJOR and
  * abi_minor >= FM_ABI_MINOR and struct_size >= sizeof(FmApi), then use the table. Every call returns an FmStatus;
  * on failure last_error() gives the message. Volumes are immutable and safe to query from many threads.
- * Batch outputs hold n * channels floats, channel fastest. Rays are in the medium's space.
+ * Batch outputs hold n * channels floats, channel fastest. Rays are in the medium's space. Each entry of FmApi
+ * below says which arrays it reads and writes, their layout, and which outputs may be NULL;
+ * plugin/abi/examples/fire_pixel.c is a complete host written from this header alone.
  */
 #ifndef FIREMEDIUM_H
 #define FIREMEDIUM_H
@@ -113,54 +115,95 @@ typedef struct FmLightInfo {
     uint32_t reserved;
 } FmLightInfo;
 
+/*
+ * The function table. Conventions for every entry:
+ * - Returns FM_OK or an error status; last_error() then holds the message (per thread).
+ * - Batches: n entries; a ray is one FmRay; a point, origin or direction is 3 doubles (x, y, z) in the medium's
+ *   space; per-channel outputs are n * channels floats, entry-major and channel fastest (out[i * channels + c]);
+ *   channels comes from volume_info. Every input number is checked finite; a NaN is an error, not a result.
+ * - "required" outputs must not be NULL (FM_INVALID_ARGUMENT); "may be NULL" outputs are skipped when NULL.
+ * - Handles are immutable once created: call any entry on one handle from many threads at once.
+ */
 typedef struct FmApi {
     uint32_t abi_major, abi_minor, struct_size, reserved;
+    /* The calling thread's last error message, UTF-8, NUL-terminated and truncated to cap bytes, into buf (may
+     * be NULL to ask for the length); returns its full length in bytes without the NUL. */
     size_t (*last_error)(char *buf, size_t cap);
+    /* Rows of the parameter tables of all components (dataset, volume, light): param_info(index) for each, index
+     * < param_count(). A row's strings are static. The volume's parameters a host needs first: "dataset" (or
+     * "filename": an OpenVDB/NanoVDB file), "densitygrid" and "temperaturegrid" (grid names; defaults "density",
+     * "temperature"), "fuel" (propane, acetylene, ...), "stepsize" (voxels), "bins"/"lambdamin"/"lambdamax" or
+     * "colormode" "rgb", "maxbytes" (the memory budget) — all in docs/params.md. */
     size_t (*param_count)(void);
-    FmStatus (*param_info)(size_t index, FmParamInfo *out);
+    FmStatus (*param_info)(size_t index, FmParamInfo *out /* required */);
+    /* A fire volume from count parameters (params may be NULL when count is 0); *out (required) receives the
+     * handle. An unknown or unused parameter is an error naming it. */
     FmStatus (*volume_create)(const FmParam *params, size_t count, FmVolume **out);
+    /* Destroys a volume (NULL is ignored). Lights made from it keep it alive until they are destroyed. */
     void (*volume_destroy)(FmVolume *volume);
-    FmStatus (*volume_info)(const FmVolume *volume, FmVolumeInfo *out);
+    FmStatus (*volume_info)(const FmVolume *volume, FmVolumeInfo *out /* required */);
+    /* 3 * channels doubles into out (cap: how many doubles out holds): the X, Y, Z of unit radiance in channel c
+     * at out[3c], out[3c + 1], out[3c + 2] — a host's film turns channel radiance into XYZ with them. */
     FmStatus (*volume_channel_xyz)(const FmVolume *volume, double *out, size_t cap);
+    /* Emission and absorption along n rays: radiance (required, n * channels floats), transmittance (may be
+     * NULL, n * channels), exits (may be NULL, n: where each ray leaves — bent by refraction, or stopped by an
+     * ember). */
     FmStatus (*volume_integrate)(const FmVolume *volume, const FmRay *rays, size_t n, float *radiance,
                                  float *transmittance, FmExit *exits);
+    /* Transmittance only (shadow rays): transmittance required, n * channels floats. */
     FmStatus (*volume_transmittance)(const FmVolume *volume, const FmRay *rays, size_t n, float *transmittance);
+    /* The first real scattering event per ray: events (required, n), weights (required, n * channels: the
+     * throughput to multiply by what is scattered in at the event, or the transmittance if it escaped), emitted
+     * (may be NULL, n * channels: the emission collected before the event). */
     FmStatus (*volume_sample_scatter)(const FmVolume *volume, const FmRay *rays, size_t n, FmScatter *events,
                                       float *weights, float *emitted);
+    /* sigma_a, sigma_s (m^-1) and the emission coefficient j = sigma_a Le per channel at n points (3n doubles);
+     * each output n * channels floats, each may be NULL. */
     FmStatus (*volume_coefficients)(const FmVolume *volume, const double *points, size_t n, float *sigma_a,
                                     float *sigma_s, float *emission);
-    /* ABI 0.2: the fire light. */
+    /* ABI 0.2: the fire light. light_create's parameters: "string weighting" "power" (default) or "luminance"
+     * (params may be NULL when count is 0); *out required. The light keeps its volume alive. */
     FmStatus (*light_create)(const FmVolume *volume, const FmParam *params, size_t count, FmLight **out);
     void (*light_destroy)(FmLight *light);
-    FmStatus (*light_info)(const FmLight *light, FmLightInfo *out);
+    FmStatus (*light_info)(const FmLight *light, FmLightInfo *out /* required */);
+    /* n points sampled by the fire's power: u holds 6 uniform numbers in [0, 1) per sample (6n doubles: the first
+     * picks the voxel or ember, the last three place the point in it); points (required, 3n doubles), pdf
+     * (required, n: density per unit medium volume), emission (may be NULL, n * channels: j at the point). */
     FmStatus (*light_sample)(const FmLight *light, const double *u, size_t n, double *points, double *pdf, float *emission);
+    /* Density per unit medium volume of n points (3n doubles); pdf required, n doubles. */
     FmStatus (*light_pdf)(const FmLight *light, const double *points, size_t n, double *pdf);
+    /* Solid-angle density with which light_sample's point lies in each direction from each origin (3n doubles
+     * each; directions need not be unit): the integral of pdf(o + s d) s^2 ds. pdf required, n doubles. A host
+     * estimates the fire's light at o by the radiance volume_integrate returns along the sampled direction over
+     * this density (and weighs it against its BSDF sampling with it, by MIS). */
     FmStatus (*light_pdf_direction)(const FmLight *light, const double *origins, const double *directions, size_t n,
                                     double *pdf);
-    /* ABI 0.3: lowest and highest temperature (K) of the volume into out[0], out[1] (0, 0 without a temperature
-       grid). */
+    /* ABI 0.3: lowest and highest temperature (K) of the volume into out[0], out[1] (required, 2 doubles; 0, 0
+       without a temperature grid). */
     FmStatus (*volume_temperature_range)(const FmVolume *volume, double *out);
     /* ABI 0.4: volume_create with where each parameter came from: locations holds count NUL-terminated
      * strings ("file:line:col"; an entry may be NULL, and locations itself may be NULL). An error about a
      * parameter then begins with its location. */
     FmStatus (*volume_create_located)(const FmParam *params, const char *const *locations, size_t count,
                                       FmVolume **out);
-    /* ABI 0.4: how many rays' tracking stopped at the per-ray collision cap so far, into *out (each cut short
-     * as if absorbed: a bias towards dark a host should report). */
+    /* ABI 0.4: how many rays' tracking stopped at the per-ray collision cap so far, into *out (required; each cut
+     * short as if absorbed: a bias towards dark a host should report). */
     FmStatus (*volume_capped_rays)(const FmVolume *volume, uint64_t *out);
     /* ABI 0.5: volume_integrate, volume_transmittance and volume_sample_scatter with a time per ray: times
      * holds n doubles (frames from the grids' time, inside the volume's shutteropen..shutterclose) or is NULL
      * (every ray at time 0). A volume with motion blur (a velocitygrid and an open shutter) is looked up where
-     * its velocity carried it from, x - v(x) * velocityscale / fps * time; any other volume ignores times. */
+     * its velocity carried it from, x - v(x) * velocityscale / fps * time, and its embers are where their
+     * velocities carried them; any other volume ignores times. Outputs as the entries without times. */
     FmStatus (*volume_integrate_at)(const FmVolume *volume, const FmRay *rays, const double *times, size_t n,
                                     float *radiance, float *transmittance, FmExit *exits);
     FmStatus (*volume_transmittance_at)(const FmVolume *volume, const FmRay *rays, const double *times, size_t n,
                                         float *transmittance);
     FmStatus (*volume_sample_scatter_at)(const FmVolume *volume, const FmRay *rays, const double *times,
                                          size_t n, FmScatter *events, float *weights, float *emitted);
-    /* ABI 0.6: the temperature (K) whose blackbody a viewer adapts to for this volume, into *out: its hottest
-     * temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a tint,
-     * or a colorramp short of physical 1: meant to be seen against a D65 white) or it has no temperature grid. */
+    /* ABI 0.6: the temperature (K) whose blackbody a viewer adapts to for this volume, into *out (required): its
+     * hottest temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a
+     * tint, or a colorramp short of physical 1: meant to be seen against a D65 white) or it has no temperature
+     * grid. */
     FmStatus (*volume_white_temperature)(const FmVolume *volume, double *out);
     /* ABI 0.7: light_sample, light_pdf and light_pdf_direction with a time per entry: times holds n doubles
      * (frames from the grids' time) or is NULL (time 0). A volume's embers move while the shutter is open; the
