@@ -1689,3 +1689,76 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
         "{e}"
     );
 }
+
+#[test]
+fn scene_readmes_quote_what_render_stats_prints() {
+    // A scene README's numbers from `render --stats` are quoted verbatim in backticks — a span holding
+    // "plugin built", "fire light:" or ending in a number of lm or W — with "…" for what is left out; each piece
+    // must appear in the stats of one of the folder's scenes (rendered at 8×6, 1 spp: the plugin's build and the
+    // fire light do not depend on the film). A number that drifts fails here, not in a reader's hands.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let dir = tmp("readme-stats");
+    let mut checked = 0;
+    let mut folders: Vec<PathBuf> = std::fs::read_dir(&root)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("README.md").is_file())
+        .collect();
+    folders.sort();
+    for folder in folders {
+        let readme = std::fs::read_to_string(folder.join("README.md")).unwrap();
+        let quotes: Vec<&str> = readme
+            .split('`')
+            .skip(1)
+            .step_by(2)
+            .filter(|q| {
+                q.contains("plugin built")
+                    || q.contains("fire light:")
+                    || ((q.ends_with(" lm") || q.ends_with(" W"))
+                        && q.chars().next().is_some_and(|c| c.is_ascii_digit()))
+            })
+            .collect();
+        if quotes.is_empty() {
+            continue;
+        }
+        let mut stats = String::new();
+        let mut scenes: Vec<PathBuf> = std::fs::read_dir(&folder)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "pbrt"))
+            .collect();
+        scenes.sort();
+        for scene in scenes {
+            let out = dir.join("s.exr");
+            let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+                .arg("render")
+                .arg(&scene)
+                .args([
+                    "--resolution",
+                    "8x6",
+                    "--spp",
+                    "1",
+                    "--stats",
+                    "--quiet",
+                    "-o",
+                ])
+                .arg(&out)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            stats += &String::from_utf8_lossy(&o.stdout);
+            stats += &String::from_utf8_lossy(&o.stderr);
+        }
+        for q in quotes {
+            for piece in q.split('…').map(str::trim).filter(|p| !p.is_empty()) {
+                assert!(
+                    stats.contains(piece),
+                    "{}: `{q}` — '{piece}' is not in what render --stats prints:\n{stats}",
+                    folder.join("README.md").display()
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 15, "{checked} quotes checked");
+}
