@@ -4,6 +4,9 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+#[path = "common/scratch.rs"]
+mod scratch;
+
 fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .args(args)
@@ -29,8 +32,7 @@ fn stability_passes_every_case() {
 
 #[test]
 fn error_vs_time_writes_csv_svg_and_png() {
-    let dir = std::env::temp_dir().join(format!("firemedium-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::Scratch::new("bench", "evt");
     let prefix = dir.join("evt");
     let vdb = scenes().join("campfire/campfire.vdb");
     let text = ok(&run(&[

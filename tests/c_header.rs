@@ -54,10 +54,21 @@ fn c_plugin(name: &str, src: &str, flags: &[&str]) -> PathBuf {
     so
 }
 
+/// `name` in a folder of its own (`firemedium-c-PID-NAME`), removed by [`done`] when the test has passed.
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-c-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("firemedium-c-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
+}
+
+/// Removes the folder [`tmp`] made for `file`.
+fn done(file: &Path) {
+    if let Some(d) = file.parent().filter(|d| {
+        d.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with("firemedium-c-"))
+    }) {
+        let _ = std::fs::remove_dir_all(d);
+    }
 }
 
 #[test]
@@ -172,6 +183,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     );
     assert_eq!(get("bad_status"), "2");
     assert!(get("bad_message").contains("did you mean 'stepsize'"));
+    done(&exe);
 }
 
 #[test]
@@ -205,6 +217,7 @@ fn an_abi_mismatch_names_both_versions() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot load"), "{e}");
+    done(&so);
 }
 
 #[test]
@@ -227,6 +240,7 @@ fn a_broken_plugin_is_refused_saying_what_is_wrong() {
             e.contains("is a broken firemedium plugin") && e.contains(want),
             "{kind}: {e}"
         );
+        done(&so);
     }
 }
 
@@ -259,6 +273,7 @@ fn every_entry_refuses_bad_arguments_from_c() {
         text.lines().count() >= 38 && text.contains("failures 0"),
         "{text}"
     );
+    done(&exe);
 }
 
 #[test]
@@ -335,4 +350,5 @@ fn the_c_example_host_renders_the_campfire() {
     assert!(brightest > 0.0 && (value("brightest ") / brightest - 1.0).abs() < 1e-6);
     let e = value("scalar_illuminance ");
     assert!(e.is_finite() && e > 0.0, "{e}");
+    done(&exe);
 }

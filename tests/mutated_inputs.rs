@@ -15,9 +15,14 @@ const BUDGET: u64 = 64 << 20;
 
 /// A file in this test's own folder (tests run in parallel, and writers clean up each other's temporaries).
 fn tmp(test: &str, name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("firemedium-mutated-{}-{test}", std::process::id()));
+    let d = folder(test);
     std::fs::create_dir_all(&d).unwrap();
     d.join(name)
+}
+
+/// This test's folder (the caller removes it when done with its files).
+fn folder(test: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("firemedium-mutated-{}-{test}", std::process::id()))
 }
 
 /// Valid files to mutate: (name, bytes, what reads them).
@@ -54,7 +59,7 @@ fn seeds(test: &str) -> Vec<(&'static str, Vec<u8>, Option<ImageKind>)> {
     for k in [0i32, 1, 3, 2] {
         binary.extend_from_slice(&k.to_le_bytes());
     }
-    vec![
+    let seeds = vec![
         ("m.exr", std::fs::read(exr).unwrap(), Some(ImageKind::Exr)),
         ("m8.png", std::fs::read(png8).unwrap(), Some(ImageKind::Png)),
         (
@@ -64,7 +69,10 @@ fn seeds(test: &str) -> Vec<(&'static str, Vec<u8>, Option<ImageKind>)> {
         ),
         ("ascii.ply", ascii.into_bytes(), None),
         ("binary.ply", binary, None),
-    ]
+    ];
+    // (Read into memory: the files are not needed any more.)
+    let _ = std::fs::remove_dir_all(folder(test));
+    seeds
 }
 
 fn read(name: &str, bytes: &[u8], kind: Option<ImageKind>) -> Result<usize, String> {
@@ -135,7 +143,8 @@ fn an_image_header_claiming_more_than_the_budget_is_refused_before_its_pixels() 
     // A PNG whose IHDR claims 60 000 × 60 000 pixels (43 GB as f32 RGB) in 57 bytes.
     let png8 = tmp("huge", "huge.png");
     write_png_bytes(&png8, 1, 1, &[1, 2, 3], false).unwrap();
-    let mut b = std::fs::read(png8).unwrap();
+    let mut b = std::fs::read(&png8).unwrap();
+    let _ = std::fs::remove_dir_all(folder("huge"));
     b[16..20].copy_from_slice(&60_000u32.to_be_bytes());
     b[20..24].copy_from_slice(&60_000u32.to_be_bytes());
     // The chunk's CRC-32 (ISO 3309, as the PNG specification defines it) over its type and data.

@@ -93,7 +93,7 @@ fn a_missing_include_names_file_and_line() {
 
 #[test]
 fn includes_resolve_relative_to_the_including_file_and_cycles_stop() {
-    let dir = std::env::temp_dir().join(format!("firemedium-pbrt-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("firemedium-pbrt-{}-include", std::process::id()));
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     std::fs::write(
         dir.join("main.pbrt"),
@@ -126,6 +126,7 @@ fn includes_resolve_relative_to_the_including_file_and_cycles_stop() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("bad.pbrt:1:11: byte 10: not UTF-8"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The next 64 random bits of the physics core's generator.

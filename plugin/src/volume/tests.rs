@@ -452,8 +452,14 @@ pub(crate) fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
         Param::point3("p0", [0.0, 0.0, 0.0]),
         Param::point3("p1", [2.0, 1.8, 2.2]),
     ];
+    // The species grids' files, in a folder of this call's own (removed once the volume has read them).
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "firemedium-kernel-{}-{}",
+        std::process::id(),
+        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
     if species {
-        let dir = std::env::temp_dir().join(format!("firemedium-kernel-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let f = |name: &str, v: &[f64]| {
             let p = dir.join(name);
@@ -485,7 +491,9 @@ pub(crate) fn blob_volume(extra: Vec<Param>, species: bool) -> FireVolume {
         ]);
     }
     list.extend(extra);
-    FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"))
+    let v = FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    v
 }
 
 #[test]

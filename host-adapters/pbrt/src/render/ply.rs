@@ -356,6 +356,7 @@ mod tests {
         bytes.truncate(bytes.len() - 2);
         std::fs::write(&b, &bytes).unwrap();
         assert!(read(&b, u64::MAX).unwrap_err().contains("end of the file"));
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A gzip member of `data` (header without options, deflate, CRC left zero, the length).
@@ -386,5 +387,6 @@ mod tests {
         assert!(read(&f, 1 << 20)
             .unwrap_err()
             .contains("not a valid gzip file"));
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -31,9 +31,10 @@ enum What {
 
 #[derive(Debug, Args)]
 pub struct ComponentsArgs {
-    /// A dataset with a sodium grid; default: scenes/spectroscopy/torch.vdb.
-    #[arg(long, default_value = "scenes/spectroscopy/torch.vdb")]
-    dataset: std::path::PathBuf,
+    /// A dataset with a sodium grid; default: the repository's scenes/spectroscopy/torch.vdb (from the
+    /// working directory if it holds one, else from the source tree this command was built from).
+    #[arg(long)]
+    dataset: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -412,7 +413,7 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
     let file = match &a.dataset {
         Some(f) => f.clone(),
         None => {
-            let local = std::path::PathBuf::from("scenes/campfire/campfire.vdb");
+            let local = repository_file("scenes/campfire/campfire.vdb");
             if local.is_file() {
                 local
             } else {
@@ -431,9 +432,7 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
     let surface = match a.surface.as_deref() {
         Some("none") => None,
         Some(s) => Some(std::path::PathBuf::from(s)),
-        None => {
-            Some(std::path::PathBuf::from("scenes/campfire/scene.pbrt")).filter(|p| p.is_file())
-        }
+        None => Some(repository_file("scenes/campfire/scene.pbrt")).filter(|p| p.is_file()),
     };
     if let Some(scene) = surface {
         let (points, about) = error::surface_ladder(
@@ -568,8 +567,31 @@ fn components(file: &str) -> Result<Components, String> {
     Ok(out)
 }
 
+/// A file of the repository, `rel` from its root: from the working directory when it holds it (a clone's
+/// root), else from the source tree this binary was built from, else `rel` as it is (its absence is then the
+/// error the caller reports, naming it).
+fn repository_file(rel: &str) -> std::path::PathBuf {
+    let here = std::path::PathBuf::from(rel);
+    if here.exists() {
+        return here;
+    }
+    let built = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(rel);
+    if built.exists() {
+        built
+    } else {
+        here
+    }
+}
+
 fn components_report(a: &ComponentsArgs) -> Result<String, String> {
-    let file = a.dataset.to_string_lossy().into_owned();
+    let file = a
+        .dataset
+        .clone()
+        .unwrap_or_else(|| repository_file("scenes/spectroscopy/torch.vdb"))
+        .to_string_lossy()
+        .into_owned();
     let mut out = format!(
         "dataset {file}\n\n| configuration | component | bytes | set-up s |\n|---|---|---|---|\n"
     );

@@ -25,9 +25,17 @@ pub struct Run {
     pub image: Vec<f64>,
 }
 
-/// The dataset: the campfire at `res` voxels along its longest side, generated once into `dir`.
+/// The dataset: the campfire at `res` voxels along its longest side, generated once into `dir` under a name keyed
+/// by what makes it — this build's version and generator source (FNV-1a of `gen.rs`) — so a file another build
+/// or tool left there under the plain name is never taken for it. Written atomically: a killed run leaves none.
 pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
-    let path = dir.join(format!("firemedium-bench-campfire-{res}.vdb"));
+    let key = include_str!("../../gen.rs")
+        .bytes()
+        .chain(env!("CARGO_PKG_VERSION").bytes())
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+        });
+    let path = dir.join(format!("firemedium-bench-campfire-{res}-{key:016x}.vdb"));
     if !path.is_file() {
         let mut sim = Sim::new(Kind::Campfire, 1);
         sim.run_to(2.0);
