@@ -1762,3 +1762,99 @@ fn scene_readmes_quote_what_render_stats_prints() {
     }
     assert!(checked >= 15, "{checked} quotes checked");
 }
+
+/// Copies the folder `from` into `to`, recursively.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().filter_map(|e| e.ok()) {
+        let (src, dst) = (e.path(), to.join(e.file_name()));
+        if src.is_dir() {
+            copy_dir(&src, &dst);
+        } else {
+            std::fs::copy(&src, &dst).unwrap();
+        }
+    }
+}
+
+#[test]
+fn the_readmes_quick_commands_run_as_written() {
+    // Every `firemedium …` (or `cargo run --release -p firemedium -- …`) line of the README's sh blocks whose
+    // command is quick — physics, info, tonemap, the quick gens and benches, the adaptation scene's render —
+    // runs as written (this build's binary standing for `firemedium`) in a copy of the repository's scenes and
+    // test data, in the README's order, and succeeds.
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = tmp("readme");
+    copy_dir(&root.join("scenes"), &dir.join("scenes"));
+    copy_dir(&root.join("tests/data"), &dir.join("tests/data"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let mut in_sh = false;
+    let mut commands: Vec<Vec<String>> = Vec::new();
+    for line in readme.lines() {
+        if line.starts_with("```") {
+            in_sh = line == "```sh" && !in_sh;
+            continue;
+        }
+        if !in_sh {
+            continue;
+        }
+        // (A comment starts at " # "; `pool.####.vdb` is not one.)
+        let cmd = line.split(" # ").next().unwrap_or("").trim();
+        let rest = cmd
+            .strip_prefix("cargo run --release -p firemedium -- ")
+            .or_else(|| cmd.strip_prefix("firemedium "));
+        let Some(rest) = rest else { continue };
+        let args: Vec<String> = rest.split_whitespace().map(String::from).collect();
+        let quick = match args.first().map(String::as_str) {
+            Some("physics" | "info" | "tonemap") => true,
+            Some("bench") => matches!(
+                args.get(1).map(String::as_str),
+                Some("stability" | "components")
+            ),
+            Some("gen") => args.iter().any(|a| a == "torch" || a == "--embers"),
+            Some("render") => args
+                .get(1)
+                .is_some_and(|s| s == "scenes/adaptation/scene.pbrt"),
+            _ => false,
+        };
+        if quick {
+            commands.push(args);
+        }
+    }
+    let names: Vec<String> = commands
+        .iter()
+        .map(|a| a[..2.min(a.len())].join(" "))
+        .collect();
+    for want in [
+        "physics --temperature",
+        "info tests/data/valid/vdb/mantaflow_fire_f060.vdb",
+        "tonemap scenes/adaptation/adaptation.exr",
+        "bench stability",
+        "bench components",
+        "gen torch",
+        "gen campfire",
+        "render scenes/adaptation/scene.pbrt",
+    ] {
+        assert!(
+            names.iter().any(|n| n == want),
+            "the README no longer shows `firemedium {want} …`: {names:?}"
+        );
+    }
+    for args in &commands {
+        let o = firemedium_in(&dir, &args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(
+            o.status.success(),
+            "firemedium {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    for f in [
+        "night.png",
+        "day.png",
+        "torch.vdb",
+        "campfire.vdb",
+        "campfire.embers.ply",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} was not written");
+    }
+}
