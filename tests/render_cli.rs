@@ -1665,6 +1665,46 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(dir.join("elsewhere/here.exr").is_file() && dir.join("elsewhere/here.png").is_file());
+    // Every gallery scene, from there, by its absolute path.
+    let gallery = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&gallery)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .flat_map(|d| {
+            std::fs::read_dir(d)
+                .unwrap()
+                .filter_map(|e| e.ok().map(|e| e.path()))
+        })
+        .filter(|p| p.extension().is_some_and(|x| x == "pbrt"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 15, "{scenes:?}");
+    for s in &scenes {
+        let o = Command::new(&installed)
+            .current_dir(dir.join("elsewhere"))
+            .env_remove("FIREMEDIUM_PLUGIN")
+            .env_remove("FIREMEDIUM_PLUGIN_PATH")
+            .arg("render")
+            .arg(s.canonicalize().unwrap())
+            .args([
+                "--resolution",
+                "8x6",
+                "--spp",
+                "1",
+                "-o",
+                "g.exr",
+                "--quiet",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            s.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
     // Without the plugin beside it, the message says where it looked.
     std::fs::remove_file(dir.join("prefix/lib/firemedium").join(&lib)).unwrap();
     let o = Command::new(&installed)
