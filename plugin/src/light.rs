@@ -91,6 +91,11 @@ fn no_emission() -> Error {
 impl FireLight {
     /// Builds the light of `vol` (the light's own parameter, `weighting`, is `luminance` or `power`).
     pub fn new(vol: Arc<FireVolume>, weighting: Weighting) -> Result<FireLight, Error> {
+        // Built under the volume's thread budget (a host's `--threads` bounds the light's build too).
+        crate::par::with_budget(vol.threads(), || Self::build(vol, weighting))
+    }
+
+    fn build(vol: Arc<FireVolume>, weighting: Weighting) -> Result<FireLight, Error> {
         let start = Instant::now();
         // Nothing to sample: refused before a weight per voxel is allocated (a 16-byte raw file claiming 600³
         // voxels and no temperature built a 3.4 GB light).
@@ -122,7 +127,6 @@ impl FireLight {
                 60,
             )
         };
-        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
         // The bricks to weigh: the stored ones and their neighbours; all of them if a background emits (a
         // grid whose empty bricks read a non-zero value).
         let stored = ds.topology();
@@ -161,8 +165,7 @@ impl FireLight {
         };
         let mut w = crate::alloc::filled(n, 0f32).ok_or_else(too_many)?;
         let (mut pw, mut plm) = (0.0, 0.0);
-        // Soot power depends on T only: memoise per 0.5 K.
-        let mut memo: std::collections::HashMap<i64, f64> = std::collections::HashMap::new();
+        // (Soot power depends on T only: each worker memoises it per 0.5 K.)
         let dch = vol.density_channel();
         let tch = vol.temperature_channel();
         let mut bricks: Vec<[usize; 3]> = Vec::with_capacity(topo.active_bricks());
@@ -175,22 +178,35 @@ impl FireLight {
         if n > u32::MAX as usize {
             return Err(too_many());
         }
-        for b in &bricks {
+        // Per brick (independent: each writes its own slot of the weights), in parallel chunks of bricks under the
+        // build's thread budget; the power sums are added brick by brick in the bricks' order, so the light is the
+        // same on any number of threads.
+        let brick_weights = |b: &[usize; 3],
+                             memo: &mut std::collections::HashMap<i64, f64>,
+                             sa: &mut [f64],
+                             ss: &mut [f64],
+                             j: &mut [f64],
+                             out: &mut Vec<(usize, f32)>|
+         -> (f64, f64) {
+            let (mut pw, mut plm) = (0.0, 0.0);
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             for k in span[2].0..span[2].1 {
                 for jy in span[1].0..span[1].1 {
                     for i in span[0].0..span[0].1 {
                         let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
-                        vol.coefficients(p, &mut sa, &mut ss, &mut j);
+                        vol.coefficients(p, sa, ss, j);
                         let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
                         let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
                         if !(lum > 0.0 || band > 0.0) {
                             continue;
                         }
-                        w[topo.index(i, jy, k)] = match weighting {
-                            Weighting::Luminance => lum,
-                            Weighting::Power => band,
-                        } as f32;
+                        out.push((
+                            topo.index(i, jy, k),
+                            match weighting {
+                                Weighting::Luminance => lum,
+                                Weighting::Power => band,
+                            } as f32,
+                        ));
                         plm += lum;
                         pw += match &src {
                             None => band,
@@ -215,6 +231,41 @@ impl FireLight {
                         };
                     }
                 }
+            }
+            (pw, plm)
+        };
+        let workers = crate::par::threads(16).min(bricks.len().max(1));
+        let chunk = bricks.len().div_ceil(workers).max(1);
+        let run = |part: &[[usize; 3]]| {
+            let mut memo = std::collections::HashMap::new();
+            let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            part.iter()
+                .map(|b| {
+                    let mut out = Vec::new();
+                    let sums = brick_weights(b, &mut memo, &mut sa, &mut ss, &mut j, &mut out);
+                    (sums, out)
+                })
+                .collect::<Vec<_>>()
+        };
+        let parts: Vec<Vec<((f64, f64), Vec<(usize, f32)>)>> = if workers <= 1 {
+            vec![run(&bricks)]
+        } else {
+            std::thread::scope(|sc| {
+                let handles: Vec<_> = bricks
+                    .chunks(chunk)
+                    .map(|part| sc.spawn(move || run(part)))
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        for ((bpw, bplm), out) in parts.into_iter().flatten() {
+            pw += bpw;
+            plm += bplm;
+            for (idx, v) in out {
+                w[idx] = v;
             }
         }
         // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
@@ -594,6 +645,25 @@ mod tests {
                 s.point
             );
         }
+    }
+
+    #[test]
+    fn the_light_is_the_same_on_one_thread_and_on_four() {
+        // The weights are built brick by brick in parallel chunks under the volume's `threads`: one thread and
+        // four give the same weights, CDF and powers, bit for bit.
+        let build = |threads: i64| {
+            let vol = sphere_fire(40, 0.9, 1e-6, 1700.0, vec![Param::int("threads", threads)]);
+            FireLight::new(vol, Weighting::Power).unwrap()
+        };
+        let (one, four) = (build(1), build(4));
+        assert!(one.voxels() > 20_000);
+        assert_eq!(one.weights, four.weights);
+        assert_eq!(one.cdf, four.cdf);
+        assert_eq!(one.emitting, four.emitting);
+        assert_eq!(
+            (one.power_w.to_bits(), one.power_lm.to_bits()),
+            (four.power_w.to_bits(), four.power_lm.to_bits())
+        );
     }
 
     #[test]

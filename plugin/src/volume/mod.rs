@@ -167,6 +167,8 @@ pub struct FireVolume {
     capped: CapCounter,
     /// Bytes the budget (`maxbytes`) leaves for what is derived from the volume later (its fire light).
     spare: u64,
+    /// The build's thread budget (`threads`), which the fire light's build keeps to as well.
+    threads: usize,
     #[cfg(test)]
     fault: String,
 }
@@ -205,7 +207,9 @@ impl FireVolume {
         crate::par::with_budget(threads, || {
             let loaded = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
             r.finish()?;
-            Self::build(set, loaded, budget, start)
+            let mut v = Self::build(set, loaded, budget, start)?;
+            v.threads = threads;
+            Ok(v)
         })
     }
 
@@ -617,6 +621,7 @@ impl FireVolume {
             diffusion: None,
             capped: CapCounter::default(),
             spare: 0,
+            threads: 0,
             #[cfg(test)]
             fault: set.fault,
         };
@@ -751,6 +756,10 @@ impl FireVolume {
         Some([s.min as f64, s.max as f64])
     }
 
+    /// The build's thread budget (`threads`; 0: every core).
+    pub(crate) fn threads(&self) -> usize {
+        self.threads
+    }
     /// Bytes of the volume's memory budget (`maxbytes`) left after its grids and tables: what a fire light built
     /// from it may take.
     pub fn spare_bytes(&self) -> u64 {
