@@ -26,6 +26,9 @@ use glam::DVec3;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// One brick's part of the light's build: its (W, lm) sums and its emitting voxels' (index, weight).
+type BrickWeights = ((f64, f64), Vec<(usize, f32)>);
+
 /// How voxels are weighted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Weighting {
@@ -247,7 +250,7 @@ impl FireLight {
                 })
                 .collect::<Vec<_>>()
         };
-        let parts: Vec<Vec<((f64, f64), Vec<(usize, f32)>)>> = if workers <= 1 {
+        let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
             vec![run(&bricks)]
         } else {
             std::thread::scope(|sc| {
