@@ -218,18 +218,13 @@ impl Element {
         absorption: &mut [f64],
         emission: &mut [f64],
     ) {
-        let t = t_k.max(T_MIN);
-        let kt = BOLTZMANN * t;
-        let ln_z = self.ln_partition_function(t);
-        let phi = 1.0 / (grid.width_nm() * 1e-9); // m⁻¹
-        for line in &self.lines {
-            let Some(bin) = grid.bin_of(line.lambda_nm) else {
-                continue;
-            };
-            let (sa, j) = line_cross_sections(line, kt, ln_z, phi);
-            absorption[bin] += sa;
-            emission[bin] += j;
-        }
+        self.add_placed(
+            t_k,
+            grid,
+            &|l| grid.bin_of(l).map(|b| [(b, 1.0), (b, 0.0)]),
+            absorption,
+            emission,
+        );
     }
 
     /// As [`add_binned_cross_sections`](Self::add_binned_cross_sections), each line's box shared between two
@@ -243,12 +238,24 @@ impl Element {
         absorption: &mut [f64],
         emission: &mut [f64],
     ) {
+        self.add_placed(t_k, grid, &|l| split.split(l), absorption, emission);
+    }
+
+    /// Each line's box (φ = 1/Δλ of `grid`) added to the bins `place` gives its wavelength, with their fractions.
+    fn add_placed(
+        &self,
+        t_k: f64,
+        grid: &SpectralGrid,
+        place: &dyn Fn(f64) -> Option<[(usize, f64); 2]>,
+        absorption: &mut [f64],
+        emission: &mut [f64],
+    ) {
         let t = t_k.max(T_MIN);
         let kt = BOLTZMANN * t;
         let ln_z = self.ln_partition_function(t);
         let phi = 1.0 / (grid.width_nm() * 1e-9); // m⁻¹
         for line in &self.lines {
-            let Some(parts) = split.split(line.lambda_nm) else {
+            let Some(parts) = place(line.lambda_nm) else {
                 continue;
             };
             let (sa, j) = line_cross_sections(line, kt, ln_z, phi);
