@@ -1640,7 +1640,14 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
     let dir = tmp("install");
     let exe = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
     let lib = firemedium_loader::library_file_name();
-    let plugin = exe.parent().unwrap().join(&lib);
+    // (Beside the binary after `cargo build`, in `deps` after `cargo test` alone.)
+    let plugin = [
+        exe.parent().unwrap().join(&lib),
+        exe.parent().unwrap().join("deps").join(&lib),
+    ]
+    .into_iter()
+    .find(|p| p.is_file())
+    .expect("the plugin is built");
     std::fs::create_dir_all(dir.join("prefix/bin")).unwrap();
     std::fs::create_dir_all(dir.join("prefix/lib/firemedium")).unwrap();
     std::fs::create_dir_all(dir.join("elsewhere")).unwrap();

@@ -25,7 +25,10 @@ exe="firemedium"
 if [[ $build == 1 ]]; then
     cargo build --release -p firemedium -p firemedium-plugin
 fi
-for f in "target/release/$exe" "target/release/$lib"; do
+# (After `cargo test` alone the plugin is only in target/release/deps.)
+libpath="target/release/$lib"
+[[ -f "$libpath" ]] || libpath="target/release/deps/$lib"
+for f in "target/release/$exe" "$libpath"; do
     if [[ ! -f "$f" ]]; then
         echo "install: $f is missing (build with: cargo build --release)" >&2
         exit 1
@@ -39,7 +42,7 @@ install_file() {
     mv -f "$2.tmp.$$" "$2"
 }
 install_file "target/release/$exe" "$prefix/bin/$exe" 755
-install_file "target/release/$lib" "$prefix/lib/firemedium/$lib" 755
+install_file "$libpath" "$prefix/lib/firemedium/$lib" 755
 install_file plugin/abi/include/firemedium.h "$prefix/include/firemedium.h" 644
 echo "installed $prefix/bin/$exe, $prefix/lib/firemedium/$lib and $prefix/include/firemedium.h"
 case ":$PATH:" in

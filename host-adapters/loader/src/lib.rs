@@ -359,7 +359,7 @@ impl Plugin {
     /// Finds the plugin: the file `FIREMEDIUM_PLUGIN` names, else the library file in each directory of
     /// `FIREMEDIUM_PLUGIN_PATH` (`:`-separated; `;` on Windows), then relative to the running executable:
     /// beside it, in `../lib/firemedium` (an installed layout: `tools/install.sh`), in its `deps` (Cargo's tests)
-    /// and one folder up (Cargo's examples, in `target/release/examples`).
+    /// and one folder up and its `deps` (Cargo's examples, in `target/release/examples`).
     ///
     /// # Safety
     ///
@@ -381,6 +381,7 @@ impl Plugin {
             dirs.push(d.join("deps"));
             if let Some(up) = d.parent() {
                 dirs.push(up.to_path_buf());
+                dirs.push(up.join("deps"));
             }
         }
         // SAFETY: the caller vouches for the environment's files (this function's contract).
