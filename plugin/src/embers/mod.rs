@@ -293,6 +293,12 @@ impl Embers {
         Some(((tca - th) / len, (tca + th) / len))
     }
 
+    /// The embers listed in grid cell `[x, y, z]`.
+    fn cell_items(&self, [x, y, z]: [usize; 3]) -> &[u32] {
+        let c = x + self.dims[0] * (y + self.dims[1] * z);
+        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+
     /// Calls `f(i, entry, exit)` for the embers whose chord meets [t0, t1], each once, cell by cell along the
     /// ray; `f` returns false to stop after the current cell (cells are visited in order: the first ember met
     /// is found once a hit lies before the exit of the cell being visited).
@@ -310,9 +316,7 @@ impl Embers {
         }
         let (mut first, mut stop) = (true, false);
         for seg in walk(self.bounds, self.dims, 1, o, d, t0, t1) {
-            let [x, y, z] = seg.cell;
-            let c = x + self.dims[0] * (y + self.dims[1] * z);
-            for &i in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+            for &i in self.cell_items(seg.cell) {
                 let i = i as usize;
                 let Some((a, b)) = self.chord(i, time, o, d) else {
                     continue;
@@ -384,8 +388,7 @@ impl Embers {
             (((p[a] - self.bounds[0][a]) / ext[a] * self.dims[a] as f64).max(0.0) as usize)
                 .min(self.dims[a] - 1)
         });
-        let c = q[0] + self.dims[0] * (q[1] + self.dims[1] * q[2]);
-        for &i in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+        for &i in self.cell_items(q) {
             if self.contains(i as usize, p, time) {
                 f(i as usize);
             }
