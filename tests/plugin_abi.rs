@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 7));
+    assert_eq!(p.version(), (0, 8));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -413,4 +413,71 @@ fn an_art_directed_colour_is_seen_against_d65() {
             .unwrap(),
         None
     );
+}
+
+#[test]
+fn the_fire_lights_line_estimate_through_the_abi() {
+    // `light_integrate_at`: at the volume's own step, the volume's march bit for bit; with a coarse step, the
+    // same fire to within the march's discretisation; with the correction always taken (probability 1), the
+    // volume's march again (coarse + (fine − coarse) / 1); bad parameters named.
+    let p = plugin();
+    let v = p.create_volume(&fire_params()).unwrap();
+    let c = v.info().channels as usize;
+    let rs = rays(64);
+    let (mut lv, mut tv) = (vec![0f32; rs.len() * c], vec![0f32; rs.len() * c]);
+    v.integrate_at(&rs, None, &mut lv, Some(&mut tv), None)
+        .unwrap();
+    let light_with = |extra: &[Param]| {
+        let mut list = vec![Param::string("weighting", "power")];
+        list.extend_from_slice(extra);
+        v.create_light_with(&list)
+    };
+    let run = |light: &firemedium_loader::Light| {
+        let (mut l, mut t) = (vec![0f32; rs.len() * c], vec![0f32; rs.len() * c]);
+        light.integrate_at(&rs, None, &mut l, Some(&mut t)).unwrap();
+        (l, t)
+    };
+    // The volume's step (the default stepsize, ½ voxel) is below this fire's longest side / 64 (96 voxels:
+    // 1.5): `linestep` 0.5 is the volume's own march.
+    let same = light_with(&[Param::float("linestep", 0.5)]).unwrap();
+    assert_eq!(run(&same), (lv.clone(), tv.clone()));
+    let total = |l: &[f32]| l.iter().map(|&x| x as f64).sum::<f64>();
+    let coarse = light_with(&[]).unwrap();
+    let (lc, tc) = run(&coarse);
+    assert_ne!(
+        lc, lv,
+        "the default step (longest side / 64) is coarser here"
+    );
+    let rel = total(&lc) / total(&lv) - 1.0;
+    assert!(rel.abs() < 0.02, "coarse line estimate off by {rel}");
+    assert!(tc.iter().all(|t| (0.0..=1.0).contains(t)));
+    let corrected = light_with(&[Param::float("linecorrection", 1.0)]).unwrap();
+    let (lq, tq) = run(&corrected);
+    for k in 0..lq.len() {
+        assert!(
+            (lq[k] - lv[k]).abs() <= 1e-5 * lv[k].abs() + 1e-30,
+            "{k}: {} vs {}",
+            lq[k],
+            lv[k]
+        );
+        assert!((tq[k] - tv[k]).abs() <= 1e-6, "{k}");
+    }
+    for (name, value, want) in [
+        ("linecorrection", 1.5, "linecorrection"),
+        ("linestep", -1.0, "linestep"),
+        ("cell", 3.0, "cell"),
+    ] {
+        let param = if name == "cell" {
+            Param::int(name, value as i64)
+        } else {
+            Param::float(name, value)
+        };
+        let e = light_with(&[param]).unwrap_err().to_string();
+        assert!(e.contains(want), "{name} = {value}: {e}");
+    }
+    let mut short = vec![0f32; 3];
+    assert!(matches!(
+        coarse.integrate_at(&rs, None, &mut short, None),
+        Err(Error::Buffer(_))
+    ));
 }

@@ -26,6 +26,33 @@ use glam::DVec3;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// Voxels per side of the pdf's cells unless a host asks otherwise.
+pub const DEFAULT_CELL: usize = 1;
+
+/// The line estimate's steps across the fire's longest side (its step `linestep` 0: the longest side over this,
+/// or the volume's own step if that is longer).
+pub const LINE_STEPS: f64 = 64.0;
+
+/// How the light estimates the fire's emission along a sampled direction (next-event estimation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineEstimate {
+    /// The coarse march's step, voxels (0: the fire's longest side over [`LINE_STEPS`]); a step no longer than
+    /// the volume's own is the volume's march.
+    pub step_voxels: f64,
+    /// The probability of the correction: with it, the volume's own march too, and the difference divided by
+    /// it added (unbiased against the volume's march); 0: the coarse march alone.
+    pub correction: f64,
+}
+
+impl Default for LineEstimate {
+    fn default() -> Self {
+        LineEstimate {
+            step_voxels: 0.0,
+            correction: 0.0,
+        }
+    }
+}
+
 /// One brick's part of the light's build: its (W, lm) sums and its emitting voxels' (index, weight).
 type BrickWeights = ((f64, f64), Vec<(usize, f32)>);
 
@@ -58,10 +85,17 @@ pub struct FireLight {
     /// The bricks the weights cover: the dataset's stored bricks and their neighbours (trilinear emission
     /// reaches a voxel beyond a brick, and the dilation one more), or every brick when a background emits.
     topo: Arc<crate::grid::Topology>,
-    /// Per voxel of those bricks, its (dilated) weight, in the dataset grids' layout (slot 0: zeros).
+    /// Voxels per side of the pdf's cells (1, 2, 4 or 8: a brick holds (8 / cell)³ of them).
+    cell: usize,
+    /// The line estimate's march step (metres; not longer than the volume's: the volume's march) and the
+    /// probability of its correction.
+    line_step: f64,
+    correction: f64,
+    /// Per cell of those bricks, its weight (the sum of its voxels' dilated weights), brick by brick in the
+    /// topology's slots ((8 / cell)³ per slot, slot 0: zeros), a brick's cells in x-fastest order.
     weights: Vec<f32>,
     /// The slots of the bricks holding weight, and the running sum of their weights: the pdf's inverse CDF picks
-    /// a brick, then a scan of its 512 weights the voxel (12 bytes per brick, not per emitting voxel).
+    /// a brick, then a scan of its cells' weights the cell (12 bytes per brick, not per emitting voxel).
     brick_slots: Vec<u32>,
     cdf: Vec<f64>,
     /// How many voxels have weight.
@@ -94,13 +128,71 @@ fn no_emission() -> Error {
 }
 
 impl FireLight {
-    /// Builds the light of `vol` (the light's own parameter, `weighting`, is `luminance` or `power`).
+    /// Builds the light of `vol` (the light's own parameter, `weighting`, is `luminance` or `power`), with
+    /// cells of [`DEFAULT_CELL`] voxels per side.
     pub fn new(vol: Arc<FireVolume>, weighting: Weighting) -> Result<FireLight, Error> {
-        // Built under the volume's thread budget (a host's `--threads` bounds the light's build too).
-        crate::par::with_budget(vol.threads(), || Self::build(vol, weighting))
+        Self::with_cell(vol, weighting, DEFAULT_CELL)
     }
 
-    fn build(vol: Arc<FireVolume>, weighting: Weighting) -> Result<FireLight, Error> {
+    /// As [`new`](Self::new), the pdf piecewise constant over cells of `cell`³ voxels (1, 2, 4 or 8).
+    pub fn with_cell(
+        vol: Arc<FireVolume>,
+        weighting: Weighting,
+        cell: usize,
+    ) -> Result<FireLight, Error> {
+        Self::with(vol, weighting, cell, LineEstimate::default())
+    }
+
+    /// As [`with_cell`](Self::with_cell), with the line estimate's settings.
+    pub fn with(
+        vol: Arc<FireVolume>,
+        weighting: Weighting,
+        cell: usize,
+        line: LineEstimate,
+    ) -> Result<FireLight, Error> {
+        if !(line.step_voxels >= 0.0 && line.step_voxels.is_finite()) {
+            return Err(Error::invalid(
+                "light",
+                "linestep",
+                line.step_voxels.to_string(),
+                "a step ≥ 0 voxels (0: the fire's longest side over 64)",
+            ));
+        }
+        if !(0.0..=1.0).contains(&line.correction) {
+            return Err(Error::invalid(
+                "light",
+                "linecorrection",
+                line.correction.to_string(),
+                "a probability in [0, 1]",
+            ));
+        }
+        if !matches!(cell, 1 | 2 | 4 | 8) {
+            return Err(Error::invalid(
+                "light",
+                "cell",
+                cell.to_string(),
+                "1, 2, 4 or 8 voxels per side (a divisor of the 8-voxel brick)",
+            ));
+        }
+        // Built under the volume's thread budget (a host's `--threads` bounds the light's build too).
+        let mut light =
+            crate::par::with_budget(vol.threads(), || Self::build(vol, weighting, cell))?;
+        let v = &light.vol;
+        let voxel = v.dataset().voxel_size();
+        let longest = (0..3)
+            .map(|a| light.dims[a] as f64 * voxel[a])
+            .fold(0.0, f64::max);
+        let step = if line.step_voxels > 0.0 {
+            line.step_voxels * voxel.min_element()
+        } else {
+            longest / LINE_STEPS
+        };
+        light.line_step = step.max(v.step_length());
+        light.correction = line.correction;
+        Ok(light)
+    }
+
+    fn build(vol: Arc<FireVolume>, weighting: Weighting, cell: usize) -> Result<FireLight, Error> {
         let start = Instant::now();
         // Nothing to sample: refused before a weight per voxel is allocated (a 16-byte raw file claiming 600³
         // voxels and no temperature built a 3.4 GB light).
@@ -279,20 +371,42 @@ impl FireLight {
         if ds.interpolation() == crate::grid::Interpolation::Trilinear {
             w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
         }
+        let emitting = w.iter().filter(|&&v| v > 0.0).count();
+        // The cells' weights: the voxels' summed per cell (in f64), brick by brick.
+        let side = 8 / cell;
+        let per = side * side * side;
+        let w = if cell == 1 {
+            w
+        } else {
+            let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
+            for (slot, ws) in w.chunks_exact(512).enumerate() {
+                let mut sums = [0f64; 512];
+                for (l, &v) in ws.iter().enumerate() {
+                    if v > 0.0 {
+                        let c =
+                            (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                        sums[c] += v as f64;
+                    }
+                }
+                for (c, &v) in sums[..per].iter().enumerate() {
+                    cw[slot * per + c] = v as f32;
+                }
+            }
+            cw
+        };
         let vv = voxel.x * voxel.y * voxel.z;
         let power_w = 4.0 * std::f64::consts::PI * vv * pw;
         let power_lm = 4.0 * std::f64::consts::PI * vv * plm;
-        // The bricks holding weight and their CDF (a voxel's weights lie in its brick's slot: 512 entries, those
-        // outside the grid's dims 0).
+        // The bricks holding weight and their CDF (a cell's weights lie in its brick's slot, those outside the
+        // grid's dims 0).
         let (mut brick_slots, mut cdf) = (Vec::new(), Vec::new());
-        let (mut total, mut emitting) = (0.0, 0usize);
+        let mut total = 0.0;
         for b in &bricks {
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
-            let ws = &w[slot * 512..(slot + 1) * 512];
+            let ws = &w[slot * per..(slot + 1) * per];
             let sum: f64 = ws.iter().map(|&v| v as f64).sum();
             if sum > 0.0 {
-                emitting += ws.iter().filter(|&&v| v > 0.0).count();
                 total += sum;
                 brick_slots.push(slot as u32);
                 cdf.push(total);
@@ -339,6 +453,9 @@ impl FireLight {
             voxel,
             total,
             topo,
+            cell,
+            line_step: 0.0,
+            correction: 0.0,
             weights: w,
             emitting,
             cdf,
@@ -407,34 +524,70 @@ impl FireLight {
         let target = target.min(self.fire_total * (1.0 - f64::EPSILON));
         let m = first_above(&self.cdf, target);
         let slot = self.brick_slots[m] as usize;
-        // Within the brick: the first voxel whose running weight passes what is left of the target (the last
+        // Within the brick: the first cell whose running weight passes what is left of the target (the last
         // weighted one if rounding leaves some over).
-        let ws = &self.weights[slot * 512..(slot + 1) * 512];
+        let per = self.per_brick();
+        let ws = &self.weights[slot * per..(slot + 1) * per];
         let mut rest = target - if m > 0 { self.cdf[m - 1] } else { 0.0 };
-        let mut l = ws.iter().rposition(|&v| v > 0.0).unwrap_or(0);
+        let mut c = ws.iter().rposition(|&v| v > 0.0).unwrap_or(0);
         for (q, &v) in ws.iter().enumerate() {
             if v > 0.0 {
                 if rest < v as f64 {
-                    l = q;
+                    c = q;
                     break;
                 }
                 rest -= v as f64;
             }
         }
-        let idx = slot * 512 + l;
-        // The voxel stored at `idx`: its brick's corner, less the topology's offset, plus its place in the brick.
-        let (b, l) = (self.slot_bricks[idx / 512], idx % 512);
-        let off = self.topo.offset();
-        let local = [l % 8, (l / 8) % 8, l / 64];
-        let [i, jy, k] = [0, 1, 2].map(|a| (b[a] as usize * 8 + local[a] - off[a]) as f64);
-        let wv = self.weights[idx] as f64;
+        let side = 8 / self.cell;
+        let b = self.slot_bricks[slot];
+        let q = [c % side, (c / side) % side, c / (side * side)];
+        let (lo, n) = self.cell_box([0, 1, 2].map(|a| b[a] as usize * side + q[a]));
         let [p0, _] = self.vol.dataset().bounds();
-        let point = p0 + (DVec3::new(i, jy, k) + DVec3::new(u[3], u[4], u[5])) * self.voxel;
+        let u = DVec3::new(u[3], u[4], u[5]);
+        let point = p0
+            + (DVec3::new(lo[0] as f64, lo[1] as f64, lo[2] as f64)
+                + u * DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64))
+                * self.voxel;
         LightSample {
             point,
-            pdf: wv / (self.total * self.voxel.x * self.voxel.y * self.voxel.z)
-                + self.ember_density(point, time),
+            pdf: self.cell_density(ws[c] as f64, n) + self.ember_density(point, time),
         }
+    }
+
+    /// Cells per brick.
+    fn per_brick(&self) -> usize {
+        let side = 8 / self.cell;
+        side * side * side
+    }
+
+    /// The voxels of cell `q` (on the lattice of cells shifted by the topology's offset) inside the grid: its
+    /// first voxel and its extent per axis (cells at the grid's edges are cut by it).
+    fn cell_box(&self, q: [usize; 3]) -> ([usize; 3], [usize; 3]) {
+        let off = self.topo.offset();
+        let lo = [0, 1, 2].map(|a| (q[a] * self.cell).max(off[a]) - off[a]);
+        let hi = [0, 1, 2].map(|a| ((q[a] + 1) * self.cell).min(self.dims[a] + off[a]) - off[a]);
+        (lo, [0, 1, 2].map(|a| hi[a].saturating_sub(lo[a])))
+    }
+
+    /// The density per unit volume inside a cell of weight `w` and extent `n` voxels.
+    fn cell_density(&self, w: f64, n: [usize; 3]) -> f64 {
+        let cells = (n[0] * n[1] * n[2]) as f64;
+        if !(w > 0.0 && cells > 0.0) {
+            return 0.0;
+        }
+        w / (self.total * cells * self.voxel.x * self.voxel.y * self.voxel.z)
+    }
+
+    /// The weight of cell `q` (shifted lattice), 0 outside the stored bricks.
+    fn cell_weight(&self, q: [usize; 3]) -> f64 {
+        let side = 8 / self.cell;
+        let slot = self.topo.slot(q.map(|v| v / side));
+        let l = q[0] % side + side * (q[1] % side + side * (q[2] % side));
+        self.weights
+            .get(slot * self.per_brick() + l)
+            .copied()
+            .unwrap_or(0.0) as f64
     }
 
     /// The embers' part of the density per unit volume at `p` and `time`.
@@ -449,11 +602,6 @@ impl FireLight {
         d
     }
 
-    /// The weight of voxel `v` (inside the lattice).
-    fn weight(&self, v: [usize; 3]) -> f64 {
-        self.weights[self.topo.index(v[0], v[1], v[2])] as f64
-    }
-
     /// Density of a medium-space point, per unit volume (embers at time 0).
     pub fn pdf(&self, p: DVec3) -> f64 {
         self.pdf_at(p, 0.0)
@@ -465,9 +613,11 @@ impl FireLight {
         if !(p.cmpge(p0).all() && p.cmplt(p1).all()) {
             return embers;
         }
-        let q = ((p - p0) / self.voxel).floor();
-        let v = [0, 1, 2].map(|a| (q[a].max(0.0) as usize).min(self.dims[a] - 1));
-        self.weight(v) / (self.total * self.voxel.x * self.voxel.y * self.voxel.z) + embers
+        let f = ((p - p0) / self.voxel).floor();
+        let off = self.topo.offset();
+        let q = [0, 1, 2]
+            .map(|a| ((f[a].max(0.0) as usize).min(self.dims[a] - 1) + off[a]) / self.cell);
+        self.cell_density(self.cell_weight(q), self.cell_box(q).1) + embers
     }
 
     /// Solid-angle density of the direction `d` from `o`: ∫ pdf(o + s d̂) s² ds over s ≥ 0 (embers at time 0).
@@ -487,58 +637,90 @@ impl FireLight {
         };
         self.voxel_direction(o, dn) + embers
     }
-    /// The voxels' part of [`pdf_direction`](Self::pdf_direction) along the unit direction `dn`.
+    /// The line estimate's march step, metres.
+    pub fn line_step(&self) -> f64 {
+        self.line_step
+    }
+
+    /// The fire's emitted radiance `l` and transmittance `t` along `ray` at `time`, as next-event estimation
+    /// takes them along a sampled direction: the volume's march at the light's coarser step, and with
+    /// probability `linecorrection` also at the volume's own step, the difference over that probability added
+    /// (the expectation is then the volume's own march: unbiased against what a camera ray sees). A light whose
+    /// step is the volume's — or a volume that tracks — integrates as the volume does. Returns the exit
+    /// parameter.
+    pub fn integrate_at(
+        &self,
+        ray: &crate::volume::Ray,
+        time: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
+        let v = &*self.vol;
+        if !(self.line_step > v.step_length()) {
+            return v.integrate_at(ray, time, l, t);
+        }
+        let te = v.integrate_stepped_at(ray, time, self.line_step, l, t);
+        let q = self.correction;
+        if q > 0.0 {
+            // (Its own random number: the march's jitter comes from the ray's seed.)
+            let u = crate::rng::Rng::new(ray.seed ^ 0x6c62_272e_07bb_0142).next_f64();
+            if u < q {
+                let c = l.len();
+                let mut fine = vec![0.0; 2 * c];
+                let (lf, tf) = fine.split_at_mut(c);
+                v.integrate_at(ray, time, lf, tf);
+                for k in 0..c {
+                    l[k] += (lf[k] - l[k]) / q;
+                    t[k] += (tf[k] - t[k]) / q;
+                }
+            }
+        }
+        te
+    }
+
+    /// The voxels' part of [`pdf_direction`](Self::pdf_direction) along the unit direction `dn`: per cell the
+    /// ray crosses, its density × (t₁³ − t₀³) / 3.
     fn voxel_direction(&self, o: DVec3, dn: DVec3) -> f64 {
         let ds = self.vol.dataset();
-        let scale = 1.0 / (self.total * self.voxel.x * self.voxel.y * self.voxel.z);
-        let mut sum = 0.0;
-        // Brick by brick (the weights' bricks, on a lattice extended by their offset so the walk's bricks are
-        // theirs), voxel by voxel only inside bricks that hold weights: a sparse fire in a big box costs its
-        // bricks along the ray, not the box's voxels. The pieces tile the ray as one voxel walk would.
         let [p0, p1] = ds.bounds();
+        // Only the part of the ray inside the grid (cells cut by its edges hold their density over their inside).
+        let Some((ta, tb)) = crate::majorant::clip_box(o, dn, 0.0, f64::INFINITY, p0, p1) else {
+            return 0.0;
+        };
+        let mut sum = 0.0;
+        // On the lattice of cells and bricks shifted by the topology's offset (the walk's bricks are the
+        // weights').
         let off = self.topo.offset();
         let shifted = [
             p0 - DVec3::new(off[0] as f64, off[1] as f64, off[2] as f64) * self.voxel,
             p1,
         ];
         let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
-        let nb = self.topo.bricks();
-        // A fire that fills its box (the weights' bricks at least an eighth of the box's): one voxel walk, the
-        // weight's brick looked up once per brick the ray crosses — what a brick walk saves would not pay for
-        // setting up a voxel walk per brick.
-        let box_bricks = nb.iter().product::<usize>();
-        if self.topo.active_bricks().saturating_mul(8) >= box_bricks {
-            for seg in walk(ds.bounds(), self.dims, 1, o, dn, 0.0, f64::INFINITY) {
-                let u = [0, 1, 2].map(|a| seg.cell[a] + off[a]);
-                let slot = self.topo.slot(u.map(|c| c / crate::grid::BRICK));
-                let l = u[0] % 8 + 8 * (u[1] % 8 + 8 * (u[2] % 8));
-                let w = self.weights.get(slot * 512 + l).copied().unwrap_or(0.0) as f64;
+        let cells = |t0: f64, t1: f64, sum: &mut f64| {
+            for seg in walk(shifted, dims_v, self.cell, o, dn, t0, t1) {
+                let w = self.cell_weight(seg.cell);
                 if w > 0.0 {
-                    sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                    let d = self.cell_density(w, self.cell_box(seg.cell).1);
+                    *sum += d * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
                 }
             }
-            return sum * scale;
+        };
+        // A fire that fills its box (the weights' bricks at least an eighth of the box's), or cells as large as
+        // bricks: one walk over the cells. Otherwise brick by brick, cell by cell only inside bricks that hold
+        // weights: a sparse fire in a big box costs its bricks along the ray, not the box's cells.
+        let box_bricks = self.topo.bricks().iter().product::<usize>();
+        if self.cell == crate::grid::BRICK
+            || self.topo.active_bricks().saturating_mul(8) >= box_bricks
+        {
+            cells(ta, tb, &mut sum);
+            return sum;
         }
-        for bseg in walk(
-            shifted,
-            dims_v,
-            crate::grid::BRICK,
-            o,
-            dn,
-            0.0,
-            f64::INFINITY,
-        ) {
-            if self.topo.slot(bseg.cell) == 0 {
-                continue;
-            }
-            for seg in walk(ds.bounds(), self.dims, 1, o, dn, bseg.t0, bseg.t1) {
-                let w = self.weight(seg.cell);
-                if w > 0.0 {
-                    sum += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
-                }
+        for bseg in walk(shifted, dims_v, crate::grid::BRICK, o, dn, ta, tb) {
+            if self.topo.slot(bseg.cell) != 0 {
+                cells(bseg.t0, bseg.t1, &mut sum);
             }
         }
-        sum * scale
+        sum
     }
 }
 
@@ -644,65 +826,76 @@ mod tests {
 
     #[test]
     fn sampled_pdf_equals_evaluated_pdf() {
-        let light = FireLight::new(
-            sphere_fire(24, 0.8, 1e-6, 1500.0, vec![]),
-            Weighting::Luminance,
-        )
-        .unwrap();
-        let mut rng = Rng::new(3);
-        for _ in 0..20_000 {
-            let u = [(); 6].map(|_| rng.next_f64());
-            let s = light.sample(u);
-            let p = light.pdf(s.point);
-            assert!(
-                s.pdf > 0.0 && ((p - s.pdf) / s.pdf).abs() < 1e-5,
-                "{} vs {p} at {}",
-                s.pdf,
-                s.point
-            );
+        for cell in [1, 2, 4, 8] {
+            let light = FireLight::with_cell(
+                sphere_fire(23, 0.8, 1e-6, 1500.0, vec![]),
+                Weighting::Luminance,
+                cell,
+            )
+            .unwrap();
+            let mut rng = Rng::new(3);
+            for _ in 0..20_000 {
+                let u = [(); 6].map(|_| rng.next_f64());
+                let s = light.sample(u);
+                let p = light.pdf(s.point);
+                assert!(
+                    s.pdf > 0.0 && ((p - s.pdf) / s.pdf).abs() < 1e-5,
+                    "cell {cell}: {} vs {p} at {}",
+                    s.pdf,
+                    s.point
+                );
+            }
         }
     }
 
     #[test]
-    fn voxels_are_sampled_in_proportion_to_their_weights() {
-        // The brick CDF then the scan inside the brick: 400 000 samples of a 24³ sphere fire; every voxel with an
-        // expected count of 50 or more is drawn within 5σ of it, and the counts of all voxels sum to the samples.
-        let light =
-            FireLight::new(sphere_fire(24, 0.8, 1e-6, 1500.0, vec![]), Weighting::Power).unwrap();
-        let n = 400_000;
-        let mut counts = std::collections::HashMap::new();
-        let mut rng = Rng::new(11);
-        for _ in 0..n {
-            let s = light.sample([(); 6].map(|_| rng.next_f64()));
-            let v = ((s.point - DVec3::splat(-1.0)) / light.voxel).floor();
-            *counts
-                .entry([v.x as i64, v.y as i64, v.z as i64])
-                .or_insert(0usize) += 1;
-        }
-        let mut checked = 0;
-        for k in 0..24 {
-            for j in 0..24 {
-                for i in 0..24 {
-                    let p = light.weight([i, j, k]) / light.total;
-                    let want = p * n as f64;
-                    let got = counts
-                        .get(&[i as i64, j as i64, k as i64])
-                        .copied()
-                        .unwrap_or(0) as f64;
-                    if p == 0.0 {
-                        assert_eq!(got, 0.0, "voxel {i} {j} {k} has no weight");
-                    } else if want >= 50.0 {
-                        let sigma = (want * (1.0 - p)).sqrt();
-                        assert!(
-                            (got - want).abs() < 5.0 * sigma,
-                            "voxel {i} {j} {k}: {got} vs {want}"
-                        );
-                        checked += 1;
+    fn cells_are_sampled_in_proportion_to_their_weights() {
+        // The brick CDF then the scan inside the brick: 400 000 samples of a 24³ sphere fire, per cell size;
+        // every cell with an expected count of 50 or more is drawn within 5σ of it, none without weight is.
+        for cell in [1, 4] {
+            let light = FireLight::with_cell(
+                sphere_fire(24, 0.8, 1e-6, 1500.0, vec![]),
+                Weighting::Power,
+                cell,
+            )
+            .unwrap();
+            let n = 400_000;
+            let off = light.topo.offset();
+            let mut counts = std::collections::HashMap::new();
+            let mut rng = Rng::new(11);
+            for _ in 0..n {
+                let s = light.sample([(); 6].map(|_| rng.next_f64()));
+                let v = ((s.point - DVec3::splat(-1.0)) / light.voxel).floor();
+                let q = [v.x, v.y, v.z].map(|x| x as usize);
+                *counts
+                    .entry([0, 1, 2].map(|a| (q[a] + off[a]) / cell))
+                    .or_insert(0usize) += 1;
+            }
+            let mut checked = 0;
+            let m = (24 + 8) / cell;
+            for k in 0..m {
+                for j in 0..m {
+                    for i in 0..m {
+                        let p = light.cell_weight([i, j, k]) / light.total;
+                        let want = p * n as f64;
+                        let got = counts.get(&[i, j, k]).copied().unwrap_or(0) as f64;
+                        if p == 0.0 {
+                            assert_eq!(got, 0.0, "cell {i} {j} {k} has no weight");
+                        } else if want >= 50.0 {
+                            let sigma = (want * (1.0 - p)).sqrt();
+                            assert!(
+                                (got - want).abs() < 5.0 * sigma,
+                                "cell size {cell}, cell {i} {j} {k}: {got} vs {want}"
+                            );
+                            checked += 1;
+                        }
                     }
                 }
             }
+            let total: usize = counts.values().sum();
+            assert_eq!(total, n);
+            assert!(checked > 1000 / (cell * cell * cell), "{checked}");
         }
-        assert!(checked > 1000, "{checked}");
     }
 
     #[test]
@@ -750,30 +943,33 @@ mod tests {
     #[test]
     fn monte_carlo_power_equals_the_computed_power() {
         // E[L_v(x)/pdf(x)] = Σ_v w_v V: the luminous power from samples within 3σ of the tabulated one.
-        let vol = sphere_fire(20, 0.9, 1e-7, 1800.0, vec![]);
-        let light = FireLight::new(vol.clone(), Weighting::Power).unwrap();
-        let xyz = vol.channel_xyz();
-        let c = vol.channels();
-        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
-        let mut rng = Rng::new(9);
-        let n = 40_000;
-        let (mut sum, mut sum2) = (0.0, 0.0);
-        for _ in 0..n {
-            let smp = light.sample([(); 6].map(|_| rng.next_f64()));
-            vol.coefficients(smp.point, &mut a, &mut s, &mut j);
-            let lum: f64 =
-                (0..c).map(|q| j[q] * xyz[q].y).sum::<f64>() * 4.0 * std::f64::consts::PI;
-            let x = lum / smp.pdf;
-            sum += x;
-            sum2 += x * x;
+        // Per cell size: the estimator is unbiased whatever the cells.
+        for cell in [1, 8] {
+            let vol = sphere_fire(20, 0.9, 1e-7, 1800.0, vec![]);
+            let light = FireLight::with_cell(vol.clone(), Weighting::Power, cell).unwrap();
+            let xyz = vol.channel_xyz();
+            let c = vol.channels();
+            let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            let mut rng = Rng::new(9);
+            let n = 40_000;
+            let (mut sum, mut sum2) = (0.0, 0.0);
+            for _ in 0..n {
+                let smp = light.sample([(); 6].map(|_| rng.next_f64()));
+                vol.coefficients(smp.point, &mut a, &mut s, &mut j);
+                let lum: f64 =
+                    (0..c).map(|q| j[q] * xyz[q].y).sum::<f64>() * 4.0 * std::f64::consts::PI;
+                let x = lum / smp.pdf;
+                sum += x;
+                sum2 += x * x;
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+            assert!(
+                (mean - light.power_lm()).abs() <= 3.0 * se + 1e-9 * mean,
+                "{mean} ± {se} vs {}",
+                light.power_lm()
+            );
         }
-        let mean = sum / n as f64;
-        let se = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
-        assert!(
-            (mean - light.power_lm()).abs() <= 3.0 * se + 1e-9 * mean,
-            "{mean} ± {se} vs {}",
-            light.power_lm()
-        );
     }
 
     #[test]
@@ -830,72 +1026,76 @@ mod tests {
                 .unwrap(),
             );
             let _ = std::fs::remove_file(&file);
-            let light = FireLight::new(vol, Weighting::Power).unwrap();
-            assert_ne!(light.topo.offset(), [0, 0, 0]);
-            let box_bricks: usize = light.topo.bricks().iter().product();
-            assert_eq!(light.topo.active_bricks() * 8 >= box_bricks, !far);
-            let ds = light.vol.dataset();
-            let [p0, p1] = ds.bounds();
-            let [nx, ny, _] = light.dims;
-            let mut rng = crate::rng::Rng::new(4);
-            let mut checked = 0;
-            for _ in 0..300 {
-                let o = p0
-                    + (p1 - p0) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 1.4
-                    - (p1 - p0) * 0.2;
-                // Toward one of the balls (centres near 0.205 m and 1.405 m on every axis), within its radius.
-                let c = if far && rng.next_f64() < 0.5 {
-                    1.405
-                } else {
-                    0.205
-                };
-                let j = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
-                let d = DVec3::splat(c) + j * 0.12 - o;
-                let dn = d.normalize();
-                let mut want = 0.0;
-                for seg in walk(ds.bounds(), light.dims, 1, o, dn, 0.0, f64::INFINITY) {
-                    let v = seg.brick;
-                    let w = light.weight([v % nx, (v / nx) % ny, v / (nx * ny)]);
-                    want += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+            for cell in [1, 2, 8] {
+                let light = FireLight::with_cell(vol.clone(), Weighting::Power, cell).unwrap();
+                assert_ne!(light.topo.offset(), [0, 0, 0]);
+                let box_bricks: usize = light.topo.bricks().iter().product();
+                assert_eq!(light.topo.active_bricks() * 8 >= box_bricks, !far);
+                let ds = light.vol.dataset();
+                let [p0, p1] = ds.bounds();
+                let mut rng = crate::rng::Rng::new(4);
+                let mut checked = 0;
+                for _ in 0..300 {
+                    let o = p0
+                        + (p1 - p0)
+                            * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64())
+                            * 1.4
+                        - (p1 - p0) * 0.2;
+                    // Toward one of the balls (centres near 0.205 m and 1.405 m on every axis), within its radius.
+                    let c = if far && rng.next_f64() < 0.5 {
+                        1.405
+                    } else {
+                        0.205
+                    };
+                    let j = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
+                    let d = DVec3::splat(c) + j * 0.12 - o;
+                    let dn = d.normalize();
+                    let mut want = 0.0;
+                    // Voxel by voxel, the density at each piece's middle (constant over a voxel for any cell size).
+                    for seg in walk(ds.bounds(), light.dims, 1, o, dn, 0.0, f64::INFINITY) {
+                        let w = light.pdf(o + dn * (0.5 * (seg.t0 + seg.t1)));
+                        want += w * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                    }
+                    let got = light.pdf_direction(o, d);
+                    checked += (want > 0.0) as usize;
+                    assert!(
+                        (got - want).abs() <= 1e-9 * want.max(1e-300),
+                        "cell {cell}: {got} vs {want}"
+                    );
                 }
-                let vv = light.voxel.x * light.voxel.y * light.voxel.z;
-                let want = want / (light.total * vv);
-                let got = light.pdf_direction(o, d);
-                checked += (want > 0.0) as usize;
-                assert!(
-                    (got - want).abs() <= 1e-9 * want.max(1e-300),
-                    "{got} vs {want}"
-                );
+                assert!(checked > 200, "{checked} rays met the fire");
             }
-            assert!(checked > 200, "{checked} rays met the fire");
         }
     }
 
     #[test]
     fn direction_pdf_integrates_to_one_over_the_sphere() {
-        // ∫ pdf_direction dω = 1 for a point outside the fire (all the pdf is seen from there).
-        let light = FireLight::new(
-            sphere_fire(16, 0.7, 1e-6, 1600.0, vec![]),
-            Weighting::Luminance,
-        )
-        .unwrap();
-        let o = DVec3::new(0.3, -3.0, 0.2);
-        let mut rng = Rng::new(5);
-        let n = 200_000;
-        let mut sum = 0.0;
-        for _ in 0..n {
-            let z = 1.0 - 2.0 * rng.next_f64();
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
-            sum += light.pdf_direction(o, DVec3::new(r * phi.cos(), r * phi.sin(), z))
-                * 4.0
-                * std::f64::consts::PI;
+        // ∫ pdf_direction dω = 1 for a point outside the fire (all the pdf is seen from there), per cell size.
+        for cell in [1, 4] {
+            let light = FireLight::with_cell(
+                sphere_fire(16, 0.7, 1e-6, 1600.0, vec![]),
+                Weighting::Luminance,
+                cell,
+            )
+            .unwrap();
+            let o = DVec3::new(0.3, -3.0, 0.2);
+            let mut rng = Rng::new(5);
+            let n = 200_000;
+            let mut sum = 0.0;
+            for _ in 0..n {
+                let z = 1.0 - 2.0 * rng.next_f64();
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = 2.0 * std::f64::consts::PI * rng.next_f64();
+                sum += light.pdf_direction(o, DVec3::new(r * phi.cos(), r * phi.sin(), z))
+                    * 4.0
+                    * std::f64::consts::PI;
+            }
+            let mean = sum / n as f64;
+            assert!((mean - 1.0).abs() < 0.03, "cell {cell}: ∫ pdf dω = {mean}");
+            // And it is consistent with point sampling: pdf_direction ≥ pdf(x) s² ds piece for the sampled direction.
+            let s = light.sample([0.5; 6]);
+            assert!(light.pdf_direction(o, s.point - o) > 0.0);
         }
-        let mean = sum / n as f64;
-        assert!((mean - 1.0).abs() < 0.03, "∫ pdf dω = {mean}");
-        // And it is consistent with point sampling: pdf_direction ≥ pdf(x) s² ds piece for the sampled direction.
-        let s = light.sample([0.5; 6]);
-        assert!(light.pdf_direction(o, s.point - o) > 0.0);
     }
 
     #[test]

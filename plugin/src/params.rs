@@ -338,8 +338,13 @@ impl<'a> ParamReader<'a> {
         if !compatible {
             return Err(self.err(
                 name,
-                format!("a {} value", p.ty.name()),
-                format!("a {} (e.g. \"{} {name}\")", spec.ty.name(), spec.ty.name()),
+                format!("{} {} value", article(p.ty.name()), p.ty.name()),
+                format!(
+                    "{} {} (e.g. \"{} {name}\")",
+                    article(spec.ty.name()),
+                    spec.ty.name(),
+                    spec.ty.name()
+                ),
             ));
         }
         Ok(Some(p))
@@ -573,6 +578,15 @@ pub fn markdown(components: &[&Component]) -> String {
         }
     }
     s
+}
+
+/// "an" before a vowel, else "a".
+fn article(word: &str) -> &'static str {
+    if word.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    }
 }
 
 #[cfg(test)]

@@ -100,6 +100,11 @@ int main(int argc, char **argv) {
         expect_failure("light_pdf_at(null light)", api->light_pdf_at(NULL, o3, NULL, 1, x));
         expect_failure("light_pdf_direction_at(NaN time)", api->light_pdf_direction_at(light, o3, dir, nan_time, 1, x));
         expect_failure("light_pdf_direction_at(null pdf)", api->light_pdf_direction_at(light, o3, dir, NULL, 1, NULL));
+        expect_failure("light_integrate_at(null light)", api->light_integrate_at(NULL, &nan_ray, NULL, 1, f, NULL));
+        expect_failure("light_integrate_at(null radiance)", api->light_integrate_at(light, &nan_ray, NULL, 1, NULL, NULL));
+        expect_failure("light_integrate_at(NaN ray)", api->light_integrate_at(light, &nan_ray, NULL, 1, f, f));
+        expect_failure("light_integrate_at(NaN time)", api->light_integrate_at(light, &nan_ray, nan_time, 1, f, NULL));
+        expect_failure("light_integrate_at(absurd n)", api->light_integrate_at(light, &nan_ray, NULL, SIZE_MAX, f, NULL));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);

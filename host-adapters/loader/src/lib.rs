@@ -256,7 +256,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 27] = [
+const ENTRIES: [&str; 28] = [
     "last_error",
     "param_count",
     "param_info",
@@ -284,6 +284,7 @@ const ENTRIES: [&str; 27] = [
     "light_sample_at",
     "light_pdf_at",
     "light_pdf_direction_at",
+    "light_integrate_at",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.
@@ -463,6 +464,41 @@ impl Plugin {
 
     /// Creates a fire volume from dataset and volume parameters.
     pub fn create_volume(&self, params: &[Param]) -> Result<Volume, Error> {
+        let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
+        let api = self.inner.api();
+        let status = with_c_params(params, |list, at_ptrs| {
+            // SAFETY: `list`, `at_ptrs` (one entry per parameter) and everything they point to live until after
+            // the call; `handle` is writable.
+            unsafe {
+                (api.volume_create_located)(
+                    list.as_ptr(),
+                    at_ptrs.as_ptr(),
+                    list.len(),
+                    &mut handle,
+                )
+            }
+        })?;
+        self.inner.check(status)?;
+        let mut info = abi::FmVolumeInfo::default();
+        // SAFETY: a live handle and a writable info.
+        let s = unsafe { (api.volume_info)(handle, &mut info) };
+        let vol = Volume {
+            inner: self.inner.clone(),
+            handle,
+            info,
+        };
+        self.inner.check(s)?;
+        Ok(vol)
+    }
+}
+
+/// Calls `f` with `params` as the ABI's parameter array and their `file:line:col` origins (null where none), both
+/// alive — with every string and value array they point to — until `f` returns.
+pub(crate) fn with_c_params<R>(
+    params: &[Param],
+    f: impl FnOnce(&[abi::FmParam], &[*const c_char]) -> R,
+) -> Result<R, Error> {
+    {
         // Keep every C string and value array alive until the call returns.
         let mut names = Vec::new();
         let mut strings: Vec<Vec<CString>> = Vec::new();
@@ -553,24 +589,7 @@ impl Plugin {
                 values,
             })
             .collect();
-        let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
-        let api = self.inner.api();
-        // SAFETY: `list`, `at_ptrs` (one entry per parameter) and everything they point to live until after the
-        // call; `handle` is writable.
-        let status = unsafe {
-            (api.volume_create_located)(list.as_ptr(), at_ptrs.as_ptr(), list.len(), &mut handle)
-        };
-        self.inner.check(status)?;
-        let mut info = abi::FmVolumeInfo::default();
-        // SAFETY: a live handle and a writable info.
-        let s = unsafe { (api.volume_info)(handle, &mut info) };
-        let vol = Volume {
-            inner: self.inner.clone(),
-            handle,
-            info,
-        };
-        self.inner.check(s)?;
-        Ok(vol)
+        Ok(f(&list, &at_ptrs))
     }
 }
 

@@ -161,6 +161,41 @@ impl Light {
         };
         self.inner.check(s)
     }
+
+    /// The fire's emitted radiance (`rays.len() × channels` floats) and, if asked, transmittance along straight
+    /// `rays` (medium space), each at its time, as the light estimates them for next-event estimation along a
+    /// sampled direction (ABI 0.8): the volume's march at the light's `linestep`, corrected toward the volume's
+    /// own with probability `linecorrection`.
+    pub fn integrate_at(
+        &self,
+        rays: &[crate::Ray],
+        times: Option<&[f64]>,
+        radiance: &mut [f32],
+        transmittance: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        let t_ptr = times_ptr(times, rays.len(), "light integrate")?;
+        let need = rays.len().saturating_mul(self.channels);
+        if radiance.len() < need || transmittance.as_ref().is_some_and(|t| t.len() < need) {
+            return Err(Error::Buffer(format!(
+                "light integrate: buffers shorter than {} rays × {} channels",
+                rays.len(),
+                self.channels
+            )));
+        }
+        let tr = transmittance.map_or(std::ptr::null_mut(), |t| t.as_mut_ptr());
+        // SAFETY: sized above; rays.len() rays.
+        let s = unsafe {
+            (self.inner.api().light_integrate_at)(
+                self.handle,
+                rays.as_ptr(),
+                t_ptr,
+                rays.len(),
+                radiance.as_mut_ptr(),
+                tr,
+            )
+        };
+        self.inner.check(s)
+    }
 }
 
 /// The times' pointer for `n` entries (null for none), checked long enough.

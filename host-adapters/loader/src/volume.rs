@@ -1,7 +1,6 @@
 //! A fire volume handle: its description, colour and temperature range, and the batch queries.
 
 use crate::{abi, Error, Exit, Inner, Light, Ray, Scatter, VolumeInfo};
-use std::ffi::{c_char, c_void, CString};
 use std::fmt;
 use std::sync::Arc;
 
@@ -34,27 +33,22 @@ impl Drop for Volume {
 impl Volume {
     /// Builds the fire light of this volume (ABI 0.2): `weighting` is `"power"` (default) or `"luminance"`.
     pub fn create_light(&self, weighting: Option<&str>) -> Result<Light, Error> {
-        let api = self.inner.api();
-        let w = weighting
-            .map(|w| {
-                CString::new(w).map_err(|_| Error::Buffer("weighting holds a NUL byte".into()))
-            })
-            .transpose()?;
-        let ptrs: Vec<*const c_char> = w.iter().map(|c| c.as_ptr()).collect();
-        let name = c"weighting";
-        let params: Vec<abi::FmParam> = ptrs
-            .iter()
-            .map(|p| abi::FmParam {
-                name: name.as_ptr(),
-                ty: abi::FM_TYPE_STRING,
-                count: 1,
-                values: p as *const *const c_char as *const c_void,
-            })
+        let params: Vec<crate::Param> = weighting
+            .map(|w| crate::Param::string("weighting", w))
+            .into_iter()
             .collect();
+        self.create_light_with(&params)
+    }
+
+    /// Builds the fire light of this volume with the light's parameters (docs/params.md, `light`: `weighting`,
+    /// `cell`, …).
+    pub fn create_light_with(&self, params: &[crate::Param]) -> Result<Light, Error> {
+        let api = self.inner.api();
         let mut handle: *mut abi::FmLight = std::ptr::null_mut();
-        // SAFETY: params and the strings they point to live until after the call; handle is writable.
-        let s =
-            unsafe { (api.light_create)(self.handle, params.as_ptr(), params.len(), &mut handle) };
+        let s = crate::with_c_params(params, |list, _| {
+            // SAFETY: `list` and everything it points to live until after the call; handle is writable.
+            unsafe { (api.light_create)(self.handle, list.as_ptr(), list.len(), &mut handle) }
+        })?;
         self.inner.check(s)?;
         let mut info = abi::FmLightInfo::default();
         // SAFETY: a live handle and a writable info.

@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 7u
+#define FM_ABI_MINOR 8u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -217,6 +217,14 @@ typedef struct FmApi {
                              double *pdf);
     FmStatus (*light_pdf_direction_at)(const FmLight *light, const double *origins, const double *directions,
                                        const double *times, size_t n, double *pdf);
+    /* ABI 0.8: the fire's emitted radiance and transmittance along n straight rays as the light estimates them
+     * for next-event estimation along a sampled direction: radiance (required) and transmittance (may be NULL)
+     * hold n * channels floats, times as light_sample_at. The volume's march at the light's "linestep" (coarser
+     * than the volume's own on a large fire: its cost does not grow with the grid), corrected toward the
+     * volume's own march with probability "linecorrection". Where its step is the volume's, the same as
+     * volume_integrate_at without exits. */
+    FmStatus (*light_integrate_at)(const FmLight *light, const FmRay *rays, const double *times, size_t n,
+                                   float *radiance, float *transmittance);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

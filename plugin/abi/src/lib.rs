@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 7;
+pub const ABI_MINOR: u32 = 8;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -421,6 +421,19 @@ pub struct FmApi {
         n: usize,
         pdf: *mut f64,
     ) -> FmStatus,
+    /// ABI 0.8: the fire's emitted radiance and transmittance along `n` straight rays, as the light estimates
+    /// them for next-event estimation along a sampled direction (`radiance`, required, and `transmittance`,
+    /// may be null: `n × channels` floats; `times` as [`light_sample_at`](Self::light_sample_at)): the volume's
+    /// march at the light's `linestep`, corrected toward the volume's own march with probability
+    /// `linecorrection`. Where its step is the volume's, the same as `volume_integrate_at` without exits.
+    pub light_integrate_at: unsafe extern "C" fn(
+        light: *const FmLight,
+        rays: *const FmRay,
+        times: *const f64,
+        n: usize,
+        radiance: *mut f32,
+        transmittance: *mut f32,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -456,7 +469,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
-        // three `_at` entries).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 27 * 8);
+        // three `_at` entries, 0.8 `light_integrate_at`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 28 * 8);
     }
 }

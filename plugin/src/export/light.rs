@@ -1,7 +1,7 @@
 //! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
 
 use super::params::read_params;
-use super::volume::{out_f32, times};
+use super::volume::{out_f32, ray_of, rays, times};
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
 use crate::volume::FireVolume;
@@ -42,13 +42,18 @@ pub(super) unsafe extern "C" fn light_create(
             "luminance" => Weighting::Luminance,
             _ => Weighting::Power,
         };
+        let cell = r.int("cell").map_err(fail)?;
+        let line = crate::light::LineEstimate {
+            step_voxels: r.float("linestep").map_err(fail)?,
+            correction: r.float("linecorrection").map_err(fail)?,
+        };
         r.finish().map_err(fail)?;
         // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
         let vol = unsafe {
             std::sync::Arc::increment_strong_count(volume as *const FireVolume);
             std::sync::Arc::from_raw(volume as *const FireVolume)
         };
-        let l = FireLight::new(vol, weighting).map_err(fail)?;
+        let l = FireLight::with(vol, weighting, cell as usize, line).map_err(fail)?;
         // SAFETY: out is non-null and writable.
         unsafe { *out = Box::into_raw(Box::new(l)) as *mut FmLight };
         Ok(())
@@ -265,6 +270,43 @@ pub(super) unsafe extern "C" fn light_pdf_direction_at(
                 DVec3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]),
                 ts[i],
             );
+        }
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn light_integrate_at(
+    l: *const FmLight,
+    rays_ptr: *const FmRay,
+    times_ptr: *const f64,
+    n: usize,
+    radiance: *mut f32,
+    transmittance: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
+        let lt = unsafe { light(l, "light_integrate") }?;
+        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
+        let rs = unsafe { rays(rays_ptr, n) }?;
+        // SAFETY: `times` is null or holds `n` doubles (caller contract).
+        let ts = unsafe { times(times_ptr, n, "light_integrate") }?;
+        let c = lt.volume().channels();
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let l_out = unsafe { out_f32(radiance, n, c) }?
+            .ok_or_else(|| bad("light_integrate: radiance is null"))?;
+        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+        let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
+        let (mut lv, mut tv) = (vec![0.0; c], vec![0.0; c]);
+        for (i, r) in rs.iter().enumerate() {
+            lt.integrate_at(&ray_of(r), ts[i], &mut lv, &mut tv);
+            for k in 0..c {
+                l_out[i * c + k] = lv[k] as f32;
+            }
+            if let Some(to) = t_out.as_deref_mut() {
+                for k in 0..c {
+                    to[i * c + k] = tv[k] as f32;
+                }
+            }
         }
         Ok(())
     })

@@ -193,6 +193,7 @@ static API: FmApi = FmApi {
     light_sample_at,
     light_pdf_at,
     light_pdf_direction_at,
+    light_integrate_at,
 };
 
 /// The plugin's entry point: the static function table.

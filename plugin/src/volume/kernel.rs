@@ -330,7 +330,8 @@ const THIN: f32 = 0.1;
 /// The straight march of `ray` through `v` in `CV` lanes of `V` channels (at most 4 lanes holding all the
 /// volume's channels; else, or for a volume without a lattice, `None`). `S`: the volume has species (their rows
 /// are looked up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical
-/// mode). Fills `l` and `t`; returns the exit parameter.
+/// mode). `step`: the march's step, metres (the volume's own, or the fire light's coarser one). Fills `l` and `t`;
+/// returns the exit parameter.
 #[inline(always)]
 pub(super) fn march<
     const CV: usize,
@@ -342,6 +343,7 @@ pub(super) fn march<
     v: &FireVolume,
     lt: &LaneTables,
     ray: &Ray,
+    step: f64,
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
@@ -361,7 +363,7 @@ pub(super) fn march<
         return Some(ray.t1);
     };
     let len = (span.b - span.a) * span.speed;
-    let mut ds = v.step;
+    let mut ds = step;
     if !(ds > 0.0) || len / ds > MAX_STEPS {
         ds = len / MAX_STEPS;
     }

@@ -13,10 +13,71 @@ use glam::DVec3;
 /// Radiance `l` and transmittance `t` along `ray` by the volume's fastest exact path; returns the exit parameter.
 pub(super) fn integrate(v: &FireVolume, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
     if let Some(lt) = &v.lanes {
-        return march_kernel(v, lt, ray, l, t).unwrap_or_else(|| march_lanes(v, lt, ray, l, t));
+        return march_kernel(v, lt, ray, v.step, l, t)
+            .unwrap_or_else(|| march_lanes(v, lt, ray, l, t));
     }
     let mut sc = Scratch::new(v.channels());
     integrate::integrate(v, ray, v.integrator, &mut sc, l, t)
+}
+
+/// As [`integrate`] with the march's step `step` (metres) instead of the volume's, for a volume that marches
+/// (`m`: the volume itself, or as motion blur displaces it).
+pub(super) fn integrate_stepped(
+    v: &FireVolume,
+    m: &dyn Medium,
+    mapped: Option<&dyn Fn(DVec3) -> DVec3>,
+    ray: &Ray,
+    step: f64,
+    l: &mut [f64],
+    t: &mut [f64],
+) -> f64 {
+    let stepped = Stepped { m, step };
+    match (&v.lanes, mapped) {
+        (Some(lt), None) => march_kernel(v, lt, ray, step, l, t)
+            .unwrap_or_else(|| march_lanes_mapped(v, lt, &stepped, |p| p, ray, l, t)),
+        (Some(lt), Some(f)) => march_lanes_mapped(v, lt, &stepped, f, ray, l, t),
+        (None, _) => {
+            let mut sc = Scratch::new(v.channels());
+            integrate::integrate(&stepped, ray, integrate::Integrator::March, &mut sc, l, t)
+        }
+    }
+}
+
+/// A medium marched with another step: everything but the step is `m`'s.
+struct Stepped<'a> {
+    m: &'a dyn Medium,
+    step: f64,
+}
+
+impl Medium for Stepped<'_> {
+    fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        self.m.clip(o, d, t0, t1)
+    }
+    fn step(&self) -> f64 {
+        self.step
+    }
+    fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
+        self.m.eval(p, sa, ss, j)
+    }
+    fn majorants(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t0: f64,
+        t1: f64,
+        f: &mut dyn FnMut(f64, f64, f64) -> bool,
+    ) {
+        self.m.majorants(o, d, t0, t1, f)
+    }
+    fn cutoff(&self) -> f64 {
+        self.m.cutoff()
+    }
+    fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
+        self.m.empty_spans(o, d, t0, t1, f)
+    }
+    fn collision_cap_hit(&self) {
+        self.m.collision_cap_hit()
+    }
 }
 
 impl FireVolume {
@@ -154,6 +215,7 @@ pub(super) fn march_kernel(
     v: &FireVolume,
     lt: &lanes::LaneTables,
     ray: &Ray,
+    step: f64,
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
@@ -166,18 +228,18 @@ pub(super) fn march_kernel(
     macro_rules! lanes {
         ($cv:literal, $v:literal) => {
             match (s, a) {
-                (false, false) => kernel::march::<$cv, $v, false, false, F>(v, lt, ray, l, t),
-                (true, false) => kernel::march::<$cv, $v, true, false, F>(v, lt, ray, l, t),
+                (false, false) => kernel::march::<$cv, $v, false, false, F>(v, lt, ray, step, l, t),
+                (true, false) => kernel::march::<$cv, $v, true, false, F>(v, lt, ray, step, l, t),
                 _ => None,
             }
         };
     }
     match v.channels() {
         0..=4 => match (s, a) {
-            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, ray, l, t),
-            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, ray, l, t),
-            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, ray, l, t),
-            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, ray, l, t),
+            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, ray, step, l, t),
+            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, ray, step, l, t),
+            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, ray, step, l, t),
+            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, ray, step, l, t),
         },
         5..=8 => lanes!(1, 8),
         9..=16 if WIDE => lanes!(1, 16),
@@ -407,7 +469,7 @@ mod tests {
             })
             .collect();
         type Kernel =
-            fn(&FireVolume, &lanes::LaneTables, &Ray, &mut [f64], &mut [f64]) -> Option<f64>;
+            fn(&FireVolume, &lanes::LaneTables, &Ray, f64, &mut [f64], &mut [f64]) -> Option<f64>;
         // (The volume's extra parameters, with sodium, and the shapes to run on it.)
         type Case = (Vec<Param>, bool, Vec<(&'static str, Kernel)>);
         let cases: Vec<Case> = vec![
@@ -469,7 +531,7 @@ mod tests {
                 for ray in &rays {
                     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
                     let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
-                    let te = kernel(&v, lt, ray, &mut l, &mut t).expect("this shape fits");
+                    let te = kernel(&v, lt, ray, v.step, &mut l, &mut t).expect("this shape fits");
                     let te3 = v64.integrate(ray, &mut l3, &mut t3);
                     assert_eq!(te, te3, "{name}");
                     let peak = l3.iter().fold(0f64, |m, &x| m.max(x));

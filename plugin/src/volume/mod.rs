@@ -875,6 +875,37 @@ impl FireVolume {
         let te = self.integrate_at_fire(&cut, time, l, t);
         self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
     }
+    /// As [`integrate_at`](Self::integrate_at) with the march's step `step` (metres) instead of the volume's —
+    /// the fire light's coarse line estimate. A volume that tracks (ratio, delta) or whose own step is as long
+    /// integrates as `integrate_at` does.
+    pub fn integrate_stepped_at(
+        &self,
+        ray: &Ray,
+        time: f64,
+        step: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
+        if self.integrator != Integrator::March || !(step > self.step) {
+            return self.integrate_at(ray, time, l, t);
+        }
+        let (cut, hit) = self.ember_cut(ray, time);
+        self.fault_check();
+        let te = match self.advected(time) {
+            Some(a) => {
+                let map = |p: DVec3| a.displaced(p);
+                let te = march::integrate_stepped(self, &a, Some(&map), &cut, step, l, t);
+                self.thick_lines(Some(&a), &cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+            None => {
+                let te = march::integrate_stepped(self, self, None, &cut, step, l, t);
+                self.thick_lines(None, &cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+        };
+        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+    }
     /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
     /// grids' time: a refracting volume ignores `time` here but for its embers.)
     pub fn integrate_exit_at(

@@ -136,6 +136,30 @@ pub static LIGHT: Component = Component {
         "",
         Range::Choices(&["power", "luminance"]),
         "Voxel weights: power, ∫ j dλ over the bins, or luminance, Σ j Y. Power measured 0.4–0.7 % lower error on the default scene (docs/RESULTS.md).",
+    ),
+    p(
+        "cell",
+        T::Integer,
+        "1",
+        "voxels",
+        Range::Between(1.0, 8.0),
+        "Voxels per side of the pdf's cells, 1, 2, 4 or 8: the light picks a cell by its emission and a point uniform in it, and the density of a direction walks cells, not voxels (docs/RESULTS.md, the fire light at production scale).",
+    ),
+    p(
+        "linestep",
+        T::Float,
+        "0",
+        "voxels",
+        Range::Between(0.0, 1e6),
+        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 64 steps. Never shorter than the volume's own step (then it is the volume's march).",
+    ),
+    p(
+        "linecorrection",
+        T::Float,
+        "0",
+        "",
+        Range::Between(0.0, 1.0),
+        "The probability of correcting a coarse line estimate by the volume's own march (the difference over the probability: unbiased against it); 0: the coarse march alone.",
     )],
 };
 

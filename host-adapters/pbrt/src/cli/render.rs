@@ -46,6 +46,11 @@ pub struct RenderArgs {
     #[arg(long = "fire-light", value_name = "power|luminance|off", default_value = "power",
           value_parser = ["power", "luminance", "off"])]
     fire_light: String,
+    /// A parameter of the fire light, NAME=VALUE (repeatable; docs/params.md, `light`): e.g. `cell=8` (the
+    /// pdf's cells, voxels per side), `linestep=2` (the march step along a light sample's direction, voxels),
+    /// `linecorrection=0.1`.
+    #[arg(long = "fire-light-param", value_name = "NAME=VALUE", value_parser = parse_light_param)]
+    fire_light_param: Vec<(String, String)>,
     /// The PNG preview's display transform: agx (default: Sobotka's AgX, the fire's core in its soft shoulder),
     /// aces, naka-rushton (the paper's cone responses), exposure or reinhard — as `firemedium tonemap --operator`.
     #[arg(long, value_enum, default_value = "agx")]
@@ -209,6 +214,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         plugin: a.plugin.clone(),
         no_fire_light: a.fire_light == "off",
         fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
+        fire_light_params: a.fire_light_param.clone(),
         res: a.resolution,
         crop: four(&a.cropwindow),
         pixel_bounds: four(&a.pixelbounds),
@@ -394,6 +400,14 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 .join(","),
         ),
         (
+            // How the fire lit the scene: `off`, or the weighting and the light parameters given.
+            "fire_light".to_string(),
+            std::iter::once(a.fire_light.clone())
+                .chain(a.fire_light_param.iter().map(|(n, v)| format!("{n}={v}")))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+        (
             // The C ABI of the plugin that rendered the media (none without plugin media).
             "plugin_abi".to_string(),
             sc.media
@@ -450,6 +464,13 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             st.camera_rays,
             st.camera_rays as f64 / st.seconds.max(1e-9)
         );
+        if st.fire_light_samples > 0 {
+            out += &format!(
+                "  fire light: {} samples, {:.2} per camera ray\n",
+                st.fire_light_samples,
+                st.fire_light_samples as f64 / st.camera_rays.max(1) as f64
+            );
+        }
         if let Some(bytes) = crate::bench::perf::peak_rss() {
             out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
         }
@@ -499,6 +520,14 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
     };
     let png = exr.with_extension("png");
     (exr, png)
+}
+
+/// `NAME=VALUE` (the plugin's table types the value when the light is built).
+fn parse_light_param(s: &str) -> Result<(String, String), String> {
+    s.split_once('=')
+        .filter(|(n, v)| !n.is_empty() && !v.is_empty())
+        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. cell=8"))
 }
 
 #[cfg(test)]

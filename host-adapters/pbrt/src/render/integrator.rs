@@ -276,6 +276,8 @@ fn fire_pdf_direction(
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
     pub mask: S,
+    /// Fire-light samples taken (next-event estimation toward a fire), for the render's statistics.
+    pub fire_samples: std::sync::atomic::AtomicU64,
 }
 
 impl Integrator<'_> {
@@ -295,6 +297,43 @@ impl Integrator<'_> {
     ) -> (S, S) {
         let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission, false);
         (l, t)
+    }
+
+    /// The emission and transmittance of plugin medium `m` along o + t·d, t ∈ [0, t_end], as its fire light
+    /// estimates them for a light sample's direction (`light_integrate_at`: a coarser march on a large fire).
+    fn light_segment(
+        &self,
+        light: &firemedium_loader::Light,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+    ) -> (S, S) {
+        let Medium::Plugin {
+            to_medium, units, ..
+        } = &self.scene.media[m]
+        else {
+            return self.medium_segment(m, o, d, t_end, rng, true);
+        };
+        let n = self.scene.bins.n();
+        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+        let (mut l, mut t) = (
+            [0f32; super::spectrum::MAX_CHANNELS],
+            [0f32; super::spectrum::MAX_CHANNELS],
+        );
+        if light
+            .integrate_at(
+                std::slice::from_ref(&ray),
+                Some(&[rng.time]),
+                &mut l[..n],
+                Some(&mut t[..n]),
+            )
+            .is_err()
+        {
+            return (S::ZERO, S::ZERO);
+        }
+        (S(l) * *units, S(t))
     }
 
     /// As [`medium_segment`](Self::medium_segment), and — when `want_exit` — where the ray leaves if a
@@ -386,14 +425,14 @@ impl Integrator<'_> {
 
     /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
     /// (transmittance — zero if an opaque surface is in the way —, the emission of medium `fire` seen along
-    /// the way, attenuated by every medium in front of it).
+    /// the way, attenuated by every medium in front of it, as its fire light estimates it).
     fn walk_media(
         &self,
         mut o: Vec3A,
         d: Vec3A,
         mut t_max: f32,
         mut medium: Option<usize>,
-        fire: Option<usize>,
+        fire: Option<(usize, &firemedium_loader::Light)>,
         rng: &mut Samples,
     ) -> (S, S) {
         let eps = self.scene.eps;
@@ -403,9 +442,12 @@ impl Integrator<'_> {
             let hit = self.scene.bvh.intersect(o, d, eps, t_max - eps);
             let seg = hit.map(|h| h.t).unwrap_or(t_max);
             if let Some(m) = medium {
-                let emits = fire == Some(m);
-                let (le, t) = self.medium_segment(m, o, d, seg, rng, emits);
-                if emits {
+                let light = fire.filter(|f| f.0 == m).map(|f| f.1);
+                let (le, t) = match light {
+                    Some(light) => self.light_segment(light, m, o, d, seg, rng),
+                    None => self.medium_segment(m, o, d, seg, rng, false),
+                };
+                if light.is_some() {
                     l += tr * le;
                 }
                 tr *= t;
@@ -430,7 +472,15 @@ impl Integrator<'_> {
     /// Radiance from one light toward `spot` (NEE), already divided by the light's selection probability:
     /// (incident radiance × visibility, direction, the light's solid-angle pdf of that direction including the
     /// selection probability — for MIS; 0 for delta lights, which paths cannot hit by themselves).
-    fn sample_light(&self, li: usize, spot: &Spot, rng: &mut Samples) -> Option<(S, Vec3A, f32)> {
+    /// `dark(wi)`: whether the vertex reflects nothing toward `wi` (a surface's BSDF is zero there), so a fire
+    /// light sample in that direction skips the march along it.
+    fn sample_light(
+        &self,
+        li: usize,
+        spot: &Spot,
+        rng: &mut Samples,
+        dark: &dyn Fn(Vec3A) -> bool,
+    ) -> Option<(S, Vec3A, f32)> {
         let sc = self.scene;
         let u = Self::rng2(rng);
         let nl = sc.lights.len() as f32;
@@ -456,9 +506,11 @@ impl Integrator<'_> {
                 if !(pdf[0] > 0.0) {
                     return None;
                 }
+                self.fire_samples
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 let xw = to_world.transform_point3(DVec3::from(pt[0]));
                 let wi = (Vec3A::from(xw.as_vec3()) - p).normalize_or_zero();
-                if wi == Vec3A::ZERO || !wi.is_finite() {
+                if wi == Vec3A::ZERO || !wi.is_finite() || dark(wi) {
                     return None;
                 }
                 let (o, medium) = spot.leave(wi);
@@ -469,7 +521,7 @@ impl Integrator<'_> {
                 }
                 // The fire's emission along wi, up to the first opaque surface.
                 let le = self
-                    .walk_media(o, wi, f32::INFINITY, medium, Some(*fm), rng)
+                    .walk_media(o, wi, f32::INFINITY, medium, Some((*fm, light)), rng)
                     .1;
                 let l = (le / pdf_dir).finite_or_zero();
                 return (!l.is_black()).then_some((l, wi, pdf_dir));
@@ -619,7 +671,8 @@ impl Integrator<'_> {
         let lights = &self.scene.lights;
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
-            if let Some((le, wi, pl)) = self.sample_light(li, &Spot::Medium { p, medium }, rng) {
+            let spot = Spot::Medium { p, medium };
+            if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false) {
                 let ph = hg((-d).dot(wi), g);
                 *l += beta * le * (ph * light_mis_weight(pl, ph));
             }
@@ -926,7 +979,12 @@ impl Integrator<'_> {
                     media: prim.media,
                     medium,
                 };
-                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng) {
+                // (A direction the BSDF does not reflect: no march along it.)
+                let dark = |wi: Vec3A| {
+                    let wi_l = to_local(h.ns, wi);
+                    bxdf.f(wo_l, wi_l, Mode::Radiance, seed).is_black()
+                };
+                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &dark) {
                     let wi_l = to_local(h.ns, wi);
                     let f = bxdf.f(wo_l, wi_l, Mode::Radiance, seed) * wi_l.z.abs();
                     if !f.is_black() {

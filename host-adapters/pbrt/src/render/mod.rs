@@ -100,6 +100,8 @@ impl Image {
 pub struct Stats {
     pub seconds: f64,
     pub camera_rays: usize,
+    /// Fire-light samples (next-event estimation toward fires).
+    pub fire_light_samples: u64,
 }
 
 const TILE: usize = 16;
@@ -131,6 +133,7 @@ pub fn render(
     let integ = integrator::Integrator {
         scene,
         mask: scene.bins.mask(),
+        fire_samples: Default::default(),
     };
     let rows: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
@@ -284,6 +287,7 @@ pub fn render(
     let stats = Stats {
         seconds: start.elapsed().as_secs_f64(),
         camera_rays: w * h * scene.spp,
+        fire_light_samples: integ.fire_samples.into_inner(),
     };
     (
         Image {

@@ -331,6 +331,39 @@ impl Scene {
     }
 }
 
+/// The command line's `NAME=VALUE` light parameters typed as the plugin's table declares them (the light's own
+/// or the volume's).
+fn light_params(plugin: &Plugin, given: &[(String, String)]) -> Result<Vec<LParam>, Error> {
+    let table = plugin.parameters();
+    given
+        .iter()
+        .map(|(name, value)| {
+            let info = table
+                .iter()
+                .find(|p| p.component == "light" && &p.name == name)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = table
+                        .iter()
+                        .filter(|p| p.component == "light")
+                        .map(|p| p.name.as_str())
+                        .collect();
+                    format!(
+                        "--fire-light-param {name}={value}: the fire light has no parameter \"{name}\" (it has {})",
+                        names.join(", ")
+                    )
+                })?;
+            let bad = |what: &str| {
+                format!("--fire-light-param {name}={value}: \"{value}\" is not {what}")
+            };
+            Ok(match info.ty.as_str() {
+                "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
+                "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
+                _ => LParam::string(name, value),
+            })
+        })
+        .collect()
+}
+
 /// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
 /// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
 /// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
@@ -417,6 +450,9 @@ pub struct Overrides {
     pub no_fire_light: bool,
     /// The fire lights' voxel weighting (`power`, the plugin's default, or `luminance`).
     pub fire_light_weighting: Option<String>,
+    /// More of the fire lights' parameters, (name, value) as given (docs/params.md, `light`: `cell`,
+    /// `linestep`, …), typed by the plugin's table.
+    pub fire_light_params: Vec<(String, String)>,
     /// Film resolution instead of the scene's.
     pub res: Option<(usize, usize)>,
     /// pbrt-v4's `--cropwindow x0 x1 y0 y1` and `--pixelbounds x0 x1 y0 y1`, instead of the film's.
@@ -732,7 +768,14 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
             if let Medium::Plugin { vol, .. } = m {
                 let r = report;
                 report += 1;
-                match vol.create_light(ov.fire_light_weighting.as_deref()) {
+                let mut lp = Vec::new();
+                if let Some(w) = &ov.fire_light_weighting {
+                    lp.push(firemedium_loader::Param::string("weighting", w));
+                }
+                if let Some(plugin) = &b.plugin {
+                    lp.extend(light_params(plugin, &ov.fire_light_params)?);
+                }
+                match vol.create_light_with(&lp) {
                     Ok(light) => {
                         let li = light.info();
                         if let Some(rep) = b.media_reports.get_mut(r) {
