@@ -27,11 +27,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Voxels per side of the pdf's cells unless a host asks otherwise.
-pub const DEFAULT_CELL: usize = 1;
+pub const DEFAULT_CELL: usize = 8;
 
 /// The line estimate's steps across the fire's longest side (its step `linestep` 0: the longest side over this,
 /// or the volume's own step if that is longer).
-pub const LINE_STEPS: f64 = 64.0;
+pub const LINE_STEPS: f64 = 32.0;
 
 /// How the light estimates the fire's emission along a sampled direction (next-event estimation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,8 +53,12 @@ impl Default for LineEstimate {
     }
 }
 
-/// One brick's part of the light's build: its (W, lm) sums and its emitting voxels' (index, weight).
-type BrickWeights = ((f64, f64), Vec<(usize, f32)>);
+/// One brick's part of the light's build: its (W, lm, mean extinction) and its emitting voxels' (index, weight).
+type BrickWeights = ((f64, f64, f64), Vec<(usize, f32)>);
+
+/// The share of a voxel's weight the `escaping` weighting keeps however deep it lies (the pdf's support stays
+/// the emission's: a voxel the coarse estimate calls opaque is still sampled, rarely).
+const ESCAPE_FLOOR: f64 = 0.05;
 
 /// How voxels are weighted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +67,9 @@ pub enum Weighting {
     Luminance,
     /// ∫ j dλ over the bins.
     Power,
+    /// ∫ j dλ times the share of it that leaves the fire: the mean over the six axis directions of e^{−τ} to
+    /// the grid's edge, τ from the bricks' mean extinction (a coarse estimate), floored at [`ESCAPE_FLOOR`].
+    Escaping,
 }
 
 /// A sampled point of the fire.
@@ -155,7 +162,7 @@ impl FireLight {
                 "light",
                 "linestep",
                 line.step_voxels.to_string(),
-                "a step ≥ 0 voxels (0: the fire's longest side over 64)",
+                "a step ≥ 0 voxels (0: the fire's longest side over 32)",
             ));
         }
         if !(0.0..=1.0).contains(&line.correction) {
@@ -284,14 +291,17 @@ impl FireLight {
                              ss: &mut [f64],
                              j: &mut [f64],
                              out: &mut Vec<(usize, f32)>|
-         -> (f64, f64) {
-            let (mut pw, mut plm) = (0.0, 0.0);
+         -> (f64, f64, f64) {
+            let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             for k in span[2].0..span[2].1 {
                 for jy in span[1].0..span[1].1 {
                     for i in span[0].0..span[0].1 {
                         let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
                         vol.coefficients(p, sa, ss, j);
+                        if weighting == Weighting::Escaping {
+                            ext += (0..c).map(|q| (sa[q] + ss[q]) * widths[q]).sum::<f64>();
+                        }
                         let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
                         let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
                         if !(lum > 0.0 || band > 0.0) {
@@ -301,7 +311,7 @@ impl FireLight {
                             topo.index(i, jy, k),
                             match weighting {
                                 Weighting::Luminance => lum,
-                                Weighting::Power => band,
+                                Weighting::Power | Weighting::Escaping => band,
                             } as f32,
                         ));
                         plm += lum;
@@ -329,7 +339,8 @@ impl FireLight {
                     }
                 }
             }
-            (pw, plm)
+            let n = span.iter().map(|s| s.1 - s.0).product::<usize>().max(1) as f64;
+            (pw, plm, ext / (n * widths.iter().sum::<f64>()))
         };
         let workers = crate::par::threads(16).min(bricks.len().max(1));
         let chunk = bricks.len().div_ceil(workers).max(1);
@@ -358,9 +369,11 @@ impl FireLight {
                     .collect()
             })
         };
-        for ((bpw, bplm), out) in parts.into_iter().flatten() {
+        let mut extinction = Vec::with_capacity(bricks.len());
+        for ((bpw, bplm, ext), out) in parts.into_iter().flatten() {
             pw += bpw;
             plm += bplm;
+            extinction.push(ext);
             for (idx, v) in out {
                 w[idx] = v;
             }
@@ -370,6 +383,19 @@ impl FireLight {
         // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
         if ds.interpolation() == crate::grid::Interpolation::Trilinear {
             w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
+        }
+        if weighting == Weighting::Escaping {
+            let escape =
+                escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
+                    .ok_or_else(too_many)?;
+            for (b, f) in bricks.iter().zip(escape) {
+                let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+                let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+                let keep = (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32;
+                w[slot * 512..(slot + 1) * 512]
+                    .iter_mut()
+                    .for_each(|v| *v *= keep);
+            }
         }
         let emitting = w.iter().filter(|&&v| v > 0.0).count();
         // The cells' weights: the voxels' summed per cell (in f64), brick by brick.
@@ -433,7 +459,7 @@ impl FireLight {
                 ember_w[i] =
                     area * match weighting {
                         Weighting::Luminance => lum,
-                        Weighting::Power => band,
+                        Weighting::Power | Weighting::Escaping => band,
                     } / vv;
                 total += ember_w[i];
                 ember_cdf[i] = total;
@@ -696,11 +722,21 @@ impl FireLight {
             p1,
         ];
         let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
+        // A whole cell's density is its weight times this; cells cut by the grid's edges hold theirs over less.
+        let c = self.cell as f64;
+        let whole = 1.0 / (self.total * c * c * c * self.voxel.x * self.voxel.y * self.voxel.z);
+        let inside = |q: [usize; 3]| {
+            (0..3).all(|a| q[a] * self.cell >= off[a] && (q[a] + 1) * self.cell <= dims_v[a])
+        };
         let cells = |t0: f64, t1: f64, sum: &mut f64| {
             for seg in walk(shifted, dims_v, self.cell, o, dn, t0, t1) {
                 let w = self.cell_weight(seg.cell);
                 if w > 0.0 {
-                    let d = self.cell_density(w, self.cell_box(seg.cell).1);
+                    let d = if inside(seg.cell) {
+                        w * whole
+                    } else {
+                        self.cell_density(w, self.cell_box(seg.cell).1)
+                    };
                     *sum += d * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
                 }
             }
@@ -722,6 +758,54 @@ impl FireLight {
         }
         sum
     }
+}
+
+/// Per brick of `bricks` (whose mean extinctions, m⁻¹, are `ext`), the mean over the six axis directions of
+/// e^{−τ} from its centre to the grid's edge, τ summed over the bricks on the way (half its own); bricks not
+/// listed hold nothing. `size`: a brick's extent per axis. `None` when the bricks' box (4 bytes each) is larger
+/// than `budget` or the allocator refuses it.
+fn escape_fractions(
+    topo: &crate::grid::Topology,
+    bricks: &[[usize; 3]],
+    ext: &[f64],
+    size: DVec3,
+    budget: u64,
+) -> Option<Vec<f64>> {
+    let nb = topo.bricks();
+    let n = nb[0].checked_mul(nb[1])?.checked_mul(nb[2])?;
+    if (n as u64).saturating_mul(8) > budget {
+        return None;
+    }
+    let at = |b: [usize; 3]| b[0] + nb[0] * (b[1] + nb[1] * b[2]);
+    let mut sigma = crate::alloc::filled(n, 0f32)?;
+    for (b, &e) in bricks.iter().zip(ext) {
+        sigma[at(*b)] = e as f32;
+    }
+    // Per axis, the optical depth from each brick's far face to the edge, both ways, by running sums along
+    // each line of bricks; e^{−τ} of both directions accumulated per brick.
+    let mut sum = crate::alloc::filled(n, 0f32)?;
+    for a in 0..3 {
+        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+        for i in 0..nb[u] {
+            for j in 0..nb[v] {
+                let line = |k: usize| {
+                    let mut b = [0; 3];
+                    (b[a], b[u], b[v]) = (k, i, j);
+                    at(b)
+                };
+                for forward in [true, false] {
+                    let mut beyond = 0.0f64;
+                    for step in 0..nb[a] {
+                        let k = if forward { nb[a] - 1 - step } else { step };
+                        let s = sigma[line(k)] as f64 * size[a];
+                        sum[line(k)] += (-(beyond + 0.5 * s)).exp() as f32;
+                        beyond += s;
+                    }
+                }
+            }
+        }
+    }
+    Some(bricks.iter().map(|b| sum[at(*b)] as f64 / 6.0).collect())
 }
 
 /// `max(w, f · max of the 26 neighbours)` per voxel of `bricks` (a separable 3×3×3 max filter over the
@@ -896,6 +980,78 @@ mod tests {
             assert_eq!(total, n);
             assert!(checked > 1000 / (cell * cell * cell), "{checked}");
         }
+    }
+
+    #[test]
+    fn the_parameter_table_states_the_lights_defaults() {
+        let default = |name: &str| {
+            crate::volume::params::LIGHT
+                .params
+                .iter()
+                .find(|p| p.name == name)
+                .map(|p| p.default)
+        };
+        assert_eq!(default("cell"), Some(DEFAULT_CELL.to_string().as_str()));
+        let line = LineEstimate::default();
+        assert_eq!(
+            default("linestep"),
+            Some(line.step_voxels.to_string().as_str())
+        );
+        assert_eq!(
+            default("linecorrection"),
+            Some(line.correction.to_string().as_str())
+        );
+    }
+
+    #[test]
+    fn the_escape_fraction_is_e_to_the_minus_tau_along_the_axes() {
+        // A row of four bricks along x (1 m each) with extinctions 0, 1, 2, 0 m⁻¹, one brick thick in y and z:
+        // brick 1 sees τ = 0.5 toward −x (its own half), 0.5 + 2 toward +x, 0.5 up, down and sideways.
+        let topo = crate::grid::Topology::build_offset([32, 8, 8], [0; 3], |_| true).unwrap();
+        let bricks = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]];
+        let f =
+            escape_fractions(&topo, &bricks, &[0.0, 1.0, 2.0, 0.0], DVec3::ONE, 1 << 20).unwrap();
+        let e = |t: f64| (-t).exp();
+        let want = [
+            (1.0 * 5.0 + e(3.0)) / 6.0,
+            (e(0.5) * 5.0 + e(2.5)) / 6.0,
+            (e(1.0) * 4.0 + e(2.0) + e(1.0)) / 6.0,
+            (5.0 + e(3.0)) / 6.0,
+        ];
+        for k in 0..4 {
+            assert!(
+                (f[k] - want[k]).abs() < 1e-6,
+                "brick {k}: {} vs {}",
+                f[k],
+                want[k]
+            );
+        }
+        // A box of bricks larger than the budget is refused, not allocated.
+        assert!(escape_fractions(&topo, &bricks, &[0.0; 4], DVec3::ONE, 16).is_none());
+    }
+
+    #[test]
+    fn escaping_weights_favour_the_voxels_whose_light_leaves() {
+        // A thick soot ball (κ ≈ 2.6 m⁻¹, τ ≈ 1.3 per brick of ½ m): the escaping weights, over the power weights, are lower at the
+        // centre than near the rim (bricks of 8³ voxels: the rim brick is an outer one on two axes); in a thin ball they are the power weights to within the escape (e^{−τ} ≈ 1).
+        let ratio = |fv: f64, v: [usize; 3]| {
+            let vol = sphere_fire(32, 0.9, fv, 1500.0, vec![]);
+            let p = FireLight::with_cell(vol.clone(), Weighting::Power, 1).unwrap();
+            let e = FireLight::with_cell(vol, Weighting::Escaping, 1).unwrap();
+            let off = p.topo.offset();
+            let q = [0, 1, 2].map(|a| v[a] + off[a]);
+            (
+                e.cell_weight(q) / p.cell_weight(q),
+                e.power_w() / p.power_w(),
+            )
+        };
+        let (centre, same_power) = ratio(3e-7, [16, 16, 16]);
+        let (rim, _) = ratio(3e-7, [6, 6, 16]);
+        assert_eq!(same_power, 1.0, "the light's power is what it emits");
+        assert!(centre < 0.75 * rim, "centre {centre}, rim {rim}");
+        assert!(centre >= ESCAPE_FLOOR * 0.999, "{centre}");
+        let (thin, _) = ratio(1e-10, [16, 16, 16]);
+        assert!((thin - 1.0).abs() < 1e-3, "{thin}");
     }
 
     #[test]

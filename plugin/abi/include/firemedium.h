@@ -104,6 +104,7 @@ typedef void FmLight;
 
 #define FM_WEIGHTING_LUMINANCE 0u
 #define FM_WEIGHTING_POWER 1u
+#define FM_WEIGHTING_ESCAPING 2u /* ABI 0.8: power times the share that leaves the fire */
 
 typedef struct FmLightInfo {
     double power_w;  /* whole spectrum, W */

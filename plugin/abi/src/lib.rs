@@ -204,6 +204,8 @@ pub type FmLight = c_void;
 pub const FM_WEIGHTING_LUMINANCE: u32 = 0;
 /// Voxel weights by their emitted power over the bins.
 pub const FM_WEIGHTING_POWER: u32 = 1;
+/// `FmLightInfo::weighting`: voxels weighted by the power that leaves the fire (ABI 0.8).
+pub const FM_WEIGHTING_ESCAPING: u32 = 2;
 
 /// What a fire light is.
 #[repr(C)]

@@ -40,6 +40,7 @@ pub(super) unsafe extern "C" fn light_create(
         r.check_names().map_err(fail)?;
         let weighting = match r.string("weighting").map_err(fail)?.as_str() {
             "luminance" => Weighting::Luminance,
+            "escaping" => Weighting::Escaping,
             _ => Weighting::Power,
         };
         let cell = r.int("cell").map_err(fail)?;
@@ -82,10 +83,10 @@ pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightI
             voxels: lt.voxels() as u64,
             bytes: lt.bytes() as u64,
             build_seconds: lt.build_seconds(),
-            weighting: if lt.weighting() == Weighting::Power {
-                FM_WEIGHTING_POWER
-            } else {
-                FM_WEIGHTING_LUMINANCE
+            weighting: match lt.weighting() {
+                Weighting::Power => FM_WEIGHTING_POWER,
+                Weighting::Luminance => FM_WEIGHTING_LUMINANCE,
+                Weighting::Escaping => FM_WEIGHTING_ESCAPING,
             },
             reserved: 0,
         };
@@ -114,6 +115,7 @@ pub(super) unsafe fn in_f64<'a>(
     let len = n
         .checked_mul(k)
         .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    super::span::<f64>(len, what)?;
     // SAFETY: caller provides n × k doubles (contract).
     let v = unsafe { std::slice::from_raw_parts(p, len) };
     // Every number is checked: a NaN would propagate into a sample or a pdf the host then trusts.
@@ -143,6 +145,7 @@ pub(super) unsafe fn out_f64<'a>(
     let len = n
         .checked_mul(k)
         .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
+    super::span::<f64>(len, what)?;
     // SAFETY: caller provides n × k writable doubles (contract).
     Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
 }
@@ -296,18 +299,19 @@ pub(super) unsafe extern "C" fn light_integrate_at(
             .ok_or_else(|| bad("light_integrate: radiance is null"))?;
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
-        let (mut lv, mut tv) = (vec![0.0; c], vec![0.0; c]);
-        for (i, r) in rs.iter().enumerate() {
-            lt.integrate_at(&ray_of(r), ts[i], &mut lv, &mut tv);
-            for k in 0..c {
-                l_out[i * c + k] = lv[k] as f32;
-            }
-            if let Some(to) = t_out.as_deref_mut() {
+        super::with_channels(c, |lv, tv| {
+            for (i, r) in rs.iter().enumerate() {
+                lt.integrate_at(&ray_of(r), ts[i], lv, tv);
                 for k in 0..c {
-                    to[i * c + k] = tv[k] as f32;
+                    l_out[i * c + k] = lv[k] as f32;
+                }
+                if let Some(to) = t_out.as_deref_mut() {
+                    for k in 0..c {
+                        to[i * c + k] = tv[k] as f32;
+                    }
                 }
             }
-        }
+        });
         Ok(())
     })
 }

@@ -89,6 +89,32 @@ fn bad(msg: impl Into<String>) -> (FmStatus, String) {
     (FM_INVALID_ARGUMENT, msg.into())
 }
 
+/// Calls `f` with two per-ray buffers of `c` channels: on the stack up to 64 channels (hosts call with one ray
+/// at a time: no allocation per call), else on the heap.
+fn with_channels<R>(c: usize, f: impl FnOnce(&mut [f64], &mut [f64]) -> R) -> R {
+    const STACK: usize = 64;
+    if c <= STACK {
+        let mut a = [0f64; 2 * STACK];
+        let (l, t) = a.split_at_mut(STACK);
+        f(&mut l[..c], &mut t[..c])
+    } else {
+        let mut v = vec![0f64; 2 * c];
+        let (l, t) = v.split_at_mut(c);
+        f(l, t)
+    }
+}
+
+/// Whether `n` elements of `T` fit what one allocation may span (isize::MAX bytes): a larger count is a host's
+/// bug, refused before a slice is made of it.
+fn span<T>(n: usize, what: &str) -> Result<(), (FmStatus, String)> {
+    if n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(bad(format!(
+            "{what}: {n} elements: more than memory can hold"
+        )));
+    }
+    Ok(())
+}
+
 unsafe extern "C" fn last_error(buf: *mut c_char, cap: usize) -> usize {
     LAST_ERROR.with(|e| {
         let e = e.borrow();

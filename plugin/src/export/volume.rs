@@ -78,6 +78,7 @@ pub(super) unsafe fn out_f32<'a>(
     let len = n
         .checked_mul(c)
         .ok_or_else(|| bad(format!("{n} rays × {c} channels overflow")))?;
+    super::span::<f32>(len, "outputs")?;
     // SAFETY: caller provides n × c floats (contract).
     Ok(Some(unsafe { std::slice::from_raw_parts_mut(p, len) }))
 }
@@ -94,6 +95,7 @@ pub(super) unsafe fn rays<'a>(
     if rays.is_null() {
         return Err(bad(format!("{n} rays at a null pointer")));
     }
+    super::span::<FmRay>(n, "rays")?;
     // SAFETY: n rays (contract).
     let rs = unsafe { std::slice::from_raw_parts(rays, n) };
     // Origins and directions finite, tmin and tmax not NaN (tmax may be +∞; tmin ≥ tmax is an empty segment):
@@ -183,20 +185,43 @@ pub(super) unsafe extern "C" fn volume_channel_xyz(
     })
 }
 
-/// `n` ray times at `p` (null: every ray at time 0, the grids' own).
+/// A call's ray times: the caller's (checked finite), or every ray at time 0 (the grids' own). Indexed per ray,
+/// without a copy (hosts call with one ray at a time).
+pub(super) struct Times<'a>(Option<&'a [f64]>);
+
+impl std::ops::Index<usize> for Times<'_> {
+    type Output = f64;
+    fn index(&self, i: usize) -> &f64 {
+        match self.0 {
+            Some(t) => &t[i],
+            None => &0.0,
+        }
+    }
+}
+
+/// `n` ray times at `p` (null: every ray at time 0).
 ///
 /// # Safety
 /// `p` is null or points to `n` doubles.
-pub(super) unsafe fn times(
+pub(super) unsafe fn times<'a>(
     p: *const f64,
     n: usize,
     what: &str,
-) -> Result<Vec<f64>, (FmStatus, String)> {
-    if p.is_null() {
-        return Ok(vec![0.0; n]);
+) -> Result<Times<'a>, (FmStatus, String)> {
+    if p.is_null() || n == 0 {
+        return Ok(Times(None));
     }
-    // SAFETY: `p` is non-null and holds `n` doubles (caller contract); each one is checked finite.
-    Ok(unsafe { in_f64(p, n, 1, &format!("{what}: times")) }?.to_vec())
+    super::span::<f64>(n, what)?;
+    // SAFETY: `p` is non-null and holds `n` doubles (caller contract).
+    let t = unsafe { std::slice::from_raw_parts(p, n) };
+    // Every time is checked (the message is made only for a bad one).
+    if let Some(i) = t.iter().position(|x| !x.is_finite()) {
+        return Err(bad(format!(
+            "{what}: times[{i}] = {}: expected finite numbers ({n} rows of 1)",
+            t[i]
+        )));
+    }
+    Ok(Times(Some(t)))
 }
 
 pub(super) unsafe extern "C" fn volume_integrate(
@@ -249,32 +274,33 @@ pub(super) unsafe extern "C" fn volume_integrate_at(
             // SAFETY: `exits` is non-null here and holds `n` entries (caller contract).
             Some(unsafe { std::slice::from_raw_parts_mut(exits, n) })
         };
-        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
-        for (i, r) in rs.iter().enumerate() {
-            let ray = ray_of(r);
-            // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
-            let (p_exit, d_exit, t_exit) = if e_out.is_some() {
-                v.integrate_exit_at(&ray, ts[i], &mut l, &mut t)
-            } else {
-                let te = v.integrate_at(&ray, ts[i], &mut l, &mut t);
-                (ray.o + ray.d * te, ray.d, te)
-            };
-            for k in 0..c {
-                l_out[i * c + k] = l[k] as f32;
-            }
-            if let Some(to) = t_out.as_deref_mut() {
+        super::with_channels(c, |l, t| {
+            for (i, r) in rs.iter().enumerate() {
+                let ray = ray_of(r);
+                // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
+                let (p_exit, d_exit, t_exit) = if e_out.is_some() {
+                    v.integrate_exit_at(&ray, ts[i], l, t)
+                } else {
+                    let te = v.integrate_at(&ray, ts[i], l, t);
+                    (ray.o + ray.d * te, ray.d, te)
+                };
                 for k in 0..c {
-                    to[i * c + k] = t[k] as f32;
+                    l_out[i * c + k] = l[k] as f32;
+                }
+                if let Some(to) = t_out.as_deref_mut() {
+                    for k in 0..c {
+                        to[i * c + k] = t[k] as f32;
+                    }
+                }
+                if let Some(eo) = e_out.as_deref_mut() {
+                    eo[i] = FmExit {
+                        point: p_exit.to_array(),
+                        direction: d_exit.to_array(),
+                        t: t_exit,
+                    };
                 }
             }
-            if let Some(eo) = e_out.as_deref_mut() {
-                eo[i] = FmExit {
-                    point: p_exit.to_array(),
-                    direction: d_exit.to_array(),
-                    t: t_exit,
-                };
-            }
-        }
+        });
         Ok(())
     })
 }
@@ -307,13 +333,14 @@ pub(super) unsafe extern "C" fn volume_transmittance_at(
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let out = unsafe { out_f32(transmittance, n, c) }?
             .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
-        let mut t = vec![0.0; c];
-        for (i, r) in rs.iter().enumerate() {
-            v.transmittance_at(&ray_of(r), ts[i], &mut t);
-            for k in 0..c {
-                out[i * c + k] = t[k] as f32;
+        super::with_channels(c, |_, t| {
+            for (i, r) in rs.iter().enumerate() {
+                v.transmittance_at(&ray_of(r), ts[i], t);
+                for k in 0..c {
+                    out[i * c + k] = t[k] as f32;
+                }
             }
-        }
+        });
         Ok(())
     })
 }

@@ -41,10 +41,11 @@ pub struct RenderArgs {
     /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
     #[arg(long)]
     plugin: Option<PathBuf>,
-    /// How emitting media light the scene: a fire light sampling voxels by emitted `power` (default) or
-    /// `luminance`; `off` leaves the fire's emission to paths that pass through it.
-    #[arg(long = "fire-light", value_name = "power|luminance|off", default_value = "power",
-          value_parser = ["power", "luminance", "off"])]
+    /// How emitting media light the scene: a fire light sampling voxels by emitted `power` (default),
+    /// `luminance`, or `escaping` (power times the share that leaves the fire); `off` leaves the fire's emission
+    /// to paths that pass through it.
+    #[arg(long = "fire-light", value_name = "power|luminance|escaping|off", default_value = "power",
+          value_parser = ["power", "luminance", "escaping", "off"])]
     fire_light: String,
     /// A parameter of the fire light, NAME=VALUE (repeatable; docs/params.md, `light`): e.g. `cell=8` (the
     /// pdf's cells, voxels per side), `linestep=2` (the march step along a light sample's direction, voxels),

@@ -1,6 +1,7 @@
 //! `firemedium bench …`: the measurements behind docs/RESULTS.md, as commands anyone can rerun.
 
 pub mod error;
+pub mod fire_light;
 pub mod perf;
 pub mod stability;
 pub mod user_path;
@@ -27,6 +28,38 @@ enum What {
     /// What the plugin builds for the same fire with and without species, refraction and the fire light:
     /// bytes and set-up time per component (unused parts cost nothing).
     Components(ComponentsArgs),
+    /// The fire light's estimators against each other and against leaving it off, on the surfaces of a fire-lit
+    /// room, with the campfire at several resolutions: error against time (CSV + log–log plot per resolution),
+    /// error × time, and a light sample's cost beside a camera path.
+    FireLight(FireLightArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct FireLightArgs {
+    /// The campfire's resolutions (voxels along its longest side), generated once into the temp directory.
+    #[arg(long, value_delimiter = ',', default_value = "64,128,256",
+          value_parser = clap::value_parser!(u32).range(16..=1024))]
+    resolutions: Vec<u32>,
+    /// Image width and height.
+    #[arg(long, default_value = "160x120", value_parser = crate::args::parse_resolution)]
+    image: (usize, usize),
+    /// The light's samples-per-pixel ladder (the light off renders 4× each).
+    #[arg(long, value_delimiter = ',', default_value = "4,16,64",
+          value_parser = clap::value_parser!(u32).range(1..=65536))]
+    spp: Vec<u32>,
+    /// Samples per pixel of each resolution's reference (the fire light as before issue 29).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1048576))]
+    reference_spp: u32,
+    /// The estimators (comma-separated keys): off, voxel, brick, coarse, corrected, luminance, escaping.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "off,voxel,brick,coarse,corrected,luminance,escaping"
+    )]
+    estimators: Vec<String>,
+    /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R.
+    #[arg(short, long, default_value = "fire-light")]
+    output: std::path::PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -106,6 +139,7 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
         What::Perf(p) => perf_report(p).map_err(|e| (1, e)),
         What::ErrorVsTime(e) => error_report(e).map_err(|m| (1, m)),
         What::Components(c) => components_report(c).map_err(|m| (1, m)),
+        What::FireLight(f) => fire_light_report(f).map_err(|m| (1, m)),
         What::Stability => {
             let start = std::time::Instant::now();
             let cases = stability::cases();
@@ -449,6 +483,67 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
             &about,
             "the fire lighting surfaces: error vs time",
         )?;
+    }
+    Ok(out)
+}
+
+fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
+    let chosen: Vec<&fire_light::Estimator> = a
+        .estimators
+        .iter()
+        .map(|k| {
+            fire_light::ESTIMATORS
+                .iter()
+                .find(|e| e.key == k)
+                .ok_or_else(|| {
+                    let keys: Vec<&str> = fire_light::ESTIMATORS.iter().map(|e| e.key).collect();
+                    format!(
+                        "--estimators: no estimator {k:?} (there are {})",
+                        keys.join(", ")
+                    )
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let spp: Vec<usize> = a.spp.iter().map(|&n| n as usize).collect();
+    let dir = std::env::temp_dir();
+    let mut out = String::from(
+        "| fire | estimator | rel. RMSE² × s | light off / it | relMSE × s | light off / it | a light sample, in camera paths |\n|---|---|---|---|---|---|---|\n",
+    );
+    for &r in &a.resolutions {
+        let r = r as usize;
+        let dataset = perf::dataset(&dir, r)?;
+        let scene = dir.join(format!(
+            "firemedium-bench-room-{r}-{}.pbrt",
+            std::process::id()
+        ));
+        std::fs::write(&scene, fire_light::room_scene(&dataset))
+            .map_err(|e| format!("{}: {e}", scene.display()))?;
+        let result = fire_light::ladder(
+            &scene,
+            r,
+            a.image,
+            &spp,
+            a.reference_spp as usize,
+            &chosen,
+            &|line| eprintln!("{line}"),
+        );
+        let _ = std::fs::remove_file(&scene);
+        let (runs, about) = result?;
+        let title = format!("the fire-lit room, campfire at {r}³: surface error vs time");
+        let prefix = fire_light::output(&a.output, r, "");
+        write_ladder(&prefix, "", &fire_light::points(&runs), &about, &title)?;
+        for l in fire_light::summary(&runs) {
+            out += &format!(
+                "| {r}³ | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {} |\n",
+                l.estimator,
+                l.rmse2_s,
+                l.gain_rmse2,
+                l.relmse_s,
+                l.gain_relmse,
+                l.sample_cost
+                    .map_or_else(|| "—".to_string(), |c| format!("{c:.2}"))
+            );
+        }
     }
     Ok(out)
 }

@@ -1,0 +1,277 @@
+//! `firemedium bench fire-light`: the fire light's estimators against each other and against leaving it off,
+//! on the surfaces of a fire-lit room, at several resolutions of the same fire (issue 29): per resolution,
+//! surface error against render time at a ladder of samples per pixel (CSV and a log–log plot), and a table of
+//! error × time and of what a light sample costs beside a camera path.
+
+use super::error::Point;
+use firemedium::metrics::errors;
+use firemedium::render::{self, scene as sc, surface_mask};
+use std::path::{Path, PathBuf};
+
+/// One estimator: its name and how the renderer is told (`None`: the fire light off).
+pub struct Estimator {
+    /// Short name (`--estimators`).
+    pub key: &'static str,
+    pub name: &'static str,
+    pub light: Option<(&'static str, &'static [(&'static str, &'static str)])>,
+}
+
+/// The estimators measured: the light before issue 29 (voxel pdf, the volume's march along each sampled
+/// direction), each change alone, the weightings, and the light off (pbrt-v4's strategy: emission found only by
+/// paths that pass through the fire).
+pub const ESTIMATORS: &[Estimator] = &[
+    Estimator {
+        key: "off",
+        name: "off",
+        light: None,
+    },
+    Estimator {
+        key: "voxel",
+        name: "voxel pdf, full march",
+        light: Some(("power", &[("cell", "1"), ("linestep", "1e-9")])),
+    },
+    Estimator {
+        key: "brick",
+        name: "brick pdf, full march",
+        light: Some(("power", &[("cell", "8"), ("linestep", "1e-9")])),
+    },
+    Estimator {
+        key: "coarse",
+        name: "brick pdf, coarse march",
+        light: Some(("power", &[("cell", "8"), ("linestep", "0")])),
+    },
+    Estimator {
+        key: "corrected",
+        name: "brick pdf, coarse march + correction 0.25",
+        light: Some((
+            "power",
+            &[("cell", "8"), ("linestep", "0"), ("linecorrection", "0.25")],
+        )),
+    },
+    Estimator {
+        key: "luminance",
+        name: "luminance, brick pdf, coarse march",
+        light: Some(("luminance", &[("cell", "8"), ("linestep", "0")])),
+    },
+    Estimator {
+        key: "escaping",
+        name: "escaping, brick pdf, coarse march",
+        light: Some(("escaping", &[("cell", "8"), ("linestep", "0")])),
+    },
+];
+
+/// The room: the fire (its box [−0.6, 0.6]² × [0, 1.6] m) on a floor before a back wall, with three diffuse
+/// spheres; `volpath` to depth 5; the fire is the only light.
+pub fn room_scene(dataset: &Path) -> String {
+    let box_mesh = "\"point3 P\" [ -0.6 -0.6 0.002 0.6 -0.6 0.002 -0.6 0.6 0.002 0.6 0.6 0.002 -0.6 -0.6 1.6 0.6 -0.6 1.6 -0.6 0.6 1.6 0.6 0.6 1.6 ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]";
+    format!(
+        r#"# issue 29's fire-lit room (written by `firemedium bench fire-light`)
+LookAt 0 -4.6 1.5   0 0 0.7   0 0 1
+Camera "perspective" "float fov" 48
+Film "rgb" "integer xresolution" 320 "integer yresolution" 240 "string filename" "room.exr"
+Sampler "independent" "integer pixelsamples" 16
+Integrator "volpath" "integer maxdepth" 5
+WorldBegin
+MakeNamedMedium "fire" "string type" "fire"
+  "string dataset" "{}"
+  "string fuel" "propane"
+  "float stepsize" 1
+AttributeBegin
+  MediumInterface "fire" ""
+  Material "interface"
+  Shape "trianglemesh" {box_mesh}
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.45 0.42 0.38 ]
+  Shape "trianglemesh" "point3 P" [ -5 -6 0  5 -6 0  5 2.5 0  -5 2.5 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+  Shape "trianglemesh" "point3 P" [ -5 2.5 0  5 2.5 0  5 2.5 4  -5 2.5 4 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.6 0.6 0.6 ]
+  Translate -1.7 -0.5 0.5
+  Shape "sphere" "float radius" 0.5
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.15 0.25 0.6 ]
+  Translate 1.6 -0.8 0.35
+  Shape "sphere" "float radius" 0.35
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [ 0.6 0.3 0.2 ]
+  Translate 0.5 1.5 0.4
+  Shape "sphere" "float radius" 0.4
+AttributeEnd
+"#,
+        dataset.display()
+    )
+}
+
+/// One render of the ladder.
+#[derive(Debug, Clone)]
+pub struct Run {
+    pub estimator: &'static str,
+    pub spp: usize,
+    pub seconds: f64,
+    pub rel_mse: f64,
+    pub rel_rmse: f64,
+    pub camera_rays: usize,
+    pub light_samples: u64,
+}
+
+/// Renders `scene` with every estimator at its ladder (the light on: `spp`; off: 4× each, the same
+/// budget in camera paths as the light's light samples cost at most) against a reference of `ref_spp` with
+/// the light before issue 29 (unbiased against the volume's march); returns the runs and a line about the
+/// reference.
+pub fn ladder(
+    scene: &Path,
+    resolution: usize,
+    res: (usize, usize),
+    spp: &[usize],
+    ref_spp: usize,
+    estimators: &[&Estimator],
+    log: &dyn Fn(&str),
+) -> Result<(Vec<Run>, String), String> {
+    let load = |spp: usize, e: &Estimator| {
+        sc::load(
+            scene,
+            &sc::Overrides {
+                spp: Some(spp),
+                no_fire_light: e.light.is_none(),
+                fire_light_weighting: e.light.map(|l| l.0.to_string()),
+                fire_light_params: e
+                    .light
+                    .map(|l| {
+                        l.1.iter()
+                            .map(|(n, v)| (n.to_string(), v.to_string()))
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+                res: Some(res),
+                ..Default::default()
+            },
+        )
+    };
+    let luminance = |img: &render::Image| img.xyz.iter().map(|v| v.y).collect::<Vec<f64>>();
+    let reference_scene = load(ref_spp, &ESTIMATORS[1])?;
+    let mut rng = firemedium_core::rng::Rng::new(0);
+    let mask = surface_mask(&reference_scene, &mut rng);
+    let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
+    drop(reference_scene);
+    let masked = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .zip(&mask)
+            .filter(|(_, m)| **m)
+            .map(|(x, _)| *x)
+            .collect()
+    };
+    let reference = masked(&luminance(&reference));
+    let about = format!(
+        "{resolution}³: reference {ref_spp} spp ({}), {}×{} pixels ({} see a surface), {:.1} s",
+        ESTIMATORS[1].name,
+        res.0,
+        res.1,
+        reference.len(),
+        st.seconds
+    );
+    log(&about);
+    let mut runs = Vec::new();
+    for e in estimators {
+        // One load per estimator (the fire and its light built once), its samples per pixel set per rung.
+        let mut s = load(1, e)?;
+        for &n in spp {
+            let n = if e.light.is_none() { 4 * n } else { n };
+            s.spp = n;
+            let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
+            let (rel_rmse, rel_mse) = errors(&masked(&luminance(&img)), &reference);
+            let run = Run {
+                estimator: e.name,
+                spp: n,
+                seconds: st.seconds,
+                rel_mse,
+                rel_rmse,
+                camera_rays: st.camera_rays,
+                light_samples: st.fire_light_samples,
+            };
+            log(&format!(
+                "{resolution}³ {}: {n} spp, {:.3} s, relMSE {:.4e}",
+                e.name, run.seconds, run.rel_mse
+            ));
+            runs.push(run);
+        }
+    }
+    Ok((runs, about))
+}
+
+/// The plot's points of one resolution.
+pub fn points(runs: &[Run]) -> Vec<Point> {
+    runs.iter()
+        .map(|r| Point {
+            estimator: r.estimator.to_string(),
+            setting: format!("{} spp", r.spp),
+            seconds: r.seconds,
+            rel_rmse: r.rel_rmse,
+            rel_mse: r.rel_mse,
+            evaluations: None,
+        })
+        .collect()
+}
+
+/// One estimator's line of the summary.
+#[derive(Debug, Clone)]
+pub struct Summary {
+    pub estimator: String,
+    /// rel. RMSE² × seconds and relMSE × seconds at its largest rung (lower is better).
+    pub rmse2_s: f64,
+    pub relmse_s: f64,
+    /// The light off's over it.
+    pub gain_rmse2: f64,
+    pub gain_relmse: f64,
+    /// What a light sample costs in camera paths without one: the time a render spends beyond the light off's
+    /// at the same samples per pixel, per light sample, over the light off's time per camera ray.
+    pub sample_cost: Option<f64>,
+}
+
+/// Per estimator of one resolution, its [`Summary`].
+pub fn summary(runs: &[Run]) -> Vec<Summary> {
+    let last = |name: &str| runs.iter().filter(|r| r.estimator == name).last();
+    let Some(off) = last("off") else {
+        return Vec::new();
+    };
+    let path_cost = off.seconds / off.camera_rays.max(1) as f64;
+    let mut names: Vec<&str> = Vec::new();
+    for r in runs {
+        if !names.contains(&r.estimator) {
+            names.push(r.estimator);
+        }
+    }
+    names
+        .into_iter()
+        .filter_map(|name| {
+            let r = last(name)?;
+            // The light off at the same samples per pixel (its ladder is 4× the light's: a rung below).
+            let same = runs.iter().find(|o| o.estimator == "off" && o.spp == r.spp);
+            let sample_cost = same
+                .filter(|_| r.light_samples > 0)
+                .map(|o| (r.seconds - o.seconds).max(0.0) / r.light_samples as f64 / path_cost);
+            let (rmse2_s, relmse_s) = (r.rel_rmse * r.rel_rmse * r.seconds, r.rel_mse * r.seconds);
+            Some(Summary {
+                estimator: name.to_string(),
+                rmse2_s,
+                relmse_s,
+                gain_rmse2: off.rel_rmse * off.rel_rmse * off.seconds / rmse2_s,
+                gain_relmse: off.rel_mse * off.seconds / relmse_s,
+                sample_cost,
+            })
+        })
+        .collect()
+}
+
+/// Where the bench writes: PREFIX-R.csv/svg/png per resolution.
+pub fn output(prefix: &Path, resolution: usize, ext: &str) -> PathBuf {
+    let mut p = prefix.as_os_str().to_owned();
+    p.push(format!("-{resolution}{ext}"));
+    PathBuf::from(p)
+}
