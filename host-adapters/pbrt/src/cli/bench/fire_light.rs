@@ -27,7 +27,7 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "voxel",
-        name: "voxel pdf, full march",
+        name: "voxel pdf, full march (before)",
         light: Some(("power", &[("cell", "1"), ("linestep", "1e-9")])),
     },
     Estimator {
@@ -37,7 +37,7 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "coarse",
-        name: "brick pdf, coarse march",
+        name: "brick pdf, coarse march (default)",
         light: Some(("power", &[("cell", "8"), ("linestep", "0")])),
     },
     Estimator {
@@ -236,7 +236,7 @@ pub struct Summary {
 
 /// Per estimator of one resolution, its [`Summary`].
 pub fn summary(runs: &[Run]) -> Vec<Summary> {
-    let last = |name: &str| runs.iter().filter(|r| r.estimator == name).last();
+    let last = |name: &str| runs.iter().rfind(|r| r.estimator == name);
     let Some(off) = last("off") else {
         return Vec::new();
     };
