@@ -529,43 +529,66 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
         inline_grid(6, 3e-7, 1700.0),
         floor
     );
-        std::fs::write(dir.join("l.pbrt"), &scene).unwrap();
-        let path = dir.join("l.pbrt");
-        let (_, _, with) = read_exr(&render(&path, &["--stats"]));
         std::fs::write(dir.join("o.pbrt"), &scene).unwrap();
         let (_, _, without) = read_exr(&render(
             &dir.join("o.pbrt"),
             &["--fire-light", "off", "--spp", "384"],
         ));
-        let (a, b) = (mean_y(&with), mean_y(&without));
-        // Noise of the mean without the light: from the pixel-to-pixel spread of (without − with), which is
-        // dominated by the light-less render's noise.
-        let n = with.len() as f64;
-        let d: Vec<f64> = with
-            .iter()
-            .zip(&without)
-            .map(|(p, q)| luminance(*q) - luminance(*p))
-            .collect();
-        let md = d.iter().sum::<f64>() / n;
-        let sd = (d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
-        eprintln!(
-            "fire light ({name}): mean Y {a:.6e} with, {b:.6e} without ({:+.3e}, σ {:.2e})",
+        // The light's estimators (issue 29): the default (brick cells, a coarse line march), the voxel pdf with
+        // the volume's own march, the escaping weighting, and the coarse march corrected half the time.
+        for (how, extra) in [
+            ("default", vec![]),
+            (
+                "voxel pdf, full march",
+                vec![
+                    "--fire-light-param",
+                    "cell=1",
+                    "--fire-light-param",
+                    "linestep=1e-9",
+                ],
+            ),
+            ("escaping", vec!["--fire-light", "escaping"]),
+            (
+                "corrected",
+                vec!["--fire-light-param", "linecorrection=0.5"],
+            ),
+        ] {
+            std::fs::write(dir.join("l.pbrt"), &scene).unwrap();
+            let path = dir.join("l.pbrt");
+            let mut args = vec!["--stats"];
+            args.extend(&extra);
+            let (_, _, with) = read_exr(&render(&path, &args));
+            let (a, b) = (mean_y(&with), mean_y(&without));
+            // Noise of the mean without the light: from the pixel-to-pixel spread of (without − with), which is
+            // dominated by the light-less render's noise.
+            let n = with.len() as f64;
+            let d: Vec<f64> = with
+                .iter()
+                .zip(&without)
+                .map(|(p, q)| luminance(*q) - luminance(*p))
+                .collect();
+            let md = d.iter().sum::<f64>() / n;
+            let sd =
+                (d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / n.sqrt();
+            eprintln!(
+            "fire light ({name}, {how}): mean Y {a:.6e} with, {b:.6e} without ({:+.3e}, σ {:.2e})",
             b / a - 1.0,
             sd / a
         );
-        assert!(
-            a > 0.0 && with.iter().all(|p| luminance(*p) > 0.0),
-            "the floor is lit everywhere"
-        );
-        assert!(
-            (b - a).abs() < 4.0 * sd + 1e-3 * a,
-            "with {a}, without {b}, σ {sd}"
-        );
-        assert!(
-            sd / a < 0.02,
-            "the comparison should be sharp (σ {:.3})",
-            sd / a
-        );
+            assert!(
+                a > 0.0 && with.iter().all(|p| luminance(*p) > 0.0),
+                "the floor is lit everywhere"
+            );
+            assert!(
+                (b - a).abs() < 4.0 * sd + 1e-3 * a,
+                "with {a}, without {b}, σ {sd}"
+            );
+            assert!(
+                sd / a < 0.02,
+                "the comparison should be sharp (σ {:.3})",
+                sd / a
+            );
+        }
     }
 }
 
@@ -1904,4 +1927,73 @@ fn the_readmes_quick_commands_run_as_written() {
     ] {
         assert!(dir.join(f).is_file(), "{f} was not written");
     }
+}
+
+#[test]
+fn the_fire_lights_parameters_are_checked_and_its_samples_counted() {
+    // `--fire-light-param NAME=VALUE` reaches the plugin typed by its table; a wrong name, type or value is named;
+    // `--stats` counts the light's samples, and the EXR records how the fire lit the scene.
+    let dir = tmp("light-params");
+    let scene = format!(
+        "LookAt 3 -3 4  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 12\nSampler \"independent\" \"integer pixelsamples\" 4\nIntegrator \"volpath\" \"integer maxdepth\" 2\nWorldBegin\nAttributeBegin\nTranslate 0 0 1.2\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.7\nAttributeEnd\nMaterial \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
+        inline_grid(16, 3e-7, 1700.0)
+    );
+    std::fs::write(dir.join("s.pbrt"), &scene).unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", "s.pbrt", "-o", "s.exr"];
+        args.extend(extra);
+        let o = firemedium_in(&dir, &args);
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    for (extra, want) in [
+        (
+            vec!["--fire-light-param", "nosuch=1"],
+            vec!["no parameter \"nosuch\"", "cell", "linestep"],
+        ),
+        (
+            vec!["--fire-light-param", "cell=two"],
+            vec!["cell=two", "not an integer"],
+        ),
+        (
+            vec!["--fire-light-param", "cell=3"],
+            vec!["cell", "1, 2, 4 or 8"],
+        ),
+        (
+            vec!["--fire-light-param", "linecorrection=2"],
+            vec!["linecorrection", "2"],
+        ),
+        (
+            vec!["--fire-light-param", "cell"],
+            vec!["expected NAME=VALUE"],
+        ),
+    ] {
+        let (ok, _, err) = run(&extra);
+        assert!(!ok, "{extra:?} should fail");
+        for w in want {
+            assert!(err.contains(w), "{extra:?}: {err}");
+        }
+    }
+    let (ok, out, err) = run(&["--stats", "--fire-light-param", "cell=2"]);
+    assert!(ok, "{err}");
+    let line = out
+        .lines()
+        .find(|l| l.contains("samples,") && l.contains("per camera ray"))
+        .unwrap_or_else(|| panic!("no light sample count in {out}"));
+    let n: u64 = line
+        .split_whitespace()
+        .nth(2)
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    // 16 × 12 pixels × 4 samples, each path sampling the light at its diffuse vertices (up to 2).
+    assert!(n > 100 && n <= 2 * 16 * 12 * 4, "{line}");
+    let (_, meta) = firemedium::imageio::read_meta(&dir.join("s.exr")).unwrap();
+    let light = meta
+        .iter()
+        .find(|m| m.0 == "fire_light")
+        .map(|m| m.1.clone());
+    assert_eq!(light.as_deref(), Some("power cell=2"));
 }

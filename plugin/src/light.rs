@@ -31,7 +31,7 @@ pub const DEFAULT_CELL: usize = 8;
 
 /// The line estimate's steps across the fire's longest side (its step `linestep` 0: the longest side over this,
 /// or the volume's own step if that is longer).
-pub const LINE_STEPS: f64 = 32.0;
+pub const LINE_STEPS: f64 = 64.0;
 
 /// How the light estimates the fire's emission along a sampled direction (next-event estimation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -162,7 +162,7 @@ impl FireLight {
                 "light",
                 "linestep",
                 line.step_voxels.to_string(),
-                "a step ≥ 0 voxels (0: the fire's longest side over 32)",
+                "a step ≥ 0 voxels (0: the fire's longest side over 64)",
             ));
         }
         if !(0.0..=1.0).contains(&line.correction) {

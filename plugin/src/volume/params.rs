@@ -151,7 +151,7 @@ pub static LIGHT: Component = Component {
         "0",
         "voxels",
         Range::Between(0.0, 1e6),
-        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 32 steps. Never shorter than the volume's own step (then it is the volume's march).",
+        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 64 steps. Never shorter than the volume's own step (then it is the volume's march).",
     ),
     p(
         "linecorrection",

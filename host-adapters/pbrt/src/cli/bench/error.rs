@@ -233,12 +233,20 @@ pub fn winner(points: &[Point]) -> Option<usize> {
 }
 
 pub fn csv(points: &[Point]) -> String {
+    // (A text field holding a comma or a quote is quoted, its quotes doubled: RFC 4180.)
+    let field = |t: &str| {
+        if t.contains([',', '"', '\n']) {
+            format!("\"{}\"", t.replace('"', "\"\""))
+        } else {
+            t.to_string()
+        }
+    };
     let mut s = String::from("estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations\n");
     for p in points {
         s += &format!(
             "{},{},{:.6},{:.6e},{:.6e},{}\n",
-            p.estimator,
-            p.setting,
+            field(&p.estimator),
+            field(&p.setting),
             p.seconds,
             p.rel_rmse,
             p.rel_mse,
@@ -248,13 +256,15 @@ pub fn csv(points: &[Point]) -> String {
     s
 }
 
-const COLOURS: [(u8, u8, u8); 6] = [
+const COLOURS: [(u8, u8, u8); 8] = [
     (214, 39, 40),
     (255, 127, 14),
     (31, 119, 180),
     (44, 160, 44),
     (148, 103, 189),
     (23, 190, 207),
+    (140, 86, 75),
+    (127, 127, 127),
 ];
 
 /// The plot's geometry: log-log axes over the points' range, in a `w`×`h` canvas.

@@ -16,9 +16,11 @@ pub struct Estimator {
     pub light: Option<(&'static str, &'static [(&'static str, &'static str)])>,
 }
 
-/// The estimators measured: the light before issue 29 (voxel pdf, the volume's march along each sampled
-/// direction), each change alone, the weightings, and the light off (pbrt-v4's strategy: emission found only by
-/// paths that pass through the fire).
+/// The estimators measured: the light before issue 29 (`voxel, full`: a pdf over voxels, the volume's own march
+/// along each sampled direction), each change alone (`brick`: cells of 8³ voxels; `coarse`: the line's march at
+/// 64 steps across the fire; `corrected`: toward the volume's march with probability 0.25), the weightings
+/// (power unless named: luminance, escaping), and the light off (pbrt-v4's strategy: emission found only by paths
+/// that pass through the fire).
 pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "off",
@@ -27,22 +29,22 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "voxel",
-        name: "voxel pdf, full march (before)",
+        name: "voxel, full (before)",
         light: Some(("power", &[("cell", "1"), ("linestep", "1e-9")])),
     },
     Estimator {
         key: "brick",
-        name: "brick pdf, full march",
+        name: "brick, full",
         light: Some(("power", &[("cell", "8"), ("linestep", "1e-9")])),
     },
     Estimator {
         key: "coarse",
-        name: "brick pdf, coarse march (default)",
+        name: "brick, coarse (default)",
         light: Some(("power", &[("cell", "8"), ("linestep", "0")])),
     },
     Estimator {
         key: "corrected",
-        name: "brick pdf, coarse march + correction 0.25",
+        name: "brick, coarse, corrected",
         light: Some((
             "power",
             &[("cell", "8"), ("linestep", "0"), ("linecorrection", "0.25")],
@@ -50,12 +52,12 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "luminance",
-        name: "luminance, brick pdf, coarse march",
+        name: "lum., brick, coarse",
         light: Some(("luminance", &[("cell", "8"), ("linestep", "0")])),
     },
     Estimator {
         key: "escaping",
-        name: "escaping, brick pdf, coarse march",
+        name: "escaping, brick, coarse",
         light: Some(("escaping", &[("cell", "8"), ("linestep", "0")])),
     },
 ];
@@ -127,7 +129,7 @@ pub struct Run {
 /// reference.
 pub fn ladder(
     scene: &Path,
-    resolution: usize,
+    label: &str,
     res: (usize, usize),
     spp: &[usize],
     ref_spp: usize,
@@ -169,7 +171,7 @@ pub fn ladder(
     };
     let reference = masked(&luminance(&reference));
     let about = format!(
-        "{resolution}³: reference {ref_spp} spp ({}), {}×{} pixels ({} see a surface), {:.1} s",
+        "{label}: reference {ref_spp} spp ({}), {}×{} pixels ({} see a surface), {:.1} s",
         ESTIMATORS[1].name,
         res.0,
         res.1,
@@ -196,7 +198,7 @@ pub fn ladder(
                 light_samples: st.fire_light_samples,
             };
             log(&format!(
-                "{resolution}³ {}: {n} spp, {:.3} s, relMSE {:.4e}",
+                "{label} {}: {n} spp, {:.3} s, relMSE {:.4e}",
                 e.name, run.seconds, run.rel_mse
             ));
             runs.push(run);
@@ -269,9 +271,9 @@ pub fn summary(runs: &[Run]) -> Vec<Summary> {
         .collect()
 }
 
-/// Where the bench writes: PREFIX-R.csv/svg/png per resolution.
-pub fn output(prefix: &Path, resolution: usize, ext: &str) -> PathBuf {
+/// Where the bench writes: PREFIX-LABEL.csv/svg/png per case.
+pub fn output(prefix: &Path, label: &str, ext: &str) -> PathBuf {
     let mut p = prefix.as_os_str().to_owned();
-    p.push(format!("-{resolution}{ext}"));
+    p.push(format!("-{label}{ext}"));
     PathBuf::from(p)
 }

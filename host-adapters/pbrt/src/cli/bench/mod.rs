@@ -57,9 +57,13 @@ pub struct FireLightArgs {
         default_value = "off,voxel,brick,coarse,corrected,luminance,escaping"
     )]
     estimators: Vec<String>,
-    /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R.
+    /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R (PREFIX-NAME.* for a scene).
     #[arg(short, long, default_value = "fire-light")]
     output: std::path::PathBuf,
+    /// A scene lit by a fire to measure instead of the generated room (e.g. scenes/mantaflow/scene.pbrt); the
+    /// resolutions are then not used.
+    #[arg(long)]
+    scene: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -509,32 +513,63 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
     let mut out = String::from(
         "| fire | estimator | rel. RMSE² × s | light off / it | relMSE × s | light off / it | a light sample, in camera paths |\n|---|---|---|---|---|---|---|\n",
     );
-    for &r in &a.resolutions {
-        let r = r as usize;
-        let dataset = perf::dataset(&dir, r)?;
-        let scene = dir.join(format!(
-            "firemedium-bench-room-{r}-{}.pbrt",
-            std::process::id()
-        ));
-        std::fs::write(&scene, fire_light::room_scene(&dataset))
-            .map_err(|e| format!("{}: {e}", scene.display()))?;
+    // (label, scene, title, whether the bench wrote the scene)
+    let mut cases = Vec::new();
+    match &a.scene {
+        Some(s) => {
+            // Its folder and file name (scenes/mantaflow/scene.pbrt: `mantaflow-scene`).
+            let part = |p: Option<&std::ffi::OsStr>| {
+                p.map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            };
+            let folder = part(s.parent().and_then(|p| p.file_name()));
+            let stem = part(s.file_stem());
+            let name = if folder.is_empty() {
+                stem
+            } else {
+                format!("{folder}-{stem}")
+            };
+            let title = format!("{name}: surface error vs time");
+            cases.push((name, s.clone(), title, false));
+        }
+        None => {
+            for &r in &a.resolutions {
+                let dataset = perf::dataset(&dir, r as usize)?;
+                let scene = dir.join(format!(
+                    "firemedium-bench-room-{r}-{}.pbrt",
+                    std::process::id()
+                ));
+                std::fs::write(&scene, fire_light::room_scene(&dataset))
+                    .map_err(|e| format!("{}: {e}", scene.display()))?;
+                let title = format!("fire-lit room, campfire {r}: error vs time");
+                cases.push((format!("{r}"), scene, title, true));
+            }
+        }
+    }
+    for (label, scene, title, written) in cases {
+        let r = if written {
+            format!("{label}³")
+        } else {
+            label.clone()
+        };
         let result = fire_light::ladder(
             &scene,
-            r,
+            &r,
             a.image,
             &spp,
             a.reference_spp as usize,
             &chosen,
             &|line| eprintln!("{line}"),
         );
-        let _ = std::fs::remove_file(&scene);
+        if written {
+            let _ = std::fs::remove_file(&scene);
+        }
         let (runs, about) = result?;
-        let title = format!("the fire-lit room, campfire at {r}³: surface error vs time");
-        let prefix = fire_light::output(&a.output, r, "");
+        let prefix = fire_light::output(&a.output, &label, "");
         write_ladder(&prefix, "", &fire_light::points(&runs), &about, &title)?;
         for l in fire_light::summary(&runs) {
             out += &format!(
-                "| {r}³ | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {} |\n",
+                "| {r} | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {} |\n",
                 l.estimator,
                 l.rmse2_s,
                 l.gain_rmse2,
@@ -710,6 +745,53 @@ fn components_report(a: &ComponentsArgs) -> Result<String, String> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_csv_quotes_names_holding_commas() {
+        let p = super::error::Point {
+            estimator: "brick pdf, coarse \"march\"".into(),
+            setting: "4 spp".into(),
+            seconds: 1.5,
+            rel_rmse: 0.25,
+            rel_mse: 0.5,
+            evaluations: None,
+        };
+        let text = super::error::csv(&[p]);
+        assert_eq!(
+            text.lines().nth(1),
+            Some("\"brick pdf, coarse \"\"march\"\"\",4 spp,1.500000,2.500000e-1,5.000000e-1,")
+        );
+    }
+
+    #[test]
+    fn the_fire_light_summary_compares_with_the_light_off_at_the_same_samples() {
+        // Off: 16 and 64 spp; the light: 16 spp, 4 s, rel. RMSE 0.5 with 1000 light samples. The light off's
+        // 64-spp rung is the baseline: rel. RMSE² × s 1 × 2 = 2; the light's 0.25 × 4 = 1 (2× better); a camera
+        // path costs 2 s / 1000 rays, a light sample (4 − 1) s / 1000 = 1.5 paths.
+        use super::fire_light::{summary, Run};
+        let run = |estimator, spp, seconds, rel_rmse, light_samples| Run {
+            estimator,
+            spp,
+            seconds,
+            rel_mse: rel_rmse * rel_rmse,
+            rel_rmse,
+            camera_rays: 1000,
+            light_samples,
+        };
+        let s = summary(&[
+            run("off", 16, 1.0, 2.0, 0),
+            run("off", 64, 2.0, 1.0, 0),
+            run("light", 16, 4.0, 0.5, 1000),
+        ]);
+        assert_eq!(s.len(), 2);
+        assert_eq!((s[0].gain_rmse2, s[0].sample_cost), (1.0, None));
+        assert!((s[1].gain_rmse2 - 2.0).abs() < 1e-12, "{:?}", s[1]);
+        assert!(
+            (s[1].sample_cost.unwrap() - 1.5).abs() < 1e-12,
+            "{:?}",
+            s[1]
+        );
+    }
+
     #[test]
     fn unused_components_cost_nothing_and_used_ones_are_counted_once() {
         let file = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
