@@ -317,7 +317,8 @@ fn estimators(points: &[Point]) -> Vec<String> {
 }
 
 /// The log–log plot as SVG.
-pub fn svg(points: &[Point], title: &str) -> String {
+/// `mark`: the point to circle as the equal-time winner, if any.
+pub fn svg(points: &[Point], title: &str, mark: Option<usize>) -> String {
     let (w, h) = (760.0, 480.0);
     let ax = Axes::new(points, w, h);
     let mut s = format!(
@@ -375,7 +376,7 @@ pub fn svg(points: &[Point], title: &str) -> String {
             ly + 4.0
         );
     }
-    if let Some(i) = winner(points) {
+    if let Some(i) = mark {
         let p = &points[i];
         let (x, y) = (ax.px(p.seconds), ax.py(p.rel_rmse));
         s += &format!(
@@ -469,7 +470,7 @@ fn draw_text(img: &mut [u8], w: usize, x: i64, y: i64, text: &str, scale: i64) {
 }
 
 /// The same plot as a PNG: lines, markers, decade grid and the labels in a small bitmap font.
-pub fn png(points: &[Point], title: &str) -> (usize, usize, Vec<u8>) {
+pub fn png(points: &[Point], title: &str, mark: Option<usize>) -> (usize, usize, Vec<u8>) {
     let (w, h) = (760usize, 480usize);
     let ax = Axes::new(points, w as f64, h as f64);
     let mut img = vec![255u8; w * h * 3];
@@ -533,7 +534,7 @@ pub fn png(points: &[Point], title: &str) -> (usize, usize, Vec<u8>) {
         let lx = w as f64 - Axes::RIGHT + 14.0;
         line((lx, ly), (lx + 22.0, ly), c, 3, &mut put);
     }
-    if let Some(i) = winner(points) {
+    if let Some(i) = mark {
         let (x, y) = (ax.px(points[i].seconds), ax.py(points[i].rel_rmse));
         for a in 0..72 {
             let t = a as f64 / 72.0 * std::f64::consts::TAU;

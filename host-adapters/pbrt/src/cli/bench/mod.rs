@@ -466,7 +466,14 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
-    let mut out = write_ladder(&a.output, "", &points, &about, &title)?;
+    let mut out = write_ladder(
+        &a.output,
+        "",
+        &points,
+        &about,
+        &title,
+        error::winner(&points),
+    )?;
     let surface = match a.surface.as_deref() {
         Some("none") => None,
         Some(s) => Some(std::path::PathBuf::from(s)),
@@ -486,6 +493,7 @@ fn error_report(a: &ErrorArgs) -> Result<String, String> {
             &points,
             &about,
             "the fire lighting surfaces: error vs time",
+            error::winner(&points),
         )?;
     }
     Ok(out)
@@ -566,7 +574,15 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
         }
         let (runs, about) = result?;
         let prefix = fire_light::output(&a.output, &label, "");
-        write_ladder(&prefix, "", &fire_light::points(&runs), &about, &title)?;
+        // (No winner circled: the rungs of different estimators do not meet at one time.)
+        write_ladder(
+            &prefix,
+            "",
+            &fire_light::points(&runs),
+            &about,
+            &title,
+            None,
+        )?;
         for l in fire_light::summary(&runs) {
             out += &format!(
                 "| {r} | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {} |\n",
@@ -583,12 +599,15 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
     Ok(out)
 }
 
+/// Writes the ladder's CSV, SVG and PNG; `mark`: the point the plots circle (and the text names) as the equal-time
+/// winner, if any.
 fn write_ladder(
     prefix: &std::path::Path,
     suffix: &str,
     points: &[error::Point],
     about: &str,
     title: &str,
+    mark: Option<usize>,
 ) -> Result<String, String> {
     let with = |ext: &str| {
         let mut p = prefix.as_os_str().to_owned();
@@ -603,8 +622,8 @@ fn write_ladder(
         })
     };
     write(&csv_path, error::csv(points).as_bytes())?;
-    write(&svg_path, error::svg(points, title).as_bytes())?;
-    let (w, h, rgb) = error::png(points, title);
+    write(&svg_path, error::svg(points, title, mark).as_bytes())?;
+    let (w, h, rgb) = error::png(points, title, mark);
     firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
@@ -620,7 +639,7 @@ fn write_ladder(
                 .unwrap_or_else(|| "—".into())
         );
     }
-    if let Some(i) = error::winner(points) {
+    if let Some(i) = mark {
         out += &format!(
             "\nequal-time winner: {} ({}), rel. RMSE {:.3e}\n",
             points[i].estimator, points[i].setting, points[i].rel_rmse
