@@ -1,7 +1,7 @@
 //! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
 
 use super::params::read_params;
-use super::volume::{out_f32, ray_of, rays, times};
+use super::volume::{out_f32, ray_of, rays, store, times};
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
 use crate::volume::FireVolume;
@@ -302,13 +302,9 @@ pub(super) unsafe extern "C" fn light_integrate_at(
         super::with_channels(c, |lv, tv| {
             for (i, r) in rs.iter().enumerate() {
                 lt.integrate_at(&ray_of(r), ts[i], lv, tv);
-                for k in 0..c {
-                    l_out[i * c + k] = lv[k] as f32;
-                }
+                store(l_out, i, lv);
                 if let Some(to) = t_out.as_deref_mut() {
-                    for k in 0..c {
-                        to[i * c + k] = tv[k] as f32;
-                    }
+                    store(to, i, tv);
                 }
             }
         });

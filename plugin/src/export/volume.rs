@@ -185,6 +185,14 @@ pub(super) unsafe extern "C" fn volume_channel_xyz(
     })
 }
 
+/// Ray `i`'s channels `v` into its row of `out` (rows of `v.len()` floats).
+pub(super) fn store(out: &mut [f32], i: usize, v: &[f64]) {
+    let c = v.len();
+    for (o, x) in out[i * c..(i + 1) * c].iter_mut().zip(v) {
+        *o = *x as f32;
+    }
+}
+
 /// A call's ray times: the caller's (checked finite), or every ray at time 0 (the grids' own). Indexed per ray,
 /// without a copy (hosts call with one ray at a time).
 pub(super) struct Times<'a>(Option<&'a [f64]>);
@@ -284,13 +292,9 @@ pub(super) unsafe extern "C" fn volume_integrate_at(
                     let te = v.integrate_at(&ray, ts[i], l, t);
                     (ray.o + ray.d * te, ray.d, te)
                 };
-                for k in 0..c {
-                    l_out[i * c + k] = l[k] as f32;
-                }
+                store(l_out, i, l);
                 if let Some(to) = t_out.as_deref_mut() {
-                    for k in 0..c {
-                        to[i * c + k] = t[k] as f32;
-                    }
+                    store(to, i, t);
                 }
                 if let Some(eo) = e_out.as_deref_mut() {
                     eo[i] = FmExit {
@@ -336,9 +340,7 @@ pub(super) unsafe extern "C" fn volume_transmittance_at(
         super::with_channels(c, |_, t| {
             for (i, r) in rs.iter().enumerate() {
                 v.transmittance_at(&ray_of(r), ts[i], t);
-                for k in 0..c {
-                    out[i * c + k] = t[k] as f32;
-                }
+                store(out, i, t);
             }
         });
         Ok(())

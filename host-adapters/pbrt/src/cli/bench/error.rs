@@ -158,20 +158,11 @@ pub fn surface_ladder(
             },
         )
     };
-    let luminance = |img: &render::Image| img.xyz.iter().map(|v| v.y).collect::<Vec<f64>>();
     let reference_scene = load(ref_spp, true)?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
-    let reference = luminance(&reference);
-    let masked = |v: &[f64]| -> Vec<f64> {
-        v.iter()
-            .zip(&mask)
-            .filter(|(_, m)| **m)
-            .map(|(x, _)| *x)
-            .collect()
-    };
-    let reference_m = masked(&reference);
+    let reference_m = surface_luminance(&reference, &mask);
     // The reference's own error: half its samples against the other half, scaled to the full count.
     let about = format!(
         "reference: fire light on, {ref_spp} spp, {}×{} pixels ({} see a diffuse surface), {:.1} s",
@@ -186,7 +177,7 @@ pub fn surface_ladder(
         while spp <= max_spp {
             let s = load(spp, light)?;
             let (img, st) = render::render(&s, 7 + spp as u64, &|_, _| {});
-            let (rel_rmse, rel_mse) = errors(&masked(&luminance(&img)), &reference_m);
+            let (rel_rmse, rel_mse) = errors(&surface_luminance(&img, &mask), &reference_m);
             points.push(Point {
                 estimator: if light {
                     "fire light on"
@@ -205,6 +196,16 @@ pub fn surface_ladder(
         }
     }
     Ok((points, about))
+}
+
+/// The luminance of the pixels `mask` marks (those that see a surface), in pixel order.
+pub fn surface_luminance(img: &firemedium::render::Image, mask: &[bool]) -> Vec<f64> {
+    img.xyz
+        .iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .map(|(v, _)| v.y)
+        .collect()
 }
 
 /// The equal-time winner: among the points no slower than the paper's setting (march, ½ voxel, spectral), the

@@ -156,20 +156,12 @@ pub fn ladder(
             },
         )
     };
-    let luminance = |img: &render::Image| img.xyz.iter().map(|v| v.y).collect::<Vec<f64>>();
     let reference_scene = load(ref_spp, &ESTIMATORS[1])?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
     drop(reference_scene);
-    let masked = |v: &[f64]| -> Vec<f64> {
-        v.iter()
-            .zip(&mask)
-            .filter(|(_, m)| **m)
-            .map(|(x, _)| *x)
-            .collect()
-    };
-    let reference = masked(&luminance(&reference));
+    let reference = super::error::surface_luminance(&reference, &mask);
     let about = format!(
         "{label}: reference {ref_spp} spp ({}), {}×{} pixels ({} see a surface), {:.1} s",
         ESTIMATORS[1].name,
@@ -187,7 +179,8 @@ pub fn ladder(
             let n = if e.light.is_none() { 4 * n } else { n };
             s.spp = n;
             let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
-            let (rel_rmse, rel_mse) = errors(&masked(&luminance(&img)), &reference);
+            let (rel_rmse, rel_mse) =
+                errors(&super::error::surface_luminance(&img, &mask), &reference);
             let run = Run {
                 estimator: e.name,
                 spp: n,
