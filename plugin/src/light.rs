@@ -691,8 +691,15 @@ impl FireLight {
             // (Its own random number: the march's jitter comes from the ray's seed.)
             let u = crate::rng::Rng::new(ray.seed ^ 0x6c62_272e_07bb_0142).next_f64();
             if u < q {
+                // (On the stack for up to 64 channels: no allocation per corrected sample.)
                 let c = l.len();
-                let mut fine = vec![0.0; 2 * c];
+                let (mut stack, mut heap) = ([0f64; 128], Vec::new());
+                let fine = if 2 * c <= stack.len() {
+                    &mut stack[..2 * c]
+                } else {
+                    heap.resize(2 * c, 0.0);
+                    &mut heap[..]
+                };
                 let (lf, tf) = fine.split_at_mut(c);
                 v.integrate_at(ray, time, lf, tf);
                 for k in 0..c {
