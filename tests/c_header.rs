@@ -33,6 +33,27 @@ fn gcc(args: &[&str]) {
     );
 }
 
+/// Compiles the C host `src` (relative to the repository) against the header into the executable `name`, as a user
+/// would (`-std=c99 -Wall -Wextra -Werror`, linked with libdl and libm).
+fn c_host(name: &str, src: &str) -> PathBuf {
+    let include = root().join("plugin/abi/include");
+    let exe = tmp(name);
+    gcc(&[
+        "-std=c99",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        "-I",
+        include.to_str().unwrap(),
+        root().join(src).to_str().unwrap(),
+        "-o",
+        exe.to_str().unwrap(),
+        "-ldl",
+        "-lm",
+    ]);
+    exe
+}
+
 /// Compiles the C file `src` (relative to the repository) against the header into a shared library named
 /// `name`, with extra compiler flags.
 fn c_plugin(name: &str, src: &str, flags: &[&str]) -> PathBuf {
@@ -73,20 +94,7 @@ fn done(file: &Path) {
 
 #[test]
 fn a_c_host_loads_the_plugin_through_the_header() {
-    let include = root().join("plugin/abi/include");
-    let exe = tmp("smoke");
-    gcc(&[
-        "-std=c99",
-        "-Wall",
-        "-Wextra",
-        "-Werror",
-        "-I",
-        include.to_str().unwrap(),
-        root().join("tests/c/smoke.c").to_str().unwrap(),
-        "-ldl",
-        "-o",
-        exe.to_str().unwrap(),
-    ]);
+    let exe = c_host("smoke", "tests/c/smoke.c");
     let fire = root().join("tests/data/valid/vdb/mantaflow_fire_f060.vdb");
     let out = Command::new(&exe)
         .arg(plugin_path())
@@ -248,20 +256,7 @@ fn a_broken_plugin_is_refused_saying_what_is_wrong() {
 fn every_entry_refuses_bad_arguments_from_c() {
     // A C host calling every entry with null handles and buffers, absurd counts, NaN numbers and unknown type
     // codes: each call fails with a status other than FM_PANIC and a message, and the plugin goes on working.
-    let include = root().join("plugin/abi/include");
-    let exe = tmp("abi_abuse");
-    gcc(&[
-        "-std=c99",
-        "-Wall",
-        "-Werror",
-        "-I",
-        include.to_str().unwrap(),
-        root().join("tests/c/abi_abuse.c").to_str().unwrap(),
-        "-o",
-        exe.to_str().unwrap(),
-        "-ldl",
-        "-lm",
-    ]);
+    let exe = c_host("abi_abuse", "tests/c/abi_abuse.c");
     let out = Command::new(&exe).arg(plugin_path()).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -281,23 +276,7 @@ fn the_c_example_host_renders_the_campfire() {
     // plugin/abi/examples/fire_pixel.c, compiled as a user would (-Wall -Wextra -Werror), run on the default
     // scene's fire: its brightest ray is the loader's, to the digit it prints, and its fire-light estimate is
     // positive and finite.
-    let include = root().join("plugin/abi/include");
-    let exe = tmp("fire_pixel");
-    gcc(&[
-        "-std=c99",
-        "-Wall",
-        "-Wextra",
-        "-Werror",
-        "-I",
-        include.to_str().unwrap(),
-        root()
-            .join("plugin/abi/examples/fire_pixel.c")
-            .to_str()
-            .unwrap(),
-        "-ldl",
-        "-o",
-        exe.to_str().unwrap(),
-    ]);
+    let exe = c_host("fire_pixel", "plugin/abi/examples/fire_pixel.c");
     let fire = root().join("scenes/campfire/campfire.vdb");
     let out = Command::new(&exe)
         .arg(plugin_path())
