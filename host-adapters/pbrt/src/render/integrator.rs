@@ -979,14 +979,20 @@ impl Integrator<'_> {
                     media: prim.media,
                     medium,
                 };
-                // (A direction the BSDF does not reflect: no march along it.)
+                // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
+                // fire-light sample evaluates it once.)
+                let seen = std::cell::Cell::new(None);
                 let dark = |wi: Vec3A| {
-                    let wi_l = to_local(h.ns, wi);
-                    bxdf.f(wo_l, wi_l, Mode::Radiance, seed).is_black()
+                    let f = bxdf.f(wo_l, to_local(h.ns, wi), Mode::Radiance, seed);
+                    seen.set(Some((wi, f)));
+                    f.is_black()
                 };
                 if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &dark) {
                     let wi_l = to_local(h.ns, wi);
-                    let f = bxdf.f(wo_l, wi_l, Mode::Radiance, seed) * wi_l.z.abs();
+                    let f = match seen.get() {
+                        Some((w, f)) if w == wi => f,
+                        _ => bxdf.f(wo_l, wi_l, Mode::Radiance, seed),
+                    } * wi_l.z.abs();
                     if !f.is_black() {
                         let pb = if pl > 0.0 {
                             bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
