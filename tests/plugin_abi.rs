@@ -472,6 +472,14 @@ fn the_fire_lights_line_estimate_through_the_abi() {
     let rel = mean(Some(&coarse)) / mean(None) - 1.0;
     eprintln!("coarse line estimate against the volume's march: {rel:+.3e}");
     assert!(rel.abs() < 0.01, "coarse line estimate off by {rel}");
+    // This thick fire's copy of 2³ blocks strays (its build-time check refuses it): the default line marches
+    // the fire's own voxels, as `lineblock` 1 asks; `lineblock` 2 forces the copy, several per cent off.
+    let own = light_with(&[Param::int("lineblock", 1)]).unwrap();
+    assert_eq!(run(&own), (lc.clone(), tc.clone()));
+    let copy = light_with(&[Param::int("lineblock", 2)]).unwrap();
+    let rel_copy = mean(Some(&copy)) / mean(None) - 1.0;
+    eprintln!("through the copy of 2³ blocks: {rel_copy:+.3e}");
+    assert!(rel_copy < -0.02, "{rel_copy}");
     let corrected = light_with(&[Param::float("linecorrection", 1.0)]).unwrap();
     let (lq, tq) = run(&corrected);
     for k in 0..lq.len() {
@@ -487,8 +495,9 @@ fn the_fire_lights_line_estimate_through_the_abi() {
         ("linecorrection", 1.5, "linecorrection"),
         ("linestep", -1.0, "linestep"),
         ("cell", 3.0, "cell"),
+        ("lineblock", 3.0, "lineblock"),
     ] {
-        let param = if name == "cell" {
+        let param = if name == "cell" || name == "lineblock" {
             Param::int(name, value as i64)
         } else {
             Param::float(name, value)

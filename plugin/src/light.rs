@@ -29,6 +29,13 @@ use std::time::Instant;
 /// Voxels per side of the pdf's cells unless a host asks otherwise.
 pub const DEFAULT_CELL: usize = 8;
 
+/// How far (relative) the radiance of the line through a copy of the fire may stray from the volume's own
+/// march, on the light's rays, for `lineblock` 0 to choose the copy.
+pub const BLOCK_BIAS: f64 = 0.005;
+
+/// Rays on which a copy's line is checked: from around the fire toward points the light samples.
+const BLOCK_RAYS: u64 = 1024;
+
 /// The line estimate's steps across the fire's longest side (its step `linestep` 0: the longest side over this,
 /// or the volume's own step if that is longer).
 pub const LINE_STEPS: f64 = 64.0;
@@ -42,6 +49,10 @@ pub struct LineEstimate {
     /// The probability of the correction: with it, the volume's own march too, and the difference divided by
     /// it added (unbiased against the volume's march); 0: the coarse march alone.
     pub correction: f64,
+    /// The side of the blocks of the fire's copy the coarse line marches through ([`FireVolume::mip`]): 2, 4 or
+    /// 8 voxels; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays
+    /// within [`BLOCK_BIAS`] of the volume's march on the light's own rays (checked when the light is built).
+    pub block: usize,
 }
 
 impl Default for LineEstimate {
@@ -49,6 +60,7 @@ impl Default for LineEstimate {
         LineEstimate {
             step_voxels: 0.0,
             correction: 0.0,
+            block: 0,
         }
     }
 }
@@ -98,6 +110,8 @@ pub struct FireLight {
     /// probability of its correction.
     line_step: f64,
     correction: f64,
+    /// The fire at the line's resolution, when the line is coarse enough and the volume can be copied so.
+    mip: Option<Box<FireVolume>>,
     /// Per cell of those bricks, its weight (the sum of its voxels' dilated weights), brick by brick in the
     /// topology's slots ((8 / cell)³ per slot, slot 0: zeros), a brick's cells in x-fastest order.
     weights: Vec<f32>,
@@ -196,6 +210,39 @@ impl FireLight {
         };
         light.line_step = step.max(v.step_length());
         light.correction = line.correction;
+        if !matches!(line.block, 0 | 1 | 2 | 4 | 8) {
+            return Err(Error::invalid(
+                "light",
+                "lineblock",
+                line.block.to_string(),
+                "0 (chosen), 1 (the fire's voxels), 2, 4 or 8 voxels per side",
+            ));
+        }
+        let start = Instant::now();
+        // Blocks no larger than about the step (the power of two nearest to it, at most a brick's side).
+        let ratio = light.line_step / voxel.min_element();
+        let sizes: &[usize] = match line.block {
+            0 => &[8, 4, 2],
+            1 => &[],
+            f => &[f][..],
+        };
+        let budget = v.spare_bytes().saturating_sub(light.bytes() as u64);
+        for &f in sizes {
+            if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {
+                continue;
+            }
+            let Some(m) = v.mip(f, budget) else { continue };
+            let m = Box::new(m);
+            if line.block == 0 {
+                let bias = light.block_bias(&m);
+                if !(bias.abs() <= BLOCK_BIAS) {
+                    continue;
+                }
+            }
+            light.mip = Some(m);
+            break;
+        }
+        light.build_seconds += start.elapsed().as_secs_f64();
         Ok(light)
     }
 
@@ -482,6 +529,7 @@ impl FireLight {
             cell,
             line_step: 0.0,
             correction: 0.0,
+            mip: None,
             weights: w,
             emitting,
             cdf,
@@ -523,6 +571,13 @@ impl FireLight {
             + self.cdf.len() * 8
             + self.slot_bricks.len() * 12
             + self.topo.bytes()
+            + self.mip.as_ref().map_or(0, |m| m.mip_bytes())
+    }
+    /// The side of the blocks the line estimate marches through, voxels (1: the fire's own).
+    pub fn line_block(&self) -> usize {
+        self.mip.as_ref().map_or(1, |m| {
+            (m.dataset().voxel_size().x / self.vol.dataset().voxel_size().x).round() as usize
+        })
     }
     /// Seconds to build.
     pub fn build_seconds(&self) -> f64 {
@@ -685,7 +740,10 @@ impl FireLight {
         if !(self.line_step > v.step_length()) {
             return v.integrate_at(ray, time, l, t);
         }
-        let te = v.integrate_stepped_at(ray, time, self.line_step, l, t);
+        let te = match &self.mip {
+            Some(m) => m.integrate_stepped_at(ray, time, self.line_step, l, t),
+            None => v.integrate_stepped_at(ray, time, self.line_step, l, t),
+        };
         let q = self.correction;
         if q > 0.0 {
             // (Its own random number: the march's jitter comes from the ray's seed.)
@@ -709,6 +767,54 @@ impl FireLight {
             }
         }
         te
+    }
+
+    /// The relative difference between the line through the copy `m` and the volume's own march, in next-event
+    /// estimation's sum over [`BLOCK_RAYS`] rays from a sphere around the fire toward points this light samples
+    /// (each line over the density of its direction).
+    fn block_bias(&self, m: &FireVolume) -> f64 {
+        let v = &*self.vol;
+        let [p0, p1] = v.bounds();
+        let (centre, radius) = ((p0 + p1) * 0.5, 0.75 * (p1 - p0).length());
+        let mut rng = crate::rng::Rng::new(0x5eed_b10c);
+        let c = v.channels();
+        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+        let (mut coarse, mut fine) = (0.0, 0.0);
+        for k in 0..BLOCK_RAYS {
+            let u = [(); 6].map(|_| rng.next_f64());
+            let x = self.sample_at(u, 0.0).point;
+            // A uniform direction from the centre places the origin on the sphere.
+            let (z, phi) = (
+                2.0 * rng.next_f64() - 1.0,
+                std::f64::consts::TAU * rng.next_f64(),
+            );
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let o = centre + DVec3::new(r * phi.cos(), r * phi.sin(), z) * radius;
+            let ray = crate::volume::Ray {
+                o,
+                d: x - o,
+                t0: 0.0,
+                // (The origin is at least a quarter of the box's diagonal from x and at most 1.25 diagonals from
+                // the box's far side: past it by t = 5.)
+                t1: 8.0,
+                seed: k,
+            };
+            // Each line over the density of its direction: what next-event estimation adds up (whose mean is
+            // the emission over all directions from o, however the light aims).
+            let p = self.pdf_direction_at(o, ray.d, 0.0);
+            if !(p > 0.0) {
+                continue;
+            }
+            m.integrate_stepped_at(&ray, 0.0, self.line_step, &mut l, &mut t);
+            coarse += l.iter().sum::<f64>() / p;
+            v.integrate_at(&ray, 0.0, &mut l, &mut t);
+            fine += l.iter().sum::<f64>() / p;
+        }
+        if fine > 0.0 {
+            coarse / fine - 1.0
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// The voxels' part of [`pdf_direction`](Self::pdf_direction) along the unit direction `dn`: per cell the
@@ -1371,5 +1477,81 @@ mod tests {
             .to_string();
         assert!(e.contains("no emitting voxel"), "{e}");
         assert!(sphere_fire(8, 0.8, 1e-6, 1500.0, vec![]).can_emit());
+    }
+
+    /// A Gaussian ball of soot in a 48³ trilinear grid over [−1, 1]³, thin or thick by `fv`: at 1550 K, or
+    /// (`steep`) from 1000 K at its edge to 1700 K at its centre.
+    pub(crate) fn ball(fv: f64, steep: bool) -> Arc<FireVolume> {
+        let n = 48;
+        let (mut d, mut t) = (Vec::new(), Vec::new());
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let c = |q: usize| -1.0 + (q as f64 + 0.5) * 2.0 / n as f64;
+                    let w = (-(c(i).powi(2) + c(j).powi(2) + c(k).powi(2)) / 0.15).exp();
+                    d.push(fv * w);
+                    t.push(if steep { 1000.0 + 700.0 * w } else { 1550.0 });
+                }
+            }
+        }
+        Arc::new(
+            FireVolume::new(&[
+                Param::floats("density", &d),
+                Param::floats("temperature", &t),
+                Param::int("nx", n as i64),
+                Param::int("ny", n as i64),
+                Param::int("nz", n as i64),
+                Param::point3("p0", [-1.0; 3]),
+                Param::point3("p1", [1.0; 3]),
+            ])
+            .unwrap(),
+        )
+    }
+
+    #[test]
+    fn the_line_marches_a_copy_only_where_it_keeps_to_the_fire() {
+        // `lineblock` 0 with a 2-voxel step: the copy of 2³ blocks is checked against the volume's march on the
+        // light's rays and kept within 0.5 % — on a fire at one temperature, thin or thick; where the temperature
+        // falls 700 K across the ball, a block's one temperature, interpolated between blocks, emits less than
+        // its voxels did (emission is convex in T), so the line marches the fire's own voxels. Asked for, the
+        // copy is used regardless.
+        let line = |block: usize| LineEstimate {
+            step_voxels: 2.0,
+            correction: 0.0,
+            block,
+        };
+        let thin = FireLight::with(ball(1e-9, false), Weighting::Power, 8, line(0)).unwrap();
+        assert_eq!(thin.line_block(), 2);
+        let bias = thin.block_bias(thin.mip.as_deref().unwrap());
+        assert!(bias.abs() <= BLOCK_BIAS, "{bias}");
+        let thick = FireLight::with(ball(1e-7, false), Weighting::Power, 8, line(0)).unwrap();
+        assert_eq!(thick.line_block(), 2);
+        let c = thick.vol.channels();
+        let (mut l, mut tr) = (vec![0.0; c], vec![0.0; c]);
+        let centre = crate::volume::Ray {
+            o: DVec3::new(-2.0, 0.0, 0.0),
+            d: DVec3::X,
+            t0: 0.0,
+            t1: 4.0,
+            seed: 1,
+        };
+        thick.vol.integrate_at(&centre, 0.0, &mut l, &mut tr);
+        assert!(tr[c / 2] < 0.7, "the thick ball lets {} through", tr[c / 2]);
+        let steep = FireLight::with(ball(1e-9, true), Weighting::Power, 8, line(0)).unwrap();
+        assert_eq!(steep.line_block(), 1);
+        let forced = FireLight::with(ball(1e-9, true), Weighting::Power, 8, line(2)).unwrap();
+        assert_eq!(forced.line_block(), 2);
+        let bias = forced.block_bias(forced.mip.as_deref().unwrap());
+        assert!(bias < -BLOCK_BIAS, "the steep fire's copy strays: {bias}");
+        // The light's memory counts the copy.
+        assert!(forced.bytes() > steep.bytes() + forced.mip.as_ref().unwrap().mip_bytes() / 2);
+        // The volume's own voxels when asked, and no block size but 0, 1, 2, 4 and 8.
+        let own = FireLight::with(ball(1e-9, false), Weighting::Power, 8, line(1)).unwrap();
+        assert_eq!(own.line_block(), 1);
+        let e = FireLight::with(ball(1e-9, false), Weighting::Power, 8, line(3))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("lineblock") && e.contains('3'), "{e}");
     }
 }

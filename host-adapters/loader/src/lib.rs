@@ -245,6 +245,14 @@ impl Param {
             at: None,
         }
     }
+    /// A bool.
+    pub fn bool(name: &str, v: bool) -> Param {
+        Param {
+            name: name.into(),
+            value: Value::Bool(vec![v]),
+            at: None,
+        }
+    }
     /// A string.
     pub fn string(name: &str, v: &str) -> Param {
         Param {

@@ -28,9 +28,59 @@ pub fn errors(a: &[f64], r: &[f64]) -> (f64, f64) {
     (if ms > 0.0 { (mse / ms).sqrt() } else { 0.0 }, rel_mse)
 }
 
+/// [`errors`] of `a` against a reference that is the mean of two independent renders `half` (`r` = their
+/// mean), with the reference's own noise taken out: per pixel E[(a − r)²] = MSE(a) + Var(r), and (h₁ − h₂)²/4
+/// estimates Var(r) without bias, so both sums lose it (floored at 0). Against a reference a few times less
+/// noisy than the image, the raw error counts the reference's noise as the image's.
+pub fn errors_debiased(a: &[f64], r: &[f64], half: [&[f64]; 2]) -> (f64, f64) {
+    let n = r.len().max(1) as f64;
+    let mean = r.iter().sum::<f64>() / n;
+    let ms = r.iter().map(|y| y * y).sum::<f64>() / n;
+    let var = |k: usize| (half[0][k] - half[1][k]).powi(2) / 4.0;
+    let mse = (0..r.len())
+        .map(|k| (a[k] - r[k]).powi(2) - var(k))
+        .sum::<f64>()
+        / n;
+    let rel_mse = (0..r.len())
+        .map(|k| ((a[k] - r[k]).powi(2) - var(k)) / (r[k] * r[k] + 0.01 * mean * mean))
+        .sum::<f64>()
+        / n;
+    (
+        if ms > 0.0 {
+            (mse.max(0.0) / ms).sqrt()
+        } else {
+            0.0
+        },
+        rel_mse.max(0.0),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_references_noise_is_taken_out() {
+        // Halves (1, 3.2) and (1.2, 2.8): r = (1.1, 3), Var(r) ≈ ((0.2)², (0.4)²)/4 = (0.01, 0.04). An image
+        // a = (1.3, 3.3): (a − r)² = (0.04, 0.09), less the reference's (0.03, 0.05): mean 0.04; mean r² =
+        // (1.21 + 9)/2 = 5.105. relMSE: ε = 0.01·2.05² = 0.042025.
+        let (h1, h2) = ([1.0, 3.2], [1.2, 2.8]);
+        let (rmse, rel) = errors_debiased(&[1.3, 3.3], &[1.1, 3.0], [&h1, &h2]);
+        assert!((rmse - (0.04f64 / 5.105).sqrt()).abs() < 1e-12, "{rmse}");
+        let eps = 0.01 * 2.05f64.powi(2);
+        let want = (0.03 / (1.21 + eps) + 0.05 / (9.0 + eps)) / 2.0;
+        assert!((rel - want).abs() < 1e-12, "{rel} vs {want}");
+        // An image as close as the reference's own noise: no error left (not negative).
+        assert_eq!(
+            errors_debiased(&[1.1, 3.0], &[1.1, 3.0], [&h1, &h2]),
+            (0.0, 0.0)
+        );
+        // Identical halves (no noise): the raw errors.
+        let same = [1.1, 3.0];
+        let raw = errors(&[1.3, 3.3], &same);
+        let deb = errors_debiased(&[1.3, 3.3], &same, [&same, &same]);
+        assert!((raw.0 - deb.0).abs() < 1e-15 && (raw.1 - deb.1).abs() < 1e-15);
+    }
 
     #[test]
     fn relative_rmse_and_relmse_are_designs() {

@@ -47,6 +47,7 @@ pub(super) unsafe extern "C" fn light_create(
         let line = crate::light::LineEstimate {
             step_voxels: r.float("linestep").map_err(fail)?,
             correction: r.float("linecorrection").map_err(fail)?,
+            block: r.int("lineblock").map_err(fail)?.max(0) as usize,
         };
         r.finish().map_err(fail)?;
         // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.

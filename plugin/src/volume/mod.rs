@@ -40,6 +40,7 @@ mod lattice;
 mod lines;
 mod looks;
 mod march;
+mod mip;
 mod motion;
 pub mod params;
 mod settings;

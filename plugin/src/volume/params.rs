@@ -160,6 +160,14 @@ pub static LIGHT: Component = Component {
         "",
         Range::Between(0.0, 1.0),
         "The probability of correcting a coarse line estimate by the volume's own march (the difference over the probability: unbiased against it); 0: the coarse march alone.",
+    ),
+    p(
+        "lineblock",
+        T::Integer,
+        "0",
+        "voxels",
+        Range::Between(0.0, 8.0),
+        "The blocks of the copy of the fire the coarse line marches through (density their mean, temperature the one that emits their mean: a copy that stays in the caches): 2, 4 or 8 voxels per side; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays within 0.5 % of the volume's march on 1024 of the light's rays (checked when the light is built). Volumes with species, emission or Lescale grids, motion blur, refraction, diffusion, thick lines or embers march their own voxels.",
     )],
 };
 

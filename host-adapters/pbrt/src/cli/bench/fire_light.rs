@@ -4,7 +4,7 @@
 //! error × time and of what a light sample costs beside a camera path.
 
 use super::error::Point;
-use firemedium::metrics::errors;
+use firemedium::metrics::{errors, errors_debiased};
 use firemedium::render::{self, scene as sc, surface_mask};
 use std::path::{Path, PathBuf};
 
@@ -17,10 +17,11 @@ pub struct Estimator {
 }
 
 /// The estimators measured: the light before issue 29 (`voxel, full`: a pdf over voxels, the volume's own march
-/// along each sampled direction), each change alone (`brick`: cells of 8³ voxels; `coarse`: the line's march at
-/// 64 steps across the fire; `corrected`: toward the volume's march with probability 0.25), the weightings
-/// (power unless named: luminance, escaping), and the light off (pbrt-v4's strategy: emission found only by paths
-/// that pass through the fire).
+/// along each sampled direction), each change alone (`brick`: cells of 8³ voxels; `own`: the line's march at
+/// 64 steps across the fire, through its own voxels; `coarse`: the same through the copy of the fire in blocks
+/// that the light's build-time check keeps, the default; `corrected`: toward the volume's march with
+/// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (pbrt-v4's
+/// strategy: emission found only by paths that pass through the fire).
 pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "off",
@@ -38,9 +39,20 @@ pub const ESTIMATORS: &[Estimator] = &[
         light: Some(("power", &[("cell", "8"), ("linestep", "1e-9")])),
     },
     Estimator {
+        key: "own",
+        name: "brick, coarse, own voxels",
+        light: Some((
+            "power",
+            &[("cell", "8"), ("linestep", "0"), ("lineblock", "1")],
+        )),
+    },
+    Estimator {
         key: "coarse",
-        name: "brick, coarse (default)",
-        light: Some(("power", &[("cell", "8"), ("linestep", "0")])),
+        name: "brick, coarse, blocks (default)",
+        light: Some((
+            "power",
+            &[("cell", "8"), ("linestep", "0"), ("lineblock", "0")],
+        )),
     },
     Estimator {
         key: "corrected",
@@ -117,15 +129,19 @@ pub struct Run {
     pub estimator: &'static str,
     pub spp: usize,
     pub seconds: f64,
+    /// Against the reference with its own noise taken out ([`firemedium::metrics::errors_debiased`]).
     pub rel_mse: f64,
     pub rel_rmse: f64,
+    /// Against the reference as it is.
+    pub raw: (f64, f64),
     pub camera_rays: usize,
     pub light_samples: u64,
 }
 
 /// Renders `scene` with every estimator at its ladder (the light on: `spp`; off: 4× each, the same
 /// budget in camera paths as the light's light samples cost at most) against a reference of `ref_spp` with
-/// the light before issue 29 (unbiased against the volume's march); returns the runs and a line about the
+/// the light's pdf over bricks and the volume's own march (unbiased against it), rendered in two independent
+/// halves so that its own noise can be taken out of every error; returns the runs and a line about the
 /// reference.
 pub fn ladder(
     scene: &Path,
@@ -156,19 +172,36 @@ pub fn ladder(
             },
         )
     };
-    let reference_scene = load(ref_spp, &ESTIMATORS[1])?;
+    let by = ESTIMATORS
+        .iter()
+        .find(|e| e.key == "brick")
+        .ok_or("no reference estimator")?;
+    let reference_scene = load(ref_spp.div_ceil(2), by)?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
-    let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
+    let mut seconds = 0.0;
+    let halves = [99, 100].map(|seed| {
+        let (img, st) = render::render(&reference_scene, seed, &|_, _| {});
+        seconds += st.seconds;
+        super::error::surface_luminance(&img, &mask)
+    });
     drop(reference_scene);
-    let reference = super::error::surface_luminance(&reference, &mask);
+    let reference: Vec<f64> = halves[0]
+        .iter()
+        .zip(&halves[1])
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
+    // The reference's own rel. RMSE (its halves' difference over 2 estimates its noise).
+    let own = firemedium::metrics::errors(&halves[0], &halves[1]).0 / 2.0;
     let about = format!(
-        "{label}: reference {ref_spp} spp ({}), {}×{} pixels ({} see a surface), {:.1} s",
-        ESTIMATORS[1].name,
+        "{label}: reference {} spp in two halves ({}; its own noise, rel. RMSE {own:.4}, taken out of every \
+         error), {}×{} pixels ({} see a surface), {:.1} s",
+        2 * ref_spp.div_ceil(2),
+        by.name,
         res.0,
         res.1,
         reference.len(),
-        st.seconds
+        seconds
     );
     log(&about);
     let mut runs = Vec::new();
@@ -179,20 +212,22 @@ pub fn ladder(
             let n = if e.light.is_none() { 4 * n } else { n };
             s.spp = n;
             let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
-            let (rel_rmse, rel_mse) =
-                errors(&super::error::surface_luminance(&img, &mask), &reference);
+            let lum = super::error::surface_luminance(&img, &mask);
+            let (rel_rmse, rel_mse) = errors_debiased(&lum, &reference, [&halves[0], &halves[1]]);
+            let raw = errors(&lum, &reference);
             let run = Run {
                 estimator: e.name,
                 spp: n,
                 seconds: st.seconds,
                 rel_mse,
                 rel_rmse,
+                raw,
                 camera_rays: st.camera_rays,
                 light_samples: st.fire_light_samples,
             };
             log(&format!(
-                "{label} {}: {n} spp, {:.3} s, relMSE {:.4e}",
-                e.name, run.seconds, run.rel_mse
+                "{label} {}: {n} spp, {:.3} s, relMSE {:.4e} (against the reference as it is {:.4e})",
+                e.name, run.seconds, run.rel_mse, run.raw.1
             ));
             runs.push(run);
         }

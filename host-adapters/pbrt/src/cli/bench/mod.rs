@@ -47,14 +47,15 @@ pub struct FireLightArgs {
     #[arg(long, value_delimiter = ',', default_value = "4,16,64",
           value_parser = clap::value_parser!(u32).range(1..=65536))]
     spp: Vec<u32>,
-    /// Samples per pixel of each resolution's reference (the fire light as before issue 29).
+    /// Samples per pixel of each resolution's reference (the fire light's pdf over bricks with the volume's own
+    /// march), rendered in two halves whose difference takes the reference's own noise out of every error.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1048576))]
     reference_spp: u32,
-    /// The estimators (comma-separated keys): off, voxel, brick, coarse, corrected, luminance, escaping.
+    /// The estimators (comma-separated keys): off, voxel, brick, own, coarse, corrected, luminance, escaping.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "off,voxel,brick,coarse,corrected,luminance,escaping"
+        default_value = "off,voxel,brick,own,coarse,corrected,luminance,escaping"
     )]
     estimators: Vec<String>,
     /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R (PREFIX-NAME.* for a scene).
@@ -793,6 +794,7 @@ mod tests {
             seconds,
             rel_mse: rel_rmse * rel_rmse,
             rel_rmse,
+            raw: (rel_rmse, rel_rmse * rel_rmse),
             camera_rays: 1000,
             light_samples,
         };

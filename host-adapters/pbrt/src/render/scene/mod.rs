@@ -358,6 +358,7 @@ fn light_params(plugin: &Plugin, given: &[(String, String)]) -> Result<Vec<LPara
             Ok(match info.ty.as_str() {
                 "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
                 "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
+                "bool" => LParam::bool(name, value.parse().map_err(|_| bad("true or false"))?),
                 _ => LParam::string(name, value),
             })
         })
