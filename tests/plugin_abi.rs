@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 8));
+    assert_eq!(p.version(), (0, 9));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -480,6 +480,9 @@ fn the_fire_lights_line_estimate_through_the_abi() {
     let rel_copy = mean(Some(&copy)) / mean(None) - 1.0;
     eprintln!("through the copy of 2³ blocks: {rel_copy:+.3e}");
     assert!(rel_copy < -0.02, "{rel_copy}");
+    // The light says which (ABI 0.9: `FmLightInfo::line_block`).
+    let blocks = |l: &firemedium_loader::Light| l.info().line_block;
+    assert_eq!((blocks(&coarse), blocks(&own), blocks(&copy)), (1, 1, 2));
     let corrected = light_with(&[Param::float("linecorrection", 1.0)]).unwrap();
     let (lq, tq) = run(&corrected);
     for k in 0..lq.len() {

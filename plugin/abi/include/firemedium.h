@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 8u
+#define FM_ABI_MINOR 9u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -113,7 +113,8 @@ typedef struct FmLightInfo {
     uint64_t bytes;
     double build_seconds;
     uint32_t weighting;
-    uint32_t reserved;
+    uint32_t line_block; /* ABI 0.9: voxels per side of the blocks its line estimate marches through (1: the
+                          * fire's own voxels; "lineblock"); 0 from an older plugin */
 } FmLightInfo;
 
 /*

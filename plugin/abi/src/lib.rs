@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 8;
+pub const ABI_MINOR: u32 = 9;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -223,8 +223,9 @@ pub struct FmLightInfo {
     pub build_seconds: f64,
     /// `FM_WEIGHTING_*`.
     pub weighting: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// ABI 0.9: voxels per side of the blocks the light's line estimate marches through (1: the fire's own
+    /// voxels; the `lineblock` parameter); 0 from an older plugin (the field was reserved).
+    pub line_block: u32,
 }
 
 /// The plugin's function table.

@@ -89,7 +89,7 @@ pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightI
                 Weighting::Luminance => FM_WEIGHTING_LUMINANCE,
                 Weighting::Escaping => FM_WEIGHTING_ESCAPING,
             },
-            reserved: 0,
+            line_block: lt.line_block() as u32,
         };
         // SAFETY: non-null, writable.
         unsafe { *out = info };

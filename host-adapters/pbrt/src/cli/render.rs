@@ -448,9 +448,13 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 m.seconds,
                 m.channels
             );
-            if let Some((voxels, w, lm, bytes, secs)) = m.light {
+            if let Some((voxels, w, lm, bytes, secs, block)) = m.light {
+                let line = match block {
+                    1 => "its voxels".to_string(),
+                    b => format!("blocks of {b}³ voxels"),
+                };
                 out += &format!(
-                    "  fire light: {voxels} emitting voxels, {w:.4e} W, {lm:.4e} lm, {:.1} MB in {secs:.3} s\n",
+                    "  fire light: {voxels} emitting voxels, {w:.4e} W, {lm:.4e} lm, {:.1} MB in {secs:.3} s; its line through {line}\n",
                     bytes as f64 / 1e6
                 );
             }

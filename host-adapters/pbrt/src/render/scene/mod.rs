@@ -272,8 +272,9 @@ pub struct MediumReport {
     pub bytes: u64,
     pub seconds: f64,
     pub channels: u32,
-    /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds).
-    pub light: Option<(u64, f64, f64, u64, f64)>,
+    /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds, the side of the blocks its line
+    /// marches through).
+    pub light: Option<(u64, f64, f64, u64, f64, u32)>,
     /// Why the fire light was left out, when it was.
     pub light_left_out: Option<String>,
 }
@@ -786,6 +787,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                                 li.power_lm,
                                 li.bytes,
                                 li.build_seconds,
+                                li.line_block,
                             ));
                         }
                         b.lights.push(Light::Fire {
