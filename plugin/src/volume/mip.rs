@@ -18,7 +18,7 @@ use crate::grid::{Interpolation, BRICK};
 use crate::majorant::MajorantGrid;
 use glam::DVec3;
 
-/// The most voxels the copy holds (128³): it exists to fit in the caches.
+/// The most voxels the copy holds (128³, 16 bytes each with its lattice): it exists to fit in the caches.
 const MAX_VOXELS: usize = 1 << 21;
 
 impl FireVolume {
@@ -64,7 +64,9 @@ impl FireVolume {
         let dims = self.ds.dims();
         let cd = dims.map(|n| n.div_ceil(f));
         let n = cd[0] * cd[1] * cd[2];
-        let threads = crate::par::threads(16);
+        // (Each worker sums into a copy-sized array of its own, 24 bytes a block: at most four workers, so that
+        // the transient stays a few times the copy.)
+        let threads = crate::par::threads(4);
         // Three f64 sums per block per worker, the two f32 grids, and the lattice (two padded floats per block).
         let need = (n as u64) * (24 * threads as u64 + 8 + 16);
         if n > MAX_VOXELS || need > budget {
