@@ -1481,7 +1481,7 @@ mod tests {
 
     /// A Gaussian ball of soot in a 48³ trilinear grid over [−1, 1]³, thin or thick by `fv`: at 1550 K, or
     /// (`steep`) from 1000 K at its edge to 1700 K at its centre.
-    pub(crate) fn ball(fv: f64, steep: bool) -> Arc<FireVolume> {
+    fn ball(fv: f64, steep: bool) -> Arc<FireVolume> {
         let n = 48;
         let (mut d, mut t) = (Vec::new(), Vec::new());
         for k in 0..n {
