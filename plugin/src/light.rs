@@ -33,6 +33,9 @@ pub const DEFAULT_CELL: usize = 8;
 /// march, on the light's rays, for `lineblock` 0 to choose the copy.
 pub const BLOCK_BIAS: f64 = 0.005;
 
+/// The most bricks whose densities the light keeps in a table over the box (16 MB).
+const DENSE_BRICKS: usize = 1 << 21;
+
 /// Rays on which a copy's line is checked: from around the fire toward points the light samples.
 const BLOCK_RAYS: u64 = 1024;
 
@@ -112,6 +115,10 @@ pub struct FireLight {
     correction: f64,
     /// The fire at the line's resolution, when the line is coarse enough and the volume can be copied so.
     mip: Option<Box<FireVolume>>,
+    /// With cells of a brick, the pdf's density in each brick of the box (the walk's lattice, x fastest; 0
+    /// without weight), so that a direction's density reads one number per brick; empty for smaller cells or
+    /// more than [`DENSE_BRICKS`] bricks (the walk then looks the weights up).
+    brick_density: Vec<f64>,
     /// Per cell of those bricks, its weight (the sum of its voxels' dilated weights), brick by brick in the
     /// topology's slots ((8 / cell)³ per slot, slot 0: zeros), a brick's cells in x-fastest order.
     weights: Vec<f32>,
@@ -210,6 +217,7 @@ impl FireLight {
         };
         light.line_step = step.max(v.step_length());
         light.correction = line.correction;
+        light.brick_density = light.dense_bricks();
         if !matches!(line.block, 0 | 1 | 2 | 4 | 8) {
             return Err(Error::invalid(
                 "light",
@@ -530,6 +538,7 @@ impl FireLight {
             line_step: 0.0,
             correction: 0.0,
             mip: None,
+            brick_density: Vec::new(),
             weights: w,
             emitting,
             cdf,
@@ -572,6 +581,44 @@ impl FireLight {
             + self.slot_bricks.len() * 12
             + self.topo.bytes()
             + self.mip.as_ref().map_or(0, |m| m.mip_bytes())
+            + self.brick_density.len() * 8
+    }
+    /// The table of [`brick_density`](Self::brick_density): each brick holding weight's density, as the walk of
+    /// [`voxel_direction`](Self::voxel_direction) computes it.
+    fn dense_bricks(&self) -> Vec<f64> {
+        let off = self.topo.offset();
+        let counts = [0, 1, 2].map(|a| (self.dims[a] + off[a]).div_ceil(crate::grid::BRICK));
+        let n = counts.iter().try_fold(1usize, |a, &c| a.checked_mul(c));
+        let Some(n) = n.filter(|&n| self.cell == crate::grid::BRICK && n <= DENSE_BRICKS) else {
+            return Vec::new();
+        };
+        let mut table = vec![0.0; n];
+        let density = self.density_of_cells();
+        for &slot in &self.brick_slots {
+            let q = self.slot_bricks[slot as usize].map(|v| v as usize);
+            let w = self.cell_weight(q);
+            if let Some(d) = table.get_mut(q[0] + counts[0] * (q[1] + counts[1] * q[2])) {
+                *d = if w > 0.0 { density(q, w) } else { 0.0 };
+            }
+        }
+        table
+    }
+    /// The pdf's density inside cell `q` (of the lattice shifted by the topology's offset) of weight `w`: a whole
+    /// cell's is its weight times one factor; cells cut by the grid's edges hold theirs over less.
+    fn density_of_cells(&self) -> impl Fn([usize; 3], f64) -> f64 + '_ {
+        let off = self.topo.offset();
+        let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
+        let c = self.cell as f64;
+        let whole = 1.0 / (self.total * c * c * c * self.voxel.x * self.voxel.y * self.voxel.z);
+        move |q, w| {
+            let inside =
+                (0..3).all(|a| q[a] * self.cell >= off[a] && (q[a] + 1) * self.cell <= dims_v[a]);
+            if inside {
+                w * whole
+            } else {
+                self.cell_density(w, self.cell_box(q).1)
+            }
+        }
     }
     /// The side of the blocks the line estimate marches through, voxels (1: the fire's own).
     pub fn line_block(&self) -> usize {
@@ -835,22 +882,22 @@ impl FireLight {
             p1,
         ];
         let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
-        // A whole cell's density is its weight times this; cells cut by the grid's edges hold theirs over less.
-        let c = self.cell as f64;
-        let whole = 1.0 / (self.total * c * c * c * self.voxel.x * self.voxel.y * self.voxel.z);
-        let inside = |q: [usize; 3]| {
-            (0..3).all(|a| q[a] * self.cell >= off[a] && (q[a] + 1) * self.cell <= dims_v[a])
-        };
+        // Cells of a brick with the bricks' table: one number per brick.
+        if !self.brick_density.is_empty() {
+            for seg in walk(shifted, dims_v, self.cell, o, dn, ta, tb) {
+                let d = self.brick_density.get(seg.brick).copied().unwrap_or(0.0);
+                if d > 0.0 {
+                    sum += d * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                }
+            }
+            return sum;
+        }
+        let density = self.density_of_cells();
         let cells = |t0: f64, t1: f64, sum: &mut f64| {
             for seg in walk(shifted, dims_v, self.cell, o, dn, t0, t1) {
                 let w = self.cell_weight(seg.cell);
                 if w > 0.0 {
-                    let d = if inside(seg.cell) {
-                        w * whole
-                    } else {
-                        self.cell_density(w, self.cell_box(seg.cell).1)
-                    };
-                    *sum += d * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
+                    *sum += density(seg.cell, w) * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
                 }
             }
         };
