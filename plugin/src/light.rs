@@ -1430,19 +1430,14 @@ mod tests {
                 }
             }
         }
-        let vol = Arc::new(
-            FireVolume::new(&[
-                Param::floats("density", &dens),
-                Param::floats("temperature", &temp),
-                Param::int("nx", n as i64),
-                Param::int("ny", n as i64),
-                Param::int("nz", n as i64),
-                Param::point3("p0", [-1.0; 3]),
-                Param::point3("p1", [1.0; 3]),
+        let vol = cube_fire(
+            n,
+            &dens,
+            &temp,
+            &[
                 Param::string("fuel", "propane"),
                 Param::float("stepsize", 0.25),
-            ])
-            .unwrap(),
+            ],
         );
         let light = FireLight::new(vol.clone(), Weighting::Luminance).unwrap();
         let xyz = vol.channel_xyz();
@@ -1541,18 +1536,22 @@ mod tests {
                 }
             }
         }
-        Arc::new(
-            FireVolume::new(&[
-                Param::floats("density", &d),
-                Param::floats("temperature", &t),
-                Param::int("nx", n as i64),
-                Param::int("ny", n as i64),
-                Param::int("nz", n as i64),
-                Param::point3("p0", [-1.0; 3]),
-                Param::point3("p1", [1.0; 3]),
-            ])
-            .unwrap(),
-        )
+        cube_fire(n, &d, &t, &[])
+    }
+
+    /// A trilinear fire over [−1, 1]³ from n³ densities and temperatures (x fastest), with `extra` parameters.
+    fn cube_fire(n: usize, d: &[f64], t: &[f64], extra: &[Param]) -> Arc<FireVolume> {
+        let mut list = vec![
+            Param::floats("density", d),
+            Param::floats("temperature", t),
+            Param::int("nx", n as i64),
+            Param::int("ny", n as i64),
+            Param::int("nz", n as i64),
+            Param::point3("p0", [-1.0; 3]),
+            Param::point3("p1", [1.0; 3]),
+        ];
+        list.extend_from_slice(extra);
+        Arc::new(FireVolume::new(&list).unwrap())
     }
 
     #[test]
