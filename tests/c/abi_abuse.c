@@ -105,6 +105,8 @@ int main(int argc, char **argv) {
         expect_failure("light_integrate_at(NaN ray)", api->light_integrate_at(light, &nan_ray, NULL, 1, f, f));
         expect_failure("light_integrate_at(NaN time)", api->light_integrate_at(light, &nan_ray, nan_time, 1, f, NULL));
         expect_failure("light_integrate_at(absurd n)", api->light_integrate_at(light, &nan_ray, NULL, SIZE_MAX, f, NULL));
+        expect_failure("light_line_channels(null light)", api->light_line_channels(NULL, (uint32_t *)x));
+        expect_failure("light_line_channels(null out)", api->light_line_channels(light, NULL));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);

@@ -264,7 +264,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 28] = [
+const ENTRIES: [&str; 29] = [
     "last_error",
     "param_count",
     "param_info",
@@ -293,6 +293,7 @@ const ENTRIES: [&str; 28] = [
     "light_pdf_at",
     "light_pdf_direction_at",
     "light_integrate_at",
+    "light_line_channels",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

@@ -198,6 +198,18 @@ impl Light {
     }
 }
 
+impl Light {
+    /// How many of the volume's channels the light's line estimate marches (ABI 0.10): its channel count, or
+    /// fewer (`linechannels`).
+    pub fn line_channels(&self) -> Result<u32, Error> {
+        let mut out = 0u32;
+        // SAFETY: a live handle; `out` is one writable u32.
+        let s = unsafe { (self.inner.api().light_line_channels)(self.handle, &mut out) };
+        self.inner.check(s)?;
+        Ok(out)
+    }
+}
+
 /// The times' pointer for `n` entries (null for none), checked long enough.
 fn times_ptr(times: Option<&[f64]>, n: usize, what: &str) -> Result<*const f64, Error> {
     match times {

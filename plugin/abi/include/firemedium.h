@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 9u
+#define FM_ABI_MINOR 10u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -227,6 +227,10 @@ typedef struct FmApi {
      * volume_integrate_at without exits. */
     FmStatus (*light_integrate_at)(const FmLight *light, const FmRay *rays, const double *times, size_t n,
                                    float *radiance, float *transmittance);
+    /* ABI 0.10: how many of the volume's channels the light's line estimate marches, into *out (required): the
+     * volume's channel count, or fewer ("linechannels": a soot fire's spectral bins, the others following from
+     * them). */
+    FmStatus (*light_line_channels)(const FmLight *light, uint32_t *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

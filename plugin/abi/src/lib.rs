@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 9;
+pub const ABI_MINOR: u32 = 10;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -437,6 +437,10 @@ pub struct FmApi {
         radiance: *mut f32,
         transmittance: *mut f32,
     ) -> FmStatus,
+    /// ABI 0.10: how many of the volume's channels the light's line estimate marches, into `*out` (required):
+    /// the volume's channel count, or fewer (`linechannels`: a soot fire's spectral bins, the others following
+    /// from them).
+    pub light_line_channels: unsafe extern "C" fn(light: *const FmLight, out: *mut u32) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -472,7 +476,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
-        // three `_at` entries, 0.8 `light_integrate_at`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 28 * 8);
+        // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 29 * 8);
     }
 }

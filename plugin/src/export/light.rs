@@ -48,6 +48,7 @@ pub(super) unsafe extern "C" fn light_create(
             step_voxels: r.float("linestep").map_err(fail)?,
             correction: r.float("linecorrection").map_err(fail)?,
             block: r.int("lineblock").map_err(fail)?.max(0) as usize,
+            channels: r.int("linechannels").map_err(fail)?.max(0) as usize,
         };
         r.finish().map_err(fail)?;
         // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
@@ -309,6 +310,19 @@ pub(super) unsafe extern "C" fn light_integrate_at(
                 }
             }
         });
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn light_line_channels(l: *const FmLight, out: *mut u32) -> FmStatus {
+    guard(|| {
+        // SAFETY: `l` is null (refused) or a live handle from light_create (caller contract).
+        let lt = unsafe { light(l, "light_line_channels") }?;
+        if out.is_null() {
+            return Err(bad("light_line_channels: out is null"));
+        }
+        // SAFETY: non-null, writable (caller contract).
+        unsafe { *out = lt.line_channels() as u32 };
         Ok(())
     })
 }

@@ -220,6 +220,7 @@ static API: FmApi = FmApi {
     light_pdf_at,
     light_pdf_direction_at,
     light_integrate_at,
+    light_line_channels,
 };
 
 /// The plugin's entry point: the static function table.

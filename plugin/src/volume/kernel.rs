@@ -327,12 +327,22 @@ const BATCH: usize = 24;
 /// A step's optical depth below which the thin step (no exponential) is taken.
 const THIN: f32 = 0.1;
 
-/// The straight march of `ray` through `v` in `CV` lanes of `V` channels (at most 4 lanes holding all the
-/// volume's channels; else, or for a volume without a lattice, `None`). `S`: the volume has species (their rows
+/// The channels a march computes: the emission table's columns and σ per unit density — the volume's own
+/// (`LaneTables`), or a few of them (the fire light's line in fewer channels, [`super::subset`]).
+#[derive(Clone, Copy)]
+pub(super) struct Tabs<'a> {
+    pub(super) j: &'a TTable,
+    pub(super) sigma: &'a [Lane],
+}
+
+/// The straight march of `ray` through `v` in `CV` lanes of `V` channels (at most 4 lanes holding the `l.len()`
+/// channels of `tabs`; else, or for a volume without a lattice, `None`). `S`: the volume has species (their rows
 /// are looked up per sample; without, that code is not compiled in); `A`: σ_a depends on T (`a_t`, rgb physical
 /// mode). `step`: the march's step, metres (the volume's own, or the fire light's coarser one). Fills `l` and `t`;
-/// returns the exit parameter.
+/// returns the exit parameter. (The thin-step test bounds the optical depth by the volume's largest σ whichever
+/// channels are marched, so a subset's channels take the very steps the whole set takes.)
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(super) fn march<
     const CV: usize,
     const V: usize,
@@ -342,6 +352,7 @@ pub(super) fn march<
 >(
     v: &FireVolume,
     lt: &LaneTables,
+    tabs: Tabs,
     ray: &Ray,
     step: f64,
     l: &mut [f64],
@@ -354,7 +365,7 @@ pub(super) fn march<
     let lat = v.lattice.as_ref()?;
     // σ per unit density in the kernel's lanes (channels past `c` are zero).
     let mut sigma = [[0f32; V]; CV];
-    for (ch, &x) in lt.sigma().as_flattened().iter().enumerate().take(c) {
+    for (ch, &x) in tabs.sigma.as_flattened().iter().enumerate().take(c) {
         sigma[ch / V][ch % V] = x;
     }
     l.fill(0.0);
@@ -403,7 +414,7 @@ pub(super) fn march<
     let all = v.temperature.is_none();
     let t_emit = v.t_emit as f32;
     let lay = Layout::new(lat, v.lescale.is_some(), v.ds.dims());
-    let jt = Rows::<CV, V>::new(&v.j)?;
+    let jt = Rows::<CV, V>::new(tabs.j)?;
     // σ_a(T) rows where they exist (else the emission rows, never read); located with the emission rows when
     // both tables share their temperatures (as every volume builds them).
     let at = match &v.a_t {

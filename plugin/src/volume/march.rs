@@ -13,7 +13,7 @@ use glam::DVec3;
 /// Radiance `l` and transmittance `t` along `ray` by the volume's fastest exact path; returns the exit parameter.
 pub(super) fn integrate(v: &FireVolume, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
     if let Some(lt) = &v.lanes {
-        return march_kernel(v, lt, ray, v.step, l, t)
+        return march_kernel(v, lt, None, ray, v.step, l, t)
             .unwrap_or_else(|| march_lanes(v, lt, ray, l, t));
     }
     let mut sc = Scratch::new(v.channels());
@@ -33,7 +33,7 @@ pub(super) fn integrate_stepped(
 ) -> f64 {
     let stepped = Stepped { m, step };
     match (&v.lanes, mapped) {
-        (Some(lt), None) => march_kernel(v, lt, ray, step, l, t)
+        (Some(lt), None) => march_kernel(v, lt, None, ray, step, l, t)
             .unwrap_or_else(|| march_lanes_mapped(v, lt, &stepped, |p| p, ray, l, t)),
         (Some(lt), Some(f)) => march_lanes_mapped(v, lt, &stepped, f, ray, l, t),
         (None, _) => {
@@ -206,7 +206,8 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
 }
 
 /// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`
-/// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time.
+/// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time. `tabs`: the channels
+/// to march, the volume's own when `None` (`l` and `t` hold as many as the tables have columns).
 #[multiversion::multiversion(targets(
     "x86_64+avx512f+avx512vl+avx512bw+avx512dq+avx2+fma",
     "x86_64+avx2+fma"
@@ -214,6 +215,7 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
 pub(super) fn march_kernel(
     v: &FireVolume,
     lt: &lanes::LaneTables,
+    tabs: Option<kernel::Tabs>,
     ray: &Ray,
     step: f64,
     l: &mut [f64],
@@ -225,21 +227,29 @@ pub(super) fn march_kernel(
     // physical mode (3 channels).
     const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
     let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
+    let tb = tabs.unwrap_or(kernel::Tabs {
+        j: &v.j,
+        sigma: lt.sigma(),
+    });
     macro_rules! lanes {
         ($cv:literal, $v:literal) => {
             match (s, a) {
-                (false, false) => kernel::march::<$cv, $v, false, false, F>(v, lt, ray, step, l, t),
-                (true, false) => kernel::march::<$cv, $v, true, false, F>(v, lt, ray, step, l, t),
+                (false, false) => {
+                    kernel::march::<$cv, $v, false, false, F>(v, lt, tb, ray, step, l, t)
+                }
+                (true, false) => {
+                    kernel::march::<$cv, $v, true, false, F>(v, lt, tb, ray, step, l, t)
+                }
                 _ => None,
             }
         };
     }
-    match v.channels() {
+    match l.len() {
         0..=4 => match (s, a) {
-            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, ray, step, l, t),
-            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, ray, step, l, t),
-            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, ray, step, l, t),
-            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, ray, step, l, t),
+            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, tb, ray, step, l, t),
+            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, tb, ray, step, l, t),
+            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, tb, ray, step, l, t),
+            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, tb, ray, step, l, t),
         },
         5..=8 => lanes!(1, 8),
         9..=16 if WIDE => lanes!(1, 16),
@@ -468,8 +478,15 @@ mod tests {
                 }
             })
             .collect();
-        type Kernel =
-            fn(&FireVolume, &lanes::LaneTables, &Ray, f64, &mut [f64], &mut [f64]) -> Option<f64>;
+        type Kernel = fn(
+            &FireVolume,
+            &lanes::LaneTables,
+            kernel::Tabs,
+            &Ray,
+            f64,
+            &mut [f64],
+            &mut [f64],
+        ) -> Option<f64>;
         // (The volume's extra parameters, with sodium, and the shapes to run on it.)
         type Case = (Vec<Param>, bool, Vec<(&'static str, Kernel)>);
         let cases: Vec<Case> = vec![
@@ -531,7 +548,12 @@ mod tests {
                 for ray in &rays {
                     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
                     let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
-                    let te = kernel(&v, lt, ray, v.step, &mut l, &mut t).expect("this shape fits");
+                    let tabs = kernel::Tabs {
+                        j: &v.j,
+                        sigma: lt.sigma(),
+                    };
+                    let te =
+                        kernel(&v, lt, tabs, ray, v.step, &mut l, &mut t).expect("this shape fits");
                     let te3 = v64.integrate(ray, &mut l3, &mut t3);
                     assert_eq!(te, te3, "{name}");
                     let peak = l3.iter().fold(0f64, |m, &x| m.max(x));

@@ -29,18 +29,7 @@ impl FireVolume {
     /// lattice, has no temperature, or when the copy would exceed `budget` bytes: the light then marches the
     /// volume itself.
     pub(crate) fn mip(&self, f: usize, budget: u64) -> Option<FireVolume> {
-        let carried = self.lanes.is_some()
-            && self.lattice.is_some()
-            && self.integrator == Integrator::March
-            && self.species.is_empty()
-            && self.lescale.is_none()
-            && !self.emission_grid
-            && self.a_t.is_none()
-            && self.blur.is_none()
-            && self.refraction.is_none()
-            && self.diffusion.is_none()
-            && self.lines.is_none()
-            && self.embers.is_none()
+        let carried = self.soot_only()
             && self.margin == 0.0
             && self.ds.interpolation() == Interpolation::Trilinear
             && self
@@ -218,6 +207,23 @@ impl FireVolume {
         v.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
         v.lattice = Some(lat);
         Some(v)
+    }
+
+    /// Whether this volume's light is its soot's alone, marched by the lane kernel: no species, emission or
+    /// `Lescale` grid, T-dependent absorption, motion blur, refraction, diffusion, thick lines or embers.
+    pub(super) fn soot_only(&self) -> bool {
+        self.lanes.is_some()
+            && self.lattice.is_some()
+            && self.integrator == Integrator::March
+            && self.species.is_empty()
+            && self.lescale.is_none()
+            && !self.emission_grid
+            && self.a_t.is_none()
+            && self.blur.is_none()
+            && self.refraction.is_none()
+            && self.diffusion.is_none()
+            && self.lines.is_none()
+            && self.embers.is_none()
     }
 
     /// Bytes the copy of [`mip`](Self::mip) holds: its grids, lattice and majorants.

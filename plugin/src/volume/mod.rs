@@ -44,6 +44,7 @@ mod mip;
 mod motion;
 pub mod params;
 mod settings;
+mod subset;
 mod tables;
 
 pub(crate) use integrate::MAX_STEPS;
@@ -53,6 +54,7 @@ pub use march::evaluations_on_this_thread;
 pub(crate) use march::Stepper;
 use march::EVALUATIONS;
 use settings::{Emission, Settings};
+pub(crate) use subset::LineChannels;
 use tables::{SpeciesChannel, TTable};
 
 use crate::dataset::{Dataset, Format};

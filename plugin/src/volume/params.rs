@@ -168,6 +168,14 @@ pub static LIGHT: Component = Component {
         "voxels",
         Range::Between(0.0, 8.0),
         "The blocks of the copy of the fire the coarse line marches through (density their mean, temperature the one that emits their mean: a copy that stays in the caches): 2, 4 or 8 voxels per side; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays within 0.5 % of the volume's march on 1024 of the light's rays (checked when the light is built). Volumes with species, emission or Lescale grids, motion blur, refraction, diffusion, thick lines or embers march their own voxels.",
+    ),
+    p(
+        "linechannels",
+        T::Integer,
+        "0",
+        "channels",
+        Range::Between(0.0, 1e6),
+        "How many of the spectral bins the coarse line marches, the others following from them (transmittance exactly from the column of soot, radiance by interpolation in 1/λ of the logarithm of its ratio to a slab of that soot at the fire's hottest temperature): 0, 8 bins where the line's X, Y and Z stay within 0.2 % of every bin's on 1024 of the light's rays (checked when the light is built), else all; 2 to 32, that many; at least the volume's bins, all of them. Only a soot fire's bins (no species' lines, no emission or Lescale grid, and as lineblock's list); rgb marches its 3.",
     )],
 };
 

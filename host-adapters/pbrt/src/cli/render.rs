@@ -448,14 +448,24 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 m.seconds,
                 m.channels
             );
-            if let Some((voxels, w, lm, bytes, secs, block)) = m.light {
-                let line = match block {
+            if let Some(lr) = m.light {
+                let li = lr.info;
+                let line = match li.line_block {
                     1 => "its voxels".to_string(),
                     b => format!("blocks of {b}³ voxels"),
                 };
+                let bins = if lr.line_channels < m.channels {
+                    format!(" in {} of its {} channels", lr.line_channels, m.channels)
+                } else {
+                    String::new()
+                };
                 out += &format!(
-                    "  fire light: {voxels} emitting voxels, {w:.4e} W, {lm:.4e} lm, {:.1} MB in {secs:.3} s; its line through {line}\n",
-                    bytes as f64 / 1e6
+                    "  fire light: {} emitting voxels, {:.4e} W, {:.4e} lm, {:.1} MB in {:.3} s; its line through {line}{bins}\n",
+                    li.voxels,
+                    li.power_w,
+                    li.power_lm,
+                    li.bytes as f64 / 1e6,
+                    li.build_seconds
                 );
             }
             if let Some(why) = &m.light_left_out {

@@ -265,6 +265,14 @@ fn no_light_sampling(b: &builder::Builder) -> Option<String> {
     })
 }
 
+/// A fire light as the plugin built it.
+#[derive(Debug, Clone, Copy)]
+pub struct LightReport {
+    pub info: firemedium_loader::LightInfo,
+    /// How many of the volume's channels its line marches (ABI 0.10).
+    pub line_channels: u32,
+}
+
 /// What the plugin built for one medium.
 #[derive(Debug, Clone)]
 pub struct MediumReport {
@@ -272,9 +280,8 @@ pub struct MediumReport {
     pub bytes: u64,
     pub seconds: f64,
     pub channels: u32,
-    /// The fire light, when built: (emitting voxels, W, lm, bytes, seconds, the side of the blocks its line
-    /// marches through).
-    pub light: Option<(u64, f64, f64, u64, f64, u32)>,
+    /// The fire light, when built.
+    pub light: Option<LightReport>,
     /// Why the fire light was left out, when it was.
     pub light_left_out: Option<String>,
 }
@@ -779,16 +786,11 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                 }
                 match vol.create_light_with(&lp) {
                     Ok(light) => {
-                        let li = light.info();
                         if let Some(rep) = b.media_reports.get_mut(r) {
-                            rep.light = Some((
-                                li.voxels,
-                                li.power_w,
-                                li.power_lm,
-                                li.bytes,
-                                li.build_seconds,
-                                li.line_block,
-                            ));
+                            rep.light = Some(LightReport {
+                                info: light.info(),
+                                line_channels: light.line_channels().map_err(|e| e.to_string())?,
+                            });
                         }
                         b.lights.push(Light::Fire {
                             light: std::sync::Arc::new(light),
