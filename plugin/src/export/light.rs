@@ -187,7 +187,14 @@ pub(super) unsafe extern "C" fn light_sample_at(
         let c = lt.volume().channels();
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut em = unsafe { out_f32(emission, n, c) }?;
-        let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        // (The coefficients' scratch only when the host asks for the emission: a light sample per path vertex
+        // paid three allocations for it.)
+        let scratch = || vec![0.0; c];
+        let (mut a, mut s, mut j) = if em.is_some() {
+            (scratch(), scratch(), scratch())
+        } else {
+            (Vec::new(), Vec::new(), Vec::new())
+        };
         for i in 0..n {
             let uu: [f64; 6] =
                 std::array::from_fn(|k| us[6 * i + k].clamp(0.0, 1.0 - f64::EPSILON));

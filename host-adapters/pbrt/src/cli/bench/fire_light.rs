@@ -18,8 +18,9 @@ pub struct Estimator {
 
 /// The estimators measured: the light before issue 29 (`voxel, full`: a pdf over voxels, the volume's own march
 /// along each sampled direction), each change alone (`brick`: cells of 8³ voxels; `own`: the line's march at
-/// 64 steps across the fire, through its own voxels; `coarse`: the same through the copy of the fire in blocks
-/// that the light's build-time check keeps, the default; `corrected`: toward the volume's march with
+/// 64 steps across the fire, through its own voxels; `allbins`: the same through the copy of the fire in blocks
+/// that the light's build-time check keeps, in every bin; `coarse`: that in the 8 bins the check allows, the
+/// default; `corrected`: toward the volume's march with
 /// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (pbrt-v4's
 /// strategy: emission found only by paths that pass through the fire).
 pub const ESTIMATORS: &[Estimator] = &[
@@ -47,11 +48,29 @@ pub const ESTIMATORS: &[Estimator] = &[
         )),
     },
     Estimator {
-        key: "coarse",
-        name: "brick, coarse, blocks (default)",
+        key: "allbins",
+        name: "brick, coarse, blocks, every bin",
         light: Some((
             "power",
-            &[("cell", "8"), ("linestep", "0"), ("lineblock", "0")],
+            &[
+                ("cell", "8"),
+                ("linestep", "0"),
+                ("lineblock", "0"),
+                ("linechannels", "4096"),
+            ],
+        )),
+    },
+    Estimator {
+        key: "coarse",
+        name: "brick, coarse, blocks, 8 bins (default)",
+        light: Some((
+            "power",
+            &[
+                ("cell", "8"),
+                ("linestep", "0"),
+                ("lineblock", "0"),
+                ("linechannels", "0"),
+            ],
         )),
     },
     Estimator {

@@ -51,11 +51,12 @@ pub struct FireLightArgs {
     /// march), rendered in two halves whose difference takes the reference's own noise out of every error.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1048576))]
     reference_spp: u32,
-    /// The estimators (comma-separated keys): off, voxel, brick, own, coarse, corrected, luminance, escaping.
+    /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, coarse, corrected, luminance,
+    /// escaping.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "off,voxel,brick,own,coarse,corrected,luminance,escaping"
+        default_value = "off,voxel,brick,own,allbins,coarse,corrected,luminance,escaping"
     )]
     estimators: Vec<String>,
     /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R (PREFIX-NAME.* for a scene).
