@@ -966,13 +966,13 @@ impl FireLight {
         let dims_v = [0, 1, 2].map(|a| self.dims[a] + off[a]);
         // Cells of a brick with the bricks' table: one number per brick.
         if !self.brick_density.is_empty() {
+            // (Every brick's term, 0 where it holds no weight: no branch on the density, which changes along
+            // the ray too irregularly to predict.)
             for seg in walk(shifted, dims_v, self.cell, o, dn, ta, tb) {
                 let d = self.brick_density.get(seg.brick).copied().unwrap_or(0.0);
-                if d > 0.0 {
-                    sum += d * (seg.t1.powi(3) - seg.t0.powi(3)) / 3.0;
-                }
+                sum += d * (seg.t1 * seg.t1 * seg.t1 - seg.t0 * seg.t0 * seg.t0);
             }
-            return sum;
+            return sum / 3.0;
         }
         let density = self.density_of_cells();
         let cells = |t0: f64, t1: f64, sum: &mut f64| {
