@@ -49,7 +49,7 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "allbins",
-        name: "brick, coarse, blocks, every bin",
+        name: "blocks, every bin",
         light: Some((
             "power",
             &[
@@ -62,7 +62,7 @@ pub const ESTIMATORS: &[Estimator] = &[
     },
     Estimator {
         key: "coarse",
-        name: "brick, coarse, blocks, 8 bins (default)",
+        name: "blocks, 8 bins (default)",
         light: Some((
             "power",
             &[
@@ -161,13 +161,16 @@ pub struct Run {
 /// budget in camera paths as the light's light samples cost at most) against a reference of `ref_spp` with
 /// the light's pdf over bricks and the volume's own march (unbiased against it), rendered in two independent
 /// halves so that its own noise can be taken out of every error; returns the runs and a line about the
-/// reference.
+/// reference. In `repeats` rounds, the estimators in turn (each loaded afresh: the build is not timed), every
+/// rung's time the median of its rounds.
+#[allow(clippy::too_many_arguments)]
 pub fn ladder(
     scene: &Path,
     label: &str,
     res: (usize, usize),
     spp: &[usize],
     ref_spp: usize,
+    repeats: usize,
     estimators: &[&Estimator],
     log: &dyn Fn(&str),
 ) -> Result<(Vec<Run>, String), String> {
@@ -223,35 +226,68 @@ pub fn ladder(
         seconds
     );
     log(&about);
-    let mut runs = Vec::new();
-    for e in estimators {
-        // One load per estimator (the fire and its light built once), its samples per pixel set per rung.
-        let mut s = load(1, e)?;
-        for &n in spp {
-            let n = if e.light.is_none() { 4 * n } else { n };
-            s.spp = n;
-            let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
-            let lum = super::error::surface_luminance(&img, &mask);
-            let (rel_rmse, rel_mse) = errors_debiased(&lum, &reference, [&halves[0], &halves[1]]);
-            let raw = errors(&lum, &reference);
-            let run = Run {
-                estimator: e.name,
-                spp: n,
-                seconds: st.seconds,
-                rel_mse,
-                rel_rmse,
-                raw,
-                camera_rays: st.camera_rays,
-                light_samples: st.fire_light_samples,
-            };
-            log(&format!(
-                "{label} {}: {n} spp, {:.3} s, relMSE {:.4e} (against the reference as it is {:.4e})",
-                e.name, run.seconds, run.rel_mse, run.raw.1
-            ));
-            runs.push(run);
+    let mut runs: Vec<Run> = Vec::new();
+    let mut times: Vec<Vec<f64>> = Vec::new();
+    for round in 0..repeats.max(1) {
+        for (k, e) in estimators.iter().enumerate() {
+            // One load per estimator and round (the fire and its light built once), its samples per pixel set per
+            // rung.
+            let mut s = load(1, e)?;
+            for (q, &n) in spp.iter().enumerate() {
+                let n = if e.light.is_none() { 4 * n } else { n };
+                s.spp = n;
+                let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
+                let at = k * spp.len() + q;
+                if round > 0 {
+                    if let Some(t) = times.get_mut(at) {
+                        t.push(st.seconds);
+                    }
+                    log(&format!(
+                        "{label} {}: {n} spp, round {}, {:.3} s",
+                        e.name,
+                        round + 1,
+                        st.seconds
+                    ));
+                    continue;
+                }
+                let lum = super::error::surface_luminance(&img, &mask);
+                let (rel_rmse, rel_mse) =
+                    errors_debiased(&lum, &reference, [&halves[0], &halves[1]]);
+                let raw = errors(&lum, &reference);
+                let run = Run {
+                    estimator: e.name,
+                    spp: n,
+                    seconds: st.seconds,
+                    rel_mse,
+                    rel_rmse,
+                    raw,
+                    camera_rays: st.camera_rays,
+                    light_samples: st.fire_light_samples,
+                };
+                log(&format!(
+                    "{label} {}: {n} spp, {:.3} s, relMSE {:.4e} (against the reference as it is {:.4e})",
+                    e.name, run.seconds, run.rel_mse, run.raw.1
+                ));
+                runs.push(run);
+                times.push(vec![st.seconds]);
+            }
         }
     }
+    for (run, t) in runs.iter_mut().zip(&times) {
+        run.seconds = median(t);
+    }
     Ok((runs, about))
+}
+
+/// The median of `t` (the mean of the middle two for an even count; 0 for none).
+fn median(t: &[f64]) -> f64 {
+    let mut v = t.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }
 
 /// The plot's points of one resolution.
@@ -323,4 +359,51 @@ pub fn output(prefix: &Path, label: &str, ext: &str) -> PathBuf {
     let mut p = prefix.as_os_str().to_owned();
     p.push(format!("-{label}{ext}"));
     PathBuf::from(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rungs_time_is_the_median_of_its_rounds() {
+        assert_eq!(median(&[3.0]), 3.0);
+        assert_eq!(median(&[5.0, 1.0, 4.0]), 4.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 10.0]), 3.0);
+        assert_eq!(median(&[]), 0.0);
+    }
+
+    #[test]
+    fn the_summary_weighs_error_by_time_against_the_light_off() {
+        // The light off at 4 and 16 spp, a light at 4: the light's gains are the light off's error² × time at its
+        // largest rung over the light's, and its sample's cost the time beyond the light off's at 4 spp per light
+        // sample, in the light off's camera paths.
+        let run = |estimator: &'static str, spp, seconds, rel: f64, light_samples| Run {
+            estimator,
+            spp,
+            seconds,
+            rel_mse: rel * rel,
+            rel_rmse: rel,
+            raw: (rel, rel * rel),
+            camera_rays: 1000 * spp,
+            light_samples,
+        };
+        let runs = [
+            run("off", 4, 1.0, 1.0, 0),
+            run("off", 16, 4.0, 0.5, 0),
+            run("light", 4, 3.0, 0.2, 2000),
+        ];
+        let s = summary(&runs);
+        assert_eq!(s.len(), 2);
+        let l = &s[1];
+        assert_eq!(l.estimator, "light");
+        // off: 0.25 × 4 = 1; light: 0.04 × 3 = 0.12.
+        assert!((l.gain_rmse2 - 1.0 / 0.12).abs() < 1e-9, "{}", l.gain_rmse2);
+        // (3 − 1) s over 2000 samples, per (4 s / 16 000 rays).
+        let cost = l.sample_cost.unwrap();
+        assert!(
+            (cost - 2.0 / 2000.0 / (4.0 / 16000.0)).abs() < 1e-9,
+            "{cost}"
+        );
+    }
 }

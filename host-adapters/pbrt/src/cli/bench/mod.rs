@@ -51,6 +51,11 @@ pub struct FireLightArgs {
     /// march), rendered in two halves whose difference takes the reference's own noise out of every error.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1048576))]
     reference_spp: u32,
+    /// Rounds: every estimator renders its ladder once per round, the estimators in turn, and each rung's time
+    /// is its median over the rounds (the images are the same every round: one seed per rung). The machine's
+    /// speed drifts between runs by tens of per cent; alternating and the median keep one run's rows comparable.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeats: u32,
     /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, coarse, corrected, luminance,
     /// escaping.
     #[arg(
@@ -568,6 +573,7 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
             a.image,
             &spp,
             a.reference_spp as usize,
+            a.repeats as usize,
             &chosen,
             &|line| eprintln!("{line}"),
         );
