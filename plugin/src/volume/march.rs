@@ -463,21 +463,7 @@ mod tests {
         // The dispatch picks one lane shape per channel count and CPU (this machine's clone runs only some):
         // each shape called directly, with and without FMA, against the f64 march — rgb in one lane of 4,
         // 6/12/20/30 bins in lanes of 8 and of 16, with sodium where it applies.
-        let rays: Vec<Ray> = (0..40)
-            .map(|k| {
-                let mut rng = crate::rng::Rng::new(900 + k);
-                let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
-                let target = DVec3::new(0.6, 0.63, 0.55)
-                    + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
-                Ray {
-                    o,
-                    d: target - o,
-                    t0: 0.0,
-                    t1: 5.0,
-                    seed: k,
-                }
-            })
-            .collect();
+        let rays = crate::volume::tests::blob_rays(40, 900);
         type Kernel = fn(
             &FireVolume,
             &lanes::LaneTables,

@@ -242,24 +242,9 @@ mod tests {
     use super::*;
     use crate::params::Param;
     use crate::volume::tests::blob_pair;
-    use glam::DVec3;
 
     fn rays() -> Vec<Ray> {
-        (0..60)
-            .map(|k| {
-                let mut rng = crate::rng::Rng::new(700 + k);
-                let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
-                let target = DVec3::new(0.6, 0.63, 0.55)
-                    + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
-                Ray {
-                    o,
-                    d: target - o,
-                    t0: 0.0,
-                    t1: 5.0,
-                    seed: k,
-                }
-            })
-            .collect()
+        crate::volume::tests::blob_rays(60, 700)
     }
 
     /// Every channel's line along `rays()` through `v` at twice its step: by the march of all, and by the march

@@ -417,6 +417,25 @@ fn pbrt_mode_is_sigma_times_density_and_normalised_blackbody() {
 /// the far x side (so many bricks are empty) and `extra` parameters (pbrt mode adds a Lescale grid); `species` adds a sodium grid
 /// (files: species grids are not inline parameters).
 /// The blob volume with `extra` parameters in the lanes' precision (the default) and in f64.
+/// `n` rays from around the blob of [`blob_volume`] toward points about its ball (seeds from `seed`).
+pub(crate) fn blob_rays(n: u64, seed: u64) -> Vec<Ray> {
+    (0..n)
+        .map(|k| {
+            let mut rng = crate::rng::Rng::new(seed + k);
+            let o = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 4.0 - 1.0;
+            let target = DVec3::new(0.6, 0.63, 0.55)
+                + (DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5);
+            Ray {
+                o,
+                d: target - o,
+                t0: 0.0,
+                t1: 5.0,
+                seed: k,
+            }
+        })
+        .collect()
+}
+
 pub(crate) fn blob_pair(extra: &[Param], species: bool) -> (FireVolume, FireVolume) {
     let mut e64 = extra.to_vec();
     e64.push(Param::string("precision", "f64"));
