@@ -338,5 +338,35 @@ mod tests {
         assert!(sodium.line_channels(8).is_none(), "an atomic line");
         let (few, _) = blob_pair(&[Param::int("bins", 8)], false);
         assert!(few.line_channels(8).is_none(), "no fewer than its bins");
+        // 64 bins: more than the kernel's four lanes hold, but 8 of them are one lane (the others follow, and
+        // the nodes are the lane march's, which takes the whole set, to its f32 rounding).
+        let (many, _) = blob_pair(
+            &[Param::int("bins", 64), Param::float("sootscale", 0.02)],
+            false,
+        );
+        let lc = many.line_channels(8).expect("8 of 64 bins");
+        let (step, c) = (2.0 * many.step_length(), 64);
+        let mut lit = 0;
+        for r in rays() {
+            let (mut l, mut t, mut lf, mut tf) =
+                (vec![0.0; c], vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            many.integrate_stepped_at(&r, 0.0, step, &mut l, &mut t);
+            many.integrate_channels(&lc, &r, step, &mut lf, &mut tf)
+                .expect("the kernel takes 8 of 64");
+            let peak = l.iter().fold(0f64, |m, &x| m.max(x));
+            lit += (peak > 0.0) as usize;
+            for ch in 0..c {
+                assert!((tf[ch] - t[ch]).abs() < 1e-5, "ch {ch}");
+                if l[ch] > 1e-3 * peak {
+                    assert!(
+                        (lf[ch] / l[ch] - 1.0).abs() < 0.01,
+                        "ch {ch}: {} vs {}",
+                        lf[ch],
+                        l[ch]
+                    );
+                }
+            }
+        }
+        assert!(lit > 20, "{lit}");
     }
 }
