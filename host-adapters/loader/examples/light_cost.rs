@@ -6,7 +6,9 @@
 //!     cargo run --release -p firemedium-loader --example light_cost -- PLUGIN FIRE.vdb [CONFIG ...]
 //!
 //! FIRE.vdb: the room's fire of `firemedium bench fire-light` (e.g. `firemedium gen campfire --resolution 256`).
-//! A CONFIG is `name=value,name=value` of light parameters (`lineblock=1,linechannels=4096`); none: the default.
+//! A CONFIG is `name=value,name=value` of light parameters (`lineblock=1,linechannels=4096`; a value with a
+//! point is a float, `linestep=16.0`); none: the default. `LC_N` sets the calls per round (default 20 000; more
+//! for a profiler, whose samples then fall mostly outside the light's build).
 //! The rays start on the room's floor and back wall and aim at points the light samples. Results in
 //! docs/RESULTS.md.
 use firemedium_loader::{Param, Plugin, Ray};
@@ -69,7 +71,10 @@ fn main() {
             l
         })
         .collect();
-    let n = 20_000usize;
+    let n: usize = std::env::var("LC_N")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20_000);
     let mut rng = Rng(0x1234_5678_9abc_def0);
     for round in 0..5 {
         for (cfg, light) in configs.iter().zip(&lights) {
