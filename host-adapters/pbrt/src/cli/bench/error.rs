@@ -391,199 +391,146 @@ pub fn svg(points: &[Point], title: &str, mark: Option<usize>) -> String {
     s + "</svg>\n"
 }
 
-/// A 5×7 bitmap font for the PNG's labels (the characters the plot uses; others are left blank): rows top to
-/// bottom, bit 4 the leftmost column.
-const FONT: &[(char, [u8; 7])] = &[
-    ('0', [0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e]),
-    ('1', [0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e]),
-    ('2', [0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f]),
-    ('3', [0x1e, 0x01, 0x01, 0x0e, 0x01, 0x01, 0x1e]),
-    ('4', [0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02]),
-    ('5', [0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e]),
-    ('6', [0x0e, 0x10, 0x10, 0x1e, 0x11, 0x11, 0x0e]),
-    ('7', [0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08]),
-    ('8', [0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e]),
-    ('9', [0x0e, 0x11, 0x11, 0x0f, 0x01, 0x01, 0x0e]),
-    ('.', [0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c]),
-    (',', [0x00, 0x00, 0x00, 0x00, 0x0c, 0x04, 0x08]),
-    ('-', [0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00]),
-    (':', [0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00]),
-    ('(', [0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02]),
-    (')', [0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08]),
-    ('/', [0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00]),
-    ('½', [0x10, 0x12, 0x14, 0x04, 0x0b, 0x11, 0x03]),
-    (' ', [0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00]),
-    ('a', [0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f]),
-    ('b', [0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x1e]),
-    ('c', [0x00, 0x00, 0x0f, 0x10, 0x10, 0x10, 0x0f]),
-    ('d', [0x01, 0x01, 0x0f, 0x11, 0x11, 0x11, 0x0f]),
-    ('e', [0x00, 0x00, 0x0e, 0x11, 0x1f, 0x10, 0x0e]),
-    ('f', [0x06, 0x08, 0x1e, 0x08, 0x08, 0x08, 0x08]),
-    ('g', [0x00, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x0e]),
-    ('h', [0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x11]),
-    ('i', [0x04, 0x00, 0x0c, 0x04, 0x04, 0x04, 0x0e]),
-    ('k', [0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12]),
-    ('l', [0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e]),
-    ('m', [0x00, 0x00, 0x1a, 0x15, 0x15, 0x15, 0x15]),
-    ('n', [0x00, 0x00, 0x1e, 0x11, 0x11, 0x11, 0x11]),
-    ('o', [0x00, 0x00, 0x0e, 0x11, 0x11, 0x11, 0x0e]),
-    ('p', [0x00, 0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10]),
-    ('q', [0x00, 0x0f, 0x11, 0x11, 0x0f, 0x01, 0x01]),
-    ('r', [0x00, 0x00, 0x16, 0x18, 0x10, 0x10, 0x10]),
-    ('s', [0x00, 0x00, 0x0f, 0x10, 0x0e, 0x01, 0x1e]),
-    ('t', [0x08, 0x08, 0x1e, 0x08, 0x08, 0x09, 0x06]),
-    ('u', [0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0d]),
-    ('v', [0x00, 0x00, 0x11, 0x11, 0x11, 0x0a, 0x04]),
-    ('w', [0x00, 0x00, 0x11, 0x15, 0x15, 0x15, 0x0a]),
-    ('x', [0x00, 0x00, 0x11, 0x0a, 0x04, 0x0a, 0x11]),
-    ('y', [0x00, 0x11, 0x11, 0x0f, 0x01, 0x11, 0x0e]),
-    ('E', [0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f]),
-    ('M', [0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11]),
-    ('R', [0x1e, 0x11, 0x11, 0x1e, 0x14, 0x12, 0x11]),
-    ('S', [0x0f, 0x10, 0x10, 0x0e, 0x01, 0x01, 0x1e]),
+/// Where the PNG's labels find a TrueType font: `FIREMEDIUM_FONT`, else the usual places of DejaVu Sans
+/// (Debian's `fonts-dejavu-core`) and of the system's sans serif on macOS and Windows.
+const FONT_PATHS: [&str; 6] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
+    "/System/Library/Fonts/Supplemental/Arial.ttf",
+    "C:\\Windows\\Fonts\\arial.ttf",
 ];
 
-/// Draws `text` with its top-left corner at (x, y), `scale` pixels per font pixel.
-fn draw_text(img: &mut [u8], w: usize, x: i64, y: i64, text: &str, scale: i64) {
-    let h = img.len() / (3 * w);
-    for (k, ch) in text.chars().enumerate() {
-        let Some((_, rows)) = FONT.iter().find(|(c, _)| *c == ch) else {
-            continue;
+/// The font the PNG's labels are drawn in, registered with plotters once per process: its path, or why there
+/// is none (no file found, one too large, or not a font plotters reads).
+fn plot_font() -> Result<&'static str, String> {
+    static FONT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
+    FONT.get_or_init(|| {
+        let named = std::env::var("FIREMEDIUM_FONT").ok();
+        let path = match &named {
+            Some(p) => p.clone(),
+            None => FONT_PATHS
+                .iter()
+                .find(|p| std::path::Path::new(p).is_file())
+                .map(|p| p.to_string())
+                .ok_or_else(|| {
+                    format!(
+                        "no TrueType font in {} (set FIREMEDIUM_FONT, or install fonts-dejavu-core)",
+                        FONT_PATHS.join(", ")
+                    )
+                })?,
         };
-        for (r, bits) in rows.iter().enumerate() {
-            for col in 0..5 {
-                if bits & (0x10 >> col) == 0 {
-                    continue;
-                }
-                for dy in 0..scale {
-                    for dx in 0..scale {
-                        let px = x + (6 * k as i64 + col) * scale + dx;
-                        let py = y + r as i64 * scale + dy;
-                        if px >= 0 && py >= 0 && (px as usize) < w && (py as usize) < h {
-                            let o = 3 * (px as usize + w * py as usize);
-                            img[o..o + 3].copy_from_slice(&[0, 0, 0]);
-                        }
-                    }
-                }
-            }
+        // (A font is a few hundred kB; a file far larger is not one.)
+        let size = std::fs::metadata(&path).map_err(|e| format!("{path}: {e}"))?.len();
+        if size > 64 << 20 {
+            return Err(format!("{path}: {size} bytes, expected a TrueType font under 64 MB"));
         }
-    }
+        let bytes = std::fs::read(&path).map_err(|e| format!("{path}: {e}"))?;
+        // (Registered once for the process's life: plotters keeps fonts as 'static bytes.)
+        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, bytes)
+            .map_err(|_| format!("{path}: not a TrueType font plotters can read"))?;
+        Ok(path)
+    })
+    .as_deref()
+    .map_err(|e| e.clone())
 }
 
-/// The same plot as a PNG: lines, markers, decade grid and the labels in a small bitmap font.
-pub fn png(points: &[Point], title: &str, mark: Option<usize>) -> (usize, usize, Vec<u8>) {
+/// The same plot as a PNG, drawn by plotters: log–log axes over the points' decades, a line and markers per
+/// estimator, the legend, and the equal-time winner circled. The labels need a TrueType font
+/// ([`plot_font`]); without one the plot is drawn unlabelled and the reason is returned beside it (the SVG
+/// carries the labels either way).
+pub fn png(
+    points: &[Point],
+    title: &str,
+    mark: Option<usize>,
+) -> (usize, usize, Vec<u8>, Option<String>) {
+    use plotters::prelude::*;
     let (w, h) = (760usize, 480usize);
-    let ax = Axes::new(points, w as f64, h as f64);
     let mut img = vec![255u8; w * h * 3];
-    let mut put = |x: i64, y: i64, c: (u8, u8, u8)| {
-        if x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h {
-            let o = 3 * (x as usize + w * y as usize);
-            img[o..o + 3].copy_from_slice(&[c.0, c.1, c.2]);
+    let font = plot_font();
+    let labels = font.is_ok();
+    let ax = Axes::new(points, w as f64, h as f64);
+    let x = 10f64.powf(ax.x0)..10f64.powf(ax.x1);
+    let y = 10f64.powf(ax.y0)..10f64.powf(ax.y1);
+    let drawn = (|| -> Result<(), Box<dyn std::error::Error + '_>> {
+        let root = BitMapBackend::with_buffer(&mut img, (w as u32, h as u32)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64);
+        if labels {
+            builder.caption(title, ("sans-serif", 18));
         }
-    };
-    let line = |a: (f64, f64),
-                b: (f64, f64),
-                c: (u8, u8, u8),
-                thick: i64,
-                put: &mut dyn FnMut(i64, i64, (u8, u8, u8))| {
-        let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
-        for i in 0..=n {
-            let t = i as f64 / n as f64;
-            let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-            for dx in -thick / 2..=thick / 2 {
-                for dy in -thick / 2..=thick / 2 {
-                    put(x.round() as i64 + dx, y.round() as i64 + dy, c);
-                }
+        let mut chart = builder.build_cartesian_2d(x.clone().log_scale(), y.clone().log_scale())?;
+        if labels {
+            chart
+                .configure_mesh()
+                .x_desc("render time, s")
+                .y_desc("relative RMSE")
+                .draw()?;
+        } else {
+            // (plotters' mesh draws its labels' text even when asked for none: the decades by hand.)
+            let grey = RGBColor(221, 221, 221);
+            for e in (ax.x0 as i32)..=(ax.x1 as i32) {
+                let v = 10f64.powi(e);
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(v, y.start), (v, y.end)],
+                    grey,
+                )))?;
+            }
+            for e in (ax.y0 as i32)..=(ax.y1 as i32) {
+                let v = 10f64.powi(e);
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(x.start, v), (x.end, v)],
+                    grey,
+                )))?;
             }
         }
+        for (k, name) in estimators(points).iter().enumerate() {
+            let (r, g, b) = COLOURS[k % COLOURS.len()];
+            let c = RGBColor(r, g, b);
+            let pts: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|p| &p.estimator == name)
+                .map(|p| (p.seconds.max(1e-6), p.rel_rmse.max(1e-9)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
+                .label(name.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
+                });
+            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+        }
+        if let Some(p) = mark.and_then(|i| points.get(i)) {
+            let at = (p.seconds.max(1e-6), p.rel_rmse.max(1e-9));
+            chart.draw_series(std::iter::once(Circle::new(at, 10, BLACK.stroke_width(2))))?;
+            if labels {
+                let text = format!("equal-time winner: {} ({})", p.estimator, p.setting);
+                chart.draw_series(std::iter::once(
+                    EmptyElement::at(at) + Text::new(text, (14, -22), ("sans-serif", 13)),
+                ))?;
+            }
+        }
+        if labels {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+        }
+        root.present()?;
+        Ok(())
+    })();
+    let why = match (drawn, font) {
+        (Err(e), _) => Some(format!("the PNG's plot: {e}")),
+        (Ok(()), Err(e)) => Some(format!("the PNG has no labels: {e}")),
+        (Ok(()), Ok(_)) => None,
     };
-    let grey = (221, 221, 221);
-    for e in (ax.x0 as i32)..=(ax.x1 as i32) {
-        let x = ax.px(10f64.powi(e));
-        line(
-            (x, Axes::TOP),
-            (x, h as f64 - Axes::BOTTOM),
-            grey,
-            1,
-            &mut put,
-        );
-    }
-    for e in (ax.y0 as i32)..=(ax.y1 as i32) {
-        let y = ax.py(10f64.powi(e));
-        line(
-            (Axes::LEFT, y),
-            (w as f64 - Axes::RIGHT, y),
-            grey,
-            1,
-            &mut put,
-        );
-    }
-    for (k, name) in estimators(points).iter().enumerate() {
-        let c = COLOURS[k % COLOURS.len()];
-        let pts: Vec<(f64, f64)> = points
-            .iter()
-            .filter(|p| &p.estimator == name)
-            .map(|p| (ax.px(p.seconds), ax.py(p.rel_rmse)))
-            .collect();
-        for pair in pts.windows(2) {
-            line(pair[0], pair[1], c, 2, &mut put);
-        }
-        for &(x, y) in &pts {
-            line((x - 3.0, y), (x + 3.0, y), c, 5, &mut put);
-        }
-        let ly = Axes::TOP + 20.0 * k as f64 + 10.0;
-        let lx = w as f64 - Axes::RIGHT + 14.0;
-        line((lx, ly), (lx + 22.0, ly), c, 3, &mut put);
-    }
-    if let Some(i) = mark {
-        let (x, y) = (ax.px(points[i].seconds), ax.py(points[i].rel_rmse));
-        for a in 0..72 {
-            let t = a as f64 / 72.0 * std::f64::consts::TAU;
-            put(
-                (x + 9.0 * t.cos()).round() as i64,
-                (y + 9.0 * t.sin()).round() as i64,
-                (0, 0, 0),
-            );
-        }
-        let label = format!(
-            "equal-time winner: {} ({})",
-            points[i].estimator, points[i].setting
-        );
-        draw_text(&mut img, w, x as i64 + 12, y as i64 - 18, &label, 1);
-    }
-    draw_text(&mut img, w, Axes::LEFT as i64 + 30, 6, title, 2);
-    for e in (ax.x0 as i32)..=(ax.x1 as i32) {
-        let x = ax.px(10f64.powi(e)) as i64;
-        let t = format!("1e{e}");
-        draw_text(
-            &mut img,
-            w,
-            x - 3 * t.len() as i64,
-            h as i64 - Axes::BOTTOM as i64 + 8,
-            &t,
-            1,
-        );
-    }
-    for e in (ax.y0 as i32)..=(ax.y1 as i32) {
-        let y = ax.py(10f64.powi(e)) as i64;
-        let t = format!("1e{e}");
-        draw_text(
-            &mut img,
-            w,
-            Axes::LEFT as i64 - 8 - 6 * t.len() as i64,
-            y - 3,
-            &t,
-            1,
-        );
-    }
-    let xt = "render time, s";
-    let mid = (0.5 * (Axes::LEFT + w as f64 - Axes::RIGHT)) as i64;
-    draw_text(&mut img, w, mid - 6 * xt.len() as i64, h as i64 - 22, xt, 2);
-    draw_text(&mut img, w, 4, Axes::TOP as i64 - 14, "relative RMSE", 1);
-    for (k, name) in estimators(points).iter().enumerate() {
-        let ly = Axes::TOP + 20.0 * k as f64 + 10.0;
-        let lx = w as f64 - Axes::RIGHT + 40.0;
-        draw_text(&mut img, w, lx as i64, ly as i64 - 3, name, 1);
-    }
-    (w, h, img)
+    (w, h, img, why)
 }

@@ -631,7 +631,10 @@ fn write_ladder(
     };
     write(&csv_path, error::csv(points).as_bytes())?;
     write(&svg_path, error::svg(points, title, mark).as_bytes())?;
-    let (w, h, rgb) = error::png(points, title, mark);
+    let (w, h, rgb, why) = error::png(points, title, mark);
+    if let Some(why) = why {
+        eprintln!("firemedium: {}: {why}", png_path.display());
+    }
     firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
@@ -772,6 +775,36 @@ fn components_report(a: &ComponentsArgs) -> Result<String, String> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_png_plot_draws_each_estimator_in_its_colour_where_its_points_are() {
+        // Two estimators over two decades of time and error; each one's colour must appear near its markers,
+        // the winner's ring in black, whether or not the machine has a font for the labels.
+        let point = |estimator: &str, seconds: f64, rel_rmse: f64| super::error::Point {
+            estimator: estimator.into(),
+            setting: "spp".into(),
+            seconds,
+            rel_rmse,
+            rel_mse: rel_rmse * rel_rmse,
+            evaluations: None,
+        };
+        let points = [
+            point("off", 0.5, 2.0),
+            point("off", 5.0, 0.6),
+            point("a light with a name longer than the old legend held", 0.6, 0.5),
+            point("a light with a name longer than the old legend held", 6.0, 0.15),
+        ];
+        let (w, h, rgb, why) = super::error::png(&points, "test", Some(3));
+        assert_eq!((w, h, rgb.len()), (760, 480, 760 * 480 * 3));
+        if let Some(why) = &why {
+            assert!(why.starts_with("the PNG has no labels"), "{why}");
+        }
+        let count = |c: [u8; 3]| rgb.chunks_exact(3).filter(|p| *p == c).count();
+        // COLOURS[0] and [1]: the first and second estimator's lines and markers.
+        let (first, second) = (count([214, 39, 40]), count([255, 127, 14]));
+        assert!(first > 200 && second > 200, "{first} {second}");
+        assert!(count([0, 0, 0]) > 50);
+    }
+
     #[test]
     fn the_csv_quotes_names_holding_commas() {
         let p = super::error::Point {
