@@ -790,8 +790,16 @@ mod tests {
         let points = [
             point("off", 0.5, 2.0),
             point("off", 5.0, 0.6),
-            point("a light with a name longer than the old legend held", 0.6, 0.5),
-            point("a light with a name longer than the old legend held", 6.0, 0.15),
+            point(
+                "a light with a name longer than the old legend held",
+                0.6,
+                0.5,
+            ),
+            point(
+                "a light with a name longer than the old legend held",
+                6.0,
+                0.15,
+            ),
         ];
         let (w, h, rgb, why) = super::error::png(&points, "test", Some(3));
         assert_eq!((w, h, rgb.len()), (760, 480, 760 * 480 * 3));
