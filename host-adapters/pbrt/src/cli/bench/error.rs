@@ -451,7 +451,18 @@ pub fn png(
     let mut img = vec![255u8; w * h * 3];
     let font = plot_font();
     let labels = font.is_ok();
-    let ax = Axes::new(points, w as f64, h as f64);
+    // (Points without a finite time and error stay in the CSV; an axis cannot hold them.)
+    let plotted = |p: &&Point| p.seconds.is_finite() && p.rel_rmse.is_finite();
+    let shown: Vec<Point> = points.iter().filter(plotted).cloned().collect();
+    if shown.is_empty() {
+        return (
+            w,
+            h,
+            img,
+            Some("no point with a finite time and error to plot".into()),
+        );
+    }
+    let ax = Axes::new(&shown, w as f64, h as f64);
     let x = 10f64.powf(ax.x0)..10f64.powf(ax.x1);
     let y = 10f64.powf(ax.y0)..10f64.powf(ax.y1);
     let drawn = (|| -> Result<(), Box<dyn std::error::Error + '_>> {
@@ -493,7 +504,7 @@ pub fn png(
         for (k, name) in estimators(points).iter().enumerate() {
             let (r, g, b) = COLOURS[k % COLOURS.len()];
             let c = RGBColor(r, g, b);
-            let pts: Vec<(f64, f64)> = points
+            let pts: Vec<(f64, f64)> = shown
                 .iter()
                 .filter(|p| &p.estimator == name)
                 .map(|p| (p.seconds.max(1e-6), p.rel_rmse.max(1e-9)))
@@ -506,7 +517,7 @@ pub fn png(
                 });
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
         }
-        if let Some(p) = mark.and_then(|i| points.get(i)) {
+        if let Some(p) = mark.and_then(|i| points.get(i)).filter(plotted) {
             let at = (p.seconds.max(1e-6), p.rel_rmse.max(1e-9));
             chart.draw_series(std::iter::once(Circle::new(at, 10, BLACK.stroke_width(2))))?;
             if labels {

@@ -811,6 +811,18 @@ mod tests {
         let (first, second) = (count([214, 39, 40]), count([255, 127, 14]));
         assert!(first > 200 && second > 200, "{first} {second}");
         assert!(count([0, 0, 0]) > 50);
+        // A point without a finite error (a dark reference) is left off the axes, not drawn at infinity; with
+        // none left, a blank plot and the reason.
+        let mut odd = points.to_vec();
+        odd.push(point("off", f64::INFINITY, f64::NAN));
+        let (_, _, same, _) = super::error::png(&odd, "test", Some(3));
+        assert_eq!(same, rgb);
+        let (_, _, blank, why) = super::error::png(&odd[4..], "test", None);
+        assert!(blank.iter().all(|&b| b == 255));
+        assert_eq!(
+            why.as_deref(),
+            Some("no point with a finite time and error to plot")
+        );
     }
 
     #[test]
