@@ -514,15 +514,20 @@ impl Integrator<'_> {
                     return None;
                 }
                 let (o, medium) = spot.leave(wi);
+                // The fire's emission along wi, up to the first opaque surface.
+                let le = self
+                    .walk_media(o, wi, f32::INFINITY, medium, Some((*fm, light)), rng)
+                    .1;
+                // (A line that brings no light — the fire hidden behind a surface — needs no density: the walk
+                // over the pdf's bricks comes after it.)
+                if le.is_black() {
+                    return None;
+                }
                 // Solid angle in medium space equals world solid angle for a similarity transform.
                 let pdf_dir = fire_pdf_direction(light, to_medium, p, wi, rng.time)? as f32 / nl;
                 if !(pdf_dir > 0.0) {
                     return None;
                 }
-                // The fire's emission along wi, up to the first opaque surface.
-                let le = self
-                    .walk_media(o, wi, f32::INFINITY, medium, Some((*fm, light)), rng)
-                    .1;
                 let l = (le / pdf_dir).finite_or_zero();
                 return (!l.is_black()).then_some((l, wi, pdf_dir));
             }
