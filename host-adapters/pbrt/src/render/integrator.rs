@@ -748,7 +748,11 @@ impl Integrator<'_> {
                         {
                             break;
                         }
-                        l += beta * S(e) * (*units * self.emission_weight(m, mis, d, rng.time));
+                        let e = S(e);
+                        // (MIS's density only for light that is there: a dark segment needs no walk.)
+                        if !e.is_black() {
+                            l += beta * e * (*units * self.emission_weight(m, mis, d, rng.time));
+                        }
                         match ev[0].event {
                             firemedium_abi::FM_EVENT_SCATTERED => {
                                 beta *= S(w);
@@ -837,7 +841,9 @@ impl Integrator<'_> {
                     }
                 } else {
                     let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
-                    l += beta * le * self.emission_weight(m, mis, d, rng.time);
+                    if !le.is_black() {
+                        l += beta * le * self.emission_weight(m, mis, d, rng.time);
+                    }
                     beta *= tr;
                     // A refracting fire bent the ray: continue from where it left, in its new direction (the
                     // surface hit found along the straight line no longer applies).
