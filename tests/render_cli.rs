@@ -289,6 +289,48 @@ fn bad_scenes_exit_1_with_file_line_col() {
 }
 
 #[test]
+fn firemedium_simd_caps_the_kernel_and_refuses_what_it_cannot_honour() {
+    // `FIREMEDIUM_SIMD=avx2` runs the march's AVX2 clone on a CPU with AVX-512 (on an AVX2 machine it is the one
+    // clone there is): the same image bit for bit. A value it cannot honour is refused, named, before any work.
+    let dir = tmp("simd");
+    let grid: String = (0..216)
+        .map(|k| format!("{} ", 1e-7 * (1.0 + (k % 7) as f64)))
+        .collect();
+    let temps: String = (0..216)
+        .map(|k| format!("{} ", 1200.0 + 60.0 * (k % 11) as f64))
+        .collect();
+    let scene = format!(
+        "LookAt 0 -4 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 12\nSampler \"independent\" \"integer pixelsamples\" 4\nIntegrator \"volpath\" \"integer maxdepth\" 2\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"integer nx\" 6 \"integer ny\" 6 \"integer nz\" 6 \"float density\" [{grid}] \"float temperature\" [{temps}] \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n"
+    );
+    std::fs::write(dir.join("s.pbrt"), &scene).unwrap();
+    let run = |simd: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .env("FIREMEDIUM_SIMD", simd)
+            .arg("render")
+            .arg(dir.join("s.pbrt"))
+            .arg("-o")
+            .arg(dir.join(out))
+            .arg("--quiet")
+            .output()
+            .unwrap()
+    };
+    let (native, avx2) = (run("native", "native.exr"), run("avx2", "avx2.exr"));
+    assert!(
+        native.status.success() && avx2.status.success(),
+        "{native:?}\n{avx2:?}"
+    );
+    assert!(mean_y(&read_exr(&dir.join("native.exr")).2) > 0.0);
+    assert!(same_render(&dir.join("native.exr"), &dir.join("avx2.exr")));
+    let o = run("avx1024", "bad.exr");
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("FIREMEDIUM_SIMD") && e.contains("\"avx1024\"") && e.contains("native or avx2"),
+        "{e}"
+    );
+}
+
+#[test]
 fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
     // A plugin (C, through the header) that forwards to the real one but reports every channel's XYZ weights
     // doubled: the renderer must render exactly twice as bright through it. (It computed its own weights from a

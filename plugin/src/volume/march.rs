@@ -206,12 +206,9 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
 }
 
 /// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`
-/// takes them); compiled for baseline x86-64 and for AVX2 + FMA, chosen once at run time. `tabs`: the channels
-/// to march, the volume's own when `None` (`l` and `t` hold as many as the tables have columns).
-#[multiversion::multiversion(targets(
-    "x86_64+avx512f+avx512vl+avx512bw+avx512dq+avx2+fma",
-    "x86_64+avx2+fma"
-))]
+/// takes them); compiled for baseline x86-64, for AVX2 + FMA and for AVX-512, chosen at run time — AVX-512 only
+/// where [`simd`] allows it (`FIREMEDIUM_SIMD=avx2` caps the kernel at what an AVX2 machine runs). `tabs`: the
+/// channels to march, the volume's own when `None` (`l` and `t` hold as many as the tables have columns).
 pub(super) fn march_kernel(
     v: &FireVolume,
     lt: &lanes::LaneTables,
@@ -221,6 +218,80 @@ pub(super) fn march_kernel(
     l: &mut [f64],
     t: &mut [f64],
 ) -> Option<f64> {
+    if simd() == Simd::Avx2 {
+        march_kernel_avx2(v, lt, tabs, ray, step, l, t)
+    } else {
+        march_kernel_any(v, lt, tabs, ray, step, l, t)
+    }
+}
+
+/// The instruction sets the march kernel may use: the best this CPU has, or at most AVX2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Simd {
+    Native,
+    Avx2,
+}
+
+/// The environment variable that caps the march kernel's instruction set.
+pub const SIMD_VAR: &str = "FIREMEDIUM_SIMD";
+
+/// `FIREMEDIUM_SIMD` read: unset, empty or `native` — the best this CPU has; `avx2` — no AVX-512 (what AVX2
+/// machines run, to measure them on a newer CPU or to render a farm's frames alike). Anything else is an error.
+pub fn simd_setting(value: Option<&str>) -> Result<Simd, crate::Error> {
+    match value.map(str::trim) {
+        None | Some("") => Ok(Simd::Native),
+        Some(v) if v.eq_ignore_ascii_case("native") => Ok(Simd::Native),
+        Some(v) if v.eq_ignore_ascii_case("avx2") => Ok(Simd::Avx2),
+        Some(v) => Err(crate::Error::invalid(
+            "volume",
+            SIMD_VAR,
+            format!("{v:?}"),
+            "native or avx2 (the environment variable capping the march kernel's instruction set)",
+        )),
+    }
+}
+
+/// The cap from the environment, read once per process (an unreadable value: no cap here — volumes refuse to
+/// be built with it, [`check_simd`]).
+pub fn simd() -> Simd {
+    static CAP: std::sync::OnceLock<Simd> = std::sync::OnceLock::new();
+    *CAP.get_or_init(|| {
+        let v = std::env::var_os(SIMD_VAR).map(|v| v.to_string_lossy().into_owned());
+        simd_setting(v.as_deref()).unwrap_or(Simd::Native)
+    })
+}
+
+/// Refuses a `FIREMEDIUM_SIMD` the march cannot honour (a volume's build calls it).
+pub fn check_simd() -> Result<(), crate::Error> {
+    let v = std::env::var_os(SIMD_VAR).map(|v| v.to_string_lossy().into_owned());
+    simd_setting(v.as_deref()).map(|_| ())
+}
+
+/// `kernel::march` in `cv` lanes of `v` channels for spectral bins (with or without species; T-dependent absorption
+/// is rgb's alone).
+macro_rules! lanes {
+    ($cv:literal, $v:literal, $s:expr, $a:expr, $f:ident, ($($arg:expr),*)) => {
+        match ($s, $a) {
+            (false, false) => kernel::march::<$cv, $v, false, false, $f>($($arg),*),
+            (true, false) => kernel::march::<$cv, $v, true, false, $f>($($arg),*),
+            _ => None,
+        }
+    };
+}
+
+/// [`march_kernel`]'s body, compiled for the targets given (the AVX-512 clone's lanes are 16 wide).
+macro_rules! march_kernel_for {
+    ($name:ident, $($target:literal),+) => {
+        #[multiversion::multiversion(targets($($target),+))]
+        fn $name(
+            v: &FireVolume,
+            lt: &lanes::LaneTables,
+            tabs: Option<kernel::Tabs>,
+            ray: &Ray,
+            step: f64,
+            l: &mut [f64],
+            t: &mut [f64],
+        ) -> Option<f64> {
     const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
     // The lanes' shape from the channel count: rgb in one lane of 4 (a 128-bit register, no padding work),
     // spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only in rgb
@@ -231,19 +302,6 @@ pub(super) fn march_kernel(
         j: &v.j,
         sigma: lt.sigma(),
     });
-    macro_rules! lanes {
-        ($cv:literal, $v:literal) => {
-            match (s, a) {
-                (false, false) => {
-                    kernel::march::<$cv, $v, false, false, F>(v, lt, tb, ray, step, l, t)
-                }
-                (true, false) => {
-                    kernel::march::<$cv, $v, true, false, F>(v, lt, tb, ray, step, l, t)
-                }
-                _ => None,
-            }
-        };
-    }
     match l.len() {
         0..=4 => match (s, a) {
             (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, tb, ray, step, l, t),
@@ -251,15 +309,23 @@ pub(super) fn march_kernel(
             (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, tb, ray, step, l, t),
             (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, tb, ray, step, l, t),
         },
-        5..=8 => lanes!(1, 8),
-        9..=16 if WIDE => lanes!(1, 16),
-        9..=16 => lanes!(2, 8),
-        17..=24 => lanes!(3, 8),
-        25..=32 if WIDE => lanes!(2, 16),
-        25..=32 => lanes!(4, 8),
+        5..=8 => lanes!(1, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+        9..=16 if WIDE => lanes!(1, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
+        9..=16 => lanes!(2, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+        17..=24 => lanes!(3, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+        25..=32 if WIDE => lanes!(2, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
+        25..=32 => lanes!(4, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
         _ => None,
     }
+        }
+    };
 }
+march_kernel_for!(
+    march_kernel_any,
+    "x86_64+avx512f+avx512vl+avx512bw+avx512dq+avx2+fma",
+    "x86_64+avx2+fma"
+);
+march_kernel_for!(march_kernel_avx2, "x86_64+avx2+fma");
 
 /// Per-ray state of the lane march: coefficients at the sample, radiance and transmittance.
 pub(super) struct LaneScratch {
@@ -456,6 +522,58 @@ mod tests {
                 "f32 and f64 cannot agree to the bit everywhere"
             );
         }
+    }
+
+    #[test]
+    fn the_avx2_cap_marches_as_the_best_kernel_does() {
+        // `FIREMEDIUM_SIMD=avx2` runs the AVX2 clone where the CPU has AVX-512 (30 bins: lanes of 8, not 16);
+        // per channel the same arithmetic, so the same numbers (on an AVX2 machine both are the AVX2 clone).
+        let rays = crate::volume::tests::blob_rays(40, 900);
+        for (extra, species) in [
+            (vec![], false),
+            (vec![], true),
+            (vec![Param::int("bins", 12)], false),
+        ] {
+            let (v, _) = blob_pair(&extra, species);
+            let lt = v.lanes.as_ref().expect("the blob marches in lanes");
+            let c = v.channels();
+            let mut lit = 0;
+            for ray in &rays {
+                let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+                let (mut l2, mut t2) = (vec![0.0; c], vec![0.0; c]);
+                let te = march_kernel_any(&v, lt, None, ray, v.step, &mut l, &mut t);
+                let te2 = march_kernel_avx2(&v, lt, None, ray, v.step, &mut l2, &mut t2);
+                assert!(te.is_some() && te == te2, "{ray:?}: {te:?} vs {te2:?}");
+                let peak = l.iter().fold(0f64, |m, &x| m.max(x));
+                lit += (peak > 0.0) as usize;
+                for k in 0..c {
+                    assert!(
+                        (l[k] - l2[k]).abs() <= 1e-6 * peak,
+                        "ch {k}: {} vs {}",
+                        l[k],
+                        l2[k]
+                    );
+                    assert!(
+                        (t[k] - t2[k]).abs() <= 1e-6,
+                        "ch {k}: {} vs {}",
+                        t[k],
+                        t2[k]
+                    );
+                }
+            }
+            assert!(lit > 10, "only {lit} rays saw the fire");
+        }
+        // The variable's values: unset, empty and `native` leave the choice to the CPU; `avx2` caps it; anything
+        // else is refused, naming the variable and the value.
+        assert_eq!(simd_setting(None), Ok(Simd::Native));
+        assert_eq!(simd_setting(Some(" ")), Ok(Simd::Native));
+        assert_eq!(simd_setting(Some("Native")), Ok(Simd::Native));
+        assert_eq!(simd_setting(Some("avx2")), Ok(Simd::Avx2));
+        let e = simd_setting(Some("avx1024")).unwrap_err().to_string();
+        assert!(
+            e.contains("FIREMEDIUM_SIMD") && e.contains("avx1024") && e.contains("avx2"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -202,6 +202,7 @@ impl FireVolume {
         let comps = settings::components();
         let r = ParamReader::new("volume", list, &comps);
         r.check_names()?;
+        march::check_simd()?;
         // (The look was expanded into the list above; reading it checks its name.)
         r.string("look")?;
         let set = Settings::read(&r, list)?;
