@@ -46,9 +46,15 @@ const DENSE_BRICKS: usize = 1 << 21;
 /// Rays on which a copy's line is checked: from around the fire toward points the light samples.
 const BLOCK_RAYS: u64 = 1024;
 
-/// The line estimate's steps across the fire's longest side (its step `linestep` 0: the longest side over this,
-/// or the volume's own step if that is longer).
+/// The line estimate's steps across the fire's longest side when `lineblock` is given and `linestep` is 0 (the
+/// longest side over this, or the volume's own step if that is longer), and the finest [`LINE_STEPS_TRIED`].
 pub const LINE_STEPS: f64 = 64.0;
+
+/// The steps across the fire's longest side `linestep` 0 and `lineblock` 0 try, coarsest first: the first whose
+/// line stays within [`BLOCK_BIAS`] of the volume's march on the light's rays is taken (the last unchecked). On
+/// issue 29's room at 256³ the 16 steps' line through the copy of 8³ blocks costs half the 64 steps' through 2³
+/// blocks, with no more error in the image (docs/RESULTS.md).
+pub const LINE_STEPS_TRIED: [f64; 3] = [16.0, 32.0, LINE_STEPS];
 
 /// How the light estimates the fire's emission along a sampled direction (next-event estimation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -197,7 +203,7 @@ impl FireLight {
                 "light",
                 "linestep",
                 line.step_voxels.to_string(),
-                "a step ≥ 0 voxels (0: the fire's longest side over 64)",
+                "a step ≥ 0 voxels (0: the fire's longest side over 16, 32 or 64 steps, checked)",
             ));
         }
         if !(0.0..=1.0).contains(&line.correction) {
@@ -224,12 +230,6 @@ impl FireLight {
         let longest = (0..3)
             .map(|a| light.dims[a] as f64 * voxel[a])
             .fold(0.0, f64::max);
-        let step = if line.step_voxels > 0.0 {
-            line.step_voxels * voxel.min_element()
-        } else {
-            longest / LINE_STEPS
-        };
-        light.line_step = step.max(v.step_length());
         light.correction = line.correction;
         light.brick_density = light.dense_bricks();
         if !matches!(line.block, 0 | 1 | 2 | 4 | 8) {
@@ -241,28 +241,55 @@ impl FireLight {
             ));
         }
         let start = Instant::now();
-        // Blocks no larger than about the step (the power of two nearest to it, at most a brick's side).
-        let ratio = light.line_step / voxel.min_element();
-        let sizes: &[usize] = match line.block {
-            0 => &[8, 4, 2],
-            1 => &[],
-            f => &[f][..],
+        // The step and the copy: given, or (both 0) the coarsest of the tried steps whose line — through a copy
+        // of blocks no larger than about the step, or the fire's own voxels — stays within BLOCK_BIAS of the
+        // volume's march on the light's own rays; the finest is taken unchecked if none does.
+        let auto = line.step_voxels == 0.0 && line.block == 0;
+        let tried: &[f64] = if auto {
+            &LINE_STEPS_TRIED
+        } else {
+            &[LINE_STEPS]
         };
         let budget = v.spare_bytes().saturating_sub(light.bytes() as u64);
-        for &f in sizes {
-            if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {
-                continue;
+        let mut fine = None;
+        for (k, &n) in tried.iter().enumerate() {
+            let step = if line.step_voxels > 0.0 {
+                line.step_voxels * voxel.min_element()
+            } else {
+                longest / n
+            };
+            light.line_step = step.max(v.step_length());
+            // (A step no longer than the volume's own: the volume's march, nothing to check.)
+            if !(light.line_step > v.step_length()) {
+                break;
             }
-            let Some(m) = v.mip(f, budget) else { continue };
-            let m = Box::new(m);
-            if line.block == 0 {
-                let bias = light.block_bias(&m);
-                if !(bias.abs() <= BLOCK_BIAS) {
+            let last = k + 1 == tried.len();
+            let ratio = light.line_step / voxel.min_element();
+            let sizes: &[usize] = match line.block {
+                0 => &[8, 4, 2],
+                1 => &[],
+                f => &[f][..],
+            };
+            let mut within = |light: &FireLight, m: &FireVolume| {
+                let f = *fine.get_or_insert_with(|| light.line_sum(&light.vol, None));
+                let bias = light.line_sum(m, Some(light.line_step)) / f - 1.0;
+                bias.abs() <= BLOCK_BIAS
+            };
+            for &f in sizes {
+                if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {
                     continue;
                 }
+                let Some(m) = v.mip(f, budget) else { continue };
+                if line.block == 0 && !within(&light, &m) {
+                    continue;
+                }
+                light.mip = Some(Box::new(m));
+                break;
             }
-            light.mip = Some(m);
-            break;
+            // No copy at this step: the fire's own voxels, checked unless this is the last step tried.
+            if light.mip.is_some() || last || within(&light, v) {
+                break;
+            }
         }
         light.channels = light.choose_channels(line.channels)?;
         light.build_seconds += start.elapsed().as_secs_f64();
@@ -897,22 +924,29 @@ impl FireLight {
     /// The relative difference between the line through the copy `m` and the volume's own march, in next-event
     /// estimation's sum over [`BLOCK_RAYS`] rays from a sphere around the fire toward points this light samples
     /// (each line over the density of its direction).
+    #[cfg(test)]
     fn block_bias(&self, m: &FireVolume) -> f64 {
-        let v = &*self.vol;
-        let c = v.channels();
+        self.line_sum(m, Some(self.line_step)) / self.line_sum(&self.vol, None) - 1.0
+    }
+
+    /// Next-event estimation's sum of the lines' radiance (every bin) over the densities of their directions, on
+    /// the [`check_rays`](Self::check_rays): through `m` at `step`, or (None) the volume's own march. NaN or ∞
+    /// where nothing is seen (no check passes).
+    fn line_sum(&self, m: &FireVolume, step: Option<f64>) -> f64 {
+        let c = m.channels();
         let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
-        let (mut coarse, mut fine) = (0.0, 0.0);
+        let mut sum = 0.0;
         for (ray, p) in self.check_rays() {
-            m.integrate_stepped_at(&ray, 0.0, self.line_step, &mut l, &mut t);
-            coarse += l.iter().sum::<f64>() / p;
-            v.integrate_at(&ray, 0.0, &mut l, &mut t);
-            fine += l.iter().sum::<f64>() / p;
+            match step {
+                Some(s) => m.integrate_stepped_at(&ray, 0.0, s, &mut l, &mut t),
+                None => m.integrate_at(&ray, 0.0, &mut l, &mut t),
+            };
+            sum += l.iter().sum::<f64>() / p;
         }
-        if fine > 0.0 {
-            coarse / fine - 1.0
-        } else {
-            f64::INFINITY
+        if step.is_none() && !(sum > 0.0) {
+            return f64::NAN;
         }
+        sum
     }
 
     /// The rays of the line's build-time checks and the density of each one's direction: [`BLOCK_RAYS`] from a
@@ -1682,6 +1716,53 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(e.contains("lineblock") && e.contains('3'), "{e}");
+    }
+
+    #[test]
+    fn the_line_takes_the_coarsest_step_that_keeps_to_the_fire() {
+        // `linestep` and `lineblock` 0: 16, 32 or 64 steps across the fire, the coarsest whose line stays within
+        // 0.5 % of the volume's march on the light's rays; the finest unchecked where none does. Given a block,
+        // 64 steps as before.
+        let steps = |l: &FireLight| {
+            let longest = 2.0;
+            (longest / l.line_step()).round() as usize
+        };
+        // (A thin ball at one temperature: a copy of 4³ blocks at 16 steps; falling 700 K to its rim, the copy
+        // strays and the fire's own voxels at 16 steps do not; a thick ball as well: only 64 steps.)
+        for (fv, steep, want) in [
+            (1e-9, false, (16, 4)),
+            (1e-9, true, (16, 1)),
+            (1e-7, false, (16, 2)),
+            (3e-6, true, (64, 1)),
+        ] {
+            let l = FireLight::with(
+                ball(fv, steep),
+                Weighting::Power,
+                8,
+                LineEstimate::default(),
+            )
+            .unwrap();
+            let bias = l.block_bias(l.mip.as_deref().unwrap_or(&l.vol));
+            assert_eq!((steps(&l), l.line_block()), want, "{fv} {steep}");
+            assert!(bias.abs() <= BLOCK_BIAS, "{fv} {steep}: {bias}");
+        }
+        // The thick, steep ball's own voxels at 16 and 32 steps (3 and 1.5 voxels) stray: why 64 were taken.
+        for step_voxels in [3.0, 1.5] {
+            let coarse = LineEstimate {
+                step_voxels,
+                block: 1,
+                ..LineEstimate::default()
+            };
+            let l = FireLight::with(ball(3e-6, true), Weighting::Power, 8, coarse).unwrap();
+            let bias = l.block_bias(&l.vol);
+            assert!(bias.abs() > BLOCK_BIAS, "{step_voxels}: {bias}");
+        }
+        let given = LineEstimate {
+            block: 2,
+            ..LineEstimate::default()
+        };
+        let l = FireLight::with(ball(1e-9, false), Weighting::Power, 8, given).unwrap();
+        assert_eq!((steps(&l), l.line_block()), (64, 2));
     }
 
     #[test]

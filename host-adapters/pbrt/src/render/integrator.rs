@@ -465,8 +465,28 @@ impl Integrator<'_> {
             }
             o = h.p;
             t_max -= h.t;
+            // A light's walk outside its fire that cannot reach a shape bounding the fire's medium again has
+            // gathered all the fire's light it will (its transmittance from here on is not wanted): the rest of
+            // the walk — a traversal to the wall behind — is skipped.
+            if let Some((f, _)) = fire {
+                if medium != Some(f) && !self.reaches(f, o, d, t_max) {
+                    return (tr, l);
+                }
+            }
         }
         (tr, l)
+    }
+
+    /// Whether o + t·d, t ∈ (0, t_max), meets the box of the shapes bounding medium `m` (the slab test).
+    fn reaches(&self, m: usize, o: Vec3A, d: Vec3A, t_max: f32) -> bool {
+        let Some(Some(b)) = self.scene.media_boxes.get(m) else {
+            return false;
+        };
+        let inv = d.recip();
+        let (t0, t1) = ((b.min - o) * inv, (b.max - o) * inv);
+        let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
+        // (NaN from 0 × ∞ on a face's plane: counted as reaching, the walk goes on as before.)
+        !(near > far || far < 0.0 || near > t_max)
     }
 
     /// Radiance from one light toward `spot` (NEE), already divided by the light's selection probability:

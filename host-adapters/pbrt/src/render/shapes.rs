@@ -461,7 +461,13 @@ impl Bvh {
         let bvh = (!prims.is_empty()).then(|| {
             obvhs::bvh2::builder::build_bvh2(
                 &prims,
-                BvhBuildParams::medium_build(),
+                // Leaves of at most 2 primitives, not obvhs's 8 (sized for SIMD leaf tests): the traversal here
+                // tests a leaf's primitives one by one. On issue 29's room the traversals' share of a render
+                // fell from 15.4 % to 12.3–13.6 %, the images the same bit for bit (docs/RESULTS.md).
+                BvhBuildParams {
+                    max_prims_per_leaf: 2,
+                    ..BvhBuildParams::medium_build()
+                },
                 &mut std::time::Duration::default(),
             )
         });
@@ -492,6 +498,32 @@ impl Bvh {
                 max: Vec3A::ZERO,
             },
         }
+    }
+
+    /// The box around the primitives whose medium interface names medium `m` (an instance's whole box when its
+    /// object holds one), None if none does: a ray that misses it cannot cross into or out of `m`.
+    pub fn media_box(&self, m: usize) -> Option<Aabb> {
+        let mut b: Option<Aabb> = None;
+        for prim in &self.prims {
+            let names = match &prim.geom {
+                Geom::Instance { object, .. } => object.media_box(m).is_some(),
+                _ => prim
+                    .media
+                    .is_some_and(|(i, o)| i == Some(m) || o == Some(m)),
+            };
+            if names {
+                let pb = prim.aabb();
+                b = Some(match b {
+                    Some(mut a) => {
+                        a.extend(pb.min);
+                        a.extend(pb.max);
+                        a
+                    }
+                    None => pb,
+                });
+            }
+        }
+        b
     }
 
     /// The nearest hit's parameter and primitive index.

@@ -291,6 +291,9 @@ pub struct MediumReport {
 pub struct Scene {
     pub bins: Bins,
     pub bvh: Bvh,
+    /// Per medium, the box around the shapes whose interface names it (None: none does) — a ray that misses it
+    /// neither enters nor leaves the medium.
+    pub media_boxes: Vec<Option<obvhs::aabb::Aabb>>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
     pub media: Vec<Medium>,
@@ -829,9 +832,12 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         ));
         spp = spp.next_power_of_two();
     }
+    let bvh = Bvh::new(b.prims);
+    let media_boxes = (0..b.media.len()).map(|m| bvh.media_box(m)).collect();
     Ok(Scene {
         bins,
-        bvh: Bvh::new(b.prims),
+        bvh,
+        media_boxes,
         materials: b.materials,
         lights: b.lights,
         media: b.media,
