@@ -20,7 +20,8 @@ pub struct Estimator {
 /// along each sampled direction), each change alone (`brick`: cells of 8³ voxels; `own`: the line's march at
 /// 64 steps across the fire, through its own voxels; `allbins`: the same through the copy of the fire in blocks
 /// that the light's build-time check keeps, in every bin; `coarse`: that in the 8 bins the check allows, the
-/// default; `corrected`: toward the volume's march with
+/// default — at the coarsest of 16, 32 or 64 steps across the fire that the check allows; `steps64`: at 64 steps
+/// through the 2³ copy, the default before that on the room at 256³; `corrected`: toward the volume's march with
 /// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (pbrt-v4's
 /// strategy: emission found only by paths that pass through the fire).
 pub const ESTIMATORS: &[Estimator] = &[
@@ -57,6 +58,19 @@ pub const ESTIMATORS: &[Estimator] = &[
                 ("linestep", "0"),
                 ("lineblock", "0"),
                 ("linechannels", "4096"),
+            ],
+        )),
+    },
+    Estimator {
+        key: "steps64",
+        name: "64 steps, 2³ blocks, 8 bins",
+        light: Some((
+            "power",
+            &[
+                ("cell", "8"),
+                ("linestep", "0"),
+                ("lineblock", "2"),
+                ("linechannels", "0"),
             ],
         )),
     },

@@ -56,12 +56,12 @@ pub struct FireLightArgs {
     /// speed drifts between runs by tens of per cent; alternating and the median keep one run's rows comparable.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeats: u32,
-    /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, coarse, corrected, luminance,
+    /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, steps64, coarse, corrected, luminance,
     /// escaping.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "off,voxel,brick,own,allbins,coarse,corrected,luminance,escaping"
+        default_value = "off,voxel,brick,own,allbins,steps64,coarse,corrected,luminance,escaping"
     )]
     estimators: Vec<String>,
     /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R (PREFIX-NAME.* for a scene).
