@@ -477,7 +477,7 @@ impl Integrator<'_> {
         (tr, l)
     }
 
-    /// Whether o + t·d, t ∈ (0, t_max), meets the box of the shapes bounding medium `m` (the slab test).
+    /// Whether o + t·d, t ∈ (eps / 2, t_max), meets the box of the shapes bounding medium `m` (the slab test).
     fn reaches(&self, m: usize, o: Vec3A, d: Vec3A, t_max: f32) -> bool {
         let Some(Some(b)) = self.scene.media_boxes.get(m) else {
             return false;
@@ -485,8 +485,10 @@ impl Integrator<'_> {
         let inv = d.recip();
         let (t0, t1) = ((b.min - o) * inv, (b.max - o) * inv);
         let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
-        // (NaN from 0 × ∞ on a face's plane: counted as reaching, the walk goes on as before.)
-        !(near > far || far < 0.0 || near > t_max)
+        // (The walk's next traversal starts at t = eps — from a point on the box's face, `far` is 0 up to
+        // rounding —, so a box that ends before eps / 2 holds nothing it could hit. NaN from 0 × ∞ on a face's
+        // plane: counted as reaching, the walk goes on as before.)
+        !(near > far || far < 0.5 * self.scene.eps || near > t_max)
     }
 
     /// Radiance from one light toward `spot` (NEE), already divided by the light's selection probability:
