@@ -425,7 +425,9 @@ impl Integrator<'_> {
 
     /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
     /// (transmittance — zero if an opaque surface is in the way —, the emission of medium `fire` seen along
-    /// the way, attenuated by every medium in front of it, as its fire light estimates it).
+    /// the way, attenuated by every medium in front of it, as its fire light estimates it). With `fire` the walk
+    /// ends where the fire's shapes can no longer be reached, its transmittance then only that far (a light
+    /// sample wants the emission alone).
     fn walk_media(
         &self,
         mut o: Vec3A,

@@ -596,6 +596,41 @@ mod tests {
     }
 
     #[test]
+    fn a_mediums_box_holds_every_shape_that_names_it_instances_too() {
+        // Medium 0 bounded by two spheres far apart (a ray leaving one may enter the other), medium 1 inside an
+        // instanced object's sphere, medium 2 named by nothing; a sphere with no interface counts for none.
+        let with = |r: f32, c: Vec3A, media| Prim {
+            media: Some(media),
+            ..sphere(r, c)
+        };
+        let object = Arc::new(Bvh::new(vec![with(0.5, Vec3A::ZERO, (Some(1), None))]));
+        let m = Affine3A::from_translation(glam::Vec3::new(0.0, 10.0, 0.0));
+        let instance = Prim {
+            geom: Geom::Instance {
+                to_world: m,
+                to_obj: m.inverse(),
+                object,
+            },
+            ..sphere(1.0, Vec3A::ZERO)
+        };
+        let bvh = Bvh::new(vec![
+            with(1.0, Vec3A::new(-3.0, 0.0, 0.0), (Some(0), None)),
+            sphere(2.0, Vec3A::new(0.0, 0.0, 8.0)),
+            with(0.5, Vec3A::new(3.0, 1.0, 0.0), (None, Some(0))),
+            instance,
+        ]);
+        // (A sphere's box is padded by a few ulps.)
+        let near = |b: Aabb, lo: [f32; 3], hi: [f32; 3]| {
+            b.min.abs_diff_eq(Vec3A::from(lo), 1e-5) && b.max.abs_diff_eq(Vec3A::from(hi), 1e-5)
+        };
+        let b = bvh.media_box(0).unwrap();
+        assert!(near(b, [-4.0, -1.0, -1.0], [3.5, 1.5, 1.0]), "{b:?}");
+        let b = bvh.media_box(1).unwrap();
+        assert!(near(b, [-0.5, 9.5, -0.5], [0.5, 10.5, 0.5]), "{b:?}");
+        assert!(bvh.media_box(2).is_none());
+    }
+
+    #[test]
     fn hits_and_normals() {
         let bvh = Bvh::new(vec![
             sphere(1.0, Vec3A::new(0.0, 0.0, 5.0)),
