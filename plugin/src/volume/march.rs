@@ -255,16 +255,17 @@ pub fn simd_setting(value: Option<&str>) -> Result<Simd, crate::Error> {
 /// be built with it, [`check_simd`]).
 pub fn simd() -> Simd {
     static CAP: std::sync::OnceLock<Simd> = std::sync::OnceLock::new();
-    *CAP.get_or_init(|| {
-        let v = std::env::var_os(SIMD_VAR).map(|v| v.to_string_lossy().into_owned());
-        simd_setting(v.as_deref()).unwrap_or(Simd::Native)
-    })
+    *CAP.get_or_init(|| simd_from_env().unwrap_or(Simd::Native))
 }
 
 /// Refuses a `FIREMEDIUM_SIMD` the march cannot honour (a volume's build calls it).
 pub fn check_simd() -> Result<(), crate::Error> {
+    simd_from_env().map(|_| ())
+}
+
+fn simd_from_env() -> Result<Simd, crate::Error> {
     let v = std::env::var_os(SIMD_VAR).map(|v| v.to_string_lossy().into_owned());
-    simd_setting(v.as_deref()).map(|_| ())
+    simd_setting(v.as_deref())
 }
 
 /// `kernel::march` in `cv` lanes of `v` channels for spectral bins (with or without species; T-dependent absorption
@@ -292,31 +293,31 @@ macro_rules! march_kernel_for {
             l: &mut [f64],
             t: &mut [f64],
         ) -> Option<f64> {
-    const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
-    // The lanes' shape from the channel count: rgb in one lane of 4 (a 128-bit register, no padding work),
-    // spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only in rgb
-    // physical mode (3 channels).
-    const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
-    let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
-    let tb = tabs.unwrap_or(kernel::Tabs {
-        j: &v.j,
-        sigma: lt.sigma(),
-    });
-    match l.len() {
-        0..=4 => match (s, a) {
-            (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, tb, ray, step, l, t),
-            (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, tb, ray, step, l, t),
-            (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, tb, ray, step, l, t),
-            (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, tb, ray, step, l, t),
-        },
-        5..=8 => lanes!(1, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
-        9..=16 if WIDE => lanes!(1, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
-        9..=16 => lanes!(2, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
-        17..=24 => lanes!(3, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
-        25..=32 if WIDE => lanes!(2, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
-        25..=32 => lanes!(4, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
-        _ => None,
-    }
+            const F: bool = multiversion::target::target_cfg_f!(target_feature = "fma");
+            // The lanes' shape from the channel count: rgb in one lane of 4 (a 128-bit register, no padding
+            // work), spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only
+            // in rgb physical mode (3 channels).
+            const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
+            let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
+            let tb = tabs.unwrap_or(kernel::Tabs {
+                j: &v.j,
+                sigma: lt.sigma(),
+            });
+            match l.len() {
+                0..=4 => match (s, a) {
+                    (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, tb, ray, step, l, t),
+                    (false, true) => kernel::march::<1, 4, false, true, F>(v, lt, tb, ray, step, l, t),
+                    (true, false) => kernel::march::<1, 4, true, false, F>(v, lt, tb, ray, step, l, t),
+                    (true, true) => kernel::march::<1, 4, true, true, F>(v, lt, tb, ray, step, l, t),
+                },
+                5..=8 => lanes!(1, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+                9..=16 if WIDE => lanes!(1, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
+                9..=16 => lanes!(2, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+                17..=24 => lanes!(3, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+                25..=32 if WIDE => lanes!(2, 16, s, a, F, (v, lt, tb, ray, step, l, t)),
+                25..=32 => lanes!(4, 8, s, a, F, (v, lt, tb, ray, step, l, t)),
+                _ => None,
+            }
         }
     };
 }
