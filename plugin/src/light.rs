@@ -252,6 +252,8 @@ impl FireLight {
         };
         let budget = v.spare_bytes().saturating_sub(light.bytes() as u64);
         let mut fine = None;
+        // (Each copy built once, whichever steps try it.)
+        let mut copies: Vec<(usize, Option<FireVolume>)> = Vec::new();
         for (k, &n) in tried.iter().enumerate() {
             let step = if line.step_voxels > 0.0 {
                 line.step_voxels * voxel.min_element()
@@ -279,11 +281,24 @@ impl FireLight {
                 if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {
                     continue;
                 }
-                let Some(m) = v.mip(f, budget) else { continue };
-                if line.block == 0 && !within(&light, &m) {
+                let k = match copies.iter().position(|c| c.0 == f) {
+                    Some(k) => k,
+                    None => {
+                        // (Within the budget less the copies held.)
+                        let held: u64 = copies
+                            .iter()
+                            .filter_map(|c| c.1.as_ref())
+                            .map(|m| m.mip_bytes() as u64)
+                            .sum();
+                        copies.push((f, v.mip(f, budget.saturating_sub(held))));
+                        copies.len() - 1
+                    }
+                };
+                let Some(m) = &copies[k].1 else { continue };
+                if line.block == 0 && !within(&light, m) {
                     continue;
                 }
-                light.mip = Some(Box::new(m));
+                light.mip = copies.swap_remove(k).1.map(Box::new);
                 break;
             }
             // No copy at this step: the fire's own voxels, checked unless this is the last step tried.
