@@ -7,7 +7,7 @@ mod image;
 #[path = "common/render.rs"]
 mod render;
 
-use render::{mean_rgb, out_dir, render, shared, y_of};
+use render::{data, mean_rgb, out_dir, read_text, render, y_of};
 
 /// A unit sphere of `material` (after `preamble`) inside a uniform sky of luminance 1, seen from 5 units away.
 fn furnace(name: &str, preamble: &str, material: &str) -> [f64; 3] {
@@ -104,10 +104,10 @@ fn pbrt_v4s_default_coat_absorbs_what_its_layer_and_walks_leave_out() {
     assert!(y > 0.75 && y < 0.95, "Y {y}");
 }
 
-/// ∫ R(λ) D65(λ) ȳ(λ) dλ / ∫ D65 ȳ at 1 nm from ../shared/data's CIE table: the luminance a mirror of normal
+/// ∫ R(λ) D65(λ) ȳ(λ) dλ / ∫ D65 ȳ at 1 nm from tests/data's CIE table: the luminance a mirror of normal
 /// reflectance R shows under a white (D65, luminance 1) sky.
 fn luminance_under_d65(r: impl Fn(f64) -> f64) -> f64 {
-    let text = std::fs::read_to_string(shared("cie1931_2deg_cmf_1nm.csv")).unwrap();
+    let text = read_text(&data("cie1931_2deg_cmf_1nm.csv"));
     let (mut num, mut den) = (0.0, 0.0);
     for line in text.lines() {
         let v: Vec<f64> = line

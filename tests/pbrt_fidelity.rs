@@ -1,6 +1,6 @@
 //! pbrt-v4 fidelity, end to end: scenes written for pbrt-v4 render at pbrt-v4's own pixel values (its film,
 //! its light normalisation, its grid media's peak-normalised blackbody), checked against numbers measured by
-//! running pbrt-v4 itself (`../shared/data/pbrt-v4-measured/`) and against closed forms from its definitions.
+//! running pbrt-v4 itself (`tests/data/pbrt-v4-measured/`) and against closed forms from its definitions.
 
 #[path = "common/image.rs"]
 mod image;
@@ -8,7 +8,7 @@ mod image;
 mod render;
 
 use image::read_exr;
-use render::{mean_rgb, out_dir, render, run_render, shared, y_of};
+use render::{data, mean_rgb, out_dir, read_text, render, run_render, y_of};
 use std::path::{Path, PathBuf};
 
 /// The slab scenes' two regions, inside their edges: the grid's box [0, 1] (x) × [0, 1] (z) and the light's
@@ -19,16 +19,16 @@ const LIGHT: ((usize, usize), (usize, usize)) = ((16, 29), (10, 22));
 
 /// The slab scene at temperature `t` (K), as a file in `dir`: `slab_const.pbrt` with its 2000 K replaced.
 fn slab_at(dir: &Path, t: f64) -> PathBuf {
-    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let text = read_text(&data("pbrt-v4-measured/slab_const.pbrt"));
     let p = dir.join(format!("slab_{t}.pbrt"));
     std::fs::write(&p, text.replace(" 2000", &format!(" {t}"))).unwrap();
     p
 }
 
 /// pbrt-v4's Y of an optically thick grid at `t` with Lescale 1: ∫ ȳ(λ) B(λ, T) / B(λ_max, T) dλ, integrated
-/// here at 1 nm from the CIE table in ../shared/data (independent of the renderer's bins).
+/// here at 1 nm from the CIE table in tests/data (independent of the renderer's bins).
 fn thick_y(t: f64) -> f64 {
-    let text = std::fs::read_to_string(shared("cie1931_2deg_cmf_1nm.csv")).unwrap();
+    let text = read_text(&data("cie1931_2deg_cmf_1nm.csv"));
     let b = |l: f64| firemedium_core::blackbody::spectral_radiance(t, l);
     let peak = b(firemedium_core::blackbody::WIEN / t * 1e9);
     text.lines()
@@ -44,11 +44,11 @@ fn thick_y(t: f64) -> f64 {
 
 #[test]
 fn a_thick_grid_beside_an_rgb_white_light_has_pbrt_v4s_pixel_ratio() {
-    // Measured by pbrt-v4 itself on slab_const.pbrt (../shared/data/pbrt-v4-measured, 1024 spp): the 2000 K box
+    // Measured by pbrt-v4 itself on slab_const.pbrt (tests/data/pbrt-v4-measured, 1024 spp): the 2000 K box
     // records Y = 5.1809 ± 0.0005, RGB (13.060, 3.351, 0.106); the `rgb L [1 1 1]` light Y = 1, RGB (1, 1, 1.002).
     let dir = out_dir("slab");
     let img = render(
-        &shared("pbrt-v4-measured/slab_const.pbrt"),
+        &data("pbrt-v4-measured/slab_const.pbrt"),
         &dir.join("c.exr"),
         &["--spp", "16"],
     );
@@ -97,7 +97,7 @@ fn a_one_voxel_grid_fades_to_its_faces_as_pbrt_v4s() {
     // (σ_a = 1000 d, S = Lescale · B̃(T), L = ∫ σ_a S e^{−τ} dy), over the pixel's footprint.
     let dir = out_dir("tent");
     let img = render(
-        &shared("pbrt-v4-measured/slab.pbrt"),
+        &data("pbrt-v4-measured/slab.pbrt"),
         &dir.join("t.exr"),
         &["--spp", "1024"],
     );
@@ -109,8 +109,7 @@ fn a_one_voxel_grid_fades_to_its_faces_as_pbrt_v4s() {
         (face - 5.7e-6).abs() < 3.0 * 1.8e-6,
         "face mean Y {face}, pbrt-v4 5.7e-6 ± 1.8e-6"
     );
-    let cmf: Vec<[f64; 2]> = std::fs::read_to_string(shared("cie1931_2deg_cmf_1nm.csv"))
-        .unwrap()
+    let cmf: Vec<[f64; 2]> = read_text(&data("cie1931_2deg_cmf_1nm.csv"))
         .lines()
         .filter_map(|line| {
             let v: Vec<f64> = line
@@ -406,7 +405,7 @@ fn the_film_applies_pbrt_v4s_sensor_settings() {
     // colour; whitebalance 5000 K adapts 5000 K daylight to D65, so the D65 light turns blue (b > r); savefp16
     // writes half floats (a smaller file, the same picture to half's precision).
     let dir = out_dir("film");
-    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let text = read_text(&data("pbrt-v4-measured/slab_const.pbrt"));
     let with = |name: &str, extra: &str| {
         let p = dir.join(format!("{name}.pbrt"));
         std::fs::write(&p, text.replace("\"bool savefp16\" false", extra)).unwrap();
@@ -501,9 +500,9 @@ fn a_crop_window_renders_its_pixels_of_the_full_film() {
     // --pixelbounds). Each pixel is the full render's, to the bit (pixels keep their seeds), and the EXR's data
     // window sits at (32, 8) inside the 64 × 32 display window.
     let dir = out_dir("crop");
-    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let text = read_text(&data("pbrt-v4-measured/slab_const.pbrt"));
     let full = render(
-        &shared("pbrt-v4-measured/slab_const.pbrt"),
+        &data("pbrt-v4-measured/slab_const.pbrt"),
         &dir.join("full.exr"),
         &["--spp", "2"],
     );
@@ -518,12 +517,12 @@ fn a_crop_window_renders_its_pixels_of_the_full_film() {
     .unwrap();
     let cases: [(&Path, &str, Vec<&str>); 3] = [
         (
-            &shared("pbrt-v4-measured/slab_const.pbrt"),
+            &data("pbrt-v4-measured/slab_const.pbrt"),
             "crop",
             vec!["--cropwindow", "0.5", "1", "0.25", "0.75"],
         ),
         (
-            &shared("pbrt-v4-measured/slab_const.pbrt"),
+            &data("pbrt-v4-measured/slab_const.pbrt"),
             "bounds",
             vec!["--pixelbounds", "32", "64", "8", "24"],
         ),
@@ -563,7 +562,7 @@ fn a_crop_window_renders_its_pixels_of_the_full_film() {
 fn the_scenes_seed_option_is_the_default_seed() {
     // `Option "integer seed" 5` renders as `--seed 5`; `--seed` wins over it.
     let dir = out_dir("seed");
-    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let text = read_text(&data("pbrt-v4-measured/slab_const.pbrt"));
     let seeded = dir.join("seeded.pbrt");
     std::fs::write(&seeded, format!("Option \"integer seed\" 5\n{text}")).unwrap();
     let run = |scene: &Path, name: &str, seed: &str| {
@@ -575,7 +574,7 @@ fn the_scenes_seed_option_is_the_default_seed() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         read_exr(&dir.join(name)).2
     };
-    let plain = shared("pbrt-v4-measured/slab_const.pbrt");
+    let plain = data("pbrt-v4-measured/slab_const.pbrt");
     let (a, b, c) = (
         run(&seeded, "a.exr", ""),
         run(&plain, "b.exr", "5"),
@@ -585,7 +584,7 @@ fn the_scenes_seed_option_is_the_default_seed() {
     assert!(run(&seeded, "d.exr", "6") == c);
 }
 
-/// The scene files of `../shared/data/pbrt-v4-scenes` copied into `dir` with small stand-ins for the assets they
+/// The scene files of `tests/data/pbrt` copied into `dir` with small stand-ins for the assets they
 /// reference and pbrt-v4-scenes does not ship here: an equal-area sky (`textures/sky.exr`, brighter overhead),
 /// the repository's NanoVDB plume as `fire.nvdb` and `bunny_cloud.nvdb`, and a small triangle mesh as
 /// `geometry/killeroo.pbrt`.
@@ -599,7 +598,7 @@ fn pbrt_v4_scenes_with_standins(dir: &Path) {
         "clouds.pbrt",
         "killeroo-simple.pbrt",
     ] {
-        std::fs::copy(shared(&format!("pbrt-v4-scenes/{name}")), dir.join(name)).unwrap();
+        std::fs::copy(data(&format!("pbrt/{name}")), dir.join(name)).unwrap();
     }
     let n = 32;
     let sky: Vec<[f32; 3]> = (0..n * n)
@@ -1006,7 +1005,7 @@ fn the_spectral_film_writes_a_channel_per_bucket() {
     // channels S0.<centre>nm hold each pixel's mean spectral radiance over its bucket — for the thick 2000 K box,
     // the peak-normalised blackbody B̃ averaged over the bucket (its RGB as on the rgb film).
     let dir = out_dir("spectral");
-    let text = std::fs::read_to_string(shared("pbrt-v4-measured/slab_const.pbrt")).unwrap();
+    let text = read_text(&data("pbrt-v4-measured/slab_const.pbrt"));
     let scene = dir.join("s.pbrt");
     std::fs::write(
         &scene,
@@ -1051,4 +1050,93 @@ fn the_spectral_film_writes_a_channel_per_bucket() {
             "bucket {k} ({name}): {v} vs {want}"
         );
     }
+}
+
+/// A constant 2000 K grid filling the unit box (σ_a = σ_s = 1, albedo ½, isotropic), seen face-on and filling a
+/// 16 × 16 film, with no other light, rendered at `maxdepth` with `extra` parameters for the medium.
+fn scattering_box(dir: &Path, maxdepth: usize, medium: &str) -> PathBuf {
+    let ones = ["1"; 27].join(" ");
+    let temps = ["2000"; 27].join(" ");
+    let text = format!(
+        r#"LookAt 0.5 -20 0.5   0.5 0 0.5   0 0 1
+Camera "perspective" "float fov" 2.8624
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "d.exr"
+Sampler "independent" "integer pixelsamples" 64
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" {maxdepth}
+WorldBegin
+MakeNamedMedium "box" "string type" "uniformgrid" "integer nx" 3 "integer ny" 3 "integer nz" 3
+  "float density" [ {ones} ] "float temperature" [ {temps} ]
+  "spectrum sigma_a" [200 1 900 1] "spectrum sigma_s" [200 1 900 1]
+  "point3 p0" [ -1 -1 -1 ] "point3 p1" [ 2 2 2 ] {medium}
+AttributeBegin
+  MediumInterface "box" ""
+  Material "interface"
+  Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0  0 0 1  1 0 1  0 1 1  1 1 1 ]
+    "integer indices" [ 0 2 3 0 3 1  4 5 7 4 7 6  0 1 5 0 5 4  2 6 7 2 7 3  0 4 6 0 6 2  1 3 7 1 7 5 ]
+AttributeEnd
+"#
+    );
+    let p = dir.join(format!("box{maxdepth}{}.pbrt", medium.len()));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// The mean Y over the film's central 8 × 8 pixels and its standard error (from the pixels' spread).
+fn centre_y(img: &(usize, usize, Vec<[f32; 3]>)) -> (f64, f64) {
+    let ys: Vec<f64> = (4..12)
+        .flat_map(|j| (4..12).map(move |i| (i, j)))
+        .map(|(i, j)| y_of(mean_rgb(img, (i, i + 1), (j, j + 1))))
+        .collect();
+    let n = ys.len() as f64;
+    let mean = ys.iter().sum::<f64>() / n;
+    let var = ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn maxdepth_counts_a_real_scattering_event_as_pbrt_v4s_volpath() {
+    // pbrt-v4's VolPathIntegrator adds a medium's emission only while depth < maxdepth and counts each real
+    // scattering event as a bounce (`if (depth++ >= maxDepth)`): at maxdepth 1 a path sees the emission in front of
+    // its first scattering event and nothing after, Y = Ỹ(T) · σ_a/σ_t · (1 − e^{−σ_t·1}) for this unit box
+    // (Ỹ = ∫ȳ B̃ at 2000 K: 5.181; σ_a/σ_t = ½, σ_t = 2).
+    let dir = out_dir("maxdepth");
+    let want = thick_y(2000.0) * 0.5 * (1.0 - (-2.0f64).exp());
+    let mut levels = Vec::new();
+    for maxdepth in 1..=3 {
+        // The default estimators (the fire light's samples and the medium's own), and pbrt-v4's: ratio tracking,
+        // no fire light. Both have pbrt-v4's expected image.
+        let ours = render(
+            &scattering_box(&dir, maxdepth, ""),
+            &dir.join(format!("o{maxdepth}.exr")),
+            &["--spp", "1024"],
+        );
+        let theirs = render(
+            &scattering_box(&dir, maxdepth, r#""string integrator" "ratio""#),
+            &dir.join(format!("p{maxdepth}.exr")),
+            &["--spp", "1024", "--fire-light", "off"],
+        );
+        let ((a, sa), (b, sb)) = (centre_y(&ours), centre_y(&theirs));
+        eprintln!(
+            "maxdepth {maxdepth}: default {a:.4} ± {sa:.4}, pbrt-v4's estimator {b:.4} ± {sb:.4}"
+        );
+        assert!(
+            (a - b).abs() < 4.0 * (sa * sa + sb * sb).sqrt(),
+            "maxdepth {maxdepth}: default {a} ± {sa}, pbrt-v4's estimator {b} ± {sb}"
+        );
+        if maxdepth == 1 {
+            for (got, s) in [(a, sa), (b, sb)] {
+                assert!(
+                    (got - want).abs() < 4.0 * s + 2e-3 * want,
+                    "maxdepth 1: Y {got} ± {s}, closed form {want}"
+                );
+            }
+        }
+        levels.push(a);
+    }
+    // Each bounce adds the light scattered once more (albedo ½: a few per cent of the level and more).
+    assert!(
+        levels[1] > levels[0] * 1.03 && levels[2] > levels[1] * 1.005,
+        "levels by maxdepth {levels:?}"
+    );
 }

@@ -6,10 +6,17 @@ use super::image::read_exr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-pub fn shared(rel: &str) -> PathBuf {
+/// A file of the repository's test data (`tests/data`, each copied from the project's reference data with its
+/// source named in `tests/data/README.md`).
+pub fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
+        .join("../../tests/data")
         .join(rel)
+}
+
+/// The text of a test-data file; a failure names the path.
+pub fn read_text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 #[path = "scratch.rs"]

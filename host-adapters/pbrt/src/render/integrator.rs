@@ -693,6 +693,7 @@ impl Integrator<'_> {
         d: Vec3A,
         g: f32,
         medium: Option<usize>,
+        depth: usize,
         beta: S,
         l: &mut S,
         rng: &mut Samples,
@@ -701,13 +702,22 @@ impl Integrator<'_> {
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
             let spot = Spot::Medium { p, medium };
-            if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false) {
-                let ph = hg((-d).dot(wi), g);
-                *l += beta * le * (ph * light_mis_weight(pl, ph));
+            if self.light_counts(li, depth + 1) {
+                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false) {
+                    let ph = hg((-d).dot(wi), g);
+                    *l += beta * le * (ph * light_mis_weight(pl, ph));
+                }
             }
         }
         let wi = sample_hg(d, g, Self::rng2(rng));
         (wi, hg((-d).dot(wi), g))
+    }
+
+    /// Whether light `li` counts for a path whose next segment is at `depth` (bounces so far): a fire light
+    /// samples a medium's emission, which pbrt-v4's `VolPathIntegrator` adds only while `depth < maxdepth`
+    /// (a real scattering event counts as a bounce); the other lights always count, as there.
+    fn light_counts(&self, li: usize, depth: usize) -> bool {
+        depth < self.scene.maxdepth || !matches!(self.scene.lights[li], Light::Fire { .. })
     }
 
     /// Radiance along a camera ray.
@@ -774,7 +784,7 @@ impl Integrator<'_> {
                         }
                         let e = S(e);
                         // (MIS's density only for light that is there: a dark segment needs no walk.)
-                        if !e.is_black() {
+                        if !e.is_black() && depth < sc.maxdepth {
                             l += beta * e * (*units * self.emission_weight(m, mis, d, rng.time));
                         }
                         match ev[0].event {
@@ -785,8 +795,9 @@ impl Integrator<'_> {
                                 }
                                 let p = o + d * ev[0].t as f32;
                                 Split::mark(&mut split, depth, l);
-                                let (wi, pdf) =
-                                    self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
+                                let (wi, pdf) = self.scatter_vertex(
+                                    p, d, *g as f32, medium, depth, beta, &mut l, rng,
+                                );
                                 (o, d, mis) = (p, wi, Some((p, pdf)));
                                 depth += 1;
                                 continue;
@@ -799,7 +810,9 @@ impl Integrator<'_> {
                     // Emission over the whole segment in closed form; in-scattering by sampling a distance from the
                     // channel-mean extinction σ̄ with spectral weights T_c(s) σ_s,c / p(s).
                     let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
-                    l += beta * le;
+                    if depth < sc.maxdepth {
+                        l += beta * le;
+                    }
                     if ss.is_black() {
                         beta *= tr;
                     } else {
@@ -820,8 +833,8 @@ impl Integrator<'_> {
                             }
                             let p = o + d * (s_hit / speed);
                             Split::mark(&mut split, depth, l);
-                            let (wi, pdf) =
-                                self.scatter_vertex(p, d, *g as f32, medium, beta, &mut l, rng);
+                            let (wi, pdf) = self
+                                .scatter_vertex(p, d, *g as f32, medium, depth, beta, &mut l, rng);
                             (o, d, mis) = (p, wi, Some((p, pdf)));
                             depth += 1;
                             continue;
@@ -841,31 +854,45 @@ impl Integrator<'_> {
                     let track = grid.track(o, d / speed, t_end * speed, || rng.next_f64());
                     match track {
                         super::rgbgrid::Track::Scattered { s, weight, emitted } => {
-                            l += beta * emitted;
+                            if depth < sc.maxdepth {
+                                l += beta * emitted;
+                            }
                             beta *= weight;
                             if depth >= sc.maxdepth {
                                 break;
                             }
                             let p = o + d * (s / speed);
                             Split::mark(&mut split, depth, l);
-                            let (wi, pdf) =
-                                self.scatter_vertex(p, d, grid.g as f32, medium, beta, &mut l, rng);
+                            let (wi, pdf) = self.scatter_vertex(
+                                p,
+                                d,
+                                grid.g as f32,
+                                medium,
+                                depth,
+                                beta,
+                                &mut l,
+                                rng,
+                            );
                             (o, d, mis) = (p, wi, Some((p, pdf)));
                             depth += 1;
                             continue;
                         }
                         super::rgbgrid::Track::Passed { weight, emitted } => {
-                            l += beta * emitted;
+                            if depth < sc.maxdepth {
+                                l += beta * emitted;
+                            }
                             beta *= weight;
                         }
                         super::rgbgrid::Track::Absorbed { emitted } => {
-                            l += beta * emitted;
+                            if depth < sc.maxdepth {
+                                l += beta * emitted;
+                            }
                             break;
                         }
                     }
                 } else {
                     let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
-                    if !le.is_black() {
+                    if !le.is_black() && depth < sc.maxdepth {
                         l += beta * le * self.emission_weight(m, mis, d, rng.time);
                     }
                     beta *= tr;
@@ -1022,7 +1049,11 @@ impl Integrator<'_> {
                     seen.set(Some((wi, f)));
                     f.is_black()
                 };
-                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &dark) {
+                let found = match self.light_counts(li, depth + 1) {
+                    true => self.sample_light(li, &spot, rng, &dark),
+                    false => None,
+                };
+                if let Some((le, wi, pl)) = found {
                     let wi_l = to_local(h.ns, wi);
                     let f = match seen.get() {
                         Some((w, f)) if w == wi => f,
