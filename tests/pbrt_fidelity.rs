@@ -1140,3 +1140,65 @@ fn maxdepth_counts_a_real_scattering_event_as_pbrt_v4s_volpath() {
         "levels by maxdepth {levels:?}"
     );
 }
+
+#[test]
+fn a_nanovdb_medium_names_its_grids_as_pbrt_v4s() {
+    // pbrt-v4's NanoVDBMedium::Create reads "gridname" (default "density") and "temperaturename" (default
+    // "temperature"). Naming the defaults renders the same image bit for bit; a name the file lacks is an error
+    // that lists the file's grids; naming a grid both ways is refused.
+    let dir = out_dir("gridname");
+    std::fs::copy(data("valid/nvdb/plume48.nvdb"), dir.join("plume.nvdb")).unwrap();
+    let scene = |extra: &str| {
+        let p = dir.join(format!("g{}.pbrt", extra.len()));
+        std::fs::write(
+            &p,
+            format!(
+                r#"LookAt 0 -3 0  0 0 0  0 0 1
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 12 "integer yresolution" 12
+Sampler "independent" "integer pixelsamples" 4
+WorldBegin
+MakeNamedMedium "plume" "string type" "nanovdb" "string filename" "plume.nvdb" "float Lescale" 2 {extra}
+AttributeBegin
+  MediumInterface "plume" ""
+  Material "interface"
+  Shape "sphere" "float radius" 0.9
+AttributeEnd
+"#
+            ),
+        )
+        .unwrap();
+        p
+    };
+    let plain = render(&scene(""), &dir.join("a.exr"), &[]);
+    let named = render(
+        &scene(r#""string gridname" "density" "string temperaturename" "temperature""#),
+        &dir.join("b.exr"),
+        &[],
+    );
+    assert!(plain.2.iter().any(|p| p[1] > 0.0), "the plume emits");
+    assert_eq!(
+        plain.2, named.2,
+        "naming the default grids changed the image"
+    );
+    let o = run_render(
+        &scene(r#""string temperaturename" "heat""#),
+        &dir.join("c.exr"),
+        &["-q"],
+    );
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && msg.contains("'heat'") && msg.contains("'density', 'temperature'"),
+        "{msg}"
+    );
+    let o = run_render(
+        &scene(r#""string gridname" "density" "string densitygrid" "density""#),
+        &dir.join("d.exr"),
+        &["-q"],
+    );
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && msg.contains("\"gridname\" and \"densitygrid\""),
+        "{msg}"
+    );
+}
