@@ -550,7 +550,8 @@ fn a_pbrt_nanovdb_scene_like_explosion_pbrt_renders() {
 
 #[test]
 fn the_fire_light_and_paths_that_find_the_fire_agree() {
-    // A floor lit only by a fire outside the camera's view, direct light only. Without the fire light, paths
+    // A floor lit only by a fire outside the camera's view, direct light only (maxdepth 2: pbrt-v4 counts a
+    // medium's emission on the segments before the maxdepth-th bounce, and the floor's is the first). Without the fire light, paths
     // find the fire by BSDF sampling alone; with it, NEE and those paths share the work by MIS. Both must give
     // the same image on average (light counted once, nothing lost) — here with the fire grid larger than its
     // spherical boundary, so the light also samples points where the medium is absent.
@@ -567,7 +568,7 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
     ] {
         let dir = tmp(&format!("firelight-{name}"));
         let scene = format!(
-        "LookAt 3 -3 4  2 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 96\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nAttributeBegin\nTranslate 0 0 1.2\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.7\nAttributeEnd\n{}\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
+        "LookAt 3 -3 4  2 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 20\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 96\nIntegrator \"volpath\" \"integer maxdepth\" 2\nWorldBegin\nAttributeBegin\nTranslate 0 0 1.2\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1]\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.7\nAttributeEnd\n{}\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
         inline_grid(6, 3e-7, 1700.0),
         floor
     );
@@ -1613,7 +1614,7 @@ fn an_ember_lights_the_floor_as_a_glowing_sphere_does() {
     )
     .unwrap();
     let scene = format!(
-        "LookAt 3 0 1  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.2\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nAttributeBegin\nTranslate 0 0 {h}\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"string embers\" \"e.csv\" \"float shutterclose\" 0\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\nMaterial \"diffuse\" \"spectrum reflectance\" [300 {rho} 900 {rho}]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
+        "LookAt 3 0 1  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 0.2\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 2\nWorldBegin\nAttributeBegin\nTranslate 0 0 {h}\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"point3 p0\" [-1 -1 -1] \"point3 p1\" [1 1 1] \"string embers\" \"e.csv\" \"float shutterclose\" 0\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\nMaterial \"diffuse\" \"spectrum reflectance\" [300 {rho} 900 {rho}]\nShape \"trianglemesh\" \"point3 P\" [-10 -10 0 10 -10 0 10 10 0 -10 10 0] \"integer indices\" [0 1 2 0 2 3]\n",
         inline_grid(2, 0.0, 0.0)
     );
     std::fs::write(dir.join("s.pbrt"), &scene).unwrap();

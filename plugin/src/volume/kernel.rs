@@ -405,6 +405,7 @@ pub(super) fn march<
         tk[ch / V][ch % V] = 1.0;
     }
     let cutoff = v.cutoff as f32;
+    let split_tau = v.step_tau as f32;
     let sigma_max = lt.sigma_max();
     let ns = v.species.len().min(MAX_SPECIES);
     let mut scales = [0f64; MAX_SPECIES];
@@ -569,7 +570,7 @@ pub(super) fn march<
         for b in 0..m {
             // Whether the sample steps at all, and whether its step is thin; with species, their rows.
             let mut sp: [Option<SpeciesRows>; MAX_SPECIES] = [None; MAX_SPECIES];
-            let thin_b = if S {
+            let (thin_b, bound) = if S {
                 if !inside[b] {
                     continue;
                 }
@@ -596,7 +597,7 @@ pub(super) fn march<
                 if !any {
                     continue;
                 }
-                bound < THIN
+                (bound < THIN, bound)
             } else {
                 // No soot: σ = j = 0, the step would add +0 and multiply by 1 (skipped, bit for bit); a sample
                 // outside (d = −1) is not counted.
@@ -604,8 +605,29 @@ pub(super) fn march<
                 if !(d[b] > 0.0 || dl[b] > 0.0) {
                     continue;
                 }
-                thin[b]
+                (thin[b], d[b] * sigma_max * deltas[b])
             };
+            // A step thicker than the volume's `step_tau` (pbrt-v4's grids: a voxel far denser than the step),
+            // in sub-steps through the f64 path (never for the fire light's channel subsets, whose columns are
+            // not the volume's).
+            if bound > split_tau && c == v.channels() {
+                let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                let tmax = split(
+                    v,
+                    p,
+                    dir,
+                    deltas[b] as f64,
+                    bound as f64,
+                    &mut lk.as_flattened_mut()[..c],
+                    &mut tk.as_flattened_mut()[..c],
+                );
+                // (Its sub-steps' evaluations count themselves.)
+                samples -= 1;
+                if !(tmax >= cutoff) {
+                    break 'ray;
+                }
+                continue;
+            }
             // (A constant empty slice without species, so the array above is not even built.)
             let species: &[Option<SpeciesRows>] = if S { &sp[..ns] } else { &[] };
             let step = Step {
@@ -655,6 +677,45 @@ pub(super) fn march<
         t[ch] = tk[ch / V][ch % V] as f64;
     }
     Some(span.b)
+}
+
+/// A thick step (optical depth bound `tau`) through `v`'s own channels in sub-steps
+/// ([`super::integrate::split_step`], f64), the radiance `l` and transmittance `t` carried in and out of the
+/// kernel's lanes; returns the largest transmittance left.
+#[cold]
+#[inline(never)]
+fn split(
+    v: &FireVolume,
+    mid: glam::DVec3,
+    dir: glam::DVec3,
+    delta: f64,
+    tau: f64,
+    l: &mut [f32],
+    t: &mut [f32],
+) -> f32 {
+    const MAX: usize = 64;
+    let c = l.len().min(MAX);
+    let [mut sa, mut ss, mut j, mut ll, mut tt] = [[0f64; MAX]; 5];
+    for ch in 0..c {
+        (ll[ch], tt[ch]) = (l[ch] as f64, t[ch] as f64);
+    }
+    let n = super::integrate::split_count(tau, v.step_tau);
+    super::integrate::split_step(
+        v,
+        mid,
+        dir,
+        delta,
+        n,
+        (&mut sa[..c], &mut ss[..c], &mut j[..c]),
+        &mut ll[..c],
+        &mut tt[..c],
+    );
+    let mut tmax = 0f32;
+    for ch in 0..c {
+        (l[ch], t[ch]) = (ll[ch] as f32, tt[ch] as f32);
+        tmax = tmax.max(t[ch]);
+    }
+    tmax
 }
 
 /// A temperature table as the kernel reads it: rows of the table's 8-channel lanes, of which the kernel's `CV`

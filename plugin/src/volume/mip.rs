@@ -187,6 +187,7 @@ impl FireVolume {
             clip_box,
             margin: 0.0,
             step,
+            step_tau: self.step_tau,
             integrator: Integrator::March,
             cutoff: self.cutoff,
             g: self.g,

@@ -150,6 +150,8 @@ pub struct FireVolume {
     clip_box: [DVec3; 2],
     margin: f64,
     step: f64,
+    /// The largest optical depth of one march step before it is split (`steptau`; ∞: never).
+    step_tau: f64,
     integrator: Integrator,
     cutoff: f64,
     g: f64,
@@ -612,6 +614,7 @@ impl FireVolume {
             clip_box,
             margin,
             step,
+            step_tau: set.step_tau,
             integrator: set.integrator,
             cutoff: set.cutoff,
             g: set.g,
@@ -1156,6 +1159,9 @@ impl Medium for FireVolume {
     }
     fn cutoff(&self) -> f64 {
         self.cutoff
+    }
+    fn step_tau(&self) -> f64 {
+        self.step_tau
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         EVALUATIONS.with(|n| n.set(n.get() + 1));

@@ -200,6 +200,9 @@ impl Medium for Advected<'_> {
     fn cutoff(&self) -> f64 {
         self.v.cutoff
     }
+    fn step_tau(&self) -> f64 {
+        self.v.step_tau
+    }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         Medium::eval(self.v, self.displaced(p), sa, ss, j)
     }

@@ -52,6 +52,11 @@ pub struct RenderArgs {
     /// `linecorrection=0.1`.
     #[arg(long = "fire-light-param", value_name = "NAME=VALUE", value_parser = parse_light_param)]
     fire_light_param: Vec<(String, String)>,
+    /// Scattering events inside a fire sample that fire's light as well (by default only surfaces and scattering
+    /// events elsewhere do: inside a scattering fire the phase function's own directions find its emission, and
+    /// a light sample's line through the fire costs more than it saves there).
+    #[arg(long = "fire-light-inside")]
+    fire_light_inside: bool,
     /// The PNG preview's display transform: agx (default: Sobotka's AgX, the fire's core in its soft shoulder),
     /// aces, naka-rushton (the paper's cone responses), exposure or reinhard — as `firemedium tonemap --operator`.
     #[arg(long, value_enum, default_value = "agx")]
@@ -216,6 +221,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         no_fire_light: a.fire_light == "off",
         fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
         fire_light_params: a.fire_light_param.clone(),
+        fire_light_inside: a.fire_light_inside,
         res: a.resolution,
         crop: four(&a.cropwindow),
         pixel_bounds: four(&a.pixelbounds),

@@ -657,10 +657,22 @@ impl Integrator<'_> {
     /// The MIS weight of emission that a path sampled with density `pdf_b` (solid angle) from `origin` along `d`
     /// collects in medium `m`: pdf_b / (pdf_b + the fire light's directional pdf), or 1 when `m` has no fire
     /// light or the path was not sampled by a BSDF/phase function (camera rays, specular bounces).
-    fn emission_weight(&self, m: usize, mis: Option<(Vec3A, f32)>, d: Vec3A, time: f64) -> f32 {
+    /// `skipped`: the medium whose fire light the path's last vertex (a scattering event inside it) did not
+    /// sample — its emission then has weight 1.
+    fn emission_weight(
+        &self,
+        m: usize,
+        mis: Option<(Vec3A, f32)>,
+        skipped: Option<usize>,
+        d: Vec3A,
+        time: f64,
+    ) -> f32 {
         let Some((origin, pdf_b)) = mis else {
             return 1.0;
         };
+        if skipped == Some(m) && !self.scene.fire_light_inside {
+            return 1.0;
+        }
         let sc = self.scene;
         let Medium::Plugin { to_medium, .. } = &sc.media[m] else {
             return 1.0;
@@ -702,7 +714,7 @@ impl Integrator<'_> {
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
             let spot = Spot::Medium { p, medium };
-            if self.light_counts(li, depth + 1) {
+            if self.light_counts(li, depth + 1) && !self.skips_inside(li, medium) {
                 if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false) {
                     let ph = hg((-d).dot(wi), g);
                     *l += beta * le * (ph * light_mis_weight(pl, ph));
@@ -718,6 +730,14 @@ impl Integrator<'_> {
     /// (a real scattering event counts as a bounce); the other lights always count, as there.
     fn light_counts(&self, li: usize, depth: usize) -> bool {
         depth < self.scene.maxdepth || !matches!(self.scene.lights[li], Light::Fire { .. })
+    }
+
+    /// Whether a scattering event in `medium` leaves light `li` unsampled: the fire light of that very medium,
+    /// unless the scene asks for it ([`super::scene::Scene::fire_light_inside`]). The emission the next segment
+    /// finds in that medium then has MIS weight 1 ([`Self::emission_weight`]'s `skipped`).
+    fn skips_inside(&self, li: usize, medium: Option<usize>) -> bool {
+        !self.scene.fire_light_inside
+            && matches!(self.scene.lights[li], Light::Fire { medium: fm, .. } if Some(fm) == medium)
     }
 
     /// Radiance along a camera ray.
@@ -749,6 +769,8 @@ impl Integrator<'_> {
         // Origin and solid-angle pdf of the current direction when it was sampled from a BSDF or phase function
         // (for MIS against the lights it may find); None for camera rays and specular bounces.
         let mut mis: Option<(Vec3A, f32)> = None;
+        // The medium of the last vertex when it was a scattering event (whose own fire light it did not sample).
+        let mut skipped: Option<usize> = None;
         for _ in 0..(4 * sc.maxdepth + 64) {
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
@@ -785,7 +807,9 @@ impl Integrator<'_> {
                         let e = S(e);
                         // (MIS's density only for light that is there: a dark segment needs no walk.)
                         if !e.is_black() && depth < sc.maxdepth {
-                            l += beta * e * (*units * self.emission_weight(m, mis, d, rng.time));
+                            l += beta
+                                * e
+                                * (*units * self.emission_weight(m, mis, skipped, d, rng.time));
                         }
                         match ev[0].event {
                             firemedium_abi::FM_EVENT_SCATTERED => {
@@ -798,7 +822,7 @@ impl Integrator<'_> {
                                 let (wi, pdf) = self.scatter_vertex(
                                     p, d, *g as f32, medium, depth, beta, &mut l, rng,
                                 );
-                                (o, d, mis) = (p, wi, Some((p, pdf)));
+                                (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
                                 depth += 1;
                                 continue;
                             }
@@ -835,7 +859,7 @@ impl Integrator<'_> {
                             Split::mark(&mut split, depth, l);
                             let (wi, pdf) = self
                                 .scatter_vertex(p, d, *g as f32, medium, depth, beta, &mut l, rng);
-                            (o, d, mis) = (p, wi, Some((p, pdf)));
+                            (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
                             depth += 1;
                             continue;
                         }
@@ -873,7 +897,7 @@ impl Integrator<'_> {
                                 &mut l,
                                 rng,
                             );
-                            (o, d, mis) = (p, wi, Some((p, pdf)));
+                            (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
                             depth += 1;
                             continue;
                         }
@@ -893,7 +917,7 @@ impl Integrator<'_> {
                 } else {
                     let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
                     if !le.is_black() && depth < sc.maxdepth {
-                        l += beta * le * self.emission_weight(m, mis, d, rng.time);
+                        l += beta * le * self.emission_weight(m, mis, skipped, d, rng.time);
                     }
                     beta *= tr;
                     // A refracting fire bent the ray: continue from where it left, in its new direction (the
@@ -1095,6 +1119,7 @@ impl Integrator<'_> {
                 eta_scale *= bs.etap * bs.etap;
             }
             medium = side_medium(wi);
+            skipped = None;
             o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
             d = wi;
             depth += 1;

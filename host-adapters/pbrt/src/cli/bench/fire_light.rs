@@ -14,6 +14,8 @@ pub struct Estimator {
     pub key: &'static str,
     pub name: &'static str,
     pub light: Option<(&'static str, &'static [(&'static str, &'static str)])>,
+    /// The scene's pbrt-v4 grid media take pbrt-v4's own estimator (`"string integrator" "ratio"`).
+    pub ratio: bool,
 }
 
 /// The estimators measured: the light before issue 29 (`voxel, full`: a pdf over voxels, the volume's own march
@@ -29,16 +31,19 @@ pub const ESTIMATORS: &[Estimator] = &[
         key: "off",
         name: "off",
         light: None,
+        ratio: false,
     },
     Estimator {
         key: "voxel",
         name: "voxel, full (before)",
         light: Some(("power", &[("cell", "1"), ("linestep", "1e-9")])),
+        ratio: false,
     },
     Estimator {
         key: "brick",
         name: "brick, full",
         light: Some(("power", &[("cell", "8"), ("linestep", "1e-9")])),
+        ratio: false,
     },
     Estimator {
         key: "own",
@@ -47,6 +52,7 @@ pub const ESTIMATORS: &[Estimator] = &[
             "power",
             &[("cell", "8"), ("linestep", "0"), ("lineblock", "1")],
         )),
+        ratio: false,
     },
     Estimator {
         key: "allbins",
@@ -60,6 +66,7 @@ pub const ESTIMATORS: &[Estimator] = &[
                 ("linechannels", "4096"),
             ],
         )),
+        ratio: false,
     },
     Estimator {
         key: "steps64",
@@ -73,6 +80,7 @@ pub const ESTIMATORS: &[Estimator] = &[
                 ("linechannels", "0"),
             ],
         )),
+        ratio: false,
     },
     Estimator {
         key: "coarse",
@@ -86,6 +94,7 @@ pub const ESTIMATORS: &[Estimator] = &[
                 ("linechannels", "0"),
             ],
         )),
+        ratio: false,
     },
     Estimator {
         key: "corrected",
@@ -94,22 +103,43 @@ pub const ESTIMATORS: &[Estimator] = &[
             "power",
             &[("cell", "8"), ("linestep", "0"), ("linecorrection", "0.25")],
         )),
+        ratio: false,
     },
     Estimator {
         key: "luminance",
         name: "lum., brick, coarse",
         light: Some(("luminance", &[("cell", "8"), ("linestep", "0")])),
+        ratio: false,
     },
     Estimator {
         key: "escaping",
         name: "escaping, brick, coarse",
         light: Some(("escaping", &[("cell", "8"), ("linestep", "0")])),
+        ratio: false,
+    },
+    Estimator {
+        key: "pbrt",
+        name: PBRT,
+        light: None,
+        ratio: true,
     },
 ];
 
+/// The `pbrt` estimator's name: pbrt-v4's own strategy for its grid media (ratio tracking, no light).
+pub const PBRT: &str = "pbrt-v4's (ratio tracking, light off)";
+
+/// The room's fire: the paper's (`fire`, propane soot), or pbrt-v4's own `nanovdb` medium over the same file —
+/// σ_a = 8.44e6 × density (propane soot's σ_a at 550 nm per unit soot fraction, Dalzell & Sarofim), grey, with
+/// σ_s = σ_a · albedo / (1 − albedo) (isotropic) and `Lescale` × the peak-normalised blackbody.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fire {
+    Fire,
+    NanoVdb { albedo: f64, lescale: f64 },
+}
+
 /// The room: the fire (its box [−0.6, 0.6]² × [0, 1.6] m) on a floor before a back wall, with three diffuse
 /// spheres; `volpath` to depth 5; the fire is the only light.
-pub fn room_scene(dataset: &Path) -> String {
+pub fn room_scene(dataset: &Path, fire: Fire, maxdepth: u32) -> String {
     let box_mesh = "\"point3 P\" [ -0.6 -0.6 0.002 0.6 -0.6 0.002 -0.6 0.6 0.002 0.6 0.6 0.002 -0.6 -0.6 1.6 0.6 -0.6 1.6 -0.6 0.6 1.6 0.6 0.6 1.6 ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]";
     format!(
         r#"# issue 29's fire-lit room (written by `firemedium bench fire-light`)
@@ -117,12 +147,9 @@ LookAt 0 -4.6 1.5   0 0 0.7   0 0 1
 Camera "perspective" "float fov" 48
 Film "rgb" "integer xresolution" 320 "integer yresolution" 240 "string filename" "room.exr"
 Sampler "independent" "integer pixelsamples" 16
-Integrator "volpath" "integer maxdepth" 5
+Integrator "volpath" "integer maxdepth" {maxdepth}
 WorldBegin
-MakeNamedMedium "fire" "string type" "fire"
-  "string dataset" "{}"
-  "string fuel" "propane"
-  "float stepsize" 1
+{medium}
 AttributeBegin
   MediumInterface "fire" ""
   Material "interface"
@@ -152,8 +179,40 @@ AttributeBegin
   Shape "sphere" "float radius" 0.4
 AttributeEnd
 "#,
-        dataset.display()
+        medium = match fire {
+            Fire::Fire => format!(
+                "MakeNamedMedium \"fire\" \"string type\" \"fire\"\n  \"string dataset\" \"{}\"\n  \"string fuel\" \"propane\"\n  \"float stepsize\" 1",
+                dataset.display()
+            ),
+            Fire::NanoVdb { albedo, lescale } => format!(
+                "MakeNamedMedium \"fire\" \"string type\" \"nanovdb\"\n  \"string filename\" \"{}\"\n  \"float scale\" 8.44e6 \"spectrum sigma_a\" [200 1 900 1]\n  \"spectrum sigma_s\" [200 {s} 900 {s}] \"float Lescale\" {lescale}",
+                dataset.display(),
+                s = albedo / (1.0 - albedo)
+            ),
+        }
     )
+}
+
+/// `scene` with its pbrt-v4 grid media on pbrt-v4's estimator (`"string integrator" "ratio"`), written beside it
+/// (relative paths stay valid).
+pub fn ratio_scene(scene: &Path) -> Result<PathBuf, String> {
+    let text = std::fs::read_to_string(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+    let mut out = text.clone();
+    for ty in ["nanovdb", "uniformgrid"] {
+        let from = format!("\"string type\" \"{ty}\"");
+        out = out.replace(&from, &format!("{from} \"string integrator\" \"ratio\""));
+    }
+    if out == text {
+        return Err(format!(
+            "{}: the `pbrt` estimator needs a nanovdb or uniformgrid medium (a `fire` medium has no pbrt-v4 estimator)",
+            scene.display()
+        ));
+    }
+    let mut name = scene.as_os_str().to_owned();
+    name.push(format!(".ratio-{}.pbrt", std::process::id()));
+    let path = PathBuf::from(name);
+    std::fs::write(&path, out).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
 }
 
 /// One render of the ladder.
@@ -188,9 +247,45 @@ pub fn ladder(
     estimators: &[&Estimator],
     log: &dyn Fn(&str),
 ) -> Result<(Vec<Run>, String), String> {
+    let ratio = match estimators.iter().any(|e| e.ratio) {
+        true => Some(ratio_scene(scene)?),
+        false => None,
+    };
+    let result = ladder_in(
+        scene,
+        ratio.as_deref(),
+        label,
+        res,
+        spp,
+        ref_spp,
+        repeats,
+        estimators,
+        log,
+    );
+    if let Some(p) = ratio {
+        let _ = std::fs::remove_file(p);
+    }
+    result
+}
+
+#[allow(clippy::too_many_arguments)]
+fn ladder_in(
+    scene: &Path,
+    ratio: Option<&Path>,
+    label: &str,
+    res: (usize, usize),
+    spp: &[usize],
+    ref_spp: usize,
+    repeats: usize,
+    estimators: &[&Estimator],
+    log: &dyn Fn(&str),
+) -> Result<(Vec<Run>, String), String> {
     let load = |spp: usize, e: &Estimator| {
         sc::load(
-            scene,
+            match (e.ratio, ratio) {
+                (true, Some(r)) => r,
+                _ => scene,
+            },
             &sc::Overrides {
                 spp: Some(spp),
                 no_fire_light: e.light.is_none(),
@@ -333,12 +428,14 @@ pub struct Summary {
     pub sample_cost: Option<f64>,
 }
 
-/// Per estimator of one resolution, its [`Summary`].
+/// Per estimator of one resolution, its [`Summary`]; its gains against pbrt-v4's estimator where it ran, else
+/// against the light off ([`baseline`]).
 pub fn summary(runs: &[Run]) -> Vec<Summary> {
     let last = |name: &str| runs.iter().rfind(|r| r.estimator == name);
-    let Some(off) = last("off") else {
+    let Some(base) = last(baseline(runs)) else {
         return Vec::new();
     };
+    let off = last("off").unwrap_or(base);
     let path_cost = off.seconds / off.camera_rays.max(1) as f64;
     let mut names: Vec<&str> = Vec::new();
     for r in runs {
@@ -360,12 +457,20 @@ pub fn summary(runs: &[Run]) -> Vec<Summary> {
                 estimator: name.to_string(),
                 rmse2_s,
                 relmse_s,
-                gain_rmse2: off.rel_rmse * off.rel_rmse * off.seconds / rmse2_s,
-                gain_relmse: off.rel_mse * off.seconds / relmse_s,
+                gain_rmse2: base.rel_rmse * base.rel_rmse * base.seconds / rmse2_s,
+                gain_relmse: base.rel_mse * base.seconds / relmse_s,
                 sample_cost,
             })
         })
         .collect()
+}
+
+/// The estimator the summary's gains are against: pbrt-v4's where it ran, else the light off.
+pub fn baseline(runs: &[Run]) -> &'static str {
+    match runs.iter().any(|r| r.estimator == PBRT) {
+        true => PBRT,
+        false => "off",
+    }
 }
 
 /// Where the bench writes: PREFIX-LABEL.csv/svg/png per case.

@@ -57,13 +57,26 @@ pub struct FireLightArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeats: u32,
     /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, steps64, coarse, corrected, luminance,
-    /// escaping.
+    /// escaping, pbrt (pbrt-v4's own: ratio tracking and the light off; a nanovdb or uniformgrid fire only).
     #[arg(
         long,
         value_delimiter = ',',
         default_value = "off,voxel,brick,own,allbins,steps64,coarse,corrected,luminance,escaping"
     )]
     estimators: Vec<String>,
+    /// The generated room's fire: `fire` (the paper's, propane soot) or `nanovdb` (pbrt-v4's own grid medium
+    /// over the same file: σ_a = 8.44e6 × density, grey, the peak-normalised blackbody × `--lescale`).
+    #[arg(long, default_value = "fire", value_parser = ["fire", "nanovdb"])]
+    medium: String,
+    /// With `--medium nanovdb`: the fire's single-scattering albedo σ_s / σ_t (isotropic; 0: it does not scatter).
+    #[arg(long, default_value_t = 0.0)]
+    albedo: f64,
+    /// With `--medium nanovdb`: its `Lescale`.
+    #[arg(long, default_value_t = 1.0)]
+    lescale: f64,
+    /// The generated room's `volpath` maxdepth.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    maxdepth: u32,
     /// Output prefix: PREFIX-R.csv, PREFIX-R.svg and PREFIX-R.png per resolution R (PREFIX-NAME.* for a scene).
     #[arg(short, long, default_value = "fire-light")]
     output: std::path::PathBuf,
@@ -309,7 +322,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
 
 /// The workload through `firemedium render` (see [`user_path`]).
 fn user_path_report(a: &PerfArgs) -> Result<String, String> {
-    use user_path::{naive, rel_rmse, render, scene, Rendered, Scratch};
+    use user_path::{naive, rel_rmse, render, scene, Kind, Rendered, Scratch};
     let file = match &a.dataset {
         Some(f) => f.clone(),
         None => perf::dataset(&std::env::temp_dir(), a.grid as usize)?,
@@ -339,20 +352,20 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
         std::fs::metadata(&file).map_or(0.0, |m| m.len() as f64 / 1e6),
         a.repeat
     );
-    // The reference: sub-pixel centres, a finer step; its own step error from pixel-centre renders at its step
-    // and half of it.
+    // The references, one per medium type (the same data, another emission): sub-pixel centres, a finer step;
+    // the fire's own step error from pixel-centre renders at its step and half of it.
     let (r, rs) = (a.reference_subpixels, a.reference_path_step);
-    let reference = render(
-        &dir.0,
-        "reference",
-        &scene(&file, bounds, size, &stratified(r), &step(rs)),
-        &[],
-    )?;
+    let mut references = Vec::new();
+    for kind in [Kind::Fire, Kind::NanoVdb] {
+        let name = format!("reference-{kind:?}");
+        let sc = scene(kind, &file, bounds, size, &stratified(r), &step(rs));
+        references.push(render(&dir.0, &name, &sc, &[])?);
+    }
     let at = |h: f64, name: &str| {
         render(
             &dir.0,
             name,
-            &scene(&file, bounds, size, &centres, &step(h)),
+            &scene(Kind::Fire, &file, bounds, size, &centres, &step(h)),
             &[],
         )
     };
@@ -361,43 +374,70 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
         at(0.5 * rs, "centres-half-ref-step")?,
     );
     let (subpix, ref_step) = (
-        rel_rmse(&coarse.y, &reference.y),
+        rel_rmse(&coarse.y, &references[0].y),
         rel_rmse(&coarse.y, &fine.y),
     );
     out += &format!(
-        "reference: {r}×{r} sub-pixel centres at a {rs}-voxel step, default spectrum ({:.1} s); its step error ≈ {ref_step:.2e} (pixel centres at {rs} against {} voxel); pixel centres differ from it by {subpix:.2e} at {rs} voxel\n\n",
-        reference.render_s,
+        "references: {r}×{r} sub-pixel centres at a {rs}-voxel step, default spectrum ({:.1} s the fire, {:.1} s the nanovdb medium); the fire's step error ≈ {ref_step:.2e} (pixel centres at {rs} against {} voxel); pixel centres differ from it by {subpix:.2e} at {rs} voxel. The nanovdb medium is pbrt-v4's own type over the same file (σ_a = 8.44e6 × density, grey, the peak-normalised blackbody; its default estimator)\n\n",
+        references[0].render_s,
+        references[1].render_s,
         0.5 * rs
     );
-    let configs: Vec<(&str, String, String, Vec<&str>)> = vec![
+    let configs: Vec<(&str, Kind, String, String, Vec<&str>)> = vec![
         (
             "pixel centres (stratified 1×1, no jitter), ½ voxel: the paper's workload",
+            Kind::Fire,
             centres.clone(),
             half.clone(),
             vec![],
         ),
         (
+            "the same as a pbrt-v4 `nanovdb` medium",
+            Kind::NanoVdb,
+            centres.clone(),
+            String::new(),
+            vec![],
+        ),
+        (
             "the same on 1 thread",
+            Kind::Fire,
             centres.clone(),
             half.clone(),
             vec!["--threads", "1"],
         ),
         (
             "pixel centres, ½ voxel, 16 bins over 400–780 nm",
+            Kind::Fire,
             centres.clone(),
             format!("{half} \"integer bins\" 16 \"float lambdamin\" 400 \"float lambdamax\" 780"),
             vec![],
         ),
         (
             "zsobol, 16 spp, ½ voxel",
+            Kind::Fire,
             "Sampler \"zsobol\" \"integer pixelsamples\" 16".into(),
             half.clone(),
             vec![],
         ),
         (
+            "zsobol, 16 spp, a `nanovdb` medium",
+            Kind::NanoVdb,
+            "Sampler \"zsobol\" \"integer pixelsamples\" 16".into(),
+            String::new(),
+            vec![],
+        ),
+        (
             "independent, 16 spp, ½ voxel",
+            Kind::Fire,
             "Sampler \"independent\" \"integer pixelsamples\" 16".into(),
             half.clone(),
+            vec![],
+        ),
+        (
+            "pixel centres, a `nanovdb` medium with pbrt-v4's estimator (`integrator \"ratio\"`)",
+            Kind::NanoVdb,
+            centres.clone(),
+            "\"string integrator\" \"ratio\"".into(),
             vec![],
         ),
     ];
@@ -409,11 +449,11 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
         if base.as_ref().is_none_or(|b| n.0 + n.1 < b.0 + b.1) {
             base = Some(n);
         }
-        for (k, (name, sampler, medium, extra)) in configs.iter().enumerate() {
+        for (k, (name, kind, sampler, medium, extra)) in configs.iter().enumerate() {
             let r = render(
                 &dir.0,
                 &format!("config{k}"),
-                &scene(&file, bounds, size, sampler, medium),
+                &scene(*kind, &file, bounds, size, sampler, medium),
                 extra,
             )
             .map_err(|e| format!("{name}: {e}"))?;
@@ -430,10 +470,11 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
     out += &format!(
         "| naive march (f64, no skipping, every coefficient at every step, 2 threads, in process) | {nl:.3} | {nr:.3} | {naive_total:.3} | {:.0} | — | {:.2e} | 1 |\n",
         (size * size) as f64 / nr,
-        rel_rmse(&ny, &reference.y)
+        rel_rmse(&ny, &references[0].y)
     );
-    for ((name, ..), r) in configs.iter().zip(&best) {
+    for ((name, kind, ..), r) in configs.iter().zip(&best) {
         let Some(r) = r else { continue };
+        let reference = &references[(*kind == Kind::NanoVdb) as usize];
         out += &format!(
             "| {name} | {:.3} | {:.3} | {:.3} | {:.0} | {:.0} | {:.2e} | {:.2} |\n",
             r.load_s,
@@ -445,7 +486,13 @@ fn user_path_report(a: &PerfArgs) -> Result<String, String> {
             r.wall_s / naive_total
         );
     }
-    if let (Some(two), Some(one)) = (&best[0], &best[1]) {
+    if let (Some(fire), Some(nvdb)) = (&best[0], &best[1]) {
+        out += &format!(
+            "\nthe `nanovdb` medium against the fire (whole process): {:.2}×\n",
+            nvdb.wall_s / fire.wall_s
+        );
+    }
+    if let (Some(two), Some(one)) = (&best[0], &best[2]) {
         out += &format!(
             "\ntwo threads against one (render phase): {:.2}×\n",
             one.render_s / two.render_s
@@ -525,8 +572,12 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
         .collect::<Result<_, _>>()?;
     let spp: Vec<usize> = a.spp.iter().map(|&n| n as usize).collect();
     let dir = std::env::temp_dir();
-    let mut out = String::from(
-        "| fire | estimator | rel. RMSE² × s | light off / it | relMSE × s | light off / it | a light sample, in camera paths |\n|---|---|---|---|---|---|---|\n",
+    let baseline = match chosen.iter().any(|e| e.ratio) {
+        true => "pbrt-v4's estimator (ratio tracking, the light off)",
+        false => "the light off",
+    };
+    let mut out = format!(
+        "gains against {baseline}\n\n| fire | estimator | rel. RMSE² × s | baseline / it | relMSE × s | baseline / it | a light sample, in camera paths |\n|---|---|---|---|---|---|---|\n",
     );
     // (label, scene, title, whether the bench wrote the scene)
     let mut cases = Vec::new();
@@ -554,7 +605,20 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
                     "firemedium-bench-room-{r}-{}.pbrt",
                     std::process::id()
                 ));
-                std::fs::write(&scene, fire_light::room_scene(&dataset))
+                let fire = match a.medium.as_str() {
+                    "nanovdb" => fire_light::Fire::NanoVdb {
+                        albedo: a.albedo,
+                        lescale: a.lescale,
+                    },
+                    _ => fire_light::Fire::Fire,
+                };
+                if !((0.0..1.0).contains(&a.albedo) && a.lescale >= 0.0 && a.lescale.is_finite()) {
+                    return Err(format!(
+                        "--albedo {} --lescale {}: expected an albedo in [0, 1) and a finite Lescale ≥ 0",
+                        a.albedo, a.lescale
+                    ));
+                }
+                std::fs::write(&scene, fire_light::room_scene(&dataset, fire, a.maxdepth))
                     .map_err(|e| format!("{}: {e}", scene.display()))?;
                 let title = format!("fire-lit room, campfire {r}: error vs time");
                 cases.push((format!("{r}"), scene, title, true));

@@ -26,11 +26,36 @@ pub struct Rendered {
     pub y: Vec<f64>,
 }
 
-/// The workload's scene: `dataset` (whose medium-space box is `bounds`) with `medium` parameters appended
-/// (pbrt syntax), seen by a pinhole 2.2 fire sizes in front (−y) with a 30° field of view, behind an `interface`
+/// The medium type a workload scene names its fire with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// `"string type" "fire"`: the paper's fire (soot, absolute Planck).
+    Fire,
+    /// `"string type" "nanovdb"`: pbrt-v4's own grid medium over the same file — σ_a = `scale` × density, grey,
+    /// with `scale` the soot's σ_a per unit soot fraction at 550 nm (propane, 8.44e6 m⁻¹: 8.44 m⁻¹ at f_v = 1e-6,
+    /// Dalzell & Sarofim), no scattering, `Lescale` 1 × the peak-normalised blackbody.
+    NanoVdb,
+}
+
+impl Kind {
+    /// The `MakeNamedMedium` parameters naming the fire's type and file.
+    fn medium(self, dataset: &Path) -> String {
+        match self {
+            Kind::Fire => format!("\"string type\" \"fire\" \"string dataset\" \"{}\"", dataset.display()),
+            Kind::NanoVdb => format!(
+                "\"string type\" \"nanovdb\" \"string filename\" \"{}\" \"float scale\" 8.44e6 \"spectrum sigma_s\" [200 0 900 0]",
+                dataset.display()
+            ),
+        }
+    }
+}
+
+/// The workload's scene: `dataset` (whose medium-space box is `bounds`) as a `kind` medium with `medium`
+/// parameters appended (pbrt syntax), seen by a pinhole 2.2 fire sizes in front (−y) with a 30° field of view, behind an `interface`
 /// box, `volpath` maxdepth 1 (nothing but the fire), `sampler` (a pbrt `Sampler` directive), a box pixel filter
 /// (so a pixel is the mean over its area: the reference's sub-pixels average it).
 pub fn scene(
+    kind: Kind,
     dataset: &Path,
     bounds: [DVec3; 2],
     size: usize,
@@ -48,10 +73,10 @@ pub fn scene(
         })
         .collect();
     format!(
-        "LookAt {}  {}  0 0 1\nCamera \"perspective\" \"float fov\" 30\nPixelFilter \"box\"\nFilm \"rgb\" \"integer xresolution\" {size} \"integer yresolution\" {size}\n{sampler}\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{}\" {medium}\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [ {} ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]\nAttributeEnd\n",
+        "LookAt {}  {}  0 0 1\nCamera \"perspective\" \"float fov\" 30\nPixelFilter \"box\"\nFilm \"rgb\" \"integer xresolution\" {size} \"integer yresolution\" {size}\n{sampler}\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" {} {medium}\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [ {} ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]\nAttributeEnd\n",
         p(eye.x, eye.y, eye.z),
         p(c.x, c.y, c.z),
-        dataset.display(),
+        kind.medium(dataset),
         corners.join("  ")
     )
 }

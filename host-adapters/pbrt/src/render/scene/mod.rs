@@ -246,8 +246,13 @@ impl Portal {
 /// below `maxdepth`. Then a fire light would be built for nothing (the fire's emission still reaches every path
 /// that crosses it).
 fn no_light_sampling(b: &builder::Builder) -> Option<String> {
-    if b.maxdepth == 0 {
-        return Some("maxdepth 0: no path vertex samples a light".into());
+    if b.maxdepth <= 1 {
+        // (pbrt-v4 counts a medium's emission only before the maxdepth-th bounce: what a fire light samples from
+        // a vertex lies past it.)
+        return Some(format!(
+            "maxdepth {}: no path vertex samples a fire's light below the maximum depth",
+            b.maxdepth
+        ));
     }
     let scatters = b.media.iter().any(|m| match m {
         Medium::Plugin { scatters, .. } => *scatters,
@@ -321,6 +326,9 @@ pub struct Scene {
     /// Output variables written beside the beauty (`--aov`), in channel order.
     pub aovs: Vec<crate::render::aov::Aov>,
     pub maxdepth: usize,
+    /// Whether a scattering event inside a fire samples that fire's own light (`--fire-light-inside`); by
+    /// default only surfaces and the events in other media do (docs/RESULTS.md measures both).
+    pub fire_light_inside: bool,
     pub film_name: Option<String>,
     pub eps: f32,
     pub warnings: Vec<String>,
@@ -465,6 +473,8 @@ pub struct Overrides {
     /// More of the fire lights' parameters, (name, value) as given (docs/params.md, `light`: `cell`,
     /// `linestep`, …), typed by the plugin's table.
     pub fire_light_params: Vec<(String, String)>,
+    /// Scattering events inside a fire sample its own light too ([`Scene::fire_light_inside`]).
+    pub fire_light_inside: bool,
     /// Film resolution instead of the scene's.
     pub res: Option<(usize, usize)>,
     /// pbrt-v4's `--cropwindow x0 x1 y0 y1` and `--pixelbounds x0 x1 y0 y1`, instead of the film's.
@@ -540,11 +550,12 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         ),
         None => None,
     };
-    // The bins: a fire's from the plugin's defaults; without one, the whole CIE table (380–780 nm, 10 nm bins),
-    // as pbrt-v4 samples wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's
-    // luminance).
+    // The bins: with a plugin medium (a fire, or pbrt-v4's grids), the plugin's measured default, which its march
+    // kernel holds in vector lanes; without one, the whole CIE table (380–780 nm, 10 nm bins), as pbrt-v4 samples
+    // wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's luminance; 380–400
+    // nm holds 0.004 % of ∫ȳ).
     let (mut lo, mut hi, mut n) = (380.0, 780.0, 40);
-    if let (Some(p), true) = (&plugin, fire) {
+    if let Some(p) = &plugin {
         let default = SpectralGrid::default();
         (lo, hi, n) = (default.min_nm(), default.max_nm(), default.count());
         for row in p.parameters() {
@@ -855,6 +866,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         shutter: b.shutter,
         aovs: ov.aovs.clone(),
         maxdepth: b.maxdepth,
+        fire_light_inside: ov.fire_light_inside,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
         warnings: b.warnings,
