@@ -301,9 +301,15 @@ impl FireLight {
                 light.mip = copies.swap_remove(k).1.map(Box::new);
                 break;
             }
-            // No copy at this step: the fire's own voxels, checked unless this is the last step tried.
-            if light.mip.is_some() || last || within(&light, v) {
+            // No copy at this step: the fire's own voxels, checked unless this is the last step tried — where a
+            // volume that bounds its march's bias (pbrt-v4's grids) takes its own march instead of an unchecked
+            // line.
+            let strict = auto && v.splits_thick_steps();
+            if light.mip.is_some() || (last && !strict) || within(&light, v) {
                 break;
+            }
+            if last {
+                light.line_step = v.step_length();
             }
         }
         light.channels = light.choose_channels(line.channels)?;

@@ -333,6 +333,24 @@ const THIN: f32 = 0.1;
 pub(super) struct Tabs<'a> {
     pub(super) j: &'a TTable,
     pub(super) sigma: &'a [Lane],
+    /// A step thicker than this is split ([`super::integrate::split_step`]): the volume's `steptau` for its own
+    /// march, ∞ for estimates checked against it (the fire light's line, its channel subsets).
+    pub(super) split_tau: f32,
+}
+
+impl<'a> Tabs<'a> {
+    /// The volume's own channels; `split`: its thick steps split as its own march splits them.
+    pub(super) fn own(v: &'a FireVolume, lt: &'a LaneTables, split: bool) -> Tabs<'a> {
+        Tabs {
+            j: &v.j,
+            sigma: lt.sigma(),
+            split_tau: if split {
+                v.step_tau as f32
+            } else {
+                f32::INFINITY
+            },
+        }
+    }
 }
 
 /// The straight march of `ray` through `v` in `CV` lanes of `V` channels (at most 4 lanes holding the `l.len()`
@@ -405,7 +423,7 @@ pub(super) fn march<
         tk[ch / V][ch % V] = 1.0;
     }
     let cutoff = v.cutoff as f32;
-    let split_tau = v.step_tau as f32;
+    let split_tau = tabs.split_tau;
     let sigma_max = lt.sigma_max();
     let ns = v.species.len().min(MAX_SPECIES);
     let mut scales = [0f64; MAX_SPECIES];

@@ -37,15 +37,13 @@ pub(super) fn integrate_stepped(
     t: &mut [f64],
 ) -> f64 {
     let stepped = Stepped { m, step };
-    // (The lane march over the dataset does not split thick steps: a volume that splits them takes f64.)
-    let lanes = v.lanes.as_ref().filter(|_| v.step_tau.is_infinite());
-    if let (Some(lt), None) = (&v.lanes, mapped) {
-        if let Some(b) = march_kernel(v, lt, None, ray, step, l, t) {
-            return b;
+    match (&v.lanes, mapped) {
+        // (The fire light's line: an estimate checked against the volume's own march, its steps not split.)
+        (Some(lt), None) => {
+            let own = kernel::Tabs::own(v, lt, false);
+            march_kernel(v, lt, Some(own), ray, step, l, t)
+                .unwrap_or_else(|| march_lanes_mapped(v, lt, &stepped, |p| p, ray, l, t))
         }
-    }
-    match (lanes, mapped) {
-        (Some(lt), None) => march_lanes_mapped(v, lt, &stepped, |p| p, ray, l, t),
         (Some(lt), Some(f)) => march_lanes_mapped(v, lt, &stepped, f, ray, l, t),
         (None, _) => {
             let mut sc = Scratch::new(v.channels());
@@ -84,7 +82,8 @@ impl Medium for Stepped<'_> {
         self.m.cutoff()
     }
     fn step_tau(&self) -> f64 {
-        self.m.step_tau()
+        // (The fire light's line at its own step: not split, as in the kernel.)
+        f64::INFINITY
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
         self.m.empty_spans(o, d, t0, t1, f)
@@ -313,10 +312,7 @@ macro_rules! march_kernel_for {
             // in rgb physical mode (3 channels).
             const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
             let (s, a) = (!v.species.is_empty(), v.a_t.is_some());
-            let tb = tabs.unwrap_or(kernel::Tabs {
-                j: &v.j,
-                sigma: lt.sigma(),
-            });
+            let tb = tabs.unwrap_or_else(|| kernel::Tabs::own(v, lt, true));
             match l.len() {
                 0..=4 => match (s, a) {
                     (false, false) => kernel::march::<1, 4, false, false, F>(v, lt, tb, ray, step, l, t),
@@ -675,10 +671,7 @@ mod tests {
                 for ray in &rays {
                     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
                     let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
-                    let tabs = kernel::Tabs {
-                        j: &v.j,
-                        sigma: lt.sigma(),
-                    };
+                    let tabs = kernel::Tabs::own(&v, lt, true);
                     let te =
                         kernel(&v, lt, tabs, ray, v.step, &mut l, &mut t).expect("this shape fits");
                     let te3 = v64.integrate(ray, &mut l3, &mut t3);

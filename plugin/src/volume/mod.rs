@@ -1150,6 +1150,14 @@ impl FireVolume {
     }
 }
 
+impl FireVolume {
+    /// Whether the march splits steps thicker than `steptau` (pbrt mode): its bias is bounded, and estimates
+    /// made from it (the fire light's line) must stay within it.
+    pub(crate) fn splits_thick_steps(&self) -> bool {
+        self.step_tau.is_finite()
+    }
+}
+
 impl Medium for FireVolume {
     fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
         crate::majorant::clip_box(o, d, t0, t1, self.clip_box[0], self.clip_box[1])

@@ -161,6 +161,7 @@ impl FireVolume {
         let tabs = Tabs {
             j: &lc.j,
             sigma: &lc.sigma,
+            split_tau: f32::INFINITY,
         };
         let te = march_kernel(self, lt, Some(tabs), ray, step, &mut lk[..k], &mut tk[..k])?;
         // The column density from the node of least σ; where its light is gone (every σ > 0 then), one at

@@ -41,11 +41,12 @@ pub struct RenderArgs {
     /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
     #[arg(long)]
     plugin: Option<PathBuf>,
-    /// How emitting media light the scene: a fire light sampling voxels by emitted `power` (default),
-    /// `luminance`, or `escaping` (power times the share that leaves the fire); `off` leaves the fire's emission
-    /// to paths that pass through it.
-    #[arg(long = "fire-light", value_name = "power|luminance|escaping|off", default_value = "power",
-          value_parser = ["power", "luminance", "escaping", "off"])]
+    /// How emitting media light the scene: a fire light sampling voxels by emitted `power`, `luminance`, or
+    /// `escaping` (power times the share that leaves the fire); `off` leaves the fire's emission to paths that
+    /// pass through it; `auto` (default): `power`, except for a fire that scatters, whose light costs more than
+    /// it saves (measured; `--stats` says so).
+    #[arg(long = "fire-light", value_name = "auto|power|luminance|escaping|off", default_value = "auto",
+          value_parser = ["auto", "power", "luminance", "escaping", "off"])]
     fire_light: String,
     /// A parameter of the fire light, NAME=VALUE (repeatable; docs/params.md, `light`): e.g. `cell=8` (the
     /// pdf's cells, voxels per side), `linestep=2` (the march step along a light sample's direction, voxels),
@@ -219,7 +220,9 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         spp: a.spp,
         plugin: a.plugin.clone(),
         no_fire_light: a.fire_light == "off",
-        fire_light_weighting: (a.fire_light != "off").then(|| a.fire_light.clone()),
+        fire_light_weighting: (!matches!(a.fire_light.as_str(), "off" | "auto"))
+            .then(|| a.fire_light.clone()),
+        fire_light_forced: a.fire_light != "auto",
         fire_light_params: a.fire_light_param.clone(),
         fire_light_inside: a.fire_light_inside,
         res: a.resolution,
@@ -285,6 +288,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         ctrlc::set_handler(|| render::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
     let [x0, x1, y0, y1] = sc.bounds;
     let tiles = (x1 - x0).div_ceil(16) * (y1 - y0).div_ceil(16);
+    // (Loaded, Ctrl-C handled from here on: a farm's scheduler, or a test, may interrupt the render now.)
+    log.event(serde_json::json!({"event": "rendering", "frame": frame, "tiles": tiles}));
     let bar = ProgressBar::new(tiles as u64);
     let terminal = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     let show = !a.quiet && terminal;

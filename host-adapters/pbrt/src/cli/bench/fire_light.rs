@@ -16,6 +16,8 @@ pub struct Estimator {
     pub light: Option<(&'static str, &'static [(&'static str, &'static str)])>,
     /// The scene's pbrt-v4 grid media take pbrt-v4's own estimator (`"string integrator" "ratio"`).
     pub ratio: bool,
+    /// Scattering events inside the fire sample its light too (`--fire-light-inside`).
+    pub inside: bool,
 }
 
 /// The estimators measured: the light before issue 29 (`voxel, full`: a pdf over voxels, the volume's own march
@@ -32,18 +34,21 @@ pub const ESTIMATORS: &[Estimator] = &[
         name: "off",
         light: None,
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "voxel",
         name: "voxel, full (before)",
         light: Some(("power", &[("cell", "1"), ("linestep", "1e-9")])),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "brick",
         name: "brick, full",
         light: Some(("power", &[("cell", "8"), ("linestep", "1e-9")])),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "own",
@@ -53,6 +58,7 @@ pub const ESTIMATORS: &[Estimator] = &[
             &[("cell", "8"), ("linestep", "0"), ("lineblock", "1")],
         )),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "allbins",
@@ -67,6 +73,7 @@ pub const ESTIMATORS: &[Estimator] = &[
             ],
         )),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "steps64",
@@ -81,6 +88,7 @@ pub const ESTIMATORS: &[Estimator] = &[
             ],
         )),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "coarse",
@@ -95,6 +103,7 @@ pub const ESTIMATORS: &[Estimator] = &[
             ],
         )),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "corrected",
@@ -104,24 +113,43 @@ pub const ESTIMATORS: &[Estimator] = &[
             &[("cell", "8"), ("linestep", "0"), ("linecorrection", "0.25")],
         )),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "luminance",
         name: "lum., brick, coarse",
         light: Some(("luminance", &[("cell", "8"), ("linestep", "0")])),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "escaping",
         name: "escaping, brick, coarse",
         light: Some(("escaping", &[("cell", "8"), ("linestep", "0")])),
         ratio: false,
+        inside: false,
     },
     Estimator {
         key: "pbrt",
         name: PBRT,
         light: None,
         ratio: true,
+        inside: false,
+    },
+    Estimator {
+        key: "inside",
+        name: "blocks, 8 bins, sampled inside the fire too",
+        light: Some((
+            "power",
+            &[
+                ("cell", "8"),
+                ("linestep", "0"),
+                ("lineblock", "0"),
+                ("linechannels", "0"),
+            ],
+        )),
+        ratio: false,
+        inside: true,
     },
 ];
 
@@ -298,6 +326,8 @@ fn ladder_in(
                             .collect()
                     })
                     .unwrap_or_default(),
+                fire_light_inside: e.inside,
+                fire_light_forced: true,
                 res: Some(res),
                 ..Default::default()
             },

@@ -57,7 +57,8 @@ pub struct FireLightArgs {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     repeats: u32,
     /// The estimators (comma-separated keys): off, voxel, brick, own, allbins, steps64, coarse, corrected, luminance,
-    /// escaping, pbrt (pbrt-v4's own: ratio tracking and the light off; a nanovdb or uniformgrid fire only).
+    /// escaping, pbrt (pbrt-v4's own: ratio tracking and the light off; a nanovdb or uniformgrid fire only), inside
+    /// (the default, with the light sampled from scattering events inside the fire too).
     #[arg(
         long,
         value_delimiter = ',',
