@@ -93,15 +93,7 @@ pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "coarse",
         name: "blocks, 8 bins (default)",
-        light: Some((
-            "power",
-            &[
-                ("cell", "8"),
-                ("linestep", "0"),
-                ("lineblock", "0"),
-                ("linechannels", "0"),
-            ],
-        )),
+        light: Some(("power", DEFAULT_LINE)),
         ratio: false,
         inside: false,
     },
@@ -139,18 +131,18 @@ pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "inside",
         name: "blocks, 8 bins, sampled inside the fire too",
-        light: Some((
-            "power",
-            &[
-                ("cell", "8"),
-                ("linestep", "0"),
-                ("lineblock", "0"),
-                ("linechannels", "0"),
-            ],
-        )),
+        light: Some(("power", DEFAULT_LINE)),
         ratio: false,
         inside: true,
     },
+];
+
+/// The light's default cells and line (each choice made by its build-time check).
+const DEFAULT_LINE: &[(&str, &str)] = &[
+    ("cell", "8"),
+    ("linestep", "0"),
+    ("lineblock", "0"),
+    ("linechannels", "0"),
 ];
 
 /// The `pbrt` estimator's name: pbrt-v4's own strategy for its grid media (ratio tracking, no light).
@@ -221,9 +213,19 @@ AttributeEnd
     )
 }
 
+/// A file removed when dropped.
+#[derive(Debug)]
+pub struct TempFile(pub PathBuf);
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
 /// `scene` with its pbrt-v4 grid media on pbrt-v4's estimator (`"string integrator" "ratio"`), written beside it
 /// (relative paths stay valid).
-pub fn ratio_scene(scene: &Path) -> Result<PathBuf, String> {
+pub fn ratio_scene(scene: &Path) -> Result<TempFile, String> {
     let text = std::fs::read_to_string(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
     let mut out = text.clone();
     for ty in ["nanovdb", "uniformgrid"] {
@@ -240,7 +242,7 @@ pub fn ratio_scene(scene: &Path) -> Result<PathBuf, String> {
     name.push(format!(".ratio-{}.pbrt", std::process::id()));
     let path = PathBuf::from(name);
     std::fs::write(&path, out).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(path)
+    Ok(TempFile(path))
 }
 
 /// One render of the ladder.
@@ -275,43 +277,15 @@ pub fn ladder(
     estimators: &[&Estimator],
     log: &dyn Fn(&str),
 ) -> Result<(Vec<Run>, String), String> {
+    // (Removed when the ladder ends, however it ends.)
     let ratio = match estimators.iter().any(|e| e.ratio) {
         true => Some(ratio_scene(scene)?),
         false => None,
     };
-    let result = ladder_in(
-        scene,
-        ratio.as_deref(),
-        label,
-        res,
-        spp,
-        ref_spp,
-        repeats,
-        estimators,
-        log,
-    );
-    if let Some(p) = ratio {
-        let _ = std::fs::remove_file(p);
-    }
-    result
-}
-
-#[allow(clippy::too_many_arguments)]
-fn ladder_in(
-    scene: &Path,
-    ratio: Option<&Path>,
-    label: &str,
-    res: (usize, usize),
-    spp: &[usize],
-    ref_spp: usize,
-    repeats: usize,
-    estimators: &[&Estimator],
-    log: &dyn Fn(&str),
-) -> Result<(Vec<Run>, String), String> {
     let load = |spp: usize, e: &Estimator| {
         sc::load(
-            match (e.ratio, ratio) {
-                (true, Some(r)) => r,
+            match (e.ratio, &ratio) {
+                (true, Some(r)) => &r.0,
                 _ => scene,
             },
             &sc::Overrides {
