@@ -232,3 +232,67 @@ fn submit_makes_the_merge_wait_for_every_render_task() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("/bin/false"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn farm_scripts_run_nothing_a_file_name_or_partition_smuggles_in() {
+    // A newline in the scene's file name ended the job script's comment line, and the name's next line ran when
+    // the job ran; `--partition` likewise ended its `#SBATCH` line. Both are refused, naming the character; quotes,
+    // `$` and backticks in a name stay inside its quoted word, and the scripts run nothing else.
+    let dir = tmp("inject");
+    let evil = "a\ntouch INJECTED_NL\n.pbrt";
+    std::fs::write(dir.join(evil), SCENE).unwrap();
+    let o = run_in(&dir, &["farm", "slurm", evil, "--frames", "1-1"]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && msg.contains("'\\n' at byte"),
+        "{msg}"
+    );
+    std::fs::write(dir.join("s.pbrt"), SCENE).unwrap();
+    for partition in ["render\ntouch INJECTED_P", "a b", "$(touch INJECTED_S)", ""] {
+        let o = run_in(
+            &dir,
+            &[
+                "farm",
+                "slurm",
+                "s.pbrt",
+                "--frames",
+                "1-1",
+                "--partition",
+                partition,
+            ],
+        );
+        let msg = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(2) && msg.contains("--partition"),
+            "{partition:?}: {msg}"
+        );
+    }
+    // Quotes, `$` and backticks in the name: the render script quotes it, so running the task passes the name
+    // whole (its render then stops at the scene's missing dataset) and touches nothing.
+    let odd = "it's $(touch INJECTED_D) `touch INJECTED_B`.pbrt";
+    std::fs::write(dir.join(odd), SCENE).unwrap();
+    ok(&run_in(
+        &dir,
+        &["farm", "slurm", odd, "--frames", "1-1", "--dir", "odd"],
+    ));
+    let script = dir.join("odd/render.sbatch");
+    let text = std::fs::read_to_string(&script).unwrap();
+    assert!(!text.contains("#SBATCH --output"), "{text}");
+    let o = Command::new("bash")
+        .arg(&script)
+        .current_dir(&*dir)
+        .env("SLURM_ARRAY_TASK_ID", "0")
+        .output()
+        .unwrap();
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(msg.contains(odd) && msg.contains("torch.0001.vdb"), "{msg}");
+    for name in [
+        "INJECTED_NL",
+        "INJECTED_P",
+        "INJECTED_S",
+        "INJECTED_D",
+        "INJECTED_B",
+    ] {
+        assert!(!dir.join(name).exists(), "{name} was created");
+    }
+}

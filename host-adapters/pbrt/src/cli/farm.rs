@@ -82,6 +82,21 @@ fn quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', r"'\''"))
 }
 
+/// Refuses a path that would leave its place in a job script: a control character (a newline ends the comment
+/// or directive it stands in, and the next line runs as a command). Shell words are quoted ([`quote`]); paths
+/// reach `#SBATCH` directives never (the logs go to `sbatch --output`, an argument).
+fn plain(what: &str, s: &str) -> Result<(), (u8, String)> {
+    match s.char_indices().find(|(_, c)| c.is_control()) {
+        Some((i, c)) => Err((
+            2,
+            format!(
+                "{what} {s:?}: character {c:?} at byte {i}: expected no control character (it would end its line of the job script)"
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// An absolute form of `p` (made from the working directory; the file need not exist yet).
 fn absolute(p: &Path) -> Result<PathBuf, (u8, String)> {
     std::path::absolute(p).map_err(|e| (2, format!("{}: {e}", p.display())))
@@ -92,6 +107,19 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
         return Err((2, format!("{}: no such scene file", a.scene.display())));
     }
     let scene = absolute(&a.scene)?;
+    plain("the scene's path", &scene.display().to_string())?;
+    if let Some(p) = &a.partition {
+        if p.is_empty()
+            || !p
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_.,-".contains(c))
+        {
+            return Err((
+                2,
+                format!("--partition {p:?}: expected partition names of letters, digits and _ . , - (Slurm's)"),
+            ));
+        }
+    }
     let stem = scene
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -107,6 +135,8 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
             .clone()
             .unwrap_or_else(|| beside.join(format!("{stem}.####.exr"))),
     )?;
+    plain("--dir", &dir.display().to_string())?;
+    plain("-o", &output.display().to_string())?;
     let frames = &a.frames.0;
     let outs: Vec<PathBuf> = frames
         .iter()
@@ -193,7 +223,6 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
          #SBATCH --job-name=firemedium-render\n\
          #SBATCH --array=0-{last_task}\n\
          #SBATCH --cpus-per-task={cpus}\n\
-         #SBATCH --output={logs}/render-%A_%a.log\n\
          {partition}\
          set -eu\n\
          FRAMES=({frame_list})\n\
@@ -210,7 +239,6 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
         nf = frames.len(),
         last_task = tasks - 1,
         cpus = a.cpus,
-        logs = dir.join("logs").display(),
         exe = q(&exe),
         qscene = q(&scene),
         qlog = q(&dir.join("logs/render.jsonl")),
@@ -222,7 +250,6 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
          # firemedium farm: each frame's {tiles} tiles merged into its EXR (after every render task succeeded).\n\
          #SBATCH --job-name=firemedium-merge\n\
          #SBATCH --array=0-{last_frame}\n\
-         #SBATCH --output={logs}/merge-%A_%a.log\n\
          {partition}\
          set -eu\n\
          FRAMES=({frame_list})\n\
@@ -233,20 +260,27 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
          for ((K = 0; K < {tiles}; K++)); do TILES+=({qtiles}/{tile_name}); done\n\
          exec {exe} merge \"${{TILES[@]}}\" -o \"${{OUT[$TASK]}}\"\n",
         last_frame = frames.len() - 1,
-        logs = dir.join("logs").display(),
         qtiles = q(&dir.join("tiles")),
         exe = q(&exe),
     );
     let (render_path, merge_path) = (dir.join("render.sbatch"), dir.join("merge.sbatch"));
+    // The tasks' logs (Slurm's %A job and %a task): `sbatch --output`, an argument, not a directive in the
+    // script (Slurm splits a directive at white space).
+    let (render_log, merge_log) = (
+        dir.join("logs/render-%A_%a.log"),
+        dir.join("logs/merge-%A_%a.log"),
+    );
     let submit = format!(
         "#!/bin/bash\n\
          # Submits the render array, then the merge array to start when every render task succeeded.\n\
          set -eu\n\
-         R=$(sbatch --parsable {render})\n\
-         M=$(sbatch --parsable --dependency=afterok:${{R%%;*}} {merge})\n\
+         R=$(sbatch --parsable --output={rlog} {render})\n\
+         M=$(sbatch --parsable --output={mlog} --dependency=afterok:${{R%%;*}} {merge})\n\
          echo \"render job $R, merge job $M\"\n",
         render = q(&render_path),
         merge = q(&merge_path),
+        rlog = q(&render_log),
+        mlog = q(&merge_log),
     );
     let submit_path = dir.join("submit.sh");
     for (path, text) in [
@@ -265,9 +299,10 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
         submit_path.display()
     );
     if a.submit {
-        let render_id = sbatch(&a.sbatch, &[], &render_path)?;
+        let output = |p: &Path| format!("--output={}", p.display());
+        let render_id = sbatch(&a.sbatch, &[&output(&render_log)], &render_path)?;
         let dep = format!("--dependency=afterok:{render_id}");
-        let merge_id = sbatch(&a.sbatch, &[&dep], &merge_path)?;
+        let merge_id = sbatch(&a.sbatch, &[&output(&merge_log), &dep], &merge_path)?;
         writeln!(
             out,
             "submitted render job {render_id} and merge job {merge_id} (frames: {})",
