@@ -134,6 +134,22 @@ impl Target for Collect {
 
 const MAX_INCLUDE_DEPTH: usize = 64;
 
+/// The most `Include`s one scene may follow, counting each time a file is included (a file included twice by
+/// each of 40 files in a chain — a diamond, neither a cycle nor deep — is 2⁴⁰ parses; a production scene's
+/// geometry includes number in the thousands).
+const MAX_INCLUDES: u64 = 1 << 16;
+
+/// The most bytes of scene text one scene may parse, its includes' repeats counted.
+const MAX_SCENE_BYTES: u64 = 1 << 36;
+
+/// The files being included (the chain from the scene file) and what the whole parse has read so far.
+#[derive(Debug, Default)]
+struct Includes {
+    stack: Vec<PathBuf>,
+    count: u64,
+    bytes: u64,
+}
+
 /// Parses the scene file at `path` (and everything it includes) into `target`.
 pub fn parse_file(path: &Path, target: &mut dyn Target) -> Result<(), ParseError> {
     let loc = Loc {
@@ -141,7 +157,7 @@ pub fn parse_file(path: &Path, target: &mut dyn Target) -> Result<(), ParseError
         line: 0,
         col: 0,
     };
-    parse_path(path, target, &mut Vec::new(), &loc)
+    parse_path(path, target, &mut Includes::default(), &loc)
 }
 
 /// Parses scene text; `name` labels positions and `dir` resolves relative `Include`s.
@@ -155,7 +171,7 @@ pub fn parse_str(
         tok: Tokenizer::new(Arc::from(name), text),
         peeked: None,
         dir: dir.to_path_buf(),
-        stack: Vec::new(),
+        stack: Includes::default(),
     };
     p.run(target)
 }
@@ -163,20 +179,43 @@ pub fn parse_str(
 fn parse_path(
     path: &Path,
     target: &mut dyn Target,
-    stack: &mut Vec<PathBuf>,
+    inc: &mut Includes,
     from: &Loc,
 ) -> Result<(), ParseError> {
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-    if stack.contains(&canon) {
+    if inc.stack.contains(&canon) {
         return Err(ParseError::new(
             from,
             format!("{} includes itself (an Include cycle)", path.display()),
         ));
     }
-    if stack.len() >= MAX_INCLUDE_DEPTH {
+    if inc.stack.len() >= MAX_INCLUDE_DEPTH {
         return Err(ParseError::new(
             from,
             format!("Includes nested deeper than {MAX_INCLUDE_DEPTH}"),
+        ));
+    }
+    inc.count += 1;
+    if inc.count > MAX_INCLUDES {
+        return Err(ParseError::new(
+            from,
+            format!(
+                "{}: the scene's Include number {}: expected at most {MAX_INCLUDES} (files that include another more than once in a chain multiply: is a file included twice at each level?)",
+                path.display(),
+                inc.count
+            ),
+        ));
+    }
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    inc.bytes = inc.bytes.saturating_add(len);
+    if inc.bytes > MAX_SCENE_BYTES {
+        return Err(ParseError::new(
+            from,
+            format!(
+                "{} ({len} bytes): the scene's text, its includes counted each time, reaches {} bytes: expected at most {MAX_SCENE_BYTES}",
+                path.display(),
+                inc.bytes
+            ),
         ));
     }
     let bytes = crate::read_regular_file(path)
@@ -196,17 +235,17 @@ fn parse_path(
             format!("byte {at}: not UTF-8 text"),
         )
     })?;
-    stack.push(canon);
+    inc.stack.push(canon);
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut p = Parser {
         tok: Tokenizer::new(Arc::from(path.display().to_string()), &text),
         peeked: None,
         dir,
-        stack: std::mem::take(stack),
+        stack: std::mem::take(inc),
     };
     let r = p.run(target);
-    *stack = std::mem::take(&mut p.stack);
-    stack.pop();
+    *inc = std::mem::take(&mut p.stack);
+    inc.stack.pop();
     r
 }
 
@@ -214,7 +253,7 @@ struct Parser<'a> {
     tok: Tokenizer<'a>,
     peeked: Option<Token>,
     dir: PathBuf,
-    stack: Vec<PathBuf>,
+    stack: Includes,
 }
 
 const TYPES: [&str; 17] = [

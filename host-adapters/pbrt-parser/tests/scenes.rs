@@ -207,3 +207,32 @@ fn mutated_scenes_never_panic() {
     eprintln!("parser mutations: {ok} parsed, {err} errors, 0 panics");
     assert!(ok > 100 && err > 1000, "{ok} {err}");
 }
+
+#[test]
+fn a_diamond_of_includes_is_refused_in_bounded_time() {
+    // 41 files of ~30 bytes, each including the next twice: no cycle, 41 deep, 2⁴⁰ parses. Refused at the
+    // 65 537th Include, naming the file and the bound; a file included twice legitimately still is.
+    let dir = std::env::temp_dir().join(format!("firemedium-pbrt-{}-diamond", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for i in 0..40 {
+        let next = format!("f{}.pbrt", i + 1);
+        std::fs::write(
+            dir.join(format!("f{i}.pbrt")),
+            format!("Include \"{next}\"\nInclude \"{next}\"\n"),
+        )
+        .unwrap();
+    }
+    std::fs::write(dir.join("f40.pbrt"), "Shape \"sphere\"\n").unwrap();
+    let e = parse_file(&dir.join("f0.pbrt"), &mut Collect::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("Include number 65537") && e.contains("expected at most 65536"),
+        "{e}"
+    );
+    // Three levels of the same diamond: 2³ spheres, as pbrt-v4 would include them.
+    let mut c = Collect::default();
+    parse_file(&dir.join("f37.pbrt"), &mut c).unwrap();
+    assert_eq!(c.0.len(), 8);
+    std::fs::remove_dir_all(&dir).ok();
+}
