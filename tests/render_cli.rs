@@ -2057,3 +2057,45 @@ fn the_fire_lights_parameters_are_checked_and_its_samples_counted() {
         .map(|m| m.1.clone());
     assert_eq!(light.as_deref(), Some("auto cell=2"));
 }
+
+#[test]
+fn escape_sequences_and_huge_tokens_from_a_scene_never_reach_the_terminal_raw() {
+    // A scene string holding ESC[2J ESC[31m was printed raw on stderr (clearing the terminal), and a 5 MB token
+    // echoed whole: both are escaped or cut in the error.
+    let dir = tmp("term");
+    let scene = dir.join("t.pbrt");
+    std::fs::write(
+        &scene,
+        "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"\u{1b}[2J\u{1b}[31mbogus\"\n",
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .args(["render", "-o"])
+        .arg(dir.join("t.exr"))
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && !err.contains('\u{1b}') && err.contains("\\u{1b}[2J"),
+        "{err:?}"
+    );
+    std::fs::write(
+        &scene,
+        format!("WorldBegin\nShape \"{}\"\n", "x".repeat(5_000_000)),
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .args(["render", "-o"])
+        .arg(dir.join("t.exr"))
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.len() < 10_000 && err.contains("more characters"),
+        "{} bytes: {}",
+        err.len(),
+        &err[..err.len().min(300)]
+    );
+}

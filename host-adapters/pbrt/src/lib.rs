@@ -24,4 +24,5 @@ pub mod gen;
 pub mod imageio;
 pub mod metrics;
 pub mod render;
+pub mod term;
 pub mod tonemap;

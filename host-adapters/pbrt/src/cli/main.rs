@@ -95,11 +95,13 @@ fn main() -> ExitCode {
         Ok(text) => {
             let mut out = std::io::stdout().lock();
             // A closed pipe (`| head`) is not an error worth a panic.
-            let _ = out.write_all(text.as_bytes());
+            let _ = out.write_all(firemedium::term::printable(&text, usize::MAX).as_bytes());
             ExitCode::SUCCESS
         }
         Err((status, msg)) => {
             // One line, whatever the message holds.
+            // (Input quoted in it made printable: no escape sequence from a file reaches the terminal.)
+            let msg = firemedium::term::printable(&msg, firemedium::term::MAX_MESSAGE_CHARS);
             eprintln!("firemedium: {}", msg.replace('\n', " "));
             ExitCode::from(status)
         }

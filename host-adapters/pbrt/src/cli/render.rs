@@ -281,7 +281,10 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
     let load_seconds = load_start.elapsed().as_secs_f64();
     if !a.quiet {
         for w in &sc.warnings {
-            eprintln!("{w}");
+            eprintln!(
+                "{}",
+                firemedium::term::printable(w, firemedium::term::MAX_MESSAGE_CHARS)
+            );
         }
     }
     let _ =
