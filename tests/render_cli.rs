@@ -2099,3 +2099,58 @@ fn escape_sequences_and_huge_tokens_from_a_scene_never_reach_the_terminal_raw() 
         &err[..err.len().min(300)]
     );
 }
+
+#[test]
+fn ctrl_c_ends_a_path_that_would_bounce_for_hours() {
+    // maxdepth 1e8 in an albedo-1 medium 10⁴ mean free paths deep: one path scatters ~10⁸ times (Russian roulette
+    // acts at surfaces only). SIGINT is checked at every bounce, so the render stops with exit 130 instead of
+    // finishing the path (it ran on 44 s after SIGINT before).
+    let dir = tmp("long-path");
+    let scene = dir.join("p.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 -2000  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 1\nFilm \"rgb\" \"integer xresolution\" 2 \"integer yresolution\" 2\nSampler \"independent\" \"integer pixelsamples\" 16\nIntegrator \"volpath\" \"integer maxdepth\" 100000000\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"spectrum sigma_a\" [200 0 900 0] \"spectrum sigma_s\" [200 10 900 10]\nAttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1000\nAttributeEnd\n",
+    )
+    .unwrap();
+    let log = dir.join("p.jsonl");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(&scene)
+        .args(["--threads", "2", "-q", "--log-json"])
+        .arg(&log)
+        .arg("-o")
+        .arg(dir.join("p.exr"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut waited = 0;
+    while !std::fs::read_to_string(&log).is_ok_and(|t| t.contains("\"rendering\"")) {
+        assert!(
+            waited < 1200 && child.try_wait().unwrap().is_none(),
+            "no \"rendering\" event in {} within 120 s",
+            log.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        waited += 1;
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success());
+    // Bounded wait (a hang guard, not a timing assertion).
+    let mut waited = 0;
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            waited < 600,
+            "the render did not stop within 60 s of SIGINT"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        waited += 1;
+    };
+    assert_eq!(status.code(), Some(130));
+}

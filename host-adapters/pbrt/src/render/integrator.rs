@@ -772,6 +772,11 @@ impl Integrator<'_> {
         // The medium of the last vertex when it was a scattering event (whose own fire light it did not sample).
         let mut skipped: Option<usize> = None;
         for _ in 0..(4 * sc.maxdepth + 64) {
+            // Ctrl-C or SIGTERM within a path too (a maxdepth of 1e8 in an albedo-1 medium is one long path): its
+            // tile is then left out, never written half-done.
+            if super::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) {
+                break;
+            }
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
             if let Some(m) = medium {
