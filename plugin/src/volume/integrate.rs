@@ -219,6 +219,11 @@ pub(crate) const MAX_STEPS: f64 = (1u64 << 24) as f64;
 /// it. The march needs no cap: its steps are bounded by [`MAX_STEPS`].
 pub(crate) const MAX_COLLISIONS: u64 = 1 << 20;
 
+/// The most channel evaluations one ray's tracking may take: [`MAX_COLLISIONS`] at 32 channels. With more
+/// channels (up to 4 096 bins) the collision cap shrinks in proportion, so one call's work stays bounded (a ray
+/// at 4 096 bins through one dense voxel took 44 s).
+pub(crate) const MAX_TRACKING_WORK: u64 = MAX_COLLISIONS * 32;
+
 /// Emitted radiance `l` and transmittance `t` of the ray; returns the parameter where the ray left the medium
 /// (or t1).
 pub(crate) fn integrate(
@@ -354,6 +359,7 @@ fn collisions(
     } = span;
     let mut count = 0u64;
     let mut capped = false;
+    let cap = (MAX_TRACKING_WORK / sc.sa.len().max(1) as u64).clamp(1 << 10, MAX_COLLISIONS);
     m.majorants(ray.o, ray.d, a, b, &mut |ta, tb, smaj| {
         if !(smaj > 0.0) {
             return true;
@@ -365,7 +371,7 @@ fn collisions(
                 return true;
             }
             count += 1;
-            if count > MAX_COLLISIONS {
+            if count > cap {
                 capped = true;
                 return false;
             }
