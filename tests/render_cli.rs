@@ -1504,6 +1504,7 @@ fn log_json_records_each_event_as_a_line() {
     assert!(
         errors.len() == 1
             && errors[0]["code"] == 1
+            && errors[0]["frame"] == 33
             && errors[0]["message"]
                 .as_str()
                 .unwrap()
@@ -2153,4 +2154,31 @@ fn ctrl_c_ends_a_path_that_would_bounce_for_hours() {
         waited += 1;
     };
     assert_eq!(status.code(), Some(130));
+}
+
+#[test]
+fn a_log_that_cannot_be_written_is_said_once_and_the_render_goes_on() {
+    // `--log-json /dev/full`: every event was lost without a word.
+    let dir = tmp("log-full");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(&scene)
+        .args(["-q", "--log-json", "/dev/full", "-o"])
+        .arg(dir.join("s.exr"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(
+        err.matches("--log-json /dev/full: cannot write").count(),
+        1,
+        "{err}"
+    );
+    assert!(dir.join("s.exr").is_file());
 }

@@ -132,19 +132,28 @@ fn parse_aovs(s: &str) -> Result<Aovs, String> {
 }
 
 /// `--log-json`: events as JSON lines appended to a file (a farm's scheduler reads them while the render runs).
-struct JsonLog(Option<std::sync::Mutex<std::fs::File>>);
+/// A write that fails (a full disk) is said once on stderr, with the file and the error: the render goes on.
+struct JsonLog(
+    Option<std::sync::Mutex<std::fs::File>>,
+    std::path::PathBuf,
+    std::sync::atomic::AtomicBool,
+);
 
 impl JsonLog {
     fn open(path: Option<&Path>) -> Result<JsonLog, (u8, String)> {
         let Some(path) = path else {
-            return Ok(JsonLog(None));
+            return Ok(JsonLog(None, Default::default(), Default::default()));
         };
         let f = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(path)
             .map_err(|e| (2, format!("--log-json {}: {e}", path.display())))?;
-        Ok(JsonLog(Some(std::sync::Mutex::new(f))))
+        Ok(JsonLog(
+            Some(std::sync::Mutex::new(f)),
+            path.to_path_buf(),
+            Default::default(),
+        ))
     }
     fn on(&self) -> bool {
         self.0.is_some()
@@ -152,7 +161,15 @@ impl JsonLog {
     fn event(&self, v: serde_json::Value) {
         if let Some(Ok(mut f)) = self.0.as_ref().map(|m| m.lock()) {
             // (One write per line: appends of a line from several processes do not interleave.)
-            let _ = std::io::Write::write_all(&mut *f, format!("{v}\n").as_bytes());
+            let r = std::io::Write::write_all(&mut *f, format!("{v}\n").as_bytes());
+            if let Err(e) = r {
+                if !self.2.swap(true, std::sync::atomic::Ordering::Relaxed) {
+                    eprintln!(
+                        "firemedium: --log-json {}: cannot write: {e} (this and later events are lost; the render goes on)",
+                        self.1.display()
+                    );
+                }
+            }
         }
     }
 }
@@ -174,10 +191,10 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
         return Err((2, "--spp must be at least 1".into()));
     }
     let log = JsonLog::open(a.log_json.as_deref())?;
-    let logged = |r: Result<String, (u8, String)>| {
+    let logged = |r: Result<String, (u8, String)>, frame: Option<i64>| {
         if let Err((code, message)) = &r {
             if *code != 0 {
-                log.event(serde_json::json!({"event": "error", "code": code, "message": message}));
+                log.event(serde_json::json!({"event": "error", "frame": frame, "code": code, "message": message}));
             }
         }
         r
@@ -185,14 +202,17 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
     let frames: Option<Vec<i64>> = a.frames.clone().map(|f| f.0).or(a.frame.map(|f| vec![f]));
     let Some(frames) = frames else {
         if a.skip_existing {
-            return logged(Err((2, "--skip-existing needs --frames or --frame".into())));
+            return logged(
+                Err((2, "--skip-existing needs --frames or --frame".into())),
+                None,
+            );
         }
-        return logged(render_frame(a, None, &log));
+        return logged(render_frame(a, None, &log), None);
     };
     let mut out = String::new();
     for &f in &frames {
         let start = std::time::Instant::now();
-        match logged(render_frame(a, Some(f), &log)) {
+        match logged(render_frame(a, Some(f), &log), Some(f)) {
             Ok(text) => {
                 out += &text;
                 // One line per finished frame, as it finishes (a farm's log follows the sequence).
