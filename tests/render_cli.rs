@@ -816,7 +816,75 @@ fn ctrl_c_ends_a_long_render_inside_its_tiles() {
         waited += 1;
     };
     assert_eq!(status.code(), Some(130));
-    assert!(out.is_file(), "the finished tiles are written");
+    // The finished tiles beside the output, never under its name (a complete frame from an earlier run would
+    // be lost), their record saying the render is not complete.
+    let partial = dir.join("i.partial.exr");
+    assert!(
+        partial.is_file() && !out.exists(),
+        "the finished tiles are written beside the output"
+    );
+    let (_, meta) = firemedium::imageio::read_meta(&partial).unwrap();
+    assert!(
+        meta.iter().any(|(k, v)| k == "complete" && v == "false"),
+        "{meta:?}"
+    );
+}
+
+#[test]
+fn skip_existing_renders_again_what_is_not_a_finished_frame() {
+    // `--skip-existing` took any file under the name for a finished frame: truncated, empty and text EXRs, and
+    // one an interrupted render wrote, were "left out". Now only an EXR that reads whole and whose record says
+    // complete is; the others are rendered again, saying why.
+    let dir = tmp("skip-broken");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
+    )
+    .unwrap();
+    let run = |frame: &str| {
+        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(&scene)
+            .args(["--frame", frame, "--skip-existing", "-o"])
+            .arg(dir.join("f.####.exr"))
+            .output()
+            .unwrap()
+    };
+    let o = run("1");
+    assert!(o.status.success());
+    let good = std::fs::read(dir.join("f.0001.exr")).unwrap();
+    let o = run("1");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("exists, left out"));
+    // A complete EXR whose record says interrupted, a truncated one, an empty one, a text file.
+    let mut interrupted = good.clone();
+    // (The record is one text attribute of key=value lines.)
+    let at = interrupted
+        .windows(b"complete=true".len())
+        .position(|w| w == b"complete=true")
+        .expect("the record's complete line");
+    interrupted[at + 9..at + 13].copy_from_slice(b"nope");
+    for (k, bytes) in [
+        (2, interrupted),
+        (3, good[..good.len() / 2].to_vec()),
+        (4, Vec::new()),
+        (5, b"not an exr".to_vec()),
+    ] {
+        let f = dir.join(format!("f.{k:04}.exr"));
+        std::fs::write(&f, &bytes).unwrap();
+        let o = run(&k.to_string());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.success()
+                && err.contains("is not a finished frame")
+                && err.contains("rendering it again"),
+            "frame {k}: {err}"
+        );
+        assert!(
+            std::fs::read(&f).unwrap().len() > 1000,
+            "frame {k} rendered again"
+        );
+    }
 }
 
 #[test]
@@ -1251,6 +1319,22 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && e.contains("leave pixel (12, 8)"),
+        "{e}"
+    );
+    // A tile whose record says its render was interrupted (as an interrupted render writes it).
+    let mut bytes = std::fs::read(dir.join(&tiles[3])).unwrap();
+    let at = bytes
+        .windows(b"complete=true".len())
+        .position(|w| w == b"complete=true")
+        .expect("the record's complete line");
+    bytes[at + 9..at + 13].copy_from_slice(b"nope");
+    std::fs::write(dir.join("cut.exr"), &bytes).unwrap();
+    let o = run(&[
+        "merge", &tiles[0], &tiles[1], &tiles[2], "cut.exr", "-o", "x.exr",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("cut.exr") && e.contains("interrupted"),
         "{e}"
     );
     // The record the EXRs carry (read back with the `exr` crate): what the render was.

@@ -31,6 +31,20 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
     let mut extra: Option<(Vec<String>, Vec<f32>)> = None;
     for (k, path) in a.tiles.iter().enumerate() {
         let (win, meta) = imageio::read_meta(path).map_err(|e| (1, e))?;
+        // A tile an interrupted render wrote (its record says so) is not merged into a finished-looking frame.
+        if let Some((_, v)) = meta
+            .iter()
+            .find(|(k, _)| k == "complete")
+            .filter(|(_, v)| v != "true")
+        {
+            return Err((
+                1,
+                format!(
+                    "{}: the tile's record says complete={v}: its render was interrupted (render the tile again)",
+                    path.display()
+                ),
+            ));
+        }
         seconds += meta
             .iter()
             .find(|(k, _)| k == imageio::RENDER_SECONDS)

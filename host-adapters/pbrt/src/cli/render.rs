@@ -174,6 +174,33 @@ impl JsonLog {
     }
 }
 
+/// The EXR record's attribute saying whether every tile was rendered ("true") or the render was interrupted.
+const COMPLETE: &str = "complete";
+
+/// `path` with `.partial` before its extension: where an interrupted render writes what it finished.
+fn partial(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}.partial{ext}"))
+}
+
+/// Whether the EXR at `path` is a finished frame: it reads whole (every pixel), and its record does not say it
+/// is incomplete (renders before the record said so are taken as complete when they read whole).
+fn finished(path: &Path) -> Result<(), String> {
+    imageio::read(path, false)?;
+    let (_, meta) = imageio::read_meta(path)?;
+    match meta.iter().find(|(k, _)| k == COMPLETE) {
+        Some((_, v)) if v != "true" => Err("its record says the render was interrupted".into()),
+        _ => Ok(()),
+    }
+}
+
 /// The seed of frame `f` from the render's seed: the same seed for the same frame, another for each frame.
 fn frame_seed(seed: u64, f: i64) -> u64 {
     seed ^ (f as u64)
@@ -271,18 +298,35 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         }
         Ok(outputs(&a.scene, None, Some(&patterned)))
     };
+    // `--skip-existing`: a frame is done when its EXR reads whole and its record says it is complete; a truncated,
+    // unreadable or interrupted one is rendered again, saying why.
     let exists = |exr: &Path| {
-        (a.skip_existing && exr.is_file()).then(|| {
-            log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
-            (
-                0,
-                format!(
-                    "frame {}: {} exists, left out\n",
-                    frame.unwrap_or(0),
-                    exr.display()
-                ),
-            )
-        })
+        if !(a.skip_existing && exr.is_file()) {
+            return None;
+        }
+        let why = match finished(exr) {
+            Ok(()) => {
+                log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
+                return Some((
+                    0,
+                    format!(
+                        "frame {}: {} exists, left out\n",
+                        frame.unwrap_or(0),
+                        exr.display()
+                    ),
+                ));
+            }
+            Err(why) => why,
+        };
+        if !a.quiet {
+            eprintln!(
+                "firemedium: frame {}: {} is not a finished frame ({}): rendering it again",
+                frame.unwrap_or(0),
+                exr.display(),
+                firemedium::term::printable(&why, firemedium::term::MAX_MESSAGE_CHARS)
+            );
+        }
+        None
     };
     // (With `-o`, a frame left out is not even loaded.)
     if a.output.is_some() {
@@ -461,6 +505,15 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             format!("{:.6}", st.seconds),
         ),
     ];
+    // An interrupted render writes its finished tiles beside the output, never over it (a complete frame from
+    // an earlier run stays), and its record says it is not complete.
+    let (exr, png) = if img.complete {
+        (exr, png)
+    } else {
+        (partial(&exr), partial(&png))
+    };
+    img.meta
+        .push((COMPLETE.to_string(), img.complete.to_string()));
     img.write_exr(&exr, fire_t, sc.response.fp16)
         .map_err(|e| (1, e))?;
     write_preview(&img, &png, &tone).map_err(|e| (1, e))?;
