@@ -2189,8 +2189,15 @@ fn escape_sequences_and_huge_tokens_from_a_scene_never_reach_the_terminal_raw() 
 fn ctrl_c_ends_a_path_that_would_bounce_for_hours() {
     // maxdepth 1e8 in an albedo-1 medium 10⁴ mean free paths deep: one path scatters ~10⁸ times (Russian roulette
     // acts at surfaces only). SIGINT is checked at every bounce, so the render stops with exit 130 instead of
-    // finishing the path (it ran on 44 s after SIGINT before).
-    let dir = tmp("long-path");
+    // finishing the path (it ran on 44 s after SIGINT before). SIGTERM (what Slurm sends at a time limit) too:
+    // it ended the render writing nothing.
+    for signal in ["INT", "TERM"] {
+        interrupt_a_long_path(signal);
+    }
+}
+
+fn interrupt_a_long_path(signal: &str) {
+    let dir = tmp(&format!("long-path-{signal}"));
     let scene = dir.join("p.pbrt");
     std::fs::write(
         &scene,
@@ -2220,7 +2227,7 @@ fn ctrl_c_ends_a_path_that_would_bounce_for_hours() {
     }
     std::thread::sleep(std::time::Duration::from_millis(300));
     assert!(Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap()
         .success());
@@ -2232,12 +2239,16 @@ fn ctrl_c_ends_a_path_that_would_bounce_for_hours() {
         }
         assert!(
             waited < 600,
-            "the render did not stop within 60 s of SIGINT"
+            "the render did not stop within 60 s of SIG{signal}"
         );
         std::thread::sleep(std::time::Duration::from_millis(100));
         waited += 1;
     };
-    assert_eq!(status.code(), Some(130));
+    assert_eq!(status.code(), Some(130), "SIG{signal}");
+    assert!(
+        dir.join("p.partial.exr").is_file(),
+        "SIG{signal}: the finished tiles"
+    );
 }
 
 #[test]
