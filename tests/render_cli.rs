@@ -1337,6 +1337,27 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
         !o.status.success() && e.contains("cut.exr") && e.contains("interrupted"),
         "{e}"
     );
+    // One flipped byte in a tile's pixels (the last block's last value's high byte): merged silently before, one
+    // pixel −1.2e15; now an error (the checksum in its record, or the file unreadable).
+    let mut bytes = std::fs::read(dir.join(&tiles[3])).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x80;
+    std::fs::write(dir.join("flipped.exr"), &bytes).unwrap();
+    let o = run(&[
+        "merge",
+        &tiles[0],
+        &tiles[1],
+        &tiles[2],
+        "flipped.exr",
+        "-o",
+        "x.exr",
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("flipped.exr") && !dir.join("x.exr").exists(),
+        "{e}"
+    );
+    eprintln!("one flipped byte: {e}");
     // The record the EXRs carry (read back with the `exr` crate): what the render was.
     let (win, meta) = firemedium::imageio::read_meta(&dir.join("merged.exr")).unwrap();
     assert_eq!((win.origin, win.full), ((0, 0), (24, 16)));

@@ -412,7 +412,8 @@ pub fn write_channels_exr(
         let mut image = Image::from_layer(layer);
         image.attributes.display_window =
             IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
-        record_attribute(&mut image.attributes.other, meta, fire_temperature);
+        let meta = with_checksum(meta, pixels_checksum(rgb, names, values, fp16));
+        record_attribute(&mut image.attributes.other, &meta, fire_temperature);
         image
             .write()
             .non_parallel()
@@ -432,6 +433,61 @@ pub struct Window {
 /// What a render was (name, value pairs: scene, frame, spp, seed).
 pub type Meta = Vec<(String, String)>;
 
+/// The render record's line holding a checksum of the pixels as stored (FNV-1a over each channel in the order of
+/// their names — R, G, B and the further ones alike, as the EXR sorts them — its name, then its values as f32
+/// bits, a half float as the f32 it reads back as): `merge` verifies each tile against it, so a flipped byte in a
+/// tile is an error, not a pixel of −1.2e15 in the frame.
+pub const PIXELS_KEY: &str = "pixels_fnv1a64";
+
+/// The checksum of [`PIXELS_KEY`] over `rgb` and the channels `names` whose values `extra` holds per pixel in
+/// turn, as stored.
+pub fn pixels_checksum(rgb: &[[f32; 3]], names: &[String], extra: &[f32], fp16: bool) -> String {
+    let stored = |v: f32| {
+        if fp16 {
+            exr::prelude::f16::from_f32(v).to_f32()
+        } else {
+            v
+        }
+    };
+    let nk = names.len();
+    let mut channels: Vec<(&str, usize)> =
+        ["R", "G", "B"].iter().map(|n| (*n, usize::MAX)).collect();
+    channels.extend(names.iter().enumerate().map(|(k, n)| (n.as_str(), k)));
+    channels.sort_by(|a, b| a.0.cmp(b.0));
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for (name, k) in channels {
+        eat(name.as_bytes());
+        for (i, p) in rgb.iter().enumerate() {
+            let v = match (name, k) {
+                ("R", usize::MAX) => p[0],
+                ("G", usize::MAX) => p[1],
+                ("B", usize::MAX) => p[2],
+                _ => extra.get(i * nk + k).copied().unwrap_or(0.0),
+            };
+            eat(&stored(v).to_bits().to_le_bytes());
+        }
+    }
+    format!("{h:016x}")
+}
+
+/// `meta` with its [`PIXELS_KEY`] line set to the checksum of these pixels.
+fn with_checksum(meta: &[(String, String)], sum: String) -> Meta {
+    let mut m: Meta = meta
+        .iter()
+        .filter(|(k, _)| k != PIXELS_KEY)
+        .cloned()
+        .collect();
+    if !meta.is_empty() {
+        m.push((PIXELS_KEY.to_string(), sum));
+    }
+    m
+}
+
 /// The EXR attribute that holds a render's [`Meta`], one `name=value` per line. One attribute: the EXR writer
 /// keeps attributes in a hash map, so several would be written in a different order by every process and the
 /// same render would not give the same bytes.
@@ -446,7 +502,7 @@ pub const RENDER_SECONDS: &str = "render_seconds";
 pub fn record_differences(a: &[(String, String)], b: &[(String, String)]) -> Option<String> {
     let timeless = |m: &[(String, String)]| -> Meta {
         m.iter()
-            .filter(|(k, _)| k != RENDER_SECONDS)
+            .filter(|(k, _)| k != RENDER_SECONDS && k != PIXELS_KEY)
             .cloned()
             .collect()
     };
@@ -519,6 +575,7 @@ pub fn write_exr_as(
     meta: &[(String, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
+    let meta = &with_checksum(meta, pixels_checksum(rgb, &[], &[], fp16));
     // The attribute, then one thread writes the blocks in order, so the same render gives the same bytes
     // (parallel writing put them in completion order; farms and caches compare files).
     macro_rules! write {

@@ -111,6 +111,19 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
             ));
         }
         let (names, values) = imageio::read_extra_channels(path).map_err(|e| (1, e))?;
+        // The pixels as the tile's render wrote them (a tile from before the record held a checksum: as read).
+        if let Some((_, want)) = meta.iter().find(|(k, _)| k == imageio::PIXELS_KEY) {
+            let got = imageio::pixels_checksum(&img.px, &names, &values, false);
+            if got != *want {
+                return Err((
+                    1,
+                    format!(
+                        "{}: its pixels' checksum {got} is not the {want} its render recorded: the file was changed or damaged after it was written (render the tile again)",
+                        path.display()
+                    ),
+                ));
+            }
+        }
         let nk = names.len();
         match &mut extra {
             None => {
