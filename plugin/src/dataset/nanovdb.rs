@@ -222,7 +222,15 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
             ));
         }
     }
-    // Index of the node of `level` at byte `addr`, checked.
+    // Each node is some parent's child once: a tree. A file whose offsets point twice at one node (a DAG: 817
+    // bytes of 32 768 upper entries onto one lower node onto one leaf claimed 134 M leaves) is refused at the
+    // second reference, before anything is expanded. (At most a bit per node the file holds.)
+    let seen = std::cell::RefCell::new([
+        vec![false; counts[0]],
+        vec![false; counts[1]],
+        vec![false; counts[2]],
+    ]);
+    // Index of the node of `level` at byte `addr`, checked, and claimed.
     let node = |level: usize, addr: i128| -> Result<usize, Error> {
         let rel = addr - base(level) as i128;
         let stride = strides[level] as i128;
@@ -237,7 +245,16 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
                 format!("byte {addr}"),
             ));
         }
-        Ok((rel / stride) as usize)
+        let idx = (rel / stride) as usize;
+        if std::mem::replace(&mut seen.borrow_mut()[level][idx], true) {
+            return Err(Error::format(
+                file,
+                at_grid("tree"),
+                "each node the child of one parent (a tree)",
+                format!("level-{level} node {idx} (byte {addr}) referenced a second time"),
+            ));
+        }
+        Ok(idx)
     };
     let root = base(3) as usize;
     c.seek(root as u64 + 24, &at_grid("root"))?;
@@ -258,9 +275,18 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
         leaves: Vec::new(),
     };
     let mut uppers = Vec::new();
+    let mut keys = std::collections::HashSet::new();
     for i in 0..table_size {
         c.pos = root + 64 + 32 * i;
         let key = c.u64("a root key")?;
+        if !keys.insert(key) {
+            return Err(Error::format(
+                file,
+                at_grid("root"),
+                "each root key once",
+                format!("key {key:#x} repeated at entry {i}"),
+            ));
+        }
         let child = c.i64("a root child offset")?;
         let state = c.u32("a root tile state")?;
         let value = c.f32("a root tile value")?;
@@ -377,4 +403,49 @@ pub(crate) fn read(
         trees.push((name, tree(file, name, &buf)?, InLeaves));
     }
     densify(file, trees, max_bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn u64_at(b: &[u8], at: usize) -> u64 {
+        u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+    }
+
+    #[test]
+    fn a_node_referenced_twice_is_refused_before_anything_is_expanded() {
+        // The repository's plume (NanoVDB's own tools wrote it) with one lower node's second child entry made a
+        // copy of its first: two leaves of the tree become one leaf referenced twice — the shape of an 817-byte
+        // file whose shared nodes claimed 134 M leaves and aborted its host through the C ABI.
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../tests/data/valid/nvdb/plume48.nvdb"
+        );
+        let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let grids = table(path, Bytes::Slice(&bytes)).unwrap();
+        let g = grids.iter().find(|g| g.name == "density").unwrap();
+        assert_eq!(g.codec, 0, "the plume is uncompressed");
+        let mut buf = bytes[g.offset..g.offset + g.grid_size as usize].to_vec();
+        assert!(tree(path, "density", &buf).is_ok());
+        let lower = GRID_BYTES + u64_at(&buf, GRID_BYTES + 8) as usize;
+        let words = LOWER.1 / 64;
+        let child_mask = lower + 32 + 8 * words;
+        let children: Vec<usize> = (0..LOWER.1)
+            .filter(|&i| u64_at(&buf, child_mask + 8 * (i / 64)) >> (i % 64) & 1 == 1)
+            .take(2)
+            .collect();
+        assert_eq!(children.len(), 2, "a lower node with two leaves");
+        let entry = |i: usize| lower + LOWER.0 + 8 * i;
+        let first = buf[entry(children[0])..entry(children[0]) + 8].to_vec();
+        buf[entry(children[1])..entry(children[1]) + 8].copy_from_slice(&first);
+        let Err(e) = tree(path, "density", &buf) else {
+            panic!("a leaf referenced twice was read");
+        };
+        let e = e.to_string();
+        assert!(
+            e.contains("referenced a second time") && e.contains("a tree"),
+            "{e}"
+        );
+    }
 }
