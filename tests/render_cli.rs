@@ -2298,3 +2298,35 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_render_goes_on() {
     );
     assert!(dir.join("s.exr").is_file());
 }
+
+#[test]
+fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
+    // A 1×1 EXR patched to claim 30 000² pixels (10.8 GB of f32 RGB): within a budget of half a large machine,
+    // it aborted `tonemap` (SIGABRT) when its pixels were allocated infallibly. Under an address-space limit
+    // that cannot hold them, the allocation fails and says so.
+    let dir = tmp("bomb-within");
+    let exr_path = dir.join("bomb.exr");
+    write_exr_map(&exr_path, 1, 1, |_, _| 1.0);
+    let mut bytes = std::fs::read(&exr_path).unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+        let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+        bytes[at + 8..at + 12].copy_from_slice(&29_999i32.to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&29_999i32.to_le_bytes());
+    }
+    std::fs::write(&exr_path, &bytes).unwrap();
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 4000000 && exec '{}' tonemap bomb.exr -o bomb.png",
+            env!("CARGO_BIN_EXE_firemedium")
+        ))
+        .current_dir(&*dir)
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("bomb.exr") && e.contains("more than this machine can give"),
+        "{e}"
+    );
+}

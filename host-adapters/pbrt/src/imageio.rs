@@ -117,6 +117,19 @@ pub fn read_extra_channels(path: &Path) -> Result<(Vec<String>, Vec<f32>), Strin
     Ok((extra.iter().map(|c| c.name.to_string()).collect(), values))
 }
 
+/// An empty vector with room for `n` values, or an error naming `file` and the bytes when the machine has not
+/// got them (never an abort).
+fn fallible_vec<T>(file: &str, n: usize) -> Result<Vec<T>, String> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        format!(
+            "{file}: {} bytes for its pixels: more than this machine can give",
+            n.saturating_mul(std::mem::size_of::<T>())
+        )
+    })?;
+    Ok(v)
+}
+
 /// The image formats [`decode`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageKind {
@@ -146,15 +159,25 @@ pub fn decode(
             use exr::prelude::*;
             let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
                 .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+            let mut most = 0usize;
             for h in &meta.headers {
                 let size = h.layer_size;
                 fits(size.width(), size.height())?;
+                most = most.max(size.width().saturating_mul(size.height()));
             }
+            // The pixels' storage reserved here, fallibly, for the largest layer (a 600 KB file may claim 30 000²
+            // pixels, 10.8 GB: within a budget of half a large machine, it aborted the process when allocated
+            // infallibly); the reader's callback then only sizes it.
+            let pixels = std::cell::RefCell::new(Some(fallible_vec::<[f32; 3]>(file, most)?));
             let img = read()
                 .no_deep_data()
                 .largest_resolution_level()
                 .rgba_channels(
-                    |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+                    |res, _| {
+                        let mut v = pixels.borrow_mut().take().unwrap_or_default();
+                        v.resize(res.width() * res.height(), [0f32; 3]);
+                        (res.width(), v)
+                    },
                     |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
                         px[pos.x() + *w * pos.y()] = [r, g, b]
                     },
@@ -180,11 +203,11 @@ pub fn decode(
                 let info = r.info();
                 fits(info.width as usize, info.height as usize)?;
             }
-            let mut buf = vec![
-                0u8;
-                r.output_buffer_size()
-                    .ok_or_else(|| format!("{file}: PNG too large"))?
-            ];
+            let n = r
+                .output_buffer_size()
+                .ok_or_else(|| format!("{file}: PNG too large"))?;
+            let mut buf = fallible_vec::<u8>(file, n)?;
+            buf.resize(n, 0);
             let info = r
                 .next_frame(&mut buf)
                 .map_err(|e| format!("{file}: corrupt PNG: {e}"))?;
@@ -203,15 +226,14 @@ pub fn decode(
                     v
                 }
             };
-            let px = (0..w * h)
-                .map(|p| {
-                    let b = p * chans;
-                    match chans {
-                        1 | 2 => [value(b); 3],
-                        _ => [value(b), value(b + 1), value(b + 2)],
-                    }
-                })
-                .collect();
+            let mut px = fallible_vec::<[f32; 3]>(file, w * h)?;
+            px.extend((0..w * h).map(|p| {
+                let b = p * chans;
+                match chans {
+                    1 | 2 => [value(b); 3],
+                    _ => [value(b), value(b + 1), value(b + 2)],
+                }
+            }));
             Ok(RgbImage { w, h, px })
         }
     }
