@@ -2330,3 +2330,35 @@ fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
         "{e}"
     );
 }
+
+#[test]
+fn scene_images_are_held_to_the_renders_memory_budget() {
+    // A PNG of 4 000² zero pixels (a few kilobytes) as an infinite light's map: its 192 MB of pixels were checked
+    // against half the machine, not `--max-memory` (a 16 000² one took 7 GB with `--max-memory 1`).
+    let dir = tmp("image-budget");
+    {
+        let f = std::fs::File::create(dir.join("sky.png")).unwrap();
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(f), 4000, 4000);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&vec![0u8; 4000 * 4000]).unwrap();
+    }
+    assert!(std::fs::metadata(dir.join("sky.png")).unwrap().len() < 1_000_000);
+    let scene = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.png\"\n";
+    std::fs::write(dir.join("s.pbrt"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(dir.join("s.pbrt"))
+        .args(["--max-memory", "0.1", "-o"])
+        .arg(dir.join("s.exr"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("s.pbrt:5:1: infinite light:")
+            && e.contains("a 4000×4000 image needs 192000000 bytes"),
+        "{e}"
+    );
+}

@@ -373,7 +373,9 @@ impl Builder {
                                 if p.has("L") {
                                     return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
                                 }
-                                let img = crate::imageio::read(&self.dir.join(f), false).map_err(|e| err(loc, format!("infinite light: {e}")))?;
+                                // (Within what the scene's budget — `--max-memory` — leaves, not half the machine.)
+                                let left = self.max_memory.saturating_sub(self.media_bytes);
+                                let img = crate::imageio::read_within(&self.dir.join(f), false, left).map_err(|e| err(loc, format!("infinite light: {e}")))?;
                                 if !(img.w == img.h || img.w == 2 * img.h) {
                                     return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
                                 }
@@ -482,7 +484,8 @@ impl Builder {
                             "black" => crate::imageio::Wrap::Black,
                             w => return Err(err(loc, format!("imagemap: wrap \"{w}\" is not one of repeat, clamp, black"))),
                         };
-                        let img = crate::imageio::read(&self.dir.join(f), srgb).map_err(|e| err(loc, format!("imagemap: {e}")))?;
+                        let left = self.max_memory.saturating_sub(self.media_bytes);
+                        let img = crate::imageio::read_within(&self.dir.join(f), srgb, left).map_err(|e| err(loc, format!("imagemap: {e}")))?;
                         let invert = p.bool("invert", false);
                         Tex::Image { img: std::sync::Arc::new(img), scale: num(p, "scale", 1.0) as f32, invert, wrap, basis: self.rgb_basis() }
                     }
