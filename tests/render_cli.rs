@@ -2362,3 +2362,40 @@ fn scene_images_are_held_to_the_renders_memory_budget() {
         "{e}"
     );
 }
+
+#[test]
+fn a_texture_naming_another_twice_at_every_level_is_built_once_per_node() {
+    // 40 checkerboards each using the previous one twice (3.5 KB of scene): every level copied its two
+    // textures, 2⁴⁰ nodes (4.9 GB at 20 levels, an abort at 40). Shared now: the render runs in little memory and
+    // the checker of two equal textures is that texture (albedo 0.5 under a white sky: a grey of 0.5).
+    let dir = tmp("texture-dag");
+    let mut scene = String::from("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nTexture \"t0\" \"spectrum\" \"constant\" \"rgb value\" [0.5 0.5 0.5]\n");
+    for i in 1..=40 {
+        scene += &format!(
+            "Texture \"t{i}\" \"spectrum\" \"checkerboard\" \"texture tex1\" \"t{}\" \"texture tex2\" \"t{}\" \"float uscale\" 8\n",
+            i - 1,
+            i - 1
+        );
+    }
+    scene += "Material \"diffuse\" \"texture reflectance\" \"t40\"\nShape \"trianglemesh\" \"point3 P\" [-5 -5 0 5 -5 0 5 5 0 -5 5 0] \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
+    std::fs::write(dir.join("d.pbrt"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(dir.join("d.pbrt"))
+        .args(["--max-memory", "1", "--stats", "--seed", "1", "-o"])
+        .arg(dir.join("d.exr"))
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let peak: f64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("peak memory: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no peak memory in {out}"));
+    assert!(peak < 200.0, "peak memory {peak} MB");
+    let (_, _, px) = read_exr(&dir.join("d.exr"));
+    let y = mean_y(&px);
+    assert!((y - 0.5).abs() < 0.03, "mean Y {y}");
+}

@@ -462,8 +462,8 @@ impl Builder {
                             .spectrum(p, "tex2", Some(S::ZERO), RgbUse::Albedo)?
                             .unwrap_or(Tex::Const(S::ZERO));
                         Tex::Checker {
-                            a: Box::new(a),
-                            b: Box::new(b),
+                            a: std::sync::Arc::new(a),
+                            b: std::sync::Arc::new(b),
                             su: num(p, "uscale", 1.0) as f32,
                             sv: num(p, "vscale", 1.0) as f32,
                         }
