@@ -757,6 +757,53 @@ fn every_scene_renders_at_a_tiny_resolution() {
     }
 }
 
+/// Waits (bounded: 120 s) for a render started with `--log-json log` to say it is loaded and handles its
+/// signals (its "rendering" event; a fixed delay lost the race on a loaded machine), sends it `SIG{signal}`, and
+/// waits (bounded: 60 s, a hang guard, not a timing assertion) for its exit status.
+fn interrupt(mut child: std::process::Child, log: &Path, signal: &str) -> std::process::ExitStatus {
+    let mut waited = 0;
+    while !std::fs::read_to_string(log).is_ok_and(|t| t.contains("\"rendering\"")) {
+        assert!(
+            waited < 1200 && child.try_wait().unwrap().is_none(),
+            "no \"rendering\" event in {} within 120 s",
+            log.display()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        waited += 1;
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    assert!(Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success());
+    let mut waited = 0;
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        assert!(
+            waited < 600,
+            "the render did not stop within 60 s of SIG{signal}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        waited += 1;
+    }
+}
+
+/// A real 1×1 EXR at `path` whose data and display windows are patched to claim `side`² pixels.
+fn exr_claiming(path: &Path, side: i32) {
+    write_exr_map(path, 1, 1, |_, _| 1.0);
+    let mut bytes = std::fs::read(path).unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+        let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+        // box2i: xMin, yMin, xMax, yMax (i32, little-endian).
+        bytes[at + 8..at + 12].copy_from_slice(&(side - 1).to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&(side - 1).to_le_bytes());
+    }
+    std::fs::write(path, &bytes).unwrap();
+}
+
 #[test]
 fn ctrl_c_ends_a_long_render_inside_its_tiles() {
     // One 64×64 tile-sized render at 10⁶ samples per pixel would take hours: SIGINT must end it (Ctrl-C was
@@ -765,7 +812,7 @@ fn ctrl_c_ends_a_long_render_inside_its_tiles() {
     let out = dir.join("i.exr");
     let log = dir.join("i.jsonl");
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
         .arg(root.join("scenes/campfire/scene.pbrt"))
         .args([
@@ -784,37 +831,7 @@ fn ctrl_c_ends_a_long_render_inside_its_tiles() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    // The render says when it is loaded and handles Ctrl-C (its "rendering" event; a fixed delay lost the race
-    // on a loaded machine, the signal arriving before the handler).
-    let mut waited = 0;
-    while !std::fs::read_to_string(&log).is_ok_and(|t| t.contains("\"rendering\"")) {
-        assert!(
-            waited < 1200 && child.try_wait().unwrap().is_none(),
-            "no \"rendering\" event in {} within 120 s",
-            log.display()
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        waited += 1;
-    }
-    std::thread::sleep(std::time::Duration::from_millis(200));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    // Bounded wait (not a timing assertion: a render that ignores the signal fails here instead of hanging).
-    let mut waited = 0;
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        assert!(
-            waited < 600,
-            "the render did not stop within 60 s of SIGINT"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        waited += 1;
-    };
+    let status = interrupt(child, &log, "INT");
     assert_eq!(status.code(), Some(130));
     // The finished tiles beside the output, never under its name (a complete frame from an earlier run would
     // be lost), their record saying the render is not complete.
@@ -892,16 +909,7 @@ fn an_image_claiming_a_huge_size_is_refused_before_it_is_read() {
     // A real 1×1 EXR whose data window is patched to claim 100 000² pixels (a few hundred bytes): as a light
     // map it must be an error naming the size against the memory budget, not a 120 GB allocation that aborts.
     let dir = tmp("bomb");
-    let exr_path = dir.join("bomb.exr");
-    write_exr_map(&exr_path, 1, 1, |_, _| 1.0);
-    let mut bytes = std::fs::read(&exr_path).unwrap();
-    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
-        let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
-        // box2i: xMin, yMin, xMax, yMax (i32, little-endian).
-        bytes[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
-        bytes[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
-    }
-    std::fs::write(&exr_path, &bytes).unwrap();
+    exr_claiming(&dir.join("bomb.exr"), 100_000);
     let scene = "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"bomb.exr\"\n";
     std::fs::write(dir.join("b.pbrt"), scene).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
@@ -2226,7 +2234,7 @@ fn interrupt_a_long_path(signal: &str) {
     )
     .unwrap();
     let log = dir.join("p.jsonl");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
         .arg(&scene)
         .args(["--threads", "2", "-q", "--log-json"])
@@ -2236,35 +2244,7 @@ fn interrupt_a_long_path(signal: &str) {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let mut waited = 0;
-    while !std::fs::read_to_string(&log).is_ok_and(|t| t.contains("\"rendering\"")) {
-        assert!(
-            waited < 1200 && child.try_wait().unwrap().is_none(),
-            "no \"rendering\" event in {} within 120 s",
-            log.display()
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        waited += 1;
-    }
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    assert!(Command::new("kill")
-        .args([&format!("-{signal}"), &child.id().to_string()])
-        .status()
-        .unwrap()
-        .success());
-    // Bounded wait (a hang guard, not a timing assertion).
-    let mut waited = 0;
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        assert!(
-            waited < 600,
-            "the render did not stop within 60 s of SIG{signal}"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(100));
-        waited += 1;
-    };
+    let status = interrupt(child, &log, signal);
     assert_eq!(status.code(), Some(130), "SIG{signal}");
     assert!(
         dir.join("p.partial.exr").is_file(),
@@ -2305,15 +2285,7 @@ fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
     // it aborted `tonemap` (SIGABRT) when its pixels were allocated infallibly. Under an address-space limit
     // that cannot hold them, the allocation fails and says so.
     let dir = tmp("bomb-within");
-    let exr_path = dir.join("bomb.exr");
-    write_exr_map(&exr_path, 1, 1, |_, _| 1.0);
-    let mut bytes = std::fs::read(&exr_path).unwrap();
-    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
-        let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
-        bytes[at + 8..at + 12].copy_from_slice(&29_999i32.to_le_bytes());
-        bytes[at + 12..at + 16].copy_from_slice(&29_999i32.to_le_bytes());
-    }
-    std::fs::write(&exr_path, &bytes).unwrap();
+    exr_claiming(&dir.join("bomb.exr"), 30_000);
     let o = Command::new("bash")
         .arg("-c")
         .arg(format!(

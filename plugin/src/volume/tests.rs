@@ -742,24 +742,29 @@ fn builds_from_the_mantaflow_fire() {
     assert!(t.iter().all(|x| (0.0..1.0).contains(x)));
 }
 
-#[test]
-fn tracking_stops_at_the_collision_cap_and_counts_it() {
-    // One voxel of dense soot (f_v = 1e4 · sootscale) in a brick of thin smoke: the brick's majorant is that
-    // voxel's, ~1e10 m⁻¹, so a ray through the thin part meets ~1e10 null collisions per metre. It stops at
-    // MAX_COLLISIONS (2^20) as if absorbed, and the volume counts the ray for the host to report.
+/// One voxel of dense soot (f_v = 1e4 · sootscale) in a 4³ brick of thin smoke (nearest lookups), with `extra`.
+fn dense_voxel_in_smoke(extra: &[Param]) -> FireVolume {
     let mut d = vec![1e-6; 64];
     d[63] = 1e4;
-    let v = FireVolume::new(&[
+    let mut list = vec![
         Param::floats("density", &d),
         Param::floats("temperature", &[1500.0; 64]),
         Param::int("nx", 4),
         Param::int("ny", 4),
         Param::int("nz", 4),
         Param::string("interpolation", "nearest"),
-        Param::string("integrator", "ratio"),
         Param::float("sootscale", 1.0),
-    ])
-    .unwrap();
+    ];
+    list.extend_from_slice(extra);
+    FireVolume::new(&list).unwrap()
+}
+
+#[test]
+fn tracking_stops_at_the_collision_cap_and_counts_it() {
+    // One voxel of dense soot (f_v = 1e4 · sootscale) in a brick of thin smoke: the brick's majorant is that
+    // voxel's, ~1e10 m⁻¹, so a ray through the thin part meets ~1e10 null collisions per metre. It stops at
+    // MAX_COLLISIONS (2^20) as if absorbed, and the volume counts the ray for the host to report.
+    let v = dense_voxel_in_smoke(&[Param::string("integrator", "ratio")]);
     assert_eq!(v.capped_rays(), 0);
     let (_, t) = run(&v, &ray_x(1));
     assert!(t.iter().all(|&x| x == 0.0), "{t:?}");
@@ -778,20 +783,7 @@ fn tracking_in_4096_bins_stops_within_the_same_work() {
     // The reproducer, in process: one scattering ray at 4 096 bins through a brick whose majorant is one
     // dense voxel's took 44.5 s (2^20 null collisions × 4 096 channels). The collision cap shrinks with the
     // channels (2^25 channel evaluations a ray): the ray stops as absorbed and is counted.
-    let mut d = vec![1e-6; 64];
-    d[63] = 1e4;
-    let v = FireVolume::new(&[
-        Param::floats("density", &d),
-        Param::floats("temperature", &[1500.0; 64]),
-        Param::int("nx", 4),
-        Param::int("ny", 4),
-        Param::int("nz", 4),
-        Param::string("interpolation", "nearest"),
-        Param::float("sootscale", 1.0),
-        Param::int("bins", 4096),
-        Param::float("sigma_s", 1e-3),
-    ])
-    .unwrap();
+    let v = dense_voxel_in_smoke(&[Param::int("bins", 4096), Param::float("sigma_s", 1e-3)]);
     let c = v.channels();
     assert_eq!(c, 4096);
     let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
