@@ -791,6 +791,21 @@ fn interrupt(mut child: std::process::Child, log: &Path, signal: &str) -> std::p
     }
 }
 
+/// `firemedium render scene args…` (writing beside the scene), which must fail with exit 1: its stderr.
+fn refused(scene: &Path, args: &[&str]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        .arg("render")
+        .arg(scene)
+        .args(args)
+        .arg("-o")
+        .arg(scene.with_extension("exr"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    e
+}
+
 /// A real 1×1 EXR at `path` whose data and display windows are patched to claim `side`² pixels.
 fn exr_claiming(path: &Path, side: i32) {
     write_exr_map(path, 1, 1, |_, _| 1.0);
@@ -912,14 +927,7 @@ fn an_image_claiming_a_huge_size_is_refused_before_it_is_read() {
     exr_claiming(&dir.join("bomb.exr"), 100_000);
     let scene = "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"bomb.exr\"\n";
     std::fs::write(dir.join("b.pbrt"), scene).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
-        .arg("render")
-        .arg(dir.join("b.pbrt"))
-        .args(["--max-memory", "2"])
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{e}");
+    let e = refused(&dir.join("b.pbrt"), &["--max-memory", "2"]);
     assert!(
         e.contains("b.pbrt:4:1: infinite light:")
             && e.contains("a 100000×100000 image needs 120000000000 bytes"),
@@ -2319,15 +2327,7 @@ fn scene_images_are_held_to_the_renders_memory_budget() {
     assert!(std::fs::metadata(dir.join("sky.png")).unwrap().len() < 1_000_000);
     let scene = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.png\"\n";
     std::fs::write(dir.join("s.pbrt"), scene).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
-        .arg("render")
-        .arg(dir.join("s.pbrt"))
-        .args(["--max-memory", "0.1", "-o"])
-        .arg(dir.join("s.exr"))
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{e}");
+    let e = refused(&dir.join("s.pbrt"), &["--max-memory", "0.1"]);
     assert!(
         e.contains("s.pbrt:5:1: infinite light:")
             && e.contains("a 4000×4000 image needs 192000000 bytes"),
