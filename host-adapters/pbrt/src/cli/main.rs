@@ -5,8 +5,8 @@
 //! components). A command depends only on the library and on `args` (shared value parsers), never on another
 //! command.
 //!
-//! Exit status: 0 on success, 1 when a file or scene is refused, 2 on bad arguments, 130 when interrupted (one
-//! line on stderr, never a panic).
+//! Exit status: 0 on success, 1 when a file or scene is refused, 2 on bad arguments, 128 + the signal when
+//! interrupted (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP); one line on stderr, never a panic.
 
 #![forbid(unsafe_code)]
 mod args;

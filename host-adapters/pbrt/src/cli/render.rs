@@ -202,6 +202,30 @@ fn finished(path: &Path) -> Result<(), String> {
 }
 
 /// The seed of frame `f` from the render's seed: the same seed for the same frame, another for each frame.
+/// From here on Ctrl-C, SIGTERM and SIGHUP (what Slurm sends at a time limit or preemption) end the render
+/// between pixels and bounces, writing its finished tiles; once per process (every frame shares the handlers).
+fn handle_signals() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        #[cfg(unix)]
+        let signals = [
+            signal_hook::consts::SIGINT,
+            signal_hook::consts::SIGTERM,
+            signal_hook::consts::SIGHUP,
+        ];
+        #[cfg(not(unix))]
+        let signals = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM];
+        for s in signals {
+            // A signal we cannot handle keeps its default action (the process ends, writing nothing): say so.
+            if let Err(e) =
+                signal_hook::flag::register_usize(s, std::sync::Arc::clone(&render::INTERRUPTED), s as usize)
+            {
+                eprintln!("warning: signal {s} not handled ({e}): it will end the render without its tiles");
+            }
+        }
+    });
+}
+
 fn frame_seed(seed: u64, f: i64) -> u64 {
     seed ^ (f as u64)
         .wrapping_add(1)
@@ -351,8 +375,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             );
         }
     }
-    let _ =
-        ctrlc::set_handler(|| render::INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst));
+    handle_signals();
     let [x0, x1, y0, y1] = sc.bounds;
     let tiles = (x1 - x0).div_ceil(16) * (y1 - y0).div_ceil(16);
     // (Loaded, Ctrl-C handled from here on: a farm's scheduler, or a test, may interrupt the render now.)
@@ -578,8 +601,10 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         }
     }
     if !img.complete {
+        // The shell's convention, as a farm's scheduler reads it: 128 + the signal (130 Ctrl-C, 143 SIGTERM).
+        let signal = render::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed);
         return Err((
-            130,
+            u8::try_from(128 + signal).unwrap_or(130),
             format!(
                 "interrupted: wrote the finished tiles to {} and {}",
                 exr.display(),

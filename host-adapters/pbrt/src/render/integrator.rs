@@ -774,7 +774,7 @@ impl Integrator<'_> {
         for _ in 0..(4 * sc.maxdepth + 64) {
             // Ctrl-C or SIGTERM within a path too (a maxdepth of 1e8 in an albedo-1 medium is one long path): its
             // tile is then left out, never written half-done.
-            if super::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed) {
+            if super::interrupted() {
                 break;
             }
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);

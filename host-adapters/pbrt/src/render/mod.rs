@@ -30,10 +30,17 @@ use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
 use pixel::Samples;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, LazyLock};
 
-/// Set by Ctrl-C: the tiles not finished are left out and the finished ones are written.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// The signal that interrupted the render (SIGINT, SIGTERM or SIGHUP; 0 while none has): the tiles not finished
+/// are left out and the finished ones are written. Shared with the signal handler, hence the `Arc`.
+pub static INTERRUPTED: LazyLock<Arc<AtomicUsize>> = LazyLock::new(Default::default);
+
+/// Whether a signal has asked the render to stop.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::Relaxed) != 0
+}
 
 /// A rendered image: linear sRGB (absolute: Y in cd/m² when the scene is absolute), row-major.
 #[derive(Debug, Clone)]
@@ -157,7 +164,7 @@ pub fn render(
     let results: Vec<Option<Vec<PixelResult>>> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
-            if INTERRUPTED.load(Ordering::Relaxed) {
+            if interrupted() {
                 return None;
             }
             let mut out = Vec::with_capacity(TILE * TILE);
@@ -166,7 +173,7 @@ pub fn render(
                     let (x, y) = (x0 + cx, y0 + cy);
                     // Checked per pixel, not only per tile: Ctrl-C ends a render whose tiles take long within
                     // a pixel's time (the unfinished tile is left out, the finished ones are written).
-                    if INTERRUPTED.load(Ordering::Relaxed) {
+                    if interrupted() {
                         return None;
                     }
                     let (mut sum, mut weights) = (DVec3::ZERO, 0.0);
