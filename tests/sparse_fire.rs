@@ -162,3 +162,83 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
     assert_eq!(v["bricks"], 2 * 27);
     assert!(v["bytes"].as_u64().unwrap() < 100_000_000, "{}", v["bytes"]);
 }
+
+/// Runs `cmd`, killing it after `limit` seconds: a hang guard far above what the command takes (well under a
+/// second), not a timing — the box-following passes took minutes to hours on these files.
+fn finishes(cmd: &mut Command, limit: u64) -> std::process::Output {
+    let mut child = cmd
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() > limit {
+            child.kill().unwrap();
+            panic!("{cmd:?} still running after {limit} s: time follows the box, not the data");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn two_far_leaves_cost_what_two_leaves_cost() {
+    // Two 8³ leaves 32 768 voxels apart on every axis: a box of 4096³ bricks, two of them stored. The grid's
+    // statistics (`info`) and the majorant ranges (`render`) walked every brick of the box: 10.7 s at 16 384
+    // apart, 85 s here (render: 37 s at 24 576), growing as the box. They now walk the stored bricks (0.02 s and 0.7 s).
+    let dir = out_dir("two-far-leaves");
+    let far = 32_768;
+    let leaf = |o: [i32; 3], v: f32| (o, [u64::MAX; 8], vec![v; 512]);
+    let file = firemedium_plugin::dataset::vdb::write_sparse(
+        &[
+            ("density", vec![leaf([0; 3], 1e-3), leaf([far; 3], 1e-3)]),
+            (
+                "temperature",
+                vec![leaf([0; 3], 1500.0), leaf([far; 3], 1500.0)],
+            ),
+        ],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(0.01),
+    );
+    std::fs::write(dir.join("far.vdb"), &file).unwrap();
+    let info = finishes(
+        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .args(["info", "--json"])
+            .arg(dir.join("far.vdb")),
+        60,
+    );
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    assert_eq!(v["dims"], serde_json::json!([far + 8, far + 8, far + 8]));
+    assert_eq!(v["bricks"], 2);
+    // Seen from below through the first leaf's column, with a floor the fire light shines on.
+    std::fs::write(
+        dir.join("far.pbrt"),
+        "LookAt 0.04 0.3 -1  0.04 0 0  0 1 0\nCamera \"orthographic\" \"float screenwindow\" [-0.1 0.1 -0.1 0.1]\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"stratified\" \"integer xsamples\" 1 \"integer ysamples\" 1 \"bool jitter\" false\nIntegrator \"volpath\" \"integer maxdepth\" 5\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"far.vdb\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 0.08 0 0 0 0.08 0 0.08 0.08 0 0 0 0.08 0.08 0 0.08 0 0.08 0.08 0.08 0.08 0.08] \"integer indices\" [0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5]\nAttributeEnd\nMaterial \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [-1 -0.05 -1  1 -0.05 -1  1 -0.05 1  -1 -0.05 1] \"integer indices\" [0 1 2 0 2 3]\n",
+    )
+    .unwrap();
+    let o = finishes(
+        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .arg("render")
+            .arg(dir.join("far.pbrt"))
+            .arg("-o")
+            .arg(dir.join("far.exr"))
+            .args(["--stats", "--fire-light", "power", "--max-memory", "2"]),
+        60,
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !e.contains("warning"), "{e}");
+    // (`--stats` reports on stdout.) Each leaf and the fringe its trilinear lookups reach: 2 × 9³ voxels.
+    let stats = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stats.contains("fire light: 1458 emitting voxels"),
+        "{stats}"
+    );
+    let (_, _, px) = read_exr(&dir.join("far.exr"));
+    assert!(px.iter().any(|p| p[0] > 1.0), "the fire is seen");
+}

@@ -759,45 +759,39 @@ impl Grid {
     /// background).
     pub fn stats(&self) -> GridStats {
         let mut acc = StatsAcc::new();
-        let mut empty = 0u64;
+        let mut stored = 0u64;
         let mut row = [0f32; BRICK];
         let t = &self.topo;
-        for bz in 0..t.nb[2] {
-            for by in 0..t.nb[1] {
-                for bx in 0..t.nb[0] {
-                    let (sx, sy, sz) = (
-                        t.brick_span(bx, 0),
-                        t.brick_span(by, 1),
-                        t.brick_span(bz, 2),
-                    );
-                    let (w, h, d) = (sx.1 - sx.0, sy.1 - sy.0, sz.1 - sz.0);
-                    let slot = t.slot([bx, by, bz]);
-                    if slot == 0 {
-                        empty += (w * h * d) as u64;
-                        continue;
-                    }
-                    // The span's first sample within the brick, per axis.
-                    let o = [
-                        sx.0 + t.off[0] - bx * BRICK,
-                        sy.0 + t.off[1] - by * BRICK,
-                        sz.0 + t.off[2] - bz * BRICK,
-                    ];
-                    for z in 0..d {
-                        for y in 0..h {
-                            let start = slot * BRICK_VOXELS
-                                + o[0]
-                                + BRICK * (o[1] + y + BRICK * (o[2] + z));
-                            row[..w].copy_from_slice(&self.values[start..start + w]);
-                            if w == BRICK {
-                                acc.add_lanes(&row);
-                            } else {
-                                row[..w].iter().for_each(|&v| acc.add(v));
-                            }
-                        }
+        // The stored bricks only (time follows the data: two far leaves cost two leaves, not their box).
+        t.for_each_slot(|[bx, by, bz], slot| {
+            let (sx, sy, sz) = (
+                t.brick_span(bx, 0),
+                t.brick_span(by, 1),
+                t.brick_span(bz, 2),
+            );
+            let (w, h, d) = (sx.1 - sx.0, sy.1 - sy.0, sz.1 - sz.0);
+            stored += (w * h * d) as u64;
+            // The span's first sample within the brick, per axis.
+            let o = [
+                sx.0 + t.off[0] - bx * BRICK,
+                sy.0 + t.off[1] - by * BRICK,
+                sz.0 + t.off[2] - bz * BRICK,
+            ];
+            for z in 0..d {
+                for y in 0..h {
+                    let start =
+                        slot * BRICK_VOXELS + o[0] + BRICK * (o[1] + y + BRICK * (o[2] + z));
+                    row[..w].copy_from_slice(&self.values[start..start + w]);
+                    if w == BRICK {
+                        acc.add_lanes(&row);
+                    } else {
+                        row[..w].iter().for_each(|&v| acc.add(v));
                     }
                 }
             }
-        }
+        });
+        let all = t.dims.iter().map(|&n| n as u64).product::<u64>();
+        let empty = all - stored;
         if empty > 0 {
             acc.add_repeated(self.values[0], empty);
         }

@@ -170,21 +170,60 @@ pub(crate) fn grid_brick_ranges(g: &crate::grid::Grid, brick: usize) -> Ranges {
     let brick = brick.max(1);
     let counts = dims.map(|n| n.div_ceil(brick));
     let bg = g.background();
+    let cell = |c: [usize; 3]| c[0] + counts[0] * (c[1] + counts[1] * c[2]);
+    // The widened voxel range [lo, hi] of range brick `c` on each axis, inside the grid, and whether it
+    // leaves the grid.
+    let widened = |c: [usize; 3]| {
+        let (mut lo, mut hi, mut outside) = ([0usize; 3], [0usize; 3], false);
+        for a in 0..3 {
+            let (l, h) = ((c[a] * brick) as i64 - 1, ((c[a] + 1) * brick) as i64);
+            outside |= l < 0 || h >= dims[a] as i64;
+            lo[a] = l.max(0) as usize;
+            hi[a] = (h.min(dims[a] as i64 - 1)) as usize;
+        }
+        (lo, hi, outside)
+    };
+    // Per range brick that stored voxels reach: their (min, max) and count. Visited from the stored bricks,
+    // so time follows the data, not the box (two far leaves cost two leaves).
+    let mut reached: std::collections::HashMap<usize, (f32, f32, u64)> = Default::default();
+    topo.for_each_slot(|b, _| {
+        let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+        // The range bricks whose widened range [c·brick − 1, (c + 1)·brick] meets the span [s0, s1).
+        let first = span.map(|(s0, _)| s0.div_ceil(brick).saturating_sub(1));
+        let last = [0, 1, 2].map(|a| (span[a].1 / brick).min(counts[a] - 1));
+        for cz in first[2]..=last[2] {
+            for cy in first[1]..=last[1] {
+                for cx in first[0]..=last[0] {
+                    let c = [cx, cy, cz];
+                    let (lo, hi, _) = widened(c);
+                    let a = [0, 1, 2].map(|k| lo[k].max(span[k].0));
+                    let z = [0, 1, 2].map(|k| (hi[k] + 1).min(span[k].1));
+                    if (0..3).any(|k| a[k] >= z[k]) {
+                        continue;
+                    }
+                    let e = reached
+                        .entry(cell(c))
+                        .or_insert((f32::INFINITY, f32::NEG_INFINITY, 0));
+                    for k in a[2]..z[2] {
+                        for j in a[1]..z[1] {
+                            for i in a[0]..z[0] {
+                                let v = g.at(i as i64, j as i64, k as i64);
+                                e.0 = if v < e.0 { v } else { e.0 };
+                                e.1 = if v > e.1 { v } else { e.1 };
+                            }
+                        }
+                    }
+                    e.2 += ((z[0] - a[0]) * (z[1] - a[1]) * (z[2] - a[2])) as u64;
+                }
+            }
+        }
+    });
     let mut out = Vec::with_capacity(counts.iter().product());
     for cz in 0..counts[2] {
         for cy in 0..counts[1] {
             for cx in 0..counts[0] {
                 let c = [cx, cy, cz];
-                // The widened voxel range [lo, hi] on each axis, inside the grid, and whether it leaves it.
-                let mut lo = [0usize; 3];
-                let mut hi = [0usize; 3];
-                let mut outside = false;
-                for a in 0..3 {
-                    let (l, h) = ((c[a] * brick) as i64 - 1, ((c[a] + 1) * brick) as i64);
-                    outside |= l < 0 || h >= dims[a] as i64;
-                    lo[a] = l.max(0) as usize;
-                    hi[a] = (h.min(dims[a] as i64 - 1)) as usize;
-                }
+                let (lo, hi, outside) = widened(c);
                 let (mut mn, mut mx) = if outside {
                     (0.0f32, 0.0f32)
                 } else {
@@ -194,25 +233,17 @@ pub(crate) fn grid_brick_ranges(g: &crate::grid::Grid, brick: usize) -> Ranges {
                     mn = if v < mn { v } else { mn };
                     mx = if v > mx { v } else { mx };
                 };
-                let mut any_stored = false;
-                let (blo, bhi) = (topo.brick_of(lo), topo.brick_of(hi));
-                for bz in blo[2]..=bhi[2] {
-                    for by in blo[1]..=bhi[1] {
-                        for bx in blo[0]..=bhi[0] {
-                            any_stored |= topo.slot([bx, by, bz]) != 0;
+                let voxels = (0..3).map(|k| (hi[k] - lo[k] + 1) as u64).product::<u64>();
+                match reached.get(&cell(c)) {
+                    Some(&(a, b, n)) => {
+                        fold(a);
+                        fold(b);
+                        // Voxels of the range in empty bricks read the background.
+                        if n < voxels {
+                            fold(bg);
                         }
                     }
-                }
-                if any_stored {
-                    for k in lo[2]..=hi[2] {
-                        for j in lo[1]..=hi[1] {
-                            for i in lo[0]..=hi[0] {
-                                fold(g.at(i as i64, j as i64, k as i64));
-                            }
-                        }
-                    }
-                } else {
-                    fold(bg);
+                    None => fold(bg),
                 }
                 out.push((mn, mx));
             }
