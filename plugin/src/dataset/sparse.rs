@@ -456,10 +456,9 @@ fn table_within(file: &str, dims: [usize; 3], max_bytes: u64) -> Result<u64, Err
 pub(crate) type VoxelWrites<'a> = dyn Fn(&mut dyn FnMut([usize; 3], f32)) -> Result<(), Error> + 'a;
 
 /// A grid of `dims` bricked as a file is read, never dense: `visit` replays the file's voxel writes (`put(voxel,
-/// value)`, in file order, a later write winning) and is run twice — once to list the bricks a non-zero value
-/// touches, once to fill them. Voxels never written hold `background` (a non-zero background stores every
-/// brick, as the dense array did). Memory: the stored bricks and their table, checked against `max_bytes`
-/// before anything is allocated.
+/// value)`, in file order, a later write winning) and is run twice — once to list the bricks a value other than
+/// `background` touches, once to fill them. Voxels never written hold `background` (every empty brick reads
+/// it). Memory: the stored bricks and their table, checked against `max_bytes` before anything is allocated.
 pub(crate) fn brick_as_read(
     file: &str,
     dims: [usize; 3],
@@ -475,15 +474,15 @@ pub(crate) fn brick_as_read(
         cap: max_bytes,
     };
     let table = table_within(file, dims, max_bytes)?;
-    let topo = if background != 0.0 {
-        Topology::full(dims)
-    } else {
+    // The bricks a voxel other than the background is written to (every empty brick reads the background):
+    // a 1000³ grid of background 1 and no voxels is its background, not 4 GB of ones.
+    let topo = {
         let mut list: Vec<[usize; 3]> = Vec::new();
         let mut last = [usize::MAX; 3];
         let mut refused = false;
         visit(&mut |v, x| {
             let b = v.map(|c| c / BRICK);
-            if x != 0.0 && b != last && !refused {
+            if x != background && b != last && !refused {
                 last = b;
                 if list.len() == list.capacity() && list.try_reserve(list.len().max(64)).is_err() {
                     refused = true;

@@ -23,7 +23,9 @@
 //!   The copies are numbered by a [`Topology`] over the cells' lower corners (the samples shifted by one, so the
 //!   half-voxel margin below sample 0 has its bricks): the data's bricks and those just below them on each
 //!   axis. A cell in no copy has all eight corners in empty bricks and reads copy 0, the background. Memory
-//!   follows the data: a fire far from its copy in a 2048³ box costs its bricks, not the box.
+//!   follows the data: a fire far from its copy in a 2048³ box costs its bricks, not the box; copies of a
+//!   constant tile's interior (or the background's, along the box's faces) share one copy, as the dataset's
+//!   bricks share one block.
 //!
 //! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks
 //! (`lattice` parameter; docs/RESULTS.md has both measured on the same fires).
@@ -252,7 +254,52 @@ impl Lattice {
             let s = data.offset().map(|o| (o == 0) as usize);
             Topology::from_bricks(dims, off, data.spread(s, -1, 0)?)?
         };
-        let copies = topo.active_bricks() + 1;
+        // A copy whose data bricks (two per axis) are all one shared block — a constant tile's interior, the same
+        // values in every grid — holds that block's value throughout, save the zeros past the box where it
+        // crosses a face: such copies share one copy per block and face (below, inside or above the box on
+        // each axis), so a file of constant tiles costs its tiles here too, not 5.8 KB per brick covered.
+        let one_topology = grids
+            .iter()
+            .all(|g| std::sync::Arc::ptr_eq(g.topology(), data));
+        let mut classes: std::collections::HashMap<(usize, [i8; 3]), u32> = Default::default();
+        let constant = |b: [usize; 3]| {
+            if !one_topology {
+                return None;
+            }
+            // The copy's samples inside the lattice, [lo, hi] per axis, and where it crosses a face.
+            let (mut lo, mut hi, mut face) = ([0usize; 3], [0usize; 3], [0i8; 3]);
+            for a in 0..3 {
+                let l = (BRICK * b[a]) as i64 - off[a] as i64 - 1;
+                let h = l + BRICK as i64;
+                face[a] = if l < 0 {
+                    -1
+                } else if h >= n[a] as i64 {
+                    1
+                } else {
+                    0
+                };
+                let (l, h) = (l.max(0), h.min(n[a] as i64 - 1));
+                if l > h {
+                    return None;
+                }
+                (lo[a], hi[a]) = (l as usize, h as usize);
+            }
+            let (first, last) = (data.brick_of(lo), data.brick_of(hi));
+            let slot = data.slot(first);
+            let same = (first[2]..=last[2]).all(|z| {
+                (first[1]..=last[1])
+                    .all(|y| (first[0]..=last[0]).all(|x| data.slot([x, y, z]) == slot))
+            });
+            // (Within the box the copy's nine samples per axis span two data bricks, so one slot for all is a
+            // shared block, or the background's; a copy within one stored brick — at a face — is not shared.)
+            if !same || (slot != 0 && first == last) {
+                return None;
+            }
+            let next = classes.len() as u32;
+            Some(*classes.entry((slot, face)).or_insert(next))
+        };
+        let topo = topo.share(constant)?;
+        let copies = topo.blocks_stored() + 1;
         let voxels = copies.checked_mul(PADDED_VOXELS)?;
         // (The kernel's offsets are 32-bit, as for the dense layout.)
         if voxels.checked_mul(2)? >= u32::MAX as usize {

@@ -393,10 +393,10 @@ impl FireVolume {
                 .chain(co.species.iter().map(|sp| sp.ch))
                 .collect();
             let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
-            // Dense over the box while it costs at most four times what its grids store per stored brick (512
-            // values each: constant tiles sharing blocks count as the bricks they cover, which the copies would
-            // hold), else a copy per brick holding data (a fire far from its copy in a big box).
-            let per_grid = (ds.topology().active_bricks() as u64 + 1) * 4 * 512;
+            // Dense over the box while it costs at most four times what its grids store (512 values per block:
+            // constant tiles share blocks, as the brick layout's copies of their interiors do), else a copy per
+            // brick holding data (a fire far from its copy in a big box, a file of constant tiles).
+            let per_grid = (ds.topology().blocks_stored() as u64 + 1) * 4 * 512;
             let copied = per_grid * (2 + grids.len() as u64 - temperature.is_none() as u64);
             let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
                 let voxels = p.iter().map(|&n| n as u64).product::<u64>();
