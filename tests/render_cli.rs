@@ -2309,6 +2309,28 @@ fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
         e.contains("bomb.exr") && e.contains("more than this machine can give"),
         "{e}"
     );
+    // `--max-memory` holds every command that reads images to the user's budget (they were held to half the
+    // machine whatever the flag): refused from the header, naming the file and the bytes.
+    for args in [
+        &["tonemap", "bomb.exr", "-o", "bomb.png"][..],
+        &["merge", "bomb.exr", "-o", "merged.exr"],
+        &["diff", "bomb.exr", "bomb.exr"],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            .args(args)
+            .args(["--max-memory", "1"])
+            .current_dir(&*dir)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert!(
+            e.contains("bomb.exr")
+                && e.contains("30000×30000")
+                && e.contains("above the memory budget of 1000000000 bytes"),
+            "{args:?}: {e}"
+        );
+    }
 }
 
 #[test]

@@ -71,8 +71,8 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
 
 /// An EXR's channels other than R, G and B (a spectral film's buckets, a gbuffer's, the AOVs): their names in
 /// the file's (alphabetical) order, and per pixel their values in that order (`names.len()` per pixel), the
-/// layout [`write_channels_exr`] takes. Its pixels must fit in the default memory budget, checked from the header.
-pub fn read_extra_channels(path: &Path) -> Result<(Vec<String>, Vec<f32>), String> {
+/// layout [`write_channels_exr`] takes. Its pixels must fit in `budget` bytes, checked from the header.
+pub fn read_extra_channels(path: &Path, budget: u64) -> Result<(Vec<String>, Vec<f32>), String> {
     use exr::prelude::*;
     let file = path.display().to_string();
     let meta = exr::meta::MetaData::read_from_file(path, false)
@@ -88,7 +88,7 @@ pub fn read_extra_channels(path: &Path) -> Result<(Vec<String>, Vec<f32>), Strin
             ),
             n.saturating_mul(h.channels.list.len() as u64),
             8,
-            crate::budget::default_bytes(),
+            budget,
         )?;
     }
     let img = read()
@@ -108,7 +108,7 @@ pub fn read_extra_channels(path: &Path) -> Result<(Vec<String>, Vec<f32>), Strin
         .collect();
     let n = img.layer_data.size.area();
     let k = extra.len();
-    let mut values = vec![0f32; n * k];
+    let mut values = filled_vec(&file, n * k, 0f32)?;
     for (j, c) in extra.iter().enumerate() {
         for (i, v) in c.sample_data.values_as_f32().enumerate().take(n) {
             values[i * k + j] = v;
@@ -128,6 +128,13 @@ fn fallible_vec<T>(file: &str, n: usize) -> Result<Vec<T>, String> {
         )
     })?;
     Ok(v)
+}
+
+/// `n` copies of `v`, or an error naming `file` when the machine has not got the bytes (never an abort).
+pub fn filled_vec<T: Clone>(file: &str, n: usize, v: T) -> Result<Vec<T>, String> {
+    let mut out = fallible_vec(file, n)?;
+    out.resize(n, v);
+    Ok(out)
 }
 
 /// The image formats [`decode`] reads.

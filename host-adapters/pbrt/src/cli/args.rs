@@ -22,6 +22,12 @@ pub fn parse_gb(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--max-memory` in bytes: the budget every size read from input is checked against (default: half the
+/// machine's memory).
+pub fn budget(gb: Option<f64>) -> u64 {
+    gb.map_or_else(firemedium::budget::default_bytes, |gb| (gb * 1e9) as u64)
+}
+
 /// The frames of `--frames`.
 #[derive(Debug, Clone)]
 pub struct Frames(pub Vec<i64>);

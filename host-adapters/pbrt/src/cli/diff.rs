@@ -13,6 +13,10 @@ pub struct DiffArgs {
     a: PathBuf,
     /// The second EXR.
     b: PathBuf,
+    /// The memory budget in GB the images' sizes are checked against before their pixels are read
+    /// (default: half the machine's memory).
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
+    max_memory: Option<f64>,
 }
 
 pub fn run(a: &DiffArgs) -> Result<String, (u8, String)> {
@@ -43,12 +47,13 @@ pub fn run(a: &DiffArgs) -> Result<String, (u8, String)> {
             ),
         ));
     }
+    let budget = crate::args::budget(a.max_memory);
     let (ia, ib) = (
-        imageio::read(pa, false).map_err(|e| (1, e))?,
-        imageio::read(pb, false).map_err(|e| (1, e))?,
+        imageio::read_within(pa, false, budget).map_err(|e| (1, e))?,
+        imageio::read_within(pb, false, budget).map_err(|e| (1, e))?,
     );
-    let (na, va) = imageio::read_extra_channels(pa).map_err(|e| (1, e))?;
-    let (nb, vb) = imageio::read_extra_channels(pb).map_err(|e| (1, e))?;
+    let (na, va) = imageio::read_extra_channels(pa, budget).map_err(|e| (1, e))?;
+    let (nb, vb) = imageio::read_extra_channels(pb, budget).map_err(|e| (1, e))?;
     if (ia.w, ia.h) != (ib.w, ib.h) || na != nb {
         return Err((
             1,

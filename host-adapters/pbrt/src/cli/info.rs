@@ -186,9 +186,7 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         negative: Policy::from_name("negative", &args.negative)
             .map_err(|e| bad_arg(format!("--negative: {e}")))?,
         frame: args.frame,
-        max_bytes: args
-            .max_memory
-            .map_or_else(firemedium::budget::default_bytes, |gb| (gb * 1e9) as u64),
+        max_bytes: crate::args::budget(args.max_memory),
         ..LoadOptions::default()
     };
     if let Some(s) = &args.sample {

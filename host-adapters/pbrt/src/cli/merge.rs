@@ -16,9 +16,14 @@ pub struct MergeArgs {
     /// The frame to write (EXR; a PNG preview is not written).
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
+    /// The memory budget in GB the images' sizes are checked against before their pixels are read
+    /// (default: half the machine's memory).
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
+    max_memory: Option<f64>,
 }
 
 pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
+    let budget = crate::args::budget(a.max_memory);
     // The first tile's film, attributes and name: every other tile must match them.
     let mut frame: Option<(imageio::Window, imageio::Meta, &PathBuf)> = None;
     let mut rgb: Vec<[f32; 3]> = Vec::new();
@@ -61,11 +66,12 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                     &format!("{}: the merged {w}×{h} frame", path.display()),
                     n as u64,
                     16,
-                    firemedium::budget::default_bytes(),
+                    budget,
                 )
                 .map_err(|e| (1, e))?;
-                rgb = vec![[0.0; 3]; n];
-                owner = vec![0; n];
+                let file = path.display().to_string();
+                rgb = imageio::filled_vec(&file, n, [0.0; 3]).map_err(|e| (1, e))?;
+                owner = imageio::filled_vec(&file, n, 0).map_err(|e| (1, e))?;
                 frame = Some((win, meta.clone(), path));
             }
             Some((first, first_meta, first_path)) => {
@@ -95,7 +101,7 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                 }
             }
         }
-        let img = imageio::read(path, false).map_err(|e| (1, e))?;
+        let img = imageio::read_within(path, false, budget).map_err(|e| (1, e))?;
         let (fw, fh) = win.full;
         if win.origin.0 + img.w > fw || win.origin.1 + img.h > fh {
             return Err((
@@ -110,7 +116,7 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                 ),
             ));
         }
-        let (names, values) = imageio::read_extra_channels(path).map_err(|e| (1, e))?;
+        let (names, values) = imageio::read_extra_channels(path, budget).map_err(|e| (1, e))?;
         // The pixels as the tile's render wrote them (a tile from before the record held a checksum: as read).
         if let Some((_, want)) = meta.iter().find(|(k, _)| k == imageio::PIXELS_KEY) {
             let got = imageio::pixels_checksum(&img.px, &names, &values, false);
@@ -135,10 +141,12 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                     ),
                     (n as u64).saturating_mul(nk as u64),
                     4,
-                    firemedium::budget::default_bytes(),
+                    budget,
                 )
                 .map_err(|e| (1, e))?;
-                extra = Some((names, vec![0.0; n * nk]));
+                let values = imageio::filled_vec(&path.display().to_string(), n * nk, 0.0)
+                    .map_err(|e| (1, e))?;
+                extra = Some((names, values));
             }
             Some((first, _)) if *first != names => {
                 return Err((

@@ -32,6 +32,10 @@ pub struct TonemapArgs {
     /// Bits per channel of the PNG: 8 or 16.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(8..=16))]
     bits: u8,
+    /// The memory budget in GB the images' sizes are checked against before their pixels are read
+    /// (default: half the machine's memory).
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
+    max_memory: Option<f64>,
 }
 
 pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
@@ -44,7 +48,21 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
             format!("--exposure {}: expected stops within ±100", a.exposure),
         ));
     }
-    let img = imageio::read(&a.input, false).map_err(|e| (1, e))?;
+    let budget = crate::args::budget(a.max_memory);
+    let img = imageio::read_within(&a.input, false, budget).map_err(|e| (1, e))?;
+    // (The map's working copies: XYZ in f64 and the display's values, per pixel.)
+    firemedium::budget::check(
+        &format!(
+            "{}: tone mapping {}×{} pixels",
+            a.input.display(),
+            img.w,
+            img.h
+        ),
+        (img.w as u64).saturating_mul(img.h as u64),
+        48,
+        budget,
+    )
+    .map_err(|e| (1, e))?;
     let (white, from) = match a.white {
         WhiteArg::Given(w) => (w, "given"),
         WhiteArg::Fire => match imageio::read_fire_temperature(&a.input).map_err(|e| (1, e))? {
@@ -70,7 +88,7 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
     // How much of the flame the display flattens: of the pixels where the render's `fire` AOV (the fire seen from
     // the camera) is at least 5 % of its 99th percentile, those with a channel at the display's top (8-bit 250 and
     // above: clipped, or saturated so that steps of the input no longer show).
-    let (names, extra) = imageio::read_extra_channels(&a.input).map_err(|e| (1, e))?;
+    let (names, extra) = imageio::read_extra_channels(&a.input, budget).map_err(|e| (1, e))?;
     let clipped = ["fire.R", "fire.G", "fire.B"]
         .map(|n| names.iter().position(|m| m == n))
         .iter()
