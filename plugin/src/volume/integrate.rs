@@ -210,8 +210,15 @@ impl<'a> Span<'a> {
     }
 }
 
-/// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7.
+/// The most steps one ray may take (a guard against absurd step sizes): ~1.7e7 at up to 32 channels.
 pub(crate) const MAX_STEPS: f64 = (1u64 << 24) as f64;
+
+/// The most steps one ray of `channels` channels may take: [`MAX_STEPS`], fewer in proportion past 32 channels,
+/// so that one call's work stays bounded (a ray at 4 096 bins and the smallest step through a 256³ grid was
+/// 10¹⁰ channel evaluations); the steps then lengthen, never the work.
+pub(crate) fn max_steps(channels: usize) -> f64 {
+    MAX_STEPS * 32.0 / channels.max(32) as f64
+}
 
 /// The most tentative collisions one ray's tracking may take: 2²⁰ ≈ 10⁶, tens of milliseconds. A ray that
 /// reaches it (a majorant far above the data, or an optical depth of 10⁶ along the ray) stops there as if
@@ -246,7 +253,7 @@ pub(crate) fn integrate(
             let limit = m.step_tau();
             let dir = ray.d / span.speed;
             let Scratch { sa, ss, j, empty } = sc;
-            march_steps(&span, &mut rng, empty, |p, delta| {
+            march_steps(&span, &mut rng, empty, sa.len(), |p, delta| {
                 m.eval(p, sa, ss, j);
                 let tau = sa
                     .iter()
@@ -294,6 +301,7 @@ pub(crate) fn march_steps(
     span: &Span,
     rng: &mut Rng,
     empty: &mut Vec<(f64, f64)>,
+    channels: usize,
     mut f: impl FnMut(DVec3, f64) -> bool,
 ) {
     let &Span {
@@ -305,8 +313,9 @@ pub(crate) fn march_steps(
     } = span;
     let len = (b - a) * speed;
     let mut ds = m.step();
-    if !(ds > 0.0) || len / ds > MAX_STEPS {
-        ds = len / MAX_STEPS;
+    let most = max_steps(channels);
+    if !(ds > 0.0) || len / ds > most {
+        ds = len / most;
     }
     // Empty stretches (arc length from a): a step whose midpoint falls in one adds nothing (σ = j = 0 there, so
     // L += 0 and T *= e⁰ = 1 exactly), so it is skipped without evaluating the medium — bit for bit the same.

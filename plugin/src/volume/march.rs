@@ -209,7 +209,7 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
     let mut empty = Vec::new();
     let cutoff = v.cutoff as f32;
     let mut samples = 0;
-    integrate::march_steps(&span, &mut rng, &mut empty, |p, delta| {
+    integrate::march_steps(&span, &mut rng, &mut empty, l.len(), |p, delta| {
         samples += 1;
         v.lane_step(lt, map(p), delta, &mut ls) >= cutoff
     });

@@ -798,6 +798,40 @@ fn tracking_in_4096_bins_stops_within_the_same_work() {
 }
 
 #[test]
+fn a_march_at_4096_bins_takes_at_most_its_share_of_the_steps() {
+    // The smallest step (1e-4 voxels) along 64 voxels: 640 000 steps, each 4 096 channels — 2.6e9 channel
+    // evaluations in one ABI call (10¹⁰ through a 256³ grid). The step cap shrinks past 32 channels, as the
+    // collision cap does: the steps lengthen, the work stays 2^29 channel steps a ray.
+    let v = FireVolume::new(&[
+        Param::floats("density", &[1e-6; 64]),
+        Param::floats("temperature", &[1500.0; 64]),
+        Param::int("nx", 64),
+        Param::int("ny", 1),
+        Param::int("nz", 1),
+        Param::int("bins", 4096),
+        Param::float("stepsize", 1e-4),
+    ])
+    .unwrap();
+    let c = v.channels();
+    let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+    let before = super::march::EVALUATIONS.with(|n| n.get());
+    v.integrate(&ray_x(1), &mut l, &mut t);
+    let steps = super::march::EVALUATIONS.with(|n| n.get()) - before;
+    let most = super::integrate::max_steps(4096);
+    assert_eq!(most, 131_072.0);
+    assert!(
+        steps > 100_000 && steps as f64 <= most + 2.0,
+        "{steps} steps"
+    );
+    // The medium is seen: a little light, a little absorbed.
+    assert!(
+        l.iter().any(|&x| x > 0.0) && t.iter().all(|&x| x < 1.0 && x > 0.0),
+        "{:?}",
+        &t[..4]
+    );
+}
+
+#[test]
 fn an_optical_depth_beyond_any_fire_is_an_error_naming_where() {
     // One voxel of 1e30 (an outlier in a simulation's output) would make tracking collide ~1e30 times per
     // voxel: refused when the volume is built, naming the brick and the depth.
