@@ -12,6 +12,9 @@ use image::{luminance, mean_y, read_exr};
 #[path = "common/scratch.rs"]
 mod scratch;
 
+#[path = "common/guard.rs"]
+mod guard;
+
 /// The test's scratch folder (removed when it passes).
 fn tmp(name: &str) -> scratch::Scratch {
     scratch::Scratch::new("render", name)
@@ -2392,4 +2395,52 @@ fn a_texture_naming_another_twice_at_every_level_is_built_once_per_node() {
     let (_, _, px) = read_exr(&dir.join("d.exr"));
     let y = mean_y(&px);
     assert!((y - 0.5).abs() < 0.03, "mean Y {y}");
+}
+
+#[test]
+fn primitives_sharing_one_box_build_in_linear_time() {
+    // 32 000 coincident triangles (26.8 s in "load and build") and 100 000 instances of one sphere (262 s): the
+    // BVH builder's nearest-neighbour merging among equal boxes went quadratic. Primitives whose boxes are equal
+    // bit for bit are now one BVH entry (0.08 s and 0.07 s), and the nearest of them is still the one hit.
+    let dir = tmp("shared-boxes");
+    let head = "Camera \"perspective\" \"float fov\" 30\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
+    let n = 32_000;
+    let p = "-1 -1 0 1 -1 0 0 1 0 ".repeat(n);
+    let idx: Vec<String> = (0..3 * n).map(|i| i.to_string()).collect();
+    std::fs::write(
+        dir.join("tris.pbrt"),
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\n{head}Material \"diffuse\" \"rgb reflectance\" [0 0 0]\nShape \"trianglemesh\" \"point3 P\" [{p}] \"integer indices\" [{}]\n",
+            idx.join(" ")
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("instances.pbrt"),
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\n{head}ObjectBegin \"s\"\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\nShape \"sphere\" \"float radius\" 1\nObjectEnd\n{}",
+            "ObjectInstance \"s\"\n".repeat(100_000)
+        ),
+    )
+    .unwrap();
+    for name in ["tris", "instances"] {
+        let o = guard::finishes(
+            Command::new(env!("CARGO_BIN_EXE_firemedium"))
+                .arg("render")
+                .arg(dir.join(format!("{name}.pbrt")))
+                .arg("-o")
+                .arg(dir.join(format!("{name}.exr")))
+                .args(["--stats", "--threads", "2"]),
+            60,
+        );
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{name}: {e}");
+        // A black shape against a white sky: the centre pixel is the shape, a corner the sky.
+        let (w, h, px) = read_exr(&dir.join(format!("{name}.exr")));
+        let (centre, corner) = (px[w / 2 + w * (h / 2)], px[0]);
+        assert!(
+            centre == [0.0; 3] && corner[1] > 0.5,
+            "{name}: {centre:?} {corner:?}"
+        );
+    }
 }

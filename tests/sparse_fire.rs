@@ -15,6 +15,10 @@ use std::process::Command;
 #[path = "common/scratch.rs"]
 mod scratch;
 
+#[path = "common/guard.rs"]
+mod guard;
+use guard::finishes;
+
 /// The test's scratch folder (removed when it passes).
 fn out_dir(name: &str) -> scratch::Scratch {
     scratch::Scratch::new("sparse", name)
@@ -161,25 +165,6 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
     );
     assert_eq!(v["bricks"], 2 * 27);
     assert!(v["bytes"].as_u64().unwrap() < 100_000_000, "{}", v["bytes"]);
-}
-
-/// Runs `cmd`, killing it after `limit` seconds: a hang guard far above what the command takes (well under a
-/// second), not a timing — the box-following passes took minutes to hours on these files.
-fn finishes(cmd: &mut Command, limit: u64) -> std::process::Output {
-    let mut child = cmd
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed().as_secs() > limit {
-            child.kill().unwrap();
-            panic!("{cmd:?} still running after {limit} s: time follows the box, not the data");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    child.wait_with_output().unwrap()
 }
 
 #[test]

@@ -448,6 +448,77 @@ fn area_scale(m: &Affine3A) -> f32 {
 pub struct Bvh {
     pub prims: Vec<Prim>,
     bvh: Option<Bvh2>,
+    /// The BVH's entries when primitives share boxes ([`Shared`]); `None`: one entry per primitive.
+    shared: Option<Shared>,
+}
+
+/// Primitives whose boxes are equal bit for bit, `SHARED` or more of them, as one BVH entry: no split can part
+/// them, and a builder that tries (PLOC's nearest-neighbour search among ties) takes quadratic time — 32 000
+/// coincident triangles built in 26.8 s, 100 000 instances of one sphere in 262 s.
+struct Shared {
+    /// Per entry, its box.
+    boxes: Vec<Aabb>,
+    /// Entry e's primitives are `members[start[e]..start[e + 1]]`, in scene order.
+    start: Vec<u32>,
+    members: Vec<u32>,
+}
+
+/// How many primitives must share a box to be one entry (below it the builder's leaves of two hold them: a
+/// quad's two triangles share a box and stay as they were, so scenes without such ties build the same BVH).
+const SHARED: usize = 4;
+
+impl Shared {
+    /// The entries of `boxes`, or `None` when no box repeats `SHARED` times.
+    fn of(boxes: &[Aabb]) -> Option<Shared> {
+        let key =
+            |b: &Aabb| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
+        let mut count: std::collections::HashMap<[u32; 6], (u32, u32)> = Default::default();
+        for b in boxes {
+            count.entry(key(b)).or_insert((0, u32::MAX)).0 += 1;
+        }
+        if count.values().all(|&(n, _)| (n as usize) < SHARED) {
+            return None;
+        }
+        // Entries in the order of their first primitive; a tied box's primitives all in its one entry.
+        let mut entry_of = Vec::with_capacity(boxes.len());
+        let mut entry_boxes = Vec::new();
+        for b in boxes {
+            let c = count.get_mut(&key(b)).expect("counted");
+            let e = if (c.0 as usize) < SHARED || c.1 == u32::MAX {
+                entry_boxes.push(*b);
+                let e = entry_boxes.len() as u32 - 1;
+                if c.0 as usize >= SHARED {
+                    c.1 = e;
+                }
+                e
+            } else {
+                c.1
+            };
+            entry_of.push(e);
+        }
+        let mut start = vec![0u32; entry_boxes.len() + 1];
+        for &e in &entry_of {
+            start[e as usize + 1] += 1;
+        }
+        for e in 0..entry_boxes.len() {
+            start[e + 1] += start[e];
+        }
+        let mut next = start.clone();
+        let mut members = vec![0u32; boxes.len()];
+        for (p, &e) in entry_of.iter().enumerate() {
+            members[next[e as usize] as usize] = p as u32;
+            next[e as usize] += 1;
+        }
+        Some(Shared {
+            boxes: entry_boxes,
+            start,
+            members,
+        })
+    }
+
+    fn members(&self, e: usize) -> &[u32] {
+        &self.members[self.start[e] as usize..self.start[e + 1] as usize]
+    }
 }
 
 impl std::fmt::Debug for Bvh {
@@ -458,20 +529,28 @@ impl std::fmt::Debug for Bvh {
 
 impl Bvh {
     pub fn new(prims: Vec<Prim>) -> Bvh {
-        let bvh = (!prims.is_empty()).then(|| {
-            obvhs::bvh2::builder::build_bvh2(
-                &prims,
-                // Leaves of at most 2 primitives, not obvhs's 8 (sized for SIMD leaf tests): the traversal here
-                // tests a leaf's primitives one by one. On issue 29's room the traversals' share of a render
-                // fell from 15.4 % to 12.3–13.6 %, the images the same bit for bit (docs/RESULTS.md).
-                BvhBuildParams {
-                    max_prims_per_leaf: 2,
-                    ..BvhBuildParams::medium_build()
-                },
-                &mut std::time::Duration::default(),
-            )
-        });
-        Bvh { prims, bvh }
+        // Leaves of at most 2 primitives, not obvhs's 8 (sized for SIMD leaf tests): the traversal here tests a
+        // leaf's primitives one by one. On the fire-lit room the traversals' share of a render fell from 15.4 %
+        // to 12.3–13.6 %, the images the same bit for bit (docs/RESULTS.md).
+        fn build<T: Boundable>(items: &[T]) -> Option<Bvh2> {
+            (!items.is_empty()).then(|| {
+                obvhs::bvh2::builder::build_bvh2(
+                    items,
+                    BvhBuildParams {
+                        max_prims_per_leaf: 2,
+                        ..BvhBuildParams::medium_build()
+                    },
+                    &mut std::time::Duration::default(),
+                )
+            })
+        }
+        let boxes: Vec<Aabb> = prims.iter().map(Boundable::aabb).collect();
+        let shared = Shared::of(&boxes);
+        let bvh = match &shared {
+            Some(s) => build(&s.boxes),
+            None => build(&prims),
+        };
+        Bvh { prims, bvh, shared }
     }
 
     /// The nearest hit in (tmin, tmax).
@@ -545,27 +624,45 @@ impl Bvh {
         let ray = BRay::new(o, d, tmin, tmax);
         let prims = &self.prims;
         let mut part = None;
-        let found = bvh.ray_traverse(ray, &mut hit, |r, id| {
-            let pid = bvh.primitive_indices[id] as usize;
-            match &prims[pid].geom {
-                Geom::Instance { to_obj, object, .. } => {
-                    let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
-                    match object.nearest(oo, dd, tmin, r.tmax) {
-                        // The traversal keeps t exactly when t < r.tmax, and so does this.
-                        Some((t, inner)) if t < r.tmax => {
-                            part = Some(inner);
-                            t
-                        }
-                        _ => f32::INFINITY,
+        let one = |pid: usize, tmax: f32, part: &mut Option<usize>| match &prims[pid].geom {
+            Geom::Instance { to_obj, object, .. } => {
+                let (oo, dd) = (to_obj.transform_point3a(o), to_obj.transform_vector3a(d));
+                match object.nearest(oo, dd, tmin, tmax) {
+                    // The traversal keeps t exactly when t < r.tmax, and so does this.
+                    Some((t, inner)) if t < tmax => {
+                        *part = Some(inner);
+                        t
                     }
+                    _ => f32::INFINITY,
                 }
-                g => intersect_t(g, o, d, tmin, r.tmax),
+            }
+            g => intersect_t(g, o, d, tmin, tmax),
+        };
+        // The primitive of a shared entry that the nearest hit so far is on.
+        let mut member = 0usize;
+        let found = bvh.ray_traverse(ray, &mut hit, |r, id| {
+            let e = bvh.primitive_indices[id] as usize;
+            match &self.shared {
+                None => one(e, r.tmax, &mut part),
+                Some(s) => {
+                    let mut best = f32::INFINITY;
+                    for &pid in s.members(e) {
+                        let t = one(pid as usize, best.min(r.tmax), &mut part);
+                        if t < best.min(r.tmax) {
+                            (best, member) = (t, pid as usize);
+                        }
+                    }
+                    best
+                }
             }
         });
         if !found || !hit.t.is_finite() {
             return None;
         }
-        let pid = bvh.primitive_indices[hit.primitive_id as usize] as usize;
+        let pid = match &self.shared {
+            None => bvh.primitive_indices[hit.primitive_id as usize] as usize,
+            Some(_) => member,
+        };
         let part = matches!(prims[pid].geom, Geom::Instance { .. })
             .then_some(part)
             .flatten();
@@ -628,6 +725,54 @@ mod tests {
         let b = bvh.media_box(1).unwrap();
         assert!(near(b, [-0.5, 9.5, -0.5], [0.5, 10.5, 0.5]), "{b:?}");
         assert!(bvh.media_box(2).is_none());
+    }
+
+    #[test]
+    fn the_nearest_of_primitives_sharing_a_box_is_hit() {
+        // Six triangles with the box [0, 1]³ (one BVH entry), planes z = x + s·y, s from 1 down to 1/6, and a
+        // sphere elsewhere: a ray along +z at (0.1, 0.1) meets the last one first, at z = 0.1 + 0.1/6.
+        let tri = |s: f32| Prim {
+            geom: Geom::Triangle {
+                p: [
+                    Vec3A::new(0.0, 0.0, 0.0),
+                    Vec3A::new(1.0, 0.0, 1.0),
+                    Vec3A::new(0.0, 1.0, s),
+                ],
+                n: None,
+                uv: [Vec2::ZERO; 3],
+            },
+            material: Some(0),
+            area_light: None,
+            media: None,
+            reverse: false,
+        };
+        let mut prims = vec![sphere(1.0, Vec3A::new(5.0, 0.0, 0.0))];
+        prims.extend((0..6).map(|k| tri(1.0 - k as f32 / 6.0)));
+        let bvh = Bvh::new(prims);
+        assert_eq!(bvh.shared.as_ref().map(|s| s.boxes.len()), Some(2));
+        let h = bvh
+            .intersect(Vec3A::new(0.1, 0.1, -1.0), Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert_eq!(h.prim, 6);
+        assert!((h.t - (1.1 + 0.1 / 6.0)).abs() < 1e-5, "{}", h.t);
+        // Limited to before it, the next nearest.
+        let h = bvh
+            .intersect(
+                Vec3A::new(0.1, 0.1, -1.0),
+                Vec3A::Z,
+                1e-4,
+                1.1 + 0.1 / 6.0 - 1e-4,
+            )
+            .map(|h| h.prim);
+        assert_eq!(h, None);
+        let h = bvh
+            .intersect(Vec3A::new(0.1, 0.1, 0.12), Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert_eq!(h.prim, 5);
+        let h = bvh
+            .intersect(Vec3A::new(5.0, 0.0, -5.0), Vec3A::Z, 1e-4, f32::INFINITY)
+            .unwrap();
+        assert_eq!(h.prim, 0);
     }
 
     #[test]
