@@ -10,7 +10,12 @@ duplicated and truncated runs):
   - scenes: scenes/*/scene.pbrt (text-aware mutations: numbers replaced by extreme values, tokens dropped or
     duplicated) rendered at 8×8, 1 spp, `--max-memory 1`;
   - images: a small EXR and PNG written by the binary itself; `firemedium tonemap`;
-  - meshes: a PLY (ascii and binary) referenced by a scene; `firemedium render`.
+  - meshes: a PLY (ascii and binary) referenced by a scene; `firemedium render`;
+  - vdb-tree, nvdb-tree: structure-aware OpenVDB and NanoVDB node tables (tools/tree_mutants.py: trees drawn at
+    random and written by a writer that lies, valid files patched field by field); `firemedium info`, or a
+    render of the file as a fire lighting a floor (so the lattice, majorants and fire light walk it too).
+
+    python3 tools/mutants.py --count 20000 --kinds vdb-tree,nvdb-tree   # the node-table run alone
 
 Outcome per run: ok (exit 0), refused (exit 1 or 2 with one line on stderr), panic (exit 101), abort (a
 signal: SIGABRT, SIGSEGV…), hang (killed at the time limit), or over the RSS limit (peak RSS above --rss-gb,
@@ -27,6 +32,9 @@ import subprocess
 import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import tree_mutants  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -90,6 +98,10 @@ class Harness:
         self.bin = os.path.join(ROOT, "target", "release", "firemedium")
         self.work = tempfile.mkdtemp(prefix="firemedium-mutants-")
         self.seeds = self.make_seeds()
+        every = ["dataset", "dataset", "scene", "scene", "image", "mesh", "vdb-tree", "nvdb-tree"]
+        self.kinds = [k for k in every if not a.kinds or k in a.kinds.split(",")]
+        if not self.kinds:
+            sys.exit(f"--kinds {a.kinds}: expected some of {', '.join(sorted(set(every)))}")
 
     def run(self, argv, cwd):
         limit = self.a.limit_gb * 1024 * 1024
@@ -164,11 +176,13 @@ class Harness:
                    b"property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n" + verts +
                    struct.pack("<Biii", 3, 0, 1, 2) + struct.pack("<Biii", 3, 0, 2, 3))
         s["mesh"] = [(".ply", ply_ascii), (".ply", ply_bin)]
+        nv = os.path.join(d, "nvdb")
+        s["nvdb-tree"] = [open(os.path.join(nv, f), "rb").read() for f in ("ramp16.nvdb", "plume48.nvdb")]
         return s
 
     def one(self, k):
         rng = random.Random(self.a.seed * 1_000_003 + k)
-        kind = rng.choice(["dataset", "dataset", "scene", "scene", "image", "mesh"])
+        kind = rng.choice(self.kinds)
         d = os.path.join(self.work, f"m{k}")
         os.makedirs(d, exist_ok=True)
         if kind == "dataset":
@@ -187,6 +201,29 @@ class Harness:
             f = os.path.join(d, "m" + ext)
             open(f, "wb").write(mutate_bytes(data, rng))
             argv = [self.bin, "tonemap", f, "-o", os.path.join(d, "t.png")]
+        elif kind in ("vdb-tree", "nvdb-tree"):
+            if kind == "vdb-tree":
+                data, ext = tree_mutants.openvdb(rng), ".vdb"
+            else:
+                data, ext = tree_mutants.nanovdb(rng.choice(self.seeds["nvdb-tree"]), rng), ".nvdb"
+            if rng.random() < 0.125:
+                data = mutate_bytes(data, rng)
+            f = os.path.join(d, "m" + ext)
+            open(f, "wb").write(data)
+            if rng.random() < 0.5:
+                argv = [self.bin, "info", f, "--max-memory", "1"]
+            else:
+                scene = os.path.join(d, "s.pbrt")
+                open(scene, "w").write(
+                    'LookAt 0 -3 1  0 0 0.3  0 0 1\nCamera "perspective" "float fov" 50\n'
+                    'Film "rgb" "integer xresolution" 8 "integer yresolution" 8\n'
+                    'Integrator "volpath" "integer maxdepth" 3\nWorldBegin\n'
+                    f'MakeNamedMedium "f" "string type" "fire" "string dataset" "m{ext}" "string fuel" "propane"\n'
+                    'AttributeBegin\nMediumInterface "f" ""\nMaterial "interface"\nShape "sphere" "float radius" 2\n'
+                    'AttributeEnd\nMaterial "diffuse"\n'
+                    'Shape "trianglemesh" "point3 P" [-9 -9 -1 9 -9 -1 9 9 -1 -9 9 -1] "integer indices" [0 1 2 0 2 3]\n')
+                argv = [self.bin, "render", scene, "--spp", "1", "--threads", "1", "-q", "--max-memory", "1",
+                        "--fire-light", "power", "-o", os.path.join(d, "o.exr")]
         else:
             ext, data = rng.choice(self.seeds["mesh"])
             f = os.path.join(d, "m.ply")
@@ -242,4 +279,5 @@ if __name__ == "__main__":
     ap.add_argument("--rss-gb", type=float, default=1.5, help="peak RSS above which a run counts as a failure")
     ap.add_argument("--timeout", type=float, default=30.0, help="seconds before a run counts as a hang")
     ap.add_argument("--keep", help="directory for the inputs of failing runs")
+    ap.add_argument("--kinds", help="comma-separated kinds to mutate (default: all)")
     sys.exit(Harness(ap.parse_args()).main())
