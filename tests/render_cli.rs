@@ -2398,13 +2398,15 @@ fn a_texture_naming_another_twice_at_every_level_is_built_once_per_node() {
 }
 
 #[test]
-fn primitives_sharing_one_box_build_in_linear_time() {
-    // 32 000 coincident triangles (26.8 s in "load and build") and 100 000 instances of one sphere (262 s): the
-    // BVH builder's nearest-neighbour merging among equal boxes went quadratic. Primitives whose boxes are equal
-    // bit for bit are now one BVH entry (0.08 s and 0.07 s), and the nearest of them is still the one hit.
+fn degenerate_geometry_builds_in_n_log_n() {
+    // 32 000 coincident triangles took 26.8 s in "load and build", 100 000 instances of one sphere 262 s and
+    // 32 000 nested triangles, each wider than the last, 26.4 s: the BVH builder's nearest-neighbour merging
+    // went quadratic (at the 64 000 here, about 100 s each). Primitives whose boxes are equal bit for bit are one
+    // BVH entry (0.08 s, 0.07 s); a chain of nested boxes is built by median splits (0.13 s); the nearest
+    // primitive is still the one hit.
     let dir = tmp("shared-boxes");
     let head = "Camera \"perspective\" \"float fov\" 30\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
-    let n = 32_000;
+    let n = 64_000;
     let p = "-1 -1 0 1 -1 0 0 1 0 ".repeat(n);
     let idx: Vec<String> = (0..3 * n).map(|i| i.to_string()).collect();
     std::fs::write(
@@ -2423,7 +2425,21 @@ fn primitives_sharing_one_box_build_in_linear_time() {
         ),
     )
     .unwrap();
-    for name in ["tris", "instances"] {
+    let p: String = (0..n)
+        .map(|i| {
+            let w = 1.0 + i as f64 * 5e-4;
+            format!("-1 -1 0 {} -1 0 -1 {} 0 ", w - 1.0, w - 1.0)
+        })
+        .collect();
+    std::fs::write(
+        dir.join("nested.pbrt"),
+        format!(
+            "LookAt 0 0 -5  0 0 0  0 1 0\n{head}Material \"diffuse\" \"rgb reflectance\" [0 0 0]\nShape \"trianglemesh\" \"point3 P\" [{p}] \"integer indices\" [{}]\n",
+            idx.join(" ")
+        ),
+    )
+    .unwrap();
+    for name in ["tris", "instances", "nested"] {
         let o = guard::finishes(
             Command::new(env!("CARGO_BIN_EXE_firemedium"))
                 .arg("render")
