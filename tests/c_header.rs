@@ -123,6 +123,10 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         ("sizeof_FmParamInfo", std::mem::size_of::<FmParamInfo>()),
         ("sizeof_FmApi", std::mem::size_of::<FmApi>()),
         ("sizeof_FmLightInfo", std::mem::size_of::<FmLightInfo>()),
+        (
+            "sizeof_FmMajorantGrid",
+            std::mem::size_of::<FmMajorantGrid>(),
+        ),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),

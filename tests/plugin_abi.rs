@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 10));
+    assert_eq!(p.version(), (0, 11));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -529,4 +529,154 @@ fn the_fire_lights_line_estimate_through_the_abi() {
         coarse.integrate_at(&rs, None, &mut short, None),
         Err(Error::Buffer(_))
     ));
+}
+
+#[test]
+fn a_host_tracks_the_fire_itself_through_its_majorant_grid_and_point_coefficients() {
+    // ABI 0.11, the medium level's first part: what the volume holds (features) and its majorant grid, beside
+    // the point coefficients. A host's own ratio tracking — its own DDA over the exported cells, the plugin
+    // asked only for σ at its tentative collisions — gives the transmittance the plugin's own march gives.
+    let p = plugin();
+    let with = |extra: &[Param]| {
+        let mut list = fire_params();
+        list.extend_from_slice(extra);
+        p.create_volume(&list).unwrap()
+    };
+    use firemedium_loader::{
+        FM_FEATURE_EMITS, FM_FEATURE_EMITS_WITHOUT_ABSORPTION, FM_FEATURE_MOTION,
+        FM_FEATURE_SCATTERS,
+    };
+    let v = with(&[]);
+    assert_eq!(v.features().unwrap(), FM_FEATURE_EMITS);
+    let blur = [
+        Param::string("velocitygrid", "velocity"),
+        Param::float("velocityscale", 0.05),
+        Param::float("shutterclose", 0.5),
+    ];
+    assert_eq!(
+        with(&blur).features().unwrap(),
+        FM_FEATURE_EMITS | FM_FEATURE_MOTION
+    );
+    assert_eq!(
+        with(&[Param::float("sigma_s", 1.0)]).features().unwrap(),
+        FM_FEATURE_EMITS | FM_FEATURE_SCATTERS
+    );
+    assert_eq!(
+        with(&[Param::string("emissiongrid", "flame")])
+            .features()
+            .unwrap(),
+        FM_FEATURE_EMITS | FM_FEATURE_EMITS_WITHOUT_ABSORPTION
+    );
+    let grid = v.majorant_grid().unwrap();
+    let cells = grid.counts.iter().product::<usize>();
+    // With motion blur every cell's bound covers the shutter: at least the still fire's, more somewhere.
+    let moving = with(&blur);
+    let widened = moving.majorant_grid().unwrap();
+    assert_eq!(widened.counts, grid.counts);
+    assert!(widened
+        .sigma_t
+        .iter()
+        .zip(grid.sigma_t)
+        .all(|(w, s)| w >= s));
+    assert!(widened.sigma_t.iter().zip(grid.sigma_t).any(|(w, s)| w > s));
+    assert_eq!(grid.sigma_t.len(), cells);
+    assert!(grid.sigma_t.iter().any(|&s| s > 0.0) && grid.sigma_t.iter().all(|&s| s >= 0.0));
+    // The bound holds at every point, in every channel (2 000 points, the box and a margin around it).
+    let c = v.info().channels as usize;
+    let mut rng = 1u64;
+    let mut u = move || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let points: Vec<[f64; 3]> = (0..2000)
+        .map(|_| [0, 1, 2].map(|a| grid.lo[a] - 0.01 + (grid.hi[a] - grid.lo[a] + 0.02) * u()))
+        .collect();
+    let (mut sa, mut ss, mut j) = (
+        vec![0f32; points.len() * c],
+        vec![0f32; points.len() * c],
+        vec![0f32; points.len() * c],
+    );
+    v.coefficients(&points, &mut sa, &mut ss, &mut j).unwrap();
+    for (i, p) in points.iter().enumerate() {
+        let most = (0..c)
+            .map(|k| sa[i * c + k] as f64 + ss[i * c + k] as f64)
+            .fold(0.0, f64::max);
+        assert!(
+            most <= grid.at(*p) * (1.0 + 1e-5),
+            "{p:?}: σ_t {most} over the bound {}",
+            grid.at(*p)
+        );
+    }
+    // Ratio tracking by the host, cell by cell, against the plugin's march, in channel 16.
+    let k = 16;
+    let rs = rays(8);
+    let mut plugin_t = vec![0f32; rs.len() * c];
+    v.transmittance(&rs, &mut plugin_t).unwrap();
+    let n = 400;
+    for (r, ray) in rs.iter().enumerate() {
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for _ in 0..n {
+            let mut tr = 1.0f64;
+            let mut t = ray.tmin;
+            let at = |t: f64| [0, 1, 2].map(|a| ray.origin[a] + t * ray.direction[a]);
+            // The ray's part inside the cells' box.
+            let (mut t0, mut t1) = (ray.tmin, ray.tmax);
+            for a in 0..3 {
+                let (lo, hi) = (
+                    (grid.lo[a] - ray.origin[a]) / ray.direction[a],
+                    (grid.hi[a] - ray.origin[a]) / ray.direction[a],
+                );
+                t0 = t0.max(lo.min(hi));
+                t1 = t1.min(lo.max(hi));
+            }
+            t = t.max(t0);
+            while t < t1 && tr > 0.0 {
+                // The cell at t and where the ray leaves it.
+                let cell = grid.cell_of(at(t + 1e-9));
+                let mut exit = t1;
+                for a in 0..3 {
+                    if ray.direction[a] != 0.0 {
+                        let side = if ray.direction[a] > 0.0 {
+                            cell[a] + 1
+                        } else {
+                            cell[a]
+                        };
+                        let plane = grid.lo[a] + side as f64 * grid.cell[a];
+                        let te = (plane - ray.origin[a]) / ray.direction[a];
+                        if te > t {
+                            exit = exit.min(te);
+                        }
+                    }
+                }
+                let bound =
+                    grid.sigma_t[cell[0] + grid.counts[0] * (cell[1] + grid.counts[1] * cell[2])];
+                let speed = ray.direction.iter().map(|d| d * d).sum::<f64>().sqrt();
+                let step = if bound > 0.0 {
+                    -(1.0 - u()).ln() / (bound * speed)
+                } else {
+                    f64::INFINITY
+                };
+                if t + step >= exit {
+                    t = exit;
+                    continue;
+                }
+                t += step;
+                let (mut a1, mut s1, mut j1) = (vec![0f32; c], vec![0f32; c], vec![0f32; c]);
+                v.coefficients(&[at(t)], &mut a1, &mut s1, &mut j1).unwrap();
+                tr *= 1.0 - (a1[k] as f64 + s1[k] as f64) / bound;
+            }
+            sum += tr;
+            sum2 += tr * tr;
+        }
+        let mean = sum / n as f64;
+        let sd = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+        let want = plugin_t[r * c + k] as f64;
+        assert!(
+            (mean - want).abs() <= 4.0 * sd + 2e-3,
+            "ray {r}: the host's ratio tracking {mean} ± {sd}, the plugin's march {want}"
+        );
+        eprintln!("ray {r}: host {mean:.5} ± {sd:.5}, plugin {want:.5}");
+    }
 }

@@ -104,6 +104,19 @@ impl MajorantGrid {
     pub fn counts(&self) -> [usize; 3] {
         self.counts
     }
+    /// The box the bricks tile (the dataset's bounds).
+    pub fn bounds(&self) -> [DVec3; 2] {
+        self.bounds
+    }
+    /// The edge of a brick in medium units, per axis (the last brick on an axis may be cut by the box).
+    pub fn cell(&self) -> DVec3 {
+        let dims = DVec3::new(
+            self.dims[0] as f64,
+            self.dims[1] as f64,
+            self.dims[2] as f64,
+        );
+        (self.bounds[1] - self.bounds[0]) / dims * self.brick as f64
+    }
     /// Voxels per brick edge.
     pub fn brick(&self) -> usize {
         self.brick

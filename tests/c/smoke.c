@@ -11,6 +11,7 @@ int main(int argc, char **argv) {
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
+    printf("sizeof_FmMajorantGrid %zu\n", sizeof(FmMajorantGrid));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
@@ -45,6 +46,14 @@ int main(int argc, char **argv) {
     FmExit exit;
     FmStatus s = api->volume_integrate(vol, &ray, 1, radiance, transmittance, &exit);
     printf("integrate_status %d\nradiance_29 %.9g\ntransmittance_29 %.9g\nexit_y %.9g\n", s, radiance[29], transmittance[29], exit.point[1]);
+    /* The medium level: what the volume holds, and its majorant grid (the cell of the ray's start). */
+    uint64_t features = 0;
+    FmStatus fs = api->volume_features(vol, &features);
+    FmMajorantGrid grid;
+    grid.struct_size = sizeof grid;
+    FmStatus gs = api->volume_majorant_grid(vol, &grid);
+    printf("features_status %d\nfeatures %llu\nmajorant_status %d\nmajorant_cells %u %u %u\nmajorant_first %.9g\n", fs,
+           (unsigned long long)features, gs, grid.counts[0], grid.counts[1], grid.counts[2], grid.sigma_t[0]);
     /* The fire light: one sample, its pdf evaluated again. */
     FmLight *light = NULL;
     if (api->light_create(vol, NULL, 0, &light) != FM_OK) return 1;

@@ -21,7 +21,9 @@
 use firemedium_abi as abi;
 pub use firemedium_abi::{
     FmExit as Exit, FmLightInfo as LightInfo, FmRay as Ray, FmScatter as Scatter,
-    FmVolumeInfo as VolumeInfo,
+    FmVolumeInfo as VolumeInfo, FM_FEATURE_DIFFUSION, FM_FEATURE_EMBERS, FM_FEATURE_EMITS,
+    FM_FEATURE_EMITS_WITHOUT_ABSORPTION, FM_FEATURE_MOTION, FM_FEATURE_REFRACTION,
+    FM_FEATURE_SCATTERS, FM_FEATURE_THICK_LINES,
 };
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::fmt;
@@ -31,7 +33,7 @@ use std::sync::Arc;
 mod light;
 mod volume;
 pub use light::Light;
-pub use volume::Volume;
+pub use volume::{MajorantGrid, Volume};
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq)]
@@ -264,7 +266,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 29] = [
+const ENTRIES: [&str; 31] = [
     "last_error",
     "param_count",
     "param_info",
@@ -294,6 +296,8 @@ const ENTRIES: [&str; 29] = [
     "light_pdf_direction_at",
     "light_integrate_at",
     "light_line_channels",
+    "volume_features",
+    "volume_majorant_grid",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

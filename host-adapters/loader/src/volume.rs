@@ -90,6 +90,40 @@ impl Volume {
         Ok((out > 0.0).then_some(out))
     }
 
+    /// What the volume holds beyond absorption: `FM_FEATURE_*` bits (ABI 0.11). A host that tracks the medium
+    /// itself refuses, or keeps to the whole-ray queries for, what it cannot handle.
+    pub fn features(&self) -> Result<u64, Error> {
+        let mut out = 0u64;
+        // SAFETY: a live handle and a writable u64.
+        let s = unsafe { (self.inner.api().volume_features)(self.handle, &mut out) };
+        self.inner.check(s)?;
+        Ok(out)
+    }
+
+    /// The volume's majorant grid (ABI 0.11), borrowed from the volume: cells tiling a box, per cell a bound on
+    /// σ_t over every channel and point (and the shutter, with motion blur), for the host's own free paths.
+    pub fn majorant_grid(&self) -> Result<MajorantGrid<'_>, Error> {
+        let mut g = abi::FmMajorantGrid::default();
+        // SAFETY: a live handle and a struct of the size it says.
+        let s = unsafe { (self.inner.api().volume_majorant_grid)(self.handle, &mut g) };
+        self.inner.check(s)?;
+        let n = g.counts.iter().map(|&c| c as usize).product::<usize>();
+        if g.sigma_t.is_null() || n == 0 {
+            return Err(Error::Status {
+                code: abi::FM_INVALID_ARGUMENT,
+                message: "volume_majorant_grid: no cells".into(),
+            });
+        }
+        Ok(MajorantGrid {
+            lo: [g.bounds[0], g.bounds[1], g.bounds[2]],
+            hi: [g.bounds[3], g.bounds[4], g.bounds[5]],
+            cell: g.cell,
+            counts: g.counts.map(|c| c as usize),
+            // SAFETY: the plugin's array of `n` doubles, owned by the volume this borrow keeps alive.
+            sigma_t: unsafe { std::slice::from_raw_parts(g.sigma_t, n) },
+        })
+    }
+
     /// How many rays' tracking stopped at the plugin's per-ray collision cap so far (each cut short as if
     /// absorbed; report it).
     pub fn capped_rays(&self) -> Result<u64, Error> {
@@ -304,5 +338,35 @@ impl Volume {
             )
         };
         self.inner.check(s)
+    }
+}
+
+/// A volume's majorant grid ([`Volume::majorant_grid`]).
+#[derive(Debug, Clone, Copy)]
+pub struct MajorantGrid<'a> {
+    /// The cells' box, medium space.
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    /// A cell's edge per axis (the last cell per axis may be cut by the box).
+    pub cell: [f64; 3],
+    /// Cells per axis.
+    pub counts: [usize; 3],
+    /// Per cell, x fastest, a bound on σ_t (medium units⁻¹).
+    pub sigma_t: &'a [f64],
+}
+
+impl MajorantGrid<'_> {
+    /// The cell holding `p` (clamped to the grid: a point of the medium outside the box takes the nearest
+    /// cell's bound).
+    pub fn cell_of(&self, p: [f64; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|a| {
+            let c = ((p[a] - self.lo[a]) / self.cell[a]).floor();
+            (c.max(0.0) as usize).min(self.counts[a] - 1)
+        })
+    }
+    /// The bound on σ_t at `p`.
+    pub fn at(&self, p: [f64; 3]) -> f64 {
+        let [x, y, z] = self.cell_of(p);
+        self.sigma_t[x + self.counts[0] * (y + self.counts[1] * z)]
     }
 }

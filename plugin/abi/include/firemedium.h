@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 10u
+#define FM_ABI_MINOR 11u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -94,6 +94,32 @@ typedef struct FmVolumeInfo {
     uint64_t bytes;
     double build_seconds;
 } FmVolumeInfo;
+
+/* ABI 0.11: volume_features bits. A host that tracks the medium itself (volume_coefficients at points, the
+ * majorant grid for free paths) refuses, or keeps to the whole-ray queries for, what it cannot handle. */
+#define FM_FEATURE_EMITS (1ull << 0)
+#define FM_FEATURE_SCATTERS (1ull << 1)
+#define FM_FEATURE_MOTION (1ull << 2)      /* point coefficients depend on time */
+#define FM_FEATURE_REFRACTION (1ull << 3)  /* rays bend: lost by straight tracking */
+#define FM_FEATURE_EMBERS (1ull << 4)      /* opaque spheres: only the whole-ray queries see them */
+#define FM_FEATURE_THICK_LINES (1ull << 5) /* lines across their profiles: only the whole-ray queries */
+#define FM_FEATURE_DIFFUSION (1ull << 6)   /* multiple scattering read as emission: only the whole-ray queries */
+#define FM_FEATURE_EMITS_WITHOUT_ABSORPTION (1ull << 7) /* an emission grid: Le = j / sigma_a undefined where sigma_a = 0 */
+
+/* ABI 0.11: the majorant grid, for a host's own free-path sampling: cells of cell[] medium units tiling the box
+ * bounds[0..3] .. bounds[3..6] (the last per axis may be cut by the box), counts[] of them, and per cell (x
+ * fastest) a bound on sigma_t (medium units^-1) over every channel and every point of the cell, over the shutter
+ * with motion blur. A point of the volume's bounds outside the cells' box (pbrt mode's half-voxel margin) takes
+ * the nearest cell's bound. sigma_t is owned by the volume and valid while it lives. The host sets struct_size
+ * to sizeof(FmMajorantGrid) before the call. */
+typedef struct FmMajorantGrid {
+    size_t struct_size;
+    double bounds[6];
+    double cell[3];
+    uint32_t counts[3];
+    uint32_t reserved;
+    const double *sigma_t;
+} FmMajorantGrid;
 
 typedef struct FmParamInfo {
     const char *component, *name, *ty, *default_value, *unit, *range, *doc;
@@ -231,6 +257,10 @@ typedef struct FmApi {
      * volume's channel count, or fewer ("linechannels": a soot fire's spectral bins, the others following from
      * them). */
     FmStatus (*light_line_channels)(const FmLight *light, uint32_t *out);
+    /* ABI 0.11: the medium level, first part. volume_features: FM_FEATURE_* bits into *out (required);
+     * volume_majorant_grid: the majorant grid into *out (required, its struct_size set by the host). */
+    FmStatus (*volume_features)(const FmVolume *volume, uint64_t *out);
+    FmStatus (*volume_majorant_grid)(const FmVolume *volume, FmMajorantGrid *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

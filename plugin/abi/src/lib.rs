@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 10;
+pub const ABI_MINOR: u32 = 11;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -226,6 +226,59 @@ pub struct FmLightInfo {
     /// ABI 0.9: voxels per side of the blocks the light's line estimate marches through (1: the fire's own
     /// voxels; the `lineblock` parameter); 0 from an older plugin (the field was reserved).
     pub line_block: u32,
+}
+
+/// ABI 0.11, [`FmApi::volume_features`]: the volume emits.
+pub const FM_FEATURE_EMITS: u64 = 1 << 0;
+/// It scatters (σ_s > 0).
+pub const FM_FEATURE_SCATTERS: u64 = 1 << 1;
+/// Its lookups move over the shutter (velocity motion blur): point coefficients depend on time.
+pub const FM_FEATURE_MOTION: u64 = 1 << 2;
+/// Rays bend in it (refraction): a host tracking straight rays loses the bending.
+pub const FM_FEATURE_REFRACTION: u64 = 1 << 3;
+/// It carries embers (opaque moving spheres, not a medium): only the whole-ray queries see them.
+pub const FM_FEATURE_EMBERS: u64 = 1 << 4;
+/// Atomic lines integrated across their profiles (optically thick lines): only the whole-ray queries.
+pub const FM_FEATURE_THICK_LINES: u64 = 1 << 5;
+/// Its smoke's multiple scattering is read as emission (diffusion): only the whole-ray queries.
+pub const FM_FEATURE_DIFFUSION: u64 = 1 << 6;
+/// It emits where it may not absorb (an emission grid): Le = j/σ_a is undefined there, j is not.
+pub const FM_FEATURE_EMITS_WITHOUT_ABSORPTION: u64 = 1 << 7;
+
+/// ABI 0.11: a volume's majorant grid ([`FmApi::volume_majorant_grid`]), for a host's own free-path sampling:
+/// cells of `cell` medium units tiling `bounds` (the last per axis may be cut by the box), `counts` of them,
+/// and per cell (x fastest) a bound on σ_t over every channel and every point of the cell — over the shutter
+/// with motion blur. A point of the volume's bounds outside the cells' box (pbrt mode's half-voxel margin)
+/// takes the nearest cell's bound.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmMajorantGrid {
+    /// Set by the host to `size_of::<FmMajorantGrid>()` before the call (the plugin writes no more).
+    pub struct_size: usize,
+    /// Lower and upper corner of the cells' box, medium space.
+    pub bounds: [f64; 6],
+    /// A cell's edge per axis, medium units.
+    pub cell: [f64; 3],
+    /// Cells per axis.
+    pub counts: [u32; 3],
+    /// Reserved (0).
+    pub reserved: u32,
+    /// `counts[0] · counts[1] · counts[2]` bounds on σ_t (medium units⁻¹), x fastest; owned by the volume and
+    /// valid while it lives.
+    pub sigma_t: *const f64,
+}
+
+impl Default for FmMajorantGrid {
+    fn default() -> Self {
+        FmMajorantGrid {
+            struct_size: core::mem::size_of::<FmMajorantGrid>(),
+            bounds: [0.0; 6],
+            cell: [0.0; 3],
+            counts: [0; 3],
+            reserved: 0,
+            sigma_t: core::ptr::null(),
+        }
+    }
 }
 
 /// The plugin's function table.
@@ -441,6 +494,14 @@ pub struct FmApi {
     /// the volume's channel count, or fewer (`linechannels`: a soot fire's spectral bins, the others following
     /// from them).
     pub light_line_channels: unsafe extern "C" fn(light: *const FmLight, out: *mut u32) -> FmStatus,
+    /// ABI 0.11: what the volume holds beyond absorption, into `*out` (required): `FM_FEATURE_*` bits. A host that
+    /// tracks the medium itself (from [`volume_coefficients`](Self::volume_coefficients) and
+    /// [`volume_majorant_grid`](Self::volume_majorant_grid)) refuses, or keeps to the whole-ray queries for, what
+    /// it cannot handle.
+    pub volume_features: unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
+    /// ABI 0.11: the volume's majorant grid into `*out` (required, its `struct_size` set by the host).
+    pub volume_majorant_grid:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmMajorantGrid) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -476,7 +537,9 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
-        // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 29 * 8);
+        // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`, 0.11 `volume_features` and
+        // `volume_majorant_grid`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 31 * 8);
+        assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);
     }
 }

@@ -221,6 +221,8 @@ static API: FmApi = FmApi {
     light_pdf_direction_at,
     light_integrate_at,
     light_line_channels,
+    volume_features,
+    volume_majorant_grid,
 };
 
 /// The plugin's entry point: the static function table.

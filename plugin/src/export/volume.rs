@@ -515,3 +515,78 @@ pub(super) unsafe extern "C" fn volume_capped_rays(
         Ok(())
     })
 }
+
+pub(super) unsafe extern "C" fn volume_features(
+    volume: *const FmVolume,
+    out: *mut u64,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_features") }?;
+        if out.is_null() {
+            return Err(bad("volume_features: out is null"));
+        }
+        let f = v.features();
+        let bits = [
+            (f.emits, FM_FEATURE_EMITS),
+            (f.scatters, FM_FEATURE_SCATTERS),
+            (f.motion, FM_FEATURE_MOTION),
+            (f.refraction, FM_FEATURE_REFRACTION),
+            (f.embers, FM_FEATURE_EMBERS),
+            (f.thick_lines, FM_FEATURE_THICK_LINES),
+            (f.diffusion, FM_FEATURE_DIFFUSION),
+            (
+                f.emits_without_absorption,
+                FM_FEATURE_EMITS_WITHOUT_ABSORPTION,
+            ),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .fold(0u64, |a, (_, bit)| a | bit);
+        // SAFETY: non-null (checked) and writable (caller contract).
+        unsafe { *out = bits };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_majorant_grid(
+    volume: *const FmVolume,
+    out: *mut FmMajorantGrid,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_majorant_grid") }?;
+        if out.is_null() {
+            return Err(bad("volume_majorant_grid: out is null"));
+        }
+        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
+        let size = unsafe { std::ptr::addr_of!((*out).struct_size).read_unaligned() };
+        if size < std::mem::size_of::<FmMajorantGrid>() {
+            return Err(bad(format!(
+                "volume_majorant_grid: out->struct_size {size}, expected at least {} (set it to sizeof(FmMajorantGrid))",
+                std::mem::size_of::<FmMajorantGrid>()
+            )));
+        }
+        let m = v.majorant_cells();
+        let mut counts = [0u32; 3];
+        for (c, &n) in counts.iter_mut().zip(&m.counts) {
+            *c = u32::try_from(n).map_err(|_| {
+                bad(format!(
+                    "volume_majorant_grid: {n} cells on an axis, more than the struct's u32 holds"
+                ))
+            })?;
+        }
+        let [p0, p1] = m.bounds;
+        let grid = FmMajorantGrid {
+            struct_size: std::mem::size_of::<FmMajorantGrid>(),
+            bounds: [p0.x, p0.y, p0.z, p1.x, p1.y, p1.z],
+            cell: m.cell.to_array(),
+            counts,
+            reserved: 0,
+            sigma_t: m.sigma_t.as_ptr(),
+        };
+        // SAFETY: non-null, and at least size_of::<FmMajorantGrid>() writable bytes (checked above).
+        unsafe { out.write_unaligned(grid) };
+        Ok(())
+    })
+}

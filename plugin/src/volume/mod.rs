@@ -113,6 +113,40 @@ pub(crate) struct Source {
     pub species: Vec<(Element, usize, f64)>,
 }
 
+/// What a volume holds beyond absorption ([`FireVolume::features`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Features {
+    /// It emits (a temperature or emission grid that reaches emitting values).
+    pub emits: bool,
+    /// It scatters (σ_s > 0).
+    pub scatters: bool,
+    /// Its lookups move over the shutter (velocity motion blur).
+    pub motion: bool,
+    /// Rays bend in it (refraction).
+    pub refraction: bool,
+    /// It carries embers (opaque moving spheres, not a medium).
+    pub embers: bool,
+    /// Atomic lines integrated across their profiles (optically thick lines).
+    pub thick_lines: bool,
+    /// Its smoke's multiple scattering is read as emission (diffusion).
+    pub diffusion: bool,
+    /// It emits where it may not absorb (an emission grid): Le is undefined there, j is not.
+    pub emits_without_absorption: bool,
+}
+
+/// A volume's majorant grid ([`FireVolume::majorant_cells`]).
+#[derive(Debug, Clone, Copy)]
+pub struct MajorantCells<'a> {
+    /// The box the cells tile, medium space.
+    pub bounds: [DVec3; 2],
+    /// A cell's edge per axis (the last cell per axis may be cut by the box).
+    pub cell: DVec3,
+    /// Cells per axis.
+    pub counts: [usize; 3],
+    /// Per cell, x fastest, a bound on σ_t (medium units⁻¹).
+    pub sigma_t: &'a [f64],
+}
+
 /// A fire volume: a dataset, its coefficient tables and majorants, and an integrator.
 #[derive(Debug, Clone)]
 pub struct FireVolume {
@@ -1074,6 +1108,35 @@ impl FireVolume {
             .filter(|&t| self.physical_colour && t > 0.0)
     }
 
+    /// What the volume holds beyond absorption — what a host that tracks the medium itself (from its point
+    /// coefficients and majorant grid) must handle or refuse.
+    pub fn features(&self) -> Features {
+        Features {
+            emits: self.can_emit(),
+            scatters: self.scatters(),
+            motion: self.blur.is_some(),
+            refraction: self.refraction.is_some(),
+            embers: self.embers.is_some(),
+            thick_lines: self.lines.is_some(),
+            diffusion: self.diffusion.is_some(),
+            emits_without_absorption: self.emission_grid,
+        }
+    }
+    /// The majorant grid a host walks with its own DDA: the box its cells tile, a cell's edge, the cells per
+    /// axis and per cell (x fastest) a bound on σ_t over every channel and every point of the cell (and, with
+    /// motion blur, over the shutter). A point of the volume's bounds outside the box (pbrt mode's half voxel)
+    /// takes the nearest cell's bound.
+    pub fn majorant_cells(&self) -> MajorantCells<'_> {
+        MajorantCells {
+            bounds: self.majorant.bounds(),
+            cell: self.majorant.cell(),
+            counts: self.majorant.counts(),
+            sigma_t: self
+                .blur
+                .as_ref()
+                .map_or(&self.brick_sigma[..], |b| b.brick_sigma()),
+        }
+    }
     /// The volume's motion blur: the shutter (frames) and the largest displacement (medium units); `None`
     /// without a velocity grid or with the shutter closed.
     pub fn motion_blur(&self) -> Option<([f64; 2], f64)> {

@@ -66,6 +66,10 @@ impl Blur {
     }
 
     /// The largest displacement over the shutter, medium units.
+    /// The majorant bricks' σ̄, widened over the shutter.
+    pub(crate) fn brick_sigma(&self) -> &[f64] {
+        &self.brick_sigma
+    }
     pub(crate) fn reach(&self) -> f64 {
         self.reach
     }
