@@ -833,17 +833,11 @@ mod tests {
         assert!(bvh.media_box(2).is_none());
     }
 
-    #[test]
-    fn the_nearest_of_primitives_sharing_a_box_is_hit() {
-        // Six triangles with the box [0, 1]³ (one BVH entry), planes z = x + s·y, s from 1 down to 1/6, and a
-        // sphere elsewhere: a ray along +z at (0.1, 0.1) meets the last one first, at z = 0.1 + 0.1/6.
-        let tri = |s: f32| Prim {
+    /// A triangle of material 0, no light, no media.
+    fn triangle(p: [Vec3A; 3]) -> Prim {
+        Prim {
             geom: Geom::Triangle {
-                p: [
-                    Vec3A::new(0.0, 0.0, 0.0),
-                    Vec3A::new(1.0, 0.0, 1.0),
-                    Vec3A::new(0.0, 1.0, s),
-                ],
+                p,
                 n: None,
                 uv: [Vec2::ZERO; 3],
             },
@@ -851,6 +845,19 @@ mod tests {
             area_light: None,
             media: None,
             reverse: false,
+        }
+    }
+
+    #[test]
+    fn the_nearest_of_primitives_sharing_a_box_is_hit() {
+        // Six triangles with the box [0, 1]³ (one BVH entry), planes z = x + s·y, s from 1 down to 1/6, and a
+        // sphere elsewhere: a ray along +z at (0.1, 0.1) meets the last one first, at z = 0.1 + 0.1/6.
+        let tri = |s: f32| {
+            triangle([
+                Vec3A::new(0.0, 0.0, 0.0),
+                Vec3A::new(1.0, 0.0, 1.0),
+                Vec3A::new(0.0, 1.0, s),
+            ])
         };
         let mut prims = vec![sphere(1.0, Vec3A::new(5.0, 0.0, 0.0))];
         prims.extend((0..6).map(|k| tri(1.0 - k as f32 / 6.0)));
@@ -885,17 +892,7 @@ mod tests {
     fn nested_boxes_build_by_median_splits_and_the_nearest_is_hit() {
         // 8 000 triangles each wider and higher than the last (PLOC's chain) are built by median splits; a
         // tessellated plane of as many is not. Rays find the depth brute force finds.
-        let tri = |p: [Vec3A; 3]| Prim {
-            geom: Geom::Triangle {
-                p,
-                n: None,
-                uv: [Vec2::ZERO; 3],
-            },
-            material: Some(0),
-            area_light: None,
-            media: None,
-            reverse: false,
-        };
+        let tri = triangle;
         let nested: Vec<Prim> = (0..8000)
             .map(|i| {
                 let (w, z) = (1.0 + i as f32 * 1e-3, 1.0 + i as f32 * 1e-4);
