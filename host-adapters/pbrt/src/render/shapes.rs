@@ -935,21 +935,11 @@ mod tests {
     fn hits_and_normals() {
         let bvh = Bvh::new(vec![
             sphere(1.0, Vec3A::new(0.0, 0.0, 5.0)),
-            Prim {
-                geom: Geom::Triangle {
-                    p: [
-                        Vec3A::new(-1.0, -1.0, 10.0),
-                        Vec3A::new(1.0, -1.0, 10.0),
-                        Vec3A::new(0.0, 1.0, 10.0),
-                    ],
-                    n: None,
-                    uv: [Vec2::ZERO; 3],
-                },
-                material: Some(0),
-                area_light: None,
-                media: None,
-                reverse: false,
-            },
+            triangle([
+                Vec3A::new(-1.0, -1.0, 10.0),
+                Vec3A::new(1.0, -1.0, 10.0),
+                Vec3A::new(0.0, 1.0, 10.0),
+            ]),
         ]);
         let h = bvh
             .intersect(Vec3A::ZERO, Vec3A::Z, 1e-4, f32::INFINITY)
