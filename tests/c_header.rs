@@ -127,6 +127,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             "sizeof_FmMajorantGrid",
             std::mem::size_of::<FmMajorantGrid>(),
         ),
+        ("sizeof_FmPointQuery", std::mem::size_of::<FmPointQuery>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),
@@ -193,6 +194,16 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         c_l > 0.0 && c_t < 1.0,
         "the ray should cross the fire: L {c_l}, T {c_t}"
     );
+    // The medium level from C: what the fire holds (it emits) and its majorant grid; the point query at 650 nm
+    // gives the soot's absorption there and its emitted radiance.
+    assert_eq!(get("features_status"), "0");
+    assert_eq!(get("features"), FM_FEATURE_EMITS.to_string());
+    assert_eq!(get("majorant_status"), "0");
+    assert!(get("majorant_first").parse::<f64>().unwrap() >= 0.0);
+    assert_eq!(get("point_status"), "0");
+    let sa: f64 = get("point_sigma_a_650").parse().unwrap();
+    let le: f64 = get("point_le_650").parse().unwrap();
+    assert!(sa > 0.0 && le > 0.0, "σ_a {sa}, Le {le}");
     assert_eq!(get("bad_status"), "2");
     assert!(get("bad_message").contains("did you mean 'stepsize'"));
     done(&exe);

@@ -107,6 +107,28 @@ int main(int argc, char **argv) {
         expect_failure("light_integrate_at(absurd n)", api->light_integrate_at(light, &nan_ray, NULL, SIZE_MAX, f, NULL));
         expect_failure("light_line_channels(null light)", api->light_line_channels(NULL, (uint32_t *)x));
         expect_failure("light_line_channels(null out)", api->light_line_channels(light, NULL));
+        /* The medium level: null handles and outputs, a struct the host did not size, NaN and negative
+         * wavelengths, absurd counts. */
+        FmMajorantGrid grid;
+        grid.struct_size = 8;
+        expect_failure("volume_features(null volume)", api->volume_features(NULL, &u64));
+        expect_failure("volume_features(null out)", api->volume_features(vol, NULL));
+        expect_failure("volume_majorant_grid(null out)", api->volume_majorant_grid(vol, NULL));
+        expect_failure("volume_majorant_grid(unsized)", api->volume_majorant_grid(vol, &grid));
+        double pt[3] = {0.5, 0.5, 0.5}, lam[2] = {NAN, -500.0}, outs[2];
+        FmPointQuery q = {sizeof q, 1, pt, NULL, 1, 0, lam, outs, NULL, NULL, NULL};
+        expect_failure("volume_point(null query)", api->volume_point(vol, NULL));
+        expect_failure("volume_point(NaN wavelength)", api->volume_point(vol, &q));
+        q.lambdas = lam + 1;
+        expect_failure("volume_point(negative wavelength)", api->volume_point(vol, &q));
+        q.lambdas = NULL;
+        expect_failure("volume_point(null wavelengths)", api->volume_point(vol, &q));
+        q.lambdas = lam + 1;
+        q.n = SIZE_MAX / 2;
+        expect_failure("volume_point(absurd n)", api->volume_point(vol, &q));
+        q.n = 1;
+        q.struct_size = 8;
+        expect_failure("volume_point(unsized)", api->volume_point(vol, &q));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);

@@ -11,7 +11,7 @@ int main(int argc, char **argv) {
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
-    printf("sizeof_FmMajorantGrid %zu\n", sizeof(FmMajorantGrid));
+    printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\n", sizeof(FmMajorantGrid), sizeof(FmPointQuery));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
@@ -54,6 +54,11 @@ int main(int argc, char **argv) {
     FmStatus gs = api->volume_majorant_grid(vol, &grid);
     printf("features_status %d\nfeatures %llu\nmajorant_status %d\nmajorant_cells %u %u %u\nmajorant_first %.9g\n", fs,
            (unsigned long long)features, gs, grid.counts[0], grid.counts[1], grid.counts[2], grid.sigma_t[0]);
+    /* The point query at the ray's midpoint inside the fire, at two wavelengths. */
+    double point[3] = {1.0, 1.0, 0.5}, lambdas[2] = {450.0, 650.0}, sa[2], le[2];
+    FmPointQuery q = {sizeof q, 1, point, NULL, 2, 0, lambdas, sa, NULL, le, NULL};
+    FmStatus ps = api->volume_point(vol, &q);
+    printf("point_status %d\npoint_sigma_a_650 %.9g\npoint_le_650 %.9g\n", ps, sa[1], le[1]);
     /* The fire light: one sample, its pdf evaluated again. */
     FmLight *light = NULL;
     if (api->light_create(vol, NULL, 0, &light) != FM_OK) return 1;

@@ -33,7 +33,7 @@ use std::sync::Arc;
 mod light;
 mod volume;
 pub use light::Light;
-pub use volume::{MajorantGrid, Volume};
+pub use volume::{MajorantGrid, Point, Volume};
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq)]
@@ -266,7 +266,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 31] = [
+const ENTRIES: [&str; 32] = [
     "last_error",
     "param_count",
     "param_info",
@@ -298,6 +298,7 @@ const ENTRIES: [&str; 31] = [
     "light_line_channels",
     "volume_features",
     "volume_majorant_grid",
+    "volume_point",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

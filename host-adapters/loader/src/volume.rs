@@ -124,6 +124,63 @@ impl Volume {
         })
     }
 
+    /// σ_a, σ_s, Le and j at `points`, each at its time (`times`, frames; `None`: 0) and at its own `k =
+    /// lambdas.len() / points.len()` wavelengths (nm, point-major), into `out` (as many as `lambdas`): the
+    /// closed forms at each wavelength, not the bins (ABI 0.11). A volume with layers they cannot express is
+    /// refused with `FM_UNSUPPORTED` naming the layer.
+    pub fn point(
+        &self,
+        points: &[[f64; 3]],
+        times: Option<&[f64]>,
+        lambdas: &[f64],
+        out: &mut [Point],
+    ) -> Result<(), Error> {
+        let n = points.len();
+        let k = lambdas.len().checked_div(n).unwrap_or(0);
+        if k * n != lambdas.len() || out.len() != lambdas.len() || u32::try_from(k).is_err() {
+            return Err(Error::Buffer(format!(
+                "point: {} wavelengths and {} outputs for {n} points (k each, the same for every point)",
+                lambdas.len(),
+                out.len()
+            )));
+        }
+        if let Some(t) = times.filter(|t| t.len() != n) {
+            return Err(Error::Buffer(format!(
+                "point: {} times for {n} points",
+                t.len()
+            )));
+        }
+        let mut v = vec![0f64; 4 * lambdas.len()];
+        let (sa, rest) = v.split_at_mut(lambdas.len());
+        let (ss, rest) = rest.split_at_mut(lambdas.len());
+        let (le, j) = rest.split_at_mut(lambdas.len());
+        let q = abi::FmPointQuery {
+            struct_size: std::mem::size_of::<abi::FmPointQuery>(),
+            n,
+            points: points.as_ptr().cast(),
+            times: times.map_or(std::ptr::null(), <[f64]>::as_ptr),
+            k: k as u32,
+            reserved: 0,
+            lambdas: lambdas.as_ptr(),
+            sigma_a: sa.as_mut_ptr(),
+            sigma_s: ss.as_mut_ptr(),
+            le: le.as_mut_ptr(),
+            j: j.as_mut_ptr(),
+        };
+        // SAFETY: a live handle; every array sized as the query says (checked above).
+        let s = unsafe { (self.inner.api().volume_point)(self.handle, &q) };
+        self.inner.check(s)?;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = Point {
+                sigma_a: sa[i],
+                sigma_s: ss[i],
+                le: le[i],
+                j: j[i],
+            };
+        }
+        Ok(())
+    }
+
     /// How many rays' tracking stopped at the plugin's per-ray collision cap so far (each cut short as if
     /// absorbed; report it).
     pub fn capped_rays(&self) -> Result<u64, Error> {
@@ -369,4 +426,17 @@ impl MajorantGrid<'_> {
         let [x, y, z] = self.cell_of(p);
         self.sigma_t[x + self.counts[0] * (y + self.counts[1] * z)]
     }
+}
+
+/// The coefficients at one point and wavelength ([`Volume::point`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Point {
+    /// σ_a, medium units⁻¹.
+    pub sigma_a: f64,
+    /// σ_s, medium units⁻¹.
+    pub sigma_s: f64,
+    /// The emitted radiance Le (0 where σ_a = 0: an emission grid's j still emits there).
+    pub le: f64,
+    /// j = σ_a·Le.
+    pub j: f64,
 }

@@ -121,6 +121,23 @@ typedef struct FmMajorantGrid {
     const double *sigma_t;
 } FmMajorantGrid;
 
+/* ABI 0.11: a point query (volume_point): at n points, each at its time and at k wavelengths of its own, sigma_a,
+ * sigma_s, the emitted radiance Le and the emission coefficient j = sigma_a Le -- the closed forms at each
+ * wavelength (soot's kappa(lambda) and Planck's B(lambda, T); pbrt-v4's spectra and peak-normalised blackbody),
+ * not the bins. Outputs are n*k doubles each, point-major, each may be NULL; Le is 0 where sigma_a is 0 (an
+ * emission grid's j still emits there). A volume whose layers the closed forms cannot express (atomic lines, art
+ * direction, a scatter colour grid, diffusion, refraction, embers) is refused with FM_UNSUPPORTED naming it. */
+typedef struct FmPointQuery {
+    size_t struct_size;    /* sizeof(FmPointQuery) */
+    size_t n;              /* points */
+    const double *points;  /* 3n, medium space (required) */
+    const double *times;   /* n frames from the grids' time, or NULL: time 0 */
+    uint32_t k;            /* wavelengths per point */
+    uint32_t reserved;
+    const double *lambdas; /* n*k nm (required) */
+    double *sigma_a, *sigma_s, *le, *j;
+} FmPointQuery;
+
 typedef struct FmParamInfo {
     const char *component, *name, *ty, *default_value, *unit, *range, *doc;
 } FmParamInfo;
@@ -261,6 +278,8 @@ typedef struct FmApi {
      * volume_majorant_grid: the majorant grid into *out (required, its struct_size set by the host). */
     FmStatus (*volume_features)(const FmVolume *volume, uint64_t *out);
     FmStatus (*volume_majorant_grid)(const FmVolume *volume, FmMajorantGrid *out);
+    /* ABI 0.11: the point query (FmPointQuery above; query required). */
+    FmStatus (*volume_point)(const FmVolume *volume, const FmPointQuery *query);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

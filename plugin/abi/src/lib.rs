@@ -281,6 +281,39 @@ impl Default for FmMajorantGrid {
     }
 }
 
+/// ABI 0.11: a point query ([`FmApi::volume_point`]): at `n` points, each at its time and at `k` wavelengths of
+/// its own, σ_a, σ_s, the emitted radiance Le and the emission coefficient j = σ_a·Le — the closed forms at each
+/// wavelength (soot's κ(λ) and Planck's B(λ, T); pbrt-v4's spectra and peak-normalised blackbody), not the bins.
+/// Outputs are `n · k` doubles each, point-major (may be null); a volume whose layers the closed forms cannot
+/// express (atomic lines, art direction, a scatter colour grid, diffusion, refraction, embers) is refused with
+/// `FM_UNSUPPORTED` naming the layer.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmPointQuery {
+    /// Set by the host to `size_of::<FmPointQuery>()`.
+    pub struct_size: usize,
+    /// Points.
+    pub n: usize,
+    /// `3n` doubles, medium space (required).
+    pub points: *const f64,
+    /// `n` times (frames from the grids' time), or null: time 0.
+    pub times: *const f64,
+    /// Wavelengths per point.
+    pub k: u32,
+    /// Reserved (0).
+    pub reserved: u32,
+    /// `n · k` wavelengths, nm (required).
+    pub lambdas: *const f64,
+    /// σ_a, medium units⁻¹.
+    pub sigma_a: *mut f64,
+    /// σ_s, medium units⁻¹.
+    pub sigma_s: *mut f64,
+    /// Le, radiance (0 where σ_a = 0: an emission grid's j still emits there).
+    pub le: *mut f64,
+    /// j = σ_a·Le, radiance per medium unit.
+    pub j: *mut f64,
+}
+
 /// The plugin's function table.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
@@ -502,6 +535,9 @@ pub struct FmApi {
     /// ABI 0.11: the volume's majorant grid into `*out` (required, its `struct_size` set by the host).
     pub volume_majorant_grid:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmMajorantGrid) -> FmStatus,
+    /// ABI 0.11: the point query (see [`FmPointQuery`]; `query` required).
+    pub volume_point:
+        unsafe extern "C" fn(volume: *const FmVolume, query: *const FmPointQuery) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -538,8 +574,9 @@ mod tests {
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
         // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`, 0.11 `volume_features` and
-        // `volume_majorant_grid`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 31 * 8);
+        // `volume_majorant_grid` and `volume_point`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 32 * 8);
+        assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);
     }
 }

@@ -223,6 +223,7 @@ static API: FmApi = FmApi {
     light_line_channels,
     volume_features,
     volume_majorant_grid,
+    volume_point,
 };
 
 /// The plugin's entry point: the static function table.

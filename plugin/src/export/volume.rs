@@ -590,3 +590,83 @@ pub(super) unsafe extern "C" fn volume_majorant_grid(
         Ok(())
     })
 }
+
+pub(super) unsafe extern "C" fn volume_point(
+    volume: *const FmVolume,
+    query: *const FmPointQuery,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_point") }?;
+        if query.is_null() {
+            return Err(bad("volume_point: query is null"));
+        }
+        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
+        let size = unsafe { std::ptr::addr_of!((*query).struct_size).read_unaligned() };
+        if size < std::mem::size_of::<FmPointQuery>() {
+            return Err(bad(format!(
+                "volume_point: query->struct_size {size}, expected at least {} (set it to sizeof(FmPointQuery))",
+                std::mem::size_of::<FmPointQuery>()
+            )));
+        }
+        // SAFETY: non-null and at least size_of::<FmPointQuery>() readable bytes (checked above).
+        let q = unsafe { query.read_unaligned() };
+        let (n, k) = (q.n, q.k as usize);
+        // SAFETY: the query's arrays as its contract sizes them (null refused or, for times, read as 0).
+        let points = unsafe { in_f64(q.points, n, 3, "volume_point: points") }?;
+        // SAFETY: as above.
+        let lambdas = unsafe { in_f64(q.lambdas, n, k, "volume_point: lambdas") }?;
+        let times = if q.times.is_null() {
+            None
+        } else {
+            // SAFETY: as above.
+            Some(unsafe { in_f64(q.times, n, 1, "volume_point: times") }?)
+        };
+        if let Some(i) = lambdas.iter().position(|&l| !(l > 0.0)) {
+            return Err(bad(format!(
+                "volume_point: lambdas[{i}] = {}: expected wavelengths in nm above 0",
+                lambdas[i]
+            )));
+        }
+        // The outputs the host asked for (each may be null).
+        let mut outs: Vec<Option<&mut [f64]>> = Vec::with_capacity(4);
+        for (p, what) in [
+            (q.sigma_a, "volume_point: sigma_a"),
+            (q.sigma_s, "volume_point: sigma_s"),
+            (q.le, "volume_point: le"),
+            (q.j, "volume_point: j"),
+        ] {
+            outs.push(if p.is_null() {
+                None
+            } else {
+                // SAFETY: n × k writable doubles (contract).
+                Some(unsafe { out_f64(p, n, k, what) }?)
+            });
+        }
+        if n == 0 || k == 0 {
+            return Ok(());
+        }
+        // (A row of k, sized like the host's own n × k wavelengths, allocated fallibly.)
+        let mut row = crate::alloc::filled(k, crate::volume::PointCoefficients::default())
+            .ok_or_else(|| {
+                bad(format!(
+                    "volume_point: {k} wavelengths per point: no memory for a row"
+                ))
+            })?;
+        for i in 0..n {
+            let p = DVec3::from_slice(&points[3 * i..3 * i + 3]);
+            let time = times.map_or(0.0, |t| t[i]);
+            v.point(p, time, &lambdas[k * i..k * (i + 1)], &mut row)
+                .map_err(fail)?;
+            for (m, c) in row.iter().enumerate() {
+                let values = [c.sigma_a, c.sigma_s, c.le, c.j];
+                for (o, value) in outs.iter_mut().zip(values) {
+                    if let Some(o) = o {
+                        o[k * i + m] = value;
+                    }
+                }
+            }
+        }
+        Ok(())
+    })
+}

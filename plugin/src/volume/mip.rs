@@ -202,6 +202,7 @@ impl FireVolume {
             capped: CapCounter::default(),
             spare: 0,
             threads: self.threads,
+            point_model: self.point_model.clone(),
             #[cfg(test)]
             fault: self.fault.clone(),
         };

@@ -43,6 +43,7 @@ mod march;
 mod mip;
 mod motion;
 pub mod params;
+mod point;
 mod settings;
 mod subset;
 mod tables;
@@ -53,6 +54,7 @@ use integrate::{Medium, Scratch};
 pub use march::evaluations_on_this_thread;
 pub(crate) use march::Stepper;
 use march::EVALUATIONS;
+pub use point::PointCoefficients;
 use settings::{Emission, Settings};
 pub(crate) use subset::LineChannels;
 use tables::{SpeciesChannel, TTable};
@@ -208,6 +210,8 @@ pub struct FireVolume {
     spare: u64,
     /// The build's thread budget (`threads`), which the fire light's build keeps to as well.
     threads: usize,
+    /// What the point query evaluates at any wavelength (or why it is refused).
+    point_model: point::PointModel,
     #[cfg(test)]
     fault: String,
 }
@@ -624,6 +628,20 @@ impl FireVolume {
             }
             _ => true,
         };
+        // What the point query's closed forms cannot express (the first such layer names the refusal).
+        let refused = [
+            (!co.species.is_empty(), "atomic lines or the blue core"),
+            (thick.is_some(), "optically thick atomic lines"),
+            (scatter_color.is_some(), "a scatter colour grid"),
+            (set.diffusion.is_some(), "diffusion"),
+            (refraction.is_some(), "refraction"),
+            (embers.is_some(), "embers"),
+            (!physical_colour, "art direction (a tint or a colour ramp)"),
+        ]
+        .iter()
+        .find(|(on, _)| *on)
+        .map(|(_, why)| why.to_string());
+        let point_model = point::PointModel::new(&set.emission, set.sigma_s.as_ref(), refused);
         let mut vol = FireVolume {
             ds,
             density,
@@ -663,6 +681,7 @@ impl FireVolume {
             capped: CapCounter::default(),
             spare: 0,
             threads: 0,
+            point_model,
             #[cfg(test)]
             fault: set.fault,
         };

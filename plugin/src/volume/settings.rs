@@ -118,7 +118,7 @@ impl Settings {
         let basis = read_basis(r, mode)?;
         // pbrt-v4's grid media scatter unless told otherwise (σ_s defaults to 1, as σ_a); the paper's fire does not.
         let sigma_s = match (spectrum_param(r, "sigma_s", list, RgbUse::Unbounded)?, mode) {
-            (None, Mode::Pbrt) => Some(Box::new(|_: f64| 1.0) as SpectrumFn),
+            (None, Mode::Pbrt) => Some(std::sync::Arc::new(|_: f64| 1.0) as SpectrumFn),
             (s, _) => s,
         };
         let emission = match mode {
@@ -390,8 +390,8 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         }
     }
     let scale = r.float("scale")?;
-    let sigma_a =
-        spectrum_param(r, "sigma_a", list, RgbUse::Unbounded)?.unwrap_or_else(|| Box::new(|_| 1.0));
+    let sigma_a = spectrum_param(r, "sigma_a", list, RgbUse::Unbounded)?
+        .unwrap_or_else(|| std::sync::Arc::new(|_| 1.0));
     // A per-voxel Lescale array is a dataset channel (inline grids); then the scalar factor is 1.
     let per_voxel = crate::dataset::params::lescale_is_grid(r)?;
     let le_scale = if per_voxel { 1.0 } else { r.float("Lescale")? };
@@ -410,7 +410,7 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
                 .enumerate()
                 .map(|(i, c)| c[1] * f(CMF_START_NM + i as f64))
                 .sum();
-            (y > 0.0).then(|| Box::new(move |l| f(l) / y) as SpectrumFn)
+            (y > 0.0).then(|| std::sync::Arc::new(move |l| f(l) / y) as SpectrumFn)
         }
         le => le,
     };
@@ -423,7 +423,7 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
 }
 
 /// A spectrum as a function of wavelength (nm).
-pub(super) type SpectrumFn = Box<dyn Fn(f64) -> f64 + Send + Sync>;
+pub(super) type SpectrumFn = std::sync::Arc<dyn Fn(f64) -> f64 + Send + Sync>;
 
 /// A spectrum parameter as a function of λ (nm): one constant, or (λ, value) pairs linear between, zero
 /// outside (pbrt-v4's piecewise-linear spectrum), or an `rgb` value as pbrt-v4 makes it a spectrum of its use
@@ -458,7 +458,7 @@ fn spectrum_param(
                     ));
                 }
                 let s = RgbSpectrum::new([v[0], v[1], v[2]], usage);
-                return Ok(Some(Box::new(move |l| s.eval(l))));
+                return Ok(Some(std::sync::Arc::new(move |l| s.eval(l))));
             }
         }
     }
@@ -478,7 +478,7 @@ fn spectrum_param(
         if c < 0.0 {
             return Err(Error::invalid("volume", name, c, "a value >= 0"));
         }
-        return Ok(Some(Box::new(move |_| c)));
+        return Ok(Some(std::sync::Arc::new(move |_| c)));
     }
     if v.len() % 2 != 0 || v.len() < 4 {
         return Err(Error::invalid(
@@ -507,7 +507,7 @@ fn spectrum_param(
             "values >= 0",
         ));
     }
-    Ok(Some(Box::new(move |l| {
+    Ok(Some(std::sync::Arc::new(move |l| {
         if l < pairs[0].0 || l > pairs[pairs.len() - 1].0 {
             return 0.0;
         }
