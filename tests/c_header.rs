@@ -128,6 +128,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             std::mem::size_of::<FmMajorantGrid>(),
         ),
         ("sizeof_FmPointQuery", std::mem::size_of::<FmPointQuery>()),
+        ("sizeof_FmErrorDetail", std::mem::size_of::<FmErrorDetail>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),
@@ -205,6 +206,9 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     let le: f64 = get("point_le_650").parse().unwrap();
     assert!(sa > 0.0 && le > 0.0, "σ_a {sa}, Le {le}");
     assert_eq!(get("bad_status"), "2");
+    // ABI 0.12: the same error's parts as fields.
+    assert_eq!(get("detail_status"), "0 2");
+    assert_eq!(get("detail_parameter"), "stepsise");
     assert!(get("bad_message").contains("did you mean 'stepsize'"));
     done(&exe);
 }

@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 11));
+    assert_eq!(p.version(), (0, 12));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -174,15 +174,26 @@ fn four_threads_give_the_single_thread_results() {
 fn errors_come_back_typed() {
     let p = plugin();
     match p.create_volume(&[fire_params(), vec![Param::float("stepsise", 0.25)]].concat()) {
-        Err(Error::Status { code, message }) => {
+        Err(Error::Status {
+            code,
+            message,
+            detail,
+        }) => {
             assert_eq!(code, firemedium_abi::FM_INVALID_PARAMETER);
             assert!(message.contains("did you mean 'stepsize'"), "{message}");
+            // ABI 0.12: the parameter at fault as a field, not only in the text.
+            assert_eq!(detail.parameter.as_deref(), Some("stepsise"));
         }
         other => panic!("expected a parameter error, got {other:?}"),
     }
     match p.create_volume(&[Param::string("filename", "/no/such/fire.vdb")]) {
-        Err(Error::Status { code, message }) => {
+        Err(Error::Status {
+            code,
+            message,
+            detail,
+        }) => {
             assert_eq!(code, firemedium_abi::FM_DATASET);
+            assert_eq!(detail.file.as_deref(), Some("/no/such/fire.vdb"));
             assert!(
                 message.contains("/no/such/fire.vdb: cannot read"),
                 "{message}"
@@ -195,15 +206,37 @@ fn errors_come_back_typed() {
         value: Value::String(vec!["fast".into()]),
         at: Some("scene.pbrt:12:5".into()),
     };
-    let e = p
+    let err = p
         .create_volume(&[fire_params(), vec![wrong_type]].concat())
-        .unwrap_err()
-        .to_string();
-    // The error names the parameter, what it is and what was expected, from where the host said it was given.
+        .unwrap_err();
+    let e = err.to_string();
+    // The error names the parameter, what it is and what was expected, from where the host said it was given —
+    // in the text, and (ABI 0.12) as fields a host reads without parsing it.
     assert!(
         e.starts_with("scene.pbrt:12:5: volume: parameter 'stepsize'") && e.contains("float"),
         "{e}"
     );
+    let Error::Status { detail, .. } = err else {
+        panic!("{err:?}")
+    };
+    assert_eq!(
+        (detail.parameter.as_deref(), detail.location.as_deref()),
+        (Some("stepsize"), Some("scene.pbrt:12:5"))
+    );
+    // A file's content at fault: the file and the position in it.
+    let dir = std::env::temp_dir().join(format!("firemedium-abi-detail-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let broken = dir.join("broken.vdb");
+    std::fs::write(&broken, b"not an OpenVDB file at all").unwrap();
+    let err = p
+        .create_volume(&[Param::string("filename", broken.to_str().unwrap())])
+        .unwrap_err();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let Error::Status { detail, .. } = &err else {
+        panic!("{err:?}")
+    };
+    assert_eq!(detail.file.as_deref(), broken.to_str());
+    assert_eq!(detail.position.as_deref(), Some("byte 0"), "{err}");
     let v = p.create_volume(&fire_params()).unwrap();
     let mut small = vec![0f32; 10];
     assert!(matches!(

@@ -129,6 +129,10 @@ int main(int argc, char **argv) {
         q.n = 1;
         q.struct_size = 8;
         expect_failure("volume_point(unsized)", api->volume_point(vol, &q));
+        FmErrorDetail detail;
+        detail.struct_size = 4;
+        expect_failure("last_error_detail(null out)", api->last_error_detail(NULL));
+        expect_failure("last_error_detail(unsized)", api->last_error_detail(&detail));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);

@@ -11,7 +11,8 @@ int main(int argc, char **argv) {
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
-    printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\n", sizeof(FmMajorantGrid), sizeof(FmPointQuery));
+    printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\nsizeof_FmErrorDetail %zu\n", sizeof(FmMajorantGrid),
+           sizeof(FmPointQuery), sizeof(FmErrorDetail));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
@@ -76,6 +77,10 @@ int main(int argc, char **argv) {
     char msg[512];
     api->last_error(msg, sizeof msg);
     printf("bad_status %d\nbad_message %s\n", b, msg);
+    FmErrorDetail detail;
+    detail.struct_size = sizeof detail;
+    FmStatus ds = api->last_error_detail(&detail);
+    printf("detail_status %d %d\ndetail_parameter %s\n", ds, detail.status, detail.parameter ? detail.parameter : "(null)");
     api->volume_destroy(vol);
     free(radiance);
     free(transmittance);

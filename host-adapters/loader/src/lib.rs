@@ -78,6 +78,8 @@ pub enum Error {
         code: i32,
         /// The plugin's message.
         message: String,
+        /// Its parts, for pointing a user at the cause without parsing the message (ABI 0.12).
+        detail: Box<ErrorDetail>,
     },
     /// A buffer passed to a batch call is too small.
     Buffer(String),
@@ -149,6 +151,27 @@ impl Inner {
         buf.truncate(n);
         String::from_utf8_lossy(&buf).into_owned()
     }
+    /// The last error's parts on this thread (ABI 0.12).
+    fn last_error_detail(&self) -> ErrorDetail {
+        let mut d = abi::FmErrorDetail::default();
+        // SAFETY: a struct of the size it says.
+        if unsafe { (self.api().last_error_detail)(&mut d) } != abi::FM_OK {
+            return ErrorDetail::default();
+        }
+        let owned = |p: *const c_char| {
+            (!p.is_null()).then(|| {
+                // SAFETY: a NUL-terminated string the plugin keeps until the next call on this thread (non-null,
+                // checked), copied now.
+                unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+            })
+        };
+        ErrorDetail {
+            parameter: owned(d.parameter),
+            location: owned(d.location),
+            file: owned(d.file),
+            position: owned(d.position),
+        }
+    }
     fn check(&self, status: i32) -> Result<(), Error> {
         if status == abi::FM_OK {
             Ok(())
@@ -156,9 +179,23 @@ impl Inner {
             Err(Error::Status {
                 code: status,
                 message: self.last_error(),
+                detail: Box::new(self.last_error_detail()),
             })
         }
     }
+}
+
+/// The parts of a plugin error (ABI 0.12): what a host needs to point its user at the cause.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct ErrorDetail {
+    /// The parameter at fault, as the host named it.
+    pub parameter: Option<String>,
+    /// Where the host said that parameter was given (`Param::at`: `file:line:col`).
+    pub location: Option<String>,
+    /// The file whose reading or content failed.
+    pub file: Option<String>,
+    /// Where in that file: `byte 1234`, `line 3, column 5`, `grid 'density'`.
+    pub position: Option<String>,
 }
 
 /// A loaded plugin.
@@ -266,7 +303,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 32] = [
+const ENTRIES: [&str; 33] = [
     "last_error",
     "param_count",
     "param_info",
@@ -299,6 +336,7 @@ const ENTRIES: [&str; 32] = [
     "volume_features",
     "volume_majorant_grid",
     "volume_point",
+    "last_error_detail",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

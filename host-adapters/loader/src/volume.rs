@@ -112,6 +112,7 @@ impl Volume {
             return Err(Error::Status {
                 code: abi::FM_INVALID_ARGUMENT,
                 message: "volume_majorant_grid: no cells".into(),
+                detail: Default::default(),
             });
         }
         Ok(MajorantGrid {

@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 11u
+#define FM_ABI_MINOR 12u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -137,6 +137,19 @@ typedef struct FmPointQuery {
     const double *lambdas; /* n*k nm (required) */
     double *sigma_a, *sigma_s, *le, *j;
 } FmPointQuery;
+
+/* ABI 0.12: the last error's structure (last_error_detail), beside its message: what a host needs to point its
+ * user at the cause without parsing text. Strings are owned by the plugin, valid until the next call on the same
+ * thread; NULL when the error has no such part. */
+typedef struct FmErrorDetail {
+    size_t struct_size;    /* sizeof(FmErrorDetail), set by the host */
+    FmStatus status;       /* the failing call's status (FM_OK when none has failed on this thread) */
+    int32_t reserved;
+    const char *parameter; /* the parameter at fault, as the host named it */
+    const char *location;  /* where the host said it was given (volume_create_located): file:line:col */
+    const char *file;      /* the file whose reading or content failed */
+    const char *position;  /* where in it: "byte 1234", "line 3, column 5", "grid 'density'" */
+} FmErrorDetail;
 
 typedef struct FmParamInfo {
     const char *component, *name, *ty, *default_value, *unit, *range, *doc;
@@ -280,6 +293,8 @@ typedef struct FmApi {
     FmStatus (*volume_majorant_grid)(const FmVolume *volume, FmMajorantGrid *out);
     /* ABI 0.11: the point query (FmPointQuery above; query required). */
     FmStatus (*volume_point)(const FmVolume *volume, const FmPointQuery *query);
+    /* ABI 0.12: the last error on this thread as a structure into *out (required, its struct_size set). */
+    FmStatus (*last_error_detail)(FmErrorDetail *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 11;
+pub const ABI_MINOR: u32 = 12;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -314,6 +314,42 @@ pub struct FmPointQuery {
     pub j: *mut f64,
 }
 
+/// ABI 0.12: the last error's structure ([`FmApi::last_error_detail`]), beside its message: what a host needs to
+/// point its user at the cause without parsing text. Strings are NUL-terminated UTF-8 owned by the plugin, valid
+/// until the next call on the same thread; null when the error has no such part.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmErrorDetail {
+    /// Set by the host to `size_of::<FmErrorDetail>()`.
+    pub struct_size: usize,
+    /// The status the failing call returned (`FM_OK` when no call has failed on this thread).
+    pub status: FmStatus,
+    /// Reserved (0).
+    pub reserved: i32,
+    /// The parameter at fault, as the host named it.
+    pub parameter: *const c_char,
+    /// Where the host said that parameter was given (`volume_create_located`'s location: `file:line:col`).
+    pub location: *const c_char,
+    /// The file whose reading or content failed.
+    pub file: *const c_char,
+    /// Where in that file: `byte 1234`, `line 3, column 5`, `grid 'density'`.
+    pub position: *const c_char,
+}
+
+impl Default for FmErrorDetail {
+    fn default() -> Self {
+        FmErrorDetail {
+            struct_size: core::mem::size_of::<FmErrorDetail>(),
+            status: FM_OK,
+            reserved: 0,
+            parameter: core::ptr::null(),
+            location: core::ptr::null(),
+            file: core::ptr::null(),
+            position: core::ptr::null(),
+        }
+    }
+}
+
 /// The plugin's function table.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
@@ -538,6 +574,9 @@ pub struct FmApi {
     /// ABI 0.11: the point query (see [`FmPointQuery`]; `query` required).
     pub volume_point:
         unsafe extern "C" fn(volume: *const FmVolume, query: *const FmPointQuery) -> FmStatus,
+    /// ABI 0.12: the last error on this thread as a structure into `*out` (required, its `struct_size` set by
+    /// the host); see [`FmErrorDetail`].
+    pub last_error_detail: unsafe extern "C" fn(out: *mut FmErrorDetail) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -574,8 +613,9 @@ mod tests {
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
         // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`, 0.11 `volume_features` and
-        // `volume_majorant_grid` and `volume_point`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 32 * 8);
+        // `volume_majorant_grid` and `volume_point`, 0.12 `last_error_detail`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 33 * 8);
+        assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);
     }

@@ -17,6 +17,10 @@ use volume::*;
 
 thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+    /// The last error's status and parts (parameter, location, file, position), for `last_error_detail`.
+    static LAST_DETAIL: RefCell<(FmStatus, [Option<CString>; 4])> = const { RefCell::new((FM_OK, [None, None, None, None])) };
+    /// The parts of an error [`fail`] converted, until [`guard`] reports it (or the call succeeds after all).
+    static PENDING_PARTS: RefCell<Option<[Option<String>; 4]>> = const { RefCell::new(None) };
     /// Set while an entry runs under [`guard`]: a panic there is caught and reported, so the hook stays quiet.
     static IN_GUARD: Cell<bool> = const { Cell::new(false) };
     /// Where the last caught panic happened (`file:line`), for its message.
@@ -49,15 +53,24 @@ fn set_error(msg: String) {
     LAST_ERROR.with(|e| *e.borrow_mut() = msg);
 }
 
-/// Runs `f`, mapping its error and any panic to a status and the last-error message.
+/// Records the last error's status and parts for `last_error_detail`.
+fn set_detail(status: FmStatus, parts: [Option<String>; 4]) {
+    let c = |s: Option<String>| s.map(|s| CString::new(s.replace('\0', "?")).unwrap_or_default());
+    let [a, b, f, p] = parts;
+    LAST_DETAIL.with(|d| *d.borrow_mut() = (status, [c(a), c(b), c(f), c(p)]));
+}
+
+/// Runs `f`, mapping its error and any panic to a status and the last-error message (and its detail).
 fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
     let outer = IN_GUARD.with(|g| g.replace(true));
     let result = catch_unwind(AssertUnwindSafe(f));
     IN_GUARD.with(|g| g.set(outer));
+    let parts = PENDING_PARTS.with(|p| p.borrow_mut().take());
     match result {
         Ok(Ok(())) => FM_OK,
         Ok(Err((status, msg))) => {
             set_error(msg);
+            set_detail(status, parts.unwrap_or_default());
             status
         }
         Err(payload) => {
@@ -68,6 +81,7 @@ fn guard(f: impl FnOnce() -> Result<(), (FmStatus, String)>) -> FmStatus {
                 .unwrap_or_default();
             let at = PANIC_AT.with(|p| std::mem::take(&mut *p.borrow_mut()));
             set_error(format!("firemedium: internal error (panic at {at}: {what}); the call did nothing, the host may continue"));
+            set_detail(FM_PANIC, Default::default());
             FM_PANIC
         }
     }
@@ -82,7 +96,50 @@ fn status_of(e: &Error) -> FmStatus {
 }
 
 fn fail(e: Error) -> (FmStatus, String) {
+    // The error's parts, for `last_error_detail`: (parameter, location, file, position).
+    let parts = match &e {
+        Error::InvalidParameter { at, name, .. } => [Some(name.clone()), at.clone(), None, None],
+        Error::Format { file, at, .. } => [None, None, Some(file.clone()), Some(at.clone())],
+        Error::Io { file, .. } | Error::Unsupported { file, .. } | Error::TooLarge { file, .. } => {
+            [None, None, Some(file.clone()), None]
+        }
+    };
+    PENDING_PARTS.with(|p| *p.borrow_mut() = Some(parts));
     (status_of(&e), e.to_string())
+}
+
+unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
+    // (A misuse is itself the last error then: its message, and a detail of its status alone.)
+    if out.is_null() {
+        return guard(|| Err(bad("last_error_detail: out is null")));
+    }
+    // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
+    let size = unsafe { std::ptr::addr_of!((*out).struct_size).read_unaligned() };
+    if size < std::mem::size_of::<FmErrorDetail>() {
+        return guard(|| {
+            Err(bad(format!(
+                "last_error_detail: out->struct_size {size}, expected at least {} (set it to sizeof(FmErrorDetail))",
+                std::mem::size_of::<FmErrorDetail>()
+            )))
+        });
+    }
+    LAST_DETAIL.with(|d| {
+        let d = d.borrow();
+        let ptr = |s: &Option<CString>| s.as_ref().map_or(std::ptr::null(), |s| s.as_ptr());
+        let detail = FmErrorDetail {
+            struct_size: std::mem::size_of::<FmErrorDetail>(),
+            status: d.0,
+            reserved: 0,
+            parameter: ptr(&d.1[0]),
+            location: ptr(&d.1[1]),
+            file: ptr(&d.1[2]),
+            position: ptr(&d.1[3]),
+        };
+        // SAFETY: non-null and at least size_of::<FmErrorDetail>() writable bytes (checked above); the strings
+        // live in this thread's slot until the next failing call on it.
+        unsafe { out.write_unaligned(detail) };
+    });
+    FM_OK
 }
 
 fn bad(msg: impl Into<String>) -> (FmStatus, String) {
@@ -224,6 +281,7 @@ static API: FmApi = FmApi {
     volume_features,
     volume_majorant_grid,
     volume_point,
+    last_error_detail,
 };
 
 /// The plugin's entry point: the static function table.
