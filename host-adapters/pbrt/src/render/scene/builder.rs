@@ -815,9 +815,17 @@ impl Builder {
                     list.push(LParam::float("maxbytes", left as f64));
                 }
                 let vol = plugin.create_volume(&list).map_err(|e| {
-                    // An error about one parameter begins with where it was given: report it there.
+                    // An error about one parameter carries where it was given (the plugin's error detail, not its
+                    // text): report it there, the message without that prefix.
                     let text = e.to_string();
-                    let at = params.params().iter().find_map(|p| text.strip_prefix(&format!("{}: ", p.loc)).map(|rest| (&p.loc, rest)));
+                    let given = match &e {
+                        firemedium_loader::Error::Status { detail, .. } => detail.location.clone(),
+                        _ => None,
+                    };
+                    let at = given.and_then(|g| params.params().iter().find(|p| p.loc.to_string() == g)).map(|p| {
+                        let prefix = format!("{}: ", p.loc);
+                        (&p.loc, text.strip_prefix(&prefix).unwrap_or(&text))
+                    });
                     match at {
                         Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
                         None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
