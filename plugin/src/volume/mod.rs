@@ -1232,7 +1232,38 @@ impl FireVolume {
     }
 }
 
+/// The grids at a point ([`FireVolume::lookup`]).
+pub(super) struct Lookup {
+    /// Soot density (clamped at 0).
+    pub d: f64,
+    /// Temperature, K (0 without a temperature grid).
+    pub t: f64,
+    /// The Lescale or emission grid's value (1 without one).
+    pub les: f64,
+    /// Whether it emits there (above pbrt mode's 100 K, or any temperature in physical mode).
+    pub emits: bool,
+}
+
 impl FireVolume {
+    /// The grids' values at medium-space point `p` (trilinear or as the dataset interpolates) and the stencil
+    /// that read them (for further grids), `None` outside the volume and its margin: what both the bins'
+    /// coefficients and the point query read.
+    #[inline(always)]
+    pub(super) fn lookup(&self, p: DVec3) -> Option<(crate::grid::Stencil, Lookup)> {
+        let st = self.ds.stencil_with_margin(p, self.margin)?;
+        let ch = self.ds.channels();
+        let d = ch[self.density].grid.eval(&st).max(0.0) as f64;
+        let t = self
+            .temperature
+            .map(|i| ch[i].grid.eval(&st) as f64)
+            .unwrap_or(0.0);
+        let les = self
+            .lescale
+            .map(|i| ch[i].grid.eval(&st).max(0.0) as f64)
+            .unwrap_or(1.0);
+        let emits = t > self.t_emit || self.temperature.is_none();
+        Some((st, Lookup { d, t, les, emits }))
+    }
     /// Whether the march splits steps thicker than `steptau` (pbrt mode): its bias is bounded, and estimates
     /// made from it (the fire light's line) must stay within it.
     pub(crate) fn splits_thick_steps(&self) -> bool {
@@ -1255,7 +1286,7 @@ impl Medium for FireVolume {
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         EVALUATIONS.with(|n| n.set(n.get() + 1));
-        let Some(st) = self.ds.stencil_with_margin(p, self.margin) else {
+        let Some((st, Lookup { d, t, les, emits })) = self.lookup(p) else {
             sa.iter_mut()
                 .chain(ss.iter_mut())
                 .chain(j.iter_mut())
@@ -1263,16 +1294,6 @@ impl Medium for FireVolume {
             return;
         };
         let ch = self.ds.channels();
-        let d = ch[self.density].grid.eval(&st).max(0.0) as f64;
-        let t = self
-            .temperature
-            .map(|i| ch[i].grid.eval(&st) as f64)
-            .unwrap_or(0.0);
-        let les = self
-            .lescale
-            .map(|i| ch[i].grid.eval(&st).max(0.0) as f64)
-            .unwrap_or(1.0);
-        let emits = t > self.t_emit || self.temperature.is_none();
         let loc = self.j.locate(t);
         let at = self.a_t.as_ref().map(|tab| (tab, tab.locate(t)));
         for c in 0..sa.len() {

@@ -129,20 +129,9 @@ impl FireVolume {
         let q = self.advected(time).map_or(p, |a| a.displaced(p));
         out.iter_mut()
             .for_each(|o| *o = PointCoefficients::default());
-        let Some(st) = self.ds.stencil_with_margin(q, self.margin) else {
+        let Some((_, super::Lookup { d, t, les, emits })) = self.lookup(q) else {
             return Ok(());
         };
-        let ch = self.ds.channels();
-        let d = ch[self.density].grid.eval(&st).max(0.0) as f64;
-        let t = self
-            .temperature
-            .map(|i| ch[i].grid.eval(&st) as f64)
-            .unwrap_or(0.0);
-        let les = self
-            .lescale
-            .map(|i| ch[i].grid.eval(&st).max(0.0) as f64)
-            .unwrap_or(1.0);
-        let emits = t > self.t_emit || self.temperature.is_none();
         let e = self.emitting(d, les);
         for (o, &l) in out.iter_mut().zip(lambdas) {
             let (sa, ss, j) = match model {
