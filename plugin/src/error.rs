@@ -98,15 +98,35 @@ impl fmt::Display for Error {
                     "{component}: parameter '{name}' = {value}: expected {expected}"
                 )
             }
-            Error::Format { file, at, expected, found } => {
+            Error::Format {
+                file,
+                at,
+                expected,
+                found,
+            } => {
                 write!(f, "{file}: {at}: expected {expected}, found {found}")
             }
             Error::Io { file, message } => write!(f, "{file}: cannot read: {message}"),
-            Error::Unsupported { file, what, hint } => write!(f, "{file}: unsupported: {what} ({hint})"),
-            Error::TooLarge { file, what, bytes, cap } => write!(
-                f,
-                "{file}: {what} needs {bytes} bytes, above the memory cap of {cap} bytes (raise 'maxbytes' if intended)"
-            ),
+            Error::Unsupported { file, what, hint } => {
+                write!(f, "{file}: unsupported: {what} ({hint})")
+            }
+            Error::TooLarge {
+                file,
+                what,
+                bytes,
+                cap,
+            } => {
+                // (Sizes are saturating products: u64::MAX stands for one past what u64 counts.)
+                let needs = if *bytes == u64::MAX {
+                    "more than 2^64".to_string()
+                } else {
+                    bytes.to_string()
+                };
+                write!(
+                    f,
+                    "{file}: {what} needs {needs} bytes, above the memory cap of {cap} bytes (raise 'maxbytes' if intended)"
+                )
+            }
         }
     }
 }
@@ -170,5 +190,29 @@ impl Error {
             expected: expected.into(),
             found: found.to_string(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_size_past_u64_says_so_not_u64_max() {
+        // A brick table of a 2³¹-voxel box overflows u64: the saturated count is not a number of bytes.
+        let e = |bytes| {
+            Error::TooLarge {
+                file: "far.vdb".into(),
+                what: "the brick table".into(),
+                bytes,
+                cap: 1_000_000_000,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            e(u64::MAX),
+            "far.vdb: the brick table needs more than 2^64 bytes, above the memory cap of 1000000000 bytes (raise 'maxbytes' if intended)"
+        );
+        assert!(e(5_000_000_000).contains("needs 5000000000 bytes"));
     }
 }
