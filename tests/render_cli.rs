@@ -2319,12 +2319,7 @@ fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
         &["merge", "bomb.exr", "-o", "merged.exr"],
         &["diff", "bomb.exr", "bomb.exr"],
     ] {
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
-            .args(args)
-            .args(["--max-memory", "1"])
-            .current_dir(&*dir)
-            .output()
-            .unwrap();
+        let o = firemedium_in(&dir, &[args, &["--max-memory", "1"]].concat());
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
         assert!(
