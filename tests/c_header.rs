@@ -129,6 +129,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         ),
         ("sizeof_FmPointQuery", std::mem::size_of::<FmPointQuery>()),
         ("sizeof_FmErrorDetail", std::mem::size_of::<FmErrorDetail>()),
+        ("sizeof_FmCreateInfo", std::mem::size_of::<FmCreateInfo>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),

@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 12));
+    assert_eq!(p.version(), (0, 13));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -856,4 +856,63 @@ fn a_host_collects_the_fires_emission_at_its_own_wavelengths_and_times() {
         }
         assert!(seen >= 4, "the fan crosses the fire: {seen} rays see it");
     }
+}
+
+#[test]
+fn the_hosts_context_goes_beside_the_scenes_parameters() {
+    // ABI 0.13: threads, the memory budget, the frame and the shutter in the creation info, not made-up
+    // parameters; a parameter the scene sets itself wins.
+    use firemedium_loader::{Context, FM_FEATURE_MOTION};
+    let p = plugin();
+    let tight = Context {
+        max_bytes: Some(1000),
+        threads: Some(1),
+        ..Default::default()
+    };
+    let e = p.create_volume_with(&fire_params(), &tight).unwrap_err();
+    assert!(
+        e.to_string().contains("above the memory cap of 1000 bytes"),
+        "{e}"
+    );
+    let own = [fire_params(), vec![Param::float("maxbytes", 1e9)]].concat();
+    assert!(p.create_volume_with(&own, &tight).is_ok());
+    // The shutter: a velocity grid blurs over the context's shutter, and not without one.
+    let moving = [
+        fire_params(),
+        vec![Param::string("velocitygrid", "velocity")],
+    ]
+    .concat();
+    let open = Context {
+        shutter: Some([0.0, 0.5]),
+        ..Default::default()
+    };
+    let blurred = p.create_volume_with(&moving, &open).unwrap();
+    assert_eq!(
+        blurred.features().unwrap() & FM_FEATURE_MOTION,
+        FM_FEATURE_MOTION
+    );
+    let still = p.create_volume_with(&moving, &Context::default()).unwrap();
+    assert_eq!(still.features().unwrap() & FM_FEATURE_MOTION, 0);
+    // The same volume either way: the context as parameters gives the same numbers.
+    let as_params = [
+        moving.clone(),
+        vec![
+            Param::float("shutteropen", 0.0),
+            Param::float("shutterclose", 0.5),
+        ],
+    ]
+    .concat();
+    let by_params = p.create_volume(&as_params).unwrap();
+    let rs = rays(16);
+    let c = blurred.info().channels as usize;
+    let (mut a, mut b) = (vec![0f32; rs.len() * c], vec![0f32; rs.len() * c]);
+    let times = vec![0.3; rs.len()];
+    blurred
+        .integrate_at(&rs, Some(&times), &mut a, None, None)
+        .unwrap();
+    by_params
+        .integrate_at(&rs, Some(&times), &mut b, None, None)
+        .unwrap();
+    assert_eq!(a, b);
+    assert!(a.iter().any(|&v| v > 0.0));
 }

@@ -133,6 +133,12 @@ int main(int argc, char **argv) {
         detail.struct_size = 4;
         expect_failure("last_error_detail(null out)", api->last_error_detail(NULL));
         expect_failure("last_error_detail(unsized)", api->last_error_detail(&detail));
+        FmCreateInfo ci = {sizeof ci, ok_params, NULL, 5, 0, FM_CREATE_SHUTTER, 0, 0, {1.0, 0.0}};
+        expect_failure("volume_create_with(null info)", api->volume_create_with(NULL, &out));
+        expect_failure("volume_create_with(null out)", api->volume_create_with(&ci, NULL));
+        expect_failure("volume_create_with(shutter closing before it opens)", api->volume_create_with(&ci, &out));
+        ci.struct_size = 8;
+        expect_failure("volume_create_with(unsized)", api->volume_create_with(&ci, &out));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);

@@ -11,8 +11,8 @@ int main(int argc, char **argv) {
     printf("sizeof_FmRay %zu\nsizeof_FmExit %zu\nsizeof_FmScatter %zu\nsizeof_FmVolumeInfo %zu\n",
            sizeof(FmRay), sizeof(FmExit), sizeof(FmScatter), sizeof(FmVolumeInfo));
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
-    printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\nsizeof_FmErrorDetail %zu\n", sizeof(FmMajorantGrid),
-           sizeof(FmPointQuery), sizeof(FmErrorDetail));
+    printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\nsizeof_FmErrorDetail %zu\nsizeof_FmCreateInfo %zu\n",
+           sizeof(FmMajorantGrid), sizeof(FmPointQuery), sizeof(FmErrorDetail), sizeof(FmCreateInfo));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);

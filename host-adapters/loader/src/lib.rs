@@ -185,6 +185,20 @@ impl Inner {
     }
 }
 
+/// The host's context for a volume (ABI 0.13, [`Plugin::create_volume_with`]): what the renderer knows and the
+/// scene does not say.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Context {
+    /// Threads the build may use (`None`: the plugin's default, the machine's).
+    pub threads: Option<u32>,
+    /// The volume's memory budget, bytes (`None`: the plugin's default).
+    pub max_bytes: Option<u64>,
+    /// The frame a `####` in a file name takes.
+    pub frame: Option<i64>,
+    /// The camera's shutter, frames from the grids' time (for motion blur).
+    pub shutter: Option<[f64; 2]>,
+}
+
 /// The parts of a plugin error (ABI 0.12): what a host needs to point its user at the cause.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct ErrorDetail {
@@ -303,7 +317,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 33] = [
+const ENTRIES: [&str; 34] = [
     "last_error",
     "param_count",
     "param_info",
@@ -337,6 +351,7 @@ const ENTRIES: [&str; 33] = [
     "volume_majorant_grid",
     "volume_point",
     "last_error_detail",
+    "volume_create_with",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.
@@ -516,19 +531,30 @@ impl Plugin {
 
     /// Creates a fire volume from dataset and volume parameters.
     pub fn create_volume(&self, params: &[Param]) -> Result<Volume, Error> {
+        self.create_volume_with(params, &Context::default())
+    }
+
+    /// As [`create_volume`](Self::create_volume), with the host's context beside the scene's parameters (ABI
+    /// 0.13): threads, memory budget, frame, shutter. A parameter the scene sets itself wins over the context.
+    pub fn create_volume_with(&self, params: &[Param], context: &Context) -> Result<Volume, Error> {
         let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
         let api = self.inner.api();
         let status = with_c_params(params, |list, at_ptrs| {
-            // SAFETY: `list`, `at_ptrs` (one entry per parameter) and everything they point to live until after
-            // the call; `handle` is writable.
-            unsafe {
-                (api.volume_create_located)(
-                    list.as_ptr(),
-                    at_ptrs.as_ptr(),
-                    list.len(),
-                    &mut handle,
-                )
-            }
+            let info = abi::FmCreateInfo {
+                struct_size: std::mem::size_of::<abi::FmCreateInfo>(),
+                params: list.as_ptr(),
+                locations: at_ptrs.as_ptr(),
+                count: list.len(),
+                threads: context.threads.unwrap_or(0),
+                flags: context.frame.map_or(0, |_| abi::FM_CREATE_FRAME)
+                    | context.shutter.map_or(0, |_| abi::FM_CREATE_SHUTTER),
+                max_bytes: context.max_bytes.unwrap_or(0),
+                frame: context.frame.unwrap_or(0),
+                shutter: context.shutter.unwrap_or([0.0, 0.0]),
+            };
+            // SAFETY: `info`, `list`, `at_ptrs` (one entry per parameter) and everything they point to live until
+            // after the call; `handle` is writable.
+            unsafe { (api.volume_create_with)(&info, &mut handle) }
         })?;
         self.inner.check(status)?;
         let mut info = abi::FmVolumeInfo::default();

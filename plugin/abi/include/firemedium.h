@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 0u
-#define FM_ABI_MINOR 12u
+#define FM_ABI_MINOR 13u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -150,6 +150,23 @@ typedef struct FmErrorDetail {
     const char *file;      /* the file whose reading or content failed */
     const char *position;  /* where in it: "byte 1234", "line 3, column 5", "grid 'density'" */
 } FmErrorDetail;
+
+/* ABI 0.13: a volume's creation (volume_create_with): the scene's parameters with their locations, and the host's
+ * context beside them instead of as made-up parameters. A parameter the scene gives itself (threads, maxbytes, frame,
+ * shutteropen, shutterclose) wins over the context. */
+#define FM_CREATE_FRAME (1u << 0)   /* frame is set */
+#define FM_CREATE_SHUTTER (1u << 1) /* shutter is set */
+typedef struct FmCreateInfo {
+    size_t struct_size;            /* sizeof(FmCreateInfo) */
+    const FmParam *params;         /* may be NULL when count is 0 */
+    const char *const *locations;  /* per parameter file:line:col or NULL; the array may be NULL */
+    size_t count;
+    uint32_t threads;              /* 0: the plugin's default (the machine's) */
+    uint32_t flags;                /* FM_CREATE_* */
+    uint64_t max_bytes;            /* 0: the plugin's default */
+    int64_t frame;                 /* the frame a #### in a file name takes */
+    double shutter[2];             /* the camera's shutter, frames from the grids' time */
+} FmCreateInfo;
 
 typedef struct FmParamInfo {
     const char *component, *name, *ty, *default_value, *unit, *range, *doc;
@@ -295,6 +312,8 @@ typedef struct FmApi {
     FmStatus (*volume_point)(const FmVolume *volume, const FmPointQuery *query);
     /* ABI 0.12: the last error on this thread as a structure into *out (required, its struct_size set). */
     FmStatus (*last_error_detail)(FmErrorDetail *out);
+    /* ABI 0.13: a volume from a creation info (info and out required). */
+    FmStatus (*volume_create_with)(const FmCreateInfo *info, FmVolume **out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -26,7 +26,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 0;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 12;
+pub const ABI_MINOR: u32 = 13;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -350,6 +350,38 @@ impl Default for FmErrorDetail {
     }
 }
 
+/// [`FmCreateInfo::flags`]: `frame` is set.
+pub const FM_CREATE_FRAME: u32 = 1 << 0;
+/// [`FmCreateInfo::flags`]: `shutter` is set.
+pub const FM_CREATE_SHUTTER: u32 = 1 << 1;
+
+/// ABI 0.13: a volume's creation ([`FmApi::volume_create_with`]): the scene's parameters with their locations, and
+/// the host's context beside them — threads, memory budget, frame, shutter — instead of as parameters the host must
+/// make up. A parameter the scene gives itself (`threads`, `maxbytes`, `frame`, `shutteropen`, `shutterclose`)
+/// wins over the context.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmCreateInfo {
+    /// Set by the host to `size_of::<FmCreateInfo>()`.
+    pub struct_size: usize,
+    /// The scene's parameters (may be null when `count` is 0).
+    pub params: *const FmParam,
+    /// Per parameter its `file:line:col`, or null (the whole array may be null).
+    pub locations: *const *const c_char,
+    /// Parameters.
+    pub count: usize,
+    /// Threads the build may use (0: the plugin's default, the machine's).
+    pub threads: u32,
+    /// `FM_CREATE_*` bits: which of `frame` and `shutter` are set.
+    pub flags: u32,
+    /// The memory budget of the volume, bytes (0: the plugin's default).
+    pub max_bytes: u64,
+    /// The frame a `####` in a file name takes.
+    pub frame: i64,
+    /// The camera's shutter, frames from the grids' time (motion blur).
+    pub shutter: [f64; 2],
+}
+
 /// The plugin's function table.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
@@ -577,6 +609,9 @@ pub struct FmApi {
     /// ABI 0.12: the last error on this thread as a structure into `*out` (required, its `struct_size` set by
     /// the host); see [`FmErrorDetail`].
     pub last_error_detail: unsafe extern "C" fn(out: *mut FmErrorDetail) -> FmStatus,
+    /// ABI 0.13: a volume from a creation info (see [`FmCreateInfo`]; `info` and `out` required).
+    pub volume_create_with:
+        unsafe extern "C" fn(info: *const FmCreateInfo, out: *mut *mut FmVolume) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -613,8 +648,9 @@ mod tests {
         // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
         // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
         // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`, 0.11 `volume_features` and
-        // `volume_majorant_grid` and `volume_point`, 0.12 `last_error_detail`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 33 * 8);
+        // `volume_majorant_grid` and `volume_point`, 0.12 `last_error_detail`, 0.13 `volume_create_with`).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 34 * 8);
+        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 72);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);

@@ -282,6 +282,7 @@ static API: FmApi = FmApi {
     volume_majorant_grid,
     volume_point,
     last_error_detail,
+    volume_create_with,
 };
 
 /// The plugin's entry point: the static function table.

@@ -4,6 +4,7 @@
 use super::light::{in_f64, out_f64};
 use super::params::read_params;
 use super::{bad, fail, guard};
+use crate::params::Param;
 use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
 use firemedium_abi::*;
 use glam::DVec3;
@@ -31,6 +32,59 @@ pub(super) unsafe extern "C" fn volume_create_located(
         }
         // SAFETY: the caller's contract for `params`/`locations`/`count` (documented in FmApi).
         let list = unsafe { read_params(params, locations, count) }?;
+        let v = FireVolume::new(&list).map_err(fail)?;
+        // SAFETY: out is non-null and writable (checked, contract).
+        unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_create_with(
+    info: *const FmCreateInfo,
+    out: *mut *mut FmVolume,
+) -> FmStatus {
+    guard(|| {
+        if out.is_null() || info.is_null() {
+            return Err(bad("volume_create_with: info and out are required"));
+        }
+        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
+        let size = unsafe { std::ptr::addr_of!((*info).struct_size).read_unaligned() };
+        if size < std::mem::size_of::<FmCreateInfo>() {
+            return Err(bad(format!(
+                "volume_create_with: info->struct_size {size}, expected at least {} (set it to sizeof(FmCreateInfo))",
+                std::mem::size_of::<FmCreateInfo>()
+            )));
+        }
+        // SAFETY: non-null and at least size_of::<FmCreateInfo>() readable bytes (checked above).
+        let ci = unsafe { info.read_unaligned() };
+        // SAFETY: the caller's contract for the parameter arrays (as volume_create_located's).
+        let mut list = unsafe { read_params(ci.params, ci.locations, ci.count) }?;
+        // The host's context, where the scene does not set the same itself.
+        let mut context = Vec::new();
+        if ci.threads > 0 {
+            context.push(Param::int("threads", ci.threads as i64));
+        }
+        if ci.max_bytes > 0 {
+            context.push(Param::float("maxbytes", ci.max_bytes as f64));
+        }
+        if ci.flags & FM_CREATE_FRAME != 0 {
+            context.push(Param::int("frame", ci.frame));
+        }
+        if ci.flags & FM_CREATE_SHUTTER != 0 {
+            if !ci.shutter.iter().all(|s| s.is_finite()) || ci.shutter[0] > ci.shutter[1] {
+                return Err(bad(format!(
+                    "volume_create_with: shutter {:?}: expected finite open ≤ close",
+                    ci.shutter
+                )));
+            }
+            context.push(Param::float("shutteropen", ci.shutter[0]));
+            context.push(Param::float("shutterclose", ci.shutter[1]));
+        }
+        for p in context {
+            if !list.iter().any(|q| q.name == p.name) {
+                list.push(p);
+            }
+        }
         let v = FireVolume::new(&list).map_err(fail)?;
         // SAFETY: out is non-null and writable (checked, contract).
         unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };

@@ -778,16 +778,13 @@ impl Builder {
                         list.push(b.clone());
                     }
                 }
-                if let Some(n) = self.threads {
-                    if !list.iter().any(|p| p.name == "threads") {
-                        list.push(LParam::int("threads", n as i64));
-                    }
-                }
-                if let Some(f) = self.frame {
-                    if !list.iter().any(|p| p.name == "frame") {
-                        list.push(LParam::int("frame", f));
-                    }
-                }
+                // The renderer's context goes beside the scene's parameters, not among them (a parameter the scene
+                // sets itself wins in the plugin).
+                let mut context = firemedium_loader::Context {
+                    threads: self.threads.map(|n| n as u32),
+                    frame: self.frame,
+                    ..Default::default()
+                };
                 // Motion blur: a velocity grid or embers (which move by their own velocities) see the camera's
                 // shutter (unless the medium sets its own), and the camera then draws a time per sample.
                 let velocity = list.iter().any(|p| {
@@ -798,23 +795,21 @@ impl Builder {
                     let camera = self.camera_shutter();
                     let mut shutter = camera;
                     for (k, n) in ["shutteropen", "shutterclose"].into_iter().enumerate() {
-                        match list.iter().find(|p| p.name == n).map(|p| &p.value) {
-                            Some(Value::Float(v)) if v.len() == 1 => shutter[k] = v[0],
-                            Some(_) => {}
-                            None => list.push(LParam::float(n, camera[k])),
+                        if let Some(Value::Float(v)) = list.iter().find(|p| p.name == n).map(|p| &p.value) {
+                            if v.len() == 1 {
+                                shutter[k] = v[0];
+                            }
                         }
                     }
+                    context.shutter = Some(camera);
                     // The camera draws its times in its own shutter; the plugin holds each in the medium's.
                     if shutter[1] > shutter[0] {
                         self.shutter = Some(camera);
                     }
                 }
-                if !list.iter().any(|p| p.name == "maxbytes") {
-                    // The budget is shared: each medium may use what the media built before it left.
-                    let left = self.max_memory.saturating_sub(self.media_bytes).max(1);
-                    list.push(LParam::float("maxbytes", left as f64));
-                }
-                let vol = plugin.create_volume(&list).map_err(|e| {
+                // The budget is shared: each medium may use what the media built before it left.
+                context.max_bytes = Some(self.max_memory.saturating_sub(self.media_bytes).max(1));
+                let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
                     // An error about one parameter carries where it was given (the plugin's error detail, not its
                     // text): report it there, the message without that prefix.
                     let text = e.to_string();
