@@ -20,6 +20,17 @@ fn tmp(name: &str) -> scratch::Scratch {
     scratch::Scratch::new("render", name)
 }
 
+/// `dir/s.pbrt`: a white sky seen by a `px`² film at 1 spp — the smallest scene that renders.
+fn sky_scene(dir: &Path, px: u32) -> PathBuf {
+    let scene = dir.join("s.pbrt");
+    std::fs::write(
+        &scene,
+        format!("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" {px} \"integer yresolution\" {px}\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"),
+    )
+    .unwrap();
+    scene
+}
+
 /// `firemedium ARGS` run in `dir`.
 fn firemedium_in(dir: &Path, args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_firemedium"))
@@ -871,12 +882,7 @@ fn skip_existing_renders_again_what_is_not_a_finished_frame() {
     // one an interrupted render wrote, were "left out". Now only an EXR that reads whole and whose record says
     // complete is; the others are rendered again, saying why.
     let dir = tmp("skip-broken");
-    let scene = dir.join("s.pbrt");
-    std::fs::write(
-        &scene,
-        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
-    )
-    .unwrap();
+    let scene = sky_scene(&dir, 8);
     let run = |frame: &str| {
         Command::new(env!("CARGO_BIN_EXE_firemedium"))
             .arg("render")
@@ -2267,12 +2273,7 @@ fn interrupt_a_long_path(signal: &str, code: i32) {
 fn a_log_that_cannot_be_written_is_said_once_and_the_render_goes_on() {
     // `--log-json /dev/full`: every event was lost without a word.
     let dir = tmp("log-full");
-    let scene = dir.join("s.pbrt");
-    std::fs::write(
-        &scene,
-        "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
-    )
-    .unwrap();
+    let scene = sky_scene(&dir, 4);
     let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
         .arg("render")
         .arg(&scene)

@@ -108,20 +108,31 @@ fn fail(e: Error) -> (FmStatus, String) {
     (status_of(&e), e.to_string())
 }
 
+/// Checks a struct the host passed whose first field is its `struct_size` (every ABI struct since 0.11): refused
+/// when null or smaller than this plugin's `T` — `what` names the argument, `c_type` its C type.
+///
+/// # Safety
+/// `p` is null or points at a struct whose first field is a `size_t` (the caller's contract).
+unsafe fn sized<T>(p: *const T, what: &str, c_type: &str) -> Result<(), (FmStatus, String)> {
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    // SAFETY: non-null (checked); the host's struct starts with its size (contract).
+    let size = unsafe { p.cast::<usize>().read_unaligned() };
+    let want = std::mem::size_of::<T>();
+    if size < want {
+        return Err(bad(format!(
+            "{what}->struct_size {size}, expected at least {want} (set it to sizeof({c_type}))"
+        )));
+    }
+    Ok(())
+}
+
 unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
     // (A misuse is itself the last error then: its message, and a detail of its status alone.)
-    if out.is_null() {
-        return guard(|| Err(bad("last_error_detail: out is null")));
-    }
-    // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
-    let size = unsafe { std::ptr::addr_of!((*out).struct_size).read_unaligned() };
-    if size < std::mem::size_of::<FmErrorDetail>() {
-        return guard(|| {
-            Err(bad(format!(
-                "last_error_detail: out->struct_size {size}, expected at least {} (set it to sizeof(FmErrorDetail))",
-                std::mem::size_of::<FmErrorDetail>()
-            )))
-        });
+    // SAFETY: null or the host's FmErrorDetail (contract).
+    if let Err(e) = unsafe { sized(out, "last_error_detail: out", "FmErrorDetail") } {
+        return guard(|| Err(e));
     }
     LAST_DETAIL.with(|d| {
         let d = d.borrow();

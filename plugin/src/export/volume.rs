@@ -44,17 +44,11 @@ pub(super) unsafe extern "C" fn volume_create_with(
     out: *mut *mut FmVolume,
 ) -> FmStatus {
     guard(|| {
-        if out.is_null() || info.is_null() {
-            return Err(bad("volume_create_with: info and out are required"));
+        if out.is_null() {
+            return Err(bad("volume_create_with: out is null"));
         }
-        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
-        let size = unsafe { std::ptr::addr_of!((*info).struct_size).read_unaligned() };
-        if size < std::mem::size_of::<FmCreateInfo>() {
-            return Err(bad(format!(
-                "volume_create_with: info->struct_size {size}, expected at least {} (set it to sizeof(FmCreateInfo))",
-                std::mem::size_of::<FmCreateInfo>()
-            )));
-        }
+        // SAFETY: null or the host's FmCreateInfo (contract).
+        unsafe { super::sized(info, "volume_create_with: info", "FmCreateInfo") }?;
         // SAFETY: non-null and at least size_of::<FmCreateInfo>() readable bytes (checked above).
         let ci = unsafe { info.read_unaligned() };
         // SAFETY: the caller's contract for the parameter arrays (as volume_create_located's).
@@ -610,17 +604,8 @@ pub(super) unsafe extern "C" fn volume_majorant_grid(
     guard(|| {
         // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
         let v = unsafe { vol(volume, "volume_majorant_grid") }?;
-        if out.is_null() {
-            return Err(bad("volume_majorant_grid: out is null"));
-        }
-        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
-        let size = unsafe { std::ptr::addr_of!((*out).struct_size).read_unaligned() };
-        if size < std::mem::size_of::<FmMajorantGrid>() {
-            return Err(bad(format!(
-                "volume_majorant_grid: out->struct_size {size}, expected at least {} (set it to sizeof(FmMajorantGrid))",
-                std::mem::size_of::<FmMajorantGrid>()
-            )));
-        }
+        // SAFETY: null or the host's FmMajorantGrid (contract).
+        unsafe { super::sized(out, "volume_majorant_grid: out", "FmMajorantGrid") }?;
         let m = v.majorant_cells();
         let mut counts = [0u32; 3];
         for (c, &n) in counts.iter_mut().zip(&m.counts) {
@@ -652,17 +637,8 @@ pub(super) unsafe extern "C" fn volume_point(
     guard(|| {
         // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
         let v = unsafe { vol(volume, "volume_point") }?;
-        if query.is_null() {
-            return Err(bad("volume_point: query is null"));
-        }
-        // SAFETY: non-null (checked); the host's struct is at least its first field (caller contract).
-        let size = unsafe { std::ptr::addr_of!((*query).struct_size).read_unaligned() };
-        if size < std::mem::size_of::<FmPointQuery>() {
-            return Err(bad(format!(
-                "volume_point: query->struct_size {size}, expected at least {} (set it to sizeof(FmPointQuery))",
-                std::mem::size_of::<FmPointQuery>()
-            )));
-        }
+        // SAFETY: null or the host's FmPointQuery (contract).
+        unsafe { super::sized(query, "volume_point: query", "FmPointQuery") }?;
         // SAFETY: non-null and at least size_of::<FmPointQuery>() readable bytes (checked above).
         let q = unsafe { query.read_unaligned() };
         let (n, k) = (q.n, q.k as usize);
