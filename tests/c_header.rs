@@ -130,6 +130,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         ("sizeof_FmPointQuery", std::mem::size_of::<FmPointQuery>()),
         ("sizeof_FmErrorDetail", std::mem::size_of::<FmErrorDetail>()),
         ("sizeof_FmCreateInfo", std::mem::size_of::<FmCreateInfo>()),
+        ("sizeof_FmRayQuery", std::mem::size_of::<FmRayQuery>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),
@@ -159,7 +160,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
             && get("light_voxels").parse::<u64>().unwrap() > 1000
     );
     assert_eq!(get("channels"), "32");
-    // ABI 0.3 from C: the Mantaflow frame's temperature range, 0 … 2.974609 × temperaturescale 1000 K.
+    // From C: the Mantaflow frame's temperature range, 0 … 2.974609 × temperaturescale 1000 K.
     assert_eq!(get("temperature_status"), "0");
     assert_eq!(get("temperature_min"), "0");
     let tmax: f64 = get("temperature_max").parse().unwrap();
@@ -207,7 +208,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     let le: f64 = get("point_le_650").parse().unwrap();
     assert!(sa > 0.0 && le > 0.0, "σ_a {sa}, Le {le}");
     assert_eq!(get("bad_status"), "2");
-    // ABI 0.12: the same error's parts as fields.
+    // The same error's parts as fields.
     assert_eq!(get("detail_status"), "0 2");
     assert_eq!(get("detail_parameter"), "stepsise");
     assert!(get("bad_message").contains("did you mean 'stepsize'"));
@@ -246,6 +247,23 @@ fn an_abi_mismatch_names_both_versions() {
         .to_string();
     assert!(e.contains("cannot load"), "{e}");
     done(&so);
+    // A plugin of the last 0.x ABI (0.13, before the 1.0 cut) and this 1.0 host: refused, both versions named.
+    let old = c_plugin(
+        "fake013",
+        "tests/c/fake_plugin.c",
+        &["-DFAKE_MAJOR=0u", "-DFAKE_MINOR=13u"],
+    );
+    // SAFETY: a library this test made.
+    let e = unsafe { Plugin::load(&old) }.unwrap_err().to_string();
+    assert!(
+        e.contains(&format!(
+            "speaks firemedium ABI 0.13, this host needs {}.{}",
+            firemedium_abi::ABI_MAJOR,
+            firemedium_abi::ABI_MINOR
+        )),
+        "{e}"
+    );
+    done(&old);
 }
 
 #[test]
@@ -285,7 +303,7 @@ fn every_entry_refuses_bad_arguments_from_c() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(
-        text.lines().count() >= 38 && text.contains("failures 0"),
+        text.lines().count() >= 60 && text.contains("failures 0"),
         "{text}"
     );
     done(&exe);

@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (0, 13));
+    assert_eq!(p.version(), (1, 0));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -125,6 +125,7 @@ fn loads_describes_and_integrates() {
             t0: r.tmin,
             t1: r.tmax,
             seed: r.seed,
+            first: None,
         };
         local.integrate(&ray, &mut ll, &mut lt);
         for k in 0..c {
@@ -915,4 +916,152 @@ fn the_hosts_context_goes_beside_the_scenes_parameters() {
         .unwrap();
     assert_eq!(a, b);
     assert!(a.iter().any(|&v| v > 0.0));
+}
+
+#[test]
+fn the_whole_ray_query_takes_the_hosts_first_number_and_step() {
+    // ABI 1.0's one whole-ray query: a host's own first uniform number per ray (its sampler's, stratified)
+    // replaces the first number of the ray's stream — the march's offset, tracking's first free flight — and a
+    // step of the host's makes a coarser march.
+    use firemedium_abi::FM_EVENT_SCATTERED;
+    use firemedium_loader::{Sampling, Scatter};
+    let p = plugin();
+    let v = p.create_volume(&fire_params()).unwrap();
+    let c = v.info().channels as usize;
+    let ray = rays(9)[4];
+    // The march draws one number a ray: with the host's, the seed no longer matters.
+    let seeded: Vec<Ray> = (0..4).map(|s| Ray { seed: s, ..ray }).collect();
+    let mut own = vec![0f32; 4 * c];
+    v.integrate(&seeded, &mut own, None, None).unwrap();
+    assert!(
+        own[..c] != own[c..2 * c],
+        "the seeds give different offsets"
+    );
+    let u = [0.3; 4];
+    let given = Sampling {
+        u: Some(&u),
+        ..Sampling::default()
+    };
+    let mut with_u = vec![0f32; 4 * c];
+    v.integrate_with(&seeded, &given, &mut with_u, None, None)
+        .unwrap();
+    assert!(with_u[29] > 0.0);
+    for s in 1..4 {
+        assert_eq!(with_u[..c], with_u[s * c..(s + 1) * c], "seed {s}");
+    }
+    // Stratified offsets average to the seeds' mean: 64 numbers (k + ½)/64 against 256 seeds.
+    let fan: Vec<Ray> = (0..256).map(|s| Ray { seed: s, ..ray }).collect();
+    let mut l = vec![0f32; 256 * c];
+    v.integrate(&fan, &mut l, None, None).unwrap();
+    let mean = |l: &[f32], n: usize| (0..n).map(|i| l[i * c + 29] as f64).sum::<f64>() / n as f64;
+    let seeds_mean = mean(&l, 256);
+    let strata: Vec<f64> = (0..64).map(|k| (k as f64 + 0.5) / 64.0).collect();
+    let mut ls = vec![0f32; 64 * c];
+    let s = Sampling {
+        u: Some(&strata),
+        ..Sampling::default()
+    };
+    v.integrate_with(&fan[..64], &s, &mut ls, None, None)
+        .unwrap();
+    let strata_mean = mean(&ls, 64);
+    assert!(
+        (strata_mean / seeds_mean - 1.0).abs() < 2e-3,
+        "{strata_mean} vs {seeds_mean}"
+    );
+    // A number outside [0, 1) is refused, naming the ray.
+    let bad = [0.5, 1.0];
+    let e = v
+        .integrate_with(
+            &seeded[..2],
+            &Sampling {
+                u: Some(&bad),
+                ..Sampling::default()
+            },
+            &mut with_u[..2 * c],
+            None,
+            None,
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("u[1] = 1: expected a number in [0, 1)"), "{e}");
+
+    // The step: 0 is the volume's own, bit for bit; four times the volume's is a coarser march of the same fire —
+    // each ray's estimate differs, their mean over 256 seeds agrees within a per cent (the offset is jittered).
+    let own_step = v.info().step;
+    let mut b = vec![0f32; 256 * c];
+    v.integrate_with(&fan, &Sampling::default(), &mut b, None, None)
+        .unwrap();
+    assert_eq!(l, b);
+    let coarse = Sampling {
+        step: 4.0 * own_step,
+        ..Sampling::default()
+    };
+    v.integrate_with(&fan, &coarse, &mut b, None, None).unwrap();
+    assert!(l != b, "a coarser march");
+    let coarse_mean = mean(&b, 256);
+    assert!(
+        (coarse_mean / seeds_mean - 1.0).abs() < 0.01,
+        "{coarse_mean} vs {seeds_mean}"
+    );
+    let fan9 = rays(9);
+    let mut b = vec![0f32; 9 * c];
+    // A step of its own is for straight rays: with exits it is refused.
+    let mut exits = vec![Default::default(); 9];
+    let e = v
+        .integrate_with(&fan9, &coarse, &mut b, None, Some(&mut exits))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("exits must be null"), "{e}");
+
+    // Delta tracking's first free flight is the host's number: in a constant scattering slab (2³ voxels of soot
+    // at 1500 K, f_v 1e-9: σ_a ≈ 0.01 m⁻¹ beside σ_s 20 m⁻¹, so that the first tentative collision is a real one), two numbers u₁ < u₂ put
+    // their events ln((1 − u₁)/(1 − u₂)) / σ̄ apart, σ̄ the majorant there, whatever the seeds.
+    let grid = |name: &str, x: f64| Param {
+        name: name.into(),
+        value: Value::Float(vec![x; 8]),
+        at: None,
+    };
+    let sv = p
+        .create_volume(&[
+            grid("density", 1.0),
+            grid("temperature", 1500.0),
+            Param::int("nx", 2),
+            Param::int("ny", 2),
+            Param::int("nz", 2),
+            Param::float("sootscale", 1e-9),
+            Param::float("sigma_s", 20.0),
+        ])
+        .unwrap();
+    let g = sv.majorant_grid().unwrap();
+    let r = Ray {
+        origin: [-1.0, 0.5, 0.5],
+        direction: [1.0, 0.0, 0.0],
+        tmin: 0.0,
+        tmax: 10.0,
+        seed: 5,
+    };
+    let twice = [r, Ray { seed: 77, ..r }];
+    let us = [0.02, 0.05];
+    let mut ev = [Scatter::default(); 2];
+    let mut w = vec![0f32; 2 * c];
+    sv.sample_scatter_with(
+        &twice,
+        &Sampling {
+            u: Some(&us),
+            ..Sampling::default()
+        },
+        &mut ev,
+        &mut w,
+        None,
+    )
+    .unwrap();
+    assert!(ev.iter().all(|e| e.event == FM_EVENT_SCATTERED), "{ev:?}");
+    let sigma = g.at(ev[0].point);
+    assert_eq!(g.cell_of(ev[0].point), g.cell_of(ev[1].point));
+    let want = ((1.0 - us[0]) / (1.0 - us[1])).ln() / sigma;
+    assert!(
+        ((ev[1].t - ev[0].t) / want - 1.0).abs() < 1e-9,
+        "{} vs {want}",
+        ev[1].t - ev[0].t
+    );
 }

@@ -1398,7 +1398,7 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     );
     assert!(get("scene").ends_with("fire.pbrt"));
     assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
-    assert_eq!(get("plugin_abi"), "0.13");
+    assert_eq!(get("plugin_abi"), "1.0");
     assert!(
         get("camera").starts_with("perspective fov 40")
             && get("camera").contains("screenwindow -1.5 1.5 -1 1"),
@@ -1788,6 +1788,7 @@ fn an_ember_lights_the_floor_as_a_glowing_sphere_does() {
         t0: 0.0,
         t1: 2.0,
         seed: 1,
+        first: None,
     };
     v.integrate(&ray, &mut l, &mut t);
     let xyz = v.channel_xyz();

@@ -69,6 +69,7 @@ fn main() {
                     t0: 0.0,
                     t1: 5.0,
                     seed: i as u64,
+                    first: None,
                 };
                 let (_, d, _) = v.integrate_exit(&ray, &mut l, &mut t);
                 sum += l[15];

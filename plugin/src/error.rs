@@ -154,7 +154,7 @@ impl From<firemedium_core::Error> for Error {
 
 impl Error {
     /// The error with the location of the parameter it names, when `list` gave one (hosts pass where each
-    /// parameter came from; see `volume_create_located`).
+    /// parameter came from; see `FmCreateInfo::locations`).
     pub fn located(self, list: &[crate::params::Param]) -> Error {
         match self {
             Error::InvalidParameter {

@@ -995,6 +995,7 @@ impl FireLight {
                 // the box's far side: past it by t = 5.)
                 t1: 8.0,
                 seed: k,
+                first: None,
             };
             let p = self.pdf_direction_at(o, ray.d, 0.0);
             (p > 0.0).then_some((ray, p))
@@ -1600,6 +1601,7 @@ mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: 1,
+                first: None,
             };
             vol.transmittance(&ray, &mut t);
             tau_max = tau_max.max(-t[c / 2].ln());
@@ -1718,6 +1720,7 @@ mod tests {
             t0: 0.0,
             t1: 4.0,
             seed: 1,
+            first: None,
         };
         thick.vol.integrate_at(&centre, 0.0, &mut l, &mut tr);
         assert!(tr[c / 2] < 0.7, "the thick ball lets {} through", tr[c / 2]);

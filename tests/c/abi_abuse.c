@@ -36,15 +36,16 @@ int main(int argc, char **argv) {
     FmParam ok_params[5] = {{"density", FM_TYPE_FLOAT, 8, d}, {"temperature", FM_TYPE_FLOAT, 8, t},
                             {"nx", FM_TYPE_INTEGER, 1, &two}, {"ny", FM_TYPE_INTEGER, 1, &two},
                             {"nz", FM_TYPE_INTEGER, 1, &two}};
+    FmCreateInfo ok = {.struct_size = sizeof ok, .params = ok_params, .count = 5};
     FmVolume *vol = NULL;
-    if (api->volume_create(ok_params, 5, &vol) != FM_OK) { fprintf(stderr, "valid volume refused\n"); return 1; }
+    if (api->volume_create(&ok, &vol) != FM_OK) { fprintf(stderr, "valid volume refused\n"); return 1; }
     FmLight *light = NULL;
     if (api->light_create(vol, NULL, 0, &light) != FM_OK) { fprintf(stderr, "valid light refused\n"); return 1; }
 
     FmVolume *out = NULL;
-    FmParamInfo info;
-    FmVolumeInfo vinfo;
-    FmLightInfo linfo;
+    FmParamInfo info = {.struct_size = sizeof info};
+    FmVolumeInfo vinfo = {.struct_size = sizeof vinfo};
+    FmLightInfo linfo = {.struct_size = sizeof linfo};
     float f[64];
     double x[64];
     uint64_t u64;
@@ -58,26 +59,90 @@ int main(int argc, char **argv) {
 
     expect_failure("param_info(out of range)", api->param_info(SIZE_MAX, &info));
     expect_failure("param_info(null out)", api->param_info(0, NULL));
-    expect_failure("volume_create(null out)", api->volume_create(ok_params, 5, NULL));
-    expect_failure("volume_create(null list)", api->volume_create(NULL, 3, &out));
-    expect_failure("volume_create(absurd count)", api->volume_create(ok_params, SIZE_MAX, &out));
-    expect_failure("volume_create(unknown type)", api->volume_create(&bad_type, 1, &out));
-    expect_failure("volume_create(null name)", api->volume_create(&null_name, 1, &out));
-    expect_failure("volume_create(null values)", api->volume_create(&null_values, 1, &out));
-    expect_failure("volume_create(null string)", api->volume_create(&null_str, 1, &out));
-    expect_failure("volume_create_located(null list)", api->volume_create_located(NULL, NULL, 2, &out));
+    /* Each bad parameter list through a creation info of its own. */
+    FmCreateInfo bad = ok;
+    expect_failure("volume_create(null out)", api->volume_create(&ok, NULL));
+    expect_failure("volume_create(null info)", api->volume_create(NULL, &out));
+    bad.params = NULL;
+    bad.count = 3;
+    expect_failure("volume_create(null list)", api->volume_create(&bad, &out));
+    bad.params = ok_params;
+    bad.count = SIZE_MAX;
+    expect_failure("volume_create(absurd count)", api->volume_create(&bad, &out));
+    bad.count = 1;
+    bad.params = &bad_type;
+    expect_failure("volume_create(unknown type)", api->volume_create(&bad, &out));
+    bad.params = &null_name;
+    expect_failure("volume_create(null name)", api->volume_create(&bad, &out));
+    bad.params = &null_values;
+    expect_failure("volume_create(null values)", api->volume_create(&bad, &out));
+    bad.params = &null_str;
+    expect_failure("volume_create(null string)", api->volume_create(&bad, &out));
+    bad = ok;
+    bad.flags = FM_CREATE_SHUTTER;
+    bad.shutter[0] = 1.0;
+    expect_failure("volume_create(shutter closing before it opens)", api->volume_create(&bad, &out));
+    bad = ok;
+    bad.struct_size = 8;
+    expect_failure("volume_create(unsized)", api->volume_create(&bad, &out));
+    FmParamInfo small_info = {.struct_size = 4};
+    expect_failure("param_info(unsized)", api->param_info(0, &small_info));
     expect_failure("volume_info(null volume)", api->volume_info(NULL, &vinfo));
     expect_failure("volume_info(null out)", api->volume_info(vol, NULL));
     expect_failure("volume_channel_xyz(null out)", api->volume_channel_xyz(vol, NULL, 90));
     expect_failure("volume_channel_xyz(short)", api->volume_channel_xyz(vol, x, 2));
-    expect_failure("volume_integrate(null volume)", api->volume_integrate(NULL, &nan_ray, 1, f, NULL, NULL));
-    expect_failure("volume_integrate(null rays)", api->volume_integrate(vol, NULL, 4, f, NULL, NULL));
-    expect_failure("volume_integrate(null radiance)", api->volume_integrate(vol, &nan_ray, 1, NULL, NULL, NULL));
-    expect_failure("volume_integrate(NaN ray)", api->volume_integrate(vol, &nan_ray, 1, f, NULL, NULL));
-    expect_failure("volume_integrate(absurd n)", api->volume_integrate(vol, &nan_ray, SIZE_MAX, f, NULL, NULL));
-    expect_failure("volume_transmittance(null out)", api->volume_transmittance(vol, &nan_ray, 1, NULL));
-    expect_failure("volume_transmittance(NaN ray)", api->volume_transmittance(vol, &nan_ray, 1, f));
-    expect_failure("volume_sample_scatter(null events)", api->volume_sample_scatter(vol, &nan_ray, 1, NULL, f, NULL));
+    {
+        /* The whole-ray query: one valid query, each field made wrong in turn. */
+        FmRay good = {{-1, 0.5, 0.5}, {1, 0, 0}, 0, 5, 1};
+        FmRayQuery q0 = {.struct_size = sizeof q0, .what = FM_QUERY_INTEGRATE, .n = 1, .rays = &good};
+        q0.radiance = f;
+        FmRayQuery q = q0;
+        expect_failure("volume_query(null volume)", api->volume_query(NULL, &q));
+        expect_failure("volume_query(null query)", api->volume_query(vol, NULL));
+        q.struct_size = 8;
+        expect_failure("volume_query(unsized)", api->volume_query(vol, &q));
+        q = q0;
+        q.rays = NULL;
+        q.n = 4;
+        expect_failure("volume_query(null rays)", api->volume_query(vol, &q));
+        q = q0;
+        q.radiance = NULL;
+        expect_failure("volume_query(null radiance)", api->volume_query(vol, &q));
+        q = q0;
+        q.rays = &nan_ray;
+        expect_failure("volume_query(NaN ray)", api->volume_query(vol, &q));
+        q = q0;
+        q.n = SIZE_MAX;
+        expect_failure("volume_query(absurd n)", api->volume_query(vol, &q));
+        q = q0;
+        q.what = 7;
+        expect_failure("volume_query(unknown what)", api->volume_query(vol, &q));
+        double u_one[1] = {1.0}, nan_one[1] = {NAN};
+        q = q0;
+        q.u = u_one;
+        expect_failure("volume_query(u of 1)", api->volume_query(vol, &q));
+        q = q0;
+        q.times = nan_one;
+        expect_failure("volume_query(NaN time)", api->volume_query(vol, &q));
+        q = q0;
+        q.step = -1.0;
+        expect_failure("volume_query(negative step)", api->volume_query(vol, &q));
+        FmExit exits[1];
+        q = q0;
+        q.step = 1.0;
+        q.exits = exits;
+        expect_failure("volume_query(step with exits)", api->volume_query(vol, &q));
+        q = q0;
+        q.what = FM_QUERY_TRANSMITTANCE;
+        expect_failure("volume_query(transmittance, null out)", api->volume_query(vol, &q));
+        q.transmittance = f;
+        expect_failure("volume_query(transmittance, radiance set)", api->volume_query(vol, &q));
+        q = q0;
+        q.what = FM_QUERY_SCATTER;
+        q.radiance = NULL;
+        q.weights = f;
+        expect_failure("volume_query(scatter, null events)", api->volume_query(vol, &q));
+    }
     expect_failure("volume_coefficients(null points)", api->volume_coefficients(vol, NULL, 3, f, NULL, NULL));
     expect_failure("volume_coefficients(absurd n)", api->volume_coefficients(vol, x, SIZE_MAX / 2, NULL, NULL, NULL));
     x[0] = NAN;
@@ -88,23 +153,27 @@ int main(int argc, char **argv) {
     expect_failure("light_create(null volume)", api->light_create(NULL, NULL, 0, (FmLight **)&out));
     expect_failure("light_create(null out)", api->light_create(vol, NULL, 0, NULL));
     expect_failure("light_info(null light)", api->light_info(NULL, &linfo));
-    expect_failure("light_sample(NaN u)", api->light_sample(light, nan_u, 1, x, x + 3, NULL));
-    expect_failure("light_sample(null points)", api->light_sample(light, nan_u, 1, NULL, x, NULL));
-    expect_failure("light_sample(absurd n)", api->light_sample(light, nan_u, SIZE_MAX / 2, x, x, NULL));
-    expect_failure("light_pdf(null light)", api->light_pdf(NULL, x, 1, x));
-    expect_failure("light_pdf(NaN point)", api->light_pdf(light, x, 1, x + 8));
-    expect_failure("light_pdf_direction(null pdf)", api->light_pdf_direction(light, x, x, 1, NULL));
+    expect_failure("light_sample(NaN u)", api->light_sample(light, nan_u, NULL, 1, x, x + 3, NULL));
+    expect_failure("light_sample(null points)", api->light_sample(light, nan_u, NULL, 1, NULL, x, NULL));
+    expect_failure("light_sample(absurd n)", api->light_sample(light, nan_u, NULL, SIZE_MAX / 2, x, x, NULL));
+    expect_failure("light_pdf(null light)", api->light_pdf(NULL, x, NULL, 1, x));
+    expect_failure("light_pdf(NaN point)", api->light_pdf(light, x, NULL, 1, x + 8));
+    expect_failure("light_pdf_direction(null pdf)", api->light_pdf_direction(light, x, x, NULL, 1, NULL));
     {
         double good_u[6] = {0.5, 0.5, 0.5, 0.5, 0.5, 0.5}, nan_time[1] = {NAN}, dir[3] = {1, 0, 0}, o3[3] = {-1, 0, 0};
-        expect_failure("light_sample_at(NaN time)", api->light_sample_at(light, good_u, nan_time, 1, x, x + 3, NULL));
-        expect_failure("light_pdf_at(null light)", api->light_pdf_at(NULL, o3, NULL, 1, x));
-        expect_failure("light_pdf_direction_at(NaN time)", api->light_pdf_direction_at(light, o3, dir, nan_time, 1, x));
-        expect_failure("light_pdf_direction_at(null pdf)", api->light_pdf_direction_at(light, o3, dir, NULL, 1, NULL));
-        expect_failure("light_integrate_at(null light)", api->light_integrate_at(NULL, &nan_ray, NULL, 1, f, NULL));
-        expect_failure("light_integrate_at(null radiance)", api->light_integrate_at(light, &nan_ray, NULL, 1, NULL, NULL));
-        expect_failure("light_integrate_at(NaN ray)", api->light_integrate_at(light, &nan_ray, NULL, 1, f, f));
-        expect_failure("light_integrate_at(NaN time)", api->light_integrate_at(light, &nan_ray, nan_time, 1, f, NULL));
-        expect_failure("light_integrate_at(absurd n)", api->light_integrate_at(light, &nan_ray, NULL, SIZE_MAX, f, NULL));
+        expect_failure("light_sample(NaN time)", api->light_sample(light, good_u, nan_time, 1, x, x + 3, NULL));
+        expect_failure("light_pdf(null light, times)", api->light_pdf(NULL, o3, NULL, 1, x));
+        expect_failure("light_pdf_direction(NaN time)", api->light_pdf_direction(light, o3, dir, nan_time, 1, x));
+        expect_failure("light_pdf_direction(null pdf, times)", api->light_pdf_direction(light, o3, dir, NULL, 1, NULL));
+        expect_failure("light_integrate(null light)", api->light_integrate(NULL, &nan_ray, NULL, 1, f, NULL));
+        expect_failure("light_integrate(null radiance)", api->light_integrate(light, &nan_ray, NULL, 1, NULL, NULL));
+        expect_failure("light_integrate(NaN ray)", api->light_integrate(light, &nan_ray, NULL, 1, f, f));
+        expect_failure("light_integrate(NaN time)", api->light_integrate(light, &nan_ray, nan_time, 1, f, NULL));
+        expect_failure("light_integrate(absurd n)", api->light_integrate(light, &nan_ray, NULL, SIZE_MAX, f, NULL));
+        FmLightInfo small_light = {.struct_size = 4};
+        expect_failure("light_info(unsized)", api->light_info(light, &small_light));
+        FmVolumeInfo small_volume = {.struct_size = 4};
+        expect_failure("volume_info(unsized)", api->volume_info(vol, &small_volume));
         expect_failure("light_line_channels(null light)", api->light_line_channels(NULL, (uint32_t *)x));
         expect_failure("light_line_channels(null out)", api->light_line_channels(light, NULL));
         /* The medium level: null handles and outputs, a struct the host did not size, NaN and negative
@@ -133,19 +202,15 @@ int main(int argc, char **argv) {
         detail.struct_size = 4;
         expect_failure("last_error_detail(null out)", api->last_error_detail(NULL));
         expect_failure("last_error_detail(unsized)", api->last_error_detail(&detail));
-        FmCreateInfo ci = {sizeof ci, ok_params, NULL, 5, 0, FM_CREATE_SHUTTER, 0, 0, {1.0, 0.0}};
-        expect_failure("volume_create_with(null info)", api->volume_create_with(NULL, &out));
-        expect_failure("volume_create_with(null out)", api->volume_create_with(&ci, NULL));
-        expect_failure("volume_create_with(shutter closing before it opens)", api->volume_create_with(&ci, &out));
-        ci.struct_size = 8;
-        expect_failure("volume_create_with(unsized)", api->volume_create_with(&ci, &out));
     }
     api->volume_destroy(NULL);
     api->light_destroy(NULL);
 
     /* Still working afterwards. */
     FmRay ray = {{-1, 0.5, 0.5}, {1, 0, 0}, 0, 5, 1};
-    FmStatus s = api->volume_integrate(vol, &ray, 1, f, NULL, NULL);
+    FmRayQuery q = {.struct_size = sizeof q, .what = FM_QUERY_INTEGRATE, .n = 1, .rays = &ray};
+    q.radiance = f;
+    FmStatus s = api->volume_query(vol, &q);
     printf("afterwards %d\n", s);
     if (s != FM_OK || !(f[15] > 0)) { fprintf(stderr, "the plugin stopped working\n"); failures++; }
     api->light_destroy(light);

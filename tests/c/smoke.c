@@ -13,13 +13,14 @@ int main(int argc, char **argv) {
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
     printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\nsizeof_FmErrorDetail %zu\nsizeof_FmCreateInfo %zu\n",
            sizeof(FmMajorantGrid), sizeof(FmPointQuery), sizeof(FmErrorDetail), sizeof(FmCreateInfo));
+    printf("sizeof_FmRayQuery %zu\n", sizeof(FmRayQuery));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
     if (!entry) { fprintf(stderr, "no entry symbol\n"); return 1; }
     const FmApi *api = entry();
     printf("abi %u.%u\nstruct_size %u\n", api->abi_major, api->abi_minor, api->struct_size);
-    if (api->abi_major != FM_ABI_MAJOR || api->abi_minor < FM_ABI_MINOR || api->struct_size < sizeof(FmApi)) return 3;
+    if (!fm_api_compatible(api)) return 3;
     printf("param_count %zu\n", api->param_count());
 
     const char *file = argv[2];
@@ -29,14 +30,15 @@ int main(int argc, char **argv) {
         {"temperaturescale", FM_TYPE_FLOAT, 1, &tscale},
         {"sootscale", FM_TYPE_FLOAT, 1, &soot},
     };
+    FmCreateInfo create = {.struct_size = sizeof create, .params = params, .count = 3};
     FmVolume *vol = NULL;
-    if (api->volume_create(params, 3, &vol) != FM_OK) {
+    if (api->volume_create(&create, &vol) != FM_OK) {
         char msg[512];
         api->last_error(msg, sizeof msg);
         fprintf(stderr, "volume_create: %s\n", msg);
         return 1;
     }
-    FmVolumeInfo info;
+    FmVolumeInfo info = {.struct_size = sizeof info};
     api->volume_info(vol, &info);
     printf("channels %u\n", info.channels);
     double trange[2] = {-1.0, -1.0};
@@ -45,7 +47,11 @@ int main(int argc, char **argv) {
     FmRay ray = {{1.0, -1.0, 0.5}, {0.0, 1.0, 0.0}, 0.0, 10.0, 7};
     float *radiance = calloc(info.channels, sizeof(float)), *transmittance = calloc(info.channels, sizeof(float));
     FmExit exit;
-    FmStatus s = api->volume_integrate(vol, &ray, 1, radiance, transmittance, &exit);
+    FmRayQuery rq = {.struct_size = sizeof rq, .what = FM_QUERY_INTEGRATE, .n = 1, .rays = &ray};
+    rq.radiance = radiance;
+    rq.transmittance = transmittance;
+    rq.exits = &exit;
+    FmStatus s = api->volume_query(vol, &rq);
     printf("integrate_status %d\nradiance_29 %.9g\ntransmittance_29 %.9g\nexit_y %.9g\n", s, radiance[29], transmittance[29], exit.point[1]);
     /* The medium level: what the volume holds, and its majorant grid (the cell of the ray's start). */
     uint64_t features = 0;
@@ -63,17 +69,18 @@ int main(int argc, char **argv) {
     /* The fire light: one sample, its pdf evaluated again. */
     FmLight *light = NULL;
     if (api->light_create(vol, NULL, 0, &light) != FM_OK) return 1;
-    FmLightInfo linfo;
+    FmLightInfo linfo = {.struct_size = sizeof linfo};
     api->light_info(light, &linfo);
     double u[6] = {0.3, 0.6, 0.2, 0.5, 0.5, 0.5}, pt[3], pdf, pdf2;
-    api->light_sample(light, u, 1, pt, &pdf, NULL);
-    api->light_pdf(light, pt, 1, &pdf2);
+    api->light_sample(light, u, NULL, 1, pt, &pdf, NULL);
+    api->light_pdf(light, pt, NULL, 1, &pdf2);
     printf("light_power_w %.9g\nlight_voxels %llu\nlight_pdf %.9g\nlight_pdf_again %.9g\n", linfo.power_w, (unsigned long long)linfo.voxels, pdf, pdf2);
     api->light_destroy(light);
     /* A bad parameter comes back as a status and a message, not a crash. */
     FmParam bad[1] = {{"stepsise", FM_TYPE_FLOAT, 1, &tscale}};
     FmVolume *none = NULL;
-    FmStatus b = api->volume_create(bad, 1, &none);
+    FmCreateInfo bad_create = {.struct_size = sizeof bad_create, .params = bad, .count = 1};
+    FmStatus b = api->volume_create(&bad_create, &none);
     char msg[512];
     api->last_error(msg, sizeof msg);
     printf("bad_status %d\nbad_message %s\n", b, msg);

@@ -120,7 +120,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     let mut l = vec![0f32; n * c];
-    // The fire's emission along each direction as the light estimates it (its line estimate, ABI 0.8).
+    // The fire's emission along each direction as the light estimates it (its line estimate).
     light.integrate_at(&shots, None, &mut l, None)?;
     // ∫ L_Y dω over all directions at that point (its scalar illuminance, lm/m²): the mean of L_Y / pdf.
     let mut sum = 0.0;

@@ -1,5 +1,5 @@
-//! What a fire-light sample costs inside the plugin, call by call through the ABI: `light_sample_at` (a point),
-//! `light_pdf_direction_at` (its direction's density) and `light_integrate_at` (the fire's emission along it),
+//! What a fire-light sample costs inside the plugin, call by call through the ABI: `light_sample` (a point),
+//! `light_pdf_direction` (its direction's density) and `light_integrate` (the fire's emission along it),
 //! one entry per call as a renderer makes them, one thread, for each light configuration in interleaved rounds
 //! (the machine's speed drifts between rounds; compare the rows of one round).
 //!

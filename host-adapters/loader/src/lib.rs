@@ -33,7 +33,7 @@ use std::sync::Arc;
 mod light;
 mod volume;
 pub use light::Light;
-pub use volume::{MajorantGrid, Point, Volume};
+pub use volume::{MajorantGrid, Point, Sampling, Volume};
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,7 +78,7 @@ pub enum Error {
         code: i32,
         /// The plugin's message.
         message: String,
-        /// Its parts, for pointing a user at the cause without parsing the message (ABI 0.12).
+        /// Its parts, for pointing a user at the cause without parsing the message .
         detail: Box<ErrorDetail>,
     },
     /// A buffer passed to a batch call is too small.
@@ -151,7 +151,7 @@ impl Inner {
         buf.truncate(n);
         String::from_utf8_lossy(&buf).into_owned()
     }
-    /// The last error's parts on this thread (ABI 0.12).
+    /// The last error's parts on this thread .
     fn last_error_detail(&self) -> ErrorDetail {
         let mut d = abi::FmErrorDetail::default();
         // SAFETY: a struct of the size it says.
@@ -185,7 +185,7 @@ impl Inner {
     }
 }
 
-/// The host's context for a volume (ABI 0.13, [`Plugin::create_volume_with`]): what the renderer knows and the
+/// The host's context for a volume ([`Plugin::create_volume_with`]): what the renderer knows and the
 /// scene does not say.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Context {
@@ -199,7 +199,7 @@ pub struct Context {
     pub shutter: Option<[f64; 2]>,
 }
 
-/// The parts of a plugin error (ABI 0.12): what a host needs to point its user at the cause.
+/// The parts of a plugin error : what a host needs to point its user at the cause.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct ErrorDetail {
     /// The parameter at fault, as the host named it.
@@ -317,17 +317,22 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 34] = [
+const ENTRIES: [&str; 24] = [
     "last_error",
+    "last_error_detail",
     "param_count",
     "param_info",
     "volume_create",
     "volume_destroy",
     "volume_info",
     "volume_channel_xyz",
-    "volume_integrate",
-    "volume_transmittance",
-    "volume_sample_scatter",
+    "volume_temperature_range",
+    "volume_white_temperature",
+    "volume_capped_rays",
+    "volume_query",
+    "volume_features",
+    "volume_majorant_grid",
+    "volume_point",
     "volume_coefficients",
     "light_create",
     "light_destroy",
@@ -335,23 +340,8 @@ const ENTRIES: [&str; 34] = [
     "light_sample",
     "light_pdf",
     "light_pdf_direction",
-    "volume_temperature_range",
-    "volume_create_located",
-    "volume_capped_rays",
-    "volume_integrate_at",
-    "volume_transmittance_at",
-    "volume_sample_scatter_at",
-    "volume_white_temperature",
-    "light_sample_at",
-    "light_pdf_at",
-    "light_pdf_direction_at",
-    "light_integrate_at",
+    "light_integrate",
     "light_line_channels",
-    "volume_features",
-    "volume_majorant_grid",
-    "volume_point",
-    "last_error_detail",
-    "volume_create_with",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.
@@ -510,20 +500,26 @@ impl Plugin {
         };
         (0..n)
             .filter_map(|i| {
-                let mut info = std::mem::MaybeUninit::<abi::FmParamInfo>::uninit();
-                // SAFETY: writes one FmParamInfo on success.
-                (unsafe { (api.param_info)(i, info.as_mut_ptr()) } == abi::FM_OK).then(|| {
-                    // SAFETY: initialised by the successful call; its strings are static in the library.
-                    let info = unsafe { info.assume_init() };
-                    ParamInfo {
-                        component: s(info.component),
-                        name: s(info.name),
-                        ty: s(info.ty),
-                        default: s(info.default_value),
-                        unit: s(info.unit),
-                        range: s(info.range),
-                        doc: s(info.doc),
-                    }
+                let null = std::ptr::null();
+                let mut info = abi::FmParamInfo {
+                    struct_size: std::mem::size_of::<abi::FmParamInfo>(),
+                    component: null,
+                    name: null,
+                    ty: null,
+                    default_value: null,
+                    unit: null,
+                    range: null,
+                    doc: null,
+                };
+                // SAFETY: writes one FmParamInfo (its size set) on success.
+                (unsafe { (api.param_info)(i, &mut info) } == abi::FM_OK).then(|| ParamInfo {
+                    component: s(info.component),
+                    name: s(info.name),
+                    ty: s(info.ty),
+                    default: s(info.default_value),
+                    unit: s(info.unit),
+                    range: s(info.range),
+                    doc: s(info.doc),
                 })
             })
             .collect()
@@ -534,8 +530,8 @@ impl Plugin {
         self.create_volume_with(params, &Context::default())
     }
 
-    /// As [`create_volume`](Self::create_volume), with the host's context beside the scene's parameters (ABI
-    /// 0.13): threads, memory budget, frame, shutter. A parameter the scene sets itself wins over the context.
+    /// As [`create_volume`](Self::create_volume), with the host's context beside the scene's parameters:
+    /// threads, memory budget, frame, shutter. A parameter the scene sets itself wins over the context.
     pub fn create_volume_with(&self, params: &[Param], context: &Context) -> Result<Volume, Error> {
         let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
         let api = self.inner.api();
@@ -554,7 +550,7 @@ impl Plugin {
             };
             // SAFETY: `info`, `list`, `at_ptrs` (one entry per parameter) and everything they point to live until
             // after the call; `handle` is writable.
-            unsafe { (api.volume_create_with)(&info, &mut handle) }
+            unsafe { (api.volume_create)(&info, &mut handle) }
         })?;
         self.inner.check(status)?;
         let mut info = abi::FmVolumeInfo::default();

@@ -80,7 +80,7 @@ impl Light {
         };
         // SAFETY: buffers sized above; [f64; 3] and [f64; 6] are contiguous doubles.
         let s = unsafe {
-            (self.inner.api().light_sample_at)(
+            (self.inner.api().light_sample)(
                 self.handle,
                 u.as_ptr() as *const f64,
                 t_ptr,
@@ -113,7 +113,7 @@ impl Light {
         }
         // SAFETY: sized above.
         let s = unsafe {
-            (self.inner.api().light_pdf_at)(
+            (self.inner.api().light_pdf)(
                 self.handle,
                 points.as_ptr() as *const f64,
                 t_ptr,
@@ -150,7 +150,7 @@ impl Light {
         }
         // SAFETY: sized above.
         let s = unsafe {
-            (self.inner.api().light_pdf_direction_at)(
+            (self.inner.api().light_pdf_direction)(
                 self.handle,
                 origins.as_ptr() as *const f64,
                 directions.as_ptr() as *const f64,
@@ -164,7 +164,7 @@ impl Light {
 
     /// The fire's emitted radiance (`rays.len() × channels` floats) and, if asked, transmittance along straight
     /// `rays` (medium space), each at its time, as the light estimates them for next-event estimation along a
-    /// sampled direction (ABI 0.8): the volume's march at the light's `linestep`, corrected toward the volume's
+    /// sampled direction: the volume's march at the light's `linestep`, corrected toward the volume's
     /// own with probability `linecorrection`.
     pub fn integrate_at(
         &self,
@@ -185,7 +185,7 @@ impl Light {
         let tr = transmittance.map_or(std::ptr::null_mut(), |t| t.as_mut_ptr());
         // SAFETY: sized above; rays.len() rays.
         let s = unsafe {
-            (self.inner.api().light_integrate_at)(
+            (self.inner.api().light_integrate)(
                 self.handle,
                 rays.as_ptr(),
                 t_ptr,
@@ -199,7 +199,7 @@ impl Light {
 }
 
 impl Light {
-    /// How many of the volume's channels the light's line estimate marches (ABI 0.10): its channel count, or
+    /// How many of the volume's channels the light's line estimate marches: its channel count, or
     /// fewer (`linechannels`).
     pub fn line_channels(&self) -> Result<u32, Error> {
         let mut out = 0u32;

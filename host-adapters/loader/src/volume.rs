@@ -4,6 +4,19 @@ use crate::{abi, Error, Exit, Inner, Light, Ray, Scatter, VolumeInfo};
 use std::fmt;
 use std::sync::Arc;
 
+/// How the rays of a whole-ray query are sampled.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Sampling<'a> {
+    /// One time per ray (frames from the grids' time), or `None`: time 0.
+    pub times: Option<&'a [f64]>,
+    /// One uniform number in [0, 1) per ray, or `None`: the first random number each ray's estimator draws
+    /// (the march's offset, tracking's first free flight) — the host's own, stratified as its sampler is.
+    pub u: Option<&'a [f64]>,
+    /// The march's step in medium units when longer than the volume's own (straight rays, no exits); 0: the
+    /// volume's.
+    pub step: f64,
+}
+
 /// A fire volume living in the plugin. Immutable; `Send + Sync`.
 pub struct Volume {
     pub(crate) inner: Arc<Inner>,
@@ -31,7 +44,7 @@ impl Drop for Volume {
 }
 
 impl Volume {
-    /// Builds the fire light of this volume (ABI 0.2): `weighting` is `"power"` (default) or `"luminance"`.
+    /// Builds the fire light of this volume: `weighting` is `"power"` (default) or `"luminance"`.
     pub fn create_light(&self, weighting: Option<&str>) -> Result<Light, Error> {
         let params: Vec<crate::Param> = weighting
             .map(|w| crate::Param::string("weighting", w))
@@ -69,7 +82,7 @@ impl Volume {
     }
 
     /// The lowest and highest temperature of the volume's grid (K, after its mapping), `None` without a
-    /// temperature grid (ABI 0.3).
+    /// temperature grid.
     pub fn temperature_range(&self) -> Result<Option<[f64; 2]>, Error> {
         let mut out = [0.0f64; 2];
         // SAFETY: room for two doubles.
@@ -81,7 +94,7 @@ impl Volume {
 
     /// The temperature whose blackbody a viewer adapts to for this volume (K): its hottest when its colour is
     /// the physics', `None` when its colour is art-directed (a tint or a colour ramp: seen against D65) or it has
-    /// no temperature grid (ABI 0.6).
+    /// no temperature grid.
     pub fn white_temperature(&self) -> Result<Option<f64>, Error> {
         let mut out = 0.0f64;
         // SAFETY: a live handle and a writable double.
@@ -90,7 +103,7 @@ impl Volume {
         Ok((out > 0.0).then_some(out))
     }
 
-    /// What the volume holds beyond absorption: `FM_FEATURE_*` bits (ABI 0.11). A host that tracks the medium
+    /// What the volume holds beyond absorption: `FM_FEATURE_*` bits. A host that tracks the medium
     /// itself refuses, or keeps to the whole-ray queries for, what it cannot handle.
     pub fn features(&self) -> Result<u64, Error> {
         let mut out = 0u64;
@@ -100,7 +113,7 @@ impl Volume {
         Ok(out)
     }
 
-    /// The volume's majorant grid (ABI 0.11), borrowed from the volume: cells tiling a box, per cell a bound on
+    /// The volume's majorant grid, borrowed from the volume: cells tiling a box, per cell a bound on
     /// σ_t over every channel and point (and the shutter, with motion blur), for the host's own free paths.
     pub fn majorant_grid(&self) -> Result<MajorantGrid<'_>, Error> {
         let mut g = abi::FmMajorantGrid::default();
@@ -127,7 +140,7 @@ impl Volume {
 
     /// σ_a, σ_s, Le and j at `points`, each at its time (`times`, frames; `None`: 0) and at its own `k =
     /// lambdas.len() / points.len()` wavelengths (nm, point-major), into `out` (as many as `lambdas`): the
-    /// closed forms at each wavelength, not the bins (ABI 0.11). A volume with layers they cannot express is
+    /// closed forms at each wavelength, not the bins. A volume with layers they cannot express is
     /// refused with `FM_UNSUPPORTED` naming the layer.
     pub fn point(
         &self,
@@ -233,16 +246,36 @@ impl Volume {
         self.integrate_at(rays, None, radiance, transmittance, exits)
     }
 
-    /// Checks that `times`, when given, has one entry per ray; its pointer (null for none).
-    fn times_ptr(times: Option<&[f64]>, rays: usize) -> Result<*const f64, Error> {
-        match times {
+    /// Checks that `what`, when given, has one entry per ray; its pointer (null for none).
+    fn per_ray(what: &str, v: Option<&[f64]>, rays: usize) -> Result<*const f64, Error> {
+        match v {
             Some(t) if t.len() != rays => Err(Error::Buffer(format!(
-                "times: {} entries for {rays} rays",
+                "{what}: {} entries for {rays} rays",
                 t.len()
             ))),
             Some(t) => Ok(t.as_ptr()),
             None => Ok(std::ptr::null()),
         }
+    }
+
+    /// `FmRayQuery` for `rays` sampled as `s`, every output null.
+    fn query(what: u32, rays: &[Ray], s: &Sampling) -> Result<abi::FmRayQuery, Error> {
+        Ok(abi::FmRayQuery {
+            what,
+            n: rays.len(),
+            rays: rays.as_ptr(),
+            times: Self::per_ray("times", s.times, rays.len())?,
+            u: Self::per_ray("u", s.u, rays.len())?,
+            step: s.step,
+            ..abi::FmRayQuery::default()
+        })
+    }
+
+    /// The fast path's one entry: `q`, whose buffers the caller sized.
+    fn run(&self, q: &abi::FmRayQuery) -> Result<(), Error> {
+        // SAFETY: `q` and the buffers it points to, sized by the caller for `q.n` rays, live across the call.
+        let s = unsafe { (self.inner.api().volume_query)(self.handle, q) };
+        self.inner.check(s)
     }
 
     /// As [`integrate`](Self::integrate), each ray at its time (`times`: frames from the grids' time, one per
@@ -255,17 +288,32 @@ impl Volume {
         transmittance: Option<&mut [f32]>,
         exits: Option<&mut [Exit]>,
     ) -> Result<(), Error> {
-        let times = Self::times_ptr(times, rays.len())?;
-        self.need("radiance", radiance.len(), rays.len())?;
-        let t_ptr = match transmittance {
-            Some(t) => {
-                self.need("transmittance", t.len(), rays.len())?;
-                t.as_mut_ptr()
-            }
-            None => std::ptr::null_mut(),
+        let s = Sampling {
+            times,
+            ..Sampling::default()
         };
-        let e_ptr = match exits {
-            Some(e) if e.len() >= rays.len() => e.as_mut_ptr(),
+        self.integrate_with(rays, &s, radiance, transmittance, exits)
+    }
+
+    /// As [`integrate`](Self::integrate), the rays sampled as `sampling` says (times, the host's first uniform
+    /// numbers, a coarser step).
+    pub fn integrate_with(
+        &self,
+        rays: &[Ray],
+        sampling: &Sampling,
+        radiance: &mut [f32],
+        transmittance: Option<&mut [f32]>,
+        exits: Option<&mut [Exit]>,
+    ) -> Result<(), Error> {
+        let mut q = Self::query(abi::FM_QUERY_INTEGRATE, rays, sampling)?;
+        self.need("radiance", radiance.len(), rays.len())?;
+        q.radiance = radiance.as_mut_ptr();
+        if let Some(t) = transmittance {
+            self.need("transmittance", t.len(), rays.len())?;
+            q.transmittance = t.as_mut_ptr();
+        }
+        match exits {
+            Some(e) if e.len() >= rays.len() => q.exits = e.as_mut_ptr(),
             Some(e) => {
                 return Err(Error::Buffer(format!(
                     "exits: {} entries for {} rays",
@@ -273,21 +321,9 @@ impl Volume {
                     rays.len()
                 )))
             }
-            None => std::ptr::null_mut(),
-        };
-        // SAFETY: buffers sized above; rays.len() rays.
-        let s = unsafe {
-            (self.inner.api().volume_integrate_at)(
-                self.handle,
-                rays.as_ptr(),
-                times,
-                rays.len(),
-                radiance.as_mut_ptr(),
-                t_ptr,
-                e_ptr,
-            )
-        };
-        self.inner.check(s)
+            None => {}
+        }
+        self.run(&q)
     }
 
     /// Transmittance along `rays` (`rays.len() × channels` floats).
@@ -302,19 +338,24 @@ impl Volume {
         times: Option<&[f64]>,
         transmittance: &mut [f32],
     ) -> Result<(), Error> {
-        let times = Self::times_ptr(times, rays.len())?;
-        self.need("transmittance", transmittance.len(), rays.len())?;
-        // SAFETY: buffer sized above; times null or one per ray (checked).
-        let s = unsafe {
-            (self.inner.api().volume_transmittance_at)(
-                self.handle,
-                rays.as_ptr(),
-                times,
-                rays.len(),
-                transmittance.as_mut_ptr(),
-            )
+        let s = Sampling {
+            times,
+            ..Sampling::default()
         };
-        self.inner.check(s)
+        self.transmittance_with(rays, &s, transmittance)
+    }
+
+    /// As [`transmittance`](Self::transmittance), the rays sampled as `sampling` says.
+    pub fn transmittance_with(
+        &self,
+        rays: &[Ray],
+        sampling: &Sampling,
+        transmittance: &mut [f32],
+    ) -> Result<(), Error> {
+        let mut q = Self::query(abi::FM_QUERY_TRANSMITTANCE, rays, sampling)?;
+        self.need("transmittance", transmittance.len(), rays.len())?;
+        q.transmittance = transmittance.as_mut_ptr();
+        self.run(&q)
     }
 
     /// The first real scattering event per ray, with weights and the emission before it.
@@ -338,7 +379,24 @@ impl Volume {
         weights: &mut [f32],
         emitted: Option<&mut [f32]>,
     ) -> Result<(), Error> {
-        let times = Self::times_ptr(times, rays.len())?;
+        let s = Sampling {
+            times,
+            ..Sampling::default()
+        };
+        self.sample_scatter_with(rays, &s, events, weights, emitted)
+    }
+
+    /// As [`sample_scatter`](Self::sample_scatter), the rays sampled as `sampling` says (its `u`: each ray's
+    /// first free-flight sample).
+    pub fn sample_scatter_with(
+        &self,
+        rays: &[Ray],
+        sampling: &Sampling,
+        events: &mut [Scatter],
+        weights: &mut [f32],
+        emitted: Option<&mut [f32]>,
+    ) -> Result<(), Error> {
+        let mut q = Self::query(abi::FM_QUERY_SCATTER, rays, sampling)?;
         if events.len() < rays.len() {
             return Err(Error::Buffer(format!(
                 "events: {} entries for {} rays",
@@ -346,27 +404,14 @@ impl Volume {
                 rays.len()
             )));
         }
+        q.events = events.as_mut_ptr();
         self.need("weights", weights.len(), rays.len())?;
-        let l_ptr = match emitted {
-            Some(l) => {
-                self.need("emitted", l.len(), rays.len())?;
-                l.as_mut_ptr()
-            }
-            None => std::ptr::null_mut(),
-        };
-        // SAFETY: buffers sized above.
-        let s = unsafe {
-            (self.inner.api().volume_sample_scatter_at)(
-                self.handle,
-                rays.as_ptr(),
-                times,
-                rays.len(),
-                events.as_mut_ptr(),
-                weights.as_mut_ptr(),
-                l_ptr,
-            )
-        };
-        self.inner.check(s)
+        q.weights = weights.as_mut_ptr();
+        if let Some(l) = emitted {
+            self.need("emitted", l.len(), rays.len())?;
+            q.radiance = l.as_mut_ptr();
+        }
+        self.run(&q)
     }
 
     /// σ_a, σ_s and j per channel at medium-space points.

@@ -46,7 +46,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     api = entry();
-    if (api->abi_major != FM_ABI_MAJOR || api->abi_minor < FM_ABI_MINOR || api->struct_size < sizeof(FmApi)) {
+    if (!fm_api_compatible(api)) {
         fprintf(stderr, "fire_pixel: the plugin speaks ABI %u.%u, this host needs %u.%u\n", api->abi_major,
                 api->abi_minor, FM_ABI_MAJOR, FM_ABI_MINOR);
         return 1;
@@ -55,9 +55,12 @@ int main(int argc, char **argv) {
     /* The fire: the dataset's density (a soot volume fraction) and temperature (K), propane soot. */
     const char *dataset = argv[2], *fuel = "propane";
     FmParam params[2] = {{"dataset", FM_TYPE_STRING, 1, &dataset}, {"fuel", FM_TYPE_STRING, 1, &fuel}};
+    FmCreateInfo create = {.struct_size = sizeof create};
+    create.params = params;
+    create.count = 2;
     FmVolume *fire = NULL;
-    check(api->volume_create(params, 2, &fire), "volume_create");
-    FmVolumeInfo info;
+    check(api->volume_create(&create, &fire), "volume_create");
+    FmVolumeInfo info = {.struct_size = sizeof info};
     check(api->volume_info(fire, &info), "volume_info");
     size_t c = info.channels;
     printf("fire: %zu channels over %g-%g nm\n", c, info.lambda_min, info.lambda_max);
@@ -74,7 +77,13 @@ int main(int argc, char **argv) {
         rays[i] = r;
     }
     float *radiance = malloc(FAN * c * sizeof(float)), *transmittance = malloc(FAN * c * sizeof(float));
-    check(api->volume_integrate(fire, rays, FAN, radiance, transmittance, NULL), "volume_integrate");
+    FmRayQuery q = {.struct_size = sizeof q};
+    q.what = FM_QUERY_INTEGRATE;
+    q.n = FAN;
+    q.rays = rays;
+    q.radiance = radiance;
+    q.transmittance = transmittance;
+    check(api->volume_query(fire, &q), "volume_query");
     double brightest = 0.0;
     for (int i = 0; i < FAN; i++) {
         double y = 0.0;
@@ -88,7 +97,7 @@ int main(int argc, char **argv) {
      * the fire: the radiance along each sampled direction over that direction's density, averaged. */
     FmLight *light = NULL;
     check(api->light_create(fire, NULL, 0, &light), "light_create");
-    FmLightInfo linfo;
+    FmLightInfo linfo = {.struct_size = sizeof linfo};
     check(api->light_info(light, &linfo), "light_info");
     printf("fire light: %.4e W, %.4e lm over %llu voxels\n", linfo.power_w, linfo.power_lm,
            (unsigned long long)linfo.voxels);
@@ -96,7 +105,7 @@ int main(int argc, char **argv) {
     double u[6 * N], points[3 * N], pdf[N], origins[3 * N], dirs[3 * N], pd[N];
     uint64_t state = 0x2545f4914f6cdd1dull;
     for (int i = 0; i < 6 * N; i++) u[i] = uniform(&state);
-    check(api->light_sample(light, u, N, points, pdf, NULL), "light_sample");
+    check(api->light_sample(light, u, NULL, N, points, pdf, NULL), "light_sample");
     double at[3] = {info.bounds_max[0] + 1.0, 0.5 * (info.bounds_min[1] + info.bounds_max[1]),
                     0.5 * (info.bounds_min[2] + info.bounds_max[2])};
     FmRay shots[N];
@@ -108,11 +117,11 @@ int main(int argc, char **argv) {
         FmRay r = {{at[0], at[1], at[2]}, {dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2]}, 0.0, 1e30, 1000u + i};
         shots[i] = r;
     }
-    check(api->light_pdf_direction(light, origins, dirs, N, pd), "light_pdf_direction");
+    check(api->light_pdf_direction(light, origins, dirs, NULL, N, pd), "light_pdf_direction");
     float *l = malloc(N * c * sizeof(float));
-    /* The fire's emission along each direction as the light estimates it (ABI 0.8: a march whose steps do not
-     * grow with the grid). */
-    check(api->light_integrate_at(light, shots, NULL, N, l, NULL), "light_integrate_at");
+    /* The fire's emission along each direction as the light estimates it (a march whose steps do not grow with
+     * the grid). */
+    check(api->light_integrate(light, shots, NULL, N, l, NULL), "light_integrate");
     double sum = 0.0;
     for (int i = 0; i < N; i++) {
         if (!(pd[i] > 0.0)) continue;

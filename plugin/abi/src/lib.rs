@@ -13,8 +13,14 @@
 //!   thread. No panic crosses the boundary ([`FM_PANIC`] is returned instead).
 //! - Handles are opaque; a volume is immutable after creation and may be queried from many threads at once.
 //!   Destroy it exactly once; never unload the library while handles live.
+//! - Every struct that crosses the boundary begins with `struct_size`, set by the host to the size it was built
+//!   with: the plugin reads and writes no more than that, and refuses a struct smaller than its own. Array
+//!   elements ([`FmParam`], [`FmRay`], [`FmExit`], [`FmScatter`]) have the layout of the major version.
 //! - Batch queries take `n` rays and write `n × channels` floats (radiance, transmittance, weights), channel
 //!   fastest; `channels` comes from [`FmVolumeInfo`]. Optional outputs may be null.
+//! - A host asks a medium two things, as pbrt-v4 and Mitsuba 3 do: the coefficients at a point, at its own
+//!   wavelengths and time ([`FmApi::volume_point`]), and a bound on σ_t ([`FmApi::volume_majorant_grid`]);
+//!   or it hands the plugin whole rays ([`FmApi::volume_query`]), the fast path.
 //! - Rays are in the medium's space (the host applies its transforms); distances are |direction| · Δt, in
 //!   metres when the medium's space is in metres.
 
@@ -24,9 +30,9 @@
 use core::ffi::{c_char, c_void};
 
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
-pub const ABI_MAJOR: u32 = 0;
+pub const ABI_MAJOR: u32 = 1;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 13;
+pub const ABI_MINOR: u32 = 0;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -99,7 +105,7 @@ pub struct FmRay {
 }
 
 /// Where the plugin stopped following a ray: the host continues from here (rays may bend inside the medium).
-/// A host that passes no exits to `volume_integrate` gets the straight-line integration even when the volume
+/// A host that passes no exits to `volume_query` gets the straight-line integration even when the volume
 /// refracts (what NEE and light paths, whose pdfs assume straight lines, want).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -147,8 +153,10 @@ pub const FM_INTEGRATOR_DELTA: u32 = 2;
 
 /// What a volume is.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FmVolumeInfo {
+    /// Set by the host to `size_of::<FmVolumeInfo>()`.
+    pub struct_size: usize,
     /// Lower corner of the medium-space bounds.
     pub bounds_min: [f64; 3],
     /// Upper corner.
@@ -179,6 +187,8 @@ pub struct FmVolumeInfo {
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct FmParamInfo {
+    /// Set by the host to `size_of::<FmParamInfo>()`.
+    pub struct_size: usize,
     /// Component (`dataset`, `volume`).
     pub component: *const c_char,
     /// Parameter name.
@@ -204,13 +214,15 @@ pub type FmLight = c_void;
 pub const FM_WEIGHTING_LUMINANCE: u32 = 0;
 /// Voxel weights by their emitted power over the bins.
 pub const FM_WEIGHTING_POWER: u32 = 1;
-/// `FmLightInfo::weighting`: voxels weighted by the power that leaves the fire (ABI 0.8).
+/// `FmLightInfo::weighting`: voxels weighted by the power that leaves the fire.
 pub const FM_WEIGHTING_ESCAPING: u32 = 2;
 
 /// What a fire light is.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FmLightInfo {
+    /// Set by the host to `size_of::<FmLightInfo>()`.
+    pub struct_size: usize,
     /// Emitted power over the whole spectrum, W (pbrt mode: over the bins, relative units).
     pub power_w: f64,
     /// Luminous power over the bins, lm.
@@ -223,12 +235,47 @@ pub struct FmLightInfo {
     pub build_seconds: f64,
     /// `FM_WEIGHTING_*`.
     pub weighting: u32,
-    /// ABI 0.9: voxels per side of the blocks the light's line estimate marches through (1: the fire's own
-    /// voxels; the `lineblock` parameter); 0 from an older plugin (the field was reserved).
+    /// Voxels per side of the blocks the light's line estimate marches through (1: the fire's own voxels; the
+    /// `lineblock` parameter).
     pub line_block: u32,
 }
 
-/// ABI 0.11, [`FmApi::volume_features`]: the volume emits.
+impl Default for FmVolumeInfo {
+    fn default() -> Self {
+        FmVolumeInfo {
+            struct_size: core::mem::size_of::<FmVolumeInfo>(),
+            bounds_min: [0.0; 3],
+            bounds_max: [0.0; 3],
+            channels: 0,
+            channel_space: 0,
+            lambda_min: 0.0,
+            lambda_max: 0.0,
+            g: 0.0,
+            scatters: 0,
+            integrator: 0,
+            step: 0.0,
+            bytes: 0,
+            build_seconds: 0.0,
+        }
+    }
+}
+
+impl Default for FmLightInfo {
+    fn default() -> Self {
+        FmLightInfo {
+            struct_size: core::mem::size_of::<FmLightInfo>(),
+            power_w: 0.0,
+            power_lm: 0.0,
+            voxels: 0,
+            bytes: 0,
+            build_seconds: 0.0,
+            weighting: 0,
+            line_block: 0,
+        }
+    }
+}
+
+/// [`FmApi::volume_features`]: the volume emits.
 pub const FM_FEATURE_EMITS: u64 = 1 << 0;
 /// It scatters (σ_s > 0).
 pub const FM_FEATURE_SCATTERS: u64 = 1 << 1;
@@ -245,7 +292,7 @@ pub const FM_FEATURE_DIFFUSION: u64 = 1 << 6;
 /// It emits where it may not absorb (an emission grid): Le = j/σ_a is undefined there, j is not.
 pub const FM_FEATURE_EMITS_WITHOUT_ABSORPTION: u64 = 1 << 7;
 
-/// ABI 0.11: a volume's majorant grid ([`FmApi::volume_majorant_grid`]), for a host's own free-path sampling:
+/// A volume's majorant grid ([`FmApi::volume_majorant_grid`]), for a host's own free-path sampling:
 /// cells of `cell` medium units tiling `bounds` (the last per axis may be cut by the box), `counts` of them,
 /// and per cell (x fastest) a bound on σ_t over every channel and every point of the cell — over the shutter
 /// with motion blur. A point of the volume's bounds outside the cells' box (pbrt mode's half-voxel margin)
@@ -281,7 +328,7 @@ impl Default for FmMajorantGrid {
     }
 }
 
-/// ABI 0.11: a point query ([`FmApi::volume_point`]): at `n` points, each at its time and at `k` wavelengths of
+/// A point query ([`FmApi::volume_point`]): at `n` points, each at its time and at `k` wavelengths of
 /// its own, σ_a, σ_s, the emitted radiance Le and the emission coefficient j = σ_a·Le — the closed forms at each
 /// wavelength (soot's κ(λ) and Planck's B(λ, T); pbrt-v4's spectra and peak-normalised blackbody), not the bins.
 /// Outputs are `n · k` doubles each, point-major (may be null); a volume whose layers the closed forms cannot
@@ -314,7 +361,7 @@ pub struct FmPointQuery {
     pub j: *mut f64,
 }
 
-/// ABI 0.12: the last error's structure ([`FmApi::last_error_detail`]), beside its message: what a host needs to
+/// The last error's structure ([`FmApi::last_error_detail`]), beside its message: what a host needs to
 /// point its user at the cause without parsing text. Strings are NUL-terminated UTF-8 owned by the plugin, valid
 /// until the next call on the same thread; null when the error has no such part.
 #[repr(C)]
@@ -328,7 +375,7 @@ pub struct FmErrorDetail {
     pub reserved: i32,
     /// The parameter at fault, as the host named it.
     pub parameter: *const c_char,
-    /// Where the host said that parameter was given (`volume_create_located`'s location: `file:line:col`).
+    /// Where the host said that parameter was given ([`FmCreateInfo::locations`]: `file:line:col`).
     pub location: *const c_char,
     /// The file whose reading or content failed.
     pub file: *const c_char,
@@ -355,7 +402,7 @@ pub const FM_CREATE_FRAME: u32 = 1 << 0;
 /// [`FmCreateInfo::flags`]: `shutter` is set.
 pub const FM_CREATE_SHUTTER: u32 = 1 << 1;
 
-/// ABI 0.13: a volume's creation ([`FmApi::volume_create_with`]): the scene's parameters with their locations, and
+/// A volume's creation ([`FmApi::volume_create`]): the scene's parameters with their locations, and
 /// the host's context beside them — threads, memory budget, frame, shutter — instead of as parameters the host must
 /// make up. A parameter the scene gives itself (`threads`, `maxbytes`, `frame`, `shutteropen`, `shutterclose`)
 /// wins over the context.
@@ -382,7 +429,93 @@ pub struct FmCreateInfo {
     pub shutter: [f64; 2],
 }
 
-/// The plugin's function table.
+/// [`FmRayQuery::what`]: emitted radiance (required) and transmittance (may be null) along each ray, and where
+/// it leaves (`exits`, may be null).
+pub const FM_QUERY_INTEGRATE: u32 = 0;
+/// [`FmRayQuery::what`]: transmittance only (shadow rays), required.
+pub const FM_QUERY_TRANSMITTANCE: u32 = 1;
+/// [`FmRayQuery::what`]: the first real scattering event per ray (`events`, `weights`, required) and the
+/// emitted radiance before it (`radiance`, may be null).
+pub const FM_QUERY_SCATTER: u32 = 2;
+
+/// The fast whole-ray query ([`FmApi::volume_query`]): `n` rays, each at its time, integrated, attenuated or
+/// tracked to a scattering event by the plugin. Outputs are `n × channels` floats (channel fastest) or `n`
+/// entries; the ones `what` does not use must be null.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmRayQuery {
+    /// Set by the host to `size_of::<FmRayQuery>()`.
+    pub struct_size: usize,
+    /// `FM_QUERY_*`.
+    pub what: u32,
+    /// Reserved (0).
+    pub reserved: u32,
+    /// Rays.
+    pub n: usize,
+    /// `n` rays (required when `n` > 0).
+    pub rays: *const FmRay,
+    /// `n` times (frames from the grids' time, inside the volume's shutter), or null: time 0. A volume with
+    /// motion blur (a `velocitygrid` and an open shutter) is looked up where its velocity carried it from; embers
+    /// are where theirs carried them.
+    pub times: *const f64,
+    /// `n` uniform numbers in [0, 1), or null: the first random number each ray's estimator draws (the march's
+    /// offset along the ray, tracking's first free-flight distance) — the host's own sample, stratified as its
+    /// sampler stratifies; the rest come from the ray's `seed`.
+    pub u: *const f64,
+    /// [`FM_QUERY_INTEGRATE`] without exits: the march's step, medium units, when longer than the volume's own
+    /// (a coarse estimate, as the fire light's line); 0: the volume's. A tracking volume ignores it.
+    pub step: f64,
+    /// Emitted radiance (`n × channels`).
+    pub radiance: *mut f32,
+    /// Transmittance (`n × channels`).
+    pub transmittance: *mut f32,
+    /// Where each ray leaves (`n`): rays bend in a refracting volume. Without exits the ray stays straight (what
+    /// next-event estimation and light paths, whose pdfs assume straight lines, want).
+    pub exits: *mut FmExit,
+    /// Scattering events (`n`).
+    pub events: *mut FmScatter,
+    /// The events' weights (`n × channels`): the transmittance when the ray escaped, the factor on the
+    /// in-scattered radiance when it scattered.
+    pub weights: *mut f32,
+}
+
+impl Default for FmRayQuery {
+    fn default() -> Self {
+        FmRayQuery {
+            struct_size: core::mem::size_of::<FmRayQuery>(),
+            what: FM_QUERY_INTEGRATE,
+            reserved: 0,
+            n: 0,
+            rays: core::ptr::null(),
+            times: core::ptr::null(),
+            u: core::ptr::null(),
+            step: 0.0,
+            radiance: core::ptr::null_mut(),
+            transmittance: core::ptr::null_mut(),
+            exits: core::ptr::null_mut(),
+            events: core::ptr::null_mut(),
+            weights: core::ptr::null_mut(),
+        }
+    }
+}
+
+impl Default for FmCreateInfo {
+    fn default() -> Self {
+        FmCreateInfo {
+            struct_size: core::mem::size_of::<FmCreateInfo>(),
+            params: core::ptr::null(),
+            locations: core::ptr::null(),
+            count: 0,
+            threads: 0,
+            flags: 0,
+            max_bytes: 0,
+            frame: 0,
+            shutter: [0.0; 2],
+        }
+    }
+}
+
+/// The plugin's function table (ABI 1.0).
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct FmApi {
@@ -397,53 +530,56 @@ pub struct FmApi {
     /// Copies the calling thread's last error message (UTF-8, NUL-terminated, truncated to `cap`) into `buf`;
     /// returns its full length in bytes without the NUL. `buf` may be null to ask for the length.
     pub last_error: unsafe extern "C" fn(buf: *mut c_char, cap: usize) -> usize,
+    /// The last error on this thread as a structure into `*out` (required, its `struct_size` set by the host);
+    /// see [`FmErrorDetail`].
+    pub last_error_detail: unsafe extern "C" fn(out: *mut FmErrorDetail) -> FmStatus,
     /// Number of rows in the parameter tables of all components.
     pub param_count: unsafe extern "C" fn() -> usize,
-    /// Row `index` of the parameter tables.
+    /// Row `index` of the parameter tables into `*out` (its `struct_size` set by the host).
     pub param_info: unsafe extern "C" fn(index: usize, out: *mut FmParamInfo) -> FmStatus,
-    /// Creates a fire volume (dataset + volume parameters); `*out` receives the handle.
-    pub volume_create: unsafe extern "C" fn(
-        params: *const FmParam,
-        count: usize,
-        out: *mut *mut FmVolume,
-    ) -> FmStatus,
+    /// Creates a fire volume (dataset + volume parameters, and the host's context: see [`FmCreateInfo`]; `info`
+    /// and `out` required); `*out` receives the handle.
+    pub volume_create:
+        unsafe extern "C" fn(info: *const FmCreateInfo, out: *mut *mut FmVolume) -> FmStatus,
     /// Destroys a volume (null is ignored).
     pub volume_destroy: unsafe extern "C" fn(volume: *mut FmVolume),
-    /// Describes a volume.
+    /// Describes a volume into `*out` (its `struct_size` set by the host).
     pub volume_info:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmVolumeInfo) -> FmStatus,
     /// Writes 3 × channels f64: the XYZ of unit radiance in each channel (to turn channel radiance into XYZ).
     pub volume_channel_xyz:
         unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64, cap: usize) -> FmStatus,
-    /// Integrates emission–absorption along `n` rays: radiance (required) and transmittance (optional),
-    /// `n × channels` f32 each; exits (optional), `n` entries.
-    pub volume_integrate: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        n: usize,
-        radiance: *mut f32,
-        transmittance: *mut f32,
-        exits: *mut FmExit,
-    ) -> FmStatus,
-    /// Transmittance only (shadow rays): `n × channels` f32.
-    pub volume_transmittance: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        n: usize,
-        transmittance: *mut f32,
-    ) -> FmStatus,
-    /// Samples the first real scattering event per ray: events (`n`), weights and emitted radiance before the
-    /// event (`n × channels` f32 each; emitted may be null).
-    pub volume_sample_scatter: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        n: usize,
-        events: *mut FmScatter,
-        weights: *mut f32,
-        emitted: *mut f32,
-    ) -> FmStatus,
-    /// σ_a, σ_s (m⁻¹) and the emission coefficient j = σ_a L_e per channel at `n` points (3 f64 each); each
-    /// output `n × channels` f32, any may be null.
+    /// The lowest and highest temperature (K) of the volume's grid after its mapping, into `out[0..2]`; both 0
+    /// when the volume has no temperature grid.
+    pub volume_temperature_range:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
+    /// The temperature (K) whose blackbody a viewer adapts to for this volume, into `*out`: its hottest
+    /// temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a
+    /// `tint`, or a `colorramp` short of `physical` 1: meant to be seen against a D65 white) or it has no
+    /// temperature grid.
+    pub volume_white_temperature:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
+    /// How many rays' tracking (ratio, delta, scattering events) stopped at the per-ray collision cap so far,
+    /// into `*out`: each was cut short as if absorbed, a bias towards dark that a host should report.
+    pub volume_capped_rays:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
+    /// The fast path: whole rays (see [`FmRayQuery`]; `query` required).
+    pub volume_query:
+        unsafe extern "C" fn(volume: *const FmVolume, query: *const FmRayQuery) -> FmStatus,
+    /// What the volume holds beyond absorption, into `*out` (required): `FM_FEATURE_*` bits. A host that tracks
+    /// the medium itself (from [`volume_point`](Self::volume_point) and
+    /// [`volume_majorant_grid`](Self::volume_majorant_grid)) refuses, or keeps to the whole-ray query for, what it
+    /// cannot handle.
+    pub volume_features: unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
+    /// The volume's majorant grid into `*out` (required, its `struct_size` set by the host).
+    pub volume_majorant_grid:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmMajorantGrid) -> FmStatus,
+    /// The point query at the host's wavelengths (see [`FmPointQuery`]; `query` required).
+    pub volume_point:
+        unsafe extern "C" fn(volume: *const FmVolume, query: *const FmPointQuery) -> FmStatus,
+    /// σ_a, σ_s (m⁻¹) and the emission coefficient j = σ_a L_e in the volume's own channels at `n` points (3 f64
+    /// each; every layer, lines and art direction included, at time 0); each output `n × channels` f32, any may
+    /// be null.
     pub volume_coefficients: unsafe extern "C" fn(
         volume: *const FmVolume,
         points: *const f64,
@@ -452,8 +588,8 @@ pub struct FmApi {
         sigma_s: *mut f32,
         emission: *mut f32,
     ) -> FmStatus,
-    /// ABI 0.2. Builds the fire light of a volume (parameters: `string weighting` power (default) | luminance). The light
-    /// keeps the volume alive; destroy both.
+    /// Builds the fire light of a volume (parameters: `string weighting` power (default) | luminance | escaping,
+    /// and the rest of the `light` table). The light keeps the volume alive; destroy both.
     pub light_create: unsafe extern "C" fn(
         volume: *const FmVolume,
         params: *const FmParam,
@@ -462,128 +598,48 @@ pub struct FmApi {
     ) -> FmStatus,
     /// Destroys a light (null is ignored).
     pub light_destroy: unsafe extern "C" fn(light: *mut FmLight),
-    /// Describes a light.
+    /// Describes a light into `*out` (its `struct_size` set by the host).
     pub light_info: unsafe extern "C" fn(light: *const FmLight, out: *mut FmLightInfo) -> FmStatus,
-    /// Samples `n` points from 6 uniform numbers each (`u`, 6n doubles): medium-space points (3n), their
-    /// density per unit volume (n), and the emission coefficient j = σ_a L_e there (n × channels, may be null).
+    /// Samples `n` points from 6 uniform numbers each (`u`, 6n doubles), each at its time (`times`: `n` doubles,
+    /// frames from the grids' time, or null for time 0: a volume's embers move while the shutter is open, and
+    /// the light samples them where they are then): medium-space points (3n), their density per unit volume
+    /// (n), and the emission coefficient j = σ_a L_e there (n × channels, may be null; an ember is a surface:
+    /// its light reaches a host through `volume_query` along the point's direction).
     pub light_sample: unsafe extern "C" fn(
         light: *const FmLight,
         u: *const f64,
+        times: *const f64,
         n: usize,
         points: *mut f64,
         pdf: *mut f64,
         emission: *mut f32,
     ) -> FmStatus,
-    /// Density per unit volume of `n` medium-space points (3n doubles).
+    /// Density per unit volume of `n` medium-space points (3n doubles), each at its time (as
+    /// [`light_sample`](Self::light_sample)).
     pub light_pdf: unsafe extern "C" fn(
         light: *const FmLight,
         points: *const f64,
+        times: *const f64,
         n: usize,
         pdf: *mut f64,
     ) -> FmStatus,
     /// Solid-angle density of the sampled point's direction, seen from `origins` along `directions` (3n each,
-    /// medium space): ∫ pdf(o + s d̂) s² ds.
+    /// medium space): ∫ pdf(o + s d̂) s² ds, for a sample drawn at each time (as
+    /// [`light_sample`](Self::light_sample)).
     pub light_pdf_direction: unsafe extern "C" fn(
         light: *const FmLight,
         origins: *const f64,
         directions: *const f64,
-        n: usize,
-        pdf: *mut f64,
-    ) -> FmStatus,
-    /// ABI 0.3: the lowest and highest temperature (K) of the volume's grid after its mapping, into `out[0..2]`;
-    /// both 0 when the volume has no temperature grid. (A tone mapper's white point: the blackbody at the
-    /// fire's hottest temperature.)
-    pub volume_temperature_range:
-        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
-    /// ABI 0.4: [`volume_create`](Self::volume_create) with where each parameter came from: `locations` holds
-    /// `count` NUL-terminated strings (`file:line:col` of the scene that gave the parameter; an entry may be
-    /// null, and `locations` itself may be null). An error about a parameter then begins with its location.
-    pub volume_create_located: unsafe extern "C" fn(
-        params: *const FmParam,
-        locations: *const *const c_char,
-        count: usize,
-        out: *mut *mut FmVolume,
-    ) -> FmStatus,
-    /// ABI 0.4: how many rays' tracking (ratio, delta, scattering events) stopped at the per-ray collision cap so
-    /// far, into `*out`: each was cut short as if absorbed, a bias towards dark that a host should report.
-    pub volume_capped_rays:
-        unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
-    /// ABI 0.5: [`volume_integrate`](Self::volume_integrate) with a time per ray: `times` holds `n` doubles,
-    /// frames from the grids' time inside the volume's shutter (`shutteropen`, `shutterclose`), or is null
-    /// (every ray at time 0). A volume with motion blur (a `velocitygrid` and an open shutter) is looked up
-    /// where its velocity carried it from; any other volume ignores the times.
-    pub volume_integrate_at: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        times: *const f64,
-        n: usize,
-        radiance: *mut f32,
-        transmittance: *mut f32,
-        exits: *mut FmExit,
-    ) -> FmStatus,
-    /// ABI 0.5: [`volume_transmittance`](Self::volume_transmittance) with a time per ray (as
-    /// [`volume_integrate_at`](Self::volume_integrate_at)).
-    pub volume_transmittance_at: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        times: *const f64,
-        n: usize,
-        transmittance: *mut f32,
-    ) -> FmStatus,
-    /// ABI 0.5: [`volume_sample_scatter`](Self::volume_sample_scatter) with a time per ray (as
-    /// [`volume_integrate_at`](Self::volume_integrate_at)).
-    pub volume_sample_scatter_at: unsafe extern "C" fn(
-        volume: *const FmVolume,
-        rays: *const FmRay,
-        times: *const f64,
-        n: usize,
-        events: *mut FmScatter,
-        weights: *mut f32,
-        emitted: *mut f32,
-    ) -> FmStatus,
-    /// ABI 0.6: the temperature (K) whose blackbody a viewer adapts to for this volume, into `*out`: its hottest
-    /// temperature when its colour is the physics' (Planck emission), 0 when its colour is art-directed (a
-    /// `tint`, or a `colorramp` short of `physical` 1: meant to be seen against a D65 white) or it has no
-    /// temperature grid.
-    pub volume_white_temperature:
-        unsafe extern "C" fn(volume: *const FmVolume, out: *mut f64) -> FmStatus,
-    /// ABI 0.7: [`light_sample`](Self::light_sample) with a time per sample (`times`: `n` doubles, frames from
-    /// the grids' time, or null for time 0): a volume's embers move while the shutter is open, and the light
-    /// samples them where they are then. The emission output is the volume's j at the point (an ember is a
-    /// surface: its light reaches a host through `volume_integrate_at` along the point's direction).
-    pub light_sample_at: unsafe extern "C" fn(
-        light: *const FmLight,
-        u: *const f64,
-        times: *const f64,
-        n: usize,
-        points: *mut f64,
-        pdf: *mut f64,
-        emission: *mut f32,
-    ) -> FmStatus,
-    /// ABI 0.7: [`light_pdf`](Self::light_pdf) with a time per point (as [`light_sample_at`](Self::light_sample_at)).
-    pub light_pdf_at: unsafe extern "C" fn(
-        light: *const FmLight,
-        points: *const f64,
         times: *const f64,
         n: usize,
         pdf: *mut f64,
     ) -> FmStatus,
-    /// ABI 0.7: [`light_pdf_direction`](Self::light_pdf_direction) with a time per direction (as
-    /// [`light_sample_at`](Self::light_sample_at)): the density a sample drawn at that time has.
-    pub light_pdf_direction_at: unsafe extern "C" fn(
-        light: *const FmLight,
-        origins: *const f64,
-        directions: *const f64,
-        times: *const f64,
-        n: usize,
-        pdf: *mut f64,
-    ) -> FmStatus,
-    /// ABI 0.8: the fire's emitted radiance and transmittance along `n` straight rays, as the light estimates
-    /// them for next-event estimation along a sampled direction (`radiance`, required, and `transmittance`,
-    /// may be null: `n × channels` floats; `times` as [`light_sample_at`](Self::light_sample_at)): the volume's
-    /// march at the light's `linestep`, corrected toward the volume's own march with probability
-    /// `linecorrection`. Where its step is the volume's, the same as `volume_integrate_at` without exits.
-    pub light_integrate_at: unsafe extern "C" fn(
+    /// The fire's emitted radiance and transmittance along `n` straight rays, as the light estimates them for
+    /// next-event estimation along a sampled direction (`radiance`, required, and `transmittance`, may be null:
+    /// `n × channels` floats; `times` as [`light_sample`](Self::light_sample)): the volume's march at the
+    /// light's `linestep`, corrected toward the volume's own march with probability `linecorrection`. Where its
+    /// step is the volume's, the same as `volume_query` without exits.
+    pub light_integrate: unsafe extern "C" fn(
         light: *const FmLight,
         rays: *const FmRay,
         times: *const f64,
@@ -591,27 +647,9 @@ pub struct FmApi {
         radiance: *mut f32,
         transmittance: *mut f32,
     ) -> FmStatus,
-    /// ABI 0.10: how many of the volume's channels the light's line estimate marches, into `*out` (required):
-    /// the volume's channel count, or fewer (`linechannels`: a soot fire's spectral bins, the others following
-    /// from them).
+    /// How many of the volume's channels the light's line estimate marches, into `*out` (required): the volume's
+    /// channel count, or fewer (`linechannels`: a soot fire's spectral bins, the others following from them).
     pub light_line_channels: unsafe extern "C" fn(light: *const FmLight, out: *mut u32) -> FmStatus,
-    /// ABI 0.11: what the volume holds beyond absorption, into `*out` (required): `FM_FEATURE_*` bits. A host that
-    /// tracks the medium itself (from [`volume_coefficients`](Self::volume_coefficients) and
-    /// [`volume_majorant_grid`](Self::volume_majorant_grid)) refuses, or keeps to the whole-ray queries for, what
-    /// it cannot handle.
-    pub volume_features: unsafe extern "C" fn(volume: *const FmVolume, out: *mut u64) -> FmStatus,
-    /// ABI 0.11: the volume's majorant grid into `*out` (required, its `struct_size` set by the host).
-    pub volume_majorant_grid:
-        unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmMajorantGrid) -> FmStatus,
-    /// ABI 0.11: the point query (see [`FmPointQuery`]; `query` required).
-    pub volume_point:
-        unsafe extern "C" fn(volume: *const FmVolume, query: *const FmPointQuery) -> FmStatus,
-    /// ABI 0.12: the last error on this thread as a structure into `*out` (required, its `struct_size` set by
-    /// the host); see [`FmErrorDetail`].
-    pub last_error_detail: unsafe extern "C" fn(out: *mut FmErrorDetail) -> FmStatus,
-    /// ABI 0.13: a volume from a creation info (see [`FmCreateInfo`]; `info` and `out` required).
-    pub volume_create_with:
-        unsafe extern "C" fn(info: *const FmCreateInfo, out: *mut *mut FmVolume) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -630,9 +668,11 @@ mod tests {
     #[test]
     fn version_rules() {
         assert!(compatible(ABI_MAJOR, ABI_MINOR, ABI_MAJOR, ABI_MINOR));
-        assert!(compatible(0, 3, 0, 1));
-        assert!(!compatible(0, 1, 0, 2));
-        assert!(!compatible(1, 1, 0, 1));
+        assert!(compatible(1, 3, 1, 0));
+        assert!(!compatible(1, 0, 1, 2));
+        // A host built for 0.x and a 1.0 plugin, both ways.
+        assert!(!compatible(1, 0, 0, 13));
+        assert!(!compatible(0, 13, 1, 0));
     }
 
     #[test]
@@ -641,15 +681,13 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmRay>(), 72);
         assert_eq!(core::mem::size_of::<FmExit>(), 56);
         assert_eq!(core::mem::size_of::<FmScatter>(), 40);
-        assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 112);
+        assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 120);
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
-        assert_eq!(core::mem::size_of::<FmParamInfo>(), 56);
-        assert_eq!(core::mem::size_of::<FmLightInfo>(), 48);
-        // Four u32 fields, then one pointer per entry (0.4 appended `volume_create_located` and
-        // `volume_capped_rays`, 0.5 the three `_at` entries, 0.6 `volume_white_temperature`, 0.7 the light's
-        // three `_at` entries, 0.8 `light_integrate_at`, 0.10 `light_line_channels`, 0.11 `volume_features` and
-        // `volume_majorant_grid` and `volume_point`, 0.12 `last_error_detail`, 0.13 `volume_create_with`).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 34 * 8);
+        assert_eq!(core::mem::size_of::<FmParamInfo>(), 64);
+        assert_eq!(core::mem::size_of::<FmLightInfo>(), 56);
+        // Four u32 fields, then one pointer per entry.
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 24 * 8);
+        assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
         assert_eq!(core::mem::size_of::<FmCreateInfo>(), 72);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);

@@ -3,12 +3,17 @@
 
 /// SplitMix64 (Steele, Lea & Flood 2014).
 #[derive(Debug, Clone)]
-pub struct Rng(u64);
+pub struct Rng(u64, Option<f64>);
 
 impl Rng {
     /// A stream from `seed`.
     pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x5851_F42D_4C95_7F2D)
+        Rng(seed ^ 0x5851_F42D_4C95_7F2D, None)
+    }
+    /// The stream from `seed` whose first uniform number is `first` (a host's own sample, in [0, 1)) instead of
+    /// the stream's: the next ones are the stream's own from its start.
+    pub fn starting(seed: u64, first: Option<f64>) -> Rng {
+        Rng(seed ^ 0x5851_F42D_4C95_7F2D, first)
     }
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
@@ -20,6 +25,9 @@ impl Rng {
     }
     /// Uniform in [0, 1).
     pub fn next_f64(&mut self) -> f64 {
+        if let Some(u) = self.1.take() {
+            return u;
+        }
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 }
@@ -27,6 +35,18 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_given_first_number_comes_first_then_the_stream() {
+        let mut own = Rng::new(9);
+        let mut given = Rng::starting(9, Some(0.25));
+        assert_eq!(given.next_f64(), 0.25);
+        for _ in 0..4 {
+            assert_eq!(given.next_f64(), own.next_f64());
+        }
+        let (mut a, mut b) = (Rng::new(3), Rng::starting(3, None));
+        assert_eq!(a.next_f64(), b.next_f64());
+    }
 
     #[test]
     fn uniform_mean_and_range() {

@@ -19,6 +19,7 @@ pub fn pinhole_rays(v: &FireVolume, size: usize) -> impl Iterator<Item = Ray> {
             t0: 0.0,
             t1: f64::INFINITY,
             seed: p as u64,
+            first: None,
         }
     })
 }

@@ -201,6 +201,7 @@ fn shoot(v: &FireVolume, o: DVec3, d: DVec3, time: f64) -> (Vec<f64>, Vec<f64>) 
         t0: 0.0,
         t1: 10.0,
         seed: 1,
+        first: None,
     };
     v.integrate_at(&ray, time, &mut l, &mut t);
     (l, t)
@@ -273,6 +274,7 @@ fn the_fire_in_front_attenuates_it_and_nothing_passes() {
         t0: 0.0,
         t1: 10.0,
         seed: 3,
+        first: None,
     };
     v.transmittance(&ray, &mut tr);
     assert!(tr.iter().all(|&x| x == 0.0));

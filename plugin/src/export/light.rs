@@ -76,10 +76,10 @@ pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightI
     guard(|| {
         // SAFETY: the handle's contract.
         let lt = unsafe { light(l, "light_info") }?;
-        if out.is_null() {
-            return Err(bad("light_info: out is null"));
-        }
+        // SAFETY: null or the host's FmLightInfo (contract).
+        unsafe { super::sized(out, "light_info: out", "FmLightInfo") }?;
         let info = FmLightInfo {
+            struct_size: std::mem::size_of::<FmLightInfo>(),
             power_w: lt.power_w(),
             power_lm: lt.power_lm(),
             voxels: lt.voxels() as u64,
@@ -92,8 +92,8 @@ pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightI
             },
             line_block: lt.line_block() as u32,
         };
-        // SAFETY: non-null, writable.
-        unsafe { *out = info };
+        // SAFETY: non-null with at least our struct's size writable (checked, contract).
+        unsafe { out.write_unaligned(info) };
         Ok(())
     })
 }
@@ -155,18 +155,6 @@ pub(super) unsafe fn out_f64<'a>(
 pub(super) unsafe extern "C" fn light_sample(
     l: *const FmLight,
     u: *const f64,
-    n: usize,
-    points: *mut f64,
-    pdf: *mut f64,
-    emission: *mut f32,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as light_sample_at's without times.
-    unsafe { light_sample_at(l, u, std::ptr::null(), n, points, pdf, emission) }
-}
-
-pub(super) unsafe extern "C" fn light_sample_at(
-    l: *const FmLight,
-    u: *const f64,
     times_ptr: *const f64,
     n: usize,
     points: *mut f64,
@@ -215,16 +203,6 @@ pub(super) unsafe extern "C" fn light_sample_at(
 pub(super) unsafe extern "C" fn light_pdf(
     l: *const FmLight,
     points: *const f64,
-    n: usize,
-    pdf: *mut f64,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as light_pdf_at's without times.
-    unsafe { light_pdf_at(l, points, std::ptr::null(), n, pdf) }
-}
-
-pub(super) unsafe extern "C" fn light_pdf_at(
-    l: *const FmLight,
-    points: *const f64,
     times_ptr: *const f64,
     n: usize,
     pdf: *mut f64,
@@ -247,17 +225,6 @@ pub(super) unsafe extern "C" fn light_pdf_at(
 }
 
 pub(super) unsafe extern "C" fn light_pdf_direction(
-    l: *const FmLight,
-    origins: *const f64,
-    directions: *const f64,
-    n: usize,
-    pdf: *mut f64,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as light_pdf_direction_at's without times.
-    unsafe { light_pdf_direction_at(l, origins, directions, std::ptr::null(), n, pdf) }
-}
-
-pub(super) unsafe extern "C" fn light_pdf_direction_at(
     l: *const FmLight,
     origins: *const f64,
     directions: *const f64,
@@ -287,7 +254,7 @@ pub(super) unsafe extern "C" fn light_pdf_direction_at(
     })
 }
 
-pub(super) unsafe extern "C" fn light_integrate_at(
+pub(super) unsafe extern "C" fn light_integrate(
     l: *const FmLight,
     rays_ptr: *const FmRay,
     times_ptr: *const f64,

@@ -108,7 +108,7 @@ fn fail(e: Error) -> (FmStatus, String) {
     (status_of(&e), e.to_string())
 }
 
-/// Checks a struct the host passed whose first field is its `struct_size` (every ABI struct since 0.11): refused
+/// Checks a struct the host passed whose first field is its `struct_size` (every ABI struct but array elements): refused
 /// when null or smaller than this plugin's `T` — `what` names the argument, `c_type` its C type.
 ///
 /// # Safety
@@ -229,9 +229,8 @@ unsafe extern "C" fn param_count() -> usize {
 
 unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus {
     guard(|| {
-        if out.is_null() {
-            return Err(bad("param_info: out is null"));
-        }
+        // SAFETY: null or the host's FmParamInfo (contract).
+        unsafe { sized(out, "param_info: out", "FmParamInfo") }?;
         let rows = param_rows();
         let r = rows.get(index).ok_or_else(|| {
             bad(format!(
@@ -239,9 +238,10 @@ unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus
                 rows.len()
             ))
         })?;
-        // SAFETY: out is non-null and points to an FmParamInfo the caller owns (ABI contract).
+        // SAFETY: out is non-null with at least our struct's size writable (checked, ABI contract).
         unsafe {
-            *out = FmParamInfo {
+            out.write_unaligned(FmParamInfo {
+                struct_size: std::mem::size_of::<FmParamInfo>(),
                 component: r[0].as_ptr(),
                 name: r[1].as_ptr(),
                 ty: r[2].as_ptr(),
@@ -249,7 +249,7 @@ unsafe extern "C" fn param_info(index: usize, out: *mut FmParamInfo) -> FmStatus
                 unit: r[4].as_ptr(),
                 range: r[5].as_ptr(),
                 doc: r[6].as_ptr(),
-            };
+            });
         }
         Ok(())
     })
@@ -261,15 +261,20 @@ static API: FmApi = FmApi {
     struct_size: std::mem::size_of::<FmApi>() as u32,
     reserved: 0,
     last_error,
+    last_error_detail,
     param_count,
     param_info,
     volume_create,
     volume_destroy,
     volume_info,
     volume_channel_xyz,
-    volume_integrate,
-    volume_transmittance,
-    volume_sample_scatter,
+    volume_temperature_range,
+    volume_white_temperature,
+    volume_capped_rays,
+    volume_query,
+    volume_features,
+    volume_majorant_grid,
+    volume_point,
     volume_coefficients,
     light_create,
     light_destroy,
@@ -277,23 +282,8 @@ static API: FmApi = FmApi {
     light_sample,
     light_pdf,
     light_pdf_direction,
-    volume_temperature_range,
-    volume_create_located,
-    volume_capped_rays,
-    volume_integrate_at,
-    volume_transmittance_at,
-    volume_sample_scatter_at,
-    volume_white_temperature,
-    light_sample_at,
-    light_pdf_at,
-    light_pdf_direction_at,
-    light_integrate_at,
+    light_integrate,
     light_line_channels,
-    volume_features,
-    volume_majorant_grid,
-    volume_point,
-    last_error_detail,
-    volume_create_with,
 };
 
 /// The plugin's entry point: the static function table.
@@ -339,8 +329,13 @@ mod tests {
             ),
         ];
         let mut out = std::ptr::null_mut();
+        let info = FmCreateInfo {
+            params: list.as_ptr(),
+            count: list.len(),
+            ..FmCreateInfo::default()
+        };
         // SAFETY: every parameter points at live values of its type and count; `out` is writable.
-        let status = unsafe { (api.volume_create)(list.as_ptr(), list.len(), &mut out) };
+        let status = unsafe { (api.volume_create)(&info, &mut out) };
         (status, out)
     }
 
@@ -399,17 +394,14 @@ mod tests {
     }
 
     fn integrate_one(api: &FmApi, v: *mut FmVolume, ray: &FmRay, l: &mut [f32]) -> FmStatus {
+        let q = FmRayQuery {
+            n: 1,
+            rays: ray,
+            radiance: l.as_mut_ptr(),
+            ..FmRayQuery::default()
+        };
         // SAFETY: one ray, `l` holds the volume's channels, optional outputs null.
-        unsafe {
-            (api.volume_integrate)(
-                v,
-                ray,
-                1,
-                l.as_mut_ptr(),
-                std::ptr::null_mut(),
-                std::ptr::null_mut(),
-            )
-        }
+        unsafe { (api.volume_query)(v, &q) }
     }
 
     #[test]
@@ -431,6 +423,7 @@ mod tests {
             (api.light_sample)(
                 light,
                 u.as_ptr(),
+                std::ptr::null(),
                 1,
                 pts.as_mut_ptr(),
                 pdf.as_mut_ptr(),

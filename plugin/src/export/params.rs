@@ -28,7 +28,7 @@ pub(super) unsafe fn read_params(
     let locations = if locations.is_null() {
         None
     } else {
-        // SAFETY: non-null, `count` entries (caller contract of volume_create_located).
+        // SAFETY: non-null, `count` entries (caller contract of volume_create's FmCreateInfo).
         Some(unsafe { std::slice::from_raw_parts(locations, count) })
     };
     let mut out = Vec::with_capacity(count);

@@ -1,5 +1,5 @@
-//! The fire volume's entries: create (with parameter locations), destroy, describe, and the batch queries —
-//! integrate, transmittance, scattering events, point coefficients, temperature range.
+//! The fire volume's entries: create (from the host's creation info), destroy, describe, the fast whole-ray query
+//! (integrate, transmittance, scattering events), point coefficients in the channels, temperature range.
 
 use super::light::{in_f64, out_f64};
 use super::params::read_params;
@@ -8,50 +8,21 @@ use crate::params::Param;
 use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
 use firemedium_abi::*;
 use glam::DVec3;
-use std::ffi::c_char;
 use std::panic::catch_unwind;
 
 pub(super) unsafe extern "C" fn volume_create(
-    params: *const FmParam,
-    count: usize,
-    out: *mut *mut FmVolume,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as volume_create_located's without locations.
-    unsafe { volume_create_located(params, std::ptr::null(), count, out) }
-}
-
-pub(super) unsafe extern "C" fn volume_create_located(
-    params: *const FmParam,
-    locations: *const *const c_char,
-    count: usize,
+    info: *const FmCreateInfo,
     out: *mut *mut FmVolume,
 ) -> FmStatus {
     guard(|| {
         if out.is_null() {
             return Err(bad("volume_create: out is null"));
         }
-        // SAFETY: the caller's contract for `params`/`locations`/`count` (documented in FmApi).
-        let list = unsafe { read_params(params, locations, count) }?;
-        let v = FireVolume::new(&list).map_err(fail)?;
-        // SAFETY: out is non-null and writable (checked, contract).
-        unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
-        Ok(())
-    })
-}
-
-pub(super) unsafe extern "C" fn volume_create_with(
-    info: *const FmCreateInfo,
-    out: *mut *mut FmVolume,
-) -> FmStatus {
-    guard(|| {
-        if out.is_null() {
-            return Err(bad("volume_create_with: out is null"));
-        }
         // SAFETY: null or the host's FmCreateInfo (contract).
-        unsafe { super::sized(info, "volume_create_with: info", "FmCreateInfo") }?;
+        unsafe { super::sized(info, "volume_create: info", "FmCreateInfo") }?;
         // SAFETY: non-null and at least size_of::<FmCreateInfo>() readable bytes (checked above).
         let ci = unsafe { info.read_unaligned() };
-        // SAFETY: the caller's contract for the parameter arrays (as volume_create_located's).
+        // SAFETY: the caller's contract for the parameter arrays (documented in FmCreateInfo).
         let mut list = unsafe { read_params(ci.params, ci.locations, ci.count) }?;
         // The host's context, where the scene does not set the same itself.
         let mut context = Vec::new();
@@ -67,7 +38,7 @@ pub(super) unsafe extern "C" fn volume_create_with(
         if ci.flags & FM_CREATE_SHUTTER != 0 {
             if !ci.shutter.iter().all(|s| s.is_finite()) || ci.shutter[0] > ci.shutter[1] {
                 return Err(bad(format!(
-                    "volume_create_with: shutter {:?}: expected finite open ≤ close",
+                    "volume_create: shutter {:?}: expected finite open ≤ close",
                     ci.shutter
                 )));
             }
@@ -167,7 +138,32 @@ pub(super) fn ray_of(r: &FmRay) -> Ray {
         t0: r.tmin,
         t1: r.tmax,
         seed: r.seed,
+        first: None,
     }
+}
+
+/// `n` first uniform numbers at `p` (null: none given), each checked to lie in [0, 1).
+///
+/// # Safety
+/// `p` is null or points to `n` doubles.
+unsafe fn firsts<'a>(
+    p: *const f64,
+    n: usize,
+    what: &str,
+) -> Result<Option<&'a [f64]>, (FmStatus, String)> {
+    if p.is_null() || n == 0 {
+        return Ok(None);
+    }
+    super::span::<f64>(n, what)?;
+    // SAFETY: `p` is non-null and holds `n` doubles (caller contract).
+    let u = unsafe { std::slice::from_raw_parts(p, n) };
+    if let Some(i) = u.iter().position(|x| !(0.0..1.0).contains(x)) {
+        return Err(bad(format!(
+            "{what}: u[{i}] = {}: expected a number in [0, 1)",
+            u[i]
+        )));
+    }
+    Ok(Some(u))
 }
 
 pub(super) unsafe extern "C" fn volume_info(
@@ -177,15 +173,15 @@ pub(super) unsafe extern "C" fn volume_info(
     guard(|| {
         // SAFETY: contract of the handle.
         let v = unsafe { vol(volume, "volume_info") }?;
-        if out.is_null() {
-            return Err(bad("volume_info: out is null"));
-        }
+        // SAFETY: null or the host's FmVolumeInfo (contract).
+        unsafe { super::sized(out, "volume_info: out", "FmVolumeInfo") }?;
         let [p0, p1] = v.bounds();
         let (space, lo, hi) = match v.color_mode() {
             ColorMode::Spectral(g) => (FM_SPACE_SPECTRAL, g.min_nm(), g.max_nm()),
             ColorMode::Rgb => (FM_SPACE_XYZ, 380.0, 780.0),
         };
         let info = FmVolumeInfo {
+            struct_size: std::mem::size_of::<FmVolumeInfo>(),
             bounds_min: p0.to_array(),
             bounds_max: p1.to_array(),
             channels: v.channels() as u32,
@@ -203,8 +199,8 @@ pub(super) unsafe extern "C" fn volume_info(
             bytes: v.bytes() as u64,
             build_seconds: v.build_seconds(),
         };
-        // SAFETY: non-null, writable (contract).
-        unsafe { *out = info };
+        // SAFETY: non-null with at least our struct's size writable (checked, contract).
+        unsafe { out.write_unaligned(info) };
         Ok(())
     })
 }
@@ -280,196 +276,150 @@ pub(super) unsafe fn times<'a>(
     Ok(Times(Some(t)))
 }
 
-pub(super) unsafe extern "C" fn volume_integrate(
+pub(super) unsafe extern "C" fn volume_query(
     volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    n: usize,
-    radiance: *mut f32,
-    transmittance: *mut f32,
-    exits: *mut FmExit,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as volume_integrate_at's without times.
-    unsafe {
-        volume_integrate_at(
-            volume,
-            rays_ptr,
-            std::ptr::null(),
-            n,
-            radiance,
-            transmittance,
-            exits,
-        )
-    }
-}
-
-pub(super) unsafe extern "C" fn volume_integrate_at(
-    volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    times_ptr: *const f64,
-    n: usize,
-    radiance: *mut f32,
-    transmittance: *mut f32,
-    exits: *mut FmExit,
+    query: *const FmRayQuery,
 ) -> FmStatus {
     guard(|| {
         // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
-        let v = unsafe { vol(volume, "volume_integrate") }?;
+        let v = unsafe { vol(volume, "volume_query") }?;
+        // SAFETY: null or the host's FmRayQuery (contract).
+        unsafe { super::sized(query, "volume_query: query", "FmRayQuery") }?;
+        // SAFETY: non-null and at least size_of::<FmRayQuery>() readable bytes (checked above).
+        let q = unsafe { query.read_unaligned() };
+        let n = q.n;
         // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
-        let rs = unsafe { rays(rays_ptr, n) }?;
+        let rs = unsafe { rays(q.rays, n) }?;
         // SAFETY: `times` is null or holds `n` doubles (caller contract).
-        let ts = unsafe { times(times_ptr, n, "volume_integrate") }?;
-        let c = v.channels();
-        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
-        let l_out = unsafe { out_f32(radiance, n, c) }?
-            .ok_or_else(|| bad("volume_integrate: radiance is null"))?;
-        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
-        let mut t_out = unsafe { out_f32(transmittance, n, c) }?;
-        let mut e_out = if exits.is_null() {
-            None
-        } else {
-            // SAFETY: `exits` is non-null here and holds `n` entries (caller contract).
-            Some(unsafe { std::slice::from_raw_parts_mut(exits, n) })
+        let ts = unsafe { times(q.times, n, "volume_query") }?;
+        // SAFETY: `u` is null or holds `n` doubles (caller contract).
+        let us = unsafe { firsts(q.u, n, "volume_query") }?;
+        let ray = |i: usize| Ray {
+            first: us.map(|u| u[i]),
+            ..ray_of(&rs[i])
         };
-        super::with_channels(c, |l, t| {
-            for (i, r) in rs.iter().enumerate() {
-                let ray = ray_of(r);
-                // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
-                let (p_exit, d_exit, t_exit) = if e_out.is_some() {
-                    v.integrate_exit_at(&ray, ts[i], l, t)
-                } else {
-                    let te = v.integrate_at(&ray, ts[i], l, t);
-                    (ray.o + ray.d * te, ray.d, te)
-                };
-                store(l_out, i, l);
-                if let Some(to) = t_out.as_deref_mut() {
-                    store(to, i, t);
-                }
-                if let Some(eo) = e_out.as_deref_mut() {
-                    eo[i] = FmExit {
-                        point: p_exit.to_array(),
-                        direction: d_exit.to_array(),
-                        t: t_exit,
-                    };
-                }
-            }
-        });
-        Ok(())
-    })
-}
-
-pub(super) unsafe extern "C" fn volume_transmittance(
-    volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    n: usize,
-    transmittance: *mut f32,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as volume_transmittance_at's without times.
-    unsafe { volume_transmittance_at(volume, rays_ptr, std::ptr::null(), n, transmittance) }
-}
-
-pub(super) unsafe extern "C" fn volume_transmittance_at(
-    volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    times_ptr: *const f64,
-    n: usize,
-    transmittance: *mut f32,
-) -> FmStatus {
-    guard(|| {
-        // SAFETY: the caller's buffers are as the ABI documents.
-        let v = unsafe { vol(volume, "volume_transmittance") }?;
-        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
-        let rs = unsafe { rays(rays_ptr, n) }?;
-        // SAFETY: `times` is null or holds `n` doubles (caller contract).
-        let ts = unsafe { times(times_ptr, n, "volume_transmittance") }?;
         let c = v.channels();
-        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
-        let out = unsafe { out_f32(transmittance, n, c) }?
-            .ok_or_else(|| bad("volume_transmittance: transmittance is null"))?;
-        super::with_channels(c, |_, t| {
-            for (i, r) in rs.iter().enumerate() {
-                v.transmittance_at(&ray_of(r), ts[i], t);
-                store(out, i, t);
+        let unused = |name: &str, null: bool| {
+            if null {
+                Ok(())
+            } else {
+                Err(bad(format!(
+                    "volume_query: {name} is set, but query {} does not write it (set it null)",
+                    q.what
+                )))
             }
-        });
-        Ok(())
-    })
-}
-
-pub(super) unsafe extern "C" fn volume_sample_scatter(
-    volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    n: usize,
-    events: *mut FmScatter,
-    weights: *mut f32,
-    emitted: *mut f32,
-) -> FmStatus {
-    // SAFETY: the caller's contract, as volume_sample_scatter_at's without times.
-    unsafe {
-        volume_sample_scatter_at(
-            volume,
-            rays_ptr,
-            std::ptr::null(),
-            n,
-            events,
-            weights,
-            emitted,
-        )
-    }
-}
-
-pub(super) unsafe extern "C" fn volume_sample_scatter_at(
-    volume: *const FmVolume,
-    rays_ptr: *const FmRay,
-    times_ptr: *const f64,
-    n: usize,
-    events: *mut FmScatter,
-    weights: *mut f32,
-    emitted: *mut f32,
-) -> FmStatus {
-    guard(|| {
-        // SAFETY: the caller's buffers are as the ABI documents.
-        let v = unsafe { vol(volume, "volume_sample_scatter") }?;
-        // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
-        let rs = unsafe { rays(rays_ptr, n) }?;
-        // SAFETY: `times` is null or holds `n` doubles (caller contract).
-        let ts = unsafe { times(times_ptr, n, "volume_sample_scatter") }?;
-        let c = v.channels();
-        if events.is_null() && n > 0 {
-            return Err(bad("volume_sample_scatter: events is null"));
+        };
+        if !(q.step >= 0.0 && q.step.is_finite()) {
+            return Err(bad(format!(
+                "volume_query: step {}: expected 0 (the volume's) or a finite length > 0",
+                q.step
+            )));
         }
-        let ev = if n == 0 {
-            &mut [][..]
-        } else {
-            // SAFETY: `events` is non-null here and holds `n` entries (caller contract).
-            unsafe { std::slice::from_raw_parts_mut(events, n) }
-        };
-        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
-        let w_out = unsafe { out_f32(weights, n, c) }?
-            .ok_or_else(|| bad("volume_sample_scatter: weights is null"))?;
-        // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
-        let mut l_out = unsafe { out_f32(emitted, n, c) }?;
-        let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
-        for (i, r) in rs.iter().enumerate() {
-            let ray = ray_of(r);
-            let e = v.sample_scatter_at(&ray, ts[i], &mut l, &mut w);
-            let (event, t) = match e {
-                Event::Escaped => (FM_EVENT_ESCAPED, ray.t1),
-                Event::Scattered(t) => (FM_EVENT_SCATTERED, t),
-                Event::Absorbed => (FM_EVENT_ABSORBED, ray.t1),
-            };
-            ev[i] = FmScatter {
-                event,
-                reserved: 0,
-                t,
-                point: (ray.o + ray.d * t).to_array(),
-            };
-            for k in 0..c {
-                w_out[i * c + k] = w[k] as f32;
-            }
-            if let Some(lo) = l_out.as_deref_mut() {
-                for k in 0..c {
-                    lo[i * c + k] = l[k] as f32;
+        match q.what {
+            FM_QUERY_INTEGRATE => {
+                unused("events", q.events.is_null())?;
+                unused("weights", q.weights.is_null())?;
+                if q.step > 0.0 && !q.exits.is_null() {
+                    return Err(bad(
+                        "volume_query: a step of its own is for straight rays: exits must be null with it",
+                    ));
                 }
+                // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+                let l_out = unsafe { out_f32(q.radiance, n, c) }?
+                    .ok_or_else(|| bad("volume_query: radiance is null"))?;
+                // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+                let mut t_out = unsafe { out_f32(q.transmittance, n, c) }?;
+                let mut e_out = if q.exits.is_null() || n == 0 {
+                    None
+                } else {
+                    // SAFETY: `exits` is non-null here and holds `n` entries (caller contract).
+                    Some(unsafe { std::slice::from_raw_parts_mut(q.exits, n) })
+                };
+                super::with_channels(c, |l, t| {
+                    for i in 0..n {
+                        let r = ray(i);
+                        // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
+                        let (p_exit, d_exit, t_exit) = if e_out.is_some() {
+                            v.integrate_exit_at(&r, ts[i], l, t)
+                        } else {
+                            let te = if q.step > 0.0 {
+                                v.integrate_stepped_at(&r, ts[i], q.step, l, t)
+                            } else {
+                                v.integrate_at(&r, ts[i], l, t)
+                            };
+                            (r.o + r.d * te, r.d, te)
+                        };
+                        store(l_out, i, l);
+                        if let Some(to) = t_out.as_deref_mut() {
+                            store(to, i, t);
+                        }
+                        if let Some(eo) = e_out.as_deref_mut() {
+                            eo[i] = FmExit {
+                                point: p_exit.to_array(),
+                                direction: d_exit.to_array(),
+                                t: t_exit,
+                            };
+                        }
+                    }
+                });
+            }
+            FM_QUERY_TRANSMITTANCE => {
+                unused("radiance", q.radiance.is_null())?;
+                unused("exits", q.exits.is_null())?;
+                unused("events", q.events.is_null())?;
+                unused("weights", q.weights.is_null())?;
+                // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+                let out = unsafe { out_f32(q.transmittance, n, c) }?
+                    .ok_or_else(|| bad("volume_query: transmittance is null"))?;
+                super::with_channels(c, |_, t| {
+                    for i in 0..n {
+                        v.transmittance_at(&ray(i), ts[i], t);
+                        store(out, i, t);
+                    }
+                });
+            }
+            FM_QUERY_SCATTER => {
+                unused("transmittance", q.transmittance.is_null())?;
+                unused("exits", q.exits.is_null())?;
+                if q.events.is_null() && n > 0 {
+                    return Err(bad("volume_query: events is null"));
+                }
+                let ev = if n == 0 {
+                    &mut [][..]
+                } else {
+                    // SAFETY: `events` is non-null here and holds `n` entries (caller contract).
+                    unsafe { std::slice::from_raw_parts_mut(q.events, n) }
+                };
+                // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+                let w_out = unsafe { out_f32(q.weights, n, c) }?
+                    .ok_or_else(|| bad("volume_query: weights is null"))?;
+                // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
+                let mut l_out = unsafe { out_f32(q.radiance, n, c) }?;
+                super::with_channels(c, |l, w| {
+                    for i in 0..n {
+                        let r = ray(i);
+                        let (event, t) = match v.sample_scatter_at(&r, ts[i], l, w) {
+                            Event::Escaped => (FM_EVENT_ESCAPED, r.t1),
+                            Event::Scattered(t) => (FM_EVENT_SCATTERED, t),
+                            Event::Absorbed => (FM_EVENT_ABSORBED, r.t1),
+                        };
+                        ev[i] = FmScatter {
+                            event,
+                            reserved: 0,
+                            t,
+                            point: (r.o + r.d * t).to_array(),
+                        };
+                        store(w_out, i, w);
+                        if let Some(lo) = l_out.as_deref_mut() {
+                            store(lo, i, l);
+                        }
+                    }
+                });
+            }
+            w => {
+                return Err(bad(format!(
+                    "volume_query: what {w}: expected FM_QUERY_INTEGRATE (0), FM_QUERY_TRANSMITTANCE (1) or FM_QUERY_SCATTER (2)"
+                )))
             }
         }
         Ok(())

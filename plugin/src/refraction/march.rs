@@ -103,7 +103,7 @@ pub(crate) fn integrate_exit(
             step
         };
         let mut stepper = Stepper::new(v, false);
-        let mut rng = crate::rng::Rng::new(ray.seed);
+        let mut rng = ray.rng();
         let (mut s0, mut next) = (0.0, rng.next_f64() * ds);
         if next <= 0.0 {
             next = ds;
@@ -138,7 +138,7 @@ pub(crate) fn integrate_exit(
     } else {
         step
     };
-    let mut rng = crate::rng::Rng::new(ray.seed);
+    let mut rng = ray.rng();
     let first = rng.next_f64() * ds;
     let mut opaque = false;
     let mut stepper = Stepper::new(v, true);
@@ -202,6 +202,7 @@ mod tests {
             t0: 0.0,
             t1: 10.0,
             seed: 3,
+            first: None,
         };
         let (p, dir, te) = v.integrate_exit(&ray, &mut l, &mut t);
         (l, t, p, dir, te)
@@ -315,6 +316,7 @@ mod tests {
                     t0: 0.0,
                     t1: 10.0,
                     seed,
+                    first: None,
                 };
                 let c = v.channels();
                 let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);

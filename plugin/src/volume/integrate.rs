@@ -54,6 +54,16 @@ pub struct Ray {
     pub t1: f64,
     /// Seed of the ray's random numbers.
     pub seed: u64,
+    /// The first of them, when the host gives it (its sampler's stratified number): the march's offset along
+    /// the ray, tracking's first free-flight distance.
+    pub first: Option<f64>,
+}
+
+impl Ray {
+    /// The ray's random numbers: `first`, if given, then the stream of `seed`.
+    pub(crate) fn rng(&self) -> crate::rng::Rng {
+        crate::rng::Rng::starting(self.seed, self.first)
+    }
 }
 
 /// What integrators need from a medium.
@@ -246,7 +256,7 @@ pub(crate) fn integrate(
     let Some(span) = Span::new(m, ray) else {
         return ray.t1;
     };
-    let mut rng = Rng::new(ray.seed);
+    let mut rng = ray.rng();
     match how {
         Integrator::March => {
             let cutoff = m.cutoff();
@@ -502,7 +512,7 @@ pub(crate) fn sample_scatter(
     let Some(span) = Span::new(m, ray) else {
         return Event::Escaped;
     };
-    let mut rng = Rng::new(ray.seed);
+    let mut rng = ray.rng();
     delta(&span, &mut rng, sc, l, w, true)
 }
 
@@ -609,6 +619,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 10.0,
                 seed: 3,
+                first: None,
             };
             let (l, t) = run(&m, &ray, Integrator::March);
             let want = b * -(-tau).exp_m1();
@@ -642,6 +653,7 @@ pub(crate) mod tests {
                     t0: 0.0,
                     t1: 100.0,
                     seed: 11,
+                    first: None,
                 };
                 let (l, _) = run(&m, &ray, Integrator::March);
                 let want = bb * -(-2.0 * kappa * (r * r - imp * imp).sqrt()).exp_m1();
@@ -672,6 +684,7 @@ pub(crate) mod tests {
                         t0: 0.0,
                         t1: 5.0,
                         seed: s,
+                        first: None,
                     };
                     let (l, t) = run(&m, &ray, how);
                     assert!(l.is_finite() && (0.0..=1.0).contains(&t));
@@ -723,6 +736,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: s,
+                first: None,
             };
             let (mut l, mut w) = ([0.0], [0.0]);
             match sample_scatter(&m, &ray, &mut sc, &mut l, &mut w) {
@@ -749,6 +763,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: 0,
+                first: None,
             },
             Ray {
                 o: DVec3::NAN,
@@ -756,6 +771,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: 0,
+                first: None,
             },
             Ray {
                 o: DVec3::new(2.0, 0.0, 0.0),
@@ -763,6 +779,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: 0,
+                first: None,
             },
             Ray {
                 o: DVec3::new(0.5, 0.0, 0.0),
@@ -770,6 +787,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 1.0,
                 seed: 0,
+                first: None,
             },
         ] {
             for how in [Integrator::March, Integrator::Ratio, Integrator::Delta] {
@@ -789,6 +807,7 @@ pub(crate) mod tests {
                 t0: 0.0,
                 t1: 2.0,
                 seed: 0,
+                first: None,
             },
             Integrator::March,
         );

@@ -396,7 +396,7 @@ pub(super) fn march<
     if !(ds > 0.0) || len / ds > MAX_STEPS {
         ds = len / MAX_STEPS;
     }
-    let mut rng = crate::rng::Rng::new(ray.seed);
+    let mut rng = ray.rng();
     let mut first = rng.next_f64() * ds;
     if first <= 0.0 {
         first = ds;

@@ -204,7 +204,7 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
     let Some(span) = integrate::Span::new(m, ray) else {
         return ray.t1;
     };
-    let mut rng = crate::rng::Rng::new(ray.seed);
+    let mut rng = ray.rng();
     let mut ls = LaneScratch::new(lt.chunks());
     let mut empty = Vec::new();
     let cutoff = v.cutoff as f32;
@@ -439,6 +439,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 1,
+                first: None,
             },
             Ray {
                 o: DVec3::new(0.6, 0.63, -1.0),
@@ -446,6 +447,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 2,
+                first: None,
             },
             Ray {
                 o: DVec3::new(0.6, 0.63, 0.55),
@@ -453,6 +455,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 3,
+                first: None,
             },
             Ray {
                 o: DVec3::new(-1.0, 0.0, 0.5),
@@ -460,6 +463,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 4,
+                first: None,
             }, // in a face
             Ray {
                 o: DVec3::new(-1.0, 0.0, 0.0),
@@ -467,6 +471,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 5,
+                first: None,
             }, // along an edge
             Ray {
                 o: DVec3::new(3.0, 0.6, 0.5),
@@ -474,6 +479,7 @@ mod tests {
                 t0: 0.0,
                 t1: 9.0,
                 seed: 6,
+                first: None,
             },
         ];
         for seed in 0..150 {
@@ -486,6 +492,7 @@ mod tests {
                 t0: 0.0,
                 t1: 5.0,
                 seed: 100 + seed,
+                first: None,
             });
         }
         let pbrt = |steptau: f64| {

@@ -302,6 +302,7 @@ mod tests {
             t0: 0.0,
             t1: 1.0,
             seed,
+            first: None,
         }
     }
 

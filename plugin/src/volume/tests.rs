@@ -41,6 +41,7 @@ pub(crate) fn ray_x(seed: u64) -> Ray {
         t0: 0.0,
         t1: 3.0,
         seed,
+        first: None,
     }
 }
 
@@ -431,6 +432,7 @@ pub(crate) fn blob_rays(n: u64, seed: u64) -> Vec<Ray> {
                 t0: 0.0,
                 t1: 5.0,
                 seed: k,
+                first: None,
             }
         })
         .collect()
@@ -575,6 +577,7 @@ fn extremes_are_finite() {
                     t0: 0.0,
                     t1: 10.0,
                     seed: 1,
+                    first: None,
                 }, // starts inside
                 Ray {
                     o: DVec3::new(-1.0, 0.0, 0.0),
@@ -582,6 +585,7 @@ fn extremes_are_finite() {
                     t0: 0.0,
                     t1: 10.0,
                     seed: 2,
+                    first: None,
                 }, // along an edge
                 Ray {
                     o: DVec3::new(-1.0, 0.5, 1.0),
@@ -589,6 +593,7 @@ fn extremes_are_finite() {
                     t0: 0.0,
                     t1: 10.0,
                     seed: 3,
+                    first: None,
                 }, // in a face
                 Ray {
                     o: DVec3::new(-1.0, 2.0, 0.5),
@@ -596,6 +601,7 @@ fn extremes_are_finite() {
                     t0: 0.0,
                     t1: 10.0,
                     seed: 4,
+                    first: None,
                 }, // misses
                 Ray {
                     o: DVec3::new(0.5, 0.5, 0.5),
@@ -603,6 +609,7 @@ fn extremes_are_finite() {
                     t0: 0.0,
                     t1: 1.0,
                     seed: 5,
+                    first: None,
                 },
             ] {
                 let (l, tr) = run(&v, &ray);
@@ -700,6 +707,7 @@ fn pbrt_nanovdb_clips_to_nanovdbs_world_box() {
         t0: 0.0,
         t1: 3.0,
         seed: 4,
+        first: None,
     };
     let (l, t) = run(&v, &ray);
     assert!(l.iter().all(|x| x.is_finite()) && t[0] < 1.0 && t[0] > 0.0);
@@ -733,6 +741,7 @@ fn builds_from_the_mantaflow_fire() {
             t0: 0.0,
             t1: 10.0,
             seed: 9,
+            first: None,
         },
     );
     assert!(
@@ -978,6 +987,7 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
             t0: 0.0,
             t1: 5.0,
             seed,
+            first: None,
         };
         let (la, ta) = run(&auto, &ray);
         let (ld, td) = run(&dense, &ray);
@@ -1230,6 +1240,7 @@ fn an_emission_grid_emits_where_it_says() {
         t0: 0.0,
         t1: 3.0,
         seed,
+        first: None,
     };
     let run = |v: &FireVolume, r: &Ray| {
         let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
@@ -1338,6 +1349,7 @@ fn shared_tile_blocks_march_as_the_dense_lattice() {
             t0: 0.0,
             t1: 10.0,
             seed,
+            first: None,
         };
         let (lb, tb) = run(&bricks, &ray);
         let (ld, td) = run(&dense, &ray);
@@ -1481,6 +1493,7 @@ fn a_reaction_shell_glows_blue_brightest_at_grazing() {
             t0: 0.0,
             t1: 5.0,
             seed: 3,
+            first: None,
         };
         let (l, t) = run(&v, &ray);
         assert!(t.iter().all(|&x| x == 1.0), "the shell absorbs nothing");
@@ -1814,6 +1827,7 @@ fn random_walk_radiance(v: &FireVolume, ray: &Ray, paths: usize) -> Vec<f64> {
                     .seed
                     .wrapping_mul(6364136223846793005)
                     .wrapping_add(bounce + 1),
+                first: None,
             };
         }
     }

@@ -300,7 +300,7 @@ impl Integrator<'_> {
     }
 
     /// The emission and transmittance of plugin medium `m` along o + t·d, t ∈ [0, t_end], as its fire light
-    /// estimates them for a light sample's direction (`light_integrate_at`: a coarser march on a large fire).
+    /// estimates them for a light sample's direction (`light_integrate`: a coarser march on a large fire).
     fn light_segment(
         &self,
         light: &firemedium_loader::Light,

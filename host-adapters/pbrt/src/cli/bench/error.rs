@@ -46,6 +46,7 @@ pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, 
                             seed: seed
                                 .wrapping_mul(0x9E37_79B9_7F4A_7C15)
                                 .wrapping_add(((j * size + i) * spp + s) as u64),
+                            first: None,
                         };
                         v.integrate(&ray, &mut l, &mut t);
                         y += (0..c).map(|k| l[k] * xyz[k].y).sum::<f64>();

@@ -92,6 +92,7 @@ pub fn run(file: &Path, params: &[Param], size: usize) -> Result<Run, String> {
                     t0: 0.0,
                     t1: 1e30,
                     seed: (j * size + i) as u64,
+                    first: None,
                 };
                 // (integrate_exit: the curved march when refraction is on, the straight one otherwise.)
                 v.integrate_exit(&ray, &mut l, &mut t);

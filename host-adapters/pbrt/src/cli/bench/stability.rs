@@ -68,6 +68,7 @@ fn integrate(v: &FireVolume, o: DVec3, d: DVec3, seed: u64) -> (Vec<f64>, Vec<f6
         t0: 0.0,
         t1: 1e30,
         seed,
+        first: None,
     };
     v.integrate(&ray, &mut l, &mut t);
     (l, t)
@@ -570,6 +571,7 @@ fn refraction(out: &mut Vec<Case>) {
             t0: 0.0,
             t1: 10.0,
             seed,
+            first: None,
         };
         let (p, e, te) = v.integrate_exit(&ray, &mut l, &mut tr);
         all_ok &= p.is_finite()

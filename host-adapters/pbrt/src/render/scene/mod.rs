@@ -276,7 +276,7 @@ fn no_light_sampling(b: &builder::Builder) -> Option<String> {
 #[derive(Debug, Clone, Copy)]
 pub struct LightReport {
     pub info: firemedium_loader::LightInfo,
-    /// How many of the volume's channels its line marches (ABI 0.10).
+    /// How many of the volume's channels its line marches.
     pub line_channels: u32,
 }
 
