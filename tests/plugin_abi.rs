@@ -722,15 +722,15 @@ fn a_host_tracks_the_fire_itself_through_its_majorant_grid_and_point_coefficient
     assert!(e.contains("art direction"), "{e}");
 }
 
-/// One path of a host's own ratio tracking along `ray` over a volume's majorant grid (its own DDA, one cell at a
-/// time): the transmittance, and the emission collected pbrt-v4's way — T·j/σ̄ at each tentative collision — with
-/// `sigma(x)` giving (σ_t, j) at a collision.
-fn host_path(
+/// A host's own free-flight sampling along `ray` over a volume's majorant grid (its own DDA, one cell at a
+/// time): `collide(x, σ̄)` at each tentative collision, which says whether to go on. Returns whether the ray left
+/// the cells (rather than being stopped).
+fn walk(
     grid: &firemedium_loader::MajorantGrid,
     ray: &Ray,
     u: &mut impl FnMut() -> f64,
-    sigma: &mut dyn FnMut([f64; 3]) -> (f64, f64),
-) -> (f64, f64) {
+    collide: &mut dyn FnMut([f64; 3], f64) -> bool,
+) -> bool {
     let at = |t: f64| [0, 1, 2].map(|a| ray.origin[a] + t * ray.direction[a]);
     let speed = ray.direction.iter().map(|d| d * d).sum::<f64>().sqrt();
     // The ray's part inside the cells' box.
@@ -743,8 +743,8 @@ fn host_path(
         t0 = t0.max(lo.min(hi));
         t1 = t1.min(lo.max(hi));
     }
-    let (mut tr, mut l, mut t) = (1.0f64, 0.0f64, t0);
-    while t < t1 && tr > 0.0 {
+    let mut t = t0;
+    while t < t1 {
         // The cell at t and where the ray leaves it.
         let cell = grid.cell_of(at(t + 1e-9));
         let mut exit = t1;
@@ -769,11 +769,37 @@ fn host_path(
             continue;
         }
         t += step;
-        let (sigma_t, j) = sigma(at(t));
+        if !collide(at(t), bound) {
+            return false;
+        }
+    }
+    true
+}
+
+/// One path of a host's own ratio tracking along `ray` ([`walk`]): the transmittance, and the emission collected
+/// pbrt-v4's way — T·j/σ̄ at each tentative collision — with `sigma(x)` giving (σ_t, j) at a collision.
+fn host_path(
+    grid: &firemedium_loader::MajorantGrid,
+    ray: &Ray,
+    u: &mut impl FnMut() -> f64,
+    sigma: &mut dyn FnMut([f64; 3]) -> (f64, f64),
+) -> (f64, f64) {
+    let (mut tr, mut l) = (1.0f64, 0.0f64);
+    walk(grid, ray, u, &mut |x, bound| {
+        let (sigma_t, j) = sigma(x);
         l += tr * j / bound;
         tr *= 1.0 - sigma_t / bound;
-    }
+        tr > 0.0
+    });
     (tr, l)
+}
+
+/// A unit direction uniform on the sphere (the isotropic phase function's sample).
+fn isotropic(u: &mut impl FnMut() -> f64) -> [f64; 3] {
+    let z = 1.0 - 2.0 * u();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u();
+    [r * phi.cos(), r * phi.sin(), z]
 }
 
 #[test]
@@ -1063,5 +1089,121 @@ fn the_whole_ray_query_takes_the_hosts_first_number_and_step() {
         ((ev[1].t - ev[0].t) / want - 1.0).abs() < 1e-9,
         "{} vs {want}",
         ev[1].t - ev[0].t
+    );
+}
+
+#[test]
+fn a_host_tracks_a_scattering_fire_through_the_medium_level_alone() {
+    // A scattering fire (σ_s = 8 m⁻¹ per unit density beside soot's σ_a ≈ 8: albedo about ½, isotropic) rendered
+    // twice by a host's own volumetric path tracer: once through the medium level alone — delta tracking over the
+    // exported majorant grid with the point coefficients at one wavelength per path across bin 16, emission
+    // collected pbrt-v4's way (j/σ̄ at every tentative collision), absorption, scattering or a null collision
+    // chosen by σ_a/σ̄ and σ_s/σ̄ — and once through the fast path (the plugin's scattering events and their
+    // weights, the host sampling the phase function). The same expected radiance along each ray, within the
+    // noise of both.
+    use firemedium_loader::{Point, Scatter, FM_FEATURE_SCATTERS};
+    let p = plugin();
+    let mut list = fire_params();
+    list.push(Param::float("sigma_s", 8.0));
+    let v = p.create_volume(&list).unwrap();
+    assert_ne!(v.features().unwrap() & FM_FEATURE_SCATTERS, 0);
+    let info = v.info();
+    assert_eq!(info.g, 0.0, "isotropic");
+    let grid = v.majorant_grid().unwrap();
+    let c = info.channels as usize;
+    let k = 16;
+    let width = (info.lambda_max - info.lambda_min) / c as f64;
+    // (One stream, shared by the free flights and the collisions' choices: a copyable closure over a cell.)
+    let rng = std::cell::Cell::new(11u64);
+    let u = || {
+        rng.set(
+            rng.get()
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407),
+        );
+        (rng.get() >> 11) as f64 / (1u64 << 53) as f64
+    };
+    const DEPTH: usize = 64;
+    let (n, rs) = (8000, rays(16));
+    let (mut scattered, mut seen) = (0usize, 0);
+    for (r, ray) in rs.iter().enumerate() {
+        let (mut host, mut fast) = ((0.0, 0.0), (0.0, 0.0));
+        for i in 0..n {
+            // The medium level alone.
+            let lambda = info.lambda_min + width * (k as f64 + u());
+            let (mut l, mut path) = (0.0, *ray);
+            for _ in 0..DEPTH {
+                let mut next = None;
+                let escaped = walk(&grid, &path, &mut { u }, &mut |x, bound| {
+                    let mut o = [Point::default()];
+                    v.point(&[x], None, &[lambda], &mut o).unwrap();
+                    l += o[0].j / bound;
+                    let xi = u();
+                    if xi < o[0].sigma_a / bound {
+                        return false;
+                    }
+                    if xi < (o[0].sigma_a + o[0].sigma_s) / bound {
+                        next = Some(x);
+                        return false;
+                    }
+                    true
+                });
+                match next {
+                    Some(x) if !escaped => {
+                        scattered += 1;
+                        path = Ray {
+                            origin: x,
+                            direction: isotropic(&mut { u }),
+                            tmin: 0.0,
+                            tmax: f64::INFINITY,
+                            ..path
+                        };
+                    }
+                    _ => break,
+                }
+            }
+            host.0 += l;
+            host.1 += l * l;
+            // The fast path: the plugin's events, the host's phase function.
+            let (mut l, mut beta, mut path) = (0.0, 1.0, *ray);
+            for d in 0..DEPTH {
+                path.seed = (i * DEPTH + d) as u64 * 977 + r as u64;
+                let mut ev = [Scatter::default()];
+                let (mut w, mut e) = (vec![0f32; c], vec![0f32; c]);
+                v.sample_scatter(std::slice::from_ref(&path), &mut ev, &mut w, Some(&mut e))
+                    .unwrap();
+                l += beta * e[k] as f64;
+                if ev[0].event != firemedium_abi::FM_EVENT_SCATTERED {
+                    break;
+                }
+                beta *= w[k] as f64;
+                path = Ray {
+                    origin: ev[0].point,
+                    direction: isotropic(&mut { u }),
+                    tmin: 0.0,
+                    tmax: f64::INFINITY,
+                    ..path
+                };
+            }
+            fast.0 += l;
+            fast.1 += l * l;
+        }
+        let stats = |(s, s2): (f64, f64)| {
+            let m = s / n as f64;
+            (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+        };
+        let ((hm, hs), (fm, fs)) = (stats(host), stats(fast));
+        let sd = (hs * hs + fs * fs).sqrt();
+        eprintln!("ray {r}: medium level {hm:.6e} ± {hs:.1e}, fast path {fm:.6e} ± {fs:.1e}");
+        assert!(
+            (hm - fm).abs() <= 4.0 * sd + 0.01 * fm,
+            "ray {r}: through the medium level {hm} ± {hs}, through the fast path {fm} ± {fs}"
+        );
+        seen += (fm > 0.0) as usize;
+    }
+    assert!(seen >= 4, "the fan crosses the fire: {seen} rays see it");
+    assert!(
+        scattered > n,
+        "paths scatter in the fire: {scattered} events"
     );
 }
