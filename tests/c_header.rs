@@ -147,6 +147,8 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         "firemedium.h's FM_ABI_MAJOR/MINOR"
     );
     assert_eq!(get("abi"), version);
+    // The volume's build ran its parallel parts as the C host's pool's tasks.
+    assert!(get("pool_tasks").parse::<usize>().unwrap() >= 2);
     let (p1, p2): (f64, f64) = (
         get("light_pdf").parse().unwrap(),
         get("light_pdf_again").parse().unwrap(),

@@ -1207,3 +1207,85 @@ fn a_host_tracks_a_scattering_fire_through_the_medium_level_alone() {
         "paths scatter in the fire: {scattered} events"
     );
 }
+
+#[test]
+fn the_hosts_thread_pool_runs_the_builds_parallel_parts() {
+    // A host lending its pool (FmCreateInfo::parallel_for): the volume's and its light's build run their
+    // parallel parts (table rows, lattice slabs, the light's bricks) as the pool's tasks, on the pool's threads,
+    // and build the same fire as the plugin's own threads do.
+    use firemedium_loader::{Context, ThreadPool};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::{Arc, Mutex};
+    let p = plugin();
+    let tasks = Arc::new(AtomicUsize::new(0));
+    let names = Arc::new(Mutex::new(std::collections::BTreeSet::new()));
+    let (count, seen) = (tasks.clone(), names.clone());
+    let pool: ThreadPool = Arc::new(move |n, task| {
+        // Three workers of the host's, each taking every third task.
+        std::thread::scope(|s| {
+            for w in 0..3 {
+                let (count, seen) = (&count, &seen);
+                std::thread::Builder::new()
+                    .name(format!("host-pool-{w}"))
+                    .spawn_scoped(s, move || {
+                        for i in (w..n).step_by(3) {
+                            count.fetch_add(1, Ordering::Relaxed);
+                            let me = std::thread::current().name().unwrap_or("").to_string();
+                            seen.lock().unwrap().insert(me);
+                            task(i);
+                        }
+                    })
+                    .unwrap();
+            }
+        })
+    });
+    let context = Context {
+        threads: Some(4),
+        pool: Some(pool),
+        ..Context::default()
+    };
+    let pooled = p.create_volume_with(&fire_params(), &context).unwrap();
+    let after_volume = tasks.load(Ordering::Relaxed);
+    assert!(after_volume >= 4, "{after_volume} tasks");
+    let light = pooled.create_light(None).unwrap();
+    assert!(
+        tasks.load(Ordering::Relaxed) > after_volume,
+        "the light's build used the pool too"
+    );
+    let names = names.lock().unwrap().clone();
+    assert!(
+        !names.is_empty() && names.iter().all(|n| n.starts_with("host-pool-")),
+        "{names:?}"
+    );
+    // The same fire as with the plugin's own threads.
+    let own = p
+        .create_volume_with(
+            &fire_params(),
+            &Context {
+                threads: Some(4),
+                ..Context::default()
+            },
+        )
+        .unwrap();
+    let c = own.info().channels as usize;
+    let rs = rays(32);
+    let (mut a, mut b) = (vec![0f32; 32 * c], vec![0f32; 32 * c]);
+    own.integrate(&rs, &mut a, None, None).unwrap();
+    pooled.integrate(&rs, &mut b, None, None).unwrap();
+    assert_eq!(a, b);
+    let own_light = own.create_light(None).unwrap();
+    assert_eq!(light.info().power_w, own_light.info().power_w);
+    // A pool that runs no task at all: the plugin runs its parts itself.
+    let idle: ThreadPool = Arc::new(|_, _| {});
+    let lazy = p
+        .create_volume_with(
+            &fire_params(),
+            &Context {
+                pool: Some(idle),
+                ..Context::default()
+            },
+        )
+        .unwrap();
+    lazy.integrate(&rs, &mut b, None, None).unwrap();
+    assert_eq!(a, b);
+}

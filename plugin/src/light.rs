@@ -528,7 +528,7 @@ impl FireLight {
         let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
             vec![run(&bricks)]
         } else {
-            std::thread::scope(|sc| {
+            crate::par::scope(|sc| {
                 let handles: Vec<_> = bricks
                     .chunks(chunk)
                     .map(|part| sc.spawn(move || run(part)))

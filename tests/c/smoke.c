@@ -5,6 +5,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* A host's thread pool, serial: runs every task on the calling thread and counts them. */
+static size_t pool_tasks;
+static void serial_pool(void *pool, size_t count, FmTask task, void *data) {
+    (void)pool;
+    for (size_t i = 0; i < count; i++) {
+        pool_tasks++;
+        task(data, i);
+    }
+}
+
 int main(int argc, char **argv) {
     if (argc != 3) { fprintf(stderr, "usage: smoke PLUGIN DATASET\n"); return 2; }
     printf("header_abi %u.%u\n", FM_ABI_MAJOR, FM_ABI_MINOR);
@@ -30,7 +40,8 @@ int main(int argc, char **argv) {
         {"temperaturescale", FM_TYPE_FLOAT, 1, &tscale},
         {"sootscale", FM_TYPE_FLOAT, 1, &soot},
     };
-    FmCreateInfo create = {.struct_size = sizeof create, .params = params, .count = 3};
+    FmCreateInfo create = {.struct_size = sizeof create, .params = params, .count = 3, .threads = 2,
+                           .parallel_for = serial_pool};
     FmVolume *vol = NULL;
     if (api->volume_create(&create, &vol) != FM_OK) {
         char msg[512];
@@ -40,7 +51,7 @@ int main(int argc, char **argv) {
     }
     FmVolumeInfo info = {.struct_size = sizeof info};
     api->volume_info(vol, &info);
-    printf("channels %u\n", info.channels);
+    printf("channels %u\npool_tasks %zu\n", info.channels, pool_tasks);
     double trange[2] = {-1.0, -1.0};
     FmStatus ts = api->volume_temperature_range(vol, trange);
     printf("temperature_status %d\ntemperature_min %.9g\ntemperature_max %.9g\n", ts, trange[0], trange[1]);

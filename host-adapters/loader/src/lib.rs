@@ -185,9 +185,13 @@ impl Inner {
     }
 }
 
+/// A host's thread pool for the plugin's builds: `pool(n, task)` runs `task(i)` for every i in 0..n, on its
+/// threads as it likes, and returns when every one has returned.
+pub type ThreadPool = Arc<dyn Fn(usize, &(dyn Fn(usize) + Sync)) + Send + Sync>;
+
 /// The host's context for a volume ([`Plugin::create_volume_with`]): what the renderer knows and the
 /// scene does not say.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Clone, Default)]
 pub struct Context {
     /// Threads the build may use (`None`: the plugin's default, the machine's).
     pub threads: Option<u32>,
@@ -197,6 +201,43 @@ pub struct Context {
     pub frame: Option<i64>,
     /// The camera's shutter, frames from the grids' time (for motion blur).
     pub shutter: Option<[f64; 2]>,
+    /// The host's thread pool (`None`: the plugin starts threads of its own for its builds): the volume's and its
+    /// lights' parallel parts run as its tasks. The volume keeps it.
+    pub pool: Option<ThreadPool>,
+}
+
+impl std::fmt::Debug for Context {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Context")
+            .field("threads", &self.threads)
+            .field("max_bytes", &self.max_bytes)
+            .field("frame", &self.frame)
+            .field("shutter", &self.shutter)
+            .field("pool", &self.pool.as_ref().map(|_| "the host's"))
+            .finish()
+    }
+}
+
+/// The plugin's view of a [`ThreadPool`]: `pool` is the `ThreadPool` a volume keeps.
+unsafe extern "C" fn parallel_for(
+    pool: *mut c_void,
+    count: usize,
+    task: abi::FmTask,
+    data: *mut c_void,
+) {
+    struct Data(*mut c_void);
+    // SAFETY: the plugin's contract: its task may run on any thread, several at once.
+    unsafe impl Sync for Data {}
+    let data = Data(data);
+    // SAFETY: `pool` points at the ThreadPool the volume keeps (create_volume_with), alive across the call.
+    let pool = unsafe { &*(pool as *const ThreadPool) };
+    let run = |i: usize| {
+        let data = &data;
+        // SAFETY: the plugin's task for index i < count with its data (its contract); it never unwinds.
+        unsafe { task(data.0, i) }
+    };
+    // (A panicking pool must not unwind into the plugin: the parts it did not run, the plugin runs itself.)
+    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| pool(count, &run)));
 }
 
 /// The parts of a plugin error : what a host needs to point its user at the cause.
@@ -534,6 +575,8 @@ impl Plugin {
     /// threads, memory budget, frame, shutter. A parameter the scene sets itself wins over the context.
     pub fn create_volume_with(&self, params: &[Param], context: &Context) -> Result<Volume, Error> {
         let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
+        // (Boxed: the plugin keeps its address, and the volume keeps the box.)
+        let pool = context.pool.clone().map(Box::new);
         let api = self.inner.api();
         let status = with_c_params(params, |list, at_ptrs| {
             let info = abi::FmCreateInfo {
@@ -547,6 +590,10 @@ impl Plugin {
                 max_bytes: context.max_bytes.unwrap_or(0),
                 frame: context.frame.unwrap_or(0),
                 shutter: context.shutter.unwrap_or([0.0, 0.0]),
+                parallel_for: pool.as_ref().map(|_| parallel_for as abi::FmParallelFor),
+                pool: pool.as_deref().map_or(std::ptr::null_mut(), |p| {
+                    p as *const ThreadPool as *mut c_void
+                }),
             };
             // SAFETY: `info`, `list`, `at_ptrs` (one entry per parameter) and everything they point to live until
             // after the call; `handle` is writable.
@@ -560,6 +607,7 @@ impl Plugin {
             inner: self.inner.clone(),
             handle,
             info,
+            _pool: pool,
         };
         self.inner.check(s)?;
         Ok(vol)

@@ -22,6 +22,8 @@ pub struct Volume {
     pub(crate) inner: Arc<Inner>,
     pub(crate) handle: *mut abi::FmVolume,
     pub(crate) info: abi::FmVolumeInfo,
+    /// The host's pool the plugin may call while the volume lives (its address went to the plugin).
+    pub(crate) _pool: Option<Box<crate::ThreadPool>>,
 }
 
 // SAFETY: the plugin guarantees volumes are immutable and safe to query from many threads (ABI contract), and

@@ -161,6 +161,11 @@ typedef struct FmErrorDetail {
 /* A volume's creation (volume_create): the scene's parameters with their locations, and the host's
  * context beside them instead of as made-up parameters. A parameter the scene gives itself (threads, maxbytes, frame,
  * shutteropen, shutterclose) wins over the context. */
+/* A part of the plugin's build work: task(data, index); it never unwinds into the host. */
+typedef void (*FmTask)(void *data, size_t index);
+/* A host's thread pool: runs task(data, i) for every i in 0..count -- on its threads as it likes, in any order, the
+ * calling thread included -- and returns when every one has returned. */
+typedef void (*FmParallelFor)(void *pool, size_t count, FmTask task, void *data);
 #define FM_CREATE_FRAME (1u << 0)   /* frame is set */
 #define FM_CREATE_SHUTTER (1u << 1) /* shutter is set */
 typedef struct FmCreateInfo {
@@ -173,6 +178,11 @@ typedef struct FmCreateInfo {
     uint64_t max_bytes;            /* 0: the plugin's default */
     int64_t frame;                 /* the frame a #### in a file name takes */
     double shutter[2];             /* the camera's shutter, frames from the grids' time */
+    FmParallelFor parallel_for;    /* the host's thread pool, or NULL: the plugin's builds (this volume's and its
+                                    * lights') run their parallel parts as its tasks instead of starting threads of
+                                    * their own ("threads" still bounds how many parts a fan-out cuts). It must stay
+                                    * callable while the volume and its lights live. */
+    void *pool;                    /* handed back to parallel_for */
 } FmCreateInfo;
 
 typedef struct FmParamInfo {

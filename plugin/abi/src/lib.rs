@@ -427,7 +427,20 @@ pub struct FmCreateInfo {
     pub frame: i64,
     /// The camera's shutter, frames from the grids' time (motion blur).
     pub shutter: [f64; 2],
+    /// The host's thread pool, or null: the plugin's builds (this volume's and its lights') run their parallel
+    /// parts as its tasks instead of starting threads of their own (`threads` still bounds how many parts a
+    /// fan-out cuts). Must stay callable while the volume and its lights live.
+    pub parallel_for: Option<FmParallelFor>,
+    /// The pool's own pointer, handed back to `parallel_for` (may be null).
+    pub pool: *mut c_void,
 }
+
+/// A part of the plugin's build work ([`FmParallelFor`]): `task(data, index)`; it never unwinds into the host.
+pub type FmTask = unsafe extern "C" fn(data: *mut c_void, index: usize);
+/// A host's thread pool ([`FmCreateInfo::parallel_for`]): runs `task(data, i)` for every i in 0..count — on its
+/// threads as it likes, in any order, the calling thread included — and returns when every one has returned.
+pub type FmParallelFor =
+    unsafe extern "C" fn(pool: *mut c_void, count: usize, task: FmTask, data: *mut c_void);
 
 /// [`FmRayQuery::what`]: emitted radiance (required) and transmittance (may be null) along each ray, and where
 /// it leaves (`exits`, may be null).
@@ -511,6 +524,8 @@ impl Default for FmCreateInfo {
             max_bytes: 0,
             frame: 0,
             shutter: [0.0; 2],
+            parallel_for: None,
+            pool: core::ptr::null_mut(),
         }
     }
 }
@@ -688,7 +703,7 @@ mod tests {
         // Four u32 fields, then one pointer per entry.
         assert_eq!(core::mem::size_of::<FmApi>(), 16 + 24 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
-        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 72);
+        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 88);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);

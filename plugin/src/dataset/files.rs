@@ -77,7 +77,7 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
             buf.resize(len, 0);
             let part = len.div_ceil(threads);
             let f = &f;
-            let done: Vec<std::io::Result<()>> = std::thread::scope(|s| {
+            let done: Vec<std::io::Result<()>> = crate::par::scope(|s| {
                 let jobs: Vec<_> = buf
                     .chunks_mut(part)
                     .enumerate()

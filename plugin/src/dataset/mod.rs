@@ -60,7 +60,7 @@ pub(crate) fn par_map<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync
         return items.into_iter().map(f).collect();
     }
     let f = &f;
-    std::thread::scope(|s| {
+    crate::par::scope(|s| {
         let handles: Vec<_> = items.into_iter().map(|x| s.spawn(move || f(x))).collect();
         handles
             .into_iter()

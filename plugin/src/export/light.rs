@@ -4,7 +4,6 @@ use super::params::read_params;
 use super::volume::{out_f32, ray_of, rays, store, times};
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
-use crate::volume::FireVolume;
 use firemedium_abi::*;
 use glam::DVec3;
 use std::panic::catch_unwind;
@@ -51,12 +50,13 @@ pub(super) unsafe extern "C" fn light_create(
             channels: r.int("linechannels").map_err(fail)?.max(0) as usize,
         };
         r.finish().map_err(fail)?;
-        // SAFETY: a live handle from volume_create is an Arc::into_raw pointer; take one more reference.
-        let vol = unsafe {
-            std::sync::Arc::increment_strong_count(volume as *const FireVolume);
-            std::sync::Arc::from_raw(volume as *const FireVolume)
-        };
-        let l = FireLight::with(vol, weighting, cell as usize, line).map_err(fail)?;
+        // SAFETY: a live handle from volume_create (contract).
+        let handle = unsafe { &*(volume as *const super::volume::VolumeHandle) };
+        let vol = handle.volume.clone();
+        let l = crate::par::with_pool(handle.pool.clone(), || {
+            FireLight::with(vol, weighting, cell as usize, line)
+        })
+        .map_err(fail)?;
         // SAFETY: out is non-null and writable.
         unsafe { *out = Box::into_raw(Box::new(l)) as *mut FmLight };
         Ok(())

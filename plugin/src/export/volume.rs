@@ -4,11 +4,14 @@
 use super::light::{in_f64, out_f64};
 use super::params::read_params;
 use super::{bad, fail, guard};
+use crate::par::Pool;
 use crate::params::Param;
 use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
 use firemedium_abi::*;
 use glam::DVec3;
+use std::ffi::c_void;
 use std::panic::catch_unwind;
+use std::sync::Arc;
 
 pub(super) unsafe extern "C" fn volume_create(
     info: *const FmCreateInfo,
@@ -50,19 +53,54 @@ pub(super) unsafe extern "C" fn volume_create(
                 list.push(p);
             }
         }
-        let v = FireVolume::new(&list).map_err(fail)?;
+        let pool = ci.parallel_for.map(|f| host_pool(f, ci.pool));
+        let v = crate::par::with_pool(pool.clone(), || FireVolume::new(&list)).map_err(fail)?;
+        let handle = VolumeHandle {
+            volume: Arc::new(v),
+            pool,
+        };
         // SAFETY: out is non-null and writable (checked, contract).
-        unsafe { *out = std::sync::Arc::into_raw(std::sync::Arc::new(v)) as *mut FmVolume };
+        unsafe { *out = Box::into_raw(Box::new(handle)) as *mut FmVolume };
         Ok(())
+    })
+}
+
+/// What an `FmVolume` points at: the volume, shared with its lights, and the host's pool for their builds.
+pub(super) struct VolumeHandle {
+    pub(super) volume: Arc<FireVolume>,
+    pub(super) pool: Option<Pool>,
+}
+
+/// The host's thread pool (`FmCreateInfo::parallel_for` and its pointer) as the plugin's [`Pool`]: each fan-out
+/// hands it one task per part, through a trampoline that never unwinds.
+fn host_pool(parallel_for: FmParallelFor, pool: *mut c_void) -> Pool {
+    struct Host(FmParallelFor, *mut c_void);
+    // SAFETY: the host's contract: its pool may be called from any thread while the volume lives.
+    unsafe impl Send for Host {}
+    // SAFETY: as above.
+    unsafe impl Sync for Host {}
+    unsafe extern "C" fn run(data: *mut c_void, index: usize) {
+        // SAFETY: `data` is the task reference below, alive until the host's call returns (its contract).
+        let task = unsafe { &*(data as *const &(dyn Fn(usize) + Sync)) };
+        // (A part catches its own panic; nothing may unwind into the host's frames.)
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| task(index)));
+    }
+    let host = Host(parallel_for, pool);
+    Arc::new(move |n, task: &(dyn Fn(usize) + Sync)| {
+        let host = &host;
+        let task: &(dyn Fn(usize) + Sync) = task;
+        // SAFETY: the host runs `run(data, i)` for every i < n and returns when all have (its contract); `task`
+        // outlives the call.
+        unsafe { (host.0)(host.1, n, run, &task as *const _ as *mut c_void) }
     })
 }
 
 pub(super) unsafe extern "C" fn volume_destroy(volume: *mut FmVolume) {
     if !volume.is_null() {
         let _ = catch_unwind(|| {
-            // SAFETY: a handle from volume_create (Arc::into_raw), destroyed once (contract); lights hold their
-            // own references.
-            drop(unsafe { std::sync::Arc::from_raw(volume as *const FireVolume) });
+            // SAFETY: a handle from volume_create (Box::into_raw), destroyed once (contract); lights hold their
+            // own references to the volume.
+            drop(unsafe { Box::from_raw(volume as *mut VolumeHandle) });
         });
     }
 }
@@ -79,7 +117,7 @@ pub(super) unsafe fn vol<'a>(
         return Err(bad(format!("{what}: volume is null")));
     }
     // SAFETY: live handle (contract); volumes are immutable and Sync.
-    Ok(unsafe { &*(v as *const FireVolume) })
+    Ok(unsafe { &(*(v as *const VolumeHandle)).volume })
 }
 
 /// `n × c` mutable f32 outputs at `p` (null → None).

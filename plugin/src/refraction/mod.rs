@@ -506,7 +506,7 @@ impl IndexGrid {
                 let mut of = crate::alloc::filled(copies, [0usize; 3]).ok_or(bytes)?;
                 topo.for_each_slot(|b, s| of[s] = b);
                 let per = (copies - 1).div_ceil(threads).max(1);
-                std::thread::scope(|s| {
+                crate::par::scope(|s| {
                     for (k, chunk) in data[COPY..].chunks_mut(COPY * per).enumerate() {
                         let (of, fill) = (&of, &fill);
                         s.spawn(move || {
@@ -523,7 +523,7 @@ impl IndexGrid {
                 let side = dims.map(|d| d + 2);
                 let slab = side[0] * side[1];
                 let per = side[2].div_ceil(threads).max(1);
-                std::thread::scope(|s| {
+                crate::par::scope(|s| {
                     for (k, chunk) in data.chunks_mut(slab * per).enumerate() {
                         let fill = &fill;
                         s.spawn(move || {

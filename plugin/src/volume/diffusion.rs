@@ -64,7 +64,7 @@ impl Diffusion {
         let (mut sa, mut ss, mut jj) = (vec![0.0; n * c], vec![0.0; n * c], vec![0.0; n * c]);
         let threads = crate::par::threads(16);
         let per = n.div_ceil(threads);
-        std::thread::scope(|s| {
+        crate::par::scope(|s| {
             for (part, ((a, b), e)) in sa
                 .chunks_mut(per * c)
                 .zip(ss.chunks_mut(per * c))
@@ -104,7 +104,7 @@ impl Diffusion {
         let mut iterations = 0;
         let chans: Vec<usize> = (0..c).collect();
         let per_ch = c.div_ceil(threads);
-        let results: Vec<Vec<(Vec<f64>, usize)>> = std::thread::scope(|s| {
+        let results: Vec<Vec<(Vec<f64>, usize)>> = crate::par::scope(|s| {
             let handles: Vec<_> = chans
                 .chunks(per_ch)
                 .map(|group| {

@@ -119,7 +119,7 @@ impl Lattice {
             .iter()
             .map(|_| BrickRanges::new([nx, ny, nz], brick, 0..nz))
             .collect();
-        std::thread::scope(|s| {
+        crate::par::scope(|s| {
             // Each thread takes whole padded slabs [1 + k·per, 1 + (k+1)·per).
             let counts: Vec<usize> = (0..nz).step_by(per).map(|z0| per.min(nz - z0)).collect();
             let parts = runs(
@@ -348,7 +348,7 @@ impl Lattice {
         // Copies split over the threads in contiguous runs.
         let threads = crate::par::threads(8);
         let per = (copies - 1).div_ceil(threads).max(1);
-        std::thread::scope(|s| {
+        crate::par::scope(|s| {
             let counts: Vec<usize> = (1..copies)
                 .step_by(per)
                 .map(|c| per.min(copies - c))

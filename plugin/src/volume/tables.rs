@@ -40,7 +40,7 @@ impl TTable {
         let mut v = vec![[0f32; lanes::W]; rows * chunks];
         let threads = crate::par::threads(8);
         let chunk = rows.div_ceil(threads);
-        std::thread::scope(|s| {
+        crate::par::scope(|s| {
             for (k, part) in v.chunks_mut(chunk * chunks).enumerate() {
                 s.spawn(move || {
                     for (r, row) in part.chunks_mut(chunks).enumerate() {
