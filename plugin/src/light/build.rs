@@ -1,0 +1,480 @@
+//! The light's build: the weights over the fire's bricks (by power, luminance or escaping power), dilated for
+//! trilinear emission, their CDF, the embers' share; the line estimate's copy of the fire and its channels,
+//! each checked against the volume's march.
+
+use super::*;
+
+impl FireLight {
+    /// The bins the coarse line marches (`linechannels`; `None`: all of them).
+    pub(super) fn choose_channels(
+        &self,
+        asked: usize,
+    ) -> Result<Option<crate::volume::LineChannels>, Error> {
+        let c = self.vol.channels();
+        if asked == 1 || (asked > 32 && asked < c) {
+            return Err(Error::invalid(
+                "light",
+                "linechannels",
+                asked.to_string(),
+                "0 (chosen), 2 to 32 bins, or at least the volume's bins (all of them)",
+            ));
+        }
+        // (At the volume's own step the line is the volume's march, every bin.)
+        if !(self.line_step > self.vol.step_length()) || asked >= c {
+            return Ok(None);
+        }
+        let target = self.mip.as_deref().unwrap_or(&self.vol);
+        let k = if asked == 0 { LINE_CHANNELS } else { asked };
+        let Some(lc) = target.line_channels(k) else {
+            return Ok(None);
+        };
+        if asked == 0 && !(self.channel_bias(target, &lc) <= CHANNEL_BIAS) {
+            return Ok(None);
+        }
+        Ok(Some(lc))
+    }
+
+    /// The largest relative difference in X, Y or Z between the line of `target` in the bins of `lc` and in all,
+    /// in next-event estimation's sum over the light's check rays ([`check_rays`](Self::check_rays)).
+    pub(super) fn channel_bias(
+        &self,
+        target: &FireVolume,
+        lc: &crate::volume::LineChannels,
+    ) -> f64 {
+        let c = target.channels();
+        let xyz = target.channel_xyz();
+        let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
+        let (mut few, mut all) = (DVec3::ZERO, DVec3::ZERO);
+        let sum = |l: &[f64], p: f64| (0..c).map(|k| xyz[k] * (l[k] / p)).sum::<DVec3>();
+        for (ray, p) in self.check_rays() {
+            target.integrate_stepped_at(&ray, 0.0, self.line_step, &mut l, &mut t);
+            all += sum(&l, p);
+            if target
+                .integrate_channels(lc, &ray, self.line_step, &mut l, &mut t)
+                .is_none()
+            {
+                return f64::INFINITY;
+            }
+            few += sum(&l, p);
+        }
+        if all.min_element() > 0.0 {
+            (few / all - 1.0).abs().max_element()
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    pub(super) fn build(
+        vol: Arc<FireVolume>,
+        weighting: Weighting,
+        cell: usize,
+    ) -> Result<FireLight, Error> {
+        let start = Instant::now();
+        // Nothing to sample: refused before a weight per voxel is allocated (a 16-byte raw file claiming 600³
+        // voxels and no temperature built a 3.4 GB light).
+        if !vol.can_emit() && vol.embers().is_none_or(|e| e.len() == 0) {
+            return Err(no_emission());
+        }
+        let ds = vol.dataset();
+        let dims = ds.dims();
+        let voxel = ds.voxel_size();
+        let [p0, _] = ds.bounds();
+        let c = vol.channels();
+        let xyz = vol.channel_xyz();
+        let widths: Vec<f64> = match vol.color_mode() {
+            crate::volume::ColorMode::Spectral(g) => vec![g.width_nm(); g.count()],
+            crate::volume::ColorMode::Rgb => vec![1.0; 3],
+        };
+        // Full-spectrum power per unit density over T (soot), and per unit N (lines), physical mode only.
+        let src = vol.source().cloned();
+        let soot_power = |t: f64| -> f64 {
+            let Some(s) = &src else { return 0.0 };
+            let (lo, hi) = (10e-9f64.ln(), 1e-3f64.ln());
+            crate::quadrature::gauss_legendre(
+                |u| {
+                    let l = u.exp();
+                    s.soot.kappa(l * 1e9, 1.0, s.alpha) * spectral_radiance_si(t, l) * l
+                },
+                lo,
+                hi,
+                60,
+            )
+        };
+        // The bricks to weigh: the stored ones and their neighbours; all of them if a background emits (a
+        // grid whose empty bricks read a non-zero value).
+        let stored = ds.topology();
+        let background_emits = ds.channels().iter().any(|ch| ch.grid.background() != 0.0);
+        let topo = if background_emits {
+            crate::grid::Topology::build_offset(dims, stored.offset(), |_| true)
+        } else {
+            stored
+                .spread([0; 3], -1, 1)
+                .and_then(|list| crate::grid::Topology::from_bricks(dims, stored.offset(), list))
+        }
+        .ok_or_else(no_emission)?;
+        let topo = Arc::new(topo);
+        // Two weights per covered voxel while building (the weights and their dilation), within what the
+        // volume's budget (`maxbytes`) leaves after its grids and tables.
+        let n = topo.values_len();
+        let need = (n as u64).saturating_mul(8);
+        if need > vol.spare_bytes() {
+            return Err(Error::TooLarge {
+                file: "fire light".into(),
+                what: format!(
+                    "the weights of {} bricks of 8³ voxels",
+                    topo.active_bricks()
+                ),
+                bytes: need,
+                cap: vol.spare_bytes(),
+            });
+        }
+        let too_many = || {
+            Error::invalid(
+                "light",
+                "fire",
+                format!("{n} voxels"),
+                "a fire whose per-voxel weights (8 bytes each) the allocator can hold",
+            )
+        };
+        let mut w = crate::alloc::filled(n, 0f32).ok_or_else(too_many)?;
+        let (mut pw, mut plm) = (0.0, 0.0);
+        // (Soot power depends on T only: each worker memoises it per 0.5 K.)
+        let dch = vol.density_channel();
+        let tch = vol.temperature_channel();
+        let mut bricks: Vec<[usize; 3]> = Vec::with_capacity(topo.active_bricks());
+        let mut slot_bricks = vec![[0u32; 3]; topo.active_bricks() + 1];
+        topo.for_each_slot(|b, slot| {
+            bricks.push(b);
+            slot_bricks[slot] = b.map(|v| v as u32);
+        });
+        // (Indices into the weights are u32.)
+        if n > u32::MAX as usize {
+            return Err(too_many());
+        }
+        // Per brick (independent: each writes its own slot of the weights), in parallel chunks of bricks under the
+        // build's thread budget; the power sums are added brick by brick in the bricks' order, so the light is the
+        // same on any number of threads.
+        let brick_weights = |b: &[usize; 3],
+                             memo: &mut std::collections::HashMap<i64, f64>,
+                             sa: &mut [f64],
+                             ss: &mut [f64],
+                             j: &mut [f64],
+                             out: &mut Vec<(usize, f32)>|
+         -> (f64, f64, f64) {
+            let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for jy in span[1].0..span[1].1 {
+                    for i in span[0].0..span[0].1 {
+                        let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
+                        vol.coefficients(p, sa, ss, j);
+                        if weighting == Weighting::Escaping {
+                            ext += (0..c).map(|q| (sa[q] + ss[q]) * widths[q]).sum::<f64>();
+                        }
+                        let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
+                        let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
+                        if !(lum > 0.0 || band > 0.0) {
+                            continue;
+                        }
+                        out.push((
+                            topo.index(i, jy, k),
+                            match weighting {
+                                Weighting::Luminance => lum,
+                                Weighting::Power | Weighting::Escaping => band,
+                            } as f32,
+                        ));
+                        plm += lum;
+                        pw += match &src {
+                            None => band,
+                            Some(s) => {
+                                let chs = ds.channels();
+                                let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
+                                let d = at(dch).max(0.0) as f64;
+                                let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
+                                let key = (t * 2.0).round() as i64;
+                                let soot = *memo
+                                    .entry(key)
+                                    .or_insert_with(|| soot_power(key as f64 / 2.0));
+                                let mut v = d * s.soot_scale * soot;
+                                for (e, ch, scale) in &s.species {
+                                    let nn = at(*ch).max(0.0) as f64 * scale;
+                                    if nn > 0.0 {
+                                        v += nn * s.intensity * line_power(e, t);
+                                    }
+                                }
+                                v
+                            }
+                        };
+                    }
+                }
+            }
+            let n = span.iter().map(|s| s.1 - s.0).product::<usize>().max(1) as f64;
+            (pw, plm, ext / (n * widths.iter().sum::<f64>()))
+        };
+        let workers = crate::par::threads(16).min(bricks.len().max(1));
+        let chunk = bricks.len().div_ceil(workers).max(1);
+        let run = |part: &[[usize; 3]]| {
+            let mut memo = std::collections::HashMap::new();
+            let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            part.iter()
+                .map(|b| {
+                    let mut out = Vec::new();
+                    let sums = brick_weights(b, &mut memo, &mut sa, &mut ss, &mut j, &mut out);
+                    (sums, out)
+                })
+                .collect::<Vec<_>>()
+        };
+        let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
+            vec![run(&bricks)]
+        } else {
+            crate::par::scope(|sc| {
+                let handles: Vec<_> = bricks
+                    .chunks(chunk)
+                    .map(|part| sc.spawn(move || run(part)))
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        let mut extinction = Vec::with_capacity(bricks.len());
+        for ((bpw, bplm, ext), out) in parts.into_iter().flatten() {
+            pw += bpw;
+            plm += bplm;
+            extinction.push(ext);
+            for (idx, v) in out {
+                w[idx] = v;
+            }
+        }
+        // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
+        // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
+        // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
+        if ds.interpolation() == crate::grid::Interpolation::Trilinear {
+            w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
+        }
+        if weighting == Weighting::Escaping {
+            let escape =
+                escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
+                    .ok_or_else(too_many)?;
+            for (b, f) in bricks.iter().zip(escape) {
+                let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+                let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+                let keep = (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32;
+                w[slot * 512..(slot + 1) * 512]
+                    .iter_mut()
+                    .for_each(|v| *v *= keep);
+            }
+        }
+        let emitting = w.iter().filter(|&&v| v > 0.0).count();
+        // The cells' weights: the voxels' summed per cell (in f64), brick by brick.
+        let side = 8 / cell;
+        let per = side * side * side;
+        let w = if cell == 1 {
+            w
+        } else {
+            let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
+            for (slot, ws) in w.chunks_exact(512).enumerate() {
+                let mut sums = [0f64; 512];
+                for (l, &v) in ws.iter().enumerate() {
+                    if v > 0.0 {
+                        let c =
+                            (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                        sums[c] += v as f64;
+                    }
+                }
+                for (c, &v) in sums[..per].iter().enumerate() {
+                    cw[slot * per + c] = v as f32;
+                }
+            }
+            cw
+        };
+        let vv = voxel.x * voxel.y * voxel.z;
+        let power_w = 4.0 * std::f64::consts::PI * vv * pw;
+        let power_lm = 4.0 * std::f64::consts::PI * vv * plm;
+        // The bricks holding weight and their CDF (a cell's weights lie in its brick's slot, those outside the
+        // grid's dims 0).
+        let (mut brick_slots, mut cdf) = (Vec::new(), Vec::new());
+        let mut total = 0.0;
+        for b in &bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+            let ws = &w[slot * per..(slot + 1) * per];
+            let sum: f64 = ws.iter().map(|&v| v as f64).sum();
+            if sum > 0.0 {
+                total += sum;
+                brick_slots.push(slot as u32);
+                cdf.push(total);
+            }
+        }
+        // The embers, by the same measure: an ember is a Lambertian sphere, π r² L per steradian on average, the
+        // power j V of a voxel — in the voxels' units, divided by a voxel's volume.
+        let fire_total = total;
+        let (mut power_w, mut power_lm) = (power_w, power_lm);
+        let (mut ember_w, mut ember_cdf) = (Vec::new(), Vec::new());
+        if let Some(em) = vol.embers() {
+            let n = em.len();
+            ember_w = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
+            ember_cdf = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
+            let intensity = src.as_ref().map_or(1.0, |s| s.intensity);
+            let eps = em.emissivity();
+            let mut l = vec![0.0; c];
+            for i in 0..n {
+                em.radiance(i, 0.0, &mut l);
+                let r = em.radius(i);
+                let area = std::f64::consts::PI * r * r;
+                let lum: f64 = (0..c).map(|q| l[q] * xyz[q].y).sum();
+                let band: f64 = (0..c).map(|q| l[q] * widths[q]).sum();
+                ember_w[i] =
+                    area * match weighting {
+                        Weighting::Luminance => lum,
+                        Weighting::Power | Weighting::Escaping => band,
+                    } / vv;
+                total += ember_w[i];
+                ember_cdf[i] = total;
+                power_lm += 4.0 * std::f64::consts::PI * area * lum;
+                power_w += intensity
+                    * firemedium_core::ember::radiated_power(eps, r, em.temperature(i, 0.0));
+            }
+        }
+        if !(total > 0.0) {
+            return Err(no_emission());
+        }
+        let ember_p = ember_w.iter().map(|w| w / total).collect();
+        Ok(FireLight {
+            vol,
+            weighting,
+            dims,
+            voxel,
+            total,
+            topo,
+            cell,
+            line_step: 0.0,
+            correction: 0.0,
+            mip: None,
+            channels: None,
+            brick_density: Vec::new(),
+            weights: w,
+            emitting,
+            cdf,
+            slot_bricks,
+            brick_slots,
+            fire_total,
+            ember_p,
+            ember_cdf,
+            power_w,
+            power_lm,
+            build_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// Per brick of `bricks` (whose mean extinctions, m⁻¹, are `ext`), the mean over the six axis directions of
+/// e^{−τ} from its centre to the grid's edge, τ summed over the bricks on the way (half its own); bricks not
+/// listed hold nothing. `size`: a brick's extent per axis. `None` when the bricks' box (4 bytes each) is larger
+/// than `budget` or the allocator refuses it.
+pub(super) fn escape_fractions(
+    topo: &crate::grid::Topology,
+    bricks: &[[usize; 3]],
+    ext: &[f64],
+    size: DVec3,
+    budget: u64,
+) -> Option<Vec<f64>> {
+    let nb = topo.bricks();
+    let n = nb[0].checked_mul(nb[1])?.checked_mul(nb[2])?;
+    if (n as u64).saturating_mul(8) > budget {
+        return None;
+    }
+    let at = |b: [usize; 3]| b[0] + nb[0] * (b[1] + nb[1] * b[2]);
+    let mut sigma = crate::alloc::filled(n, 0f32)?;
+    for (b, &e) in bricks.iter().zip(ext) {
+        sigma[at(*b)] = e as f32;
+    }
+    // Per axis, the optical depth from each brick's far face to the edge, both ways, by running sums along
+    // each line of bricks; e^{−τ} of both directions accumulated per brick.
+    let mut sum = crate::alloc::filled(n, 0f32)?;
+    for a in 0..3 {
+        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+        for i in 0..nb[u] {
+            for j in 0..nb[v] {
+                let line = |k: usize| {
+                    let mut b = [0; 3];
+                    (b[a], b[u], b[v]) = (k, i, j);
+                    at(b)
+                };
+                for forward in [true, false] {
+                    let mut beyond = 0.0f64;
+                    for step in 0..nb[a] {
+                        let k = if forward { nb[a] - 1 - step } else { step };
+                        let s = sigma[line(k)] as f64 * size[a];
+                        sum[line(k)] += (-(beyond + 0.5 * s)).exp() as f32;
+                        beyond += s;
+                    }
+                }
+            }
+        }
+    }
+    Some(bricks.iter().map(|b| sum[at(*b)] as f64 / 6.0).collect())
+}
+
+/// `max(w, f · max of the 26 neighbours)` per voxel of `bricks` (a separable 3×3×3 max filter over the
+/// topology's storage; voxels outside it count as 0, and every voxel a stored weight's dilation reaches is
+/// inside it, the bricks around the data being covered). `None` when the allocator refuses the copies.
+fn dilate(
+    w: &[f32],
+    topo: &crate::grid::Topology,
+    bricks: &[[usize; 3]],
+    f: f32,
+) -> Option<Vec<f32>> {
+    let dims = topo.dims();
+    let mut m = crate::alloc::filled(w.len(), 0f32)?;
+    m.copy_from_slice(w);
+    let mut src = crate::alloc::filled(w.len(), 0f32)?;
+    for axis in 0..3 {
+        src.copy_from_slice(&m);
+        for b in bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for jy in span[1].0..span[1].1 {
+                    for i in span[0].0..span[0].1 {
+                        let v = [i, jy, k];
+                        let idx = topo.index(i, jy, k);
+                        let mut out = m[idx];
+                        if v[axis] > 0 {
+                            let mut q = v;
+                            q[axis] -= 1;
+                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                        }
+                        if v[axis] + 1 < dims[axis] {
+                            let mut q = v;
+                            q[axis] += 1;
+                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                        }
+                        m[idx] = out;
+                    }
+                }
+            }
+        }
+    }
+    Some(w.iter().zip(&m).map(|(&a, &b)| a.max(f * b)).collect())
+}
+
+/// Full line emission per unit number density, W·sr⁻¹ (all shipped lines of `e` at T).
+fn line_power(e: &crate::species::Element, t: f64) -> f64 {
+    use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
+    if !(t > 0.0) {
+        return 0.0;
+    }
+    let kt = BOLTZMANN * t;
+    let z = e.partition_function(t);
+    e.lines()
+        .iter()
+        .map(|l| {
+            PLANCK * SPEED_OF_LIGHT / (4.0 * std::f64::consts::PI * l.lambda_nm * 1e-9)
+                * l.a_ki
+                * l.g_k as f64
+                * (-l.e_k / kt).exp()
+                / z
+        })
+        .sum()
+}
