@@ -1,9 +1,9 @@
 //! The fire light against closed forms: sampled and evaluated densities, power, the line estimate.
 
 use super::*;
-use build::escape_fractions;
 use crate::params::Param;
 use crate::rng::Rng;
+use build::escape_fractions;
 
 fn sphere_fire(n: usize, r: f64, fv: f64, t: f64, extra: Vec<Param>) -> Arc<FireVolume> {
     // A uniform sphere of grey soot (alpha 0, constant n, k) in an n³ grid over [−1, 1]³, nearest lookup.

@@ -12,6 +12,7 @@
 //! nonlinearity) is the line's bias against the volume's own march, measured in the tests and
 //! docs/RESULTS.md; the light's `linecorrection` removes it.
 
+use super::parts;
 use super::{lanes, lattice, CapCounter, FireVolume, Integrator};
 use crate::dataset::{par_map, Dataset, LoadOptions};
 use crate::grid::{Interpolation, BRICK};
@@ -30,27 +31,28 @@ impl FireVolume {
     /// volume itself.
     pub(crate) fn mip(&self, f: usize, budget: u64) -> Option<FireVolume> {
         let carried = self.soot_only()
-            && self.margin == 0.0
-            && self.ds.interpolation() == Interpolation::Trilinear
+            && self.bounds.margin == 0.0
+            && self.grids.ds.interpolation() == Interpolation::Trilinear
             && self
+                .grids
                 .ds
                 .channels()
                 .iter()
                 .all(|c| c.grid.background() == 0.0);
-        let tch = self.temperature?;
+        let tch = self.grids.temperature?;
         if !carried || !matches!(f, 2 | 4 | 8) {
             return None;
         }
         // Emission per unit density summed over the channels, per row of the table: it must grow with T (the
         // block's temperature is found by inverting it).
         let c = self.channels();
-        let jsum: Vec<f64> = (0..self.j.rows)
-            .map(|r| (0..c).map(|ch| self.j.value(r, ch) as f64).sum())
+        let jsum: Vec<f64> = (0..self.model.j.rows)
+            .map(|r| (0..c).map(|ch| self.model.j.value(r, ch) as f64).sum())
             .collect();
         if jsum.len() < 2 || jsum.windows(2).any(|w| !(w[1] >= w[0])) {
             return None;
         }
-        let dims = self.ds.dims();
+        let dims = self.grids.ds.dims();
         let cd = dims.map(|n| n.div_ceil(f));
         let n = cd[0] * cd[1] * cd[2];
         // (Each worker sums into a copy-sized array of its own, 24 bytes a block: at most four workers, so that
@@ -63,17 +65,17 @@ impl FireVolume {
         }
 
         // Per block: Σ d, Σ d·J(T) and Σ T over its voxels, from the stored bricks (empty ones read 0).
-        let (jt, inv_dt) = (&jsum, self.j.inv_dt);
+        let (jt, inv_dt) = (&jsum, self.model.j.inv_dt);
         let emission = |t: f32| -> f64 {
             let x = (t as f64 * inv_dt).clamp(0.0, (jt.len() - 1) as f64);
             let i = (x as usize).min(jt.len() - 2);
             jt[i] + (x - i as f64) * (jt[i + 1] - jt[i])
         };
-        let topo = self.ds.topology();
+        let topo = self.grids.ds.topology();
         let mut bricks = Vec::with_capacity(topo.active_bricks());
         topo.for_each_slot(|b, _| bricks.push(b));
-        let grids = self.ds.channels();
-        let (dg, tg) = (&grids[self.density].grid, &grids[tch].grid);
+        let grids = self.grids.ds.channels();
+        let (dg, tg) = (&grids[self.grids.density].grid, &grids[tch].grid);
         let per = bricks.len().div_ceil(threads).max(1);
         let parts = par_map(bricks.chunks(per).collect(), |chunk: &[[usize; 3]]| {
             let mut s = vec![[0f64; 3]; n];
@@ -105,7 +107,7 @@ impl FireVolume {
             }
         }
         let volume = (f * f * f) as f64;
-        let dt = self.j.dt;
+        let dt = self.model.j.dt;
         let mut density = vec![0f32; n];
         let mut temperature = vec![0f32; n];
         for (q, s) in sums.iter().enumerate() {
@@ -133,8 +135,8 @@ impl FireVolume {
                 (s[2] / volume) as f32
             };
         }
-        let [p0, _] = self.ds.bounds();
-        let voxel = self.ds.voxel_size() * f as f64;
+        let [p0, _] = self.grids.ds.bounds();
+        let voxel = self.grids.ds.voxel_size() * f as f64;
         let p1 = p0 + DVec3::new(cd[0] as f64, cd[1] as f64, cd[2] as f64) * voxel;
         let ds = Dataset::from_inline(
             cd,
@@ -153,87 +155,94 @@ impl FireVolume {
             MajorantGrid::with_ranges(&ds, BRICK, ranges.into_iter().map(Some).collect());
         let nb = majorant.counts().iter().product::<usize>();
         let sigma = self
+            .model
             .a
             .iter()
-            .zip(&self.s)
+            .zip(&self.model.s)
             .map(|(a, s)| a + s)
             .fold(0.0, f64::max);
         let brick_sigma: Vec<f64> = (0..nb).map(|b| majorant.max(b, 0) as f64 * sigma).collect();
         let brick_empty: Vec<bool> = (0..nb).map(|b| majorant.max(b, 0) <= 0.0).collect();
         let dmax = (0..nb).map(|b| majorant.max(b, 0)).fold(0f32, f32::max) as f64;
-        let step = self.step * f as f64;
+        let step = self.estimator.step * f as f64;
         let clip_box = ds.bounds();
         let mut v = FireVolume {
-            ds,
-            density: 0,
-            temperature: Some(1),
-            lescale: None,
-            emission_grid: false,
-            species: Vec::new(),
-            basis: self.basis.clone(),
-            mode: self.mode,
-            a: self.a.clone(),
-            a_t: None,
-            s: self.s.clone(),
-            j: self.j.clone(),
-            t_emit: self.t_emit,
-            majorant,
-            brick_sigma,
-            brick_empty,
-            blur: None,
-            embers: None,
-            physical_colour: self.physical_colour,
-            scatter_color: None,
-            clip_box,
-            margin: 0.0,
-            step,
-            step_tau: self.step_tau,
-            integrator: Integrator::March,
-            cutoff: self.cutoff,
-            g: self.g,
-            tables: Vec::new(),
-            build_seconds: 0.0,
-            source: None,
-            refraction: None,
-            lanes: None,
-            lattice: None,
-            diffusion: None,
-            lines: None,
+            grids: parts::Grids {
+                ds,
+                density: 0,
+                temperature: Some(1),
+                lescale: None,
+                emission_grid: false,
+                species: Vec::new(),
+            },
+            model: parts::Model {
+                basis: self.model.basis.clone(),
+                mode: self.model.mode,
+                a: self.model.a.clone(),
+                a_t: None,
+                s: self.model.s.clone(),
+                j: self.model.j.clone(),
+                t_emit: self.model.t_emit,
+                physical_colour: self.model.physical_colour,
+                scatter_color: None,
+                g: self.model.g,
+                point_model: self.model.point_model.clone(),
+            },
+            bounds: parts::Bounds {
+                majorant,
+                brick_sigma,
+                brick_empty,
+                clip_box,
+                margin: 0.0,
+            },
+            layers: parts::Layers::default(),
+            estimator: parts::Estimator {
+                integrator: Integrator::March,
+                step,
+                step_tau: self.estimator.step_tau,
+                cutoff: self.estimator.cutoff,
+                lanes: None,
+                lattice: None,
+            },
+            report: parts::Report {
+                tables: Vec::new(),
+                build_seconds: 0.0,
+                source: None,
+                spare: 0,
+                threads: self.report.threads,
+            },
             capped: CapCounter::default(),
-            spare: 0,
-            threads: self.threads,
-            point_model: self.point_model.clone(),
             #[cfg(test)]
             fault: self.fault.clone(),
         };
-        v.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
-        v.lattice = Some(lat);
+        v.estimator.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
+        v.estimator.lattice = Some(lat);
         Some(v)
     }
 
     /// Whether this volume's light is its soot's alone, marched by the lane kernel: no species, emission or
     /// `Lescale` grid, T-dependent absorption, motion blur, refraction, diffusion, thick lines or embers.
     pub(super) fn soot_only(&self) -> bool {
-        self.lanes.is_some()
-            && self.lattice.is_some()
-            && self.integrator == Integrator::March
-            && self.species.is_empty()
-            && self.lescale.is_none()
-            && !self.emission_grid
-            && self.a_t.is_none()
-            && self.blur.is_none()
-            && self.refraction.is_none()
-            && self.diffusion.is_none()
-            && self.lines.is_none()
-            && self.embers.is_none()
+        self.estimator.lanes.is_some()
+            && self.estimator.lattice.is_some()
+            && self.estimator.integrator == Integrator::March
+            && self.grids.species.is_empty()
+            && self.grids.lescale.is_none()
+            && !self.grids.emission_grid
+            && self.model.a_t.is_none()
+            && self.layers.blur.is_none()
+            && self.layers.refraction.is_none()
+            && self.layers.diffusion.is_none()
+            && self.layers.lines.is_none()
+            && self.layers.embers.is_none()
     }
 
     /// Bytes the copy of [`mip`](Self::mip) holds: its grids, lattice and majorants.
     pub(crate) fn mip_bytes(&self) -> usize {
-        self.ds.bytes()
-            + self.lattice.as_ref().map_or(0, |l| l.bytes())
-            + self.majorant.bytes()
-            + self.brick_sigma.len() * 9
+        self.grids.ds.bytes()
+            + self.estimator.lattice.as_ref().map_or(0, |l| l.bytes())
+            + self.bounds.majorant.bytes()
+            + self.bounds.brick_sigma.len() * 9
     }
 }
 
@@ -245,9 +254,9 @@ mod tests {
     /// Emission per unit density summed over the channels at `t` (the table's rows, interpolated).
     fn jsum(v: &FireVolume, t: f64) -> f64 {
         let c = v.channels();
-        let x = (t * v.j.inv_dt).clamp(0.0, (v.j.rows - 1) as f64);
-        let i = (x as usize).min(v.j.rows - 2);
-        let at = |r: usize| (0..c).map(|ch| v.j.value(r, ch) as f64).sum::<f64>();
+        let x = (t * v.model.j.inv_dt).clamp(0.0, (v.model.j.rows - 1) as f64);
+        let i = (x as usize).min(v.model.j.rows - 2);
+        let at = |r: usize| (0..c).map(|ch| v.model.j.value(r, ch) as f64).sum::<f64>();
         at(i) + (x - i as f64) * (at(i + 1) - at(i))
     }
 
@@ -297,20 +306,23 @@ mod tests {
         assert!(v.mip(2, 1000).is_none(), "within the budget only");
         for f in [2usize, 4] {
             let m = v.mip(f, u64::MAX).expect("a copy");
-            let (dims, cd) = (v.ds.dims(), m.ds.dims());
+            let (dims, cd) = (v.grids.ds.dims(), m.grids.ds.dims());
             assert_eq!(cd, dims.map(|n| n.div_ceil(f)));
-            assert_eq!(m.ds.bounds()[0], v.ds.bounds()[0]);
+            assert_eq!(m.grids.ds.bounds()[0], v.grids.ds.bounds()[0]);
             assert!(
-                (m.ds.voxel_size() - v.ds.voxel_size() * f as f64)
+                (m.grids.ds.voxel_size() - v.grids.ds.voxel_size() * f as f64)
                     .abs()
                     .max_element()
                     < 1e-12
             );
             let (fd, ft) = (
-                &v.ds.channels()[v.density].grid,
-                &v.ds.channels()[v.temperature.unwrap()].grid,
+                &v.grids.ds.channels()[v.grids.density].grid,
+                &v.grids.ds.channels()[v.grids.temperature.unwrap()].grid,
             );
-            let (md, mt) = (&m.ds.channels()[0].grid, &m.ds.channels()[1].grid);
+            let (md, mt) = (
+                &m.grids.ds.channels()[0].grid,
+                &m.grids.ds.channels()[1].grid,
+            );
             let (mut soot, mut soot_copy) = (0.0, 0.0);
             for bz in 0..cd[2] {
                 for by in 0..cd[1] {

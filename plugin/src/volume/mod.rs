@@ -43,6 +43,7 @@ mod march;
 mod mip;
 mod motion;
 pub mod params;
+mod parts;
 mod point;
 mod settings;
 mod subset;
@@ -57,7 +58,7 @@ use march::EVALUATIONS;
 pub use point::PointCoefficients;
 use settings::{Emission, Settings};
 pub(crate) use subset::LineChannels;
-use tables::{SpeciesChannel, TTable};
+use tables::SpeciesChannel;
 
 use crate::dataset::{Dataset, Format};
 use crate::majorant::MajorantGrid;
@@ -149,69 +150,18 @@ pub struct MajorantCells<'a> {
     pub sigma_t: &'a [f64],
 }
 
-/// A fire volume: a dataset, its coefficient tables and majorants, and an integrator.
+/// A fire volume, from parts: the grids it reads, its coefficient model, its majorants, the optional layers the
+/// scene asked for, its estimator, and what its build reports.
 #[derive(Debug, Clone)]
 pub struct FireVolume {
-    ds: Dataset,
-    density: usize,
-    temperature: Option<usize>,
-    lescale: Option<usize>,
-    /// The `lescale` channel is an emission grid: emission follows it, not the density (j = e · J(T)).
-    emission_grid: bool,
-    species: Vec<SpeciesChannel>,
-    basis: Basis,
-    mode: Mode,
-    /// σ_a and σ_s per unit density, per channel (rgb physical mode: σ_a depends on T, `a_t`).
-    a: Vec<f64>,
-    a_t: Option<TTable>,
-    s: Vec<f64>,
-    /// Emission per unit density over T.
-    j: TTable,
-    /// pbrt's 100 K emission threshold (0 in physical mode).
-    t_emit: f64,
-    majorant: MajorantGrid,
-    brick_sigma: Vec<f64>,
-    /// Bricks holding no density and no species anywhere in their interpolation footprint: no σ, no j.
-    brick_empty: Vec<bool>,
-    /// Velocity motion blur (a velocity grid and an open shutter).
-    blur: Option<motion::Blur>,
-    /// The `embers` particles: opaque grey spheres (see [`crate::embers`]).
-    embers: Option<crate::embers::Embers>,
-    /// The fire's colour is the physics' (no tint, no colour ramp short of `physical` 1).
-    physical_colour: bool,
-    /// The scatter colour grid's channels and, per channel, the weights of its r, g, b.
-    scatter_color: Option<([usize; 3], Vec<[f64; 3]>)>,
-    /// Where rays are clipped: the dataset bounds, or pbrt-v4 nanovdb's world box [T(i_min), T(i_max + 1)]
-    /// (shifted half a voxel up), with lookups fading over the half voxel beyond the last samples.
-    clip_box: [DVec3; 2],
-    margin: f64,
-    step: f64,
-    /// The largest optical depth of one march step before it is split (`steptau`; ∞: never).
-    step_tau: f64,
-    integrator: Integrator,
-    cutoff: f64,
-    g: f64,
-    tables: Vec<TableReport>,
-    build_seconds: f64,
-    source: Option<Source>,
-    /// The index field and step control, only when `refraction` is on.
-    refraction: Option<crate::refraction::march::Refraction>,
-    /// The march's tables in f32 lanes (`precision "f32"`, the march, and every product inside f32's range).
-    lanes: Option<lanes::LaneTables>,
-    /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
-    lattice: Option<lattice::Lattice>,
-    /// The fire's light in its smoke by diffusion (`multiplescattering "diffusion"`): read as emission.
-    diffusion: Option<diffusion::Diffusion>,
-    /// Atomic lines that can be optically thick, integrated across their profiles (`lineshape "voigt"`).
-    lines: Option<lines::ThickLines>,
+    grids: parts::Grids,
+    model: parts::Model,
+    bounds: parts::Bounds,
+    layers: parts::Layers,
+    estimator: parts::Estimator,
+    report: parts::Report,
     /// Rays whose tracking stopped at the collision cap (see `integrate::MAX_COLLISIONS`).
     capped: CapCounter,
-    /// Bytes the budget (`maxbytes`) leaves for what is derived from the volume later (its fire light).
-    spare: u64,
-    /// The build's thread budget (`threads`), which the fire light's build keeps to as well.
-    threads: usize,
-    /// What the point query evaluates at any wavelength (or why it is refused).
-    point_model: point::PointModel,
     #[cfg(test)]
     fault: String,
 }
@@ -252,7 +202,7 @@ impl FireVolume {
             let loaded = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
             r.finish()?;
             let mut v = Self::build(set, loaded, budget, start)?;
-            v.threads = threads;
+            v.report.threads = threads;
             Ok(v)
         })
     }
@@ -643,59 +593,71 @@ impl FireVolume {
         .map(|(_, why)| why.to_string());
         let point_model = point::PointModel::new(&set.emission, set.sigma_s.as_ref(), refused);
         let mut vol = FireVolume {
-            ds,
-            density,
-            temperature,
-            lescale,
-            emission_grid,
-            species: co.species,
-            basis,
-            mode: set.mode,
-            a: co.a,
-            a_t: co.a_t,
-            s: co.s,
-            j: co.j,
-            t_emit: co.t_emit,
-            majorant,
-            brick_sigma,
-            brick_empty,
-            blur,
-            embers,
-            scatter_color,
-            physical_colour,
-            clip_box,
-            margin,
-            step,
-            step_tau: set.step_tau,
-            integrator: set.integrator,
-            cutoff: set.cutoff,
-            g: set.g,
-            tables,
-            build_seconds: 0.0,
-            source: co.source,
-            refraction,
-            lanes: None,
-            lattice: None,
-            lines: thick,
-            diffusion: None,
+            grids: parts::Grids {
+                ds,
+                density,
+                temperature,
+                lescale,
+                emission_grid,
+                species: co.species,
+            },
+            model: parts::Model {
+                basis,
+                mode: set.mode,
+                a: co.a,
+                a_t: co.a_t,
+                s: co.s,
+                j: co.j,
+                t_emit: co.t_emit,
+                physical_colour,
+                scatter_color,
+                g: set.g,
+                point_model,
+            },
+            bounds: parts::Bounds {
+                majorant,
+                brick_sigma,
+                brick_empty,
+                clip_box,
+                margin,
+            },
+            layers: parts::Layers {
+                blur,
+                embers,
+                refraction,
+                diffusion: None,
+                lines: thick,
+            },
+            estimator: parts::Estimator {
+                integrator: set.integrator,
+                step,
+                step_tau: set.step_tau,
+                cutoff: set.cutoff,
+                lanes: None,
+                lattice: None,
+            },
+            report: parts::Report {
+                tables,
+                build_seconds: 0.0,
+                source: co.source,
+                spare: 0,
+                threads: 0,
+            },
             capped: CapCounter::default(),
-            spare: 0,
-            threads: 0,
-            point_model,
             #[cfg(test)]
             fault: set.fault,
         };
         if lanes_wanted {
             let t3 = Instant::now();
-            vol.lanes = lanes::LaneTables::build(&vol, dmax, dlmax, &nmax, step);
-            if let Some(lt) = &vol.lanes {
-                vol.tables.push(TableReport {
+            vol.estimator.lanes = lanes::LaneTables::build(&vol, dmax, dlmax, &nmax, step);
+            if let Some(lt) = &vol.estimator.lanes {
+                vol.report.tables.push(TableReport {
                     name: "march lanes (σ per unit density; the tables are shared)".into(),
                     bytes: lt.bytes(),
                     seconds: t3.elapsed().as_secs_f64(),
                 });
                 if let Some((lat, seconds)) = lattice {
-                    vol.tables.push(TableReport {
+                    vol.report.tables.push(TableReport {
                         name: match lat.bricks() {
                             None => {
                                 "march lattice (grids interleaved and padded; their brick ranges)"
@@ -709,15 +671,18 @@ impl FireVolume {
                         bytes: lat.bytes(),
                         seconds,
                     });
-                    vol.lattice = Some(lat);
+                    vol.estimator.lattice = Some(lat);
                 }
             }
         }
-        if let Some(res) = set.diffusion.filter(|_| vol.s.iter().any(|&v| v > 0.0)) {
+        if let Some(res) = set
+            .diffusion
+            .filter(|_| vol.model.s.iter().any(|&v| v > 0.0))
+        {
             let t5 = Instant::now();
             // The solve's peak: three cell arrays per channel, five per solving thread.
             let cells = {
-                let size = vol.clip_box[1] - vol.clip_box[0];
+                let size = vol.bounds.clip_box[1] - vol.bounds.clip_box[0];
                 let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
                 [0, 1, 2]
                     .map(|k| ((size[k] / h).ceil() as u64).max(1))
@@ -725,7 +690,7 @@ impl FireVolume {
                     .product::<u64>()
             };
             let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
-            let left = spare.saturating_sub(vol.tables.iter().map(|t| t.bytes as u64).sum());
+            let left = spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
             if need > left {
                 return Err(Error::invalid(
                     "volume",
@@ -734,101 +699,110 @@ impl FireVolume {
                     format!("a grid within the memory budget's {left} bytes left"),
                 ));
             }
-            let df = diffusion::Diffusion::build(&vol, res, vol.g)?;
-            vol.tables.push(TableReport {
+            let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
+            vol.report.tables.push(TableReport {
                 name: format!("diffusion ({} iterations)", df.iterations),
                 bytes: df.bytes(),
                 seconds: t5.elapsed().as_secs_f64(),
             });
-            vol.diffusion = Some(df);
+            vol.layers.diffusion = Some(df);
         }
-        vol.spare = spare.saturating_sub(vol.tables.iter().map(|t| t.bytes as u64).sum());
-        vol.build_seconds = start.elapsed().as_secs_f64();
+        vol.report.spare =
+            spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+        vol.report.build_seconds = start.elapsed().as_secs_f64();
         Ok(vol)
     }
 
     /// The dataset.
     pub fn dataset(&self) -> &Dataset {
-        &self.ds
+        &self.grids.ds
     }
     /// Medium-space bounds rays are clipped to (the dataset's, or pbrt-v4 nanovdb's world box in pbrt mode).
     pub fn bounds(&self) -> [DVec3; 2] {
-        self.clip_box
+        self.bounds.clip_box
     }
     /// Number of channels.
     pub fn channels(&self) -> usize {
-        self.basis.channels()
+        self.model.basis.channels()
     }
     /// The colour mode.
     pub fn color_mode(&self) -> ColorMode {
-        self.basis.mode
+        self.model.basis.mode
     }
     /// The coefficient mode.
     pub fn mode(&self) -> Mode {
-        self.mode
+        self.model.mode
     }
     /// XYZ (Y in cd/m², or pbrt's relative units in pbrt mode) per unit radiance in each channel.
     pub fn channel_xyz(&self) -> Vec<DVec3> {
-        self.basis.xyz()
+        self.model.basis.xyz()
     }
     /// The integrator in use.
     pub fn integrator(&self) -> Integrator {
-        self.integrator
+        self.estimator.integrator
     }
     /// Henyey–Greenstein g.
     pub fn g(&self) -> f64 {
-        self.g
+        self.model.g
     }
     /// Whether the host should sample scattering events: scattering is configured and not resolved by
     /// diffusion (where the smoke's scattered light is emission).
     pub fn scatters(&self) -> bool {
-        self.diffusion.is_none() && self.s.iter().any(|&v| v > 0.0)
+        self.layers.diffusion.is_none() && self.model.s.iter().any(|&v| v > 0.0)
     }
     /// March step length, medium units.
     pub fn step_length(&self) -> f64 {
-        self.step
+        self.estimator.step
     }
     /// The tables built (name, bytes, seconds).
     pub fn tables(&self) -> &[TableReport] {
-        &self.tables
+        &self.report.tables
     }
     /// Bytes held by the dataset and tables.
     pub fn bytes(&self) -> usize {
         // (The species line tables are among `tables`, reported as "species X (lines)".)
-        self.ds.bytes() + self.tables.iter().map(|t| t.bytes).sum::<usize>()
+        self.grids.ds.bytes() + self.report.tables.iter().map(|t| t.bytes).sum::<usize>()
     }
     /// Seconds spent building.
     pub fn build_seconds(&self) -> f64 {
-        self.build_seconds
+        self.report.build_seconds
     }
     pub(crate) fn source(&self) -> Option<&Source> {
-        self.source.as_ref()
+        self.report.source.as_ref()
     }
     pub(crate) fn density_channel(&self) -> usize {
-        self.density
+        self.grids.density
     }
     pub(crate) fn temperature_channel(&self) -> Option<usize> {
-        self.temperature
+        self.grids.temperature
     }
     /// The lowest and highest temperature of the grid (K, after the mapping), if it has one.
     pub fn temperature_range(&self) -> Option<[f64; 2]> {
-        let s = self.ds.channels()[self.temperature?].grid.stats();
+        let s = self.grids.ds.channels()[self.grids.temperature?]
+            .grid
+            .stats();
         Some([s.min as f64, s.max as f64])
     }
 
     /// The build's thread budget (`threads`; 0: every core).
     pub(crate) fn threads(&self) -> usize {
-        self.threads
+        self.report.threads
     }
     /// Bytes of the volume's memory budget (`maxbytes`) left after its grids and tables: what a fire light built
     /// from it may take.
     pub fn spare_bytes(&self) -> u64 {
-        self.spare
+        self.report.spare
     }
     /// Whether anything in the volume can emit: some temperature (or constant `Le`) with a non-zero emission
     /// table, or species. A fire light of a volume that cannot emit is refused before it allocates per voxel.
     pub fn can_emit(&self) -> bool {
-        !self.species.is_empty() || self.j.v.iter().any(|lane| lane.iter().any(|&x| x > 0.0))
+        !self.grids.species.is_empty()
+            || self
+                .model
+                .j
+                .v
+                .iter()
+                .any(|lane| lane.iter().any(|&x| x > 0.0))
     }
     /// How many rays' tracking stopped at the collision cap so far (each a ray cut short as if absorbed: a bias
     /// a host should report).
@@ -845,7 +819,7 @@ impl FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        for seg in self.majorant.segments(o, d, t0, t1) {
+        for seg in self.bounds.majorant.segments(o, d, t0, t1) {
             if !f(seg.t0, seg.t1, sigma[seg.brick]) {
                 return;
             }
@@ -861,7 +835,7 @@ impl FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64),
     ) {
-        for seg in self.majorant.segments(o, d, t0, t1) {
+        for seg in self.bounds.majorant.segments(o, d, t0, t1) {
             if empty[seg.brick] {
                 f(seg.t0, seg.t1);
             }
@@ -870,7 +844,7 @@ impl FireVolume {
     /// The density that emits at a sample of soot density `d` and Lescale (or emission grid) value `les`.
     #[inline(always)]
     pub(super) fn emitting<T: std::ops::Mul<Output = T>>(&self, d: T, les: T) -> T {
-        if self.emission_grid {
+        if self.grids.emission_grid {
             les
         } else {
             d * les
@@ -879,11 +853,12 @@ impl FireVolume {
     /// Whether `p` can hold medium: inside the clip box and not in an empty brick.
     #[inline]
     pub(crate) fn holds_medium(&self, p: DVec3) -> bool {
-        let [m0, m1] = self.clip_box;
+        let [m0, m1] = self.bounds.clip_box;
         let empty = self
+            .bounds
             .majorant
             .brick_at(p)
-            .is_some_and(|b| self.brick_empty[b]);
+            .is_some_and(|b| self.bounds.brick_empty[b]);
         !empty && p.cmpge(m0).all() && p.cmple(m1).all()
     }
 
@@ -946,7 +921,7 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> f64 {
-        if self.integrator != Integrator::March || !(step > self.step) {
+        if self.estimator.integrator != Integrator::March || !(step > self.estimator.step) {
             return self.integrate_at(ray, time, l, t);
         }
         let (cut, hit) = self.ember_cut(ray, time);
@@ -997,6 +972,7 @@ impl FireVolume {
     /// `ray` up to the first ember it meets at `time`, and that ember's (parameter, index).
     fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
         let hit = self
+            .layers
             .embers
             .as_ref()
             .and_then(|e| e.hit(ray.o, ray.d, ray.t0, ray.t1, time));
@@ -1015,7 +991,7 @@ impl FireVolume {
         l: Option<&mut [f64]>,
         t: &mut [f64],
     ) -> Option<f64> {
-        let (Some((th, i)), Some(em)) = (hit, &self.embers) else {
+        let (Some((th, i)), Some(em)) = (hit, &self.layers.embers) else {
             return None;
         };
         if let Some(l) = l {
@@ -1047,7 +1023,7 @@ impl FireVolume {
     }
     /// The volume's embers, if it has any.
     pub(crate) fn embers(&self) -> Option<&crate::embers::Embers> {
-        self.embers.as_ref()
+        self.layers.embers.as_ref()
     }
     /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
     fn integrate_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
@@ -1066,7 +1042,7 @@ impl FireVolume {
         t: &mut [f64],
         fold: lines::Fold,
     ) {
-        if let Some(tl) = &self.lines {
+        if let Some(tl) = &self.layers.lines {
             match adv {
                 Some(a) => tl.apply(self, ray, end, false, &|p| a.displaced(p), l, t, fold),
                 None => tl.apply(self, ray, end, true, &|p| p, l, t, fold),
@@ -1095,7 +1071,7 @@ impl FireVolume {
     /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
     /// parameter is then the entry parameter plus arc length / |d|.
     fn integrate_exit_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
-        let Some(rf) = &self.refraction else {
+        let Some(rf) = &self.layers.refraction else {
             let te = self.integrate_fire(ray, l, t);
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
@@ -1109,7 +1085,7 @@ impl FireVolume {
     /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
     fn transmittance_fire(&self, ray: &Ray, t: &mut [f64]) {
         let mut sc = Scratch::new(self.channels());
-        integrate::transmittance(self, ray, self.integrator, &mut sc, t);
+        integrate::transmittance(self, ray, self.estimator.integrator, &mut sc, t);
         self.thick_lines(None, ray, ray.t1, None, t, lines::Fold::Add);
     }
     /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights.
@@ -1124,7 +1100,7 @@ impl FireVolume {
     pub fn white_temperature(&self) -> Option<f64> {
         self.temperature_range()
             .map(|[_, hi]| hi)
-            .filter(|&t| self.physical_colour && t > 0.0)
+            .filter(|&t| self.model.physical_colour && t > 0.0)
     }
 
     /// What the volume holds beyond absorption — what a host that tracks the medium itself (from its point
@@ -1133,12 +1109,12 @@ impl FireVolume {
         Features {
             emits: self.can_emit(),
             scatters: self.scatters(),
-            motion: self.blur.is_some(),
-            refraction: self.refraction.is_some(),
-            embers: self.embers.is_some(),
-            thick_lines: self.lines.is_some(),
-            diffusion: self.diffusion.is_some(),
-            emits_without_absorption: self.emission_grid,
+            motion: self.layers.blur.is_some(),
+            refraction: self.layers.refraction.is_some(),
+            embers: self.layers.embers.is_some(),
+            thick_lines: self.layers.lines.is_some(),
+            diffusion: self.layers.diffusion.is_some(),
+            emits_without_absorption: self.grids.emission_grid,
         }
     }
     /// The majorant grid a host walks with its own DDA: the box its cells tile, a cell's edge, the cells per
@@ -1147,19 +1123,20 @@ impl FireVolume {
     /// takes the nearest cell's bound.
     pub fn majorant_cells(&self) -> MajorantCells<'_> {
         MajorantCells {
-            bounds: self.majorant.bounds(),
-            cell: self.majorant.cell(),
-            counts: self.majorant.counts(),
+            bounds: self.bounds.majorant.bounds(),
+            cell: self.bounds.majorant.cell(),
+            counts: self.bounds.majorant.counts(),
             sigma_t: self
+                .layers
                 .blur
                 .as_ref()
-                .map_or(&self.brick_sigma[..], |b| b.brick_sigma()),
+                .map_or(&self.bounds.brick_sigma[..], |b| b.brick_sigma()),
         }
     }
     /// The volume's motion blur: the shutter (frames) and the largest displacement (medium units); `None`
     /// without a velocity grid or with the shutter closed.
     pub fn motion_blur(&self) -> Option<([f64; 2], f64)> {
-        self.blur.as_ref().map(|b| (b.shutter(), b.reach()))
+        self.layers.blur.as_ref().map(|b| (b.shutter(), b.reach()))
     }
     /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
     /// fire is looked up where the velocity carried it from (`motion`). Without motion blur, or at time 0, the
@@ -1185,7 +1162,7 @@ impl FireVolume {
         t: &mut [f64],
     ) -> (DVec3, DVec3, f64) {
         match self.advected(time) {
-            Some(a) if self.refraction.is_none() => {
+            Some(a) if self.layers.refraction.is_none() => {
                 self.fault_check();
                 let te = a.integrate(ray, l, t);
                 self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
@@ -1215,17 +1192,17 @@ impl FireVolume {
         }
     }
     fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {
-        self.blur.as_ref().and_then(|b| b.at(self, time))
+        self.layers.blur.as_ref().and_then(|b| b.at(self, time))
     }
     /// σ_a, σ_s and j per channel at medium-space point `p` (zeros outside).
     /// (Atomic lines as their bins' means, thick or not: what a channel's coefficient is.)
     pub fn coefficients(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         Medium::eval(self, p, sa, ss, j);
-        if let Some(tl) = &self.lines {
-            if let Some(st) = self.ds.stencil_with_margin(p, self.margin) {
-                let ch = self.ds.channels();
+        if let Some(tl) = &self.layers.lines {
+            if let Some(st) = self.grids.ds.stencil_with_margin(p, self.bounds.margin) {
+                let ch = self.grids.ds.channels();
                 let value = |k: usize| ch[k].grid.eval(&st) as f64;
-                let t = self.temperature.map_or(0.0, value);
+                let t = self.grids.temperature.map_or(0.0, value);
                 tl.add_boxed(t, &value, sa, j);
             }
         }
@@ -1250,39 +1227,48 @@ impl FireVolume {
     /// coefficients and the point query read.
     #[inline(always)]
     pub(super) fn lookup(&self, p: DVec3) -> Option<(crate::grid::Stencil, Lookup)> {
-        let st = self.ds.stencil_with_margin(p, self.margin)?;
-        let ch = self.ds.channels();
-        let d = ch[self.density].grid.eval(&st).max(0.0) as f64;
+        let st = self.grids.ds.stencil_with_margin(p, self.bounds.margin)?;
+        let ch = self.grids.ds.channels();
+        let d = ch[self.grids.density].grid.eval(&st).max(0.0) as f64;
         let t = self
+            .grids
             .temperature
             .map(|i| ch[i].grid.eval(&st) as f64)
             .unwrap_or(0.0);
         let les = self
+            .grids
             .lescale
             .map(|i| ch[i].grid.eval(&st).max(0.0) as f64)
             .unwrap_or(1.0);
-        let emits = t > self.t_emit || self.temperature.is_none();
+        let emits = t > self.model.t_emit || self.grids.temperature.is_none();
         Some((st, Lookup { d, t, les, emits }))
     }
     /// Whether the march splits steps thicker than `steptau` (pbrt mode): its bias is bounded, and estimates
     /// made from it (the fire light's line) must stay within it.
     pub(crate) fn splits_thick_steps(&self) -> bool {
-        self.step_tau.is_finite()
+        self.estimator.step_tau.is_finite()
     }
 }
 
 impl Medium for FireVolume {
     fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        crate::majorant::clip_box(o, d, t0, t1, self.clip_box[0], self.clip_box[1])
+        crate::majorant::clip_box(
+            o,
+            d,
+            t0,
+            t1,
+            self.bounds.clip_box[0],
+            self.bounds.clip_box[1],
+        )
     }
     fn step(&self) -> f64 {
-        self.step
+        self.estimator.step
     }
     fn cutoff(&self) -> f64 {
-        self.cutoff
+        self.estimator.cutoff
     }
     fn step_tau(&self) -> f64 {
-        self.step_tau
+        self.estimator.step_tau
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         EVALUATIONS.with(|n| n.set(n.get() + 1));
@@ -1293,21 +1279,23 @@ impl Medium for FireVolume {
                 .for_each(|v| *v = 0.0);
             return;
         };
-        let ch = self.ds.channels();
-        let loc = self.j.locate(t);
-        let at = self.a_t.as_ref().map(|tab| (tab, tab.locate(t)));
+        let ch = self.grids.ds.channels();
+        let loc = self.model.j.locate(t);
+        let at = self.model.a_t.as_ref().map(|tab| (tab, tab.locate(t)));
         for c in 0..sa.len() {
-            sa[c] = d * at.map(|(tab, l)| tab.at(l, c) as f64).unwrap_or(self.a[c]);
-            ss[c] = d * self.s[c];
+            sa[c] = d * at
+                .map(|(tab, l)| tab.at(l, c) as f64)
+                .unwrap_or(self.model.a[c]);
+            ss[c] = d * self.model.s[c];
             j[c] = if emits {
-                self.emitting(d, les) * self.j.at(loc, c) as f64
+                self.emitting(d, les) * self.model.j.at(loc, c) as f64
             } else {
                 0.0
             };
         }
         // The scatter colour: what it does not scatter is absorbed (σ_t kept, so the majorants and the march
         // stand).
-        if let Some((k, w)) = &self.scatter_color {
+        if let Some((k, w)) = &self.model.scatter_color {
             let rgb = k.map(|i| (ch[i].grid.eval(&st) as f64).clamp(0.0, 1.0));
             for c in 0..sa.len() {
                 let albedo = w[c][0] * rgb[0] + w[c][1] * rgb[1] + w[c][2] * rgb[2];
@@ -1315,7 +1303,7 @@ impl Medium for FireVolume {
                 ss[c] *= albedo;
             }
         }
-        for sp in &self.species {
+        for sp in &self.grids.species {
             let n = ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale;
             if n > 0.0 {
                 let l = sp.sigma.locate(t);
@@ -1325,7 +1313,7 @@ impl Medium for FireVolume {
                 }
             }
         }
-        if let Some(df) = &self.diffusion {
+        if let Some(df) = &self.layers.diffusion {
             df.add(p, ss, j);
         }
     }
@@ -1337,7 +1325,7 @@ impl Medium for FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        self.majorants_over(&self.brick_sigma, o, d, t0, t1, f)
+        self.majorants_over(&self.bounds.brick_sigma, o, d, t0, t1, f)
     }
     fn collision_cap_hit(&self) {
         self.capped
@@ -1345,7 +1333,7 @@ impl Medium for FireVolume {
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
-        self.empty_spans_over(&self.brick_empty, o, d, t0, t1, f)
+        self.empty_spans_over(&self.bounds.brick_empty, o, d, t0, t1, f)
     }
 }
 

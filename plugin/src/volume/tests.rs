@@ -4,6 +4,7 @@
 
 use super::basis::Basis;
 use super::tables::RangeMax;
+use super::tables::TTable;
 use super::*;
 use crate::blackbody::{spectral_radiance, WIEN};
 use crate::cie::cmf_table::CMF;
@@ -65,7 +66,7 @@ fn voxel_slab_matches_closed_form_across_optical_depth() {
             Param::string("precision", precision),
         ];
         let v = slab_volume(fv, 1800.0, extra);
-        assert_eq!(v.lanes.is_some(), precision == "f32");
+        assert_eq!(v.estimator.lanes.is_some(), precision == "f32");
         let ttol = if precision == "f32" { 4e-7 } else { 1e-9 };
         let c = v.channels();
         let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
@@ -895,7 +896,7 @@ fn the_budget_covers_what_the_volume_derives() {
     };
     let tight = build(600.0);
     let roomy = build(1e9);
-    assert!(tight.lattice.is_none() && roomy.lattice.is_some());
+    assert!(tight.estimator.lattice.is_none() && roomy.estimator.lattice.is_some());
     let (a, b) = (run(&tight, &ray_x(3)).0, run(&roomy, &ray_x(3)).0);
     for k in 0..a.len() {
         assert!(
@@ -961,10 +962,10 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
     let (auto, dense, off) = (build("auto"), build("dense"), build("off"));
     std::fs::remove_dir_all(&dir).unwrap();
     let (a, d) = (
-        auto.lattice.as_ref().unwrap(),
-        dense.lattice.as_ref().unwrap(),
+        auto.estimator.lattice.as_ref().unwrap(),
+        dense.estimator.lattice.as_ref().unwrap(),
     );
-    assert!(a.bricks().is_some() && d.bricks().is_none() && off.lattice.is_none());
+    assert!(a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice.is_none());
     // 54 stored bricks: their copies and those below them, not the box.
     let copies = a.bricks().unwrap().active_bricks();
     assert!((54..=2 * 64).contains(&copies), "{copies} copies");
