@@ -1,0 +1,160 @@
+//! The march on the lattice's brick copies and shared tiles, against the dense lattice.
+
+use super::*;
+
+#[test]
+fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
+    // Two fires of 3³ leaves with random soot and temperature, the second 120 voxels from the first on every
+    // axis: the dense lattice over their 144³ box would cost 60 times what the grids store, so `auto` copies
+    // the bricks. Rays through the first fire (and the empty box) give the dense lattice's answer to the bit,
+    // and that of the march without a lattice to f32 rounding.
+    let mut rng = crate::rng::Rng::new(77);
+    let mut leaves = |o: i32| {
+        let (mut d, mut t) = (Vec::new(), Vec::new());
+        for l in 0..27 {
+            let origin = [o + 8 * (l % 3), o + 8 * ((l / 3) % 3), o + 8 * (l / 9)];
+            let dv: Vec<f32> = (0..512).map(|_| (rng.next_f64() * 3e-6) as f32).collect();
+            let tv: Vec<f32> = (0..512)
+                .map(|_| (1200.0 + rng.next_f64() * 600.0) as f32)
+                .collect();
+            d.push((origin, [u64::MAX; 8], dv));
+            t.push((origin, [u64::MAX; 8], tv));
+        }
+        (d, t)
+    };
+    let ((d0, t0), (d1, t1)) = (leaves(0), leaves(120));
+    let bytes = crate::dataset::vdb::write_sparse(
+        &[
+            ("density", [d0, d1].concat()),
+            ("temperature", [t0, t1].concat()),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(0.01),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-bricks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("two.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let build = |lattice: &str| {
+        FireVolume::new(&[
+            Param::string("filename", &file.display().to_string()),
+            Param::string("lattice", lattice),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (auto, dense, off) = (build("auto"), build("dense"), build("off"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let (a, d) = (
+        auto.estimator.lattice.as_ref().unwrap(),
+        dense.estimator.lattice.as_ref().unwrap(),
+    );
+    assert!(a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice.is_none());
+    // 54 stored bricks: their copies and those below them, not the box.
+    let copies = a.bricks().unwrap().active_bricks();
+    assert!((54..=2 * 64).contains(&copies), "{copies} copies");
+    assert!(
+        a.bytes() * 20 < d.bytes(),
+        "{} vs {} bytes",
+        a.bytes(),
+        d.bytes()
+    );
+    let mut rng = crate::rng::Rng::new(5);
+    let (mut lit, mut worst) = (0, 0f64);
+    for seed in 0..300 {
+        // From a point around the first fire (0.24 m across) toward a point in it, some rays on to the second.
+        let mut u = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let to = DVec3::splat(0.02) + u() * 0.2;
+        let from = DVec3::splat(0.12) + (u() - DVec3::splat(0.5)).normalize_or(DVec3::X) * 0.5;
+        let ray = Ray {
+            o: from,
+            d: (to - from).normalize(),
+            t0: 0.0,
+            t1: 5.0,
+            seed,
+            first: None,
+        };
+        let (la, ta) = run(&auto, &ray);
+        let (ld, td) = run(&dense, &ray);
+        let (lo, _) = run(&off, &ray);
+        assert_eq!((&la, &ta), (&ld, &td), "ray {seed}: bricks vs dense");
+        let y: f64 = la.iter().sum();
+        if y > 0.0 {
+            lit += 1;
+            let yo: f64 = lo.iter().sum();
+            worst = worst.max((y - yo).abs() / y);
+        }
+    }
+    assert!(lit > 100, "{lit} rays saw the fire");
+    assert!(worst < 1e-5, "bricks vs no lattice: {worst:e}");
+}
+
+/// A fog volume of OpenVDB tiles (one block of values shared by 4 096 bricks) marches as its dense copy does.
+#[test]
+fn shared_tile_blocks_march_as_the_dense_lattice() {
+    let leaf = |o: [i32; 3], k: f32| -> crate::dataset::vdb::VdbLeaf {
+        (
+            o,
+            [u64::MAX; 8],
+            (0..512).map(|i| k * (1.0 + (i % 7) as f32)).collect(),
+        )
+    };
+    let bytes = crate::dataset::vdb::write_tiled(
+        &[
+            (
+                "density",
+                vec![leaf([128, 0, 0], 2e-6)],
+                vec![([0, 0, 0], 128, 1e-6), ([128, 8, 0], 8, 3e-6)],
+            ),
+            (
+                "temperature",
+                vec![leaf([128, 0, 0], 300.0)],
+                vec![([0, 0, 0], 128, 1500.0), ([128, 8, 0], 8, 1900.0)],
+            ),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(0.01),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-tiles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("fog.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let build = |lattice: &str| {
+        FireVolume::new(&[
+            Param::string("filename", &file.display().to_string()),
+            Param::string("lattice", lattice),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (bricks, dense, off) = (build("bricks"), build("dense"), build("off"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(dense.dataset().topology().blocks_stored(), 3);
+    let mut rng = crate::rng::Rng::new(9);
+    let (mut lit, mut worst) = (0, 0f64);
+    for seed in 0..200 {
+        let mut u = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
+        let to = u() * DVec3::new(1.36, 1.28, 1.28);
+        let from =
+            DVec3::new(0.68, 0.64, 0.64) + (u() - DVec3::splat(0.5)).normalize_or(DVec3::X) * 3.0;
+        let ray = Ray {
+            o: from,
+            d: (to - from).normalize(),
+            t0: 0.0,
+            t1: 10.0,
+            seed,
+            first: None,
+        };
+        let (lb, tb) = run(&bricks, &ray);
+        let (ld, td) = run(&dense, &ray);
+        let (lo, _) = run(&off, &ray);
+        assert_eq!((&lb, &tb), (&ld, &td), "ray {seed}: bricks vs dense");
+        let y: f64 = ld.iter().sum();
+        if y > 0.0 {
+            lit += 1;
+            worst = worst.max((y - lo.iter().sum::<f64>()).abs() / y);
+        }
+    }
+    assert!(lit > 150, "{lit} of 200 rays crossed the fog");
+    assert!(worst < 1e-5, "lattice vs stencils: {worst:e}");
+}
