@@ -1,0 +1,541 @@
+//! Building a fire volume: the parameters read once, the dataset read, its channels found, the coefficient
+//! tables, the majorants, the optional layers the scene asks for, the march's accelerator — each part of
+//! [`FireVolume`] made here, within the memory budget and the thread budget.
+
+use super::*;
+
+impl FireVolume {
+    /// Builds a fire volume from a parameter list (the `dataset` and `volume` tables, docs/params.md): the
+    /// parameters are read and checked first ([`Settings`]), then the dataset is loaded, then the coefficient
+    /// tables, the march lattice, the majorant bricks and (if asked for) the refraction field are built.
+    pub fn new(list: &[Param]) -> Result<FireVolume, Error> {
+        Self::new_unlocated(list).map_err(|e| e.located(list))
+    }
+
+    pub(super) fn new_unlocated(list: &[Param]) -> Result<FireVolume, Error> {
+        let start = Instant::now();
+        let list = &*looks::expand(list);
+        let comps = settings::components();
+        let r = ParamReader::new("volume", list, &comps);
+        r.check_names()?;
+        march::check_simd()?;
+        // (The look was expanded into the list above; reading it checks its name.)
+        r.string("look")?;
+        let set = Settings::read(&r, list)?;
+        let threads = r.int("threads")? as usize;
+        let budget = r.float("maxbytes")? as u64;
+        crate::par::with_budget(threads, || {
+            let loaded = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
+            r.finish()?;
+            let mut v = Self::build(set, loaded, budget, start)?;
+            v.report.threads = threads;
+            Ok(v)
+        })
+    }
+
+    /// `budget`: the volume's memory budget (`maxbytes`); what it derives beyond its grids must fit in what the
+    /// grids leave of it.
+    pub(super) fn build(
+        set: Settings,
+        loaded: crate::dataset::params::Loaded,
+        budget: u64,
+        start: Instant,
+    ) -> Result<FireVolume, Error> {
+        let crate::dataset::params::Loaded {
+            ds,
+            lescale,
+            emission_grid,
+            motion,
+            scatter_color,
+            reaction,
+            embers,
+        } = loaded;
+        let spare = budget.saturating_sub(ds.bytes() as u64);
+        let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
+        let density = channel("density").unwrap_or(0);
+        let temperature = channel("temperature");
+        let basis = set.basis;
+        let c = basis.channels();
+
+        // ---- coefficients
+        let t_max = temperature
+            .map(|i| ds.channels()[i].stats.max as f64)
+            .unwrap_or(0.0)
+            .max(0.0);
+        let mut tables = Vec::new();
+        let mut thick = None;
+        let mut co = match &set.emission {
+            Emission::Physical {
+                optics,
+                alpha,
+                sootscale,
+                intensity,
+                smokescale,
+                tint,
+                ramp,
+                species,
+            } => {
+                // Lines that can be thick leave the tables for the line model (`lines`).
+                let mut thin = species.clone();
+                if set.voigt && !species.is_empty() {
+                    let t0 = Instant::now();
+                    let sigma_s = set.sigma_s.as_ref();
+                    let continuum = |l: f64| {
+                        let k = optics.kappa(l, 1.0, *alpha) * sootscale;
+                        [
+                            smokescale * k,
+                            smokescale * sigma_s.map_or(0.0, |f| f(l)),
+                            intensity * k * tint.as_ref().map_or(1.0, |f| f(l)),
+                        ]
+                    };
+                    let t_range = temperature
+                        .map(|i| {
+                            let st = &ds.channels()[i].stats;
+                            [st.min as f64, st.max as f64]
+                        })
+                        .unwrap_or([0.0, 0.0]);
+                    let inp = lines::Input {
+                        species,
+                        ds: &ds,
+                        basis: &basis,
+                        broadening: set.linebroadening,
+                        intensity: *intensity,
+                        continuum: &continuum,
+                        t_range,
+                        budget: spare,
+                    };
+                    let marks = lines::select(&inp);
+                    thick = lines::ThickLines::new(&inp, &marks, t_max)?;
+                    for ((_, e, _), m) in thin.iter_mut().zip(&marks) {
+                        let keep: Vec<bool> = m.iter().map(|x| !x).collect();
+                        let lines = e.lines().to_vec();
+                        *e = e.with_lines(&|l| {
+                            lines
+                                .iter()
+                                .zip(&keep)
+                                .any(|(x, &k)| k && x.lambda_nm == l.lambda_nm)
+                        });
+                    }
+                    if let Some(tl) = &thick {
+                        tables.push(TableReport {
+                            name: format!("thick lines ({} wavelengths across them)", tl.nodes()),
+                            bytes: tl.bytes(),
+                            seconds: t0.elapsed().as_secs_f64(),
+                        });
+                    }
+                }
+                let mut co = coefficients::physical(
+                    &basis,
+                    optics,
+                    (*alpha, *sootscale, *intensity),
+                    (*smokescale, tint.as_ref(), ramp.as_ref()),
+                    &thin,
+                    set.sigma_s.as_ref(),
+                    &ds,
+                    t_max,
+                    &mut tables,
+                );
+                // (The light's power counts every line.)
+                if let Some(src) = &mut co.source {
+                    for ((e, _, _), (_, full, _)) in src.species.iter_mut().zip(species) {
+                        *e = full.clone();
+                    }
+                }
+                co
+            }
+            Emission::Pbrt {
+                scale,
+                sigma_a,
+                le_scale,
+                le,
+            } => coefficients::pbrt(
+                &basis,
+                *scale,
+                sigma_a,
+                *le_scale,
+                le.as_ref(),
+                set.sigma_s.as_ref(),
+                temperature.is_some(),
+                t_max,
+                &mut tables,
+            )?,
+        };
+        // (The fire light's full-spectrum power assumes emission follows the soot: with an emission grid it reports
+        // its power over the bins.)
+        if emission_grid {
+            co.source = None;
+        }
+        // The blue core: the reaction zone's chemiluminescence, a channel that emits (yield · heat release / 4π
+        // times the CH*/C₂* band spectrum, per channel) and absorbs nothing — the species' machinery, with
+        // tables that do not depend on temperature.
+        if let Some(ch) = reaction {
+            let shape = basis.emit(&firemedium_core::chemiluminescence::spectrum);
+            let zeros = vec![0.0; c];
+            co.species.push(SpeciesChannel {
+                ch,
+                scale: set.chemiluminescence / (4.0 * std::f64::consts::PI),
+                sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
+                j: tables::TTable::build(0.0, c, &|_| shape.clone()),
+            });
+            // (The light's full-spectrum power follows the soot and atoms: with the blue core, over the bins.)
+            co.source = None;
+        }
+        if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {
+            return Err(Error::invalid(
+                "volume",
+                "sigma_a/sigma_s",
+                format!("{:?} {:?}", co.a, co.s),
+                "finite, non-negative coefficients",
+            ));
+        }
+
+        // ---- the march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below
+        // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
+        // as it copies them.
+        let brick = majorant_brick(set.brick, ds.topology());
+        // (With diffusion the emission reads the coarse fluence grid: the f64 march.)
+        let lanes_wanted =
+            set.f32_lanes && set.integrator == Integrator::March && set.diffusion.is_none();
+        let mut lattice = None;
+        let mut known = vec![None; ds.channels().len()];
+        if lanes_wanted && ds.interpolation() == crate::grid::Interpolation::Trilinear {
+            let t4 = Instant::now();
+            let ch = ds.channels();
+            let extra: Vec<usize> = lescale
+                .iter()
+                .copied()
+                .chain(co.species.iter().map(|sp| sp.ch))
+                .collect();
+            let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
+            // Dense over the box while it costs at most four times what its grids store (512 values per block:
+            // constant tiles share blocks, as the brick layout's copies of their interiors do), else a copy per
+            // brick holding data (a fire far from its copy in a big box, a file of constant tiles).
+            let per_grid = (ds.topology().blocks_stored() as u64 + 1) * 4 * 512;
+            let copied = per_grid * (2 + grids.len() as u64 - temperature.is_none() as u64);
+            let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
+                let voxels = p.iter().map(|&n| n as u64).product::<u64>();
+                voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
+            });
+            let dense = match set.lattice.as_str() {
+                "dense" => Some(true),
+                "bricks" => Some(false),
+                "off" => None,
+                _ => Some(dense_fits),
+            };
+            let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
+            match dense {
+                Some(true) => {
+                    if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare)
+                    {
+                        let order = std::iter::once(density).chain(temperature).chain(extra);
+                        for (k, r) in order.zip(ranges) {
+                            if known[k].is_none() {
+                                known[k] = Some(r);
+                            }
+                        }
+                        lattice = Some((lat, t4.elapsed().as_secs_f64()));
+                    }
+                }
+                Some(false) => {
+                    lattice = lattice::Lattice::build_bricks(d, t, &grids, spare)
+                        .map(|lat| (lat, t4.elapsed().as_secs_f64()));
+                }
+                None => {}
+            }
+        }
+
+        // ---- majorants
+        let t1 = Instant::now();
+        let majorant = MajorantGrid::with_ranges(&ds, brick, known);
+        let mut brick_sigma =
+            coefficients::brick_majorants(&majorant, &co, density, temperature, c);
+        // An emission grid emits where there may be no smoke: tracking's estimators add j/σ̄ at tentative
+        // collisions, so σ̄ must not be 0 where j is not — a floor of one collision per voxel there.
+        if let Some(e) = lescale.filter(|_| emission_grid) {
+            let floor = 1.0 / ds.voxel_size().min_element();
+            for (b, s) in brick_sigma.iter_mut().enumerate() {
+                if majorant.max(b, e) > 0.0 {
+                    *s = s.max(floor);
+                }
+            }
+        }
+        let nb = brick_sigma.len();
+        // An optical depth above 1e12 per voxel is no fire: a voxel value far outside the data's range, or a
+        // scale far too large. Tracking through it would take ~1e12 collisions per voxel.
+        let voxel = ds.voxel_size().max_element();
+        if let Some((b, &sigma)) = brick_sigma
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1.total_cmp(y.1))
+            .filter(|(_, &s)| !(s * voxel <= MAX_OPTICAL_DEPTH_PER_VOXEL))
+        {
+            let [cx, cy, _] = majorant.counts();
+            let (i, j, k) = (b % cx, (b / cx) % cy, b / (cx * cy));
+            return Err(Error::invalid(
+                "volume",
+                "extinction",
+                format!("{sigma:.3e} m⁻¹ in brick ({i}, {j}, {k}) of {brick}³ voxels, an optical depth of {:.3e} per voxel", sigma * voxel),
+                format!("at most {MAX_OPTICAL_DEPTH_PER_VOXEL:e} per voxel (a voxel value far outside the data's range, or sootscale, scale, sigma_a or sigma_s far too large?)"),
+            ));
+        }
+        let emitter = lescale.filter(|_| emission_grid);
+        let brick_empty: Vec<bool> = (0..nb)
+            .map(|b| {
+                majorant.max(b, density) <= 0.0
+                    && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
+                    && emitter.is_none_or(|e| majorant.max(b, e) <= 0.0)
+            })
+            .collect();
+        tables.push(TableReport {
+            name: format!("majorant bricks ({brick}³ voxels)"),
+            bytes: majorant.bytes() + brick_sigma.len() * 8,
+            seconds: t1.elapsed().as_secs_f64(),
+        });
+        let blur = motion.map(|m| {
+            let t5 = Instant::now();
+            let b = motion::Blur::new(m, &ds, &majorant, &brick_sigma, &brick_empty);
+            tables.push(TableReport {
+                name: format!(
+                    "motion blur (majorants widened by {:.4} medium units)",
+                    b.reach()
+                ),
+                bytes: b.bytes(),
+                seconds: t5.elapsed().as_secs_f64(),
+            });
+            b
+        });
+
+        // ---- embers
+        let embers = match embers {
+            None => None,
+            Some(ef) => {
+                let Emission::Physical { intensity, .. } = &set.emission else {
+                    return Err(Error::invalid(
+                        "dataset",
+                        "embers",
+                        format!("\"{}\" for a pbrt-v4 medium", ef.file),
+                        "a fire (\"string type\" \"fire\"): embers glow by their temperature",
+                    ));
+                };
+                let t6 = Instant::now();
+                let nodes = basis.nodes();
+                let g = vec![set.ember.emissivity * intensity; nodes.lambda.len()];
+                let left = spare.saturating_sub(tables.iter().map(|t| t.bytes as u64).sum());
+                let em = crate::embers::Embers::new(
+                    &ef.file,
+                    &ef.particles,
+                    set.ember,
+                    ef.shutter,
+                    ef.fps,
+                    &|t| basis.emit_planck(&nodes, &g, t),
+                    left,
+                )?;
+                tables.push(TableReport {
+                    name: format!("embers ({} particles and their grid)", em.len()),
+                    bytes: em.bytes(),
+                    seconds: t6.elapsed().as_secs_f64(),
+                });
+                Some(em)
+            }
+        };
+
+        // ---- refraction
+        let step = set.stepsize * ds.voxel_size().min_element();
+        let refraction = match &set.refraction {
+            None => None,
+            Some(rs) => {
+                let t_ch = temperature.ok_or_else(|| {
+                    Error::invalid(
+                        "volume",
+                        "refraction",
+                        "true without a temperature grid",
+                        "a temperature grid (the index of air follows from it)",
+                    )
+                })?;
+                let t2 = Instant::now();
+                // What the budget leaves after the grids, the tables and the lattice.
+                let left = spare
+                    .saturating_sub(tables.iter().map(|t| t.bytes as u64).sum())
+                    .saturating_sub(lattice.as_ref().map_or(0, |(l, _)| l.bytes() as u64));
+                let rf = crate::refraction::march::Refraction::build(
+                    &ds.channels()[t_ch].grid,
+                    ds.bounds(),
+                    &rs.air,
+                    (rs.wavelength, rs.scale),
+                    rs.rk4,
+                    step,
+                    ds.voxel_size().min_element(),
+                    left,
+                )
+                .map_err(|bytes| Error::TooLarge {
+                    file: "refraction".into(),
+                    what:
+                        "the index field (16 bytes per voxel around the voxels hotter than ambient)"
+                            .into(),
+                    bytes,
+                    cap: left,
+                })?;
+                tables.push(TableReport {
+                    name: "refraction index field".into(),
+                    bytes: rf.field.bytes(),
+                    seconds: t2.elapsed().as_secs_f64(),
+                });
+                Some(rf)
+            }
+        };
+
+        // The largest value a lookup can return, from the bricks' ranges (for the lane march's range check).
+        let max = |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
+        let (dmax, lesmax) = (max(density), lescale.map_or(1.0, max));
+        // The largest emitting density: d · Lescale, or the emission grid itself.
+        let dlmax = if emission_grid { lesmax } else { dmax * lesmax };
+        let nmax: Vec<f64> = co.species.iter().map(|sp| max(sp.ch)).collect();
+        let [b0, b1] = ds.bounds();
+        let (clip_box, margin) = if set.mode == Mode::Pbrt && ds.format() == Format::NanoVdb {
+            let half = ds.voxel_size() * 0.5;
+            ([b0 + half, b1 + half], 0.5)
+        } else {
+            ([b0, b1], 0.0)
+        };
+        let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
+        let physical_colour = match &set.emission {
+            Emission::Physical { tint, ramp, .. } => {
+                tint.is_none() && ramp.as_ref().is_none_or(|r| r.physical >= 1.0)
+            }
+            _ => true,
+        };
+        // What the point query's closed forms cannot express (the first such layer names the refusal).
+        let refused = [
+            (!co.species.is_empty(), "atomic lines or the blue core"),
+            (thick.is_some(), "optically thick atomic lines"),
+            (scatter_color.is_some(), "a scatter colour grid"),
+            (set.diffusion.is_some(), "diffusion"),
+            (refraction.is_some(), "refraction"),
+            (embers.is_some(), "embers"),
+            (!physical_colour, "art direction (a tint or a colour ramp)"),
+        ]
+        .iter()
+        .find(|(on, _)| *on)
+        .map(|(_, why)| why.to_string());
+        let point_model = point::PointModel::new(&set.emission, set.sigma_s.as_ref(), refused);
+        let mut vol = FireVolume {
+            grids: parts::Grids {
+                ds,
+                density,
+                temperature,
+                lescale,
+                emission_grid,
+                species: co.species,
+            },
+            model: parts::Model {
+                basis,
+                mode: set.mode,
+                a: co.a,
+                a_t: co.a_t,
+                s: co.s,
+                j: co.j,
+                t_emit: co.t_emit,
+                physical_colour,
+                scatter_color,
+                g: set.g,
+                point_model,
+            },
+            bounds: parts::Bounds {
+                majorant,
+                brick_sigma,
+                brick_empty,
+                clip_box,
+                margin,
+            },
+            layers: parts::Layers {
+                blur,
+                embers,
+                refraction,
+                diffusion: None,
+                lines: thick,
+            },
+            estimator: parts::Estimator {
+                integrator: set.integrator,
+                step,
+                step_tau: set.step_tau,
+                cutoff: set.cutoff,
+                lanes: None,
+                lattice: None,
+            },
+            report: parts::Report {
+                tables,
+                build_seconds: 0.0,
+                source: co.source,
+                spare: 0,
+                threads: 0,
+            },
+            capped: CapCounter::default(),
+            #[cfg(test)]
+            fault: set.fault,
+        };
+        if lanes_wanted {
+            let t3 = Instant::now();
+            vol.estimator.lanes = lanes::LaneTables::build(&vol, dmax, dlmax, &nmax, step);
+            if let Some(lt) = &vol.estimator.lanes {
+                vol.report.tables.push(TableReport {
+                    name: "march lanes (σ per unit density; the tables are shared)".into(),
+                    bytes: lt.bytes(),
+                    seconds: t3.elapsed().as_secs_f64(),
+                });
+                if let Some((lat, seconds)) = lattice {
+                    vol.report.tables.push(TableReport {
+                        name: match lat.bricks() {
+                            None => {
+                                "march lattice (grids interleaved and padded; their brick ranges)"
+                                    .into()
+                            }
+                            Some(t) => format!(
+                                "march lattice (grids interleaved, a padded copy per brick: {} copies)",
+                                t.active_bricks()
+                            ),
+                        },
+                        bytes: lat.bytes(),
+                        seconds,
+                    });
+                    vol.estimator.lattice = Some(lat);
+                }
+            }
+        }
+        if let Some(res) = set
+            .diffusion
+            .filter(|_| vol.model.s.iter().any(|&v| v > 0.0))
+        {
+            let t5 = Instant::now();
+            // The solve's peak: three cell arrays per channel, five per solving thread.
+            let cells = {
+                let size = vol.bounds.clip_box[1] - vol.bounds.clip_box[0];
+                let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
+                [0, 1, 2]
+                    .map(|k| ((size[k] / h).ceil() as u64).max(1))
+                    .iter()
+                    .product::<u64>()
+            };
+            let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
+            let left = spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+            if need > left {
+                return Err(Error::invalid(
+                    "volume",
+                    "diffusionresolution",
+                    format!("{res} ({cells} cells, {need} bytes to solve)"),
+                    format!("a grid within the memory budget's {left} bytes left"),
+                ));
+            }
+            let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
+            vol.report.tables.push(TableReport {
+                name: format!("diffusion ({} iterations)", df.iterations),
+                bytes: df.bytes(),
+                seconds: t5.elapsed().as_secs_f64(),
+            });
+            vol.layers.diffusion = Some(df);
+        }
+        vol.report.spare =
+            spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+        vol.report.build_seconds = start.elapsed().as_secs_f64();
+        Ok(vol)
+    }
+}

@@ -1,0 +1,301 @@
+//! The fire volume's whole-ray queries: integrate (straight, or bent by refraction, with where the ray leaves),
+//! transmittance and scattering events, at a time (motion blur, moving embers) and at a coarser step (the
+//! light's line); the embers cut the ray, thick lines fold in beside the march.
+
+use super::*;
+
+impl FireVolume {
+    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter (where
+    /// an ember stopped the ray, if one did).
+    pub fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let te = self.integrate_fire(&cut, l, t);
+        self.ember_seen(hit, 0.0, Some(l), t).unwrap_or(te)
+    }
+    /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
+    /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
+    /// parameter is then the entry parameter plus arc length / |d|. (Embers are met along the straight chord.)
+    pub fn integrate_exit(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let exit = self.integrate_exit_fire(&cut, l, t);
+        match self.ember_seen(hit, 0.0, Some(l), t) {
+            Some(th) => (ray.o + ray.d * th, exit.1, th),
+            None => exit,
+        }
+    }
+    /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
+    pub fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        self.transmittance_fire(&cut, t);
+        self.ember_seen(hit, 0.0, None, t);
+    }
+    /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights. A ray
+    /// that reaches an ember collects its radiance and ends there ([`Event::Absorbed`]).
+    pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
+        let (cut, hit) = self.ember_cut(ray, 0.0);
+        let ev = self.sample_scatter_fire(&cut, l, w);
+        self.ember_event(ev, hit, 0.0, l, w)
+    }
+    /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
+    /// fire is looked up where the velocity carried it from (`motion`), and embers are where their velocity
+    /// carried them. Without motion blur or embers, or at time 0, the same as `integrate`.
+    pub fn integrate_at(&self, ray: &Ray, time: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let te = self.integrate_at_fire(&cut, time, l, t);
+        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+    }
+    /// As [`integrate_at`](Self::integrate_at) with the march's step `step` (metres) instead of the volume's —
+    /// the fire light's coarse line estimate. A volume that tracks (ratio, delta) or whose own step is as long
+    /// integrates as `integrate_at` does.
+    pub fn integrate_stepped_at(
+        &self,
+        ray: &Ray,
+        time: f64,
+        step: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
+        if self.estimator.integrator != Integrator::March || !(step > self.estimator.step) {
+            return self.integrate_at(ray, time, l, t);
+        }
+        let (cut, hit) = self.ember_cut(ray, time);
+        self.fault_check();
+        let te = match self.advected(time) {
+            Some(a) => {
+                let map = |p: DVec3| a.displaced(p);
+                let te = march::integrate_stepped(self, &a, Some(&map), &cut, step, l, t);
+                self.thick_lines(Some(&a), &cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+            None => {
+                let te = march::integrate_stepped(self, self, None, &cut, step, l, t);
+                self.thick_lines(None, &cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+        };
+        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+    }
+    /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
+    /// grids' time: a refracting volume ignores `time` here but for its embers.)
+    pub fn integrate_exit_at(
+        &self,
+        ray: &Ray,
+        time: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> (DVec3, DVec3, f64) {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let exit = self.integrate_exit_at_fire(&cut, time, l, t);
+        match self.ember_seen(hit, time, Some(l), t) {
+            Some(th) => (ray.o + ray.d * th, exit.1, th),
+            None => exit,
+        }
+    }
+    /// As [`transmittance`](Self::transmittance) at time `time`.
+    pub fn transmittance_at(&self, ray: &Ray, time: f64, t: &mut [f64]) {
+        let (cut, hit) = self.ember_cut(ray, time);
+        self.transmittance_at_fire(&cut, time, t);
+        self.ember_seen(hit, time, None, t);
+    }
+    /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
+    pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
+        let (cut, hit) = self.ember_cut(ray, time);
+        let ev = self.sample_scatter_at_fire(&cut, time, l, w);
+        self.ember_event(ev, hit, time, l, w)
+    }
+    /// `ray` up to the first ember it meets at `time`, and that ember's (parameter, index).
+    pub(super) fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
+        let hit = self
+            .layers
+            .embers
+            .as_ref()
+            .and_then(|e| e.hit(ray.o, ray.d, ray.t0, ray.t1, time));
+        let mut cut = *ray;
+        if let Some((th, _)) = hit {
+            cut.t1 = th.max(ray.t0);
+        }
+        (cut, hit)
+    }
+    /// An ember met at the end of a cut ray: its radiance seen through `t` added to `l`, and nothing passes
+    /// it; returns where it was met.
+    pub(super) fn ember_seen(
+        &self,
+        hit: Option<(f64, usize)>,
+        time: f64,
+        l: Option<&mut [f64]>,
+        t: &mut [f64],
+    ) -> Option<f64> {
+        let (Some((th, i)), Some(em)) = (hit, &self.layers.embers) else {
+            return None;
+        };
+        if let Some(l) = l {
+            let mut e = vec![0.0; t.len()];
+            em.radiance(i, time, &mut e);
+            for c in 0..t.len() {
+                l[c] += t[c] * e[c];
+            }
+        }
+        t.iter_mut().for_each(|v| *v = 0.0);
+        Some(th)
+    }
+    /// A scattering event on a cut ray: one that reached the ember collects its radiance and ends there.
+    pub(super) fn ember_event(
+        &self,
+        ev: Event,
+        hit: Option<(f64, usize)>,
+        time: f64,
+        l: &mut [f64],
+        w: &mut [f64],
+    ) -> Event {
+        match ev {
+            Event::Escaped if hit.is_some() => {
+                self.ember_seen(hit, time, Some(l), w);
+                Event::Absorbed
+            }
+            _ => ev,
+        }
+    }
+    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
+    pub(super) fn integrate_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
+        self.fault_check();
+        let te = march::integrate(self, ray, l, t);
+        self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
+        te
+    }
+    /// The thick lines' part of a result along `ray` up to `end` (see [`lines`]), in the medium as `adv` sees it.
+    pub(super) fn thick_lines(
+        &self,
+        adv: Option<&motion::Advected>,
+        ray: &Ray,
+        end: f64,
+        l: Option<&mut [f64]>,
+        t: &mut [f64],
+        fold: lines::Fold,
+    ) {
+        if let Some(tl) = &self.layers.lines {
+            match adv {
+                Some(a) => tl.apply(self, ray, end, false, &|p| a.displaced(p), l, t, fold),
+                None => tl.apply(self, ray, end, true, &|p| p, l, t, fold),
+            }
+        }
+    }
+    /// `sample_scatter`'s event with the thick lines folded in (emission before the event, their mean
+    /// transmittance on the weights).
+    pub(super) fn scatter_lines(
+        &self,
+        adv: Option<&motion::Advected>,
+        ray: &Ray,
+        ev: Event,
+        l: &mut [f64],
+        w: &mut [f64],
+    ) -> Event {
+        let end = match ev {
+            Event::Scattered(t) => t,
+            Event::Escaped => ray.t1,
+            Event::Absorbed => return ev,
+        };
+        self.thick_lines(adv, ray, end, Some(l), w, lines::Fold::Scale);
+        ev
+    }
+    /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
+    /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
+    /// parameter is then the entry parameter plus arc length / |d|.
+    pub(super) fn integrate_exit_fire(
+        &self,
+        ray: &Ray,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> (DVec3, DVec3, f64) {
+        let Some(rf) = &self.layers.refraction else {
+            let te = self.integrate_fire(ray, l, t);
+            return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
+        };
+        self.fault_check();
+        let exit = crate::refraction::march::integrate_exit(self, rf, ray, l, t);
+        // (Along the straight chord: the bend is a fraction of a degree.)
+        self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
+        exit
+    }
+
+    /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
+    pub(super) fn transmittance_fire(&self, ray: &Ray, t: &mut [f64]) {
+        let mut sc = Scratch::new(self.channels());
+        integrate::transmittance(self, ray, self.estimator.integrator, &mut sc, t);
+        self.thick_lines(None, ray, ray.t1, None, t, lines::Fold::Add);
+    }
+    /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights.
+    pub(super) fn sample_scatter_fire(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
+        let mut sc = Scratch::new(self.channels());
+        let ev = integrate::sample_scatter(self, ray, &mut sc, l, w);
+        self.scatter_lines(None, ray, ev, l, w)
+    }
+
+    /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
+    /// fire is looked up where the velocity carried it from (`motion`). Without motion blur, or at time 0, the
+    /// same as `integrate`.
+    pub(super) fn integrate_at_fire(
+        &self,
+        ray: &Ray,
+        time: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
+        match self.advected(time) {
+            Some(a) => {
+                self.fault_check();
+                let te = a.integrate(ray, l, t);
+                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+            None => self.integrate_fire(ray, l, t),
+        }
+    }
+    /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
+    /// grids' time: a refracting volume ignores `time` here.)
+    pub(super) fn integrate_exit_at_fire(
+        &self,
+        ray: &Ray,
+        time: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> (DVec3, DVec3, f64) {
+        match self.advected(time) {
+            Some(a) if self.layers.refraction.is_none() => {
+                self.fault_check();
+                let te = a.integrate(ray, l, t);
+                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
+                (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
+            }
+            _ => self.integrate_exit_fire(ray, l, t),
+        }
+    }
+    /// As [`transmittance`](Self::transmittance) at time `time`.
+    pub(super) fn transmittance_at_fire(&self, ray: &Ray, time: f64, t: &mut [f64]) {
+        match self.advected(time) {
+            Some(a) => {
+                a.transmittance(ray, t);
+                self.thick_lines(Some(&a), ray, ray.t1, None, t, lines::Fold::Add);
+            }
+            None => self.transmittance_fire(ray, t),
+        }
+    }
+    /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
+    pub(super) fn sample_scatter_at_fire(
+        &self,
+        ray: &Ray,
+        time: f64,
+        l: &mut [f64],
+        w: &mut [f64],
+    ) -> Event {
+        match self.advected(time) {
+            Some(a) => {
+                let ev = a.sample_scatter(ray, l, w);
+                self.scatter_lines(Some(&a), ray, ev, l, w)
+            }
+            None => self.sample_scatter_fire(ray, l, w),
+        }
+    }
+    pub(super) fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {
+        self.layers.blur.as_ref().and_then(|b| b.at(self, time))
+    }
+}
