@@ -153,9 +153,9 @@ impl From<firemedium_core::Error> for Error {
 }
 
 impl Error {
-    /// The error with the location of the parameter it names, when `list` gave one (hosts pass where each
-    /// parameter came from; see `FmCreateInfo::locations`).
-    pub fn located(self, list: &[crate::params::Param]) -> Error {
+    /// The error with the location of the parameter it names, when `at(name)` gives one (hosts pass where each
+    /// parameter came from; see `FmCreateInfo::locations` and `params::location_in`).
+    pub fn located<'a>(self, at: impl Fn(&str) -> Option<&'a str>) -> Error {
         match self {
             Error::InvalidParameter {
                 at: None,
@@ -164,10 +164,7 @@ impl Error {
                 value,
                 expected,
             } => Error::InvalidParameter {
-                at: list
-                    .iter()
-                    .find(|p| p.name == name)
-                    .and_then(|p| p.at.clone()),
+                at: at(&name).map(str::to_string),
                 component,
                 name,
                 value,

@@ -97,6 +97,15 @@ pub struct Param {
     pub at: Option<String>,
 }
 
+/// Where `list` says the parameter `name` came from, for [`crate::Error::located`].
+pub fn location_in<'a>(list: &'a [Param]) -> impl Fn(&str) -> Option<&'a str> + 'a {
+    move |name| {
+        list.iter()
+            .find(|p| p.name == name)
+            .and_then(|p| p.at.as_deref())
+    }
+}
+
 impl Param {
     /// A `float` parameter.
     pub fn float(name: &str, v: f64) -> Param {
@@ -711,7 +720,11 @@ mod tests {
         list[1].at = Some("fire.pbrt:3:7".into());
         let r = ParamReader::new("volume", &list, &[&T]);
         r.float("stepsize").unwrap();
-        let e = r.finish().unwrap_err().located(&list).to_string();
+        let e = r
+            .finish()
+            .unwrap_err()
+            .located(location_in(&list))
+            .to_string();
         assert_eq!(
             e,
             "fire.pbrt:3:7: volume: parameter 'mode' = given, but nothing in this configuration reads it: expected only the parameters that apply (docs/params.md says when each does)"

@@ -33,6 +33,7 @@ mod files;
 pub mod nanovdb;
 mod options;
 pub(crate) mod params;
+pub(crate) mod particles;
 pub mod raw;
 mod sparse;
 mod text;

@@ -106,7 +106,7 @@ pub(crate) struct Loaded {
 /// An `embers` file's particles, and the shutter and frame rate they move in.
 pub(crate) struct EmberFile {
     pub file: String,
-    pub particles: Vec<crate::embers::Particle>,
+    pub particles: Vec<super::particles::Particle>,
     /// Frames from the grids' time.
     pub shutter: [f64; 2],
     pub fps: f64,
@@ -134,7 +134,7 @@ fn read_embers(
         });
     }
     let bytes = crate::dataset::read_file(&path)?;
-    let particles = crate::embers::read::parse(&file, &bytes, opts.max_bytes)?;
+    let particles = super::particles::parse(&file, &bytes, opts.max_bytes)?;
     Ok(Some(EmberFile {
         file,
         particles,

@@ -15,11 +15,10 @@
 //!   direction has solid-angle density w/(W V_ball) ∫ s² ds over the ray's chord through the ball, closed form
 //!   (s₁³ − s₀³)/3 — the same form as a voxel's, so the light's mixture of voxels and embers is exact.
 
-pub(crate) mod read;
 #[cfg(test)]
 mod tests;
 
-pub(crate) use read::Particle;
+pub(crate) use crate::dataset::particles::Particle;
 
 use crate::majorant::walk;
 use crate::Error;

@@ -3,8 +3,8 @@
 //! integrates to 1, sample and pdf agree, and its estimate of a sphere's radiance over its solid angle is the
 //! closed form L·2π(1 − cos α)).
 
-use super::read::{parse, Particle};
 use crate::blackbody::spectral_radiance;
+use crate::dataset::particles::{parse, Particle};
 use crate::light::{FireLight, Weighting};
 use crate::params::Param;
 use crate::volume::tests::slab_volume;

@@ -639,7 +639,5 @@ impl IndexField for IndexGrid {
     }
 }
 
-pub(crate) mod march;
-
 #[cfg(test)]
 mod tests;

@@ -9,7 +9,7 @@ impl FireVolume {
     /// parameters are read and checked first ([`Settings`]), then the dataset is loaded, then the coefficient
     /// tables, the march lattice, the majorant bricks and (if asked for) the refraction field are built.
     pub fn new(list: &[Param]) -> Result<FireVolume, Error> {
-        Self::new_unlocated(list).map_err(|e| e.located(list))
+        Self::new_unlocated(list).map_err(|e| e.located(crate::params::location_in(list)))
     }
 
     pub(super) fn new_unlocated(list: &[Param]) -> Result<FireVolume, Error> {
@@ -357,7 +357,7 @@ impl FireVolume {
                 let left = spare
                     .saturating_sub(tables.iter().map(|t| t.bytes as u64).sum())
                     .saturating_sub(lattice.as_ref().map_or(0, |(l, _)| l.bytes() as u64));
-                let rf = crate::refraction::march::Refraction::build(
+                let rf = super::bent::Refraction::build(
                     &ds.channels()[t_ch].grid,
                     ds.bounds(),
                     &rs.air,

@@ -31,6 +31,7 @@
 //! species present. The build report lists bytes and seconds per table.
 
 mod basis;
+mod bent;
 mod build;
 mod coefficients;
 mod diffusion;

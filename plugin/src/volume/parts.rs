@@ -67,7 +67,7 @@ pub(super) struct Layers {
     /// The `embers` particles: opaque grey spheres (see [`crate::embers`]).
     pub(super) embers: Option<crate::embers::Embers>,
     /// The index field and step control, only when `refraction` is on.
-    pub(super) refraction: Option<crate::refraction::march::Refraction>,
+    pub(super) refraction: Option<super::bent::Refraction>,
     /// The fire's light in its smoke by diffusion (`multiplescattering "diffusion"`): read as emission.
     pub(super) diffusion: Option<diffusion::Diffusion>,
     /// Atomic lines that can be optically thick, integrated across their profiles (`lineshape "voigt"`).

@@ -211,7 +211,7 @@ impl FireVolume {
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
         self.fault_check();
-        let exit = crate::refraction::march::integrate_exit(self, rf, ray, l, t);
+        let exit = super::bent::integrate_exit(self, rf, ray, l, t);
         // (Along the straight chord: the bend is a fraction of a degree.)
         self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
         exit

@@ -3,10 +3,10 @@
 //! per march step, with the medium sampled at the step's midpoint where the step looked up n and ∇n; with
 //! `refractionintegrator "rk4"`, the RK4 reference path first, then the march along it at the volume's own step.
 
-use super::{trace, trace_verlet, IndexGrid, Steps};
+use super::{FireVolume, Ray, Stepper, MAX_STEPS};
 use crate::ciddor::Air;
 use crate::grid::Grid;
-use crate::volume::{FireVolume, Ray, Stepper, MAX_STEPS};
+use crate::refraction::{trace, trace_verlet, IndexGrid, Steps};
 use glam::DVec3;
 
 /// The refraction state of a volume: the baked index field and how rays are stepped through it.

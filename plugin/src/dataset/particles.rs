@@ -274,7 +274,7 @@ fn ply(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error>
     if bytes.get(body) == Some(&b'\n') {
         body += 1;
     }
-    let header = crate::dataset::as_text(file, &bytes[..end])?;
+    let header = super::as_text(file, &bytes[..end])?;
     let (mut format, mut count, mut props) = (None, None::<usize>, Vec::<(Scalar, String)>::new());
     let mut in_vertex = false;
     let mut seen_element = false;
@@ -357,7 +357,7 @@ fn ply(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error>
                 format!("{} bytes of data", data.len()),
             ));
         }
-        let text = crate::dataset::as_text(file, data)?;
+        let text = super::as_text(file, data)?;
         out = particles(file, n, max_bytes)?;
         let mut lines = text
             .lines()
@@ -418,7 +418,7 @@ fn ply(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error>
 }
 
 fn csv(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error> {
-    let text = crate::dataset::as_text(file, bytes)?;
+    let text = super::as_text(file, bytes)?;
     let mut rows = text
         .lines()
         .enumerate()
