@@ -1289,3 +1289,45 @@ fn the_hosts_thread_pool_runs_the_builds_parallel_parts() {
     lazy.integrate(&rs, &mut b, None, None).unwrap();
     assert_eq!(a, b);
 }
+
+#[test]
+fn the_medium_handle_carries_what_the_medium_level_can_and_refuses_the_rest() {
+    // Volume::medium: the majorants and point coefficients of a plain fire (the same as the volume's own
+    // answers), and an error naming the layer for a volume whose layers they cannot carry.
+    use firemedium_loader::{Point, FM_FEATURE_EMITS};
+    let p = plugin();
+    let v = p.create_volume(&fire_params()).unwrap();
+    let m = v.medium().unwrap();
+    assert_eq!(m.features(), FM_FEATURE_EMITS);
+    assert_eq!(m.g(), 0.0);
+    let grid = v.majorant_grid().unwrap();
+    assert_eq!(m.majorant_grid().sigma_t, grid.sigma_t);
+    let x = [1.0, 1.0, 0.6];
+    assert_eq!(m.majorant(x), grid.at(x));
+    let (mut a, mut b) = ([Point::default(); 2], [Point::default(); 2]);
+    m.point(&[x], None, &[450.0, 650.0], &mut a).unwrap();
+    v.point(&[x], None, &[450.0, 650.0], &mut b).unwrap();
+    assert_eq!(a, b);
+    assert!(a[1].sigma_a > 0.0 && a[1].sigma_a <= m.majorant(x));
+    for (extra, layer) in [
+        (
+            Param {
+                name: "tint".into(),
+                value: Value::Rgb(vec![1.0, 0.5, 0.2]),
+                at: None,
+            },
+            "art direction",
+        ),
+        (Param::bool("refraction", true), "refraction"),
+    ] {
+        let mut list = fire_params();
+        list.push(extra);
+        let e = p
+            .create_volume(&list)
+            .unwrap()
+            .medium()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(layer), "{e}");
+    }
+}

@@ -33,7 +33,7 @@ use std::sync::Arc;
 mod light;
 mod volume;
 pub use light::Light;
-pub use volume::{MajorantGrid, Point, Sampling, Volume};
+pub use volume::{MajorantGrid, Medium, Point, Sampling, Volume};
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq)]

@@ -197,6 +197,22 @@ impl Volume {
         Ok(())
     }
 
+    /// The volume as pbrt-v4 and Mitsuba 3 see a medium ([`Medium`]): refused, naming the layer, when the
+    /// volume holds one that point coefficients and majorants cannot carry (refraction, embers, atomic lines,
+    /// art direction, diffusion) — the whole-ray queries still render such a volume.
+    pub fn medium(&self) -> Result<Medium<'_>, Error> {
+        let features = self.features()?;
+        let grid = self.majorant_grid()?;
+        // One point at the cells' centre asks the plugin whether its layers have closed forms.
+        let centre = [0, 1, 2].map(|a| 0.5 * (grid.lo[a] + grid.hi[a]));
+        self.point(&[centre], None, &[550.0], &mut [Point::default()])?;
+        Ok(Medium {
+            volume: self,
+            grid,
+            features,
+        })
+    }
+
     /// How many rays' tracking stopped at the plugin's per-ray collision cap so far (each cut short as if
     /// absorbed; report it).
     pub fn capped_rays(&self) -> Result<u64, Error> {
@@ -487,4 +503,60 @@ pub struct Point {
     pub le: f64,
     /// j = σ_a·Le.
     pub j: f64,
+}
+
+/// A volume seen as pbrt-v4 (`Medium::SamplePoint`, `SampleRay`) and Mitsuba 3 (`get_scattering_coefficients`,
+/// `get_majorant`) see a medium, for a host that tracks the fire itself: the coefficients at a point — at the
+/// host's wavelengths and time — and a bound on σ_t per cell. Made by [`Volume::medium`].
+pub struct Medium<'v> {
+    volume: &'v Volume,
+    grid: MajorantGrid<'v>,
+    features: u64,
+}
+
+impl std::fmt::Debug for Medium<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Medium")
+            .field("features", &self.features)
+            .field("cells", &self.grid.counts)
+            .finish()
+    }
+}
+
+impl<'v> Medium<'v> {
+    /// The volume behind it (its whole-ray queries, its light).
+    pub fn volume(&self) -> &'v Volume {
+        self.volume
+    }
+
+    /// What the medium holds: `FM_FEATURE_*` bits (emits, scatters, moves).
+    pub fn features(&self) -> u64 {
+        self.features
+    }
+
+    /// The Henyey–Greenstein g of its scattering.
+    pub fn g(&self) -> f64 {
+        self.volume.info.g
+    }
+
+    /// The majorant grid: cells with a bound on σ_t each (over the shutter, with motion blur).
+    pub fn majorant_grid(&self) -> &MajorantGrid<'v> {
+        &self.grid
+    }
+
+    /// The bound on σ_t at `p` (medium space): its cell's.
+    pub fn majorant(&self, p: [f64; 3]) -> f64 {
+        self.grid.at(p)
+    }
+
+    /// σ_a, σ_s, Le and j at `points`, each at its time and its own wavelengths (see [`Volume::point`]).
+    pub fn point(
+        &self,
+        points: &[[f64; 3]],
+        times: Option<&[f64]>,
+        lambdas: &[f64],
+        out: &mut [Point],
+    ) -> Result<(), Error> {
+        self.volume.point(points, times, lambdas, out)
+    }
 }
