@@ -202,6 +202,27 @@ impl Param {
 /// A parameter list.
 pub type ParamList = Vec<Param>;
 
+/// A parameter whose value names one of a type's values: the names in the table's order, and the values in the
+/// same order. A table row's range is `Range::Choices(T::NAMES)` and the reader's [`ParamReader::choice`] gives
+/// the value, so docs/params.md, the ABI's self-description, the check and the parse read one list.
+pub trait Choice: Sized + Copy + 'static {
+    /// The names, in the table's order.
+    const NAMES: &'static [&'static str];
+    /// The values, in the same order.
+    const VALUES: &'static [Self];
+}
+
+/// Implements [`Choice`] for a type from `value => "name"` pairs.
+macro_rules! choice {
+    ($t:ty { $($v:expr => $n:literal),+ $(,)? }) => {
+        impl $crate::params::Choice for $t {
+            const NAMES: &'static [&'static str] = &[$($n),+];
+            const VALUES: &'static [Self] = &[$($v),+];
+        }
+    };
+}
+pub(crate) use choice;
+
 /// The accepted values of a parameter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Range {
@@ -482,6 +503,22 @@ impl<'a> ParamReader<'a> {
             }
         }
         Ok(v)
+    }
+
+    /// A choice (or the table default) as its typed value.
+    pub fn choice<T: Choice>(&self, name: &str) -> Result<T, Error> {
+        let s = self.string(name)?;
+        T::NAMES
+            .iter()
+            .position(|n| *n == s)
+            .map(|i| T::VALUES[i])
+            .ok_or_else(|| {
+                self.err(
+                    name,
+                    format!("\"{s}\""),
+                    format!("one of {}", T::NAMES.join(", ")),
+                )
+            })
     }
 
     /// All strings of a string parameter, or `None` when absent.

@@ -7,7 +7,7 @@ use super::{
     RawValue,
 };
 use crate::grid::Interpolation;
-use crate::params::ParamReader;
+use crate::params::{choice, ParamReader};
 use crate::Error;
 use glam::DVec3;
 
@@ -159,7 +159,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     }
     let velocity = velocity_grids(r)?.filter(|_| shutter[1] > shutter[0]);
     let per_frame = r.float("velocityscale")? / r.float("fps")?;
-    let pol = |name: &str| -> Result<Policy, Error> { Policy::from_name(name, &r.string(name)?) };
+    let pol = |name: &str| -> Result<Policy, Error> { r.choice(name) };
     let format = match r.string("format")?.as_str() {
         "" => None,
         f => Some(Format::from_name(f)?),
@@ -183,21 +183,9 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     };
     let opts = LoadOptions {
         format,
-        order: if r.string("order")? == "z" {
-            AxisOrder::ZFastest
-        } else {
-            AxisOrder::XFastest
-        },
-        raw_coords: if r.string("rawcoords")? == "xyz" {
-            RawCoords::Xyz
-        } else {
-            RawCoords::Thesis
-        },
-        raw_value: if r.string("rawvalue")? == "maxrgb" {
-            RawValue::MaxRgb
-        } else {
-            RawValue::Red
-        },
+        order: r.choice("order")?,
+        raw_coords: r.choice("rawcoords")?,
+        raw_value: r.choice("rawvalue")?,
         raw_dims: [
             rawdims[0] as usize,
             rawdims[1] as usize,
@@ -328,11 +316,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         tmap.scale = s;
         tmap.pbrt_offset = v[0] - v[2] / s;
     }
-    let interp = if r.string("interpolation")? == "nearest" {
-        Interpolation::Nearest
-    } else {
-        Interpolation::Trilinear
-    };
+    let interp: Interpolation = r.choice("interpolation")?;
     let species: Vec<String> = r
         .strings("species")?
         .unwrap_or_default()
@@ -581,3 +565,9 @@ pub(crate) fn lescale_is_grid(r: &ParamReader) -> Result<bool, Error> {
         r.numbers("density")?.is_some() && [r.int("nx")?, r.int("ny")?, r.int("nz")?] == [1, 1, 1];
     Ok(v.len() > 1 || one_voxel)
 }
+
+choice!(AxisOrder { AxisOrder::XFastest => "x", AxisOrder::ZFastest => "z" });
+choice!(RawCoords { RawCoords::Thesis => "thesis", RawCoords::Xyz => "xyz" });
+choice!(RawValue { RawValue::Red => "red", RawValue::MaxRgb => "maxrgb" });
+choice!(Policy { Policy::Error => "error", Policy::Zero => "zero" });
+choice!(Interpolation { Interpolation::Trilinear => "trilinear", Interpolation::Nearest => "nearest" });

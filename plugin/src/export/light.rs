@@ -37,11 +37,7 @@ pub(super) unsafe extern "C" fn light_create(
         let list = unsafe { read_params(params, std::ptr::null(), count) }?;
         let r = crate::params::ParamReader::new("light", &list, &[&crate::volume::params::LIGHT]);
         r.check_names().map_err(fail)?;
-        let weighting = match r.string("weighting").map_err(fail)?.as_str() {
-            "luminance" => Weighting::Luminance,
-            "escaping" => Weighting::Escaping,
-            _ => Weighting::Power,
-        };
+        let weighting: Weighting = r.choice("weighting").map_err(fail)?;
         let cell = r.int("cell").map_err(fail)?;
         let line = crate::light::LineEstimate {
             step_voxels: r.float("linestep").map_err(fail)?,

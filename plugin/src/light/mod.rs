@@ -20,6 +20,7 @@
 
 use crate::blackbody::spectral_radiance_si;
 use crate::majorant::walk;
+use crate::params::choice;
 use crate::volume::FireVolume;
 use crate::Error;
 use glam::DVec3;
@@ -104,6 +105,8 @@ pub enum Weighting {
     /// the grid's edge, τ from the bricks' mean extinction (a coarse estimate), floored at [`ESCAPE_FLOOR`].
     Escaping,
 }
+
+choice!(Weighting { Weighting::Power => "power", Weighting::Luminance => "luminance", Weighting::Escaping => "escaping" });
 
 /// A sampled point of the fire.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -216,11 +216,11 @@ impl FireVolume {
                 let voxels = p.iter().map(|&n| n as u64).product::<u64>();
                 voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
             });
-            let dense = match set.lattice.as_str() {
-                "dense" => Some(true),
-                "bricks" => Some(false),
-                "off" => None,
-                _ => Some(dense_fits),
+            let dense = match set.lattice {
+                settings::Lattice::Dense => Some(true),
+                settings::Lattice::Bricks => Some(false),
+                settings::Lattice::Off => None,
+                settings::Lattice::Auto => Some(dense_fits),
             };
             let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
             match dense {

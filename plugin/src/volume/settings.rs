@@ -6,7 +6,7 @@ use super::basis::Basis;
 use super::{params, ColorMode, Integrator, Mode};
 use crate::ciddor::Air;
 use crate::cie::cmf_table::{CMF, CMF_START_NM};
-use crate::params::{Component, Param, ParamReader, ParamType, Values};
+use crate::params::{choice, Component, Param, ParamReader, ParamType, Values};
 use crate::rgb_spectrum::{RgbSpectrum, RgbUse};
 use crate::soot::SootOptics;
 use crate::species::Element;
@@ -31,7 +31,7 @@ pub(super) struct Settings {
     /// `precision "f32"`: the march in f32 lanes where every product fits.
     pub f32_lanes: bool,
     /// `lattice`: auto, dense, bricks or off.
-    pub lattice: String,
+    pub lattice: Lattice,
     pub integrator: Integrator,
     /// March step, voxels.
     pub stepsize: f64,
@@ -110,11 +110,7 @@ impl Settings {
         if fault == "create" {
             panic!("fault injection: panic during creation");
         }
-        let mode = if r.string("mode")? == "pbrt" {
-            Mode::Pbrt
-        } else {
-            Mode::Physical
-        };
+        let mode: Mode = r.choice("mode")?;
         let basis = read_basis(r, mode)?;
         // pbrt-v4's grid media scatter unless told otherwise (σ_s defaults to 1, as σ_a); the paper's fire does not.
         let sigma_s = match (spectrum_param(r, "sigma_s", list, RgbUse::Unbounded)?, mode) {
@@ -126,15 +122,16 @@ impl Settings {
             Mode::Pbrt => read_pbrt(r, list)?,
         };
         let brick = r.int("brick")? as usize;
-        let f32_lanes = r.string("precision")? == "f32";
-        let lattice = r.string("lattice")?;
+        let f32_lanes = r.choice::<Precision>("precision")? == Precision::F32;
+        let lattice = r.choice("lattice")?;
         // Unset: the march, for the paper's fire and for pbrt-v4's grids alike (pbrt-v4's own estimator, ratio
         // tracking, is `integrator "ratio"`). In pbrt mode a step thicker than `steptau` is split, so the march
         // follows a voxel far denser than its step (a 1-voxel grid σ_a = 1000 has τ = 500 per half-voxel step,
         // where the midpoint's emission is 80× brighter than the surface layer pbrt-v4 sees); its bias against
         // pbrt-v4's expected image is measured in docs/pbrt-compat.md.
-        let integrator =
-            Integrator::from_name(&r.string("integrator")?).unwrap_or(Integrator::March);
+        let integrator = r
+            .choice::<Option<Integrator>>("integrator")?
+            .unwrap_or(Integrator::March);
         let stepsize = r.float("stepsize")?;
         let step_tau = r.opt_float("steptau")?.unwrap_or(match mode {
             Mode::Physical => f64::INFINITY,
@@ -143,8 +140,8 @@ impl Settings {
         let cutoff = r.float("cutoff")?;
         let g = r.float("g")?;
         let chemiluminescence = r.float("chemiluminescence")?;
-        let voigt = r.string("lineshape")? == "voigt";
-        let diffusion = (r.string("multiplescattering")? == "diffusion")
+        let voigt = r.choice::<LineShape>("lineshape")? == LineShape::Voigt;
+        let diffusion = (r.choice::<Scattering>("multiplescattering")? == Scattering::Diffusion)
             .then_some(r.int("diffusionresolution")? as usize);
         let linebroadening = r.float("linebroadening")?;
         // Refraction's parameters are validated whether or not it is on.
@@ -159,7 +156,8 @@ impl Settings {
             air,
             wavelength: r.float("refractionwavelength")?,
             scale: r.float("refractionscale")?,
-            rk4: r.string("refractionintegrator")? == "rk4",
+            rk4: r.choice::<RefractionIntegrator>("refractionintegrator")?
+                == RefractionIntegrator::Rk4,
         };
         let ember = crate::embers::Material {
             emissivity: r.float("emberemissivity")?,
@@ -195,7 +193,7 @@ impl Settings {
 /// The channels: spectral bins over [lambdamin, lambdamax], or XYZ bands; K = 683 lm/W (physical: Y in cd/m²)
 /// or 1 (pbrt-v4's film records ∫ L ȳ dλ as it is, with an imaging ratio of 1).
 fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
-    let colormode = r.string("colormode")?;
+    let colormode: ColourSpace = r.choice("colormode")?;
     let grid = SpectralGrid::new(
         r.float("lambdamin")?,
         r.float("lambdamax")?,
@@ -215,7 +213,7 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
             expected,
         },
     })?;
-    let mode_c = if colormode == "rgb" {
+    let mode_c = if colormode == ColourSpace::Rgb {
         ColorMode::Rgb
     } else {
         ColorMode::Spectral(grid)
@@ -225,7 +223,7 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
     } else {
         crate::constants::LUMINOUS_EFFICACY
     };
-    let line_split = r.string("linecolour")? == "ownwavelength";
+    let line_split = r.choice::<LineColour>("linecolour")? == LineColour::OwnWavelength;
     Ok(Basis {
         mode: mode_c,
         k,
@@ -240,8 +238,8 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
             return Err(Error::invalid("volume", name, "given", "mode \"pbrt\" (in physical mode the fire's absorption and emission come from soot and species)"));
         }
     }
-    let optics = match r.string("fuel")?.as_str() {
-        "custom" => {
+    let optics = match r.choice::<Fuel>("fuel")? {
+        Fuel::Custom => {
             let v = r.numbers("fuelnk")?.ok_or_else(|| {
                 Error::invalid(
                     "volume",
@@ -263,7 +261,8 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
                 Error::invalid("volume", "fuelnk", e.to_string(), "a valid (λ, n, k) table")
             })?
         }
-        f => SootOptics::for_fuel(f)?,
+        Fuel::Propane => SootOptics::propane(),
+        Fuel::Acetylene => SootOptics::acetylene(),
     };
     let alpha = r.float("alpha")?;
     let sootscale = r.float("sootscale")?;
@@ -518,3 +517,81 @@ fn spectrum_param(
         a.1 + (l - a.0) / (b.0 - a.0) * (b.1 - a.1)
     })))
 }
+
+/// `precision`: the march's per-sample arithmetic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Precision {
+    F32,
+    F64,
+}
+choice!(Precision { Precision::F32 => "f32", Precision::F64 => "f64" });
+
+/// `lattice`: the copy of the grids the f32 march reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lattice {
+    /// Dense while it costs at most 4× the grids' storage, else bricks.
+    Auto,
+    Dense,
+    Bricks,
+    /// No copy: the march reads the grids.
+    Off,
+}
+choice!(Lattice { Lattice::Auto => "auto", Lattice::Dense => "dense", Lattice::Bricks => "bricks", Lattice::Off => "off" });
+
+/// `lineshape`: atomic lines' profiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LineShape {
+    Voigt,
+    Box,
+}
+choice!(LineShape { LineShape::Voigt => "voigt", LineShape::Box => "box" });
+
+/// `multiplescattering`: how the smoke scatters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scattering {
+    PathTraced,
+    Diffusion,
+}
+choice!(Scattering { Scattering::PathTraced => "pathtraced", Scattering::Diffusion => "diffusion" });
+
+/// `refractionintegrator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RefractionIntegrator {
+    Verlet,
+    Rk4,
+}
+choice!(RefractionIntegrator { RefractionIntegrator::Verlet => "verlet", RefractionIntegrator::Rk4 => "rk4" });
+
+/// `colormode`: spectral bins or XYZ bands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ColourSpace {
+    Spectral,
+    Rgb,
+}
+choice!(ColourSpace { ColourSpace::Spectral => "spectral", ColourSpace::Rgb => "rgb" });
+
+/// `linecolour`: how spectral bins carry an atomic line's light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LineColour {
+    OwnWavelength,
+    BinMean,
+}
+choice!(LineColour { LineColour::OwnWavelength => "ownwavelength", LineColour::BinMean => "binmean" });
+
+/// `fuel`: the soot's optical constants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Fuel {
+    Propane,
+    Acetylene,
+    /// `fuelnk`'s table.
+    Custom,
+}
+choice!(Fuel { Fuel::Propane => "propane", Fuel::Acetylene => "acetylene", Fuel::Custom => "custom" });
+
+choice!(Mode { Mode::Physical => "physical", Mode::Pbrt => "pbrt" });
+choice!(Option<Integrator> {
+    None => "",
+    Some(Integrator::March) => "march",
+    Some(Integrator::Ratio) => "ratio",
+    Some(Integrator::Delta) => "delta",
+});
