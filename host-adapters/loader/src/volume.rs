@@ -17,6 +17,16 @@ pub struct Sampling<'a> {
     pub step: f64,
 }
 
+impl<'a> Sampling<'a> {
+    /// Each ray at its time (`None`: 0), the rest the plugin's own.
+    pub fn at(times: Option<&'a [f64]>) -> Self {
+        Sampling {
+            times,
+            ..Sampling::default()
+        }
+    }
+}
+
 /// A fire volume living in the plugin. Immutable; `Send + Sync`.
 pub struct Volume {
     pub(crate) inner: Arc<Inner>,
@@ -306,10 +316,7 @@ impl Volume {
         transmittance: Option<&mut [f32]>,
         exits: Option<&mut [Exit]>,
     ) -> Result<(), Error> {
-        let s = Sampling {
-            times,
-            ..Sampling::default()
-        };
+        let s = Sampling::at(times);
         self.integrate_with(rays, &s, radiance, transmittance, exits)
     }
 
@@ -356,10 +363,7 @@ impl Volume {
         times: Option<&[f64]>,
         transmittance: &mut [f32],
     ) -> Result<(), Error> {
-        let s = Sampling {
-            times,
-            ..Sampling::default()
-        };
+        let s = Sampling::at(times);
         self.transmittance_with(rays, &s, transmittance)
     }
 
@@ -397,10 +401,7 @@ impl Volume {
         weights: &mut [f32],
         emitted: Option<&mut [f32]>,
     ) -> Result<(), Error> {
-        let s = Sampling {
-            times,
-            ..Sampling::default()
-        };
+        let s = Sampling::at(times);
         self.sample_scatter_with(rays, &s, events, weights, emitted)
     }
 
