@@ -223,6 +223,14 @@ macro_rules! choice {
 }
 pub(crate) use choice;
 
+/// The table's name of a choice's value.
+pub fn name_of<T: Choice + PartialEq>(v: T) -> &'static str {
+    T::VALUES
+        .iter()
+        .position(|x| *x == v)
+        .map_or("", |i| T::NAMES[i])
+}
+
 /// The accepted values of a parameter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Range {

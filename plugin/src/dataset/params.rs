@@ -29,14 +29,39 @@ const VELOCITY: [&str; 3] = ["velocity.x", "velocity.y", "velocity.z"];
 /// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
 pub const HOUDINI_KELVIN: f64 = 5000.0;
 
+/// `source`: the tool whose conventions the grids follow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Tool {
+    /// Density and temperature in K (our gen, the thesis's files).
+    Kelvin,
+    /// pbrt-v4's nanovdb: as kelvin.
+    Pbrt,
+    /// A Mantaflow domain cache: the flame grid as Cycles maps it.
+    Blender,
+    /// Pyro: temperature × 5000 K.
+    Houdini,
+    /// EmberGen: smoke and temperature in K.
+    EmberGen,
+}
+choice!(Tool { Tool::Kelvin => "kelvin", Tool::Pbrt => "pbrt", Tool::Blender => "blender", Tool::Houdini => "houdini", Tool::EmberGen => "embergen" });
+choice!(Option<Format> {
+    None => "",
+    Some(Format::AsciiDense) => "ascii",
+    Some(Format::AsciiSparse) => "asciisparse",
+    Some(Format::Raw) => "raw",
+    Some(Format::Raw2) => "raw2",
+    Some(Format::Vdb) => "vdb",
+    Some(Format::NanoVdb) => "nvdb",
+});
+
 /// The names a tool writes a channel under, in the order tried (`source` presets): (density, temperature).
-fn preset_names(source: &str) -> Option<(&'static [&'static str], &'static [&'static str])> {
+fn preset_names(source: Tool) -> Option<(&'static [&'static str], &'static [&'static str])> {
     match source {
         // Houdini's Pyro: density, temperature (older setups: heat).
-        "houdini" => Some((&["density"], &["temperature", "heat"])),
+        Tool::Houdini => Some((&["density"], &["temperature", "heat"])),
         // EmberGen: smoke, temperature (kelvin), flames, fuel, velocity.
-        "embergen" => Some((&["smoke", "density"], &["temperature"])),
-        _ => None,
+        Tool::EmberGen => Some((&["smoke", "density"], &["temperature"])),
+        Tool::Kelvin | Tool::Pbrt | Tool::Blender => None,
     }
 }
 
@@ -160,10 +185,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     let velocity = velocity_grids(r)?.filter(|_| shutter[1] > shutter[0]);
     let per_frame = r.float("velocityscale")? / r.float("fps")?;
     let pol = |name: &str| -> Result<Policy, Error> { r.choice(name) };
-    let format = match r.string("format")?.as_str() {
-        "" => None,
-        f => Some(Format::from_name(f)?),
-    };
+    let format: Option<Format> = r.choice("format")?;
     let rawdims = r.ints("rawdims")?.unwrap_or(vec![256, 256, 256]);
     if rawdims.len() != 3 {
         return Err(Error::invalid(
@@ -221,12 +243,13 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     // Where the grids come from: Blender's fluid cache gives the fire's temperature as its flame grid, which
     // Cycles maps to 1000 K · (ignition + flame · (maximum − ignition)) where there is flame (Blender's defaults:
     // ignition 1.5, maximum 3.0).
-    let source = r.string("source")?;
-    let blender = source == "blender";
+    let tool: Tool = r.choice("source")?;
+    let source = crate::params::name_of(tool);
+    let blender = tool == Tool::Blender;
     // Houdini's Pyro shader maps its temperature field linearly onto kelvin, 0 → 0 K and 1 → its blackbody's
     // "temperature high", 5000 K by default (SideFX, Pyro Shader / Blackbody COP docs); EmberGen's grids hold
     // kelvin already, under their own names.
-    let relative = (source == "houdini").then_some(HOUDINI_KELVIN);
+    let relative = (tool == Tool::Houdini).then_some(HOUDINI_KELVIN);
     if blender || relative.is_some() {
         let given = [
             "temperaturescale",
@@ -414,7 +437,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         } else {
             filename.clone()
         };
-        let (dgrid, tgrid) = match preset_names(&source) {
+        let (dgrid, tgrid) = match preset_names(tool) {
             Some((d, t)) => (
                 preset_grid(r, "densitygrid", d, &dfile, &opts)?,
                 preset_grid(r, "temperaturegrid", t, &tfile, &opts)?,
