@@ -6,7 +6,7 @@ use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::par::Pool;
 use crate::params::Param;
-use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray};
+use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray, Want};
 use firemedium_abi::*;
 use glam::DVec3;
 use std::ffi::c_void;
@@ -378,13 +378,12 @@ pub(super) unsafe extern "C" fn volume_query(
                         let r = ray(i);
                         // A host that does not ask where the ray leaves gets the straight ray (light paths, NEE).
                         let (p_exit, d_exit, t_exit) = if e_out.is_some() {
-                            v.integrate_exit_at(&r, ts[i], l, t)
+                            v.query(&r, Some(ts[i]), Want::Exit, l, t).exit(&r)
                         } else {
-                            let te = if q.step > 0.0 {
-                                v.integrate_stepped_at(&r, ts[i], q.step, l, t)
-                            } else {
-                                v.integrate_at(&r, ts[i], l, t)
-                            };
+                            let step = (q.step > 0.0).then_some(q.step);
+                            let te = v
+                                .query(&r, Some(ts[i]), Want::Radiance { step }, l, t)
+                                .end(&r);
                             (r.o + r.d * te, r.d, te)
                         };
                         store(l_out, i, l);
@@ -411,7 +410,7 @@ pub(super) unsafe extern "C" fn volume_query(
                     .ok_or_else(|| bad("volume_query: transmittance is null"))?;
                 super::with_channels(c, |_, t| {
                     for i in 0..n {
-                        v.transmittance_at(&ray(i), ts[i], t);
+                        v.query(&ray(i), Some(ts[i]), Want::Transmittance, &mut [], t);
                         store(out, i, t);
                     }
                 });
@@ -436,7 +435,7 @@ pub(super) unsafe extern "C" fn volume_query(
                 super::with_channels(c, |l, w| {
                     for i in 0..n {
                         let r = ray(i);
-                        let (event, t) = match v.sample_scatter_at(&r, ts[i], l, w) {
+                        let (event, t) = match v.query(&r, Some(ts[i]), Want::Scatter, l, w).event() {
                             Event::Escaped => (FM_EVENT_ESCAPED, r.t1),
                             Event::Scattered(t) => (FM_EVENT_SCATTERED, t),
                             Event::Absorbed => (FM_EVENT_ABSORBED, r.t1),

@@ -59,6 +59,7 @@ pub use march::evaluations_on_this_thread;
 pub(crate) use march::Stepper;
 use march::EVALUATIONS;
 pub use point::PointCoefficients;
+pub use query::{Answer, Want};
 use settings::{Emission, Settings};
 pub(crate) use subset::LineChannels;
 use tables::SpeciesChannel;

@@ -5,44 +5,89 @@
 use super::*;
 
 impl FireVolume {
+    /// The one whole-ray query: what `want` asks along `ray`, at `time` (frames from the grids' time: with motion
+    /// blur the fire is looked up where its velocity carried it from, and embers are where theirs carried them;
+    /// `None`: the grids as they are, embers at time 0). `l` gets the emitted radiance (before the event, for
+    /// [`Want::Scatter`]), `t` the transmittance (the event's weights). Every `integrate*`, `transmittance*` and
+    /// `sample_scatter*` below is this.
+    pub fn query(
+        &self,
+        ray: &Ray,
+        time: Option<f64>,
+        want: Want,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> Answer {
+        let at = time.unwrap_or(0.0);
+        let (cut, hit) = self.ember_cut(ray, at);
+        match want {
+            Want::Radiance { step } => {
+                let te = match (step, time) {
+                    (Some(s), _)
+                        if self.estimator.integrator == Integrator::March
+                            && s > self.estimator.step =>
+                    {
+                        self.stepped_fire(&cut, at, s, l, t)
+                    }
+                    (_, Some(time)) => self.integrate_at_fire(&cut, time, l, t),
+                    (_, None) => self.integrate_fire(&cut, l, t),
+                };
+                Answer::Ends(self.ember_seen(hit, at, Some(l), t).unwrap_or(te))
+            }
+            Want::Exit => {
+                let exit = match time {
+                    Some(time) => self.integrate_exit_at_fire(&cut, time, l, t),
+                    None => self.integrate_exit_fire(&cut, l, t),
+                };
+                Answer::Exits(match self.ember_seen(hit, at, Some(l), t) {
+                    Some(th) => (ray.o + ray.d * th, exit.1, th),
+                    None => exit,
+                })
+            }
+            Want::Transmittance => {
+                match time {
+                    Some(time) => self.transmittance_at_fire(&cut, time, t),
+                    None => self.transmittance_fire(&cut, t),
+                }
+                self.ember_seen(hit, at, None, t);
+                Answer::Transmitted
+            }
+            Want::Scatter => {
+                let ev = match time {
+                    Some(time) => self.sample_scatter_at_fire(&cut, time, l, t),
+                    None => self.sample_scatter_fire(&cut, l, t),
+                };
+                Answer::Event(self.ember_event(ev, hit, at, l, t))
+            }
+        }
+    }
     /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter (where
     /// an ember stopped the ray, if one did).
     pub fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
-        let (cut, hit) = self.ember_cut(ray, 0.0);
-        let te = self.integrate_fire(&cut, l, t);
-        self.ember_seen(hit, 0.0, Some(l), t).unwrap_or(te)
+        self.query(ray, None, Want::Radiance { step: None }, l, t)
+            .end(ray)
     }
     /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
-    /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
-    /// parameter is then the entry parameter plus arc length / |d|. (Embers are met along the straight chord.)
+    /// refraction on, the ray curves through the index field and leaves bent (`volume/bent.rs`); the parameter
+    /// is then the entry parameter plus arc length / |d|. (Embers are met along the straight chord.)
     pub fn integrate_exit(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> (DVec3, DVec3, f64) {
-        let (cut, hit) = self.ember_cut(ray, 0.0);
-        let exit = self.integrate_exit_fire(&cut, l, t);
-        match self.ember_seen(hit, 0.0, Some(l), t) {
-            Some(th) => (ray.o + ray.d * th, exit.1, th),
-            None => exit,
-        }
+        self.query(ray, None, Want::Exit, l, t).exit(ray)
     }
     /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
     pub fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
-        let (cut, hit) = self.ember_cut(ray, 0.0);
-        self.transmittance_fire(&cut, t);
-        self.ember_seen(hit, 0.0, None, t);
+        self.query(ray, None, Want::Transmittance, &mut [], t);
     }
     /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights. A ray
     /// that reaches an ember collects its radiance and ends there ([`Event::Absorbed`]).
     pub fn sample_scatter(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
-        let (cut, hit) = self.ember_cut(ray, 0.0);
-        let ev = self.sample_scatter_fire(&cut, l, w);
-        self.ember_event(ev, hit, 0.0, l, w)
+        self.query(ray, None, Want::Scatter, l, w).event()
     }
     /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
     /// fire is looked up where the velocity carried it from (`motion`), and embers are where their velocity
     /// carried them. Without motion blur or embers, or at time 0, the same as `integrate`.
     pub fn integrate_at(&self, ray: &Ray, time: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
-        let (cut, hit) = self.ember_cut(ray, time);
-        let te = self.integrate_at_fire(&cut, time, l, t);
-        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+        self.query(ray, Some(time), Want::Radiance { step: None }, l, t)
+            .end(ray)
     }
     /// As [`integrate_at`](Self::integrate_at) with the march's step `step` (metres) instead of the volume's —
     /// the fire light's coarse line estimate. A volume that tracks (ratio, delta) or whose own step is as long
@@ -55,25 +100,8 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> f64 {
-        if self.estimator.integrator != Integrator::March || !(step > self.estimator.step) {
-            return self.integrate_at(ray, time, l, t);
-        }
-        let (cut, hit) = self.ember_cut(ray, time);
-        self.fault_check();
-        let te = match self.advected(time) {
-            Some(a) => {
-                let map = |p: DVec3| a.displaced(p);
-                let te = march::integrate_stepped(self, &a, Some(&map), &cut, step, l, t);
-                self.thick_lines(Some(&a), &cut, cut.t1, Some(l), t, lines::Fold::Add);
-                te
-            }
-            None => {
-                let te = march::integrate_stepped(self, self, None, &cut, step, l, t);
-                self.thick_lines(None, &cut, cut.t1, Some(l), t, lines::Fold::Add);
-                te
-            }
-        };
-        self.ember_seen(hit, time, Some(l), t).unwrap_or(te)
+        self.query(ray, Some(time), Want::Radiance { step: Some(step) }, l, t)
+            .end(ray)
     }
     /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
     /// grids' time: a refracting volume ignores `time` here but for its embers.)
@@ -84,24 +112,32 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> (DVec3, DVec3, f64) {
-        let (cut, hit) = self.ember_cut(ray, time);
-        let exit = self.integrate_exit_at_fire(&cut, time, l, t);
-        match self.ember_seen(hit, time, Some(l), t) {
-            Some(th) => (ray.o + ray.d * th, exit.1, th),
-            None => exit,
-        }
+        self.query(ray, Some(time), Want::Exit, l, t).exit(ray)
     }
     /// As [`transmittance`](Self::transmittance) at time `time`.
     pub fn transmittance_at(&self, ray: &Ray, time: f64, t: &mut [f64]) {
-        let (cut, hit) = self.ember_cut(ray, time);
-        self.transmittance_at_fire(&cut, time, t);
-        self.ember_seen(hit, time, None, t);
+        self.query(ray, Some(time), Want::Transmittance, &mut [], t);
     }
     /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
     pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
-        let (cut, hit) = self.ember_cut(ray, time);
-        let ev = self.sample_scatter_at_fire(&cut, time, l, w);
-        self.ember_event(ev, hit, time, l, w)
+        self.query(ray, Some(time), Want::Scatter, l, w).event()
+    }
+    /// The march at `step` along a cut ray at `time`, thick lines folded in.
+    fn stepped_fire(&self, cut: &Ray, time: f64, step: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+        self.fault_check();
+        match self.advected(time) {
+            Some(a) => {
+                let map = |p: DVec3| a.displaced(p);
+                let te = march::integrate_stepped(self, &a, Some(&map), cut, step, l, t);
+                self.thick_lines(Some(&a), cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+            None => {
+                let te = march::integrate_stepped(self, self, None, cut, step, l, t);
+                self.thick_lines(None, cut, cut.t1, Some(l), t, lines::Fold::Add);
+                te
+            }
+        }
     }
     /// `ray` up to the first ember it meets at `time`, and that ember's (parameter, index).
     pub(super) fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
@@ -297,5 +333,60 @@ impl FireVolume {
     }
     pub(super) fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {
         self.layers.blur.as_ref().and_then(|b| b.at(self, time))
+    }
+}
+
+/// What a whole-ray [`FireVolume::query`] asks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Want {
+    /// Emitted radiance and transmittance along the straight ray; with a `step` longer than the volume's, a march
+    /// at that step (a coarse estimate: the fire light's line).
+    Radiance { step: Option<f64> },
+    /// The same following the ray where it bends (refraction), and where it leaves.
+    Exit,
+    /// Transmittance only (shadow rays; straight).
+    Transmittance,
+    /// The first real scattering event.
+    Scatter,
+}
+
+/// What a [`FireVolume::query`] found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Answer {
+    /// The ray's parameter where it ended (its end, or an ember).
+    Ends(f64),
+    /// Where it left: point, unit direction, parameter.
+    Exits((DVec3, DVec3, f64)),
+    /// Transmittance only.
+    Transmitted,
+    /// A scattering query's event.
+    Event(Event),
+}
+
+impl Answer {
+    /// The end parameter (the ray's own end for an answer without one).
+    pub fn end(self, ray: &Ray) -> f64 {
+        match self {
+            Answer::Ends(t) | Answer::Exits((_, _, t)) => t,
+            Answer::Event(Event::Scattered(t)) => t,
+            _ => ray.t1,
+        }
+    }
+    /// The exit (the straight ray's end for an answer without one).
+    pub fn exit(self, ray: &Ray) -> (DVec3, DVec3, f64) {
+        match self {
+            Answer::Exits(e) => e,
+            a => {
+                let t = a.end(ray);
+                (ray.o + ray.d * t, ray.d.normalize_or_zero(), t)
+            }
+        }
+    }
+    /// The event (escaped for an answer without one).
+    pub fn event(self) -> Event {
+        match self {
+            Answer::Event(e) => e,
+            _ => Event::Escaped,
+        }
     }
 }
