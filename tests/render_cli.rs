@@ -415,6 +415,79 @@ fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
 }
 
 #[test]
+fn a_plugin_call_that_fails_inside_a_render_is_counted_and_reported() {
+    // A plugin (C, through the header) that forwards to the real one but refuses one whole-ray query in five: the
+    // render finishes and writes its image (the work is kept), but exits 1 naming how many calls failed and the
+    // first one's message, and --stats counts them — never a silent black pixel.
+    let dir = tmp("failing");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let real = bin.parent().unwrap().join("deps").join(format!(
+        "{}firemedium_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    let shim = dir.join("libfailing.so");
+    let cc = Command::new("gcc")
+        .args(["-std=c11", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])
+        .arg(root.join("plugin/abi/include"))
+        .arg(root.join("tests/c/failing_plugin.c"))
+        .arg("-o")
+        .arg(&shim)
+        .arg("-ldl")
+        .output()
+        .unwrap();
+    assert!(
+        cc.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cc.stderr)
+    );
+    let scene = format!(
+        "LookAt 0 -3 0.5  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 4\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"float sootscale\" 1e-6\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n",
+        inline_grid(4, 1.0, 1600.0)
+    );
+    std::fs::write(dir.join("f.pbrt"), scene).unwrap();
+    let exr = dir.join("f.exr");
+    let o = Command::new(&bin)
+        .arg("render")
+        .arg(dir.join("f.pbrt"))
+        .args(["-o", exr.to_str().unwrap(), "--stats", "--plugin"])
+        .arg(&shim)
+        .env("FIREMEDIUM_REAL_PLUGIN", &real)
+        .output()
+        .unwrap();
+    let (err, stats) = (
+        String::from_utf8_lossy(&o.stderr),
+        String::from_utf8_lossy(&o.stdout),
+    );
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("plugin calls failed during the render")
+            && err.contains("failing shim: this query is refused (a test)"),
+        "{err}"
+    );
+    let counted: u64 = stats
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("plugin calls that failed: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count in\n{stats}"));
+    // 8 × 8 pixels × 4 samples, one camera ray each through the fire: about a fifth of them refused.
+    assert!(
+        (40..=90).contains(&counted),
+        "{counted} failed calls\n{err}"
+    );
+    // Written beside the output, as an interrupted render's tiles are, its record saying it is not complete.
+    let written = err
+        .split(" so ")
+        .nth(1)
+        .and_then(|s| s.split(" and ").next())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| panic!("no path in\n{err}"));
+    assert!(written.is_file() && !exr.is_file(), "{}", written.display());
+}
+
+#[test]
 fn unsupported_pbrt_parameters_are_named_where_they_stand() {
     // pbrt-v4 reads an integrator's "regularize" and a shape's "alpha"; this renderer does not yet: each is a
     // warning at its own position, never dropped silently (pbrt-v4's ReportUnused).

@@ -529,14 +529,21 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         ),
     ];
     // An interrupted render writes its finished tiles beside the output, never over it (a complete frame from
-    // an earlier run stays), and its record says it is not complete.
-    let (exr, png) = if img.complete {
+    // an earlier run stays), and its record says it is not complete; so does a render in which plugin calls
+    // failed (its paths lost light there: `--skip-existing` renders it again).
+    let whole = img.complete && st.plugin_failures.0 == 0;
+    let (exr, png) = if whole {
         (exr, png)
     } else {
         (partial(&exr), partial(&png))
     };
-    img.meta
-        .push((COMPLETE.to_string(), img.complete.to_string()));
+    img.meta.push((COMPLETE.to_string(), whole.to_string()));
+    if st.plugin_failures.0 > 0 {
+        img.meta.push((
+            "plugin_failures".to_string(),
+            st.plugin_failures.0.to_string(),
+        ));
+    }
     img.write_exr(&exr, fire_t, sc.response.fp16)
         .map_err(|e| (1, e))?;
     write_preview(&img, &png, &tone).map_err(|e| (1, e))?;
@@ -596,6 +603,13 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 st.fire_light_samples as f64 / st.camera_rays.max(1) as f64
             );
         }
+        if st.plugin_failures.0 > 0 {
+            out += &format!(
+                "  plugin calls that failed: {} (first: {})\n",
+                st.plugin_failures.0,
+                st.plugin_failures.1.as_deref().unwrap_or("no message")
+            );
+        }
         if let Some(bytes) = crate::bench::perf::peak_rss() {
             out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
         }
@@ -607,6 +621,27 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             u8::try_from(128 + signal).unwrap_or(130),
             format!(
                 "interrupted: wrote the finished tiles to {} and {}",
+                exr.display(),
+                png.display()
+            ),
+        ));
+    }
+    // A plugin call that failed inside the render left its path without the rest of its light: the image is
+    // darker there than the scene. It is written (the work is kept), and the render fails saying so.
+    if let (n @ 1.., first) = &st.plugin_failures {
+        log.event(serde_json::json!({
+            "event": "plugin_failures",
+            "frame": frame,
+            "count": n,
+            "first": first,
+        }));
+        // (The statistics, which say the same, before the error.)
+        print!("{out}");
+        return Err((
+            1,
+            format!(
+                "{n} plugin calls failed during the render (first: {}); the paths that made them gave nothing from there on, so {} and {} are darker than the scene",
+                first.as_deref().unwrap_or("no message"),
                 exr.display(),
                 png.display()
             ),

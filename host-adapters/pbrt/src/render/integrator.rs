@@ -255,20 +255,46 @@ fn plugin_ray(to_medium: &DAffine3, o: Vec3A, d: Vec3A, t_end: f32, seed: u64) -
 }
 
 /// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
-/// from `o` at `time` (frames: the embers move); None if the plugin refused the query.
+/// from `o` at `time` (frames: the embers move).
 fn fire_pdf_direction(
     light: &firemedium_loader::Light,
     to_medium: &DAffine3,
     o: Vec3A,
     d: Vec3A,
     time: f64,
-) -> Option<f64> {
+) -> Result<f64, firemedium_loader::Error> {
     let (om, dm) = to_space(to_medium, o, d);
     let mut pd = [0.0f64];
-    light
-        .pdf_direction_at(&[om.to_array()], &[dm.to_array()], Some(&[time]), &mut pd)
-        .ok()?;
-    Some(pd[0])
+    light.pdf_direction_at(&[om.to_array()], &[dm.to_array()], Some(&[time]), &mut pd)?;
+    Ok(pd[0])
+}
+
+/// Plugin calls that failed inside the render: counted, the first one's message kept, for the render's report
+/// (a path whose call failed contributes nothing from there on — never silently).
+#[derive(Debug, Default)]
+pub struct Failures {
+    count: std::sync::atomic::AtomicU64,
+    first: std::sync::OnceLock<String>,
+}
+
+impl Failures {
+    /// `r`'s value, or `None` with the failure counted.
+    pub fn note<T>(&self, r: Result<T, firemedium_loader::Error>) -> Option<T> {
+        match r {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.count
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let _ = self.first.set(e.to_string());
+                None
+            }
+        }
+    }
+
+    /// How many failed, and the first one's message.
+    pub fn into_report(self) -> (u64, Option<String>) {
+        (self.count.into_inner(), self.first.into_inner())
+    }
 }
 
 /// Renders radiance along camera rays.
@@ -278,6 +304,8 @@ pub struct Integrator<'a> {
     pub mask: S,
     /// Fire-light samples taken (next-event estimation toward a fire), for the render's statistics.
     pub fire_samples: std::sync::atomic::AtomicU64,
+    /// Plugin calls that failed inside the render.
+    pub failures: Failures,
 }
 
 impl Integrator<'_> {
@@ -322,15 +350,13 @@ impl Integrator<'_> {
             [0f32; super::spectrum::MAX_CHANNELS],
             [0f32; super::spectrum::MAX_CHANNELS],
         );
-        if light
-            .integrate_at(
-                std::slice::from_ref(&ray),
-                Some(&[rng.time]),
-                &mut l[..n],
-                Some(&mut t[..n]),
-            )
-            .is_err()
-        {
+        let estimated = light.integrate_at(
+            std::slice::from_ref(&ray),
+            Some(&[rng.time]),
+            &mut l[..n],
+            Some(&mut t[..n]),
+        );
+        if self.failures.note(estimated).is_none() {
             return (S::ZERO, S::ZERO);
         }
         (S(l) * *units, S(t))
@@ -366,7 +392,7 @@ impl Integrator<'_> {
                     [0f32; super::spectrum::MAX_CHANNELS],
                 );
                 let mut exit = [firemedium_loader::Exit::default()];
-                let ok = if emission {
+                let done = if emission {
                     vol.integrate_at(
                         std::slice::from_ref(&ray),
                         Some(&time),
@@ -374,12 +400,10 @@ impl Integrator<'_> {
                         Some(&mut t[..n]),
                         want_exit.then_some(&mut exit[..]),
                     )
-                    .is_ok()
                 } else {
                     vol.transmittance_at(std::slice::from_ref(&ray), Some(&time), &mut t[..n])
-                        .is_ok()
                 };
-                if !ok {
+                if self.failures.note(done).is_none() {
                     return (S::ZERO, S::ZERO, None);
                 }
                 let bent = (emission && want_exit).then(|| {
@@ -524,9 +548,13 @@ impl Integrator<'_> {
                 // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
                 let uu = [(); 6].map(|_| rng.next_f64());
                 let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
-                light
-                    .sample_at(&[uu], Some(&[rng.time]), &mut pt, &mut pdf, None)
-                    .ok()?;
+                self.failures.note(light.sample_at(
+                    &[uu],
+                    Some(&[rng.time]),
+                    &mut pt,
+                    &mut pdf,
+                    None,
+                ))?;
                 if !(pdf[0] > 0.0) {
                     return None;
                 }
@@ -548,7 +576,11 @@ impl Integrator<'_> {
                     return None;
                 }
                 // Solid angle in medium space equals world solid angle for a similarity transform.
-                let pdf_dir = fire_pdf_direction(light, to_medium, p, wi, rng.time)? as f32 / nl;
+                let pdf_dir = self
+                    .failures
+                    .note(fire_pdf_direction(light, to_medium, p, wi, rng.time))?
+                    as f32
+                    / nl;
                 if !(pdf_dir > 0.0) {
                     return None;
                 }
@@ -680,7 +712,10 @@ impl Integrator<'_> {
         for l in &sc.lights {
             if let Light::Fire { light, medium } = l {
                 if *medium == m {
-                    let Some(pd) = fire_pdf_direction(light, to_medium, origin, d, time) else {
+                    let Some(pd) = self
+                        .failures
+                        .note(fire_pdf_direction(light, to_medium, origin, d, time))
+                    else {
                         return 1.0;
                     };
                     let pl = pd as f32 / sc.lights.len() as f32;
@@ -800,16 +835,14 @@ impl Integrator<'_> {
                         // (The emission collected at delta tracking's tentative collisions, as pbrt-v4's volpath:
                         // marching it along every segment instead cost 7× the time for no less error on a
                         // scattering fire — docs/RESULTS.md.)
-                        if vol
-                            .sample_scatter_at(
-                                std::slice::from_ref(&ray),
-                                Some(&[rng.time]),
-                                &mut ev,
-                                &mut w[..n],
-                                Some(&mut e[..n]),
-                            )
-                            .is_err()
-                        {
+                        let tracked = vol.sample_scatter_at(
+                            std::slice::from_ref(&ray),
+                            Some(&[rng.time]),
+                            &mut ev,
+                            &mut w[..n],
+                            Some(&mut e[..n]),
+                        );
+                        if self.failures.note(tracked).is_none() {
                             break;
                         }
                         let e = S(e);

@@ -109,6 +109,9 @@ pub struct Stats {
     pub camera_rays: usize,
     /// Fire-light samples (next-event estimation toward fires).
     pub fire_light_samples: u64,
+    /// Plugin calls that failed inside the render (their paths gave nothing from there on), and the first one's
+    /// message.
+    pub plugin_failures: (u64, Option<String>),
 }
 
 const TILE: usize = 16;
@@ -141,6 +144,7 @@ pub fn render(
         scene,
         mask: scene.bins.mask(),
         fire_samples: Default::default(),
+        failures: Default::default(),
     };
     let rows: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
@@ -295,6 +299,7 @@ pub fn render(
         seconds: start.elapsed().as_secs_f64(),
         camera_rays: w * h * scene.spp,
         fire_light_samples: integ.fire_samples.into_inner(),
+        plugin_failures: integ.failures.into_report(),
     };
     (
         Image {
