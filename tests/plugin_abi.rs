@@ -1331,3 +1331,31 @@ fn the_medium_handle_carries_what_the_medium_level_can_and_refuses_the_rest() {
         assert!(e.contains(layer), "{e}");
     }
 }
+
+#[test]
+fn the_plugin_resolves_its_own_file_names_against_the_hosts_folder() {
+    // FmCreateInfo::directory: a relative `filename` is the scene's folder's, so a host passes the fire's
+    // parameters as the scene wrote them, knowing none of their names; without the folder it is the working
+    // directory's, and a file not there is an error naming it.
+    use firemedium_loader::Context;
+    let p = plugin();
+    let file = PathBuf::from(fire_file());
+    let (dir, name) = (
+        file.parent().unwrap().to_path_buf(),
+        file.file_name().unwrap().to_str().unwrap().to_string(),
+    );
+    let mut list = fire_params();
+    list[0] = Param::string("filename", &name);
+    let there = Context {
+        directory: Some(dir.clone()),
+        ..Context::default()
+    };
+    let v = p.create_volume_with(&list, &there).unwrap();
+    let absolute = p.create_volume(&fire_params()).unwrap();
+    assert_eq!(v.info().bounds_min, absolute.info().bounds_min);
+    let e = p.create_volume(&list).unwrap_err().to_string();
+    assert!(e.contains(&name), "{e}");
+    // An absolute name stays as it is.
+    let v = p.create_volume_with(&fire_params(), &there).unwrap();
+    assert_eq!(v.info().bounds_max, absolute.info().bounds_max);
+}

@@ -223,6 +223,25 @@ macro_rules! choice {
 }
 pub(crate) use choice;
 
+/// Relative file names in `list` (the values of the tables' `Range::Path` rows) made `dir`'s.
+pub fn resolve_paths(list: &mut [Param], dir: &std::path::Path) {
+    let is_path = |name: &str| {
+        crate::volume::params::components()
+            .iter()
+            .flat_map(|c| c.params.iter())
+            .any(|p| p.name == name && p.range == Range::Path)
+    };
+    for p in list.iter_mut().filter(|p| is_path(&p.name)) {
+        if let Values::Strings(v) = &mut p.values {
+            for s in v.iter_mut().filter(|s| !s.is_empty()) {
+                if std::path::Path::new(s.as_str()).is_relative() {
+                    *s = dir.join(&*s).display().to_string();
+                }
+            }
+        }
+    }
+}
+
 /// The table's name of a choice's value.
 pub fn name_of<T: Choice + PartialEq>(v: T) -> &'static str {
     T::VALUES
@@ -242,6 +261,8 @@ pub enum Range {
     Above(f64),
     /// One of these strings.
     Choices(&'static [&'static str]),
+    /// File names: a relative one is the host's folder's (`FmCreateInfo::directory`: a scene's).
+    Path,
 }
 
 impl Range {
@@ -256,6 +277,7 @@ impl Range {
         };
         match self {
             Range::Any => String::new(),
+            Range::Path => "a file (relative: to the scene's folder)".to_string(),
             Range::Between(a, b) => format!("{} to {}", num(*a), num(*b)),
             Range::Above(a) => format!("> {}", num(*a)),
             Range::Choices(c) => c

@@ -204,6 +204,9 @@ pub struct Context {
     /// The host's thread pool (`None`: the plugin starts threads of its own for its builds): the volume's and its
     /// lights' parallel parts run as its tasks. The volume keeps it.
     pub pool: Option<ThreadPool>,
+    /// The folder the scene's relative file names are in (`None`: the working directory): the plugin resolves
+    /// its own file parameters against it.
+    pub directory: Option<PathBuf>,
 }
 
 impl std::fmt::Debug for Context {
@@ -214,6 +217,7 @@ impl std::fmt::Debug for Context {
             .field("frame", &self.frame)
             .field("shutter", &self.shutter)
             .field("pool", &self.pool.as_ref().map(|_| "the host's"))
+            .field("directory", &self.directory)
             .finish()
     }
 }
@@ -577,6 +581,18 @@ impl Plugin {
         let mut handle: *mut abi::FmVolume = std::ptr::null_mut();
         // (Boxed: the plugin keeps its address, and the volume keeps the box.)
         let pool = context.pool.clone().map(Box::new);
+        let directory =
+            match &context.directory {
+                Some(d) => Some(d.to_str().and_then(|s| CString::new(s).ok()).ok_or_else(
+                    || {
+                        Error::Buffer(format!(
+                            "the scene's folder {}: expected UTF-8 without NUL bytes",
+                            d.display()
+                        ))
+                    },
+                )?),
+                None => None,
+            };
         let api = self.inner.api();
         let status = with_c_params(params, |list, at_ptrs| {
             let info = abi::FmCreateInfo {
@@ -594,6 +610,7 @@ impl Plugin {
                 pool: pool.as_deref().map_or(std::ptr::null_mut(), |p| {
                     p as *const ThreadPool as *mut c_void
                 }),
+                directory: directory.as_ref().map_or(std::ptr::null(), |d| d.as_ptr()),
             };
             // SAFETY: `info`, `list`, `at_ptrs` (one entry per parameter) and everything they point to live until
             // after the call; `handle` is writable.

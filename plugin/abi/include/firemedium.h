@@ -183,6 +183,8 @@ typedef struct FmCreateInfo {
                                     * their own ("threads" still bounds how many parts a fan-out cuts). It must stay
                                     * callable while the volume and its lights live. */
     void *pool;                    /* handed back to parallel_for */
+    const char *directory;         /* the folder relative file names are in (a scene's), or NULL: the working
+                                    * directory; the plugin resolves its own file parameters against it */
 } FmCreateInfo;
 
 typedef struct FmParamInfo {

@@ -433,6 +433,10 @@ pub struct FmCreateInfo {
     pub parallel_for: Option<FmParallelFor>,
     /// The pool's own pointer, handed back to `parallel_for` (may be null).
     pub pool: *mut c_void,
+    /// The folder relative file names are in (a scene's: NUL-terminated UTF-8), or null: the process's working
+    /// directory. The plugin resolves its own file parameters (the `Range::Path` rows of its tables, docs/params.md)
+    /// against it, so a host need not know which of the fire's parameters name files.
+    pub directory: *const c_char,
 }
 
 /// A part of the plugin's build work ([`FmParallelFor`]): `task(data, index)`; it never unwinds into the host.
@@ -526,6 +530,7 @@ impl Default for FmCreateInfo {
             shutter: [0.0; 2],
             parallel_for: None,
             pool: core::ptr::null_mut(),
+            directory: core::ptr::null(),
         }
     }
 }
@@ -703,7 +708,7 @@ mod tests {
         // Four u32 fields, then one pointer per entry.
         assert_eq!(core::mem::size_of::<FmApi>(), 16 + 24 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
-        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 88);
+        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 96);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);

@@ -27,6 +27,17 @@ pub(super) unsafe extern "C" fn volume_create(
         let ci = unsafe { info.read_unaligned() };
         // SAFETY: the caller's contract for the parameter arrays (documented in FmCreateInfo).
         let mut list = unsafe { read_params(ci.params, ci.locations, ci.count) }?;
+        if !ci.directory.is_null() {
+            // SAFETY: non-null, a NUL-terminated string (the caller's contract).
+            let dir = unsafe { std::ffi::CStr::from_ptr(ci.directory) };
+            let dir = dir.to_str().map_err(|_| {
+                bad(format!(
+                    "volume_create: directory {:?}: expected UTF-8",
+                    dir.to_string_lossy()
+                ))
+            })?;
+            crate::params::resolve_paths(&mut list, std::path::Path::new(dir));
+        }
         // The host's context, where the scene does not set the same itself.
         let mut context = Vec::new();
         if ci.threads > 0 {

@@ -11,7 +11,7 @@ use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
 use firemedium_pbrt_parser::{Loc, Param, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 #[derive(Clone)]
@@ -714,10 +714,9 @@ impl Builder {
                         return Err(err(&p.loc, format!("nanovdb medium \"{name}\": \"{}\" and \"{key}\" both name a grid: give one (pbrt-v4 reads \"{}\")", p.name, p.name)));
                     }
                     let value = match (&p.values, p.ty.as_str()) {
-                        (firemedium_pbrt_parser::Values::Strings(v), _) => {
-                            let files = ["filename", "dataset", "densityfile", "temperaturefile", "speciesfiles", "embers"];
-                            Value::String(v.iter().map(|s| if files.contains(&p.name.as_str()) && !Path::new(s).is_absolute() { self.dir.join(s).display().to_string() } else { s.clone() }).collect())
-                        }
+                        // (File names as the scene wrote them: the plugin resolves its own against the scene's
+                        // folder, `Context::directory`.)
+                        (firemedium_pbrt_parser::Values::Strings(v), _) => Value::String(v.clone()),
                         (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
                         (firemedium_pbrt_parser::Values::Numbers(v), "integer") => Value::Integer(v.iter().map(|&x| x as i64).collect()),
                         (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
@@ -783,6 +782,7 @@ impl Builder {
                 let mut context = firemedium_loader::Context {
                     threads: self.threads.map(|n| n as u32),
                     frame: self.frame,
+                    directory: Some(self.dir.clone()),
                     ..Default::default()
                 };
                 // Motion blur: a velocity grid or embers (which move by their own velocities) see the camera's
