@@ -85,6 +85,9 @@ int main(int argc, char **argv) {
     bad = ok;
     bad.struct_size = 8;
     expect_failure("volume_create(unsized)", api->volume_create(&bad, &out));
+    bad = ok;
+    bad.directory = "scenes/\xff\xfe";
+    expect_failure("volume_create(a folder that is not UTF-8)", api->volume_create(&bad, &out));
     FmParamInfo small_info = {.struct_size = 4};
     expect_failure("param_info(unsized)", api->param_info(0, &small_info));
     expect_failure("volume_info(null volume)", api->volume_info(NULL, &vinfo));
