@@ -344,12 +344,9 @@ fn firemedium_simd_caps_the_kernel_and_refuses_what_it_cannot_honour() {
     );
 }
 
-#[test]
-fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
-    // A plugin (C, through the header) that forwards to the real one but reports every channel's XYZ weights
-    // doubled: the renderer must render exactly twice as bright through it. (It computed its own weights from a
-    // linked copy of the plugin's code before, so a plugin from another commit rendered silently wrong.)
-    let dir = tmp("colour");
+/// The plugin this test run built, and a C shim plugin (`tests/c/SRC`, built against the header) that forwards to it
+/// through `FIREMEDIUM_REAL_PLUGIN`: (real, shim).
+fn shim_plugin(dir: &Path, src: &str) -> (PathBuf, PathBuf) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
     let real = bin.parent().unwrap().join("deps").join(format!(
@@ -358,11 +355,11 @@ fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
         std::env::consts::DLL_SUFFIX
     ));
     assert!(real.is_file(), "{} not built", real.display());
-    let shim = dir.join("libdoubled.so");
+    let shim = dir.join(format!("lib{}", src.replace(".c", ".so")));
     let cc = Command::new("gcc")
-        .args(["-std=c99", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])
+        .args(["-std=c11", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])
         .arg(root.join("plugin/abi/include"))
-        .arg(root.join("tests/c/doubled_colour_plugin.c"))
+        .arg(root.join("tests/c").join(src))
         .arg("-o")
         .arg(&shim)
         .arg("-ldl")
@@ -373,10 +370,26 @@ fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
         "{}",
         String::from_utf8_lossy(&cc.stderr)
     );
-    let scene = format!(
-        "LookAt 0 -3 0.5  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 2\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"float sootscale\" 1e-6\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n",
+    (real, shim)
+}
+
+/// An 8 × 8 film looking at a 4³ soot fire at 1600 K inside a sphere, `spp` samples a pixel.
+fn small_fire_scene(spp: usize) -> String {
+    format!(
+        "LookAt 0 -3 0.5  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" {spp}\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"float sootscale\" 1e-6\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n",
         inline_grid(4, 1.0, 1600.0)
-    );
+    )
+}
+
+#[test]
+fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
+    // A plugin (C, through the header) that forwards to the real one but reports every channel's XYZ weights
+    // doubled: the renderer must render exactly twice as bright through it. (It computed its own weights from a
+    // linked copy of the plugin's code before, so a plugin from another commit rendered silently wrong.)
+    let dir = tmp("colour");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let (real, shim) = shim_plugin(&dir, "doubled_colour_plugin.c");
+    let scene = small_fire_scene(2);
     std::fs::write(dir.join("c.pbrt"), scene).unwrap();
     let plain = read_exr(&render(
         &dir.join("c.pbrt"),
@@ -420,32 +433,9 @@ fn a_plugin_call_that_fails_inside_a_render_is_counted_and_reported() {
     // render finishes and writes its image (the work is kept), but exits 1 naming how many calls failed and the
     // first one's message, and --stats counts them — never a silent black pixel.
     let dir = tmp("failing");
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
-    let real = bin.parent().unwrap().join("deps").join(format!(
-        "{}firemedium_plugin{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
-    let shim = dir.join("libfailing.so");
-    let cc = Command::new("gcc")
-        .args(["-std=c11", "-Wall", "-Werror", "-shared", "-fPIC", "-I"])
-        .arg(root.join("plugin/abi/include"))
-        .arg(root.join("tests/c/failing_plugin.c"))
-        .arg("-o")
-        .arg(&shim)
-        .arg("-ldl")
-        .output()
-        .unwrap();
-    assert!(
-        cc.status.success(),
-        "{}",
-        String::from_utf8_lossy(&cc.stderr)
-    );
-    let scene = format!(
-        "LookAt 0 -3 0.5  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 4\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" {} \"float sootscale\" 1e-6\nAttributeBegin\nMediumInterface \"f\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\nAttributeEnd\n",
-        inline_grid(4, 1.0, 1600.0)
-    );
+    let (real, shim) = shim_plugin(&dir, "failing_plugin.c");
+    let scene = small_fire_scene(4);
     std::fs::write(dir.join("f.pbrt"), scene).unwrap();
     let exr = dir.join("f.exr");
     let o = Command::new(&bin)
