@@ -295,14 +295,11 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> (DVec3, DVec3, f64) {
-        match self.advected(time) {
-            Some(a) if self.layers.refraction.is_none() => {
-                self.fault_check();
-                let te = a.integrate(ray, l, t);
-                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
-                (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
-            }
-            _ => self.integrate_exit_fire(ray, l, t),
+        if self.layers.refraction.is_none() && self.advected(time).is_some() {
+            let te = self.integrate_at_fire(ray, time, l, t);
+            (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
+        } else {
+            self.integrate_exit_fire(ray, l, t)
         }
     }
     /// As [`transmittance`](Self::transmittance) at time `time`.
