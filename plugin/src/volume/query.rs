@@ -20,43 +20,36 @@ impl FireVolume {
     ) -> Answer {
         let at = time.unwrap_or(0.0);
         let (cut, hit) = self.ember_cut(ray, at);
+        // The fire as it stands at `time` (motion blur), looked up once for the whole query.
+        let adv = time.and_then(|time| self.advected(time));
+        let adv = adv.as_ref();
         match want {
             Want::Radiance { step } => {
-                let te = match (step, time) {
-                    (Some(s), _)
+                let te = match step {
+                    Some(s)
                         if self.estimator.integrator == Integrator::March
                             && s > self.estimator.step =>
                     {
-                        self.stepped_fire(&cut, at, s, l, t)
+                        self.stepped_fire(adv, &cut, s, l, t)
                     }
-                    (_, Some(time)) => self.integrate_at_fire(&cut, time, l, t),
-                    (_, None) => self.integrate_fire(&cut, l, t),
+                    _ => self.integrate_fire(adv, &cut, l, t),
                 };
                 Answer::Ends(self.ember_seen(hit, at, Some(l), t).unwrap_or(te))
             }
             Want::Exit => {
-                let exit = match time {
-                    Some(time) => self.integrate_exit_at_fire(&cut, time, l, t),
-                    None => self.integrate_exit_fire(&cut, l, t),
-                };
+                let exit = self.integrate_exit_fire(adv, &cut, l, t);
                 Answer::Exits(match self.ember_seen(hit, at, Some(l), t) {
                     Some(th) => (ray.o + ray.d * th, exit.1, th),
                     None => exit,
                 })
             }
             Want::Transmittance => {
-                match time {
-                    Some(time) => self.transmittance_at_fire(&cut, time, t),
-                    None => self.transmittance_fire(&cut, t),
-                }
+                self.transmittance_fire(adv, &cut, t);
                 self.ember_seen(hit, at, None, t);
                 Answer::Transmitted
             }
             Want::Scatter => {
-                let ev = match time {
-                    Some(time) => self.sample_scatter_at_fire(&cut, time, l, t),
-                    None => self.sample_scatter_fire(&cut, l, t),
-                };
+                let ev = self.sample_scatter_fire(adv, &cut, l, t);
                 Answer::Event(self.ember_event(ev, hit, at, l, t))
             }
         }
@@ -122,22 +115,25 @@ impl FireVolume {
     pub fn sample_scatter_at(&self, ray: &Ray, time: f64, l: &mut [f64], w: &mut [f64]) -> Event {
         self.query(ray, Some(time), Want::Scatter, l, w).event()
     }
-    /// The march at `step` along a cut ray at `time`, thick lines folded in.
-    fn stepped_fire(&self, cut: &Ray, time: f64, step: f64, l: &mut [f64], t: &mut [f64]) -> f64 {
+    /// The march at `step` along a cut ray in the fire as `adv` has moved it, thick lines folded in.
+    fn stepped_fire(
+        &self,
+        adv: Option<&motion::Advected>,
+        cut: &Ray,
+        step: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
         self.fault_check();
-        match self.advected(time) {
+        let te = match adv {
             Some(a) => {
                 let map = |p: DVec3| a.displaced(p);
-                let te = march::integrate_stepped(self, &a, Some(&map), cut, step, l, t);
-                self.thick_lines(Some(&a), cut, cut.t1, Some(l), t, lines::Fold::Add);
-                te
+                march::integrate_stepped(self, a, Some(&map), cut, step, l, t)
             }
-            None => {
-                let te = march::integrate_stepped(self, self, None, cut, step, l, t);
-                self.thick_lines(None, cut, cut.t1, Some(l), t, lines::Fold::Add);
-                te
-            }
-        }
+            None => march::integrate_stepped(self, self, None, cut, step, l, t),
+        };
+        self.thick_lines(adv, cut, cut.t1, Some(l), t, lines::Fold::Add);
+        te
     }
     /// `ray` up to the first ember it meets at `time`, and that ember's (parameter, index).
     pub(super) fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
@@ -191,11 +187,21 @@ impl FireVolume {
             _ => ev,
         }
     }
-    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`; returns the exit parameter.
-    pub(super) fn integrate_fire(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
+    /// Emitted radiance `l` and transmittance `t` (per channel) along `ray`, in the fire as `adv` has moved it
+    /// (`None`: as the grids are); returns the exit parameter.
+    fn integrate_fire(
+        &self,
+        adv: Option<&motion::Advected>,
+        ray: &Ray,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
         self.fault_check();
-        let te = march::integrate(self, ray, l, t);
-        self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
+        let te = match adv {
+            Some(a) => a.integrate(ray, l, t),
+            None => march::integrate(self, ray, l, t),
+        };
+        self.thick_lines(adv, ray, ray.t1, Some(l), t, lines::Fold::Add);
         te
     }
     /// The thick lines' part of a result along `ray` up to `end` (see [`lines`]), in the medium as `adv` sees it.
@@ -233,17 +239,19 @@ impl FireVolume {
         self.thick_lines(adv, ray, end, Some(l), w, lines::Fold::Scale);
         ev
     }
-    /// As [`integrate`](Self::integrate), and where the ray leaves: (point, unit direction, parameter). With
-    /// refraction on, the ray curves through the index field and leaves bent ([`crate::refraction::march`]); the
-    /// parameter is then the entry parameter plus arc length / |d|.
-    pub(super) fn integrate_exit_fire(
+    /// As [`integrate_fire`](Self::integrate_fire), and where the ray leaves: (point, unit direction,
+    /// parameter). With refraction on, the ray curves through the index field and leaves bent
+    /// (`volume/bent.rs`), the parameter then the entry parameter plus arc length / |d| — along the grids as they
+    /// are: refraction's curved march ignores motion.
+    fn integrate_exit_fire(
         &self,
+        adv: Option<&motion::Advected>,
         ray: &Ray,
         l: &mut [f64],
         t: &mut [f64],
     ) -> (DVec3, DVec3, f64) {
         let Some(rf) = &self.layers.refraction else {
-            let te = self.integrate_fire(ray, l, t);
+            let te = self.integrate_fire(adv, ray, l, t);
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
         self.fault_check();
@@ -252,81 +260,35 @@ impl FireVolume {
         self.thick_lines(None, ray, ray.t1, Some(l), t, lines::Fold::Add);
         exit
     }
-
-    /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend).
-    pub(super) fn transmittance_fire(&self, ray: &Ray, t: &mut [f64]) {
-        let mut sc = Scratch::new(self.channels());
-        integrate::transmittance(self, ray, self.estimator.integrator, &mut sc, t);
-        self.thick_lines(None, ray, ray.t1, None, t, lines::Fold::Add);
-    }
-    /// The first real scattering event (see [`Event`]); `l` gets the emission before it, `w` its weights.
-    pub(super) fn sample_scatter_fire(&self, ray: &Ray, l: &mut [f64], w: &mut [f64]) -> Event {
-        let mut sc = Scratch::new(self.channels());
-        let ev = integrate::sample_scatter(self, ray, &mut sc, l, w);
-        self.scatter_lines(None, ray, ev, l, w)
-    }
-
-    /// As [`integrate`](Self::integrate) at time `time` (frames from the grids' time): with motion blur the
-    /// fire is looked up where the velocity carried it from (`motion`). Without motion blur, or at time 0, the
-    /// same as `integrate`.
-    pub(super) fn integrate_at_fire(
-        &self,
-        ray: &Ray,
-        time: f64,
-        l: &mut [f64],
-        t: &mut [f64],
-    ) -> f64 {
-        match self.advected(time) {
-            Some(a) => {
-                self.fault_check();
-                let te = a.integrate(ray, l, t);
-                self.thick_lines(Some(&a), ray, ray.t1, Some(l), t, lines::Fold::Add);
-                te
+    /// Transmittance only (along the straight ray, also with refraction on: shadow rays do not bend), in the fire
+    /// as `adv` has moved it.
+    fn transmittance_fire(&self, adv: Option<&motion::Advected>, ray: &Ray, t: &mut [f64]) {
+        match adv {
+            Some(a) => a.transmittance(ray, t),
+            None => {
+                let mut sc = Scratch::new(self.channels());
+                integrate::transmittance(self, ray, self.estimator.integrator, &mut sc, t);
             }
-            None => self.integrate_fire(ray, l, t),
         }
+        self.thick_lines(adv, ray, ray.t1, None, t, lines::Fold::Add);
     }
-    /// As [`integrate_exit`](Self::integrate_exit) at time `time`. (Refraction's curved march follows the
-    /// grids' time: a refracting volume ignores `time` here.)
-    pub(super) fn integrate_exit_at_fire(
+    /// The first real scattering event (see [`Event`]) in the fire as `adv` has moved it; `l` gets the emission
+    /// before it, `w` its weights.
+    fn sample_scatter_fire(
         &self,
+        adv: Option<&motion::Advected>,
         ray: &Ray,
-        time: f64,
-        l: &mut [f64],
-        t: &mut [f64],
-    ) -> (DVec3, DVec3, f64) {
-        if self.layers.refraction.is_none() && self.advected(time).is_some() {
-            let te = self.integrate_at_fire(ray, time, l, t);
-            (ray.o + ray.d * te, ray.d.normalize_or_zero(), te)
-        } else {
-            self.integrate_exit_fire(ray, l, t)
-        }
-    }
-    /// As [`transmittance`](Self::transmittance) at time `time`.
-    pub(super) fn transmittance_at_fire(&self, ray: &Ray, time: f64, t: &mut [f64]) {
-        match self.advected(time) {
-            Some(a) => {
-                a.transmittance(ray, t);
-                self.thick_lines(Some(&a), ray, ray.t1, None, t, lines::Fold::Add);
-            }
-            None => self.transmittance_fire(ray, t),
-        }
-    }
-    /// As [`sample_scatter`](Self::sample_scatter) at time `time`.
-    pub(super) fn sample_scatter_at_fire(
-        &self,
-        ray: &Ray,
-        time: f64,
         l: &mut [f64],
         w: &mut [f64],
     ) -> Event {
-        match self.advected(time) {
-            Some(a) => {
-                let ev = a.sample_scatter(ray, l, w);
-                self.scatter_lines(Some(&a), ray, ev, l, w)
+        let ev = match adv {
+            Some(a) => a.sample_scatter(ray, l, w),
+            None => {
+                let mut sc = Scratch::new(self.channels());
+                integrate::sample_scatter(self, ray, &mut sc, l, w)
             }
-            None => self.sample_scatter_fire(ray, l, w),
-        }
+        };
+        self.scatter_lines(adv, ray, ev, l, w)
     }
     pub(super) fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {
         self.layers.blur.as_ref().and_then(|b| b.at(self, time))
