@@ -1,5 +1,5 @@
-//! `firemedium bench …` from the command line, at tiny sizes: each runs, writes what it says, and its numbers
-//! are sane. (The measurements themselves are in docs/RESULTS.md; no timing is asserted here.)
+//! `firemedium-bench …` (what `firemedium bench …` runs) from the command line, at tiny sizes: each runs, writes
+//! what it says, and its numbers are sane. (The measurements themselves are in docs/RESULTS.md; no timing is asserted here.)
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 mod scratch;
 
 fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(env!("CARGO_BIN_EXE_firemedium-bench"))
         .args(args)
         .output()
         .unwrap()
@@ -25,9 +25,56 @@ fn scenes() -> PathBuf {
 
 #[test]
 fn stability_passes_every_case() {
-    let text = ok(&run(&["bench", "stability"]));
+    let text = ok(&run(&["stability"]));
     assert!(text.contains(" cases, 0 failed"), "{text}");
     assert!(!text.contains("FAIL"), "{text}");
+    // `firemedium bench …` runs this program: the command beside it (a workspace build puts them together).
+    let bench = PathBuf::from(env!("CARGO_BIN_EXE_firemedium-bench"));
+    let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
+    assert!(
+        firemedium.is_file(),
+        "{} not built (cargo build --release -p firemedium)",
+        firemedium.display()
+    );
+    let o = Command::new(&firemedium)
+        .args(["bench", "stability"])
+        .output()
+        .unwrap();
+    let forwarded = ok(&o);
+    let cases = |t: &str| t.lines().filter(|l| l.ends_with("| pass |")).count();
+    assert!(cases(&text) >= 40, "{text}");
+    assert_eq!(cases(&forwarded), cases(&text), "{forwarded}");
+    // Its errors are the program's, with the usage a user types.
+    let o = Command::new(&firemedium)
+        .args(["bench", "bogus"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("'bogus'") && e.contains("usage: firemedium bench <COMMAND>"),
+        "{e}"
+    );
+}
+
+#[test]
+fn without_its_benchmark_program_firemedium_bench_says_where_it_looked() {
+    let dir = scratch::Scratch::new("bench", "alone");
+    let bench = PathBuf::from(env!("CARGO_BIN_EXE_firemedium-bench"));
+    let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
+    let alone = dir.join(firemedium.file_name().unwrap());
+    std::fs::copy(&firemedium, &alone).unwrap_or_else(|e| panic!("{}: {e}", firemedium.display()));
+    let o = Command::new(&alone)
+        .args(["bench", "stability"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&dir.join("firemedium-bench").display().to_string())
+            && e.contains("cargo build --release -p firemedium-bench"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -36,7 +83,6 @@ fn error_vs_time_writes_csv_svg_and_png() {
     let prefix = dir.join("evt");
     let vdb = scenes().join("campfire/campfire.vdb");
     let text = ok(&run(&[
-        "bench",
         "error-vs-time",
         "--dataset",
         vdb.to_str().unwrap(),
@@ -92,7 +138,6 @@ fn error_vs_time_writes_csv_svg_and_png() {
 fn perf_and_components_run_small() {
     let vdb = scenes().join("campfire/campfire.vdb");
     let text = ok(&run(&[
-        "bench",
         "perf",
         "--dataset",
         vdb.to_str().unwrap(),
@@ -149,7 +194,6 @@ fn perf_and_components_run_small() {
     // their errors against the sub-pixel reference agree (a mirrored camera would not); 16 zsobol samples
     // per pixel are closer to it than one at the centre.
     let text = ok(&run(&[
-        "bench",
         "perf",
         "--dataset",
         vdb.to_str().unwrap(),
@@ -173,11 +217,6 @@ fn perf_and_components_run_small() {
     );
     assert!(text.contains("two threads against one"), "{text}");
     let torch = scenes().join("spectroscopy/torch.vdb");
-    let text = ok(&run(&[
-        "bench",
-        "components",
-        "--dataset",
-        torch.to_str().unwrap(),
-    ]));
+    let text = ok(&run(&["components", "--dataset", torch.to_str().unwrap()]));
     assert_eq!(text.matches("**total**").count(), 4, "{text}");
 }

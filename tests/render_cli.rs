@@ -344,6 +344,28 @@ fn firemedium_simd_caps_the_kernel_and_refuses_what_it_cannot_honour() {
     );
 }
 
+#[test]
+fn the_command_holds_none_of_the_plugins_code() {
+    // The renderer reaches the fire through the loader and the C ABI only: the plugin's code is in the plugin,
+    // not linked into the command (the readers `info` and `gen` share with it are the dataset crate's). Rust's
+    // mangled symbols carry their crate's name with its length first, so a function of the plugin's crate linked
+    // in would leave "17firemedium_plugin" in the symbol table (the entry point's name "firemedium_plugin_entry",
+    // which the loader looks up, is not mangled).
+    let exe = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let bytes = std::fs::read(&exe).unwrap_or_else(|e| panic!("{}: {e}", exe.display()));
+    let has = |s: &[u8]| bytes.windows(s.len()).any(|w| w == s);
+    assert!(
+        has(b"18firemedium_dataset") && has(b"15firemedium_core"),
+        "{}: no mangled symbols of the crates it does link (stripped?)",
+        exe.display()
+    );
+    assert!(
+        !has(b"17firemedium_plugin"),
+        "{} links the plugin's crate",
+        exe.display()
+    );
+}
+
 /// The plugin this test run built, and a C shim plugin (`tests/c/SRC`, built against the header) that forwards to it
 /// through `FIREMEDIUM_REAL_PLUGIN`: (real, shim).
 fn shim_plugin(dir: &Path, src: &str) -> (PathBuf, PathBuf) {
@@ -1722,7 +1744,7 @@ fn moving_blob(dir: &Path) {
         }
     }
     let (zero, vy) = (vec![0f32; n * n * n], vec![4.8f32; n * n * n]);
-    let bytes = firemedium_plugin::dataset::vdb::write_with_vectors(
+    let bytes = firemedium_dataset::vdb::write_with_vectors(
         &[("density", [n; 3], &d), ("temperature", [n; 3], &t)],
         &[("vel", [n; 3], [&zero, &vy, &zero])],
         glam::DVec3::ZERO,

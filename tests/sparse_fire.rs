@@ -28,8 +28,8 @@ fn out_dir(name: &str) -> scratch::Scratch {
 fn blob(
     o: [i32; 3],
 ) -> (
-    Vec<firemedium_plugin::dataset::vdb::VdbLeaf>,
-    Vec<firemedium_plugin::dataset::vdb::VdbLeaf>,
+    Vec<firemedium_dataset::vdb::VdbLeaf>,
+    Vec<firemedium_dataset::vdb::VdbLeaf>,
 ) {
     let (mut d, mut t) = (Vec::new(), Vec::new());
     for lz in 0..3 {
@@ -90,12 +90,12 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
     let voxel = glam::DVec3::splat(0.01);
     let (d0, t0) = blob([0, 0, 0]);
     let (d1, t1) = blob([2040, 2040, 2040]);
-    let single = firemedium_plugin::dataset::vdb::write_sparse(
+    let single = firemedium_dataset::vdb::write_sparse(
         &[("density", d0.clone()), ("temperature", t0.clone())],
         glam::DVec3::ZERO,
         voxel,
     );
-    let far = firemedium_plugin::dataset::vdb::write_sparse(
+    let far = firemedium_dataset::vdb::write_sparse(
         &[
             ("density", [d0, d1].concat()),
             ("temperature", [t0, t1].concat()),
@@ -175,7 +175,7 @@ fn two_far_leaves_cost_what_two_leaves_cost() {
     let dir = out_dir("two-far-leaves");
     let far = 32_768;
     let leaf = |o: [i32; 3], v: f32| (o, [u64::MAX; 8], vec![v; 512]);
-    let file = firemedium_plugin::dataset::vdb::write_sparse(
+    let file = firemedium_dataset::vdb::write_sparse(
         &[
             ("density", vec![leaf([0; 3], 1e-3), leaf([far; 3], 1e-3)]),
             (
@@ -307,7 +307,7 @@ fn constant_tiles_stay_shared_in_the_march_lattice() {
             }
         }
     }
-    let file = firemedium_plugin::dataset::vdb::write_tiled(
+    let file = firemedium_dataset::vdb::write_tiled(
         &[("density", vec![], d), ("temperature", vec![], t)],
         glam::DVec3::ZERO,
         glam::DVec3::splat(1.0 / 1024.0),
@@ -375,7 +375,7 @@ fn a_file_of_many_nodes_reads_in_time_that_follows_its_nodes() {
             }
         }
     }
-    let file = firemedium_plugin::dataset::vdb::write_tiled(
+    let file = firemedium_dataset::vdb::write_tiled(
         &[("density", d, tiles)],
         glam::DVec3::ZERO,
         glam::DVec3::splat(0.01),

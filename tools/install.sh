@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs firemedium under a prefix: the command in PREFIX/bin, the plugin it loads in PREFIX/lib/firemedium (where
+# Installs firemedium under a prefix: the command (and firemedium-bench, which `firemedium bench` runs) in PREFIX/bin, the plugin it loads in PREFIX/lib/firemedium (where
 # the command looks for it, relative to itself), the C header in PREFIX/include. Builds the release first unless
 # --no-build (then it installs what target/release holds). Then `firemedium` works from any directory once
 # PREFIX/bin is on the PATH.
@@ -23,7 +23,7 @@ esac
 exe="firemedium"
 [[ -f target/release/firemedium.exe ]] && exe="firemedium.exe"
 if [[ $build == 1 ]]; then
-    cargo build --release -p firemedium -p firemedium-plugin
+    cargo build --release -p firemedium -p firemedium-plugin -p firemedium-bench
 fi
 # (After `cargo test` alone the plugin is only in target/release/deps.)
 libpath="target/release/$lib"
@@ -42,6 +42,10 @@ install_file() {
     mv -f "$2.tmp.$$" "$2"
 }
 install_file "target/release/$exe" "$prefix/bin/$exe" 755
+bench="firemedium-bench${exe#firemedium}"
+if [[ -f "target/release/$bench" ]]; then
+    install_file "target/release/$bench" "$prefix/bin/$bench" 755
+fi
 install_file "$libpath" "$prefix/lib/firemedium/$lib" 755
 install_file plugin/abi/include/firemedium.h "$prefix/include/firemedium.h" 644
 echo "installed $prefix/bin/$exe, $prefix/lib/firemedium/$lib and $prefix/include/firemedium.h"

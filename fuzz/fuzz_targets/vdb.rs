@@ -1,7 +1,7 @@
 //! Fuzz target: the vdb reader must return Ok or Err for any bytes, never panic or allocate past the cap.
 #![no_main]
 
-use firemedium_plugin::dataset::{Dataset, Format, LoadOptions};
+use firemedium_dataset::{Dataset, Format, LoadOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

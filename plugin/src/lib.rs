@@ -26,19 +26,18 @@ pub use firemedium_core::{
     blackbody, ciddor, cie, constants, quadrature, rgb_spectrum, rng, soot, species, spectrum,
 };
 
-mod alloc;
+use firemedium_dataset::alloc;
 pub mod dataset;
 mod embers;
-pub mod error;
 #[allow(unsafe_code)]
 // The C ABI: the plugin's one module with `unsafe`, every block with a `// SAFETY:` line.
 pub mod export;
-pub mod grid;
+pub use firemedium_dataset::grid;
 pub mod light;
 pub mod majorant;
-mod par;
+use firemedium_dataset::par;
 pub mod params;
 pub mod refraction;
 pub mod volume;
 
-pub use error::Error;
+pub use firemedium_dataset::Error;

@@ -326,15 +326,7 @@ pub struct ParamReader<'a> {
     used: RefCell<Vec<bool>>,
 }
 
-/// A number as a person reads it: plain, or in exponent form when plain would take more than a dozen digits
-/// (`1e-320`, not 320 zeros).
-pub(crate) fn short(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}
+pub(crate) use firemedium_dataset::short;
 
 fn levenshtein(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();

@@ -26,6 +26,14 @@ pub fn check(what: &str, count: u64, size: u64, budget: u64) -> Result<(), Strin
     }
 }
 
+/// Peak resident memory of this process (VmHWM), bytes, where /proc tells.
+pub fn peak_rss() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1113,7 +1113,7 @@ pub fn write_frame_as(
         Style::Houdini => f
             .temperature
             .iter()
-            .map(|t| t / firemedium_plugin::dataset::HOUDINI_KELVIN as f32)
+            .map(|t| t / firemedium_dataset::HOUDINI_KELVIN as f32)
             .collect(),
         Style::Blender => f
             .temperature
@@ -1153,7 +1153,7 @@ pub fn write_frame_as(
         ));
     }
     let [vx, vy, vz] = &f.velocity;
-    let vectors: Vec<firemedium_plugin::dataset::vdb::VdbVector> = if velocity {
+    let vectors: Vec<firemedium_dataset::vdb::VdbVector> = if velocity {
         let name = match style {
             Style::Kelvin | Style::Houdini => "vel",
             Style::Blender | Style::Embergen => "velocity",
@@ -1162,7 +1162,7 @@ pub fn write_frame_as(
     } else {
         Vec::new()
     };
-    let bytes = firemedium_plugin::dataset::vdb::write_with_vectors(
+    let bytes = firemedium_dataset::vdb::write_with_vectors(
         &grids,
         &vectors,
         f.p0,

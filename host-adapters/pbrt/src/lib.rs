@@ -19,6 +19,7 @@
 // One `unsafe` call, allowed where it is made: loading the plugin (`render::scene`).
 #![deny(unsafe_code)]
 
+pub mod args;
 pub mod budget;
 pub mod gen;
 pub mod imageio;

@@ -26,8 +26,40 @@ pub fn printable(s: &str, max: usize) -> String {
     out
 }
 
+/// clap's error as one line: its first paragraph (the problem, and the arguments it names on the lines below)
+/// and its usage line — "the following required arguments were not provided: <SCENE> <REFERENCE> (usage:
+/// firemedium compare <SCENE> <REFERENCE> <IMAGES>...)".
+pub fn one_line(text: &str) -> String {
+    let mut lines = text.lines();
+    let mut out: Vec<&str> = Vec::new();
+    for l in lines.by_ref() {
+        if l.trim().is_empty() {
+            break;
+        }
+        out.push(l.trim());
+    }
+    let mut msg = out.join(" ");
+    msg = msg.trim_start_matches("error: ").to_string();
+    if msg.is_empty() {
+        msg = "invalid arguments".into();
+    }
+    if let Some(usage) = lines.find_map(|l| l.trim().strip_prefix("Usage: ")) {
+        msg += &format!(" (usage: {usage}; see --help)");
+    }
+    msg
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn clap_errors_become_one_line_naming_the_arguments_and_the_usage() {
+        let text = "error: the following required arguments were not provided:\n  <SCENE>\n  <REFERENCE>\n\nUsage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            super::one_line(text),
+            "the following required arguments were not provided: <SCENE> <REFERENCE> (usage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...; see --help)"
+        );
+    }
+
     use super::printable;
 
     #[test]

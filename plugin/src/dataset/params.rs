@@ -26,8 +26,7 @@ pub(crate) struct Motion {
 /// The velocity channels' names in a dataset.
 const VELOCITY: [&str; 3] = ["velocity.x", "velocity.y", "velocity.z"];
 
-/// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
-pub const HOUDINI_KELVIN: f64 = 5000.0;
+use super::HOUDINI_KELVIN;
 
 /// `source`: the tool whose conventions the grids follow.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,7 +79,7 @@ fn preset_grid(
     let grids = super::list_grids(std::path::Path::new(file), opts)?;
     match names.iter().find(|n| grids.iter().any(|g| g.name == **n)) {
         Some(n) => Ok(n.to_string()),
-        None => Err(super::sparse::missing_grid(
+        None => Err(super::missing_grid(
             file,
             &names.join("' or '"),
             grids.iter().map(|g| g.name.as_str()),

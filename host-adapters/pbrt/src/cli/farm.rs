@@ -140,7 +140,7 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
     let frames = &a.frames.0;
     let outs: Vec<PathBuf> = frames
         .iter()
-        .map(|&f| firemedium_plugin::dataset::frame_path(&output, Some(f)))
+        .map(|&f| firemedium_dataset::frame_path(&output, Some(f)))
         .collect::<Result<_, _>>()
         .map_err(|e| (2, e.to_string()))?;
     if frames.len() > 1 && outs[0] == output {

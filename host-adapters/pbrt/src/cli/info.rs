@@ -6,8 +6,9 @@
 //! exits with status 1.
 
 use clap::Args;
-use firemedium_plugin::dataset::{
-    self, AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Policy, RawCoords, RawValue,
+use firemedium_dataset::{
+    self as dataset, AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Policy, RawCoords,
+    RawValue,
 };
 use glam::DVec3;
 use serde::Serialize;
@@ -115,7 +116,7 @@ fn looks_like(entries: &[dataset::GridEntry], ds: &Dataset) -> Option<(String, S
             format!(
                 "Houdini Pyro's grids, the temperature relative (up to {:.2}): \"string source\" \"houdini\" reads it as {} K per unit",
                 t.stats.max,
-                firemedium_plugin::dataset::HOUDINI_KELVIN
+                firemedium_dataset::HOUDINI_KELVIN
             ),
         ));
     }
@@ -158,7 +159,7 @@ struct SampleInfo {
 /// Runs `info`: `Ok(text)`, or `Err((exit status, message))`.
 pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
     let bad_arg = |m: String| (2u8, m);
-    let bad_file = |e: firemedium_plugin::Error| (1u8, e.to_string());
+    let bad_file = |e: firemedium_dataset::Error| (1u8, e.to_string());
     let opts = LoadOptions {
         format: args
             .format

@@ -9,7 +9,7 @@
 //! interrupted (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP); one line on stderr, never a panic.
 
 #![forbid(unsafe_code)]
-mod args;
+use firemedium::args;
 mod bench;
 mod compare;
 mod diff;
@@ -56,8 +56,14 @@ enum Command {
     Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
     Gen(gen::GenArgs),
-    /// Benchmarks: stability (stiff and extreme cases), error-vs-time, perf (the paper's workload), components.
-    Bench(bench::BenchArgs),
+    /// Benchmarks: stability (stiff and extreme cases), error-vs-time, perf (the paper's workload), components,
+    /// fire-light — the program firemedium-bench beside this one (`firemedium bench --help` lists them).
+    #[command(disable_help_flag = true)]
+    Bench {
+        /// The benchmark and its arguments, passed to firemedium-bench.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -75,7 +81,10 @@ fn main() -> ExitCode {
                 );
                 return ExitCode::from(2);
             }
-            eprintln!("firemedium: {}", one_line(&e.render().to_string()));
+            eprintln!(
+                "firemedium: {}",
+                firemedium::term::one_line(&e.render().to_string())
+            );
             return ExitCode::from(2);
         }
     };
@@ -89,7 +98,12 @@ fn main() -> ExitCode {
         Command::Farm(args) => farm::run(&args),
         Command::Tonemap(args) => tonemap::run(&args),
         Command::Gen(args) => gen::run(&args),
-        Command::Bench(args) => bench::run(&args),
+        Command::Bench { args } => {
+            return bench::forward(&args).unwrap_or_else(|(status, msg)| {
+                eprintln!("firemedium: {msg}");
+                ExitCode::from(status)
+            })
+        }
     };
     match result {
         Ok(text) => {
@@ -105,40 +119,5 @@ fn main() -> ExitCode {
             eprintln!("firemedium: {}", msg.replace('\n', " "));
             ExitCode::from(status)
         }
-    }
-}
-
-/// clap's error as one line: its first paragraph (the problem, and the arguments it names on the lines below)
-/// and its usage line — "the following required arguments were not provided: <SCENE> <REFERENCE> (usage:
-/// firemedium compare <SCENE> <REFERENCE> <IMAGES>...)".
-fn one_line(text: &str) -> String {
-    let mut lines = text.lines();
-    let mut out: Vec<&str> = Vec::new();
-    for l in lines.by_ref() {
-        if l.trim().is_empty() {
-            break;
-        }
-        out.push(l.trim());
-    }
-    let mut msg = out.join(" ");
-    msg = msg.trim_start_matches("error: ").to_string();
-    if msg.is_empty() {
-        msg = "invalid arguments".into();
-    }
-    if let Some(usage) = lines.find_map(|l| l.trim().strip_prefix("Usage: ")) {
-        msg += &format!(" (usage: {usage}; see --help)");
-    }
-    msg
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn clap_errors_become_one_line_naming_the_arguments_and_the_usage() {
-        let text = "error: the following required arguments were not provided:\n  <SCENE>\n  <REFERENCE>\n\nUsage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...\n\nFor more information, try '--help'.\n";
-        assert_eq!(
-            super::one_line(text),
-            "the following required arguments were not provided: <SCENE> <REFERENCE> (usage: firemedium compare <SCENE> <REFERENCE> <IMAGES>...; see --help)"
-        );
     }
 }

@@ -309,8 +309,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         let Some(f) = frame else {
             return Ok(outputs(&a.scene, film, Some(&exr)));
         };
-        let patterned = firemedium_plugin::dataset::frame_path(&exr, Some(f))
-            .map_err(|e| (2, e.to_string()))?;
+        let patterned =
+            firemedium_dataset::frame_path(&exr, Some(f)).map_err(|e| (2, e.to_string()))?;
         if patterned == exr && a.frames.as_ref().is_some_and(|v| v.0.len() > 1) {
             return Err((
                 2,
@@ -610,7 +610,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 st.plugin_failures.1.as_deref().unwrap_or("no message")
             );
         }
-        if let Some(bytes) = crate::bench::perf::peak_rss() {
+        if let Some(bytes) = firemedium::budget::peak_rss() {
             out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
         }
     }

@@ -93,7 +93,7 @@ pub fn read_header(file: &str, bytes: &[u8]) -> Result<Header, Error> {
 }
 
 /// [`read_header`] from bytes in memory or an open file (whose grids are skipped, not read).
-pub(crate) fn read_header_from(file: &str, src: Bytes) -> Result<Header, Error> {
+pub fn read_header_from(file: &str, src: Bytes) -> Result<Header, Error> {
     let mut c = Cursor::over(file, src);
     let magic = c.i64("the OpenVDB magic number")?;
     if magic != MAGIC {
@@ -583,19 +583,14 @@ fn find_grid<'h>(header: &'h Header, name: &str) -> Option<(&'h GridInfo, Option
 }
 
 /// The `velocitygrid` that finds the velocity under any of [`VELOCITY_NAMES`].
-pub(crate) const AUTO_VELOCITY: &str = "auto";
+pub const AUTO_VELOCITY: &str = "auto";
 /// The velocity's names in the tools' files, in the order `auto` tries them.
-pub(crate) const VELOCITY_NAMES: [&str; 3] = ["vel", "v", "velocity"];
+pub const VELOCITY_NAMES: [&str; 3] = ["vel", "v", "velocity"];
 
 /// Reads the float grids `names` into bricks over the union of their active boxes. From a file, only their
 /// descriptors and trees are read (the grids it does not name are skipped), their leaf values streamed as they
 /// are placed.
-pub(crate) fn read(
-    file: &str,
-    src: Bytes,
-    names: &[&str],
-    max_bytes: u64,
-) -> Result<Vec<Loaded>, Error> {
+pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Vec<Loaded>, Error> {
     let header = read_header_from(file, src.clone())?;
     let mut infos = Vec::new();
     for &name in names {

@@ -352,7 +352,8 @@ fn sparse_files_are_streamed_by_offset_as_they_decode_from_memory() {
         "{e_file}"
     );
     // NanoVDB alike: the grids named are read by offset (its density and temperature, each alone).
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/valid/nvdb/plume48.nvdb");
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
     let nano = std::fs::read(&path).unwrap();
     for name in ["density", "temperature"] {
         let a = Dataset::load(&[ChannelSource::new(name, &path)], &opts).unwrap();

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 /// One particle as its file gives it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Particle {
+pub struct Particle {
     /// Position (medium units).
     pub p: DVec3,
     /// Velocity (medium units per second).
@@ -27,7 +27,7 @@ pub(crate) struct Particle {
 }
 
 /// The most particles a file may hold (the acceleration grid indexes them with u32).
-pub(crate) const MAX_PARTICLES: usize = 1 << 28;
+pub const MAX_PARTICLES: usize = 1 << 28;
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Field {
@@ -186,7 +186,7 @@ fn particles(file: &str, n: usize, max_bytes: u64) -> Result<Vec<Particle>, Erro
 }
 
 /// The particles of a PLY or CSV file's bytes (PLY when they begin with `ply`).
-pub(crate) fn parse(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error> {
+pub fn parse(file: &str, bytes: &[u8], max_bytes: u64) -> Result<Vec<Particle>, Error> {
     if bytes.starts_with(b"ply") {
         ply(file, bytes, max_bytes)
     } else {

@@ -22,7 +22,7 @@
 /// ⌊x⌋ without the libm call `f64::floor` makes on baseline x86-64 (no rounding instruction before SSE4.1),
 /// exact for |x| < 2⁶³ — grid coordinates, which lookups have checked to lie within a few voxels of the grid.
 #[inline(always)]
-pub(crate) fn floor(x: f64) -> f64 {
+pub fn floor(x: f64) -> f64 {
     let t = x as i64 as f64;
     if t > x {
         t - 1.0
@@ -336,7 +336,7 @@ impl Topology {
     /// The bricks b + `shift` + d of every stored brick b, for every offset d with each component in
     /// `lo..=hi` (those below 0 left out): the list of a dilated topology for [`Topology::from_bricks`].
     /// `None` when the allocator refuses it.
-    pub(crate) fn spread(&self, shift: [usize; 3], lo: i64, hi: i64) -> Option<Vec<[usize; 3]>> {
+    pub fn spread(&self, shift: [usize; 3], lo: i64, hi: i64) -> Option<Vec<[usize; 3]>> {
         let side = (hi - lo + 1).max(0) as usize;
         let mut list = Vec::new();
         list.try_reserve(self.active.checked_mul(side * side * side)?)
@@ -426,7 +426,7 @@ impl Topology {
         (lo, hi.max(lo))
     }
     /// The sample stored at `n` in a grid's values ([`Grid::values_mut`]), or `None` for the background and padding.
-    pub(crate) fn voxel_of(&self, n: usize) -> Option<[usize; 3]> {
+    pub fn voxel_of(&self, n: usize) -> Option<[usize; 3]> {
         let block = n / BRICK_VOXELS;
         if block == 0 {
             return None;
@@ -474,7 +474,7 @@ impl Topology {
     }
 
     /// Calls `f` with every stored brick and its slot.
-    pub(crate) fn for_each_slot(&self, mut f: impl FnMut([usize; 3], usize)) {
+    pub fn for_each_slot(&self, mut f: impl FnMut([usize; 3], usize)) {
         for (r, &block) in self.top.iter().enumerate() {
             if block == 0 {
                 continue;
@@ -553,7 +553,7 @@ impl Grid {
     }
 
     /// Writes row (·, j, k) from `row` (nx values) into the bricks that hold it (the rest are left alone).
-    pub(crate) fn set_row(&mut self, j: usize, k: usize, row: &[f32]) {
+    pub fn set_row(&mut self, j: usize, k: usize, row: &[f32]) {
         let topo = self.topo.clone();
         topo.row_pieces(j, k, |x0, x1, start| {
             if start >= BRICK_VOXELS {
@@ -564,7 +564,7 @@ impl Grid {
 
     /// Sample (i, j, k) ← `v`, if its brick is stored; returns whether it was.
     #[inline]
-    pub(crate) fn set(&mut self, i: usize, j: usize, k: usize, v: f32) -> bool {
+    pub fn set(&mut self, i: usize, j: usize, k: usize, v: f32) -> bool {
         let idx = self.topo.index(i, j, k);
         if idx < BRICK_VOXELS {
             return false;
@@ -575,7 +575,7 @@ impl Grid {
 
     /// The 512 stored values (x fastest) of the brick whose first sample is (i, j, k), when that sample starts
     /// a stored brick.
-    pub(crate) fn brick_mut(&mut self, v: [usize; 3]) -> Option<&mut [f32]> {
+    pub fn brick_mut(&mut self, v: [usize; 3]) -> Option<&mut [f32]> {
         let t = &self.topo;
         if (0..3).any(|a| (v[a] + t.off[a]) % BRICK != 0 || v[a] >= t.dims[a]) {
             return None;
@@ -585,7 +585,7 @@ impl Grid {
     }
 
     /// The 512 stored values of brick `b` (brick coordinates; a shared block for a constant brick), when stored.
-    pub(crate) fn brick_values_mut(&mut self, b: [usize; 3]) -> Option<&mut [f32]> {
+    pub fn brick_values_mut(&mut self, b: [usize; 3]) -> Option<&mut [f32]> {
         if (0..3).any(|a| b[a] >= self.topo.nb[a]) {
             return None;
         }
@@ -594,7 +594,7 @@ impl Grid {
     }
 
     /// Copies row (·, j, k) into `out` (nx values).
-    pub(crate) fn row(&self, j: usize, k: usize, out: &mut [f32]) {
+    pub fn row(&self, j: usize, k: usize, out: &mut [f32]) {
         self.topo.row_pieces(j, k, |x0, x1, start| {
             if start < BRICK_VOXELS {
                 out[x0..x1].fill(self.values[0]);
@@ -622,7 +622,7 @@ impl Grid {
     }
     /// A grid of the same topology holding `f` of every stored value (the background's too); `None` when the
     /// allocator refuses.
-    pub(crate) fn map(&self, f: impl FnMut(f32) -> f32) -> Option<Grid> {
+    pub fn map(&self, f: impl FnMut(f32) -> f32) -> Option<Grid> {
         let mut values = crate::alloc::with_capacity(self.values.len())?;
         values.extend(self.values.iter().copied().map(f));
         Some(Grid {
@@ -631,18 +631,18 @@ impl Grid {
         })
     }
     /// Whether slot `s` stores only `v` (512 values; slot 0 is the background).
-    pub(crate) fn slot_is(&self, s: usize, v: f32) -> bool {
+    pub fn slot_is(&self, s: usize, v: f32) -> bool {
         self.values
             .get(s * BRICK_VOXELS..(s + 1) * BRICK_VOXELS)
             .is_some_and(|b| b.iter().all(|&x| x == v))
     }
     /// The stored values (slot 0 first: the background), for load-time policies.
-    pub(crate) fn values_mut(&mut self) -> &mut [f32] {
+    pub fn values_mut(&mut self) -> &mut [f32] {
         &mut self.values
     }
     /// This grid in topology `topo` (which holds at least this grid's bricks), or `None` when it does not or the
     /// allocator refuses.
-    pub(crate) fn rehome(&self, topo: std::sync::Arc<Topology>) -> Option<Grid> {
+    pub fn rehome(&self, topo: std::sync::Arc<Topology>) -> Option<Grid> {
         if topo.dims != self.topo.dims {
             return None;
         }
@@ -800,11 +800,12 @@ impl Grid {
 }
 
 /// Lanes of [`StatsAcc`].
-pub(crate) const STATS_LANES: usize = 8;
+pub const STATS_LANES: usize = 8;
 
 /// Running grid statistics in eight lanes (running minima, maxima, sums and counts, so that a loop over groups
 /// of eight vectorises; min and max skip NaN, as `f32::min` does: a comparison with NaN is false).
-pub(crate) struct StatsAcc {
+#[derive(Debug)]
+pub struct StatsAcc {
     lo: [f32; STATS_LANES],
     hi: [f32; STATS_LANES],
     sums: [f64; STATS_LANES],
@@ -812,8 +813,14 @@ pub(crate) struct StatsAcc {
     n: u64,
 }
 
+impl Default for StatsAcc {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl StatsAcc {
-    pub(crate) fn new() -> StatsAcc {
+    pub fn new() -> StatsAcc {
         StatsAcc {
             lo: [f32::INFINITY; STATS_LANES],
             hi: [f32::NEG_INFINITY; STATS_LANES],
@@ -824,7 +831,7 @@ impl StatsAcc {
     }
     /// Eight samples.
     #[inline]
-    pub(crate) fn add_lanes(&mut self, c: &[f32; STATS_LANES]) {
+    pub fn add_lanes(&mut self, c: &[f32; STATS_LANES]) {
         for k in 0..STATS_LANES {
             let v = c[k];
             self.lo[k] = if v < self.lo[k] { v } else { self.lo[k] };
@@ -836,7 +843,7 @@ impl StatsAcc {
     }
     /// One sample.
     #[inline]
-    pub(crate) fn add(&mut self, v: f32) {
+    pub fn add(&mut self, v: f32) {
         self.lo[0] = if v < self.lo[0] { v } else { self.lo[0] };
         self.hi[0] = if v > self.hi[0] { v } else { self.hi[0] };
         self.sums[0] += v as f64;
@@ -844,14 +851,14 @@ impl StatsAcc {
         self.n += 1;
     }
     /// `n` samples of value `v`.
-    pub(crate) fn add_repeated(&mut self, v: f32, n: u64) {
+    pub fn add_repeated(&mut self, v: f32, n: u64) {
         self.lo[0] = if v < self.lo[0] { v } else { self.lo[0] };
         self.hi[0] = if v > self.hi[0] { v } else { self.hi[0] };
         self.sums[0] += v as f64 * n as f64;
         self.counts[0] += (v != 0.0) as u64 * n;
         self.n += n;
     }
-    pub(crate) fn finish(&self) -> GridStats {
+    pub fn finish(&self) -> GridStats {
         let n = self.n.max(1) as f64;
         GridStats {
             min: self.lo.iter().fold(f32::INFINITY, |m, &v| m.min(v)),

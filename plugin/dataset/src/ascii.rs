@@ -21,7 +21,7 @@ fn dims(t: &mut Tokens) -> Result<[usize; 3], Error> {
 }
 
 /// Reads a dense ASCII grid.
-pub(crate) fn read_dense(
+pub fn read_dense(
     file: &str,
     text: &str,
     order: AxisOrder,
@@ -66,7 +66,7 @@ pub(crate) fn read_dense(
 }
 
 /// Reads a sparse (Uintah) ASCII grid.
-pub(crate) fn read_sparse(file: &str, text: &str, max_bytes: u64) -> Result<Loaded, Error> {
+pub fn read_sparse(file: &str, text: &str, max_bytes: u64) -> Result<Loaded, Error> {
     let mut t = Tokens::new(file, text);
     let dims = dims(&mut t)?;
     let total = dims.iter().map(|&d| d as i64).product::<i64>();

@@ -9,7 +9,7 @@ const WINDOW: usize = 1 << 20;
 
 /// Where a cursor's bytes come from.
 #[derive(Debug, Clone)]
-pub(crate) enum Bytes<'a> {
+pub enum Bytes<'a> {
     /// The whole file in memory.
     Slice(&'a [u8]),
     /// An open regular file of `len` bytes, read by offset.
@@ -85,7 +85,7 @@ fn read_at(
 
 /// A read position in a file's bytes.
 #[derive(Debug, Clone)]
-pub(crate) struct Cursor<'a> {
+pub struct Cursor<'a> {
     pub file: &'a str,
     src: Bytes<'a>,
     pub pos: usize,

@@ -6,7 +6,7 @@ use crate::Error;
 type Place = (usize, usize, usize);
 
 #[derive(Clone)]
-pub(crate) struct Tokens<'a> {
+pub struct Tokens<'a> {
     file: &'a str,
     text: &'a str,
     pos: usize,

@@ -1,4 +1,4 @@
-//! Argument parsers shared by the commands (values clap cannot check by itself).
+//! Argument values the commands share (what clap cannot check by itself): resolutions, frame lists, memory sizes.
 
 /// `WxH`, both from 1 to 65536.
 pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
@@ -25,7 +25,7 @@ pub fn parse_gb(s: &str) -> Result<f64, String> {
 /// `--max-memory` in bytes: the budget every size read from input is checked against (default: half the
 /// machine's memory).
 pub fn budget(gb: Option<f64>) -> u64 {
-    gb.map_or_else(firemedium::budget::default_bytes, |gb| (gb * 1e9) as u64)
+    gb.map_or_else(crate::budget::default_bytes, |gb| (gb * 1e9) as u64)
 }
 
 /// The frames of `--frames`.

@@ -3,14 +3,14 @@
 //! host that loaded the plugin. Sizes are checked against the budget (`maxbytes`) before this is called.
 
 /// `n` copies of `value`, or `None` when the allocator cannot hold them.
-pub(crate) fn filled<T: Clone>(n: usize, value: T) -> Option<Vec<T>> {
+pub fn filled<T: Clone>(n: usize, value: T) -> Option<Vec<T>> {
     let mut v = with_capacity(n)?;
     v.resize(n, value);
     Some(v)
 }
 
 /// An empty vector with room for `n` items, or `None` when the allocator cannot hold them.
-pub(crate) fn with_capacity<T>(n: usize) -> Option<Vec<T>> {
+pub fn with_capacity<T>(n: usize) -> Option<Vec<T>> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).ok()?;
     Some(v)

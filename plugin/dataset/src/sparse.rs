@@ -16,14 +16,14 @@ pub struct Transform {
 
 /// An 8³ leaf: origin, 512 values (z fastest within the leaf: offset x·64 + y·8 + z; empty when a
 /// [`LeafValues`] source decodes them while the grid is made dense), active mask.
-pub(crate) struct Leaf {
+pub struct Leaf {
     pub origin: [i32; 3],
     pub values: Vec<f32>,
     pub mask: [u64; 8],
 }
 
 /// A constant cube of `size`³ voxels at `origin`.
-pub(crate) struct Tile {
+pub struct Tile {
     pub origin: [i32; 3],
     pub size: i32,
     pub value: f32,
@@ -31,7 +31,7 @@ pub(crate) struct Tile {
 }
 
 /// One grid: its map, background, tiles and leaves.
-pub(crate) struct Tree {
+pub struct Tree {
     pub transform: Transform,
     pub background: f32,
     pub tiles: Vec<Tile>,
@@ -39,13 +39,13 @@ pub(crate) struct Tree {
 }
 
 /// Where a tree's leaf values come from while the dense grid is filled: called once per leaf, in order.
-pub(crate) trait LeafValues: Send {
+pub trait LeafValues: Send {
     /// Leaf `leaf`'s 512 values (z fastest).
     fn values<'a>(&'a mut self, leaf: &'a Leaf) -> Result<&'a [f32], Error>;
 }
 
 /// Leaves decoded with the tree (their `values`).
-pub(crate) struct InLeaves;
+pub struct InLeaves;
 
 impl LeafValues for InLeaves {
     fn values<'a>(&'a mut self, leaf: &'a Leaf) -> Result<&'a [f32], Error> {
@@ -53,7 +53,7 @@ impl LeafValues for InLeaves {
     }
 }
 
-pub(crate) fn bit(m: &[u64], i: usize) -> bool {
+pub fn bit(m: &[u64], i: usize) -> bool {
     m[i >> 6] >> (i & 63) & 1 == 1
 }
 
@@ -104,11 +104,7 @@ fn active_bbox(t: &Tree) -> Option<([i64; 3], [i64; 3])> {
 }
 
 /// The error for a grid name a file does not hold, listing the names it does.
-pub(crate) fn missing_grid<'a>(
-    file: &str,
-    name: &str,
-    have: impl Iterator<Item = &'a str>,
-) -> Error {
+pub fn missing_grid<'a>(file: &str, name: &str, have: impl Iterator<Item = &'a str>) -> Error {
     let have: Vec<String> = have.map(|g| format!("'{g}'")).collect();
     Error::format(
         file,
@@ -122,7 +118,7 @@ pub(crate) fn missing_grid<'a>(
 /// where some tree has a leaf or a tile other than its background; every voxel holds the tree's value there (leaf
 /// values, active or not, over tile values, over the background), as a dense grid over the box would — but
 /// memory follows the leaves, not the box (a fire and a far-away second copy cost two fires and a brick table).
-pub(crate) fn densify<S: LeafValues>(
+pub fn densify<S: LeafValues>(
     file: &str,
     trees: Vec<(&str, Tree, S)>,
     max_bytes: u64,
@@ -479,13 +475,13 @@ fn table_within(file: &str, dims: [usize; 3], max_bytes: u64) -> Result<u64, Err
 }
 
 /// A replay of a file's voxel writes: calls its argument with (voxel, value) for each, in file order.
-pub(crate) type VoxelWrites<'a> = dyn Fn(&mut dyn FnMut([usize; 3], f32)) -> Result<(), Error> + 'a;
+pub type VoxelWrites<'a> = dyn Fn(&mut dyn FnMut([usize; 3], f32)) -> Result<(), Error> + 'a;
 
 /// A grid of `dims` bricked as a file is read, never dense: `visit` replays the file's voxel writes (`put(voxel,
 /// value)`, in file order, a later write winning) and is run twice — once to list the bricks a value other than
 /// `background` touches, once to fill them. Voxels never written hold `background` (every empty brick reads
 /// it). Memory: the stored bricks and their table, checked against `max_bytes` before anything is allocated.
-pub(crate) fn brick_as_read(
+pub fn brick_as_read(
     file: &str,
     dims: [usize; 3],
     background: f32,

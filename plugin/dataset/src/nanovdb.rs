@@ -104,7 +104,7 @@ fn table(file: &str, src: Bytes) -> Result<Vec<GridEntry>, Error> {
 }
 
 /// Names of the grids in the file and whether each is a float grid.
-pub(crate) fn grid_names(file: &str, src: Bytes) -> Result<Vec<(String, bool)>, Error> {
+pub fn grid_names(file: &str, src: Bytes) -> Result<Vec<(String, bool)>, Error> {
     Ok(table(file, src)?
         .into_iter()
         .map(|g| (g.name, g.grid_type == 1))
@@ -376,12 +376,7 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
 }
 
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
-pub(crate) fn read(
-    file: &str,
-    src: Bytes,
-    names: &[&str],
-    max_bytes: u64,
-) -> Result<Vec<Loaded>, Error> {
+pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Vec<Loaded>, Error> {
     let entries = table(file, src.clone())?;
     let mut trees = Vec::new();
     for &name in names {
@@ -420,7 +415,7 @@ mod tests {
         // file whose shared nodes claimed 134 M leaves and aborted its host through the C ABI.
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../tests/data/valid/nvdb/plume48.nvdb"
+            "/../../tests/data/valid/nvdb/plume48.nvdb"
         );
         let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
         let grids = table(path, Bytes::Slice(&bytes)).unwrap();

@@ -1,4 +1,4 @@
-use firemedium_plugin::dataset::vdb::write_tiled;
+use firemedium_dataset::vdb::write_tiled;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: i32 = args[1].parse().unwrap();

@@ -6,7 +6,7 @@ use crate::Error;
 
 /// A decoder's complaint: what it expected and what it found, or a feature this build lacks.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) enum DecodeError {
+pub enum DecodeError {
     /// Malformed data.
     Bad { expected: String, found: String },
     /// Valid data this build cannot decode: the name of the cargo feature it lacks (`blosc`, `zip`).
@@ -36,7 +36,7 @@ impl DecodeError {
 
 /// Decodes one blosc1 frame expected to hold `expected` bytes (OpenVDB pads buffers under 48 bytes to 128
 /// before compressing, so a frame may hold up to 128 bytes for a smaller expectation; the prefix is returned).
-pub(crate) fn blosc(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
+pub fn blosc(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
     if src.len() < 16 {
         return Err(DecodeError::bad(
             "a 16-byte blosc header",
@@ -192,7 +192,7 @@ fn unshuffle(typesize: usize, src: &[u8], dest: &mut [u8]) {
 
 /// Inflates a zlib stream expected to hold exactly `expected` bytes.
 #[cfg(feature = "zip")]
-pub(crate) fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
+pub fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
     match miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(src, expected) {
         Ok(v) if v.len() == expected => Ok(v),
         Ok(v) => Err(DecodeError::bad(
@@ -207,12 +207,12 @@ pub(crate) fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> 
 }
 
 #[cfg(not(feature = "zip"))]
-pub(crate) fn zlib(_src: &[u8], _expected: usize) -> Result<Vec<u8>, DecodeError> {
+pub fn zlib(_src: &[u8], _expected: usize) -> Result<Vec<u8>, DecodeError> {
     Err(DecodeError::Feature("zip"))
 }
 
 /// IEEE 754 binary16 → f32 (exact: every half is an f32).
-pub(crate) fn half_to_f32(h: u16) -> f32 {
+pub fn half_to_f32(h: u16) -> f32 {
     let sign = ((h & 0x8000) as u32) << 16;
     let exp = ((h >> 10) & 0x1f) as u32;
     let mant = (h & 0x3ff) as u32;

@@ -35,7 +35,7 @@ pub enum RawValue {
 
 const RECORD: u64 = 3 * 4 + 4 * 8;
 
-pub(crate) fn read(
+pub fn read(
     file: &str,
     bytes: &[u8],
     with_header: bool,

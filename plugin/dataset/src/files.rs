@@ -48,7 +48,7 @@ pub fn frame_path(path: &Path, frame: Option<i64>) -> Result<PathBuf, Error> {
 /// The bytes of `path`. A large file is read in parallel, one part per thread at its offset (the copy out of
 /// the page cache is bound by one core's memory copy: 27.6 → 20.1 ms, medians of 10, for the 42.5 MB of the 256³
 /// campfire on 2 cores).
-pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
+pub fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
     let io = |e: std::io::Error| Error::Io {
         file: path.display().to_string(),
         message: e.to_string(),
@@ -108,7 +108,7 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, Error> {
 /// `path` opened for reading, with its length: only regular files, read to the length they had when opened —
 /// a device (/dev/zero) never ends and a FIFO blocks its reader forever (it is checked before it is opened:
 /// opening one blocks too).
-pub(crate) fn open_regular(path: &Path) -> Result<(std::fs::File, u64), Error> {
+pub fn open_regular(path: &Path) -> Result<(std::fs::File, u64), Error> {
     let io = |e: std::io::Error| Error::Io {
         file: path.display().to_string(),
         message: e.to_string(),
@@ -125,7 +125,7 @@ pub(crate) fn open_regular(path: &Path) -> Result<(std::fs::File, u64), Error> {
     Ok((f, len))
 }
 
-pub(crate) fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {
+pub fn as_text<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, Error> {
     std::str::from_utf8(bytes).map_err(|e| {
         Error::format(
             file,

@@ -14,7 +14,7 @@ use std::sync::{Arc, Mutex};
 
 /// A host's thread pool: `pool(n, task)` runs `task(i)` for every i in 0..n on its threads, as it likes, and
 /// returns when every one has returned.
-pub(crate) type Pool = Arc<dyn Fn(usize, &(dyn Fn(usize) + Sync)) + Send + Sync>;
+pub type Pool = Arc<dyn Fn(usize, &(dyn Fn(usize) + Sync)) + Send + Sync>;
 
 thread_local! {
     /// The budget of the build running on this thread (0: every core).
@@ -24,7 +24,7 @@ thread_local! {
 }
 
 /// Runs `f` (a build) on this thread with at most `threads` threads for its fan-outs (0: every core).
-pub(crate) fn with_budget<R>(threads: usize, f: impl FnOnce() -> R) -> R {
+pub fn with_budget<R>(threads: usize, f: impl FnOnce() -> R) -> R {
     let before = BUDGET.with(|b| b.replace(threads));
     let r = f();
     BUDGET.with(|b| b.set(before));
@@ -32,7 +32,7 @@ pub(crate) fn with_budget<R>(threads: usize, f: impl FnOnce() -> R) -> R {
 }
 
 /// Runs `f` (a build) on this thread with `pool` running its fan-outs (`None`: threads of the plugin's own).
-pub(crate) fn with_pool<R>(pool: Option<Pool>, f: impl FnOnce() -> R) -> R {
+pub fn with_pool<R>(pool: Option<Pool>, f: impl FnOnce() -> R) -> R {
     let before = POOL.with(|p| p.replace(pool));
     let r = f();
     POOL.with(|p| *p.borrow_mut() = before);
@@ -45,7 +45,7 @@ type Job<'env> = Box<dyn FnOnce() + Send + 'env>;
 /// A fan-out's parts, as [`std::thread::Scope`] has them: [`spawn`](Scope::spawn) each, and every part has run
 /// when [`scope`] returns (or when a handle is joined). The parts run together when the first handle is joined
 /// or the scope ends — on the host's pool inside [`with_pool`], else one thread each.
-pub(crate) struct Scope<'env> {
+pub struct Scope<'env> {
     jobs: Mutex<Vec<Job<'env>>>,
     /// The payload of a part that panicked and whose handle nobody joined: re-raised when the scope ends.
     panicked: Arc<Mutex<Option<Payload>>>,
@@ -72,17 +72,26 @@ impl Parts for Scope<'_> {
 }
 
 /// A part's result, as [`std::thread::ScopedJoinHandle`].
-pub(crate) struct Handle<'scope, R> {
+pub struct Handle<'scope, R> {
     slot: Arc<Mutex<Option<std::thread::Result<R>>>>,
     scope: &'scope dyn Parts,
 }
 
+impl std::fmt::Debug for Scope<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scope").finish_non_exhaustive()
+    }
+}
+
+impl<R> std::fmt::Debug for Handle<'_, R> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Handle").finish_non_exhaustive()
+    }
+}
+
 impl<'env> Scope<'env> {
     /// Adds a part (which may borrow from outside the scope).
-    pub(crate) fn spawn<R: Send + 'env>(
-        &self,
-        f: impl FnOnce() -> R + Send + 'env,
-    ) -> Handle<'_, R> {
+    pub fn spawn<R: Send + 'env>(&self, f: impl FnOnce() -> R + Send + 'env) -> Handle<'_, R> {
         let slot = Arc::new(Mutex::new(None));
         let out = slot.clone();
         let (budget, pool) = (BUDGET.with(Cell::get), POOL.with(|p| p.borrow().clone()));
@@ -147,7 +156,7 @@ impl<'env> Scope<'env> {
 
 impl<R> Handle<'_, R> {
     /// The part's result, once it has run (`Err` with its panic's payload if it panicked).
-    pub(crate) fn join(self) -> std::thread::Result<R> {
+    pub fn join(self) -> std::thread::Result<R> {
         let taken = || self.slot.lock().unwrap_or_else(|e| e.into_inner()).take();
         if let Some(r) = taken() {
             return r;
@@ -169,7 +178,7 @@ impl<R> Drop for Handle<'_, R> {
 
 /// Runs `f` with a [`Scope`] for its parts, and every part before it returns — the plugin's
 /// [`std::thread::scope`]. A part that panicked and was not joined panics here.
-pub(crate) fn scope<'env, R>(f: impl for<'s> FnOnce(&'s Scope<'env>) -> R) -> R {
+pub fn scope<'env, R>(f: impl for<'s> FnOnce(&'s Scope<'env>) -> R) -> R {
     let s = Scope {
         jobs: Mutex::new(Vec::new()),
         panicked: Arc::new(Mutex::new(None)),
@@ -183,7 +192,7 @@ pub(crate) fn scope<'env, R>(f: impl for<'s> FnOnce(&'s Scope<'env>) -> R) -> R 
 }
 
 /// How many threads a fan-out may use: the budget (or every core), at most `cap`, at least 1.
-pub(crate) fn threads(cap: usize) -> usize {
+pub fn threads(cap: usize) -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     match BUDGET.with(Cell::get) {
         0 => cores,

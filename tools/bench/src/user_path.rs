@@ -81,12 +81,26 @@ pub fn scene(
     )
 }
 
-/// Renders `scene` with `firemedium render` (this executable) and `extra` arguments into `dir`.
+/// The `firemedium` program beside this one (the user's path: the renderer and the plugin it loads).
+fn renderer() -> Result<std::path::PathBuf, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("this executable: {e}"))?;
+    let firemedium = exe.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
+    if firemedium.is_file() {
+        Ok(firemedium)
+    } else {
+        Err(format!(
+            "{} is not there: the user's-path benchmarks render with it (build it with `cargo build --release -p firemedium`)",
+            firemedium.display()
+        ))
+    }
+}
+
+/// Renders `scene` with `firemedium render` (the program beside this one) and `extra` arguments into `dir`.
 pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> Result<Rendered, String> {
     let file = dir.join(format!("{name}.pbrt"));
     std::fs::write(&file, scene).map_err(|e| format!("{}: {e}", file.display()))?;
     let out = dir.join(format!("{name}.exr"));
-    let exe = std::env::current_exe().map_err(|e| format!("this executable: {e}"))?;
+    let exe = renderer()?;
     let start = Instant::now();
     let o = Command::new(exe)
         .arg("render")

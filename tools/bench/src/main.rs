@@ -1,14 +1,24 @@
-//! `firemedium bench …`: the measurements behind docs/RESULTS.md, as commands anyone can rerun.
+//! `firemedium-bench` (run as `firemedium bench …`): the measurements behind docs/RESULTS.md, as commands anyone
+//! can rerun. It links the plugin as a library to time its parts in process (the march kernel, the components'
+//! build costs, the stability cases), and renders the user's path with the `firemedium` program beside it.
 
-pub mod error;
-pub mod fire_light;
-pub mod perf;
-pub mod stability;
-pub mod user_path;
+mod error;
+mod fire_light;
+mod perf;
+mod stability;
+mod user_path;
 
-use clap::{Args, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use std::io::Write;
+use std::process::ExitCode;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Parser)]
+#[command(
+    name = "firemedium bench",
+    bin_name = "firemedium bench",
+    version,
+    about = "firemedium's benchmarks"
+)]
 pub struct BenchArgs {
     #[command(subcommand)]
     what: What,
@@ -41,7 +51,7 @@ pub struct FireLightArgs {
           value_parser = clap::value_parser!(u32).range(16..=1024))]
     resolutions: Vec<u32>,
     /// Image width and height.
-    #[arg(long, default_value = "160x120", value_parser = crate::args::parse_resolution)]
+    #[arg(long, default_value = "160x120", value_parser = firemedium::args::parse_resolution)]
     image: (usize, usize),
     /// The light's samples-per-pixel ladder (the light off renders 4× each).
     #[arg(long, value_delimiter = ',', default_value = "4,16,64",
@@ -115,7 +125,7 @@ pub struct ErrorArgs {
     #[arg(long)]
     surface: Option<String>,
     /// The surface scene's resolution.
-    #[arg(long, default_value = "80x60", value_parser = crate::args::parse_resolution)]
+    #[arg(long, default_value = "80x60", value_parser = firemedium::args::parse_resolution)]
     surface_resolution: (usize, usize),
     /// The surface ladder's largest samples per pixel (1, 2, 4, … up to it).
     #[arg(long, default_value_t = 64)]
@@ -315,7 +325,7 @@ fn perf_report(a: &PerfArgs) -> Result<String, String> {
             err
         );
     }
-    if let Some(m) = perf::peak_rss() {
+    if let Some(m) = firemedium::budget::peak_rss() {
         out += &format!("\npeak memory (VmHWM) {:.0} MB\n", m as f64 / 1e6);
     }
     Ok(out)
@@ -836,6 +846,41 @@ fn components_report(a: &ComponentsArgs) -> Result<String, String> {
         out += &format!("| | **total** | **{total}** | **{seconds:.4}** |\n");
     }
     Ok(out)
+}
+
+fn main() -> ExitCode {
+    let args = match BenchArgs::try_parse() {
+        Ok(args) => args,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                print!("{e}");
+                return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+            }
+            eprintln!(
+                "firemedium bench: {}",
+                firemedium::term::one_line(&e.render().to_string())
+            );
+            return ExitCode::from(2);
+        }
+    };
+    match run(&args) {
+        Ok(text) => {
+            // A closed pipe (`| head`) is not an error worth a panic.
+            let _ = std::io::stdout().lock().write_all(text.as_bytes());
+            ExitCode::SUCCESS
+        }
+        Err((status, msg)) => {
+            let msg = firemedium::term::printable(&msg, firemedium::term::MAX_MESSAGE_CHARS);
+            eprintln!("firemedium bench: {}", msg.replace('\n', " "));
+            ExitCode::from(status)
+        }
+    }
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-use firemedium_plugin::dataset::vdb::write_sparse;
+use firemedium_dataset::vdb::write_sparse;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let apart: i32 = args[1].parse().unwrap();

@@ -101,7 +101,7 @@ fn stencil_agrees_with_lookup() {
 /// A random grid of `dims` whose 8³ bricks (at offset `off`) each hold data with probability `p`, as dense
 /// samples, and the sparse grid storing only those bricks.
 fn sparse_pair(dims: [usize; 3], off: [usize; 3], seed: u64, p: f64) -> (Grid, Grid) {
-    let mut rng = crate::rng::Rng::new(seed);
+    let mut rng = firemedium_core::rng::Rng::new(seed);
     let probe = Topology::build_offset(dims, off, |_| false).unwrap();
     let nb = probe.bricks();
     let keep: Vec<bool> = (0..nb.iter().product::<usize>())
@@ -127,7 +127,7 @@ fn sparse_pair(dims: [usize; 3], off: [usize; 3], seed: u64, p: f64) -> (Grid, G
 
 #[test]
 fn a_topology_from_its_brick_list_is_the_one_built_brick_by_brick() {
-    let mut rng = crate::rng::Rng::new(5);
+    let mut rng = firemedium_core::rng::Rng::new(5);
     for _ in 0..20 {
         let dims = [0, 1, 2].map(|_| 1 + (rng.next_f64() * 300.0) as usize);
         let off = [0, 1, 2].map(|_| (rng.next_f64() * 8.0) as usize);
@@ -154,7 +154,7 @@ fn sparse_grids_look_up_as_dense_ones_bit_for_bit() {
     // Random sparse trees (dims not multiples of 8, every brick offset) against the dense reference: every
     // sample, trilinear and nearest lookups and stencils at random points (faces included), statistics, and
     // the storage following the bricks kept.
-    let mut rng = crate::rng::Rng::new(5);
+    let mut rng = firemedium_core::rng::Rng::new(5);
     for (t, dims) in [[13usize, 9, 21], [8, 8, 8], [1, 17, 3], [30, 2, 11]]
         .into_iter()
         .enumerate()
@@ -194,27 +194,6 @@ fn sparse_grids_look_up_as_dense_ones_bit_for_bit() {
             assert!((s0.nonzero_fraction - s1.nonzero_fraction).abs() < 1e-12);
             let stored = sparse.topology().active_bricks();
             assert_eq!(sparse.bytes(), (stored + 1) * 512 * 4);
-        }
-    }
-}
-
-#[test]
-fn sparse_majorants_bound_the_data_as_the_dense_pass_does() {
-    // The brick-by-brick ranges of a sparse grid equal the dense slab pass's, brick for brick, at several
-    // majorant brick sizes; so every majorant is ≥ the data (the dense pass is tested against brute force).
-    for (t, dims) in [[37usize, 41, 39], [9, 64, 45]].into_iter().enumerate() {
-        // Few enough bricks stored (one in ten) to take the brick-by-brick path.
-        let (dense, sparse) = sparse_pair(dims, [5, 2, 6], 7 + t as u64, 0.1);
-        let stored: usize = sparse.topology().bricks().iter().product();
-        assert!(
-            sparse.topology().active_bricks() * 4 < stored,
-            "{} of {stored}",
-            sparse.topology().active_bricks()
-        );
-        for brick in [1, 4, 8, 16] {
-            let want = crate::majorant::brick_ranges(&dense.to_dense(), dims, brick);
-            let got = crate::majorant::grid_brick_ranges(&sparse, brick);
-            assert_eq!(got, want, "dims {dims:?} brick {brick}");
         }
     }
 }

@@ -61,7 +61,7 @@ pub enum Error {
 }
 
 impl Error {
-    pub(crate) fn invalid(
+    pub fn invalid(
         component: &'static str,
         name: impl Into<String>,
         value: impl fmt::Display,
@@ -133,6 +133,16 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// A number as a person reads it: plain, or in exponent form when plain would take more than a dozen digits
+/// (`1e-320`, not 320 zeros).
+pub fn short(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 impl From<firemedium_core::Error> for Error {
     fn from(e: firemedium_core::Error) -> Self {
         match e {
@@ -175,7 +185,7 @@ impl Error {
     }
 
     /// A format error at `at` in `file`.
-    pub(crate) fn format(
+    pub fn format(
         file: &str,
         at: impl Into<String>,
         expected: impl Into<String>,

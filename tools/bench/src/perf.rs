@@ -29,7 +29,7 @@ pub struct Run {
 /// by what makes it — this build's version and generator source (FNV-1a of `gen.rs`) — so a file another build
 /// or tool left there under the plain name is never taken for it. Written atomically: a killed run leaves none.
 pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
-    let key = include_str!("../../gen.rs")
+    let key = include_str!("../../../host-adapters/pbrt/src/gen.rs")
         .bytes()
         .chain(env!("CARGO_PKG_VERSION").bytes())
         .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
@@ -56,14 +56,6 @@ pub fn pinhole(v: &FireVolume, size: usize) -> (DVec3, impl Fn(usize, usize) -> 
         DVec3::new(u, 1.0, w).normalize()
     };
     (eye, dir)
-}
-
-/// Peak resident memory of this process (VmHWM), bytes, where /proc tells.
-pub fn peak_rss() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }
 
 /// Renders the workload with `params` added to the dataset's; `size` pixels square.
