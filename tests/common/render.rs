@@ -1,6 +1,5 @@
 //! Rendering scenes with the built binary, for the end-to-end tests: where fixtures and outputs live, one
 //! quiet render, means over pixel rectangles. Included by `#[path]` (with `image.rs`).
-#![allow(dead_code)]
 
 use super::image::read_exr;
 use std::path::{Path, PathBuf};
@@ -9,9 +8,7 @@ use std::process::Command;
 /// A file of the repository's test data (`tests/data`, each copied from the project's reference data with its
 /// source named in `tests/data/README.md`).
 pub fn data(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/data")
-        .join(rel)
+    super::root().join("tests/data").join(rel)
 }
 
 /// The text of a test-data file; a failure names the path.
@@ -19,8 +16,7 @@ pub fn read_text(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-#[path = "scratch.rs"]
-pub mod scratch;
+pub use super::scratch;
 
 /// The test's scratch folder (removed when it passes).
 pub fn out_dir(name: &str) -> scratch::Scratch {
@@ -29,7 +25,7 @@ pub fn out_dir(name: &str) -> scratch::Scratch {
 
 /// Runs `firemedium render scene -o out args…` and returns what it did (status, stderr).
 pub fn run_render(scene: &Path, out: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(super::exe("firemedium"))
         .arg("render")
         .arg(scene)
         .arg("-o")

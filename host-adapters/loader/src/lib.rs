@@ -103,7 +103,7 @@ impl fmt::Display for Error {
             Error::Broken { path, what } => write!(f, "{} is a broken firemedium plugin: {what}", path.display()),
             Error::NotFound { searched } => {
                 let s: Vec<String> = searched.iter().map(|p| p.display().to_string()).collect();
-                write!(f, "no firemedium plugin found (set FIREMEDIUM_PLUGIN to its file); looked in: {}", s.join(", "))
+                write!(f, "no firemedium plugin found (set FIREMEDIUM_PLUGIN to its file; in a source tree, `cargo build --release` builds it); looked in: {}", s.join(", "))
             }
             // (The code is for programs, in the variant; people read the plugin's message.)
             Error::Status { message, .. } => write!(f, "{message}"),

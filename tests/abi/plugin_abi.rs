@@ -26,10 +26,10 @@ fn plugin() -> Plugin {
 }
 
 fn fire_file() -> String {
-    format!(
-        "{}/../../tests/data/valid/vdb/mantaflow_fire_f060.vdb",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    crate::common::root()
+        .join("tests/data/valid/vdb/mantaflow_fire_f060.vdb")
+        .to_string_lossy()
+        .into_owned()
 }
 
 fn fire_params() -> Vec<Param> {

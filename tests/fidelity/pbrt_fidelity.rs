@@ -2,10 +2,8 @@
 //! its light normalisation, its grid media's peak-normalised blackbody), checked against numbers measured by
 //! running pbrt-v4 itself (`tests/data/pbrt-v4-measured/`) and against closed forms from its definitions.
 
-#[path = "common/image.rs"]
-mod image;
-#[path = "common/render.rs"]
-mod render;
+use crate::common::image;
+use crate::common::render;
 
 use image::{luminance, read_exr};
 use render::{data, mean_rgb, out_dir, read_text, render, run_render, y_of};
@@ -612,8 +610,7 @@ fn pbrt_v4_scenes_with_standins(dir: &Path) {
         })
         .collect();
     firemedium::imageio::write_exr(&dir.join("textures/sky.exr"), n, n, &sky, None).unwrap();
-    let plume =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let plume = crate::common::root().join("tests/data/valid/nvdb/plume48.nvdb");
     for name in ["fire.nvdb", "bunny_cloud.nvdb"] {
         std::fs::copy(&plume, dir.join(name)).unwrap();
     }

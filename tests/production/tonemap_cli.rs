@@ -1,19 +1,18 @@
 //! `firemedium tonemap` end to end: the default scene rendered once (its EXR records the fire's hottest
 //! temperature), then tone-mapped for night and for daylight adaptation; the flame is closer to white at night.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
 }
 
 fn run(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
 }
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
 /// The test's scratch folder (removed when it passes).
 fn tmp(name: &str) -> scratch::Scratch {
@@ -64,7 +63,7 @@ fn saturation(p: [f64; 3]) -> f64 {
 
 #[test]
 fn night_makes_the_flame_whiter_than_day() {
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mantaflow/scene.pbrt");
+    let scene = crate::common::root().join("scenes/mantaflow/scene.pbrt");
     let dir = tmp("adapt");
     let exr = dir.join("room.exr");
     let o = bin()

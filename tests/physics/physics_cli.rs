@@ -1,14 +1,11 @@
 //! End-to-end: the built `firemedium` binary's `physics` subcommand (the README's first command) prints the
 //! documented JSON with values that match the published references, and bad arguments exit 2 with one line.
-//!
-//! Declared as a test target of the `firemedium` package (host-adapters/pbrt/Cargo.toml) so that Cargo builds
-//! the binary first and hands its path in `CARGO_BIN_EXE_firemedium`.
 
 use serde_json::Value;
 use std::process::{Command, Output};
 
 fn firemedium(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .args(args)
         .output()
         .expect("the firemedium binary runs")

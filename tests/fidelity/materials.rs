@@ -2,10 +2,7 @@
 //! holds only if every BSDF conserves energy and every MIS weight sums to one) and measured metals against the
 //! closed form of their Fresnel reflectance.
 
-#[path = "common/image.rs"]
-mod image;
-#[path = "common/render.rs"]
-mod render;
+use crate::common::render;
 
 use render::{data, mean_rgb, out_dir, read_text, render, y_of};
 

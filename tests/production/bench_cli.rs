@@ -4,11 +4,10 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
 fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium-bench"))
+    Command::new(crate::common::exe("firemedium-bench"))
         .args(args)
         .output()
         .unwrap()
@@ -20,7 +19,7 @@ fn ok(o: &Output) -> String {
 }
 
 fn scenes() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+    crate::common::root().join("scenes")
 }
 
 #[test]
@@ -29,7 +28,7 @@ fn stability_passes_every_case() {
     assert!(text.contains(" cases, 0 failed"), "{text}");
     assert!(!text.contains("FAIL"), "{text}");
     // `firemedium bench …` runs this program: the command beside it (a workspace build puts them together).
-    let bench = PathBuf::from(env!("CARGO_BIN_EXE_firemedium-bench"));
+    let bench = crate::common::exe("firemedium-bench");
     let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
     assert!(
         firemedium.is_file(),
@@ -60,7 +59,7 @@ fn stability_passes_every_case() {
 #[test]
 fn without_its_benchmark_program_firemedium_bench_says_where_it_looked() {
     let dir = scratch::Scratch::new("bench", "alone");
-    let bench = PathBuf::from(env!("CARGO_BIN_EXE_firemedium-bench"));
+    let bench = crate::common::exe("firemedium-bench");
     let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
     let alone = dir.join(firemedium.file_name().unwrap());
     std::fs::copy(&firemedium, &alone).unwrap_or_else(|e| panic!("{}: {e}", firemedium.display()));

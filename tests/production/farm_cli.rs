@@ -6,8 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
 /// The test's scratch folder (removed when it passes).
 fn tmp(name: &str) -> scratch::Scratch {
@@ -15,7 +14,7 @@ fn tmp(name: &str) -> scratch::Scratch {
 }
 
 fn run_in(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .current_dir(dir)
         .args(args)
         .output()

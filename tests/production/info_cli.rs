@@ -5,11 +5,15 @@ use serde_json::Value;
 use std::process::{Command, Output};
 
 fn data(rel: &str) -> String {
-    format!("{}/../../tests/data/{rel}", env!("CARGO_MANIFEST_DIR"))
+    crate::common::root()
+        .join("tests/data")
+        .join(rel)
+        .to_string_lossy()
+        .into_owned()
 }
 
 fn firemedium(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .args(args)
         .output()
         .expect("firemedium runs")

@@ -5,18 +5,15 @@
 //! through `firemedium render` and the cdylib under a 1 GB memory budget, the far file must load and render,
 //! and the first copy's pixels must be the single fire's.
 
-#[path = "common/image.rs"]
-mod image;
+use crate::common::image;
 
 use image::read_exr;
 use std::path::Path;
 use std::process::Command;
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
-#[path = "common/guard.rs"]
-mod guard;
+use crate::common::guard;
 use guard::finishes;
 
 /// The test's scratch folder (removed when it passes).
@@ -66,7 +63,7 @@ fn blob(
 }
 
 fn render(scene: &Path, out: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(scene)
         .arg("-o")
@@ -140,7 +137,7 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
     }
     // With the fire light (the default) the far fire renders too: the light weighs the stored bricks and
     // their neighbours only, so it follows the data as the grids do (no warning, within the 1 GB budget).
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(dir.join("far.pbrt"))
         .arg("-o")
@@ -151,7 +148,7 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && !e.contains("warning"), "{e}");
     // What the plugin says it stored: the two blobs' bricks, not the box.
-    let info = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let info = Command::new(crate::common::exe("firemedium"))
         .args(["info", "--json"])
         .arg(dir.join("far.vdb"))
         .output()
@@ -188,7 +185,7 @@ fn two_far_leaves_cost_what_two_leaves_cost() {
     );
     std::fs::write(dir.join("far.vdb"), &file).unwrap();
     let info = finishes(
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        Command::new(crate::common::exe("firemedium"))
             .args(["info", "--json"])
             .arg(dir.join("far.vdb")),
         60,
@@ -208,7 +205,7 @@ fn two_far_leaves_cost_what_two_leaves_cost() {
     )
     .unwrap();
     let o = finishes(
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(dir.join("far.pbrt"))
             .arg("-o")
@@ -257,7 +254,7 @@ fn with_and_without_lattice(
         )
         .unwrap();
         let exr = dir.join(format!("{lattice}.exr"));
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        let o = Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(&scene)
             .arg("-o")
@@ -326,7 +323,7 @@ fn a_background_is_one_block_not_a_dense_grid() {
     // lattice 12.3 GB resident, 35 s. Empty bricks read the background: 4 KB, a 5 MB lattice, the same image.
     let dir = out_dir("background");
     std::fs::write(dir.join("u.txt"), "1000 1000 1000\n0\n1\n").unwrap();
-    let info = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let info = Command::new(crate::common::exe("firemedium"))
         .args(["info", "--json", "--format", "asciisparse"])
         .arg(dir.join("u.txt"))
         .output()
@@ -382,7 +379,7 @@ fn a_file_of_many_nodes_reads_in_time_that_follows_its_nodes() {
     );
     std::fs::write(dir.join("nodes.vdb"), &file).unwrap();
     let o = finishes(
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        Command::new(crate::common::exe("firemedium"))
             .args(["info", "--json"])
             .arg(dir.join("nodes.vdb")),
         60,

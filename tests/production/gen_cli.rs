@@ -1,18 +1,16 @@
 //! `firemedium gen` end to end: OpenVDB files of the blob fire model that the dataset reader loads, the same for
 //! a seed, species grids that follow the flame, frame sequences, and one-line errors for bad arguments.
 
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .args(args)
         .output()
         .unwrap()
 }
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
 /// The test's scratch folder (removed when it passes).
 fn tmp(name: &str) -> scratch::Scratch {
@@ -175,7 +173,7 @@ fn the_committed_campfires_are_what_the_generator_makes() {
     // scenes/campfire/campfire.vdb, campfire.embers.ply and campfire-warped.vdb were written by the commands in
     // its README; the generator is deterministic, and its embers draw on their own random numbers (the grids are
     // the same with and without them).
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire");
+    let root = crate::common::root().join("scenes/campfire");
     for (name, extra) in [
         ("campfire.vdb", &["--embers", "200"][..]),
         ("campfire-warped.vdb", &["--warp", "0.1"][..]),

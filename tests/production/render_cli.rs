@@ -5,15 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-#[path = "common/image.rs"]
-mod image;
+use crate::common::image;
 use image::{luminance, mean_y, read_exr};
 
-#[path = "common/scratch.rs"]
-mod scratch;
+use crate::common::scratch;
 
-#[path = "common/guard.rs"]
-mod guard;
+use crate::common::guard;
 
 /// The test's scratch folder (removed when it passes).
 fn tmp(name: &str) -> scratch::Scratch {
@@ -33,7 +30,7 @@ fn sky_scene(dir: &Path, px: u32) -> PathBuf {
 
 /// `firemedium ARGS` run in `dir`.
 fn firemedium_in(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    Command::new(crate::common::exe("firemedium"))
         .current_dir(dir)
         .args(args)
         .output()
@@ -52,7 +49,7 @@ fn same_render(a: &Path, b: &Path) -> bool {
 
 fn render(scene: &Path, extra: &[&str]) -> PathBuf {
     let out = scene.with_extension("exr");
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(scene)
         .arg("-o")
@@ -229,10 +226,10 @@ fn a_pbrt_uniformgrid_pixel_matches_pbrts_definitions() {
 
 #[test]
 fn the_mantaflow_scene_renders_finite_and_lit() {
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mantaflow/scene.pbrt");
+    let scene = crate::common::root().join("scenes/mantaflow/scene.pbrt");
     let dir = tmp("default");
     let out = dir.join("room.exr");
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .args(["render"])
         .arg(&scene)
         .arg("-o")
@@ -295,7 +292,7 @@ fn bad_scenes_exit_1_with_file_line_col() {
         ("unread.pbrt", "Camera \"perspective\"\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"float density\" [1]\n  \"float fuelnk\" [500 1.5 0.5]\n", "unread.pbrt:4:3: medium \"f\" (fire): volume: parameter 'fuelnk' = given, but nothing in this configuration reads it"),
     ] {
         std::fs::write(dir.join(name), text).unwrap();
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium")).arg("render").arg(dir.join(name)).output().unwrap();
+        let o = Command::new(crate::common::exe("firemedium")).arg("render").arg(dir.join(name)).output().unwrap();
         assert_eq!(o.status.code(), Some(1), "{name}");
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(e.contains(want) && e.trim_end().lines().count() == 1, "{name}: {e}");
@@ -318,7 +315,7 @@ fn firemedium_simd_caps_the_kernel_and_refuses_what_it_cannot_honour() {
     );
     std::fs::write(dir.join("s.pbrt"), &scene).unwrap();
     let run = |simd: &str, out: &str| {
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        Command::new(crate::common::exe("firemedium"))
             .env("FIREMEDIUM_SIMD", simd)
             .arg("render")
             .arg(dir.join("s.pbrt"))
@@ -351,7 +348,7 @@ fn the_command_holds_none_of_the_plugins_code() {
     // mangled symbols carry their crate's name with its length first, so a function of the plugin's crate linked
     // in would leave "17firemedium_plugin" in the symbol table (the entry point's name "firemedium_plugin_entry",
     // which the loader looks up, is not mangled).
-    let exe = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let exe = crate::common::exe("firemedium");
     let bytes = std::fs::read(&exe).unwrap_or_else(|e| panic!("{}: {e}", exe.display()));
     let has = |s: &[u8]| bytes.windows(s.len()).any(|w| w == s);
     assert!(
@@ -369,8 +366,8 @@ fn the_command_holds_none_of_the_plugins_code() {
 /// The plugin this test run built, and a C shim plugin (`tests/c/SRC`, built against the header) that forwards to it
 /// through `FIREMEDIUM_REAL_PLUGIN`: (real, shim).
 fn shim_plugin(dir: &Path, src: &str) -> (PathBuf, PathBuf) {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let root = crate::common::root();
+    let bin = crate::common::exe("firemedium");
     let real = bin.parent().unwrap().join("deps").join(format!(
         "{}firemedium_plugin{}",
         std::env::consts::DLL_PREFIX,
@@ -409,7 +406,7 @@ fn the_film_takes_its_colour_from_the_plugin_it_loaded() {
     // doubled: the renderer must render exactly twice as bright through it. (It computed its own weights from a
     // linked copy of the plugin's code before, so a plugin from another commit rendered silently wrong.)
     let dir = tmp("colour");
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let bin = crate::common::exe("firemedium");
     let (real, shim) = shim_plugin(&dir, "doubled_colour_plugin.c");
     let scene = small_fire_scene(2);
     std::fs::write(dir.join("c.pbrt"), scene).unwrap();
@@ -455,7 +452,7 @@ fn a_plugin_call_that_fails_inside_a_render_is_counted_and_reported() {
     // render finishes and writes its image (the work is kept), but exits 1 naming how many calls failed and the
     // first one's message, and --stats counts them — never a silent black pixel.
     let dir = tmp("failing");
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let bin = crate::common::exe("firemedium");
     let (real, shim) = shim_plugin(&dir, "failing_plugin.c");
     let scene = small_fire_scene(4);
     std::fs::write(dir.join("f.pbrt"), scene).unwrap();
@@ -506,7 +503,7 @@ fn unsupported_pbrt_parameters_are_named_where_they_stand() {
     let dir = tmp("unsupported");
     let scene = "Camera \"perspective\" \"float fov\" 30\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nIntegrator \"volpath\" \"bool regularize\" true\nWorldBegin\nShape \"sphere\" \"float alpha\" 0.5\n";
     std::fs::write(dir.join("u.pbrt"), scene).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(dir.join("u.pbrt"))
         .output()
@@ -619,8 +616,7 @@ fn a_pbrt_nanovdb_scene_like_explosion_pbrt_renders() {
     // The parameters of pbrt-v4's explosion.pbrt (spelled as pbrt-v4 reads them), on the shipped plume48.nvdb:
     // a scattering, emitting nanovdb medium behind an interface sphere, lit by a sky.
     let dir = tmp("nanovdb");
-    let nvdb =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let nvdb = crate::common::root().join("tests/data/valid/nvdb/plume48.nvdb");
     let scene = format!(
         "LookAt 0 -3 0  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 30\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 8\nIntegrator \"volpath\" \"integer maxdepth\" 5\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [0.02 0.02 0.03]\nMakeNamedMedium \"kaboom\" \"string type\" \"nanovdb\" \"string filename\" \"{}\" \"spectrum sigma_s\" [200 10 900 10] \"spectrum sigma_a\" [200 10 900 10] \"float Lescale\" 5 \"float temperaturecutoff\" 1 \"float temperaturescale\" 1.5\nAttributeBegin\nMediumInterface \"kaboom\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
         nvdb.display()
@@ -737,7 +733,7 @@ fn the_fire_light_and_paths_that_find_the_fire_agree() {
 #[test]
 fn refraction_moves_the_wall_behind_the_fire_and_nothing_else() {
     // The refraction scene with the fire's emission off (only the bending differs), refraction on and off.
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let root = crate::common::root().join("scenes");
     let text = std::fs::read_to_string(root.join("refraction/scene.pbrt")).unwrap();
     let vdb = root.join("mantaflow/fire_f060.vdb");
     let dir = tmp("refraction");
@@ -780,7 +776,7 @@ fn refraction_moves_the_wall_behind_the_fire_and_nothing_else() {
 fn every_scene_renders_at_a_tiny_resolution() {
     // Each scene of the gallery (every .pbrt of every scene folder) parses, loads its datasets and renders
     // finite, with its fire visible.
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let root = crate::common::root().join("scenes");
     let dir = tmp("gallery");
     let pbrt_files = |d: &std::path::Path| -> Vec<PathBuf> {
         let mut v: Vec<PathBuf> = std::fs::read_dir(d)
@@ -831,7 +827,7 @@ fn every_scene_renders_at_a_tiny_resolution() {
             scene.file_stem().unwrap().to_string_lossy()
         );
         let out = dir.join(format!("{}.exr", name.replace('/', "-")));
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        let o = Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(&scene)
             .arg("-o")
@@ -892,7 +888,7 @@ fn interrupt(mut child: std::process::Child, log: &Path, signal: &str) -> std::p
 
 /// `firemedium render scene args…` (writing beside the scene), which must fail with exit 1: its stderr.
 fn refused(scene: &Path, args: &[&str]) -> String {
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(scene)
         .args(args)
@@ -925,8 +921,8 @@ fn ctrl_c_ends_a_long_render_inside_its_tiles() {
     let dir = tmp("interrupt");
     let out = dir.join("i.exr");
     let log = dir.join("i.jsonl");
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let root = crate::common::root();
+    let child = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(root.join("scenes/campfire/scene.pbrt"))
         .args([
@@ -969,7 +965,7 @@ fn skip_existing_renders_again_what_is_not_a_finished_frame() {
     let dir = tmp("skip-broken");
     let scene = sky_scene(&dir, 8);
     let run = |frame: &str| {
-        Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(&scene)
             .args(["--frame", frame, "--skip-existing", "-o"])
@@ -1046,7 +1042,7 @@ fn files_that_never_end_are_refused_not_read() {
     for (name, text) in cases {
         let path = dir.join(format!("{name}.pbrt"));
         std::fs::write(&path, text).unwrap();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        let mut child = Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(&path)
             .stderr(std::process::Stdio::piped())
@@ -1077,13 +1073,13 @@ fn the_same_render_gives_the_same_pixels_and_cleans_up_after_killed_writers() {
     // (the EXR's blocks were once written in completion order), their files differing in the render time alone. A temporary left by a killed writer (its PID gone) is removed
     // by the next write of the same file.
     let dir = tmp("bytes");
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let root = crate::common::root();
     let stale = dir.join("a.tmp-4194400.exr");
     std::fs::write(&stale, b"left by a killed render").unwrap();
     let mut files = Vec::new();
     for name in ["a.exr", "b.exr"] {
         let out = dir.join(name);
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        let o = Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(root.join("scenes/campfire/scene.pbrt"))
             .args([
@@ -1136,7 +1132,7 @@ fn instances_share_their_objects_geometry() {
     std::fs::write(dir.join("i.pbrt"), &scene).unwrap();
     render(&dir.join("i.pbrt"), &["--max-memory", "0.1"]);
     // The budget still counts each object's primitives once: 0.001 GB does not hold the 2 000 triangles.
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(dir.join("i.pbrt"))
         .args(["--max-memory", "0.001", "-q"])
@@ -1202,8 +1198,7 @@ fn the_fire_light_is_built_only_where_a_path_can_sample_it() {
     // medium's emission only before the maxdepth-th bounce, where a light sample from the floor would land); at
     // maxdepth 2 the floor samples it.
     let dir = tmp("leave-out");
-    let nvdb =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let nvdb = crate::common::root().join("tests/data/valid/nvdb/plume48.nvdb");
     let scene = |floor: &str, depth: u32| {
         format!(
             "LookAt 0 -3 0.4  0 0 0  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nSampler \"independent\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" {depth}\nWorldBegin\nMakeNamedMedium \"kaboom\" \"string type\" \"nanovdb\" \"string filename\" \"{}\" \"spectrum sigma_a\" [200 10 900 10] \"spectrum sigma_s\" [200 0 900 0] \"float Lescale\" 5 \"float temperaturecutoff\" 1 \"float temperaturescale\" 1.5\nAttributeBegin\nMediumInterface \"kaboom\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n{floor}",
@@ -1217,7 +1212,7 @@ fn the_fire_light_is_built_only_where_a_path_can_sample_it() {
         let f = dir.join(format!("{name}.pbrt"));
         std::fs::write(&f, text).unwrap();
         let out = dir.join(format!("{name}{}.exr", extra.len()));
-        let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+        let o = Command::new(crate::common::exe("firemedium"))
             .arg("render")
             .arg(&f)
             .arg("-o")
@@ -1330,8 +1325,7 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     // Four crop-window tiles of a small fire scene merge into the full render's pixels exactly; overlapping
     // tiles, a tile of another seed and a missing tile are refused, naming the file.
     let dir = tmp("merge");
-    let nvdb =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let nvdb = crate::common::root().join("tests/data/valid/nvdb/plume48.nvdb");
     std::fs::write(
         dir.join("fire.pbrt"),
         format!(
@@ -1522,8 +1516,7 @@ fn aovs_split_the_beauty_and_merge_with_the_tiles() {
     // directly, and direct and indirect light all appear; the four sum to R, G, B. Alpha is 1 on the floor,
     // 0 on the empty sky, between through the plume; depth, normal and albedo are the floor's.
     let dir = tmp("aovs");
-    let nvdb =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/valid/nvdb/plume48.nvdb");
+    let nvdb = crate::common::root().join("tests/data/valid/nvdb/plume48.nvdb");
     std::fs::write(
         dir.join("aov.pbrt"),
         format!(
@@ -1899,7 +1892,7 @@ fn the_diffusion_scene_agrees_with_its_path_traced_twin() {
     // path traced. The cube's face (the central pixels) and the floor it lights (the bottom rows) agree within the
     // diffusion approximation's error at this depth: measured against 2048 spp, −7.5 % and −7.4 %
     // (docs/RESULTS.md, "Multiple scattering by diffusion").
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/diffusion");
+    let root = crate::common::root().join("scenes/diffusion");
     let mean = |name: &str, extra: &[&str]| {
         let mut args = vec!["--resolution", "64x48"];
         args.extend(extra);
@@ -1938,7 +1931,7 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
     // run from an unrelated directory with no plugin variables: it finds its plugin relative to itself, renders
     // the default scene, and writes where it is told.
     let dir = tmp("install");
-    let exe = PathBuf::from(env!("CARGO_BIN_EXE_firemedium"));
+    let exe = crate::common::exe("firemedium");
     let lib = firemedium_loader::library_file_name();
     // (Beside the binary after `cargo build`, in `deps` after `cargo test` alone.)
     let plugin = [
@@ -1954,7 +1947,7 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
     let installed = dir.join("prefix/bin").join(exe.file_name().unwrap());
     std::fs::copy(&exe, &installed).unwrap();
     std::fs::copy(&plugin, dir.join("prefix/lib/firemedium").join(&lib)).unwrap();
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/campfire/scene.pbrt");
+    let scene = crate::common::root().join("scenes/campfire/scene.pbrt");
     let o = Command::new(&installed)
         .current_dir(dir.join("elsewhere"))
         .env_remove("FIREMEDIUM_PLUGIN")
@@ -1973,7 +1966,7 @@ fn an_installed_firemedium_finds_its_plugin_from_any_directory() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(dir.join("elsewhere/here.exr").is_file() && dir.join("elsewhere/here.png").is_file());
     // Every gallery scene, from there, by its absolute path.
-    let gallery = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let gallery = crate::common::root().join("scenes");
     let mut scenes: Vec<PathBuf> = std::fs::read_dir(&gallery)
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -2043,7 +2036,7 @@ fn scene_readmes_quote_what_render_stats_prints() {
     // "plugin built", "fire light:" or ending in a number of lm or W — with "…" for what is left out; each piece
     // must appear in the stats of one of the folder's scenes (rendered at 8×6, 1 spp: the plugin's build and the
     // fire light do not depend on the film). A number that drifts fails here, not in a reader's hands.
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let root = crate::common::root().join("scenes");
     let dir = tmp("readme-stats");
     let mut checked = 0;
     let mut folders: Vec<PathBuf> = std::fs::read_dir(&root)
@@ -2077,7 +2070,7 @@ fn scene_readmes_quote_what_render_stats_prints() {
         scenes.sort();
         for scene in scenes {
             let out = dir.join("s.exr");
-            let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            let o = Command::new(crate::common::exe("firemedium"))
                 .arg("render")
                 .arg(&scene)
                 .args([
@@ -2125,11 +2118,11 @@ fn copy_dir(from: &Path, to: &Path) {
 
 #[test]
 fn the_readmes_quick_commands_run_as_written() {
-    // Every `firemedium …` (or `cargo run --release -p firemedium -- …`) line of the README's sh blocks whose
+    // Every `firemedium …` (or `target/release/firemedium …`) line of the README's sh blocks whose
     // command is quick — physics, info, tonemap, the quick gens and benches, the adaptation scene's render —
     // runs as written (this build's binary standing for `firemedium`) in a copy of the repository's scenes and
     // test data, in the README's order, and succeeds.
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let root = crate::common::root();
     let dir = tmp("readme");
     copy_dir(&root.join("scenes"), &dir.join("scenes"));
     copy_dir(&root.join("tests/data"), &dir.join("tests/data"));
@@ -2147,7 +2140,7 @@ fn the_readmes_quick_commands_run_as_written() {
         // (A comment starts at " # "; `pool.####.vdb` is not one.)
         let cmd = line.split(" # ").next().unwrap_or("").trim();
         let rest = cmd
-            .strip_prefix("cargo run --release -p firemedium -- ")
+            .strip_prefix("target/release/firemedium ")
             .or_else(|| cmd.strip_prefix("firemedium "));
         let Some(rest) = rest else { continue };
         let args: Vec<String> = rest.split_whitespace().map(String::from).collect();
@@ -2286,7 +2279,7 @@ fn escape_sequences_and_huge_tokens_from_a_scene_never_reach_the_terminal_raw() 
         "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"\u{1b}[2J\u{1b}[31mbogus\"\n",
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .args(["render", "-o"])
         .arg(dir.join("t.exr"))
         .arg(&scene)
@@ -2302,7 +2295,7 @@ fn escape_sequences_and_huge_tokens_from_a_scene_never_reach_the_terminal_raw() 
         format!("WorldBegin\nShape \"{}\"\n", "x".repeat(5_000_000)),
     )
     .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .args(["render", "-o"])
         .arg(dir.join("t.exr"))
         .arg(&scene)
@@ -2337,7 +2330,7 @@ fn interrupt_a_long_path(signal: &str, code: i32) {
     )
     .unwrap();
     let log = dir.join("p.jsonl");
-    let child = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let child = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(&scene)
         .args(["--threads", "2", "-q", "--log-json"])
@@ -2360,7 +2353,7 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_render_goes_on() {
     // `--log-json /dev/full`: every event was lost without a word.
     let dir = tmp("log-full");
     let scene = sky_scene(&dir, 4);
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(&scene)
         .args(["-q", "--log-json", "/dev/full", "-o"])
@@ -2388,7 +2381,7 @@ fn an_image_within_the_budget_but_past_the_memory_is_an_error_not_an_abort() {
         .arg("-c")
         .arg(format!(
             "ulimit -v 4000000 && exec '{}' tonemap bomb.exr -o bomb.png",
-            env!("CARGO_BIN_EXE_firemedium")
+            crate::common::exe("firemedium").display()
         ))
         .current_dir(&*dir)
         .output()
@@ -2458,7 +2451,7 @@ fn a_texture_naming_another_twice_at_every_level_is_built_once_per_node() {
     }
     scene += "Material \"diffuse\" \"texture reflectance\" \"t40\"\nShape \"trianglemesh\" \"point3 P\" [-5 -5 0 5 -5 0 5 5 0 -5 5 0] \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
     std::fs::write(dir.join("d.pbrt"), scene).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_firemedium"))
+    let o = Command::new(crate::common::exe("firemedium"))
         .arg("render")
         .arg(dir.join("d.pbrt"))
         .args(["--max-memory", "1", "--stats", "--seed", "1", "-o"])
@@ -2523,7 +2516,7 @@ fn degenerate_geometry_builds_in_n_log_n() {
     .unwrap();
     for name in ["tris", "instances", "nested"] {
         let o = guard::finishes(
-            Command::new(env!("CARGO_BIN_EXE_firemedium"))
+            Command::new(crate::common::exe("firemedium"))
                 .arg("render")
                 .arg(dir.join(format!("{name}.pbrt")))
                 .arg("-o")

@@ -4,8 +4,7 @@
 //! (The dataset readers have their own mutation test in the plugin; the built binary is fuzzed by
 //! tools/mutants.py; fuzz/ holds cargo-fuzz targets over the same entry points.)
 
-#[path = "common/mutate.rs"]
-mod mutate;
+use crate::common::mutate;
 
 use firemedium::imageio::{decode, write_exr, write_png_bytes, ImageKind};
 use firemedium::render::ply;
