@@ -21,7 +21,6 @@
 
 pub mod args;
 pub mod budget;
-pub mod gen;
 pub mod imageio;
 pub mod metrics;
 pub mod render;

@@ -2,7 +2,7 @@
 //! fire, a march step of half a voxel, soot + blackbody, emission–absorption only (their 40–80 s on a dual 3 GHz
 //! Xeon in 2006) — timed from loading the grid to the last ray, with the error against a converged reference.
 
-use firemedium::gen::{write_frame, Kind, Sim};
+use firemedium_gen::{frame, Kind, Sim};
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{FireVolume, Ray};
 use glam::DVec3;
@@ -26,20 +26,31 @@ pub struct Run {
 }
 
 /// The dataset: the campfire at `res` voxels along its longest side, generated once into `dir` under a name keyed
-/// by what makes it — this build's version and generator source (FNV-1a of `gen.rs`) — so a file another build
+/// by what makes it — this build's version and generator source (FNV-1a of the firemedium-gen crate's files) — so a file another build
 /// or tool left there under the plain name is never taken for it. Written atomically: a killed run leaves none.
 pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
-    let key = include_str!("../../../host-adapters/pbrt/src/gen.rs")
-        .bytes()
-        .chain(env!("CARGO_PKG_VERSION").bytes())
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-            (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-        });
+    let key = [
+        include_str!("../../gen/src/lib.rs"),
+        include_str!("../../gen/src/kinds.rs"),
+        include_str!("../../gen/src/sim.rs"),
+        include_str!("../../gen/src/voxel.rs"),
+        include_str!("../../gen/src/write.rs"),
+    ]
+    .into_iter()
+    .flat_map(str::bytes)
+    .chain(env!("CARGO_PKG_VERSION").bytes())
+    .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    });
     let path = dir.join(format!("firemedium-bench-campfire-{res}-{key:016x}.vdb"));
     if !path.is_file() {
         let mut sim = Sim::new(Kind::Campfire, 1);
         sim.run_to(2.0);
-        write_frame(&sim, res, &[], false, &path)?;
+        let f = frame(&sim, res, &[], false).map_err(|e| format!("{}: {e}", path.display()))?;
+        firemedium::imageio::write_atomic(&path, |tmp| {
+            std::fs::write(tmp, &f.bytes)
+                .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+        })?;
     }
     Ok(path)
 }

@@ -1,7 +1,7 @@
-//! `firemedium gen KIND -o OUT.vdb`: a fire dataset from the blob model (`crate::gen`), written as OpenVDB.
+//! `firemedium gen KIND -o OUT.vdb`: a fire dataset from the blob model (the firemedium-gen crate), written as OpenVDB.
 
 use clap::Args;
-use firemedium::gen::{write_frame_as, Kind, Sim, Style};
+use firemedium_gen::{frame_as, Kind, Sim, Style};
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -160,19 +160,24 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
                 .to_string_lossy()
                 .replace("####", &format!("{frame:04}")),
         );
-        let (bytes, active, tmax, fmax) = write_frame_as(
+        let f = frame_as(
             &sim,
             a.resolution as usize,
             &species,
             (a.velocity, a.reaction),
             style,
-            &path,
         )
+        .map_err(|e| (1, format!("{}: {e}", path.display())))?;
+        firemedium::imageio::write_atomic(&path, |tmp| {
+            std::fs::write(tmp, &f.bytes)
+                .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+        })
         .map_err(|e| (1, e))?;
+        let (active, tmax, fmax) = (f.active, f.peak_temperature, f.peak_soot);
         let embers = match a.embers {
             Some(_) => {
                 let ep = embers_path(&path);
-                let bytes = firemedium::gen::embers_ply(&sim.embers);
+                let bytes = firemedium_gen::embers_ply(&sim.embers);
                 firemedium::imageio::write_atomic(&ep, |tmp| {
                     std::fs::write(tmp, &bytes)
                         .map_err(|e| format!("{}: cannot write: {e}", ep.display()))
@@ -189,7 +194,7 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
             kind.name(),
             sim.time,
             sim.blobs.len(),
-            bytes as f64 / 1e6,
+            f.bytes.len() as f64 / 1e6,
             100.0 * left
         );
     }

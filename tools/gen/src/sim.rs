@@ -1,0 +1,345 @@
+//! The model run over time: fuel heated by the flames' radiation, blobs born, moved by the wind, cooled, turned to smoke.
+
+use super::*;
+
+/// A seeded, smooth 3D value noise (trilinear over a hashed lattice with a quintic fade); three independent
+/// components give a vector potential whose curl is the turbulent wind.
+#[derive(Debug)]
+pub(crate) struct Noise {
+    pub(crate) seed: u64,
+}
+
+impl Noise {
+    pub(crate) fn hash(&self, i: i64, j: i64, k: i64, c: u64) -> f64 {
+        let mut h = self.seed ^ c.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        for v in [i, j, k] {
+            h ^= (v as u64)
+                .wrapping_add(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add(h << 6)
+                .wrapping_add(h >> 2);
+            h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            h ^= h >> 31;
+        }
+        (h >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+    pub(crate) fn value(&self, p: DVec3, c: u64) -> f64 {
+        let f = p.floor();
+        let t = p - f;
+        let s = t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+        let (i, j, k) = (f.x as i64, f.y as i64, f.z as i64);
+        let mut acc = 0.0;
+        for dz in 0..2 {
+            for dy in 0..2 {
+                for dx in 0..2 {
+                    let w = (if dx == 1 { s.x } else { 1.0 - s.x })
+                        * (if dy == 1 { s.y } else { 1.0 - s.y })
+                        * (if dz == 1 { s.z } else { 1.0 - s.z });
+                    acc += w * self.hash(i + dx, j + dy, k + dz, c);
+                }
+            }
+        }
+        acc
+    }
+    /// Curl of the potential (ψ₀, ψ₁, ψ₂)(p) by central differences: divergence-free to rounding.
+    pub(crate) fn curl(&self, p: DVec3) -> DVec3 {
+        let h = 1e-3;
+        let d = |c: u64, axis: DVec3| {
+            (self.value(p + axis * h, c) - self.value(p - axis * h, c)) / (2.0 * h)
+        };
+        DVec3::new(
+            d(2, DVec3::Y) - d(1, DVec3::Z),
+            d(0, DVec3::Z) - d(2, DVec3::X),
+            d(1, DVec3::X) - d(0, DVec3::Y),
+        )
+    }
+}
+
+impl Sim {
+    pub fn new(kind: Kind, seed: u64) -> Sim {
+        let (model, mut cells) = kind.setup();
+        for c in &mut cells {
+            c.load = model.fuel_load;
+        }
+        Sim {
+            model,
+            cells,
+            blobs: Vec::new(),
+            time: 0.0,
+            warp: None,
+            ember_rate: None,
+            embers: Vec::new(),
+            embers_born: 0,
+            rng: Rng::new(seed ^ 0x5EED_F1AE),
+            ember_rng: Rng::new(seed ^ 0xE3BE_25F1),
+            noise: Noise { seed },
+        }
+    }
+
+    /// The wind at `x` for a blob at temperature `t`.
+    pub(crate) fn wind(&self, x: DVec3, t: f64) -> DVec3 {
+        let m = &self.model;
+        let lift = m.buoyancy * ((t - T_AMB).max(0.0) / T_AMB).sqrt();
+        DVec3::Z * lift + self.turbulence(x, self.time)
+    }
+    /// The turbulent part of the wind at `x` and time `time` (divergence-free; the buoyant lift is uniform for
+    /// a blob, so it moves blobs without deforming them).
+    pub(crate) fn turbulence(&self, x: DVec3, time: f64) -> DVec3 {
+        let m = &self.model;
+        // The turbulence drifts upwards with the plume and evolves slowly.
+        let q = (x - DVec3::Z * (0.5 * m.buoyancy * time)) / m.turbulence_scale
+            + DVec3::splat(0.37 * time);
+        self.noise.curl(q) * (m.turbulence * 0.5)
+    }
+
+    /// One step of dt; returns the mass bookkeeping.
+    pub fn step(&mut self) -> StepLedger {
+        let m = self.model.clone();
+        let dt = m.dt;
+        let mut ledger = StepLedger::default();
+        // The flames' radiant power and its power-weighted centre (one "blob cluster").
+        let (mut power, mut centre) = (0.0, DVec3::ZERO);
+        for b in &self.blobs {
+            let p = 4.0 * std::f64::consts::PI * m.alpha_flame * b.m_flame * SIGMA * b.t.powi(4);
+            power += p;
+            centre += b.x * p;
+        }
+        if power > 0.0 {
+            centre /= power;
+        }
+        // Fuel cells: heat (implicit in T), burn (exact in the load), emit a flame blob.
+        let matching = self.time < m.match_seconds;
+        let mut born = Vec::new();
+        for c in &mut self.cells {
+            let flux = if power > 0.0 {
+                let d = centre - c.p;
+                let r2 = d.length_squared().max(m.sigma0 * m.sigma0 * 4.0);
+                let cos = (d.dot(c.normal) / r2.sqrt()).max(0.0);
+                m.feedback * power * cos / (4.0 * std::f64::consts::PI * r2)
+            } else {
+                0.0
+            };
+            c.t = implicit_fuel_temperature(c.t, flux, m.fuel_heat_capacity, dt);
+            if matching && (c.p - m.match_at).length() < m.match_radius {
+                c.t = c.t.max(m.t_match);
+            }
+            let k = m.nu_a * (-m.t_a / c.t).exp();
+            let burnt = c.load * -(-k * dt).exp_m1();
+            let mass = burnt * c.area;
+            if !(mass > 1e-15) {
+                continue;
+            }
+            c.load -= burnt;
+            ledger.fuel_consumed += mass;
+            ledger.flame_produced += mass;
+            let jitter = DVec3::new(
+                self.rng.next_f64(),
+                self.rng.next_f64(),
+                self.rng.next_f64(),
+            ) - 0.5;
+            born.push(Blob {
+                x: c.p + c.normal * m.sigma0 + jitter * (c.area.sqrt()),
+                m_flame: mass,
+                m_smoke: 0.0,
+                t: (c.t + m.release).max(T_AMB),
+                age: 0.0,
+                sigma0: m.sigma0,
+            });
+        }
+        // Blobs: move (midpoint), cool (exact), smoke (exact), decay, grow.
+        let moved: Vec<(DVec3, f64)> = self
+            .blobs
+            .par_iter()
+            .map(|b| {
+                let v0 = self.wind(b.x, b.t);
+                let mid = b.x + v0 * (0.5 * dt);
+                (b.x + self.wind(mid, b.t) * dt, 0.0)
+            })
+            .collect();
+        let mut kept = Vec::with_capacity(self.blobs.len() + born.len());
+        let lo = DVec3::new(-m.half_width, -m.half_width, 0.0) * 1.5 - DVec3::splat(0.1 * m.height);
+        let hi = DVec3::new(m.half_width * 1.5, m.half_width * 1.5, m.height * 1.1);
+        for (b, (x, _)) in self.blobs.iter().zip(moved) {
+            let mut b = *b;
+            b.x = x;
+            b.t = radiative_cooling(b.t, m.k_rad(), dt);
+            b.t = T_AMB + (b.t - T_AMB) * (-dt / m.mixing_time).exp();
+            let to_smoke = b.m_flame * -(-m.nu_b * (-b.t / m.t_s).exp() * dt).exp_m1();
+            b.m_flame -= to_smoke;
+            b.m_smoke += to_smoke;
+            ledger.flame_to_smoke += to_smoke;
+            let decayed = b.m_smoke * -(-m.smoke_decay * dt).exp_m1();
+            b.m_smoke -= decayed;
+            ledger.smoke_decayed += decayed;
+            b.age += dt;
+            let inside = b.x.cmpge(lo).all() && b.x.cmple(hi).all();
+            if inside && b.m_flame + b.m_smoke > 1e-12 {
+                kept.push(b);
+            } else {
+                ledger.removed += b.m_flame + b.m_smoke;
+            }
+        }
+        ledger.smoke_produced = ledger.flame_to_smoke;
+        if let Some(rate) = self.ember_rate {
+            self.step_embers(rate, &born);
+        }
+        kept.extend(born);
+        self.blobs = kept;
+        self.time += dt;
+        ledger
+    }
+
+    /// The gas's temperature at `x`: the blobs' temperatures weighted by their kernels, fading to ambient
+    /// outside them (weights summing below 1 keep that share of ambient).
+    pub(crate) fn gas_temperature(&self, x: DVec3) -> f64 {
+        let kappa = self.model.kappa;
+        let (mut w, mut wt) = (0.0, 0.0);
+        for b in &self.blobs {
+            let s = b.sigma(kappa);
+            let d2 = (x - b.x).length_squared();
+            if d2 < 9.0 * s * s {
+                let k = (-0.5 * d2 / (s * s)).exp();
+                w += k;
+                wt += k * (b.t - T_AMB);
+            }
+        }
+        T_AMB + wt / w.max(1.0)
+    }
+
+    /// One step of the embers: new ones thrown from the cells that burnt this step (`born`: their flame
+    /// blobs, by mass), then each moved by gravity and quadratic drag (C_d 0.47, air at the gas's temperature:
+    /// ρ = 353 K·kg/m³ / T) towards the wind, and aged; those that land, leave the domain or cool below
+    /// [`EMBER_DEAD_K`] are dropped.
+    pub(crate) fn step_embers(&mut self, rate: f64, born: &[Blob]) {
+        use firemedium_core::ember::CHAR_DENSITY;
+        let m = self.model.clone();
+        let dt = m.dt;
+        let total: f64 = born.iter().map(|b| b.m_flame).sum();
+        if total > 0.0 {
+            // Expected rate·dt embers this step, shared by the cells by the mass they burnt.
+            let mut carry = self.ember_rng.next_f64();
+            for b in born {
+                carry += rate * dt * b.m_flame / total;
+                while carry >= 1.0 {
+                    carry -= 1.0;
+                    let g = &mut self.ember_rng;
+                    let r = 0.5e-3 * (3.0f64 / 0.5).powf(g.next_f64());
+                    let a = 2.0 * std::f64::consts::PI * g.next_f64();
+                    // A pop throws it up at 2–5 m/s and out at up to 1.5 m/s.
+                    let out = DVec3::new(a.cos(), a.sin(), 0.0) * (0.5 + g.next_f64());
+                    let v = out + DVec3::Z * (2.0 + 3.0 * g.next_f64());
+                    // Born at the gas's temperature where the fuel burns (a millimetre of char reaches it in the
+                    // flame within a fraction of a second), then cooled by radiation alone once thrown.
+                    let t0 = b.t;
+                    self.embers_born += 1;
+                    self.embers.push(Ember {
+                        x: b.x,
+                        v,
+                        r,
+                        t0,
+                        age: 0.0,
+                    });
+                }
+            }
+        }
+        let lo = DVec3::new(-m.half_width, -m.half_width, 0.0);
+        let hi = DVec3::new(m.half_width, m.half_width, m.height);
+        let moved: Vec<Ember> = self
+            .embers
+            .par_iter()
+            .map(|e| {
+                let accel = |x: DVec3, v: DVec3| {
+                    let tg = self.gas_temperature(x);
+                    let rho_air = 353.0 / tg;
+                    let w = v - self.wind(x, tg);
+                    -DVec3::Z * 9.81 * (1.0 - rho_air / CHAR_DENSITY)
+                        - w * (w.length() * 3.0 * 0.47 * rho_air / (8.0 * CHAR_DENSITY * e.r))
+                };
+                // Midpoint in (x, v).
+                let a0 = accel(e.x, e.v);
+                let (xm, vm) = (e.x + e.v * (0.5 * dt), e.v + a0 * (0.5 * dt));
+                let am = accel(xm, vm);
+                Ember {
+                    x: e.x + vm * dt,
+                    v: e.v + am * dt,
+                    age: e.age + dt,
+                    ..*e
+                }
+            })
+            .collect();
+        self.embers = moved
+            .into_iter()
+            .filter(|e| {
+                e.x.cmpge(lo).all() && e.x.cmple(hi).all() && e.temperature() > EMBER_DEAD_K
+            })
+            .collect();
+    }
+
+    /// The fuel: (cells above 500 K, cells, their mean temperature, fraction of the fuel left).
+    pub fn fuel_summary(&self) -> (usize, usize, f64, f64) {
+        let hot: Vec<f64> = self
+            .cells
+            .iter()
+            .map(|c| c.t)
+            .filter(|t| *t > 500.0)
+            .collect();
+        let total: f64 = self
+            .cells
+            .iter()
+            .map(|c| c.area * self.model.fuel_load)
+            .sum();
+        let left: f64 = self.cells.iter().map(|c| c.area * c.load).sum();
+        let mean = if hot.is_empty() {
+            0.0
+        } else {
+            hot.iter().sum::<f64>() / hot.len() as f64
+        };
+        (hot.len(), self.cells.len(), mean, left / total)
+    }
+
+    /// Runs until `t` (s).
+    pub fn run_to(&mut self, t: f64) {
+        while self.time + 0.5 * self.model.dt < t {
+            self.step();
+        }
+    }
+}
+
+/// The fuel temperature after dt: C (T₁ − T₀)/dt = flux − 2σ (T₁⁴ − T_amb⁴), solved for T₁ (a monotone
+/// equation: Newton from above, safeguarded by bisection), stable for any dt and flux.
+pub fn implicit_fuel_temperature(t0: f64, flux: f64, c: f64, dt: f64) -> f64 {
+    let f = |t: f64| c * (t - t0) / dt - flux + 2.0 * SIGMA * (t.powi(4) - T_AMB.powi(4));
+    let (mut lo, mut hi) = (0.0f64, t0.max(T_AMB) + flux.max(0.0) * dt / c + 1.0);
+    // f(lo) < 0 < f(hi) whenever flux ≥ 0; widen hi if not.
+    while f(hi) < 0.0 && hi < 1e7 {
+        hi *= 2.0;
+    }
+    let mut t = hi;
+    for _ in 0..100 {
+        let ft = f(t);
+        if ft.abs() < 1e-12 * c {
+            break;
+        }
+        if ft > 0.0 {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        let d = c / dt + 8.0 * SIGMA * t.powi(3);
+        let next = t - ft / d;
+        t = if next > lo && next < hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    t
+}
+
+/// Radiative cooling dT/dt = −K T⁴ over dt, exactly: (T⁻³ + 3K dt)^(−1/3), floored at ambient.
+pub fn radiative_cooling(t: f64, k: f64, dt: f64) -> f64 {
+    if !(t > T_AMB) {
+        return T_AMB;
+    }
+    let inv3 = t.powi(-3) + 3.0 * k * dt;
+    inv3.powf(-1.0 / 3.0).max(T_AMB)
+}
