@@ -1,7 +1,7 @@
 //! The end-to-end tests, one crate with a module per concern. They drive what a user runs — the built
-//! `firemedium` command and `firemedium-bench`, the built plugin cdylib through the loader and through C — so they
-//! are their own package (`firemedium-tests`), built beside the programs by `cargo test --workspace --release`.
-//! Each crate's own unit tests stay beside its code.
+//! `firemedium` command, the built plugin cdylib through the loader and through C. A test target of the
+//! `firemedium` package (so Cargo builds the command for them); the benchmarks' program has its own
+//! (`tests/bench_cli.rs`, of `firemedium-bench`). Each crate's unit tests stay beside its code.
 
 mod common;
 
@@ -17,9 +17,8 @@ mod fidelity {
 }
 
 /// What production use needs: renders end to end (closed forms, the default scene, frames, AOVs, faults,
-/// the documentation's commands), the farm, sparse and far-apart data, `gen`, `tonemap`, `info` and the benchmarks.
+/// the documentation's commands), the farm, sparse and far-apart data, `gen`, `tonemap` and `info`.
 mod production {
-    mod bench_cli;
     mod farm_cli;
     mod gen_cli;
     mod info_cli;

@@ -10,9 +10,9 @@ pub mod scratch;
 
 use std::path::PathBuf;
 
-/// The repository's root.
+/// The repository's root (the packages whose tests these are lie two folders down).
 pub fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// The build's output folder (`target/<profile>`): this test executable lives in its `deps/`.
@@ -24,9 +24,9 @@ fn build_dir() -> PathBuf {
         .to_path_buf()
 }
 
-/// A program the workspace builds (`firemedium`, `firemedium-bench`), in this build's output folder. These
-/// tests are their own package, so Cargo builds the programs only as members of the same invocation:
-/// `cargo test --workspace --release` (what the README and CI run) does.
+/// A program the workspace builds (`firemedium`, `firemedium-bench`), in this build's output folder: Cargo builds
+/// a package's programs for its own test targets, so `cargo test --workspace --release` (what the README and CI
+/// run) builds both, and a test of one package can run the other's.
 pub fn exe(name: &str) -> PathBuf {
     let p = build_dir().join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
     assert!(

@@ -4,10 +4,12 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use crate::common::scratch;
+#[path = "common/mod.rs"]
+mod common;
+use common::scratch;
 
 fn run(args: &[&str]) -> Output {
-    Command::new(crate::common::exe("firemedium-bench"))
+    Command::new(common::exe("firemedium-bench"))
         .args(args)
         .output()
         .unwrap()
@@ -19,7 +21,7 @@ fn ok(o: &Output) -> String {
 }
 
 fn scenes() -> PathBuf {
-    crate::common::root().join("scenes")
+    common::root().join("scenes")
 }
 
 #[test]
@@ -28,7 +30,7 @@ fn stability_passes_every_case() {
     assert!(text.contains(" cases, 0 failed"), "{text}");
     assert!(!text.contains("FAIL"), "{text}");
     // `firemedium bench …` runs this program: the command beside it (a workspace build puts them together).
-    let bench = crate::common::exe("firemedium-bench");
+    let bench = common::exe("firemedium-bench");
     let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
     assert!(
         firemedium.is_file(),
@@ -59,7 +61,7 @@ fn stability_passes_every_case() {
 #[test]
 fn without_its_benchmark_program_firemedium_bench_says_where_it_looked() {
     let dir = scratch::Scratch::new("bench", "alone");
-    let bench = crate::common::exe("firemedium-bench");
+    let bench = common::exe("firemedium-bench");
     let firemedium = bench.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
     let alone = dir.join(firemedium.file_name().unwrap());
     std::fs::copy(&firemedium, &alone).unwrap_or_else(|e| panic!("{}: {e}", firemedium.display()));
