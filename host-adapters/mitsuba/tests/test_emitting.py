@@ -1,0 +1,106 @@
+"""An emitting fire lighting a floor renders in Mitsuba (through the adapter and `firepath`) as `firemedium render`
+renders the same scene written for pbrt-v4: the flame's luminance and the floor's, in absolute units.
+
+Mitsuba's spectral film is relative (a constant spectrum of 1 W·m⁻²·sr⁻¹·nm⁻¹ gives Y = 1); firemedium's is in
+cd/m², so Mitsuba's Y is multiplied by 683 lm/W × ∫ȳ dλ (106.857 nm). Mitsuba's camera is right-handed and
+pbrt-v4's left-handed: the Mitsuba camera is mirrored in x so the two images line up pixel for pixel; both films
+use a box pixel filter (pbrt-v4's default Gaussian spreads the flame's light over its neighbours: 3 % on the floor's
+rows).
+"""
+
+import math
+import os
+import subprocess
+import tempfile
+import unittest
+from pathlib import Path
+
+import numpy as np
+
+from common import command, mitsuba_or_skip, repository
+
+mi = mitsuba_or_skip()
+import firemedium.mitsuba  # noqa: E402,F401 - registers the plugins
+
+T = mi.ScalarTransform4f
+RES = 32
+SPP = 32
+K = 683.0 * 106.856895
+BOX = "-0.6 -0.6 0.005 0.6 -0.6 0.005 -0.6 0.6 0.005 0.6 0.6 0.005 -0.6 -0.6 1.6 0.6 -0.6 1.6 -0.6 0.6 1.6 0.6 0.6 1.6"
+PBRT = f"""LookAt 0 -4.2 1.6   0 0 0.55   0 0 1
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" {RES} "integer yresolution" {RES}
+PixelFilter "box"
+Sampler "independent" "integer pixelsamples" 2048
+Integrator "volpath" "integer maxdepth" 2
+WorldBegin
+MakeNamedMedium "fire" "string type" "fire" "string dataset" "{{dataset}}" "string fuel" "propane"
+AttributeBegin
+  MediumInterface "fire" ""
+  Material "interface"
+  Shape "trianglemesh" "point3 P" [ {BOX} ] "integer indices" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "spectrum reflectance" [ 300 0.5 900 0.5 ]
+  Shape "trianglemesh" "point3 P" [ -10 -10 0  10 -10 0  10 10 0  -10 10 0 ] "integer indices" [ 0 1 2 0 2 3 ]
+AttributeEnd
+"""
+
+
+def mitsuba_scene(dataset: str, fire_light: bool = True, spp: int = SPP) -> dict:
+    return {
+        "type": "scene",
+        # max_depth 2 is pbrt-v4's maxdepth 2 here: the floor lit by the fire, nothing further.
+        "integrator": {"type": "firepath", "max_depth": 2, "fire_light": fire_light},
+        "sensor": {
+            "type": "perspective", "fov": 40, "fov_axis": "smaller",
+            "to_world": T().look_at(origin=[0, -4.2, 1.6], target=[0, 0, 0.55], up=[0, 0, 1]) @ T().scale([-1, 1, 1]),
+            "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp},
+        },
+        "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
+                  "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
+        "fire": {"type": "cube", "to_world": T().translate([0, 0, 0.8025]).scale([0.6, 0.6, 0.7975]),
+                 "bsdf": {"type": "null"},
+                 "interior": {"type": "firemedium", "filename": dataset, "fuel": "propane"}},
+    }
+
+
+def luminance(a) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)[..., :3]
+    return a[..., 0] * 0.2126 + a[..., 1] * 0.7152 + a[..., 2] * 0.0722
+
+
+class EmittingFire(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.TemporaryDirectory(prefix="firemedium-mitsuba-")
+        d = Path(cls.dir.name)
+        cls.dataset = str(repository() / "scenes" / "campfire" / "campfire.vdb")
+        (d / "scene.pbrt").write_text(PBRT.replace("{dataset}", cls.dataset))
+        subprocess.run([command(), "render", str(d / "scene.pbrt"), "-o", str(d / "ref.exr"), "--quiet"], check=True)
+        cls.ref = luminance(mi.Bitmap(str(d / "ref.exr")))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.dir.cleanup()
+
+    def test_the_flame_and_the_floor_it_lights_match_firemedium_render(self):
+        img = luminance(mi.render(mi.load_dict(mitsuba_scene(self.dataset)), seed=5)) * K
+        ref = self.ref
+        flame = ref > 0.05 * ref.max()
+        floor = np.zeros_like(flame)
+        floor[-8:, :] = True
+        floor &= ~flame
+        r_flame = img[flame].mean() / ref[flame].mean()
+        r_floor = img[floor].mean() / ref[floor].mean()
+        print(f"emitting fire: flame {img[flame].mean():.1f} cd/m² against {ref[flame].mean():.1f} ({r_flame:.4f}); "
+              f"floor {img[floor].mean():.3f} against {ref[floor].mean():.3f} ({r_floor:.4f})")
+        self.assertLess(abs(r_flame - 1.0), 0.03)
+        self.assertLess(abs(r_floor - 1.0), 0.03)
+        # The same image, pixel for pixel: the two line up (a mirrored camera would fail this).
+        self.assertGreater(np.corrcoef(img.ravel(), ref.ravel())[0, 1], 0.98)
+
+
+if __name__ == "__main__":
+    unittest.main()

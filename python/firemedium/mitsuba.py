@@ -1,0 +1,1 @@
+../../host-adapters/mitsuba/mitsuba.py
