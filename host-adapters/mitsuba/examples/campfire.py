@@ -1,5 +1,5 @@
-"""The campfire in Mitsuba 3: the fire as a `firemedium` medium inside a null-BSDF box on a diffuse floor, rendered
-by `firepath` (Mitsuba's volumetric path tracing plus the fire's emission and the fire light), written as EXR.
+"""The campfire in Mitsuba 3: the fire as a `firemedium` medium inside a null-BSDF box on a diffuse floor, before a
+wall, beside a copper ball and a small lamp of Mitsuba's own, rendered by `firepath` (Mitsuba's volumetric path tracing plus the fire's emission and the fire light), written as EXR.
 
     python3 host-adapters/mitsuba/examples/campfire.py [--size 48] [--spp 16] [--no-fire-light] [-o campfire-mitsuba.exr]
 
@@ -36,8 +36,13 @@ scene = mi.load_dict({
     # Mitsuba's own BSDFs beside the fire: a diffuse floor and a rough copper sphere.
     "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
               "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
+    "wall": {"type": "rectangle", "to_world": T().translate([0, 2.0, 2.0]).rotate([1, 0, 0], 90).scale([4, 2, 1]),
+             "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.6}}},
     "ball": {"type": "sphere", "center": [0.95, -0.3, 0.25], "radius": 0.25,
              "bsdf": {"type": "roughconductor", "material": "Cu", "alpha": 0.2}},
+    # Mitsuba's own emitter beside the fire: a dim blue lamp (its shadow rays are attenuated through the fire).
+    "lamp": {"type": "sphere", "center": [-1.4, -0.6, 1.8], "radius": 0.1,
+             "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.5, 0.8, 2.0]}}},
     # The fire: its medium space is the dataset's ([-0.6, 0.6]² × [0, 1.6] m, z up); the box just above the floor.
     "fire": {"type": "cube", "to_world": T().translate([0, 0, 0.8025]).scale([0.6, 0.6, 0.7975]),
              "bsdf": {"type": "null"},
