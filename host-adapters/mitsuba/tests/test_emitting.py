@@ -86,7 +86,10 @@ class EmittingFire(unittest.TestCase):
         cls.dir.cleanup()
 
     def test_the_flame_and_the_floor_it_lights_match_firemedium_render(self):
-        img = luminance(mi.render(mi.load_dict(mitsuba_scene(self.dataset)), seed=5)) * K
+        # Two independent halves of the samples: their mean is the render, their difference its noise.
+        halves = [luminance(mi.render(mi.load_dict(mitsuba_scene(self.dataset, spp=SPP // 2)), seed=s)) * K
+                  for s in (5, 6)]
+        img = (halves[0] + halves[1]) / 2
         ref = self.ref
         flame = ref > 0.05 * ref.max()
         floor = np.zeros_like(flame)
@@ -94,12 +97,16 @@ class EmittingFire(unittest.TestCase):
         floor &= ~flame
         r_flame = img[flame].mean() / ref[flame].mean()
         r_floor = img[floor].mean() / ref[floor].mean()
+        # The same image within noise: the squared differences to the reference against the render's own variance
+        # (of a mean of two halves: ((a − b) / 2)², pixel by pixel) — about 1 when they differ by noise alone.
+        noise = ((halves[0] - halves[1]) / 2) ** 2
+        chi = np.sum((img - ref) ** 2) / np.sum(noise)
         print(f"emitting fire: flame {img[flame].mean():.1f} cd/m² against {ref[flame].mean():.1f} ({r_flame:.4f}); "
-              f"floor {img[floor].mean():.3f} against {ref[floor].mean():.3f} ({r_floor:.4f})")
-        self.assertLess(abs(r_flame - 1.0), 0.03)
-        self.assertLess(abs(r_floor - 1.0), 0.03)
-        # The same image, pixel for pixel: the two line up (a mirrored camera would fail this).
-        self.assertGreater(np.corrcoef(img.ravel(), ref.ravel())[0, 1], 0.98)
+              f"floor {img[floor].mean():.3f} against {ref[floor].mean():.3f} ({r_floor:.4f}); squared difference "
+              f"{chi:.2f}× the render's variance; correlation {np.corrcoef(img.ravel(), ref.ravel())[0, 1]:.4f}")
+        self.assertLess(abs(r_flame - 1.0), 0.02)
+        self.assertLess(abs(r_floor - 1.0), 0.02)
+        self.assertLess(chi, 2.0)
 
 
 if __name__ == "__main__":
