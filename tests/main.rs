@@ -17,8 +17,9 @@ mod fidelity {
 }
 
 /// What production use needs: renders end to end (closed forms, the default scene, frames, AOVs, faults,
-/// the documentation's commands), the farm, sparse and far-apart data, `gen`, `tonemap` and `info`.
+/// the documentation's commands), the farm, sparse and far-apart data, `gen`, `bake`, `tonemap` and `info`.
 mod production {
+    mod bake_cli;
     mod farm_cli;
     mod gen_cli;
     mod info_cli;

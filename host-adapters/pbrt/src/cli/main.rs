@@ -10,6 +10,7 @@
 
 #![forbid(unsafe_code)]
 use firemedium::args;
+mod bake;
 mod bench;
 mod compare;
 mod diff;
@@ -56,6 +57,9 @@ enum Command {
     Tonemap(tonemap::TonemapArgs),
     /// A fire dataset (OpenVDB) from Stam & Fiume's blob fire model: campfire, candle, pool, torch.
     Gen(gen::GenArgs),
+    /// The fire's coefficients as RGB grids (OpenVDB) for a renderer without the plugin (Cycles' Volume
+    /// Coefficients node): sigma_a, sigma_s and emission per metre, linear Rec.709.
+    Bake(bake::BakeArgs),
     /// Benchmarks: stability (stiff and extreme cases), error-vs-time, perf (the paper's workload), components,
     /// fire-light — the program firemedium-bench beside this one (`firemedium bench --help` lists them).
     #[command(disable_help_flag = true)]
@@ -77,7 +81,7 @@ fn main() -> ExitCode {
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
                 eprintln!(
-                    "firemedium: a subcommand is required (render, merge, diff, farm, tonemap, compare, gen, info, physics, bench); see 'firemedium --help'"
+                    "firemedium: a subcommand is required (render, merge, diff, farm, tonemap, compare, gen, bake, info, physics, bench); see 'firemedium --help'"
                 );
                 return ExitCode::from(2);
             }
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
         Command::Farm(args) => farm::run(&args),
         Command::Tonemap(args) => tonemap::run(&args),
         Command::Gen(args) => gen::run(&args),
+        Command::Bake(args) => bake::run(&args),
         Command::Bench { args } => {
             return bench::forward(&args).unwrap_or_else(|(status, msg)| {
                 eprintln!("firemedium: {msg}");

@@ -355,27 +355,43 @@ impl Scene {
 /// The command line's `NAME=VALUE` light parameters typed as the plugin's table declares them (the light's own
 /// or the volume's).
 fn light_params(plugin: &Plugin, given: &[(String, String)]) -> Result<Vec<LParam>, Error> {
+    typed_params(
+        plugin,
+        &["light"],
+        "the fire light",
+        "--fire-light-param",
+        given,
+    )
+}
+
+/// `NAME=VALUE` parameters from a command line (`flag`) typed as the plugin's table declares them for
+/// `components` (`what` names them in an error, which lists the parameters they have).
+pub fn typed_params(
+    plugin: &Plugin,
+    components: &[&str],
+    what: &str,
+    flag: &str,
+    given: &[(String, String)],
+) -> Result<Vec<LParam>, Error> {
     let table = plugin.parameters();
     given
         .iter()
         .map(|(name, value)| {
             let info = table
                 .iter()
-                .find(|p| p.component == "light" && &p.name == name)
+                .find(|p| components.contains(&p.component.as_str()) && &p.name == name)
                 .ok_or_else(|| {
                     let names: Vec<&str> = table
                         .iter()
-                        .filter(|p| p.component == "light")
+                        .filter(|p| components.contains(&p.component.as_str()))
                         .map(|p| p.name.as_str())
                         .collect();
                     format!(
-                        "--fire-light-param {name}={value}: the fire light has no parameter \"{name}\" (it has {})",
+                        "{flag} {name}={value}: {what} has no parameter \"{name}\" (it has {})",
                         names.join(", ")
                     )
                 })?;
-            let bad = |what: &str| {
-                format!("--fire-light-param {name}={value}: \"{value}\" is not {what}")
-            };
+            let bad = |kind: &str| format!("{flag} {name}={value}: \"{value}\" is not {kind}");
             Ok(match info.ty.as_str() {
                 "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
                 "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
@@ -390,7 +406,7 @@ fn light_params(plugin: &Plugin, given: &[(String, String)]) -> Result<Vec<LPara
 /// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
 /// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
 #[allow(unsafe_code)]
-fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
+pub fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
     match path {
         // SAFETY: a plugin file the user named; the loader checks its ABI version, size and entries.
         Some(p) => unsafe { Plugin::load(p) },

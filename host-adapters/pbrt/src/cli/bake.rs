@@ -1,0 +1,251 @@
+//! `firemedium bake DATASET -o OUT.vdb`: the fire's coefficients as RGB grids, for a renderer that cannot load the
+//! plugin (Blender's Cycles reads them through its Volume Coefficients node).
+//!
+//! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters, docs/params.md), and
+//! asked through the C ABI for σ_a, σ_s and the emission coefficient j in its channels at every voxel centre of
+//! the dataset's lattice. They become three vector grids in the renderer's linear working space (Rec.709/sRGB
+//! primaries, D65), written as OpenVDB on the dataset's transform:
+//!
+//! - `emission` = the sRGB of j's XYZ (Σ_c j_c · XYZ_c, the plugin's own colour weights): per metre of path, in
+//!   cd/m² — so a path tracer summing `emission · T ds` along a ray in metres gives the pixel `firemedium render`
+//!   writes (its EXR is absolute: Y in cd/m²). Out-of-gamut (negative) components are set to 0, and how much that
+//!   changes the luminance is printed.
+//! - `sigma_a`, `sigma_s` (per metre) = the coefficient spectrum averaged with the weight of each channel's light in
+//!   that RGB component (its positive part): a colour renderer's three "wavelengths".
+//!
+//! What baking loses is printed with the result: atomic lines become their RGB, refraction's curved rays and embers
+//! do not bake (refused), and the fire light becomes the renderer's own volume sampling.
+
+use clap::Args;
+use firemedium::render::scene::{load_plugin, typed_params};
+use firemedium_core::cie::XYZ_TO_SRGB_ROWS;
+use firemedium_dataset::{ChannelSource, Dataset, LoadOptions};
+use firemedium_loader::{Context, Param};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Args)]
+pub struct BakeArgs {
+    /// The fire's dataset (OpenVDB, NanoVDB, or the thesis's formats), as the plugin's `filename` reads it.
+    dataset: PathBuf,
+    /// The baked OpenVDB file (vector grids `sigma_a`, `sigma_s`, `emission`).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// A fire parameter NAME=VALUE (repeatable; docs/params.md, the dataset's and the volume's): `fuel=propane`,
+    /// `temperaturescale=1000`, `source=houdini` ...
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
+    params: Vec<(String, String)>,
+    /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
+    #[arg(long)]
+    plugin: Option<PathBuf>,
+    /// The memory budget in GB for the grids (default: half the machine's memory).
+    #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
+    max_memory: Option<f64>,
+}
+
+fn parse_param(s: &str) -> Result<(String, String), String> {
+    s.split_once('=')
+        .filter(|(n, v)| !n.is_empty() && !v.is_empty())
+        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. fuel=propane"))
+}
+
+/// Features the grids cannot carry: baking them would silently drop them.
+const REFUSED: [(u64, &str); 3] = [
+    (
+        firemedium_abi::FM_FEATURE_REFRACTION,
+        "refraction (curved rays)",
+    ),
+    (firemedium_abi::FM_FEATURE_EMBERS, "embers (opaque spheres)"),
+    (
+        firemedium_abi::FM_FEATURE_DIFFUSION,
+        "diffusion (multiple scattering read as emission)",
+    ),
+];
+
+pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
+    let start = Instant::now();
+    let budget = crate::args::budget(a.max_memory);
+    // The lattice: the dataset's (its first float grid, as `info` reads it).
+    let opts = LoadOptions {
+        max_bytes: budget,
+        ..LoadOptions::default()
+    };
+    let entries =
+        firemedium_dataset::list_grids(&a.dataset, &opts).map_err(|e| (1, e.to_string()))?;
+    let first = entries.iter().find(|g| g.loadable).ok_or_else(|| {
+        (
+            1,
+            format!("{}: no float grid: nothing to bake", a.dataset.display()),
+        )
+    })?;
+    let lattice = Dataset::load(&[ChannelSource::new(&first.name, &a.dataset)], &opts)
+        .map_err(|e| (1, e.to_string()))?;
+    let dims = lattice.dims();
+    // The fire, through the plugin.
+    let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| (1, e.to_string()))?;
+    let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
+    params.extend(
+        typed_params(
+            &plugin,
+            &["dataset", "volume"],
+            "the fire",
+            "--param",
+            &a.params,
+        )
+        .map_err(|e| (2, e))?,
+    );
+    let context = Context {
+        max_bytes: Some(budget),
+        ..Context::default()
+    };
+    let volume = plugin
+        .create_volume_with(&params, &context)
+        .map_err(|e| (1, e.to_string()))?;
+    let features = volume.features().map_err(|e| (1, e.to_string()))?;
+    let refused: Vec<&str> = REFUSED
+        .iter()
+        .filter(|(bit, _)| features & bit != 0)
+        .map(|(_, name)| *name)
+        .collect();
+    if !refused.is_empty() {
+        return Err((
+            1,
+            format!(
+                "{}: the fire holds {}, which grids cannot carry; render it with `firemedium render`, or leave those parameters out",
+                a.dataset.display(),
+                refused.join(", ")
+            ),
+        ));
+    }
+    let info = volume.info();
+    let channels = info.channels as usize;
+    let xyz = volume.channel_xyz().map_err(|e| (1, e.to_string()))?;
+    // Each channel's linear sRGB per unit radiance, and its positive part as the weight of the channel's light in
+    // each RGB component.
+    let rgb_of = |x: &[f64; 3]| XYZ_TO_SRGB_ROWS.map(|r| r[0] * x[0] + r[1] * x[1] + r[2] * x[2]);
+    let channel_rgb: Vec<[f64; 3]> = xyz.iter().map(rgb_of).collect();
+    let weight_sum: [f64; 3] = [0, 1, 2].map(|k| {
+        channel_rgb
+            .iter()
+            .map(|c| c[k].max(0.0))
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE)
+    });
+    let n: usize = dims.iter().product();
+    let bytes = (n as u64).saturating_mul(9 * 4);
+    if bytes > budget {
+        return Err((
+            1,
+            format!(
+                "{}: the baked grids of {}×{}×{} voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
+                a.dataset.display(),
+                dims[0],
+                dims[1],
+                dims[2]
+            ),
+        ));
+    }
+    let zeros = || {
+        let mut v = Vec::new();
+        v.try_reserve_exact(n)
+            .map(|_| {
+                v.resize(n, 0f32);
+                v
+            })
+            .map_err(|_| (1, format!("bake: {n} voxels: out of memory")))
+    };
+    let mut grids: Vec<[Vec<f32>; 3]> = Vec::new();
+    for _ in 0..3 {
+        grids.push([zeros()?, zeros()?, zeros()?]);
+    }
+    let [b0, b1] = [info.bounds_min, info.bounds_max];
+    let voxel = [0, 1, 2].map(|k| (b1[k] - b0[k]) / dims[k] as f64);
+    let (mut luminance, mut clipped) = (0.0f64, 0.0f64);
+    // One z-slice per call.
+    let slice = dims[0] * dims[1];
+    let mut points = vec![[0.0; 3]; slice];
+    let (mut sa, mut ss, mut j) = (
+        vec![0f32; slice * channels],
+        vec![0f32; slice * channels],
+        vec![0f32; slice * channels],
+    );
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                points[x + dims[0] * y] = [
+                    b0[0] + (x as f64 + 0.5) * voxel[0],
+                    b0[1] + (y as f64 + 0.5) * voxel[1],
+                    b0[2] + (z as f64 + 0.5) * voxel[2],
+                ];
+            }
+        }
+        volume
+            .coefficients(&points, &mut sa, &mut ss, &mut j)
+            .map_err(|e| (1, e.to_string()))?;
+        for i in 0..slice {
+            let row = &j[i * channels..(i + 1) * channels];
+            let mut e = [0.0f64; 3];
+            let mut y_lum = 0.0;
+            for (c, v) in row.iter().enumerate() {
+                for k in 0..3 {
+                    e[k] += *v as f64 * channel_rgb[c][k];
+                }
+                y_lum += *v as f64 * xyz[c][1];
+            }
+            let kept: f64 =
+                0.2126 * e[0].max(0.0) + 0.7152 * e[1].max(0.0) + 0.0722 * e[2].max(0.0);
+            luminance += y_lum;
+            clipped += y_lum - kept;
+            let at = i + slice * z;
+            for k in 0..3 {
+                grids[2][k][at] = e[k].max(0.0) as f32;
+                for (g, src) in [(0, &sa), (1, &ss)] {
+                    let row = &src[i * channels..(i + 1) * channels];
+                    let s: f64 = row
+                        .iter()
+                        .zip(&channel_rgb)
+                        .map(|(v, c)| *v as f64 * c[k].max(0.0))
+                        .sum();
+                    grids[g][k][at] = (s / weight_sum[k]) as f32;
+                }
+            }
+        }
+    }
+    let names = ["sigma_a", "sigma_s", "emission"];
+    let vectors: Vec<firemedium_dataset::vdb::VdbVector> = names
+        .iter()
+        .zip(&grids)
+        .map(|(name, g)| (*name, dims, [&g[0][..], &g[1][..], &g[2][..]]))
+        .collect();
+    let bytes = firemedium_dataset::vdb::write_with_vectors(
+        &[],
+        &vectors,
+        glam::DVec3::from_array(b0),
+        glam::DVec3::from_array(voxel),
+    );
+    let out = &a.output;
+    firemedium::imageio::write_atomic(out, |tmp| {
+        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: cannot write: {e}", out.display()))
+    })
+    .map_err(|e| (1, e))?;
+    // (Clamping a negative component raises the luminance: the change is signed.)
+    let change = if luminance > 0.0 {
+        -100.0 * clipped / luminance
+    } else {
+        0.0
+    };
+    let lines = features & firemedium_abi::FM_FEATURE_THICK_LINES != 0;
+    Ok(format!(
+        "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre), {:.1} MB in {:.2} s\n\
+         lost in baking: the emission's out-of-gamut (negative) components, set to 0 ({change:+.2} % of its luminance){}; the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n",
+        out.display(),
+        dims[0],
+        dims[1],
+        dims[2],
+        bytes.len() as f64 / 1e6,
+        start.elapsed().as_secs_f64(),
+        if lines { "; atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption)" } else { "" },
+        info.g,
+    ))
+}

@@ -1,0 +1,124 @@
+//! `firemedium bake`: the fire's coefficients as RGB grids on the dataset's lattice, which a renderer without the
+//! plugin integrates to the fire's own luminance.
+
+use crate::common::{exe, root, scratch::Scratch};
+use firemedium_dataset::{ChannelSource, Dataset, LoadOptions};
+use firemedium_loader::{Param, Plugin};
+use glam::DVec3;
+use std::process::Command;
+
+fn plugin() -> Plugin {
+    // SAFETY: the plugin this test run built.
+    unsafe { Plugin::load(crate::common::plugin_file()) }.unwrap()
+}
+
+#[test]
+fn baked_grids_integrate_to_the_fires_luminance() {
+    let dir = Scratch::new("bake", "campfire");
+    let campfire = root().join("scenes/campfire/campfire.vdb");
+    let out = dir.join("baked.vdb");
+    let o = Command::new(exe("firemedium"))
+        .args(["bake"])
+        .arg(&campfire)
+        .arg("-o")
+        .arg(&out)
+        .args(["--param", "fuel=propane"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("72×71×95 voxels") && text.contains("lost in baking"),
+        "{text}"
+    );
+    // The grids, on the dataset's lattice and transform.
+    let names = [
+        "sigma_a.x",
+        "sigma_a.y",
+        "sigma_a.z",
+        "emission.x",
+        "emission.y",
+        "emission.z",
+    ];
+    let sources: Vec<ChannelSource> = names.iter().map(|n| ChannelSource::new(n, &out)).collect();
+    let baked = Dataset::load(&sources, &LoadOptions::default()).unwrap();
+    let fire = Dataset::load(
+        &[ChannelSource::new("density", &campfire)],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(baked.dims(), fire.dims());
+    for k in 0..2 {
+        assert!((baked.bounds()[k] - fire.bounds()[k]).abs().max_element() < 1e-9);
+    }
+    // Along rays through the flame, a colour renderer's integral over the baked grids (1 mm steps: T per RGB
+    // component from sigma_a, emission summed) against the plugin's own march, both as luminance in cd/m².
+    let volume = plugin()
+        .create_volume(&[
+            Param::string("filename", &campfire.to_string_lossy()),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap();
+    let y: Vec<f64> = volume.channel_xyz().unwrap().iter().map(|c| c[1]).collect();
+    let c = volume.info().channels as usize;
+    for (origin, z) in [
+        ([0.0, -3.0, 0.3], 0.3),
+        ([0.1, -3.0, 0.5], 0.5),
+        ([-0.05, -3.0, 0.8], 0.8),
+    ] {
+        let ray = firemedium_loader::Ray {
+            origin,
+            direction: [0.0, 1.0, 0.0],
+            tmin: 0.0,
+            tmax: 1e30,
+            seed: 1,
+        };
+        let mut rad = vec![0f32; c];
+        volume.integrate(&[ray], &mut rad, None, None).unwrap();
+        let want: f64 = rad.iter().zip(&y).map(|(l, w)| *l as f64 * w).sum();
+        let (mut l, mut tau) = ([0.0f64; 3], [0.0f64; 3]);
+        let ds = 0.001;
+        for i in 0..6000 {
+            let p = DVec3::new(origin[0], origin[1] + (i as f64 + 0.5) * ds, z);
+            for k in 0..3 {
+                let sa = baked.sample(k, p) as f64;
+                l[k] += (-tau[k] - 0.5 * sa * ds).exp() * baked.sample(3 + k, p) as f64 * ds;
+                tau[k] += sa * ds;
+            }
+        }
+        let got = 0.2126 * l[0] + 0.7152 * l[1] + 0.0722 * l[2];
+        println!("bake: ray at z = {z}: {got:.2} cd/m² from the grids, {want:.2} from the plugin's march");
+        assert!((got / want - 1.0).abs() < 0.05, "{got} against {want}");
+    }
+}
+
+#[test]
+fn what_grids_cannot_carry_is_refused_by_name() {
+    let dir = Scratch::new("bake", "refused");
+    let o = Command::new(exe("firemedium"))
+        .arg("bake")
+        .arg(root().join("scenes/campfire/campfire.vdb"))
+        .arg("-o")
+        .arg(dir.join("x.vdb"))
+        .args(["--param", "refraction=true"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("refraction") && e.contains("firemedium render"),
+        "{e}"
+    );
+    assert!(!dir.join("x.vdb").exists());
+    // A parameter the fire does not have: named, with the ones it has.
+    let o = Command::new(exe("firemedium"))
+        .arg("bake")
+        .arg(root().join("scenes/campfire/campfire.vdb"))
+        .arg("-o")
+        .arg(dir.join("x.vdb"))
+        .args(["--param", "fule=propane"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("has no parameter \"fule\""));
+}
