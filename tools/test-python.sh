@@ -1,20 +1,26 @@
 #!/usr/bin/env bash
-# The Python package's and the Mitsuba 3 adapter's tests, against the plugin and the command the release build
-# made (run `cargo build --release` or the test suite first): numpy and mitsuba==3.9.1 come from PyPI when missing,
-# the package is installed from ./python as a user installs it, and the guides' examples run as written.
-# About two minutes on 2 cores (three small Mitsuba renders, the examples), plus Mitsuba's download once.
+# The Python package's, the Mitsuba 3 adapter's and the Blender add-on's tests, against the plugin and the command
+# the release build made (run `cargo build --release` or the test suite first): numpy, mitsuba==3.9.1 and Blender's
+# Python module (bpy 4.5, for Python 3.11) come from PyPI when missing, the package is installed from ./python as
+# a user installs it, and the guides' examples run as written. About two minutes on 2 cores (small Mitsuba and
+# Cycles renders, the examples), plus the downloads once (bpy is about 350 MB).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 python3 -c 'import numpy' 2>/dev/null || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore numpy
 python3 -c 'import mitsuba, sys; sys.exit(mitsuba.__version__ != "3.9.1")' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "mitsuba==3.9.1"
+python3 -c 'import bpy, sys; sys.exit(bpy.app.version < (4, 5, 0))' 2>/dev/null \
+    || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "bpy>=4.5,<5"
 python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --force-reinstall --no-deps ./python
 lib=libfiremedium_plugin.so
 plugin="target/release/$lib"
 [[ -f "$plugin" ]] || plugin="target/release/deps/$lib"
-export FIREMEDIUM_PLUGIN="$PWD/$plugin" FIREMEDIUM_COMMAND="$PWD/target/release/firemedium" FIREMEDIUM_REQUIRE_MITSUBA=1
+export FIREMEDIUM_PLUGIN="$PWD/$plugin" FIREMEDIUM_COMMAND="$PWD/target/release/firemedium"
+export FIREMEDIUM_REQUIRE_MITSUBA=1 FIREMEDIUM_REQUIRE_BLENDER=1
 for f in "$FIREMEDIUM_PLUGIN" "$FIREMEDIUM_COMMAND"; do
     [[ -f "$f" ]] || { echo "test-python: $f is missing (cargo build --release)" >&2; exit 1; }
 done
 (cd python/tests && python3 -m unittest -v 2>&1)
 (cd host-adapters/mitsuba/tests && python3 -m unittest -v 2>&1)
+# (Blender's module prints its memory bookkeeping at exit; the result is unittest's.)
+(cd host-adapters/blender/tests && python3 -m unittest -v 2>&1 | grep -v '^Fra:\|leak detector\|Not freed')

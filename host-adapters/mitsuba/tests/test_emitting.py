@@ -1,5 +1,6 @@
 """An emitting fire lighting a floor renders in Mitsuba (through the adapter and `firepath`) as `firemedium render`
-renders the same scene written for pbrt-v4: the flame's luminance and the floor's, in absolute units.
+renders the same scene written for pbrt-v4 (tests/data/scenes/campfire-floor.pbrt): the flame's luminance and the
+floor's, in absolute units.
 
 Mitsuba's spectral film is relative (a constant spectrum of 1 W·m⁻²·sr⁻¹·nm⁻¹ gives Y = 1); firemedium's is in
 cd/m², so Mitsuba's Y is multiplied by 683 lm/W × ∫ȳ dλ (106.857 nm). Mitsuba's camera is right-handed and
@@ -26,27 +27,6 @@ T = mi.ScalarTransform4f
 RES = 32
 SPP = 32
 K = 683.0 * 106.856895
-BOX = "-0.6 -0.6 0.005 0.6 -0.6 0.005 -0.6 0.6 0.005 0.6 0.6 0.005 -0.6 -0.6 1.6 0.6 -0.6 1.6 -0.6 0.6 1.6 0.6 0.6 1.6"
-PBRT = f"""LookAt 0 -4.2 1.6   0 0 0.55   0 0 1
-Camera "perspective" "float fov" 40
-Film "rgb" "integer xresolution" {RES} "integer yresolution" {RES}
-PixelFilter "box"
-Sampler "independent" "integer pixelsamples" 2048
-Integrator "volpath" "integer maxdepth" 2
-WorldBegin
-MakeNamedMedium "fire" "string type" "fire" "string dataset" "{{dataset}}" "string fuel" "propane"
-AttributeBegin
-  MediumInterface "fire" ""
-  Material "interface"
-  Shape "trianglemesh" "point3 P" [ {BOX} ] "integer indices" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]
-AttributeEnd
-AttributeBegin
-  Material "diffuse" "spectrum reflectance" [ 300 0.5 900 0.5 ]
-  Shape "trianglemesh" "point3 P" [ -10 -10 0  10 -10 0  10 10 0  -10 10 0 ] "integer indices" [ 0 1 2 0 2 3 ]
-AttributeEnd
-"""
-
-
 def mitsuba_scene(dataset: str, fire_light: bool = True, spp: int = SPP) -> dict:
     return {
         "type": "scene",
@@ -77,8 +57,8 @@ class EmittingFire(unittest.TestCase):
         cls.dir = tempfile.TemporaryDirectory(prefix="firemedium-mitsuba-")
         d = Path(cls.dir.name)
         cls.dataset = str(repository() / "scenes" / "campfire" / "campfire.vdb")
-        (d / "scene.pbrt").write_text(PBRT.replace("{dataset}", cls.dataset))
-        subprocess.run([command(), "render", str(d / "scene.pbrt"), "-o", str(d / "ref.exr"), "--quiet"], check=True)
+        scene = repository() / "tests" / "data" / "scenes" / "campfire-floor.pbrt"
+        subprocess.run([command(), "render", str(scene), "-o", str(d / "ref.exr"), "--quiet"], check=True)
         cls.ref = luminance(mi.Bitmap(str(d / "ref.exr")))
 
     @classmethod

@@ -8,8 +8,9 @@
 //!
 //! - `emission` = the sRGB of j's XYZ (Σ_c j_c · XYZ_c, the plugin's own colour weights): per metre of path, in
 //!   cd/m² — so a path tracer summing `emission · T ds` along a ray in metres gives the pixel `firemedium render`
-//!   writes (its EXR is absolute: Y in cd/m²). Out-of-gamut (negative) components are set to 0, and how much that
-//!   changes the luminance is printed.
+//!   writes (its EXR is absolute: Y in cd/m²). A flame's colour lies outside Rec.709 (its blue is negative): the
+//!   negative components are kept, so a linear renderer reproduces the flame's luminance and chromaticity (a
+//!   compositor clipping them shifts both: how much is printed).
 //! - `sigma_a`, `sigma_s` (per metre) = the coefficient spectrum averaged with the weight of each channel's light in
 //!   that RGB component (its positive part): a colour renderer's three "wavelengths".
 //!
@@ -193,13 +194,13 @@ pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
                 }
                 y_lum += *v as f64 * xyz[c][1];
             }
-            let kept: f64 =
+            let clipped_y: f64 =
                 0.2126 * e[0].max(0.0) + 0.7152 * e[1].max(0.0) + 0.0722 * e[2].max(0.0);
             luminance += y_lum;
-            clipped += y_lum - kept;
+            clipped += y_lum - clipped_y;
             let at = i + slice * z;
             for k in 0..3 {
-                grids[2][k][at] = e[k].max(0.0) as f32;
+                grids[2][k][at] = e[k] as f32;
                 for (g, src) in [(0, &sa), (1, &ss)] {
                     let row = &src[i * channels..(i + 1) * channels];
                     let s: f64 = row
@@ -238,14 +239,14 @@ pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
     let lines = features & firemedium_abi::FM_FEATURE_THICK_LINES != 0;
     Ok(format!(
         "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre), {:.1} MB in {:.2} s\n\
-         lost in baking: the emission's out-of-gamut (negative) components, set to 0 ({change:+.2} % of its luminance){}; the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n",
+         kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n",
         out.display(),
         dims[0],
         dims[1],
         dims[2],
         bytes.len() as f64 / 1e6,
         start.elapsed().as_secs_f64(),
-        if lines { "; atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption)" } else { "" },
+        if lines { "atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption); " } else { "" },
         info.g,
     ))
 }

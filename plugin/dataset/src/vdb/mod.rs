@@ -735,6 +735,61 @@ pub fn write_tiled(
     write_grids(&all, p0, voxel)
 }
 
+/// The grid's metadata as OpenVDB writes it and readers that read metadata alone rely on (Blender, Houdini list
+/// grids by their `name` and place them by `file_bbox_min`/`file_bbox_max` before loading any voxel): its name,
+/// class, the active voxels' index-space bounds and count.
+fn write_grid_metadata(out: &mut Vec<u8>, name: &str, leaves: &[VdbLeaf], tiles: &[VdbTile]) {
+    let (mut lo, mut hi, mut count) = ([i32::MAX; 3], [i32::MIN; 3], 0i64);
+    let mut grow = |a: [i32; 3], b: [i32; 3], n: i64| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(a[k]);
+            hi[k] = hi[k].max(b[k]);
+        }
+        count += n;
+    };
+    for (origin, mask, _) in leaves {
+        for (w, word) in mask.iter().enumerate() {
+            let mut bits = *word;
+            while bits != 0 {
+                let n = (w * 64 + bits.trailing_zeros() as usize) as i32;
+                bits &= bits - 1;
+                // A leaf's voxel n is (x, y, z) = (n >> 6, (n >> 3) & 7, n & 7) from its origin.
+                let v = [
+                    origin[0] + (n >> 6),
+                    origin[1] + ((n >> 3) & 7),
+                    origin[2] + (n & 7),
+                ];
+                grow(v, v, 1);
+            }
+        }
+    }
+    for (origin, size, _) in tiles {
+        grow(
+            *origin,
+            origin.map(|o| o + size - 1),
+            i64::from(*size).pow(3),
+        );
+    }
+    if count == 0 {
+        (lo, hi) = ([0; 3], [0; 3]);
+    }
+    let entry = |out: &mut Vec<u8>, key: &str, ty: &str, value: &[u8]| {
+        for s in [key, ty] {
+            out.extend_from_slice(&(s.len() as u32).to_le_bytes());
+            out.extend_from_slice(s.as_bytes());
+        }
+        out.extend_from_slice(&(value.len() as u32).to_le_bytes());
+        out.extend_from_slice(value);
+    };
+    let vec3i = |v: [i32; 3]| v.iter().flat_map(|c| c.to_le_bytes()).collect::<Vec<u8>>();
+    out.extend_from_slice(&5u32.to_le_bytes());
+    entry(out, "class", "string", b"unknown");
+    entry(out, "file_bbox_max", "vec3i", &vec3i(hi));
+    entry(out, "file_bbox_min", "vec3i", &vec3i(lo));
+    entry(out, "file_voxel_count", "int64", &count.to_le_bytes());
+    entry(out, "name", "string", name.as_bytes());
+}
+
 /// A grid to write: name, floats per voxel, leaves, tiles.
 type WriteGrid<'a> = (&'a str, usize, Vec<VdbLeaf>, Vec<VdbTile>);
 
@@ -770,7 +825,7 @@ fn write_grids(grids: &[WriteGrid], p0: DVec3, voxel: DVec3) -> Vec<u8> {
         out.extend_from_slice(&[0u8; 24]);
         let grid_pos = out.len();
         out.extend_from_slice(&0u32.to_le_bytes()); // compression: none
-        out.extend_from_slice(&0u32.to_le_bytes()); // grid metadata
+        write_grid_metadata(&mut out, name, leaves, tiles);
         put_str(&mut out, "ScaleTranslateMap");
         let translation = p0 + 0.5 * voxel;
         for v in [

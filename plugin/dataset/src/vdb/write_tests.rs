@@ -73,3 +73,39 @@ fn written_grids_read_back_voxel_for_voxel() {
         }
     }
 }
+
+#[test]
+fn each_grid_carries_the_metadata_readers_list_it_by() {
+    // OpenVDB's own readers (Blender, Houdini) name a grid and place it by its metadata before loading voxels:
+    // `name`, and the active voxels' index bounds and count.
+    let dims = [10, 9, 20];
+    let mut v = vec![0f32; 10 * 9 * 20];
+    v[3 + 10 * (2 + 9 * 5)] = 1.0; // voxel (3, 2, 5)
+    v[9 + 10 * (8 + 9 * 17)] = 2.0; // voxel (9, 8, 17)
+    let bytes = write(&[("flame", dims, &v)], DVec3::ZERO, DVec3::ONE);
+    let find = |key: &str, ty: &str| {
+        let mut pat = (key.len() as u32).to_le_bytes().to_vec();
+        pat.extend_from_slice(key.as_bytes());
+        pat.extend_from_slice(&(ty.len() as u32).to_le_bytes());
+        pat.extend_from_slice(ty.as_bytes());
+        let at = bytes
+            .windows(pat.len())
+            .position(|w| w == pat)
+            .unwrap_or_else(|| panic!("no {key}"));
+        let size = u32::from_le_bytes(
+            bytes[at + pat.len()..at + pat.len() + 4]
+                .try_into()
+                .unwrap(),
+        ) as usize;
+        bytes[at + pat.len() + 4..at + pat.len() + 4 + size].to_vec()
+    };
+    assert_eq!(find("name", "string"), b"flame");
+    let vec3i =
+        |b: Vec<u8>| [0, 1, 2].map(|k| i32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap()));
+    assert_eq!(vec3i(find("file_bbox_min", "vec3i")), [3, 2, 5]);
+    assert_eq!(vec3i(find("file_bbox_max", "vec3i")), [9, 8, 17]);
+    assert_eq!(
+        i64::from_le_bytes(find("file_voxel_count", "int64").try_into().unwrap()),
+        2
+    );
+}

@@ -1,0 +1,123 @@
+"""The fire in Blender: `firemedium bake` and the add-on's import, rendered by Cycles on the CPU, against
+`firemedium render` of the same scene (tests/data/scenes/campfire-floor.pbrt): the flame's and the floor's mean
+luminance, and the flame's chromaticity.
+
+Cycles' film is in the baked grids' units (cd/m² for the emission integrated per metre), so the two renders are
+compared as they are; Blender's camera is right-handed and pbrt-v4's left-handed, so Blender's image is mirrored.
+"""
+
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(ROOT / "host-adapters" / "blender"))
+
+try:
+    import bpy
+    import mathutils
+except ImportError:
+    if os.environ.get("FIREMEDIUM_REQUIRE_BLENDER"):
+        raise
+    raise unittest.SkipTest("Blender's Python module is not installed (pip install bpy, 4.5 for Python 3.11)")
+
+import firemedium_blender as addon  # noqa: E402
+
+SPP = 32
+# Linear Rec.709 → XYZ.
+M = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750], [0.0193339, 0.1191920, 0.9503041]])
+
+
+def command() -> str:
+    exe = os.environ.get("FIREMEDIUM_COMMAND") or str(ROOT / "target" / "release" / "firemedium")
+    if not Path(exe).is_file():
+        raise unittest.SkipTest(f"{exe} is not built (cargo build --release)")
+    os.environ["FIREMEDIUM_COMMAND"] = exe
+    return exe
+
+
+def read_rgb(path: Path) -> np.ndarray:
+    """An EXR's RGB, read by Blender's own image loader (top row first)."""
+    img = bpy.data.images.load(str(path))
+    w, h = img.size
+    px = np.array(img.pixels[:], dtype=np.float64).reshape(h, w, img.channels)[::-1, :, :3]
+    bpy.data.images.remove(img)
+    return px
+
+
+def cycles_scene(dataset: str, out: Path) -> None:
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    addon.render_settings(scene, samples=SPP)
+    scene.cycles.seed = 3
+    scene.render.resolution_x = scene.render.resolution_y = 32
+    scene.render.resolution_percentage = 100
+    scene.cycles.pixel_filter_type = "BOX"  # one pixel wide, as the reference's
+    scene.cycles.filter_width = 1.0
+    world = bpy.data.worlds.new("black")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    scene.world = world
+    addon.import_fire(dataset, {"fuel": "propane"})
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    floor = bpy.context.active_object
+    m = bpy.data.materials.new("floor")
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.remove(nt.nodes["Principled BSDF"])
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    nt.links.new(d.outputs["BSDF"], nt.nodes["Material Output"].inputs["Surface"])
+    floor.data.materials.append(m)
+    cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    cam.data.angle = math.radians(40)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    eye, target = mathutils.Vector((0, -4.2, 1.6)), mathutils.Vector((0, 0, 0.55))
+    cam.location = eye
+    cam.rotation_euler = (target - eye).to_track_quat("-Z", "Y").to_euler()
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.filepath = str(out)
+    bpy.ops.render.render(write_still=True)
+
+
+class Cycles(unittest.TestCase):
+    def test_the_baked_fire_in_cycles_is_firemedium_renders(self):
+        exe = command()
+        with tempfile.TemporaryDirectory(prefix="firemedium-blender-") as d:
+            d = Path(d)
+            subprocess.run([exe, "render", str(ROOT / "tests/data/scenes/campfire-floor.pbrt"), "-o", str(d / "ref.exr"),
+                            "--quiet"], check=True)
+            cycles_scene(str(ROOT / "scenes/campfire/campfire.vdb"), d / "cycles.exr")
+            ref = read_rgb(d / "ref.exr")
+            img = read_rgb(d / "cycles.exr")[:, ::-1]
+        y_ref, y = ref @ M[1], img @ M[1]
+        flame = y_ref > 0.05 * y_ref.max()
+        floor = np.zeros_like(flame)
+        floor[-8:, :] = True
+        floor &= ~flame
+
+        def xy(rgb):
+            X = rgb.sum(axis=0) @ M.T
+            return X[:2] / X.sum()
+
+        r_flame = y[flame].mean() / y_ref[flame].mean()
+        r_floor = y[floor].mean() / y_ref[floor].mean()
+        dxy = np.abs(xy(img[flame]) - xy(ref[flame])).max()
+        print(f"cycles: flame {y[flame].mean():.1f} against {y_ref[flame].mean():.1f} cd/m² ({r_flame:.4f}); floor "
+              f"{y[floor].mean():.3f} against {y_ref[floor].mean():.3f} ({r_floor:.4f}); flame xy {xy(img[flame]).round(4)}"
+              f" against {xy(ref[flame]).round(4)}")
+        self.assertLess(abs(r_flame - 1.0), 0.05)
+        self.assertLess(abs(r_floor - 1.0), 0.10)
+        self.assertLess(dxy, 0.01)
+
+
+if __name__ == "__main__":
+    unittest.main()
