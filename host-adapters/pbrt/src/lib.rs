@@ -26,3 +26,15 @@ pub mod metrics;
 pub mod render;
 pub mod term;
 pub mod tonemap;
+
+/// The program `name` beside the running executable (`firemedium` and `firemedium-bench` find each other so,
+/// in a build's output folder and in an installed `bin/`): its path, or the path where it was looked for.
+pub fn program_beside(name: &str) -> Result<std::path::PathBuf, std::path::PathBuf> {
+    let exe = std::env::current_exe().unwrap_or_default();
+    let p = exe.with_file_name(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    if p.is_file() {
+        Ok(p)
+    } else {
+        Err(p)
+    }
+}

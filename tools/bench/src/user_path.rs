@@ -83,16 +83,12 @@ pub fn scene(
 
 /// The `firemedium` program beside this one (the user's path: the renderer and the plugin it loads).
 fn renderer() -> Result<std::path::PathBuf, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("this executable: {e}"))?;
-    let firemedium = exe.with_file_name(format!("firemedium{}", std::env::consts::EXE_SUFFIX));
-    if firemedium.is_file() {
-        Ok(firemedium)
-    } else {
-        Err(format!(
+    firemedium::program_beside("firemedium").map_err(|p| {
+        format!(
             "{} is not there: the user's-path benchmarks render with it (build it with `cargo build --release -p firemedium`)",
-            firemedium.display()
-        ))
-    }
+            p.display()
+        )
+    })
 }
 
 /// Renders `scene` with `firemedium render` (the program beside this one) and `extra` arguments into `dir`.

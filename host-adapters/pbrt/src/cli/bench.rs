@@ -8,16 +8,12 @@ use std::process::{Command, ExitCode};
 
 /// The benchmark program's path: beside this executable.
 fn program() -> Result<PathBuf, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("bench: this executable: {e}"))?;
-    let bench = exe.with_file_name(format!("firemedium-bench{}", std::env::consts::EXE_SUFFIX));
-    if bench.is_file() {
-        Ok(bench)
-    } else {
-        Err(format!(
+    firemedium::program_beside("firemedium-bench").map_err(|p| {
+        format!(
             "bench: the benchmarks are the program {}, which is not there (build it with `cargo build --release -p firemedium-bench`, or install with tools/install.sh)",
-            bench.display()
-        ))
-    }
+            p.display()
+        )
+    })
 }
 
 /// Runs `firemedium-bench ARGS`, its output going straight to ours; its exit status is ours.
