@@ -122,3 +122,60 @@ fn what_grids_cannot_carry_is_refused_by_name() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("has no parameter \"fule\""));
 }
+
+#[test]
+fn a_sequence_bakes_frame_by_frame() {
+    let dir = Scratch::new("bake", "frames");
+    let run = |args: &[&str]| {
+        let o = Command::new(exe("firemedium"))
+            .current_dir(&*dir)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    run(&[
+        "gen",
+        "torch",
+        "--resolution",
+        "24",
+        "--frames",
+        "30-31",
+        "-o",
+        "torch_####.vdb",
+    ]);
+    let text = run(&[
+        "bake",
+        "torch_####.vdb",
+        "--frames",
+        "30-31",
+        "-o",
+        "baked_####.vdb",
+    ]);
+    assert_eq!(text.matches("wrote baked_00").count(), 2, "{text}");
+    let (a, b) = (
+        std::fs::read(dir.join("baked_0030.vdb")).unwrap(),
+        std::fs::read(dir.join("baked_0031.vdb")).unwrap(),
+    );
+    assert!(a.len() > 1000 && a != b, "two frames, two fires");
+    // An output name without #### cannot hold a sequence.
+    let o = Command::new(exe("firemedium"))
+        .current_dir(&*dir)
+        .args([
+            "bake",
+            "torch_####.vdb",
+            "--frames",
+            "30-31",
+            "-o",
+            "one.vdb",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("####"));
+}

@@ -39,6 +39,9 @@ pub struct BakeArgs {
     /// The fire plugin library (default: FIREMEDIUM_PLUGIN, FIREMEDIUM_PLUGIN_PATH, or beside the executable).
     #[arg(long)]
     plugin: Option<PathBuf>,
+    /// Frames A-B or A-B:STEP of a sequence: the dataset's and the output's names hold #### (the frame number).
+    #[arg(long, value_name = "A-B", value_parser = crate::args::parse_frames)]
+    frames: Option<crate::args::Frames>,
     /// The memory budget in GB for the grids (default: half the machine's memory).
     #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
     max_memory: Option<f64>,
@@ -65,11 +68,41 @@ const REFUSED: [(u64, &str); 3] = [
 ];
 
 pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
+    let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| (1, e.to_string()))?;
+    let Some(frames) = &a.frames else {
+        return bake(a, &plugin, None, &a.output);
+    };
+    if !a.output.to_string_lossy().contains('#') {
+        return Err((
+            2,
+            format!(
+                "--frames needs an output name holding #### (the frame number): {}",
+                a.output.display()
+            ),
+        ));
+    }
+    let mut report = String::new();
+    for &f in &frames.0 {
+        let out =
+            firemedium_dataset::frame_path(&a.output, Some(f)).map_err(|e| (2, e.to_string()))?;
+        report += &bake(a, &plugin, Some(f), &out)?;
+    }
+    Ok(report)
+}
+
+/// One frame (`None`: the dataset as named) baked into `out`.
+fn bake(
+    a: &BakeArgs,
+    plugin: &firemedium_loader::Plugin,
+    frame: Option<i64>,
+    out: &std::path::Path,
+) -> Result<String, (u8, String)> {
     let start = Instant::now();
     let budget = crate::args::budget(a.max_memory);
     // The lattice: the dataset's (its first float grid, as `info` reads it).
     let opts = LoadOptions {
         max_bytes: budget,
+        frame,
         ..LoadOptions::default()
     };
     let entries =
@@ -84,11 +117,10 @@ pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
         .map_err(|e| (1, e.to_string()))?;
     let dims = lattice.dims();
     // The fire, through the plugin.
-    let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| (1, e.to_string()))?;
     let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
     params.extend(
         typed_params(
-            &plugin,
+            plugin,
             &["dataset", "volume"],
             "the fire",
             "--param",
@@ -98,6 +130,7 @@ pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
     );
     let context = Context {
         max_bytes: Some(budget),
+        frame,
         ..Context::default()
     };
     let volume = plugin
@@ -225,7 +258,6 @@ pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
         glam::DVec3::from_array(b0),
         glam::DVec3::from_array(voxel),
     );
-    let out = &a.output;
     firemedium::imageio::write_atomic(out, |tmp| {
         std::fs::write(tmp, &bytes).map_err(|e| format!("{}: cannot write: {e}", out.display()))
     })
