@@ -5,7 +5,8 @@ The operator "Import firemedium fire" (File ▸ Import, or ``bpy.ops.firemedium.
 ``sigma_a``, ``sigma_s`` and ``emission``: linear Rec.709, per metre, emission in cd/m² per metre — as a volume
 object, and gives it a material whose Volume Coefficients node takes the three grids directly (Blender 4.5+), so
 Cycles renders the fire's physics (soot spectra, absolute Planck emission, the CIE observer) instead of a
-blackbody ramp. A panel on the object re-bakes after a parameter changes.
+blackbody ramp. A panel on the object (Properties ▸ Object ▸ firemedium fire) shows the fire's parameters and
+re-bakes after one changes (``bpy.ops.firemedium.rebake``).
 
 Units: a Cycles render of the fire is in the same absolute units as ``firemedium render``'s EXR (Y in cd/m²).
 Set the view's exposure to about −log2 of the flame's luminance (``exposure_for`` below) to see it.
@@ -87,9 +88,24 @@ def import_fire(dataset: str, params: dict[str, object] | None = None, baked: st
     obj = bpy.data.objects.new(name, vol)
     bpy.context.scene.collection.objects.link(obj)
     vol.materials.append(fire_material(name + " material"))
+    # What re-baking needs, on the object: the dataset, the baked file and the fire's parameters (edited in the
+    # panel, or as the object's custom properties).
     obj["firemedium_dataset"] = dataset
-    obj["firemedium_params"] = ";".join(f"{k}={v}" for k, v in params.items())
+    obj["firemedium_baked"] = baked
+    obj["firemedium_params"] = {k: v for k, v in params.items()}
     return obj
+
+
+def rebake(obj: bpy.types.Object) -> str:
+    """Bakes `obj`'s dataset again with its (edited) parameters into its file, and reloads the grids."""
+    if "firemedium_dataset" not in obj:
+        raise RuntimeError(f"{obj.name} is not a firemedium fire (import one with File > Import > firemedium fire)")
+    params = {k: v for k, v in obj["firemedium_params"].items()}
+    text = bake(obj["firemedium_dataset"], obj["firemedium_baked"], params)
+    obj.data.grids.unload()
+    obj.data.filepath = obj["firemedium_baked"]
+    obj.data.update_tag()
+    return text
 
 
 def exposure_for(luminance_cd_m2: float) -> float:
@@ -135,15 +151,61 @@ class FIREMEDIUM_OT_import(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
 
+class FIREMEDIUM_OT_rebake(bpy.types.Operator):
+    """Bake the active firemedium fire again with its parameters"""
+
+    bl_idname = "firemedium.rebake"
+    bl_label = "Re-bake firemedium fire"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and "firemedium_dataset" in context.object
+
+    def execute(self, context):
+        try:
+            rebake(context.object)
+        except RuntimeError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+
+class FIREMEDIUM_PT_fire(bpy.types.Panel):
+    """The fire's main parameters, and the button that re-bakes it (Properties ▸ Object)."""
+
+    bl_label = "firemedium fire"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and "firemedium_dataset" in context.object
+
+    def draw(self, context):
+        obj = context.object
+        self.layout.label(text=str(obj["firemedium_dataset"]))
+        params = obj["firemedium_params"]
+        for key in params.keys():
+            self.layout.prop(params, f'["{key}"]', text=key)
+        self.layout.operator(FIREMEDIUM_OT_rebake.bl_idname)
+
+
 def menu(self, context):
     self.layout.operator(FIREMEDIUM_OT_import.bl_idname, text="firemedium fire (.vdb)")
 
 
+CLASSES = (FIREMEDIUM_OT_import, FIREMEDIUM_OT_rebake, FIREMEDIUM_PT_fire)
+
+
 def register():
-    bpy.utils.register_class(FIREMEDIUM_OT_import)
+    for c in CLASSES:
+        bpy.utils.register_class(c)
     bpy.types.TOPBAR_MT_file_import.append(menu)
 
 
 def unregister():
     bpy.types.TOPBAR_MT_file_import.remove(menu)
-    bpy.utils.unregister_class(FIREMEDIUM_OT_import)
+    for c in reversed(CLASSES):
+        bpy.utils.unregister_class(c)

@@ -119,5 +119,34 @@ class Cycles(unittest.TestCase):
         self.assertLess(dxy, 0.01)
 
 
+class Rebake(unittest.TestCase):
+    def test_an_edited_parameter_rebakes_the_fire(self):
+        command()
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        addon.register()
+        try:
+            with tempfile.TemporaryDirectory(prefix="firemedium-blender-") as d:
+                baked = str(Path(d) / "fire.vdb")
+                addon.bake(str(ROOT / "scenes/campfire/campfire.vdb"), baked, {"fuel": "propane"})
+                obj = addon.import_fire(str(ROOT / "scenes/campfire/campfire.vdb"), {"fuel": "propane"}, baked=baked)
+                before = Path(baked).read_bytes()
+                self.assertEqual(dict(obj["firemedium_params"]), {"fuel": "propane"})
+                # Half the soot: the file is baked again, and Blender reads the same three grids from it.
+                obj["firemedium_params"]["sootscale"] = 0.5
+                bpy.context.view_layer.objects.active = obj
+                self.assertEqual(bpy.ops.firemedium.rebake(), {"FINISHED"})
+                after = Path(baked).read_bytes()
+                self.assertNotEqual(before, after)
+                grids = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.grids
+                self.assertEqual(sorted(g.name for g in grids), ["emission", "sigma_a", "sigma_s"])
+                # A bad parameter is the command's message, and the operator cancels.
+                obj["firemedium_params"]["fule"] = "propane"
+                with self.assertRaises(RuntimeError) as e:
+                    addon.rebake(obj)
+                self.assertIn("fule", str(e.exception))
+        finally:
+            addon.unregister()
+
+
 if __name__ == "__main__":
     unittest.main()
