@@ -295,7 +295,7 @@ class FirePath(mi.SamplingIntegrator):
 
     # -- next-event estimation towards the fire light -------------------------------------------------------
 
-    def _fire_nee(self, scene, sampler, ray_origin_it, eval_fn, pdf_fn, time, wavelengths):
+    def _fire_nee(self, scene, sampler, ray_origin_it, eval_fn, time, wavelengths):
         """The fire lights' contribution at a vertex: per fire, a point sampled by its power, the line
         estimate along the direction to it, MIS against the vertex's own sampling (eval_fn(wo) → (value, pdf))."""
         total = mi.Spectrum(0.0)
@@ -404,7 +404,7 @@ class FirePath(mi.SamplingIntegrator):
                         def eval_phase(wo, mei=mei, phase=phase, ctx=ctx):
                             v, p = phase.eval_pdf(ctx, mei, wo)
                             return mi.Spectrum(v), float(p)
-                        L += beta * self._fire_nee(scene, sampler, mei, eval_phase, None, float(ray.time),
+                        L += beta * self._fire_nee(scene, sampler, mei, eval_phase, float(ray.time),
                                                    ray.wavelengths)
                     wo, w_phase, pdf = phase.sample(ctx, mei, sampler.next_1d(), sampler.next_2d())
                     if not float(pdf) > 0.0:
@@ -455,7 +455,7 @@ class FirePath(mi.SamplingIntegrator):
                 def eval_bsdf(wo, si=si, bsdf=bsdf, ctx=ctx):
                     v, p = bsdf.eval_pdf(ctx, si, si.to_local(wo))
                     return v, float(p)
-                L += beta * self._fire_nee(scene, sampler, si, eval_bsdf, None, float(ray.time), ray.wavelengths)
+                L += beta * self._fire_nee(scene, sampler, si, eval_bsdf, float(ray.time), ray.wavelengths)
             bs, w_bsdf = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d())
             if not float(bs.pdf) > 0.0:
                 break

@@ -196,28 +196,34 @@ fn bake(
     let [b0, b1] = [info.bounds_min, info.bounds_max];
     let voxel = [0, 1, 2].map(|k| (b1[k] - b0[k]) / dims[k] as f64);
     let (mut luminance, mut clipped) = (0.0f64, 0.0f64);
-    // One z-slice per call.
-    let slice = dims[0] * dims[1];
-    let mut points = vec![[0.0; 3]; slice];
+    // Voxels in chunks of a fixed size per call (the buffers' size does not follow the input's).
+    const CHUNK: usize = 16384;
+    let mut points = vec![[0.0; 3]; CHUNK];
     let (mut sa, mut ss, mut j) = (
-        vec![0f32; slice * channels],
-        vec![0f32; slice * channels],
-        vec![0f32; slice * channels],
+        vec![0f32; CHUNK * channels],
+        vec![0f32; CHUNK * channels],
+        vec![0f32; CHUNK * channels],
     );
-    for z in 0..dims[2] {
-        for y in 0..dims[1] {
-            for x in 0..dims[0] {
-                points[x + dims[0] * y] = [
-                    b0[0] + (x as f64 + 0.5) * voxel[0],
-                    b0[1] + (y as f64 + 0.5) * voxel[1],
-                    b0[2] + (z as f64 + 0.5) * voxel[2],
-                ];
-            }
+    for first in (0..n).step_by(CHUNK) {
+        let m = CHUNK.min(n - first);
+        for (i, p) in points[..m].iter_mut().enumerate() {
+            let v = first + i;
+            let (x, y, z) = (
+                v % dims[0],
+                (v / dims[0]) % dims[1],
+                v / (dims[0] * dims[1]),
+            );
+            *p = [
+                b0[0] + (x as f64 + 0.5) * voxel[0],
+                b0[1] + (y as f64 + 0.5) * voxel[1],
+                b0[2] + (z as f64 + 0.5) * voxel[2],
+            ];
         }
+        let c = m * channels;
         volume
-            .coefficients(&points, &mut sa, &mut ss, &mut j)
+            .coefficients(&points[..m], &mut sa[..c], &mut ss[..c], &mut j[..c])
             .map_err(|e| (1, e.to_string()))?;
-        for i in 0..slice {
+        for i in 0..m {
             let row = &j[i * channels..(i + 1) * channels];
             let mut e = [0.0f64; 3];
             let mut y_lum = 0.0;
@@ -231,7 +237,7 @@ fn bake(
                 0.2126 * e[0].max(0.0) + 0.7152 * e[1].max(0.0) + 0.0722 * e[2].max(0.0);
             luminance += y_lum;
             clipped += y_lum - clipped_y;
-            let at = i + slice * z;
+            let at = first + i;
             for k in 0..3 {
                 grids[2][k][at] = e[k] as f32;
                 for (g, src) in [(0, &sa), (1, &ss)] {
