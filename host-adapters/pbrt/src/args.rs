@@ -1,9 +1,12 @@
 //! Argument values the commands share (what clap cannot check by itself): resolutions, frame lists, memory sizes.
 
 /// `WxH`, both from 1 to 65536.
-pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
-    let bad =
-        || format!("'{s}' is not a resolution WxH with W and H from 1 to 65536 (say, 320x240)");
+pub fn parse_resolution(s: &str) -> Result<(usize, usize), crate::Error> {
+    let bad = || {
+        crate::Error::value(format!(
+            "'{s}' is not a resolution WxH with W and H from 1 to 65536 (say, 320x240)"
+        ))
+    };
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let (w, h): (usize, usize) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
     if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
@@ -13,12 +16,12 @@ pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
 }
 
 /// A memory size in GB: a finite number above 0.
-pub fn parse_gb(s: &str) -> Result<f64, String> {
+pub fn parse_gb(s: &str) -> Result<f64, crate::Error> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v < 1e9 => Ok(v),
-        _ => Err(format!(
+        _ => Err(crate::Error::value(format!(
             "'{s}' is not a memory size in GB (a number above 0, say 4 or 0.5)"
-        )),
+        ))),
     }
 }
 
@@ -33,11 +36,11 @@ pub fn budget(gb: Option<f64>) -> u64 {
 pub struct Frames(pub Vec<i64>);
 
 /// `A-B` or `A-B:STEP` (A ≤ B, STEP ≥ 1, at most a million frames; negative numbers allowed: `-5--1`).
-pub fn parse_frames(s: &str) -> Result<Frames, String> {
+pub fn parse_frames(s: &str) -> Result<Frames, crate::Error> {
     let bad = || {
-        format!(
+        crate::Error::value(format!(
             "'{s}': expected A-B or A-B:STEP (inclusive, A ≤ B, STEP ≥ 1), e.g. 1-240 or 1-240:2"
-        )
+        ))
     };
     let (range, step) = match s.split_once(':') {
         Some((r, st)) => (r, st.trim().parse::<i64>().map_err(|_| bad())?),
@@ -57,7 +60,9 @@ pub fn parse_frames(s: &str) -> Result<Frames, String> {
     }
     let n = (b - a) / step + 1;
     if n > 1_000_000 {
-        return Err(format!("'{s}': {n} frames; at most 1 000 000"));
+        return Err(crate::Error::value(format!(
+            "'{s}': {n} frames; at most 1 000 000"
+        )));
     }
     Ok(Frames((0..n).map(|k| a + k * step).collect()))
 }

@@ -16,13 +16,14 @@ pub fn default_bytes() -> u64 {
 }
 
 /// An error unless `count` items of `size` bytes (`what`, named in the message) fit in `budget` bytes.
-pub fn check(what: &str, count: u64, size: u64, budget: u64) -> Result<(), String> {
+pub fn check(what: &str, count: u64, size: u64, budget: u64) -> Result<(), crate::Error> {
     match count.checked_mul(size) {
         Some(bytes) if bytes <= budget => Ok(()),
-        bytes => Err(format!(
-            "{what} needs {} bytes, above the memory budget of {budget} bytes (--max-memory raises it)",
-            bytes.map_or_else(|| "more than 2^64".to_string(), |b| b.to_string())
-        )),
+        bytes => Err(crate::Error::Budget {
+            what: what.to_string(),
+            bytes,
+            budget,
+        }),
     }
 }
 
@@ -41,12 +42,14 @@ mod tests {
     #[test]
     fn sizes_are_checked_before_anything_is_allocated() {
         assert!(check("a film", 1920 * 1080, 36, 1 << 30).is_ok());
-        let e = check("a film of 1e5 × 1e5 pixels", 100_000 * 100_000, 36, 1 << 30).unwrap_err();
+        let e = check("a film of 1e5 × 1e5 pixels", 100_000 * 100_000, 36, 1 << 30)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("needs 360000000000 bytes") && e.contains("budget of 1073741824"),
             "{e}"
         );
-        let e = check("x", u64::MAX, 2, u64::MAX).unwrap_err();
+        let e = check("x", u64::MAX, 2, u64::MAX).unwrap_err().to_string();
         assert!(e.contains("more than 2^64"), "{e}");
         assert!(default_bytes() >= 1 << 20);
     }

@@ -35,13 +35,13 @@ fn srgb_to_linear(c: f32) -> f32 {
 
 /// Reads an EXR or PNG; `srgb` decodes 8/16-bit PNG values with the sRGB curve (pbrt's default encoding).
 /// Its pixels must fit in the default memory budget ([`crate::budget`]).
-pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, String> {
+pub fn read(path: &Path, srgb: bool) -> Result<RgbImage, crate::Error> {
     read_within(path, srgb, crate::budget::default_bytes())
 }
 
 /// As [`read`], with the image's size checked against `budget` bytes from its header, before its pixels are
 /// read (a 373-byte EXR may claim 100 000² pixels).
-pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, String> {
+pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, crate::Error> {
     let file = path.display().to_string();
     let kind = match path
         .extension()
@@ -51,7 +51,7 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
     {
         Some("exr") => ImageKind::Exr,
         Some("png") => ImageKind::Png,
-        _ => return Err(format!("{file}: images must be .exr or .png")),
+        _ => return Err(crate::Error::file(file, "images must be .exr or .png")),
     };
     // (A device or FIFO named as an image would never end or block: only regular files, read to their length.)
     let len = std::fs::metadata(path)
@@ -59,24 +59,28 @@ pub fn read_within(path: &Path, srgb: bool, budget: u64) -> Result<RgbImage, Str
         .filter(|m| m.is_file())
         .map(|m| m.len())
         .ok_or_else(|| {
-            format!(
-                "{file}: cannot read: not a regular file (missing, a directory, device or FIFO)"
+            crate::Error::file(
+                &file,
+                "cannot read: not a regular file (missing, a directory, device or FIFO)",
             )
         })?;
     crate::budget::check(&format!("{file}: the file"), len, 1, budget)?;
     let bytes = firemedium_pbrt_parser::read_regular_file(path)
-        .map_err(|e| format!("{file}: cannot read: {e}"))?;
+        .map_err(|e| crate::Error::file(&file, format!("cannot read: {e}")))?;
     decode(&file, &bytes, kind, srgb, budget)
 }
 
 /// An EXR's channels other than R, G and B (a spectral film's buckets, a gbuffer's, the AOVs): their names in
 /// the file's (alphabetical) order, and per pixel their values in that order (`names.len()` per pixel), the
 /// layout [`write_channels_exr`] takes. Its pixels must fit in `budget` bytes, checked from the header.
-pub fn read_extra_channels(path: &Path, budget: u64) -> Result<(Vec<String>, Vec<f32>), String> {
+pub fn read_extra_channels(
+    path: &Path,
+    budget: u64,
+) -> Result<(Vec<String>, Vec<f32>), crate::Error> {
     use exr::prelude::*;
     let file = path.display().to_string();
     let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+        .map_err(|e| crate::Error::file(&file, format!("cannot read EXR: {e}")))?;
     for h in &meta.headers {
         let n = (h.layer_size.width() as u64).saturating_mul(h.layer_size.height() as u64);
         crate::budget::check(
@@ -98,7 +102,7 @@ pub fn read_extra_channels(path: &Path, budget: u64) -> Result<(Vec<String>, Vec
         .first_valid_layer()
         .all_attributes()
         .from_file(path)
-        .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+        .map_err(|e| crate::Error::file(&file, format!("cannot read EXR: {e}")))?;
     let extra: Vec<&AnyChannel<FlatSamples>> = img
         .layer_data
         .channel_data
@@ -119,19 +123,22 @@ pub fn read_extra_channels(path: &Path, budget: u64) -> Result<(Vec<String>, Vec
 
 /// An empty vector with room for `n` values, or an error naming `file` and the bytes when the machine has not
 /// got them (never an abort).
-fn fallible_vec<T>(file: &str, n: usize) -> Result<Vec<T>, String> {
+fn fallible_vec<T>(file: &str, n: usize) -> Result<Vec<T>, crate::Error> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).map_err(|_| {
-        format!(
-            "{file}: {} bytes for its pixels: more than this machine can give",
-            n.saturating_mul(std::mem::size_of::<T>())
+        crate::Error::file(
+            file,
+            format!(
+                "{} bytes for its pixels: more than this machine can give",
+                n.saturating_mul(std::mem::size_of::<T>())
+            ),
         )
     })?;
     Ok(v)
 }
 
 /// `n` copies of `v`, or an error naming `file` when the machine has not got the bytes (never an abort).
-pub fn filled_vec<T: Clone>(file: &str, n: usize, v: T) -> Result<Vec<T>, String> {
+pub fn filled_vec<T: Clone>(file: &str, n: usize, v: T) -> Result<Vec<T>, crate::Error> {
     let mut out = fallible_vec(file, n)?;
     out.resize(n, v);
     Ok(out)
@@ -152,7 +159,7 @@ pub fn decode(
     kind: ImageKind,
     srgb: bool,
     budget: u64,
-) -> Result<RgbImage, String> {
+) -> Result<RgbImage, crate::Error> {
     let fits = |w: usize, h: usize| {
         crate::budget::check(
             &format!("{file}: a {w}×{h} image"),
@@ -165,7 +172,7 @@ pub fn decode(
         ImageKind::Exr => {
             use exr::prelude::*;
             let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
-                .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+                .map_err(|e| crate::Error::file(file, format!("cannot read EXR: {e}")))?;
             let mut most = 0usize;
             for h in &meta.headers {
                 let size = h.layer_size;
@@ -192,11 +199,14 @@ pub fn decode(
                 .first_valid_layer()
                 .all_attributes()
                 .from_buffered(std::io::Cursor::new(bytes))
-                .map_err(|e| format!("{file}: cannot read EXR: {e}"))?;
+                .map_err(|e| crate::Error::file(file, format!("cannot read EXR: {e}")))?;
             let (w, px) = img.layer_data.channel_data.pixels;
             let h = px.len().checked_div(w).unwrap_or(0);
             if px.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
-                return Err(format!("{file}: the image holds NaN or infinite values"));
+                return Err(crate::Error::file(
+                    file,
+                    "the image holds NaN or infinite values",
+                ));
             }
             Ok(RgbImage { w, h, px })
         }
@@ -205,19 +215,19 @@ pub fn decode(
             dec.set_transformations(png::Transformations::EXPAND);
             let mut r = dec
                 .read_info()
-                .map_err(|e| format!("{file}: not a PNG: {e}"))?;
+                .map_err(|e| crate::Error::file(file, format!("not a PNG: {e}")))?;
             {
                 let info = r.info();
                 fits(info.width as usize, info.height as usize)?;
             }
             let n = r
                 .output_buffer_size()
-                .ok_or_else(|| format!("{file}: PNG too large"))?;
+                .ok_or_else(|| crate::Error::file(file, "PNG too large"))?;
             let mut buf = fallible_vec::<u8>(file, n)?;
             buf.resize(n, 0);
             let info = r
                 .next_frame(&mut buf)
-                .map_err(|e| format!("{file}: corrupt PNG: {e}"))?;
+                .map_err(|e| crate::Error::file(file, format!("corrupt PNG: {e}")))?;
             let (w, h) = (info.width as usize, info.height as usize);
             let chans = info.color_type.samples();
             let sixteen = info.bit_depth == png::BitDepth::Sixteen;
@@ -324,8 +334,8 @@ pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
 /// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
 pub fn write_atomic(
     path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), String> {
+    write: impl FnOnce(&Path) -> Result<(), crate::Error>,
+) -> Result<(), crate::Error> {
     let tmp = path.with_extension(format!(
         "tmp-{}.{}",
         std::process::id(),
@@ -336,7 +346,7 @@ pub fn write_atomic(
         let _ = std::fs::remove_file(&tmp);
     })?;
     std::fs::rename(&tmp, path)
-        .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
+        .map_err(|e| crate::Error::file(path.display(), format!("cannot rename into place: {e}")))
 }
 
 /// Removes the temporaries of `path` (`NAME.tmp-PID.EXT`) that a killed writer left behind: those whose process
@@ -382,7 +392,7 @@ pub fn write_exr(
     h: usize,
     rgb: &[[f32; 3]],
     fire_temperature: Option<f64>,
-) -> Result<(), String> {
+) -> Result<(), crate::Error> {
     let window = Window {
         origin: (0, 0),
         full: (w, h),
@@ -404,7 +414,7 @@ pub fn write_channels_exr(
     fp16: bool,
     window: Window,
     meta: &[(String, String)],
-) -> Result<(), String> {
+) -> Result<(), crate::Error> {
     use exr::prelude::*;
     let nb = names.len();
     let samples = |v: Vec<f32>| {
@@ -447,7 +457,7 @@ pub fn write_channels_exr(
             .write()
             .non_parallel()
             .to_file(tmp)
-            .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+            .map_err(|e| crate::Error::file(path.display(), format!("cannot write EXR: {e}")))
     })
 }
 
@@ -602,7 +612,7 @@ pub fn write_exr_as(
     fp16: bool,
     window: Window,
     meta: &[(String, String)],
-) -> Result<(), String> {
+) -> Result<(), crate::Error> {
     use exr::prelude::*;
     let meta = &with_checksum(meta, pixels_checksum(rgb, &[], &[], fp16));
     // The attribute, then one thread writes the blocks in order, so the same render gives the same bytes
@@ -621,11 +631,9 @@ pub fn write_exr_as(
                     Vec2(window.full.0.max(1), window.full.1.max(1)),
                 );
                 record_attribute(&mut image.attributes.other, meta, fire_temperature);
-                image
-                    .write()
-                    .non_parallel()
-                    .to_file(tmp)
-                    .map_err(|e| format!("{}: cannot write EXR: {e}", path.display()))
+                image.write().non_parallel().to_file(tmp).map_err(|e| {
+                    crate::Error::file(path.display(), format!("cannot write EXR: {e}"))
+                })
             })
         };
     }
@@ -642,29 +650,30 @@ pub fn write_exr_as(
 
 /// What an EXR says about its render: where its pixels lie on the film (data window in display window) and its
 /// [`Meta`] (scene, frame, spp, seed; empty for an EXR that did not come from `render`), sorted by name.
-pub fn read_meta(path: &Path) -> Result<(Window, Meta), String> {
+pub fn read_meta(path: &Path) -> Result<(Window, Meta), crate::Error> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+        .map_err(|e| crate::Error::file(path.display(), format!("cannot read EXR: {e}")))?;
     let h = meta
         .headers
         .first()
-        .ok_or_else(|| format!("{}: an EXR without a part", path.display()))?;
+        .ok_or_else(|| crate::Error::file(path.display(), "an EXR without a part"))?;
     let display = h.shared_attributes.display_window;
     let pos = h.own_attributes.layer_position;
     let at = |v: i32, what: &str| {
         usize::try_from(v).map_err(|_| {
-            format!(
-                "{}: {what} {v}: expected a window inside the film (from 0)",
-                path.display()
+            crate::Error::file(
+                path.display(),
+                format!("{what} {v}: expected a window inside the film (from 0)"),
             )
         })
     };
     if display.position.0 != 0 || display.position.1 != 0 {
-        return Err(format!(
-            "{}: display window at ({}, {}): expected one starting at (0, 0)",
+        return Err(crate::Error::file(
             path.display(),
-            display.position.0,
-            display.position.1
+            format!(
+                "display window at ({}, {}): expected one starting at (0, 0)",
+                display.position.0, display.position.1
+            ),
         ));
     }
     let window = Window {
@@ -692,9 +701,9 @@ pub fn read_meta(path: &Path) -> Result<(Window, Meta), String> {
 }
 
 /// The fire temperature an EXR records (see [`write_exr`]), if any.
-pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, String> {
+pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, crate::Error> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| format!("{}: cannot read EXR: {e}", path.display()))?;
+        .map_err(|e| crate::Error::file(path.display(), format!("cannot read EXR: {e}")))?;
     // (Written as an image attribute; a reader may file an unknown attribute under the layer's.)
     let key = exr::prelude::Text::from(FIRE_TEMPERATURE_ATTRIBUTE);
     let record = exr::prelude::Text::from(RENDER_ATTRIBUTE);
@@ -738,7 +747,7 @@ pub fn write_png(
     h: usize,
     px: &[[f64; 3]],
     sixteen: bool,
-) -> Result<(), String> {
+) -> Result<(), crate::Error> {
     let data: Vec<u8> = if sixteen {
         px.iter()
             .flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
@@ -759,11 +768,11 @@ pub fn write_png_bytes(
     h: usize,
     data: &[u8],
     sixteen: bool,
-) -> Result<(), String> {
+) -> Result<(), crate::Error> {
     write_atomic(path, |tmp| {
         // (Messages name the file the user asked for, not the temporary one beside it.)
         let f = std::fs::File::create(tmp)
-            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+            .map_err(|e| crate::Error::file(path.display(), format!("cannot write: {e}")))?;
         let mut e = png::Encoder::new(std::io::BufWriter::new(f), w as u32, h as u32);
         e.set_color(png::ColorType::Rgb);
         e.set_depth(if sixteen {
@@ -773,9 +782,9 @@ pub fn write_png_bytes(
         });
         let mut wr = e
             .write_header()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+            .map_err(|e| crate::Error::file(path.display(), format!("{e}")))?;
         wr.write_image_data(data)
-            .map_err(|e| format!("{}: {e}", path.display()))
+            .map_err(|e| crate::Error::file(path.display(), format!("{e}")))
     })
 }
 

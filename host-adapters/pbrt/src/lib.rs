@@ -9,11 +9,12 @@
 //! | [`render`] | scene building from a pbrt-v4 file, the `volpath` integrator, tiles on rayon → an absolute [`render::Image`] |
 //! | [`imageio`] | EXR/PNG in (textures, light maps, references) and out (the film, previews), written atomically |
 //! | [`tonemap`] | visual adaptation (P&P §3.8): XYZ in cd/m² → display sRGB (von Kries + Naka–Rushton) |
-//! | [`gen`] | Stam & Fiume's blob fire model → voxel grids → OpenVDB |
 //! | [`metrics`] | DESIGN's error metrics (relative RMSE, relMSE) and luminance |
 //! | [`budget`] | the memory budget, checked before allocating what input sizes |
+//! | [`Error`] | the one error type: a scene statement's `file:line:col`, a file, the budget, the plugin, a value; its exit status |
 //!
-//! Arrows point one way: `render` → `imageio`; `imageio`, `tonemap`, `metrics` depend on no other module here;
+//! Arrows point one way: `render` → `imageio`; `imageio`, `tonemap`, `metrics` depend on no other module here but
+//! [`Error`];
 //! colour comes from `firemedium-core` and, for media, from the plugin the scene loaded.
 
 // One `unsafe` call, allowed where it is made: loading the plugin (`render::scene`).
@@ -21,11 +22,14 @@
 
 pub mod args;
 pub mod budget;
+mod error;
 pub mod imageio;
 pub mod metrics;
 pub mod render;
 pub mod term;
 pub mod tonemap;
+
+pub use error::{Error, Result};
 
 /// The program `name` beside the running executable (`firemedium` and `firemedium-bench` find each other so,
 /// in a build's output folder and in an installed `bin/`): its path, or the path where it was looked for.

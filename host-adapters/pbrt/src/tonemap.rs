@@ -141,7 +141,7 @@ impl Default for Options {
 }
 
 /// Parses `night`, `indoor`, `day`, `image` or a luminance in cd/m².
-pub fn parse_adapt(s: &str) -> Result<Adapt, String> {
+pub fn parse_adapt(s: &str) -> Result<Adapt, crate::Error> {
     match s {
         "image" => Ok(Adapt::Image),
         "night" => Ok(Adapt::Luminance(NIGHT)),
@@ -149,10 +149,10 @@ pub fn parse_adapt(s: &str) -> Result<Adapt, String> {
         "day" => Ok(Adapt::Luminance(DAY)),
         _ => match s.parse::<f64>() {
             Ok(v) if v > 0.0 && v.is_finite() => Ok(Adapt::Luminance(v)),
-            _ => Err(format!(
+            _ => Err(crate::Error::value(format!(
                 "'{s}': expected image, night ({NIGHT} cd/m²), indoor ({INDOOR}), day ({DAY}) or a luminance \
                  in cd/m² > 0"
-            )),
+            ))),
         },
     }
 }
@@ -165,12 +165,12 @@ pub enum WhiteArg {
 }
 
 /// Parses `fire`, `d65`, a temperature (`1800` or `1800K`, 300–1e5 K) or a chromaticity `x,y`.
-pub fn parse_white(s: &str) -> Result<WhiteArg, String> {
+pub fn parse_white(s: &str) -> Result<WhiteArg, crate::Error> {
     let bad = || {
-        format!(
+        crate::Error::value(format!(
             "'{s}': expected fire, d65, a temperature in K (300–100000, e.g. 1800K) or a chromaticity x,y \
              (e.g. 0.3127,0.3290)"
-        )
+        ))
     };
     let lower = s.to_ascii_lowercase();
     match lower.as_str() {
@@ -487,19 +487,22 @@ mod tests {
 
     #[test]
     fn arguments_parse_and_bad_ones_explain() {
-        assert_eq!(parse_adapt("night"), Ok(Adapt::Luminance(NIGHT)));
-        assert_eq!(parse_adapt("250"), Ok(Adapt::Luminance(250.0)));
-        assert!(parse_adapt("-3").unwrap_err().contains("cd/m²"));
-        assert_eq!(parse_white("fire"), Ok(WhiteArg::Fire));
+        assert_eq!(parse_adapt("night").ok(), Some(Adapt::Luminance(NIGHT)));
+        assert_eq!(parse_adapt("250").ok(), Some(Adapt::Luminance(250.0)));
+        assert!(parse_adapt("-3").unwrap_err().to_string().contains("cd/m²"));
+        assert_eq!(parse_white("fire").ok(), Some(WhiteArg::Fire));
         assert_eq!(
-            parse_white("1800K"),
-            Ok(WhiteArg::Given(White::Blackbody(1800.0)))
+            parse_white("1800K").ok(),
+            Some(WhiteArg::Given(White::Blackbody(1800.0)))
         );
         assert_eq!(
-            parse_white("0.3127,0.329"),
-            Ok(WhiteArg::Given(White::Chromaticity(0.3127, 0.329)))
+            parse_white("0.3127,0.329").ok(),
+            Some(WhiteArg::Given(White::Chromaticity(0.3127, 0.329)))
         );
-        assert!(parse_white("5K").unwrap_err().contains("300–100000"));
+        assert!(parse_white("5K")
+            .unwrap_err()
+            .to_string()
+            .contains("300–100000"));
         assert!(parse_white("0.9,0.5").is_err());
         // D65 through the blackbody route: the white of 6504 K is within 0.003 of D65's chromaticity.
         let (x, y) = cie::chromaticity(white_xyz(White::Blackbody(6504.0)));

@@ -159,7 +159,7 @@ pub fn surface_ladder(
             },
         )
     };
-    let reference_scene = load(ref_spp, true)?;
+    let reference_scene = load(ref_spp, true).map_err(|e| e.to_string())?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
@@ -176,7 +176,7 @@ pub fn surface_ladder(
     for light in [true, false] {
         let mut spp = 1;
         while spp <= max_spp {
-            let s = load(spp, light)?;
+            let s = load(spp, light).map_err(|e| e.to_string())?;
             let (img, st) = render::render(&s, 7 + spp as u64, &|_, _| {});
             let (rel_rmse, rel_mse) = errors(&surface_luminance(&img, &mask), &reference_m);
             points.push(Point {

@@ -311,7 +311,7 @@ pub fn ladder(
         .iter()
         .find(|e| e.key == "brick")
         .ok_or("no reference estimator")?;
-    let reference_scene = load(ref_spp.div_ceil(2), by)?;
+    let reference_scene = load(ref_spp.div_ceil(2), by).map_err(|e| e.to_string())?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
     let mut seconds = 0.0;
@@ -345,7 +345,7 @@ pub fn ladder(
         for (k, e) in estimators.iter().enumerate() {
             // One load per estimator and round (the fire and its light built once), its samples per pixel set per
             // rung.
-            let mut s = load(1, e)?;
+            let mut s = load(1, e).map_err(|e| e.to_string())?;
             for (q, &n) in spp.iter().enumerate() {
                 let n = if e.light.is_none() { 4 * n } else { n };
                 s.spp = n;

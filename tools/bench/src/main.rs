@@ -701,16 +701,18 @@ fn write_ladder(
     let (csv_path, svg_path, png_path) = (with(".csv"), with(".svg"), with(".png"));
     let write = |path: &std::path::Path, bytes: &[u8]| {
         firemedium::imageio::write_atomic(path, |tmp| {
-            std::fs::write(tmp, bytes).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+            std::fs::write(tmp, bytes)
+                .map_err(|e| firemedium::Error::file(path.display(), format!("cannot write: {e}")))
         })
     };
-    write(&csv_path, error::csv(points).as_bytes())?;
-    write(&svg_path, error::svg(points, title, mark).as_bytes())?;
+    write(&csv_path, error::csv(points).as_bytes()).map_err(|e| e.to_string())?;
+    write(&svg_path, error::svg(points, title, mark).as_bytes()).map_err(|e| e.to_string())?;
     let (w, h, rgb, why) = error::png(points, title, mark);
     if let Some(why) = why {
         eprintln!("firemedium: {}: {why}", png_path.display());
     }
-    firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)?;
+    firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)
+        .map_err(|e| e.to_string())?;
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
         out += &format!(

@@ -49,8 +49,9 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
         let f = frame(&sim, res, &[], false).map_err(|e| format!("{}: {e}", path.display()))?;
         firemedium::imageio::write_atomic(&path, |tmp| {
             std::fs::write(tmp, &f.bytes)
-                .map_err(|e| format!("{}: cannot write: {e}", path.display()))
-        })?;
+                .map_err(|e| firemedium::Error::file(path.display(), format!("cannot write: {e}")))
+        })
+        .map_err(|e| e.to_string())?;
     }
     Ok(path)
 }

@@ -124,7 +124,7 @@ pub fn render(dir: &Path, name: &str, scene: &str, extra: &[&str]) -> Result<Ren
             .and_then(|w| w.parse().ok())
             .ok_or_else(|| format!("firemedium render --stats: no '{prefix}' line in:\n{text}"))
     };
-    let img = firemedium::imageio::read(&out, false)?;
+    let img = firemedium::imageio::read(&out, false).map_err(|e| e.to_string())?;
     Ok(Rendered {
         load_s: number("scene: ", 0)?,
         render_s: number("render: ", 0)?,

@@ -19,6 +19,7 @@
 
 use clap::Args;
 use firemedium::render::scene::{load_plugin, typed_params};
+use firemedium::Error;
 use firemedium_core::cie::XYZ_TO_SRGB_ROWS;
 use firemedium_dataset::{ChannelSource, Dataset, LoadOptions};
 use firemedium_loader::{Context, Param};
@@ -47,11 +48,11 @@ pub struct BakeArgs {
     max_memory: Option<f64>,
 }
 
-fn parse_param(s: &str) -> Result<(String, String), String> {
+fn parse_param(s: &str) -> Result<(String, String), Error> {
     s.split_once('=')
         .filter(|(n, v)| !n.is_empty() && !v.is_empty())
         .map(|(n, v)| (n.to_string(), v.to_string()))
-        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. fuel=propane"))
+        .ok_or_else(|| Error::value(format!("{s:?}: expected NAME=VALUE, e.g. fuel=propane")))
 }
 
 /// Features the grids cannot carry: baking them would silently drop them.
@@ -67,24 +68,21 @@ const REFUSED: [(u64, &str); 3] = [
     ),
 ];
 
-pub fn run(a: &BakeArgs) -> Result<String, (u8, String)> {
-    let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| (1, e.to_string()))?;
+pub fn run(a: &BakeArgs) -> firemedium::Result<String> {
+    let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| Error::input(e.to_string()))?;
     let Some(frames) = &a.frames else {
         return bake(a, &plugin, None, &a.output);
     };
     if !a.output.to_string_lossy().contains('#') {
-        return Err((
-            2,
-            format!(
-                "--frames needs an output name holding #### (the frame number): {}",
-                a.output.display()
-            ),
-        ));
+        return Err(Error::value(format!(
+            "--frames needs an output name holding #### (the frame number): {}",
+            a.output.display()
+        )));
     }
     let mut report = String::new();
     for &f in &frames.0 {
-        let out =
-            firemedium_dataset::frame_path(&a.output, Some(f)).map_err(|e| (2, e.to_string()))?;
+        let out = firemedium_dataset::frame_path(&a.output, Some(f))
+            .map_err(|e| Error::value(e.to_string()))?;
         report += &bake(a, &plugin, Some(f), &out)?;
     }
     Ok(report)
@@ -96,7 +94,7 @@ fn bake(
     plugin: &firemedium_loader::Plugin,
     frame: Option<i64>,
     out: &std::path::Path,
-) -> Result<String, (u8, String)> {
+) -> firemedium::Result<String> {
     let start = Instant::now();
     let budget = crate::args::budget(a.max_memory);
     // The lattice: the dataset's (its first float grid, as `info` reads it).
@@ -105,16 +103,16 @@ fn bake(
         frame,
         ..LoadOptions::default()
     };
-    let entries =
-        firemedium_dataset::list_grids(&a.dataset, &opts).map_err(|e| (1, e.to_string()))?;
+    let entries = firemedium_dataset::list_grids(&a.dataset, &opts)
+        .map_err(|e| Error::input(e.to_string()))?;
     let first = entries.iter().find(|g| g.loadable).ok_or_else(|| {
-        (
-            1,
-            format!("{}: no float grid: nothing to bake", a.dataset.display()),
-        )
+        Error::input(format!(
+            "{}: no float grid: nothing to bake",
+            a.dataset.display()
+        ))
     })?;
     let lattice = Dataset::load(&[ChannelSource::new(&first.name, &a.dataset)], &opts)
-        .map_err(|e| (1, e.to_string()))?;
+        .map_err(|e| Error::input(e.to_string()))?;
     let dims = lattice.dims();
     // The fire, through the plugin.
     let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
@@ -126,7 +124,7 @@ fn bake(
             "--param",
             &a.params,
         )
-        .map_err(|e| (2, e))?,
+        .map_err(Error::value)?,
     );
     let context = Context {
         max_bytes: Some(budget),
@@ -135,17 +133,15 @@ fn bake(
     };
     let volume = plugin
         .create_volume_with(&params, &context)
-        .map_err(|e| (1, e.to_string()))?;
-    let features = volume.features().map_err(|e| (1, e.to_string()))?;
+        .map_err(|e| Error::input(e.to_string()))?;
+    let features = volume.features().map_err(|e| Error::input(e.to_string()))?;
     let refused: Vec<&str> = REFUSED
         .iter()
         .filter(|(bit, _)| features & bit != 0)
         .map(|(_, name)| *name)
         .collect();
     if !refused.is_empty() {
-        return Err((
-            1,
-            format!(
+        return Err(Error::input(format!(
                 "{}: the fire holds {}, which grids cannot carry; render it with `firemedium render`, or leave those parameters out",
                 a.dataset.display(),
                 refused.join(", ")
@@ -154,7 +150,9 @@ fn bake(
     }
     let info = volume.info();
     let channels = info.channels as usize;
-    let xyz = volume.channel_xyz().map_err(|e| (1, e.to_string()))?;
+    let xyz = volume
+        .channel_xyz()
+        .map_err(|e| Error::input(e.to_string()))?;
     // Each channel's linear sRGB per unit radiance, and its positive part as the weight of the channel's light in
     // each RGB component.
     let rgb_of = |x: &[f64; 3]| XYZ_TO_SRGB_ROWS.map(|r| r[0] * x[0] + r[1] * x[1] + r[2] * x[2]);
@@ -169,9 +167,7 @@ fn bake(
     let n: usize = dims.iter().product();
     let bytes = (n as u64).saturating_mul(9 * 4);
     if bytes > budget {
-        return Err((
-            1,
-            format!(
+        return Err(Error::input(format!(
                 "{}: the baked grids of {}×{}×{} voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
                 a.dataset.display(),
                 dims[0],
@@ -187,7 +183,7 @@ fn bake(
                 v.resize(n, 0f32);
                 v
             })
-            .map_err(|_| (1, format!("bake: {n} voxels: out of memory")))
+            .map_err(|_| Error::input(format!("bake: {n} voxels: out of memory")))
     };
     let mut grids: Vec<[Vec<f32>; 3]> = Vec::new();
     for _ in 0..3 {
@@ -222,7 +218,7 @@ fn bake(
         let c = m * channels;
         volume
             .coefficients(&points[..m], &mut sa[..c], &mut ss[..c], &mut j[..c])
-            .map_err(|e| (1, e.to_string()))?;
+            .map_err(|e| Error::input(e.to_string()))?;
         for i in 0..m {
             let row = &j[i * channels..(i + 1) * channels];
             let mut e = [0.0f64; 3];
@@ -265,9 +261,9 @@ fn bake(
         glam::DVec3::from_array(voxel),
     );
     firemedium::imageio::write_atomic(out, |tmp| {
-        std::fs::write(tmp, &bytes).map_err(|e| format!("{}: cannot write: {e}", out.display()))
-    })
-    .map_err(|e| (1, e))?;
+        std::fs::write(tmp, &bytes)
+            .map_err(|e| Error::file(out.display(), format!("cannot write: {e}")))
+    })?;
     // (Clamping a negative component raises the luminance: the change is signed.)
     let change = if luminance > 0.0 {
         -100.0 * clipped / luminance

@@ -8,6 +8,7 @@ use clap::Args;
 use firemedium::imageio::{self as image, RgbImage};
 use firemedium::metrics::{errors, luminance};
 use firemedium::render::{scene, surface_mask};
+use firemedium::Error;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -27,7 +28,7 @@ pub struct CompareArgs {
     plugin: Option<PathBuf>,
 }
 
-pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &CompareArgs) -> firemedium::Result<String> {
     let ov = scene::Overrides {
         spp: None,
         plugin: a.plugin.clone(),
@@ -38,16 +39,14 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
         max_memory: None,
         ..Default::default()
     };
-    let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
+    let sc = scene::load(&a.scene, &ov)?;
     let (w, h) = sc.res;
-    let reference = image::read(&a.reference, false).map_err(|e| (1, e))?;
+    let reference = image::read(&a.reference, false)?;
     let check = |img: &RgbImage, p: &PathBuf| {
         if (img.w, img.h) == (w, h) {
             Ok(())
         } else {
-            Err((
-                1,
-                format!(
+            Err(Error::input(format!(
                     "{} is {}×{} pixels where the scene renders {w}×{h}: compare images of one size, and give \
                      --resolution {}x{} if they were rendered at that size",
                     p.display(),
@@ -64,7 +63,10 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
     let mask = surface_mask(&sc, &mut rng);
     let count = mask.iter().filter(|&&m| m).count();
     if count == 0 {
-        return Err((1, format!("{}: no pixel sees a surface", a.scene.display())));
+        return Err(Error::input(format!(
+            "{}: no pixel sees a surface",
+            a.scene.display()
+        )));
     }
     let mean_ref = (0..w * h)
         .filter(|&i| mask[i])
@@ -77,7 +79,7 @@ pub fn run(a: &CompareArgs) -> Result<String, (u8, String)> {
     );
     let mut first = None;
     for p in &a.images {
-        let img = image::read(p, false).map_err(|e| (1, e))?;
+        let img = image::read(p, false)?;
         check(&img, p)?;
         let mut se: Vec<f64> = (0..w * h)
             .filter(|&i| mask[i])

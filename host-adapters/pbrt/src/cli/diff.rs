@@ -5,6 +5,7 @@
 
 use clap::Args;
 use firemedium::imageio;
+use firemedium::Error;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -19,56 +20,47 @@ pub struct DiffArgs {
     max_memory: Option<f64>,
 }
 
-pub fn run(a: &DiffArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &DiffArgs) -> firemedium::Result<String> {
     let (pa, pb) = (&a.a, &a.b);
-    let (wa, ma) = imageio::read_meta(pa).map_err(|e| (1, e))?;
-    let (wb, mb) = imageio::read_meta(pb).map_err(|e| (1, e))?;
+    let (wa, ma) = imageio::read_meta(pa)?;
+    let (wb, mb) = imageio::read_meta(pb)?;
     if wa != wb {
-        return Err((
-            1,
-            format!(
-                "{} lies at {:?} on a {:?} film, {} at {:?} on a {:?} film",
-                pa.display(),
-                wa.origin,
-                wa.full,
-                pb.display(),
-                wb.origin,
-                wb.full
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{} lies at {:?} on a {:?} film, {} at {:?} on a {:?} film",
+            pa.display(),
+            wa.origin,
+            wa.full,
+            pb.display(),
+            wb.origin,
+            wb.full
+        )));
     }
     if let Some(differs) = imageio::record_differences(&ma, &mb) {
-        return Err((
-            1,
-            format!(
-                "{} and {} are records of different renders: {differs}",
-                pa.display(),
-                pb.display(),
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{} and {} are records of different renders: {differs}",
+            pa.display(),
+            pb.display(),
+        )));
     }
     let budget = crate::args::budget(a.max_memory);
     let (ia, ib) = (
-        imageio::read_within(pa, false, budget).map_err(|e| (1, e))?,
-        imageio::read_within(pb, false, budget).map_err(|e| (1, e))?,
+        imageio::read_within(pa, false, budget)?,
+        imageio::read_within(pb, false, budget)?,
     );
-    let (na, va) = imageio::read_extra_channels(pa, budget).map_err(|e| (1, e))?;
-    let (nb, vb) = imageio::read_extra_channels(pb, budget).map_err(|e| (1, e))?;
+    let (na, va) = imageio::read_extra_channels(pa, budget)?;
+    let (nb, vb) = imageio::read_extra_channels(pb, budget)?;
     if (ia.w, ia.h) != (ib.w, ib.h) || na != nb {
-        return Err((
-            1,
-            format!(
-                "{}: {}×{} pixels, R G B {}; {}: {}×{}, R G B {}",
-                pa.display(),
-                ia.w,
-                ia.h,
-                na.join(" "),
-                pb.display(),
-                ib.w,
-                ib.h,
-                nb.join(" ")
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{}: {}×{} pixels, R G B {}; {}: {}×{}, R G B {}",
+            pa.display(),
+            ia.w,
+            ia.h,
+            na.join(" "),
+            pb.display(),
+            ib.w,
+            ib.h,
+            nb.join(" ")
+        )));
     }
     let names: Vec<&str> = ["R", "G", "B"]
         .into_iter()
@@ -95,18 +87,15 @@ pub fn run(a: &DiffArgs) -> Result<String, (u8, String)> {
         count += differs as usize;
     }
     if let Some((i, c, x, y)) = first {
-        return Err((
-            1,
-            format!(
-                "{} and {} differ in {count} of {} pixels; first at ({}, {}) {}: {x} vs {y}",
-                pa.display(),
-                pb.display(),
-                ia.w * ia.h,
-                i % ia.w,
-                i / ia.w,
-                names[c]
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{} and {} differ in {count} of {} pixels; first at ({}, {}) {}: {x} vs {y}",
+            pa.display(),
+            pb.display(),
+            ia.w * ia.h,
+            i % ia.w,
+            i / ia.w,
+            names[c]
+        )));
     }
     Ok(format!(
         "{} and {}: the same render ({}×{} pixels, {} channels, bit for bit)\n",

@@ -11,6 +11,7 @@
 
 use crate::args::{parse_frames, parse_resolution, Frames};
 use clap::{Args, Subcommand};
+use firemedium::Error;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -71,7 +72,7 @@ pub struct SlurmArgs {
     sbatch: PathBuf,
 }
 
-pub fn run(a: &FarmArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &FarmArgs) -> firemedium::Result<String> {
     match &a.scheduler {
         Scheduler::Slurm(s) => slurm(s),
     }
@@ -85,11 +86,9 @@ fn quote(s: &str) -> String {
 /// Refuses a path that would leave its place in a job script: a control character (a newline ends the comment
 /// or directive it stands in, and the next line runs as a command). Shell words are quoted ([`quote`]); paths
 /// reach `#SBATCH` directives never (the logs go to `sbatch --output`, an argument).
-fn plain(what: &str, s: &str) -> Result<(), (u8, String)> {
+fn plain(what: &str, s: &str) -> firemedium::Result<()> {
     match s.char_indices().find(|(_, c)| c.is_control()) {
-        Some((i, c)) => Err((
-            2,
-            format!(
+        Some((i, c)) => Err(Error::value(format!(
                 "{what} {s:?}: character {c:?} at byte {i}: expected no control character (it would end its line of the job script)"
             ),
         )),
@@ -98,13 +97,16 @@ fn plain(what: &str, s: &str) -> Result<(), (u8, String)> {
 }
 
 /// An absolute form of `p` (made from the working directory; the file need not exist yet).
-fn absolute(p: &Path) -> Result<PathBuf, (u8, String)> {
-    std::path::absolute(p).map_err(|e| (2, format!("{}: {e}", p.display())))
+fn absolute(p: &Path) -> firemedium::Result<PathBuf> {
+    std::path::absolute(p).map_err(|e| Error::file(p.display(), e.to_string()))
 }
 
-fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
+fn slurm(a: &SlurmArgs) -> firemedium::Result<String> {
     if !a.scene.is_file() {
-        return Err((2, format!("{}: no such scene file", a.scene.display())));
+        return Err(Error::value(format!(
+            "{}: no such scene file",
+            a.scene.display()
+        )));
     }
     let scene = absolute(&a.scene)?;
     plain("the scene's path", &scene.display().to_string())?;
@@ -114,9 +116,7 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || "_.,-".contains(c))
         {
-            return Err((
-                2,
-                format!("--partition {p:?}: expected partition names of letters, digits and _ . , - (Slurm's)"),
+            return Err(Error::value(format!("--partition {p:?}: expected partition names of letters, digits and _ . , - (Slurm's)"),
             ));
         }
     }
@@ -142,11 +142,9 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
         .iter()
         .map(|&f| firemedium_dataset::frame_path(&output, Some(f)))
         .collect::<Result<_, _>>()
-        .map_err(|e| (2, e.to_string()))?;
+        .map_err(|e| Error::value(e.to_string()))?;
     if frames.len() > 1 && outs[0] == output {
-        return Err((
-            2,
-            format!(
+        return Err(Error::value(format!(
                 "-o {}: the name holds no #### or %04d for the frame number: every frame would overwrite it",
                 output.display()
             ),
@@ -155,12 +153,10 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
     // Bands of whole rows: no more tiles than the film has rows (an empty band would fail its task).
     let (cols, rows) = match a.resolution {
         Some(r) => r,
-        None => firemedium::render::scene::film_resolution(&scene).map_err(|e| (1, e))?,
+        None => firemedium::render::scene::film_resolution(&scene)?,
     };
     if a.tiles as usize > rows {
-        return Err((
-            2,
-            format!(
+        return Err(Error::value(format!(
                 "--tiles {}: more bands than the film's {rows} rows (each tile is a band of whole rows)",
                 a.tiles
             ),
@@ -169,9 +165,7 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
     let tiles = a.tiles as u64;
     let tasks = frames.len() as u64 * tiles;
     if tasks > a.max_array {
-        return Err((
-            2,
-            format!(
+        return Err(Error::value(format!(
                 "{} frames × {tiles} tiles = {tasks} tasks: more than the job array's {} (Slurm's MaxArraySize less one; \
                  split --frames, or raise --max-array to your cluster's)",
                 frames.len(),
@@ -180,13 +174,10 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
         ));
     }
     let exe = std::env::current_exe()
-        .map_err(|e| (1, format!("cannot find the firemedium executable: {e}")))?;
+        .map_err(|e| Error::input(format!("cannot find the firemedium executable: {e}")))?;
     for sub in ["tiles", "logs"] {
         std::fs::create_dir_all(dir.join(sub)).map_err(|e| {
-            (
-                1,
-                format!("{}: cannot create: {e}", dir.join(sub).display()),
-            )
+            Error::input(format!("{}: cannot create: {e}", dir.join(sub).display()))
         })?;
     }
     let q = |p: &Path| quote(&p.display().to_string());
@@ -318,42 +309,39 @@ fn slurm(a: &SlurmArgs) -> Result<String, (u8, String)> {
 }
 
 /// Writes an executable script.
-fn write_script(path: &Path, text: &str) -> Result<(), (u8, String)> {
+fn write_script(path: &Path, text: &str) -> firemedium::Result<()> {
     firemedium::imageio::write_atomic(path, |tmp| {
-        std::fs::write(tmp, text).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+        std::fs::write(tmp, text)
+            .map_err(|e| Error::file(path.display(), format!("cannot write: {e}")))?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
             std::fs::set_permissions(tmp, std::fs::Permissions::from_mode(0o755))
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(|e| Error::file(path.display(), e.to_string()))?;
         }
         Ok(())
     })
-    .map_err(|e| (1, e))
 }
 
 /// Submits `script` with `sbatch --parsable ARGS`; its job id.
-fn sbatch(sbatch: &Path, args: &[&str], script: &Path) -> Result<String, (u8, String)> {
+fn sbatch(sbatch: &Path, args: &[&str], script: &Path) -> firemedium::Result<String> {
     let o = std::process::Command::new(sbatch)
         .arg("--parsable")
         .args(args)
         .arg(script)
         .output()
-        .map_err(|e| (1, format!("{}: cannot run: {e}", sbatch.display())))?;
+        .map_err(|e| Error::file(sbatch.display(), format!("cannot run: {e}")))?;
     let text = String::from_utf8_lossy(&o.stdout);
     // `--parsable` prints "id" or "id;cluster".
     let id = text.trim().split(';').next().unwrap_or("").to_string();
     if !o.status.success() || id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
-        return Err((
-            1,
-            format!(
-                "{} {}: {} {}",
-                sbatch.display(),
-                script.display(),
-                o.status,
-                String::from_utf8_lossy(&o.stderr).trim()
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{} {}: {} {}",
+            sbatch.display(),
+            script.display(),
+            o.status,
+            String::from_utf8_lossy(&o.stderr).trim()
+        )));
     }
     Ok(id)
 }

@@ -1,6 +1,7 @@
 //! `firemedium gen KIND -o OUT.vdb`: a fire dataset from the blob model (the firemedium-gen crate), written as OpenVDB.
 
 use clap::Args;
+use firemedium::Error;
 use firemedium_gen::{frame_as, Kind, Sim, Style};
 use std::path::PathBuf;
 
@@ -57,9 +58,9 @@ pub struct GenArgs {
 
 const SPECIES: [&str; 7] = ["Na", "Li", "K", "Ca", "Sr", "Ba", "Cu"];
 
-fn parse_species(s: &str) -> Result<(String, f64), String> {
+fn parse_species(s: &str) -> Result<(String, f64), Error> {
     let bad = || {
-        format!("--species '{s}': expected SYMBOL:PEAK with SYMBOL one of {} and PEAK a number density in m⁻³ (> 0), e.g. Na:1e17", SPECIES.join(", "))
+        Error::value(format!("--species '{s}': expected SYMBOL:PEAK with SYMBOL one of {} and PEAK a number density in m⁻³ (> 0), e.g. Na:1e17", SPECIES.join(", ")))
     };
     let (sym, n) = s.split_once(':').ok_or_else(bad)?;
     let n: f64 = n.parse().map_err(|_| bad())?;
@@ -69,30 +70,30 @@ fn parse_species(s: &str) -> Result<(String, f64), String> {
     Ok((sym.to_string(), n))
 }
 
-fn parse_warp(s: &str) -> Result<f64, String> {
+fn parse_warp(s: &str) -> Result<f64, Error> {
     match s.parse::<f64>() {
         Ok(t) if t > 0.0 && t <= 10.0 => Ok(t),
-        _ => Err(format!(
+        _ => Err(Error::value(format!(
             "--warp '{s}': expected a back-trace time in seconds, 0 < t ≤ 10, e.g. 0.25"
-        )),
+        ))),
     }
 }
 
-fn parse_spread(s: &str) -> Result<f64, String> {
+fn parse_spread(s: &str) -> Result<f64, Error> {
     match s.parse::<f64>() {
         Ok(e) if (0.0..=1e3).contains(&e) => Ok(e),
-        _ => Err(format!(
+        _ => Err(Error::value(format!(
             "--warp-spread '{s}': expected η in m/s, 0 ≤ η ≤ 1000, e.g. 0.05"
-        )),
+        ))),
     }
 }
 
-fn parse_rate(s: &str) -> Result<f64, String> {
+fn parse_rate(s: &str) -> Result<f64, Error> {
     match s.parse::<f64>() {
         Ok(r) if r > 0.0 && r <= 1e5 => Ok(r),
-        _ => Err(format!(
+        _ => Err(Error::value(format!(
             "--embers '{s}': expected embers per second, 0 < RATE ≤ 100000, e.g. 40"
-        )),
+        ))),
     }
 }
 
@@ -105,8 +106,12 @@ pub fn embers_path(path: &std::path::Path) -> PathBuf {
     })
 }
 
-fn parse_frames(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--frames '{s}': expected A-B with 0 ≤ A ≤ B ≤ 100000, e.g. 24-48");
+fn parse_frames(s: &str) -> Result<(u32, u32), Error> {
+    let bad = || {
+        Error::value(format!(
+            "--frames '{s}': expected A-B with 0 ≤ A ≤ B ≤ 100000, e.g. 24-48"
+        ))
+    };
     let (a, b) = s.split_once('-').ok_or_else(bad)?;
     let (a, b): (u32, u32) = (a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?);
     if a > b || b > 100_000 {
@@ -115,33 +120,27 @@ fn parse_frames(s: &str) -> Result<(u32, u32), String> {
     Ok((a, b))
 }
 
-pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &GenArgs) -> firemedium::Result<String> {
     let kind = Kind::from_name(&a.kind).ok_or_else(|| {
-        (
-            2,
-            format!(
-                "'{}': unknown fire; expected one of campfire, candle, pool, torch",
-                a.kind
-            ),
-        )
+        Error::value(format!(
+            "'{}': unknown fire; expected one of campfire, candle, pool, torch",
+            a.kind
+        ))
     })?;
     let species: Vec<(String, f64)> = a
         .species
         .iter()
         .map(|s| parse_species(s))
         .collect::<Result<_, _>>()
-        .map_err(|e| (2, e))?;
+        .map_err(Error::value)?;
     let (first, last) = match &a.frames {
         Some(s) => {
-            let r = parse_frames(s).map_err(|e| (2, e))?;
+            let r = parse_frames(s).map_err(Error::value)?;
             if !a.output.to_string_lossy().contains("####") {
-                return Err((
-                    2,
-                    format!(
-                        "--frames needs an output name holding #### (the frame number): {}",
-                        a.output.display()
-                    ),
-                ));
+                return Err(Error::value(format!(
+                    "--frames needs an output name holding #### (the frame number): {}",
+                    a.output.display()
+                )));
             }
             r
         }
@@ -167,12 +166,11 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
             (a.velocity, a.reaction),
             style,
         )
-        .map_err(|e| (1, format!("{}: {e}", path.display())))?;
+        .map_err(|e| Error::file(path.display(), e.to_string()))?;
         firemedium::imageio::write_atomic(&path, |tmp| {
             std::fs::write(tmp, &f.bytes)
-                .map_err(|e| format!("{}: cannot write: {e}", path.display()))
-        })
-        .map_err(|e| (1, e))?;
+                .map_err(|e| Error::file(path.display(), format!("cannot write: {e}")))
+        })?;
         let (active, tmax, fmax) = (f.active, f.peak_temperature, f.peak_soot);
         let embers = match a.embers {
             Some(_) => {
@@ -180,9 +178,8 @@ pub fn run(a: &GenArgs) -> Result<String, (u8, String)> {
                 let bytes = firemedium_gen::embers_ply(&sim.embers);
                 firemedium::imageio::write_atomic(&ep, |tmp| {
                     std::fs::write(tmp, &bytes)
-                        .map_err(|e| format!("{}: cannot write: {e}", ep.display()))
-                })
-                .map_err(|e| (1, e))?;
+                        .map_err(|e| Error::file(ep.display(), format!("cannot write: {e}")))
+                })?;
                 format!("; {} embers in {}", sim.embers.len(), ep.display())
             }
             None => String::new(),

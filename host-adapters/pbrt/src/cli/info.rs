@@ -6,6 +6,7 @@
 //! exits with status 1.
 
 use clap::Args;
+use firemedium::Error;
 use firemedium_dataset::{
     self as dataset, AxisOrder, ChannelSource, Dataset, Format, LoadOptions, Policy, RawCoords,
     RawValue,
@@ -157,9 +158,9 @@ struct SampleInfo {
 }
 
 /// Runs `info`: `Ok(text)`, or `Err((exit status, message))`.
-pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
-    let bad_arg = |m: String| (2u8, m);
-    let bad_file = |e: firemedium_dataset::Error| (1u8, e.to_string());
+pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
+    let bad_arg = Error::value;
+    let bad_file = Error::input;
     let opts = LoadOptions {
         format: args
             .format
@@ -209,18 +210,15 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
         args.grids.clone()
     };
     if names.is_empty() {
-        return Err((
-            1,
-            format!(
-                "{}: no float grid to load (grids: {})",
-                args.file.display(),
-                entries
-                    .iter()
-                    .map(|g| format!("{} {}", g.name, g.kind))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        ));
+        return Err(Error::input(format!(
+            "{}: no float grid to load (grids: {})",
+            args.file.display(),
+            entries
+                .iter()
+                .map(|g| format!("{} {}", g.name, g.kind))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
     }
     let sources: Vec<ChannelSource> = names
         .iter()
@@ -284,7 +282,7 @@ pub fn run(args: &InfoArgs) -> Result<String, (u8, String)> {
     if args.json {
         return serde_json::to_string_pretty(&report)
             .map(|s| s + "\n")
-            .map_err(|e| (1, format!("JSON output failed: {e}")));
+            .map_err(|e| Error::input(format!("JSON output failed: {e}")));
     }
     let mut s = format!("{} ({})\n", report.file, report.format);
     s += &format!("dims      {} × {} × {}\n", dims[0], dims[1], dims[2]);

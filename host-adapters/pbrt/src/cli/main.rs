@@ -93,7 +93,7 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Physics(args) => physics::run(&args).map_err(|m| (2, m)),
+        Command::Physics(args) => physics::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
@@ -117,12 +117,13 @@ fn main() -> ExitCode {
             let _ = out.write_all(firemedium::term::printable(&text, usize::MAX).as_bytes());
             ExitCode::SUCCESS
         }
-        Err((status, msg)) => {
+        Err(e) => {
             // One line, whatever the message holds.
             // (Input quoted in it made printable: no escape sequence from a file reaches the terminal.)
-            let msg = firemedium::term::printable(&msg, firemedium::term::MAX_MESSAGE_CHARS);
+            let msg =
+                firemedium::term::printable(&e.to_string(), firemedium::term::MAX_MESSAGE_CHARS);
             eprintln!("firemedium: {}", msg.replace('\n', " "));
-            ExitCode::from(status)
+            ExitCode::from(e.exit_status())
         }
     }
 }

@@ -6,6 +6,7 @@
 
 use clap::Args;
 use firemedium::imageio;
+use firemedium::Error;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -22,7 +23,7 @@ pub struct MergeArgs {
     max_memory: Option<f64>,
 }
 
-pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &MergeArgs) -> firemedium::Result<String> {
     let budget = crate::args::budget(a.max_memory);
     // The first tile's film, attributes and name: every other tile must match them.
     let mut frame: Option<(imageio::Window, imageio::Meta, &PathBuf)> = None;
@@ -35,16 +36,14 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
     // same; per pixel their values.
     let mut extra: Option<(Vec<String>, Vec<f32>)> = None;
     for (k, path) in a.tiles.iter().enumerate() {
-        let (win, meta) = imageio::read_meta(path).map_err(|e| (1, e))?;
+        let (win, meta) = imageio::read_meta(path)?;
         // A tile an interrupted render wrote (its record says so) is not merged into a finished-looking frame.
         if let Some((_, v)) = meta
             .iter()
             .find(|(k, _)| k == "complete")
             .filter(|(_, v)| v != "true")
         {
-            return Err((
-                1,
-                format!(
+            return Err(Error::input(format!(
                     "{}: the tile's record says complete={v}: its render was interrupted (render the tile again)",
                     path.display()
                 ),
@@ -58,41 +57,34 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
         match &frame {
             None => {
                 let (w, h) = win.full;
-                let n = w
-                    .checked_mul(h)
-                    .filter(|&n| n > 0)
-                    .ok_or_else(|| (1, format!("{}: a film of {w}×{h} pixels", path.display())))?;
+                let n = w.checked_mul(h).filter(|&n| n > 0).ok_or_else(|| {
+                    Error::file(path.display(), format!("a film of {w}×{h} pixels"))
+                })?;
                 firemedium::budget::check(
                     &format!("{}: the merged {w}×{h} frame", path.display()),
                     n as u64,
                     16,
                     budget,
-                )
-                .map_err(|e| (1, e))?;
+                )?;
                 let file = path.display().to_string();
-                rgb = imageio::filled_vec(&file, n, [0.0; 3]).map_err(|e| (1, e))?;
-                owner = imageio::filled_vec(&file, n, 0).map_err(|e| (1, e))?;
+                rgb = imageio::filled_vec(&file, n, [0.0; 3])?;
+                owner = imageio::filled_vec(&file, n, 0)?;
                 frame = Some((win, meta.clone(), path));
             }
             Some((first, first_meta, first_path)) => {
                 if first.full != win.full {
-                    return Err((
-                        1,
-                        format!(
-                            "{}: a film of {}×{} pixels, {} one of {}×{}: tiles of different renders",
-                            path.display(),
-                            win.full.0,
-                            win.full.1,
-                            first_path.display(),
-                            first.full.0,
-                            first.full.1
-                        ),
-                    ));
+                    return Err(Error::input(format!(
+                        "{}: a film of {}×{} pixels, {} one of {}×{}: tiles of different renders",
+                        path.display(),
+                        win.full.0,
+                        win.full.1,
+                        first_path.display(),
+                        first.full.0,
+                        first.full.1
+                    )));
                 }
                 if let Some(differs) = imageio::record_differences(first_meta, &meta) {
-                    return Err((
-                        1,
-                        format!(
+                    return Err(Error::input(format!(
                             "{}: not a tile of the render {} is a tile of ({differs}): tiles of different renders",
                             path.display(),
                             first_path.display(),
@@ -101,29 +93,24 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                 }
             }
         }
-        let img = imageio::read_within(path, false, budget).map_err(|e| (1, e))?;
+        let img = imageio::read_within(path, false, budget)?;
         let (fw, fh) = win.full;
         if win.origin.0 + img.w > fw || win.origin.1 + img.h > fh {
-            return Err((
-                1,
-                format!(
-                    "{}: {}×{} pixels at ({}, {}) reach past the {fw}×{fh} film",
-                    path.display(),
-                    img.w,
-                    img.h,
-                    win.origin.0,
-                    win.origin.1
-                ),
-            ));
+            return Err(Error::input(format!(
+                "{}: {}×{} pixels at ({}, {}) reach past the {fw}×{fh} film",
+                path.display(),
+                img.w,
+                img.h,
+                win.origin.0,
+                win.origin.1
+            )));
         }
-        let (names, values) = imageio::read_extra_channels(path, budget).map_err(|e| (1, e))?;
+        let (names, values) = imageio::read_extra_channels(path, budget)?;
         // The pixels as the tile's render wrote them (a tile from before the record held a checksum: as read).
         if let Some((_, want)) = meta.iter().find(|(k, _)| k == imageio::PIXELS_KEY) {
             let got = imageio::pixels_checksum(&img.px, &names, &values, false);
             if got != *want {
-                return Err((
-                    1,
-                    format!(
+                return Err(Error::input(format!(
                         "{}: its pixels' checksum {got} is not the {want} its render recorded: the file was changed or damaged after it was written (render the tile again)",
                         path.display()
                     ),
@@ -142,23 +129,18 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                     (n as u64).saturating_mul(nk as u64),
                     4,
                     budget,
-                )
-                .map_err(|e| (1, e))?;
-                let values = imageio::filled_vec(&path.display().to_string(), n * nk, 0.0)
-                    .map_err(|e| (1, e))?;
+                )?;
+                let values = imageio::filled_vec(&path.display().to_string(), n * nk, 0.0)?;
                 extra = Some((names, values));
             }
             Some((first, _)) if *first != names => {
-                return Err((
-                    1,
-                    format!(
-                        "{}: channels {} beside R, G, B, {} has {}: tiles of different renders",
-                        path.display(),
-                        names.join(" "),
-                        a.tiles[0].display(),
-                        first.join(" ")
-                    ),
-                ));
+                return Err(Error::input(format!(
+                    "{}: channels {} beside R, G, B, {} has {}: tiles of different renders",
+                    path.display(),
+                    names.join(" "),
+                    a.tiles[0].display(),
+                    first.join(" ")
+                )));
             }
             Some(_) => {}
         }
@@ -169,27 +151,24 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
                 let j = x + img.w * y;
                 merged[i * nk..(i + 1) * nk].copy_from_slice(&values[j * nk..(j + 1) * nk]);
                 if owner[i] != 0 {
-                    return Err((
-                        1,
-                        format!(
-                            "{} overlaps {} at pixel ({}, {})",
-                            path.display(),
-                            a.tiles[owner[i] as usize - 1].display(),
-                            win.origin.0 + x,
-                            win.origin.1 + y
-                        ),
-                    ));
+                    return Err(Error::input(format!(
+                        "{} overlaps {} at pixel ({}, {})",
+                        path.display(),
+                        a.tiles[owner[i] as usize - 1].display(),
+                        win.origin.0 + x,
+                        win.origin.1 + y
+                    )));
                 }
                 owner[i] = k as u32 + 1;
                 rgb[i] = img.px[x + img.w * y];
             }
         }
         if fire_t.is_none() {
-            fire_t = imageio::read_fire_temperature(path).map_err(|e| (1, e))?;
+            fire_t = imageio::read_fire_temperature(path)?;
         }
     }
     let Some((win, mut meta, _)) = frame else {
-        return Err((2, "no tiles".into()));
+        return Err(Error::value("no tiles"));
     };
     for (k, v) in meta.iter_mut() {
         if k == imageio::RENDER_SECONDS {
@@ -198,17 +177,14 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
     }
     let (fw, _) = win.full;
     if let Some(i) = owner.iter().position(|&o| o == 0) {
-        return Err((
-            1,
-            format!(
-                "the tiles leave pixel ({}, {}) of the {}×{} film out ({} of its pixels)",
-                i % fw,
-                i / fw,
-                win.full.0,
-                win.full.1,
-                owner.iter().filter(|&&o| o == 0).count()
-            ),
-        ));
+        return Err(Error::input(format!(
+            "the tiles leave pixel ({}, {}) of the {}×{} film out ({} of its pixels)",
+            i % fw,
+            i / fw,
+            win.full.0,
+            win.full.1,
+            owner.iter().filter(|&&o| o == 0).count()
+        )));
     }
     let full = imageio::Window {
         origin: (0, 0),
@@ -221,8 +197,7 @@ pub fn run(a: &MergeArgs) -> Result<String, (u8, String)> {
         _ => imageio::write_exr_as(
             &a.output, win.full.0, win.full.1, &rgb, fire_t, false, full, &meta,
         ),
-    }
-    .map_err(|e| (1, e))?;
+    }?;
     Ok(format!(
         "merged {} tiles into {} ({}×{})\n",
         a.tiles.len(),

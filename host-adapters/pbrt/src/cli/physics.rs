@@ -8,6 +8,7 @@
 //! `blackbody_srgb_linear` {r, g, b} (linear sRGB, D65, same scale as XYZ).
 
 use clap::Args;
+use firemedium::Error;
 use firemedium_core::{blackbody, ciddor, cie, soot};
 use serde::Serialize;
 
@@ -94,17 +95,17 @@ struct Rgb {
 }
 
 /// Checks `value` lies in [lo, hi] and is finite; the message names the flag, the value and the range.
-fn check(flag: &str, value: f64, lo: f64, hi: f64, what: &str) -> Result<f64, String> {
+fn check(flag: &str, value: f64, lo: f64, hi: f64, what: &str) -> Result<f64, Error> {
     if value.is_finite() && (lo..=hi).contains(&value) {
         Ok(value)
     } else {
-        Err(format!(
+        Err(Error::value(format!(
             "--{flag} {value}: expected {what} from {lo} to {hi}"
-        ))
+        )))
     }
 }
 
-pub fn run(args: &PhysicsArgs) -> Result<String, String> {
+pub fn run(args: &PhysicsArgs) -> firemedium::Result<String> {
     let t = check(
         "temperature",
         args.temperature,
@@ -130,12 +131,15 @@ pub fn run(args: &PhysicsArgs) -> Result<String, String> {
     )?;
     let co2 = check("co2", args.co2, 0.0, 1e6, "a CO2 mole fraction in ppm")?;
     if args.wavelengths.is_empty() {
-        return Err("--wavelengths: expected at least one wavelength in nm".into());
+        return Err(Error::value(
+            "--wavelengths: expected at least one wavelength in nm",
+        ));
     }
     for &l in &args.wavelengths {
         check("wavelengths", l, 200.0, 20_000.0, "wavelengths in nm")?;
     }
-    let optics = soot::SootOptics::for_fuel(&args.fuel).map_err(|e| format!("--fuel: {e}"))?;
+    let optics =
+        soot::SootOptics::for_fuel(&args.fuel).map_err(|e| Error::value(format!("--fuel: {e}")))?;
     let air = ciddor::Air {
         temperature_k: t,
         pressure_pa: p,
@@ -180,7 +184,7 @@ pub fn run(args: &PhysicsArgs) -> Result<String, String> {
     if args.json {
         serde_json::to_string_pretty(&report)
             .map(|s| s + "\n")
-            .map_err(|e| format!("JSON output failed: {e}"))
+            .map_err(|e| Error::input(format!("JSON output failed: {e}")))
     } else {
         Ok(table(&report))
     }

@@ -4,6 +4,7 @@ use crate::args::{parse_frames, parse_resolution, Frames};
 use clap::Args;
 use firemedium::render::{self, scene};
 use firemedium::tonemap;
+use firemedium::Error;
 use firemedium::{imageio, render::Image};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -127,7 +128,7 @@ impl PreviewOperator {
 #[derive(Debug, Clone)]
 struct Aovs(Vec<firemedium::render::aov::Aov>);
 
-fn parse_aovs(s: &str) -> Result<Aovs, String> {
+fn parse_aovs(s: &str) -> firemedium::Result<Aovs> {
     firemedium::render::aov::Aov::parse_list(s).map(Aovs)
 }
 
@@ -140,7 +141,7 @@ struct JsonLog(
 );
 
 impl JsonLog {
-    fn open(path: Option<&Path>) -> Result<JsonLog, (u8, String)> {
+    fn open(path: Option<&Path>) -> firemedium::Result<JsonLog> {
         let Some(path) = path else {
             return Ok(JsonLog(None, Default::default(), Default::default()));
         };
@@ -148,7 +149,7 @@ impl JsonLog {
             .create(true)
             .append(true)
             .open(path)
-            .map_err(|e| (2, format!("--log-json {}: {e}", path.display())))?;
+            .map_err(|e| Error::value(format!("--log-json {}: {e}", path.display())))?;
         Ok(JsonLog(
             Some(std::sync::Mutex::new(f)),
             path.to_path_buf(),
@@ -192,11 +193,14 @@ fn partial(path: &Path) -> PathBuf {
 
 /// Whether the EXR at `path` is a finished frame: it reads whole (every pixel), and its record does not say it
 /// is incomplete (renders before the record said so are taken as complete when they read whole).
-fn finished(path: &Path) -> Result<(), String> {
+fn finished(path: &Path) -> firemedium::Result<()> {
     imageio::read(path, false)?;
     let (_, meta) = imageio::read_meta(path)?;
     match meta.iter().find(|(k, _)| k == COMPLETE) {
-        Some((_, v)) if v != "true" => Err("its record says the render was interrupted".into()),
+        Some((_, v)) if v != "true" => Err(Error::file(
+            path.display(),
+            "its record says the render was interrupted",
+        )),
         _ => Ok(()),
     }
 }
@@ -237,34 +241,30 @@ fn four(v: &Option<Vec<f64>>) -> Option<[f64; 4]> {
     v.as_deref().and_then(|v| v.try_into().ok())
 }
 
-pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &RenderArgs) -> firemedium::Result<String> {
     if a.spp == Some(0) {
-        return Err((2, "--spp must be at least 1".into()));
+        return Err(Error::value("--spp must be at least 1"));
     }
     let log = JsonLog::open(a.log_json.as_deref())?;
-    let logged = |r: Result<String, (u8, String)>, frame: Option<i64>| {
-        if let Err((code, message)) = &r {
-            if *code != 0 {
-                log.event(serde_json::json!({"event": "error", "frame": frame, "code": code, "message": message}));
-            }
+    let logged = |r: firemedium::Result<Frame>, frame: Option<i64>| {
+        if let Err(e) = &r {
+            log.event(serde_json::json!({"event": "error", "frame": frame, "code": e.exit_status(), "message": e.to_string()}));
         }
         r
     };
     let frames: Option<Vec<i64>> = a.frames.clone().map(|f| f.0).or(a.frame.map(|f| vec![f]));
     let Some(frames) = frames else {
         if a.skip_existing {
-            return logged(
-                Err((2, "--skip-existing needs --frames or --frame".into())),
-                None,
-            );
+            return Err(Error::value("--skip-existing needs --frames or --frame"))
+                .inspect_err(|e| log.event(serde_json::json!({"event": "error", "frame": null, "code": e.exit_status(), "message": e.to_string()})));
         }
-        return logged(render_frame(a, None, &log), None);
+        return logged(render_frame(a, None, &log), None).map(Frame::into_text);
     };
     let mut out = String::new();
     for &f in &frames {
         let start = std::time::Instant::now();
         match logged(render_frame(a, Some(f), &log), Some(f)) {
-            Ok(text) => {
+            Ok(Frame::Rendered(text)) => {
                 out += &text;
                 // One line per finished frame, as it finishes (a farm's log follows the sequence).
                 if !a.quiet {
@@ -274,16 +274,32 @@ pub fn run(a: &RenderArgs) -> Result<String, (u8, String)> {
                     );
                 }
             }
-            Err((0, skipped)) => out += &skipped,
+            Ok(Frame::Skipped(line)) => out += &line,
             Err(e) => return Err(e),
         }
     }
     Ok(out)
 }
 
-/// Renders one frame (`None`: the scene as written) and writes its EXR and PNG; `Err((0, line))` for a frame
-/// left out by `--skip-existing`.
-fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<String, (u8, String)> {
+/// What became of one frame.
+enum Frame {
+    /// Rendered and written: the report.
+    Rendered(String),
+    /// Left out by `--skip-existing`: the line saying so.
+    Skipped(String),
+}
+
+impl Frame {
+    fn into_text(self) -> String {
+        match self {
+            Frame::Rendered(t) | Frame::Skipped(t) => t,
+        }
+    }
+}
+
+/// Renders one frame (`None`: the scene as written) and writes its EXR and PNG, or leaves it out
+/// (`--skip-existing`).
+fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium::Result<Frame> {
     log.event(serde_json::json!({"event": "start", "frame": frame, "scene": a.scene.display().to_string()}));
     let frame_start = std::time::Instant::now();
     let ov = scene::Overrides {
@@ -304,17 +320,15 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         aovs: a.aov.clone().map(|l| l.0).unwrap_or_default(),
     };
     // The output name: `-o` or the film's, with the frame's number in its pattern.
-    let named = |film: Option<&str>| -> Result<(PathBuf, PathBuf), (u8, String)> {
+    let named = |film: Option<&str>| -> firemedium::Result<(PathBuf, PathBuf)> {
         let (exr, _) = outputs(&a.scene, film, a.output.as_deref());
         let Some(f) = frame else {
             return Ok(outputs(&a.scene, film, Some(&exr)));
         };
-        let patterned =
-            firemedium_dataset::frame_path(&exr, Some(f)).map_err(|e| (2, e.to_string()))?;
+        let patterned = firemedium_dataset::frame_path(&exr, Some(f))
+            .map_err(|e| Error::value(e.to_string()))?;
         if patterned == exr && a.frames.as_ref().is_some_and(|v| v.0.len() > 1) {
-            return Err((
-                2,
-                format!(
+            return Err(Error::value(format!(
                     "--frames: the output name {} holds no #### or %04d for the frame number: every frame would overwrite it (-o fire.####.exr)",
                     exr.display()
                 ),
@@ -331,14 +345,11 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         let why = match finished(exr) {
             Ok(()) => {
                 log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
-                return Some((
-                    0,
-                    format!(
-                        "frame {}: {} exists, left out\n",
-                        frame.unwrap_or(0),
-                        exr.display()
-                    ),
-                ));
+                return Some(Frame::Skipped(format!(
+                    "frame {}: {} exists, left out\n",
+                    frame.unwrap_or(0),
+                    exr.display()
+                )));
             }
             Err(why) => why,
         };
@@ -347,22 +358,22 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 "firemedium: frame {}: {} is not a finished frame ({}): rendering it again",
                 frame.unwrap_or(0),
                 exr.display(),
-                firemedium::term::printable(&why, firemedium::term::MAX_MESSAGE_CHARS)
+                firemedium::term::printable(&why.to_string(), firemedium::term::MAX_MESSAGE_CHARS)
             );
         }
         None
     };
     // (With `-o`, a frame left out is not even loaded.)
     if a.output.is_some() {
-        if let Some(e) = exists(&named(None)?.0) {
-            return Err(e);
+        if let Some(skipped) = exists(&named(None)?.0) {
+            return Ok(skipped);
         }
     }
     let load_start = std::time::Instant::now();
-    let sc = scene::load(&a.scene, &ov).map_err(|e| (1, e))?;
+    let sc = scene::load(&a.scene, &ov)?;
     let (exr, png) = named(sc.film_name.as_deref())?;
-    if let Some(e) = exists(&exr) {
-        return Err(e);
+    if let Some(skipped) = exists(&exr) {
+        return Ok(skipped);
     }
     let seed = a.seed.unwrap_or(sc.seed);
     let seed = frame.map_or(seed, |f| frame_seed(seed, f));
@@ -401,7 +412,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         // (5000 threads for an 8×8 image spent 30 s starting them.)
         .num_threads(a.threads.map_or(0, usize::from).min(tiles))
         .build()
-        .map_err(|e| (1, format!("threads: {e}")))?;
+        .map_err(|e| Error::input(format!("threads: {e}")))?;
     let (img, st) = pool.install(|| {
         render::render(&sc, seed, &|n, total| {
             bar.set_position(n as u64);
@@ -422,7 +433,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
                 Ok(0) => {}
                 Ok(n) if !a.quiet => eprintln!("firemedium: warning: medium \"{name}\": {n} rays stopped at the per-ray collision cap (2^20 tentative collisions) and were cut short as if absorbed; the medium's majorant is far above its data (an outlier voxel?) or it is optically very thick: the image is darker there than it should be"),
                 Ok(_) => {}
-                Err(e) => return Err((1, format!("medium \"{name}\": {e}"))),
+                Err(e) => return Err(Error::input(format!("medium \"{name}\": {e}"))),
             }
         }
     }
@@ -544,9 +555,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
             st.plugin_failures.0.to_string(),
         ));
     }
-    img.write_exr(&exr, fire_t, sc.response.fp16)
-        .map_err(|e| (1, e))?;
-    write_preview(&img, &png, &tone).map_err(|e| (1, e))?;
+    img.write_exr(&exr, fire_t, sc.response.fp16)?;
+    write_preview(&img, &png, &tone)?;
     let mut out = format!(
         "wrote {} and {} ({}×{}, {} spp)\n",
         exr.display(),
@@ -617,14 +627,14 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
     if !img.complete {
         // The shell's convention, as a farm's scheduler reads it: 128 + the signal (130 Ctrl-C, 143 SIGTERM).
         let signal = render::INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed);
-        return Err((
-            u8::try_from(128 + signal).unwrap_or(130),
-            format!(
+        return Err(Error::Interrupted {
+            signal: i32::try_from(signal).unwrap_or(2),
+            message: format!(
                 "interrupted: wrote the finished tiles to {} and {}",
                 exr.display(),
                 png.display()
             ),
-        ));
+        });
     }
     // A plugin call that failed inside the render left its path without the rest of its light: the image is
     // darker there than the scene. It is written (the work is kept), and the render fails saying so.
@@ -637,9 +647,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         }));
         // (The statistics, which say the same, before the error.)
         print!("{out}");
-        return Err((
-            1,
-            format!(
+        return Err(Error::input(format!(
                 "{n} plugin calls failed during the render (first: {}); the paths that made them gave nothing from there on, so {} and {} are darker than the scene",
                 first.as_deref().unwrap_or("no message"),
                 exr.display(),
@@ -659,11 +667,15 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> Result<Str
         "render_seconds": st.seconds,
         "seconds": frame_start.elapsed().as_secs_f64(),
     }));
-    Ok(out)
+    Ok(Frame::Rendered(out))
 }
 
 /// Writes the PNG preview: the visual-adaptation tone mapping with `options`.
-pub fn write_preview(img: &Image, path: &Path, options: &tonemap::Options) -> Result<(), String> {
+pub fn write_preview(
+    img: &Image,
+    path: &Path,
+    options: &tonemap::Options,
+) -> firemedium::Result<()> {
     let px = tonemap::map(&img.xyz, options);
     imageio::write_png(path, img.w, img.h, &px, false)
 }
@@ -685,11 +697,11 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
 }
 
 /// `NAME=VALUE` (the plugin's table types the value when the light is built).
-fn parse_light_param(s: &str) -> Result<(String, String), String> {
+fn parse_light_param(s: &str) -> Result<(String, String), Error> {
     s.split_once('=')
         .filter(|(n, v)| !n.is_empty() && !v.is_empty())
         .map(|(n, v)| (n.to_string(), v.to_string()))
-        .ok_or_else(|| format!("{s:?}: expected NAME=VALUE, e.g. cell=8"))
+        .ok_or_else(|| Error::value(format!("{s:?}: expected NAME=VALUE, e.g. cell=8")))
 }
 
 #[cfg(test)]
@@ -698,7 +710,7 @@ mod tests {
 
     #[test]
     fn frame_ranges_parse_with_steps_and_negative_numbers() {
-        let f = |s: &str| parse_frames(s).map(|f| f.0);
+        let f = |s: &str| parse_frames(s).map(|f| f.0).map_err(|e| e.to_string());
         assert_eq!(f("1-5"), Ok(vec![1, 2, 3, 4, 5]));
         assert_eq!(f("1-240:100"), Ok(vec![1, 101, 201]));
         assert_eq!(f("7-7"), Ok(vec![7]));

@@ -4,6 +4,7 @@
 use clap::Args;
 use firemedium::imageio;
 use firemedium::tonemap::{self, Adapt, Operator, Options, White, WhiteArg};
+use firemedium::Error;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -38,18 +39,18 @@ pub struct TonemapArgs {
     max_memory: Option<f64>,
 }
 
-pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
+pub fn run(a: &TonemapArgs) -> firemedium::Result<String> {
     if a.bits != 8 && a.bits != 16 {
-        return Err((2, format!("--bits {}: expected 8 or 16", a.bits)));
+        return Err(Error::value(format!("--bits {}: expected 8 or 16", a.bits)));
     }
     if !a.exposure.is_finite() || a.exposure.abs() > 100.0 {
-        return Err((
-            2,
-            format!("--exposure {}: expected stops within ±100", a.exposure),
-        ));
+        return Err(Error::value(format!(
+            "--exposure {}: expected stops within ±100",
+            a.exposure
+        )));
     }
     let budget = crate::args::budget(a.max_memory);
-    let img = imageio::read_within(&a.input, false, budget).map_err(|e| (1, e))?;
+    let img = imageio::read_within(&a.input, false, budget)?;
     // (The map's working copies: XYZ in f64 and the display's values, per pixel.)
     firemedium::budget::check(
         &format!(
@@ -61,11 +62,10 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
         (img.w as u64).saturating_mul(img.h as u64),
         48,
         budget,
-    )
-    .map_err(|e| (1, e))?;
+    )?;
     let (white, from) = match a.white {
         WhiteArg::Given(w) => (w, "given"),
-        WhiteArg::Fire => match imageio::read_fire_temperature(&a.input).map_err(|e| (1, e))? {
+        WhiteArg::Fire => match imageio::read_fire_temperature(&a.input)? {
             Some(t) => (White::Blackbody(t), "the render's fire"),
             None => (White::D65, "none recorded: D65"),
         },
@@ -84,11 +84,11 @@ pub fn run(a: &TonemapArgs) -> Result<String, (u8, String)> {
     };
     let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
-    imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16).map_err(|e| (1, e))?;
+    imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16)?;
     // How much of the flame the display flattens: of the pixels where the render's `fire` AOV (the fire seen from
     // the camera) is at least 5 % of its 99th percentile, those with a channel at the display's top (8-bit 250 and
     // above: clipped, or saturated so that steps of the input no longer show).
-    let (names, extra) = imageio::read_extra_channels(&a.input, budget).map_err(|e| (1, e))?;
+    let (names, extra) = imageio::read_extra_channels(&a.input, budget)?;
     let clipped = ["fire.R", "fire.G", "fire.B"]
         .map(|n| names.iter().position(|m| m == n))
         .iter()

@@ -78,7 +78,7 @@ impl Aov {
     }
 
     /// A comma-separated list (`all` for every one); each named once, in the order written.
-    pub fn parse_list(s: &str) -> Result<Vec<Aov>, String> {
+    pub fn parse_list(s: &str) -> Result<Vec<Aov>, crate::Error> {
         let mut want = Vec::new();
         for name in s.split(',').map(str::trim).filter(|n| !n.is_empty()) {
             if name == "all" {
@@ -87,15 +87,17 @@ impl Aov {
             }
             let Some(a) = Aov::ALL.iter().find(|a| a.name() == name) else {
                 let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
-                return Err(format!(
+                return Err(crate::Error::value(format!(
                     "'{name}': unknown AOV; expected a comma-separated list of {} (or all)",
                     names.join(", ")
-                ));
+                )));
             };
             want.push(*a);
         }
         if want.is_empty() {
-            return Err(format!("'{s}': expected at least one AOV"));
+            return Err(crate::Error::value(format!(
+                "'{s}': expected at least one AOV"
+            )));
         }
         Ok(Aov::ALL.into_iter().filter(|a| want.contains(a)).collect())
     }
@@ -205,7 +207,7 @@ mod tests {
             vec![Aov::Fire, Aov::Alpha, Aov::Depth]
         );
         assert_eq!(Aov::parse_list("all").unwrap(), Aov::ALL.to_vec());
-        let e = Aov::parse_list("fire,glow").unwrap_err();
+        let e = Aov::parse_list("fire,glow").unwrap_err().to_string();
         assert!(e.contains("'glow'") && e.contains("indirect"), "{e}");
         assert_eq!(
             channel_names(&[Aov::Alpha, Aov::Normal]),

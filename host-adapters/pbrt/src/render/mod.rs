@@ -70,7 +70,7 @@ impl Image {
         path: &std::path::Path,
         fire_temperature: Option<f64>,
         fp16: bool,
-    ) -> Result<(), String> {
+    ) -> Result<(), crate::Error> {
         let window = crate::imageio::Window {
             origin: self.origin,
             full: self.full,

@@ -62,7 +62,7 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    fn read(&mut self, t: Ty) -> Result<f64, String> {
+    fn read(&mut self, t: Ty) -> Result<f64, crate::Error> {
         if self.ascii {
             while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
                 self.pos += 1;
@@ -73,17 +73,20 @@ impl Reader<'_> {
             }
             let s = std::str::from_utf8(&self.data[start..self.pos]).unwrap_or("");
             return s.parse::<f64>().map_err(|_| {
-                format!(
-                    "{}: byte {start}: expected a number, found '{s}'",
-                    self.file
+                crate::Error::file(
+                    &self.file,
+                    format!("byte {start}: expected a number, found '{s}'"),
                 )
             });
         }
         let n = size(t);
         let b = self.data.get(self.pos..self.pos + n).ok_or_else(|| {
-            format!(
-                "{}: byte {}: expected {n} more bytes, found the end of the file",
-                self.file, self.pos
+            crate::Error::file(
+                &self.file,
+                format!(
+                    "byte {}: expected {n} more bytes, found the end of the file",
+                    self.pos
+                ),
             )
         })?;
         self.pos += n;
@@ -107,10 +110,10 @@ impl Reader<'_> {
 
 /// Reads a PLY mesh, gzip-compressed or not (pbrt-v4-scenes ship `.ply.gz`); a compressed file may inflate to
 /// at most `budget` bytes.
-pub fn read(path: &Path, budget: u64) -> Result<Mesh, String> {
+pub fn read(path: &Path, budget: u64) -> Result<Mesh, crate::Error> {
     let file = path.display().to_string();
     let data = firemedium_pbrt_parser::read_regular_file(path)
-        .map_err(|e| format!("{file}: cannot read: {e}"))?;
+        .map_err(|e| crate::Error::file(&file, format!("cannot read: {e}")))?;
     if data.starts_with(&[0x1f, 0x8b]) {
         let plain = gunzip(&file, &data, budget)?;
         return parse(&file, &plain);
@@ -120,8 +123,8 @@ pub fn read(path: &Path, budget: u64) -> Result<Mesh, String> {
 
 /// The payload of a gzip member (RFC 1952): its header, its raw deflate stream inflated to at most `budget`
 /// bytes (a few bytes can claim gigabytes), and the length its trailer states checked.
-pub fn gunzip(file: &str, data: &[u8], budget: u64) -> Result<Vec<u8>, String> {
-    let bad = |what: &str| format!("{file}: not a valid gzip file: {what}");
+pub fn gunzip(file: &str, data: &[u8], budget: u64) -> Result<Vec<u8>, crate::Error> {
+    let bad = |what: &str| crate::Error::file(file, format!("not a valid gzip file: {what}"));
     if data.len() < 18 || data[2] != 8 {
         return Err(bad("expected a deflate member of at least 18 bytes"));
     }
@@ -154,7 +157,10 @@ pub fn gunzip(file: &str, data: &[u8], budget: u64) -> Result<Vec<u8>, String> {
     let limit = usize::try_from(budget).unwrap_or(usize::MAX);
     let out = miniz_oxide::inflate::decompress_to_vec_with_limit(body, limit).map_err(|e| {
         if e.status == miniz_oxide::inflate::TINFLStatus::HasMoreOutput {
-            format!("{file}: inflates to more than the memory budget of {budget} bytes")
+            crate::Error::file(
+                file,
+                format!("inflates to more than the memory budget of {budget} bytes"),
+            )
         } else {
             bad(&format!("{e}"))
         }
@@ -171,17 +177,18 @@ pub fn gunzip(file: &str, data: &[u8], budget: u64) -> Result<Vec<u8>, String> {
 }
 
 /// Parses a PLY mesh held in memory (`file` names it in errors).
-pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
+pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, crate::Error> {
     let end = data
         .windows(10)
         .position(|w| w == b"end_header")
-        .ok_or_else(|| format!("{file}: expected a PLY header ending in end_header"))?;
+        .ok_or_else(|| crate::Error::file(file, "expected a PLY header ending in end_header"))?;
     let header = std::str::from_utf8(&data[..end])
-        .map_err(|_| format!("{file}: the PLY header is not text"))?;
+        .map_err(|_| crate::Error::file(file, "the PLY header is not text"))?;
     let mut lines = header.lines();
     if lines.next().map(str::trim) != Some("ply") {
-        return Err(format!(
-            "{file}: expected the magic 'ply' on the first line"
+        return Err(crate::Error::file(
+            file,
+            "expected the magic 'ply' on the first line",
         ));
     }
     let (mut ascii, mut big) = (false, false);
@@ -194,44 +201,59 @@ pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
                 "binary_little_endian" => {}
                 "binary_big_endian" => big = true,
                 other => {
-                    return Err(format!(
-                        "{file}: line {}: unknown PLY format '{other}'",
-                        i + 2
+                    return Err(crate::Error::file(
+                        file,
+                        format!("line {}: unknown PLY format '{other}'", i + 2),
                     ))
                 }
             },
             ["element", name, count] => elements.push(Element {
                 name: name.to_string(),
-                count: count
-                    .parse()
-                    .map_err(|_| format!("{file}: line {}: bad element count '{count}'", i + 2))?,
+                count: count.parse().map_err(|_| {
+                    crate::Error::file(file, format!("line {}: bad element count '{count}'", i + 2))
+                })?,
                 props: Vec::new(),
             }),
             ["property", "list", ct, it, name] => {
                 let (c, t) = (
-                    ty(ct).ok_or_else(|| format!("{file}: line {}: unknown type '{ct}'", i + 2))?,
-                    ty(it).ok_or_else(|| format!("{file}: line {}: unknown type '{it}'", i + 2))?,
+                    ty(ct).ok_or_else(|| {
+                        crate::Error::file(file, format!("line {}: unknown type '{ct}'", i + 2))
+                    })?,
+                    ty(it).ok_or_else(|| {
+                        crate::Error::file(file, format!("line {}: unknown type '{it}'", i + 2))
+                    })?,
                 );
                 elements
                     .last_mut()
-                    .ok_or_else(|| format!("{file}: line {}: property before any element", i + 2))?
+                    .ok_or_else(|| {
+                        crate::Error::file(
+                            file,
+                            format!("line {}: property before any element", i + 2),
+                        )
+                    })?
                     .props
                     .push(Prop::List(name.to_string(), c, t));
             }
             ["property", t, name] => {
-                let t =
-                    ty(t).ok_or_else(|| format!("{file}: line {}: unknown type '{t}'", i + 2))?;
+                let t = ty(t).ok_or_else(|| {
+                    crate::Error::file(file, format!("line {}: unknown type '{t}'", i + 2))
+                })?;
                 elements
                     .last_mut()
-                    .ok_or_else(|| format!("{file}: line {}: property before any element", i + 2))?
+                    .ok_or_else(|| {
+                        crate::Error::file(
+                            file,
+                            format!("line {}: property before any element", i + 2),
+                        )
+                    })?
                     .props
                     .push(Prop::Scalar(name.to_string(), t));
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
             _ => {
-                return Err(format!(
-                    "{file}: line {}: unexpected header line '{line}'",
-                    i + 2
+                return Err(crate::Error::file(
+                    file,
+                    format!("line {}: unexpected header line '{line}'", i + 2),
                 ))
             }
         }
@@ -253,11 +275,14 @@ pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
     let (mut pos, mut normals, mut uvs, mut idx) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for el in &elements {
         if el.count > data.len() {
-            return Err(format!(
-                "{file}: element '{}' claims {} entries in a {}-byte file",
-                el.name,
-                el.count,
-                data.len()
+            return Err(crate::Error::file(
+                file,
+                format!(
+                    "element '{}' claims {} entries in a {}-byte file",
+                    el.name,
+                    el.count,
+                    data.len()
+                ),
             ));
         }
         for _ in 0..el.count {
@@ -282,8 +307,9 @@ pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
                     Prop::List(name, ct, it) => {
                         let n = r.read(*ct)? as usize;
                         if n > 64 {
-                            return Err(format!(
-                                "{file}: a face of {n} vertices (expected 3 or 4)"
+                            return Err(crate::Error::file(
+                                file,
+                                format!("a face of {n} vertices (expected 3 or 4)"),
                             ));
                         }
                         let ids: Vec<usize> = (0..n)
@@ -297,8 +323,9 @@ pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
                                     ids[0], ids[1], ids[2], ids[0], ids[2], ids[3],
                                 ]),
                                 k => {
-                                    return Err(format!(
-                                        "{file}: a face of {k} vertices (expected 3 or 4)"
+                                    return Err(crate::Error::file(
+                                        file,
+                                        format!("a face of {k} vertices (expected 3 or 4)"),
                                     ))
                                 }
                             }
@@ -314,12 +341,13 @@ pub fn parse(file: &str, data: &[u8]) -> Result<Mesh, String> {
         }
     }
     if pos.iter().any(|x| x.is_nan()) {
-        return Err(format!("{file}: vertices need x, y and z"));
+        return Err(crate::Error::file(file, "vertices need x, y and z"));
     }
     let nv = pos.len() / 3;
     if let Some(&bad) = idx.iter().find(|&&i| i >= nv) {
-        return Err(format!(
-            "{file}: face index {bad} is not below the {nv} vertices"
+        return Err(crate::Error::file(
+            file,
+            format!("face index {bad} is not below the {nv} vertices"),
         ));
     }
     let normals = (!normals.iter().any(|x| x.is_nan())).then_some(normals);
@@ -355,7 +383,10 @@ mod tests {
         assert_eq!(read(&b, u64::MAX).unwrap().1, vec![0, 1, 2]);
         bytes.truncate(bytes.len() - 2);
         std::fs::write(&b, &bytes).unwrap();
-        assert!(read(&b, u64::MAX).unwrap_err().contains("end of the file"));
+        assert!(read(&b, u64::MAX)
+            .unwrap_err()
+            .to_string()
+            .contains("end of the file"));
         std::fs::remove_dir_all(&dir).ok();
     }
 
@@ -380,12 +411,13 @@ mod tests {
         let bomb = gzip(&vec![0u8; 16 << 20]);
         assert!(bomb.len() < 64 << 10);
         std::fs::write(&f, &bomb).unwrap();
-        let e = read(&f, 1 << 20).unwrap_err();
+        let e = read(&f, 1 << 20).unwrap_err().to_string();
         assert!(e.contains("m.ply.gz") && e.contains("memory budget"), "{e}");
         // A truncated member names what is wrong.
         std::fs::write(&f, &bomb[..12]).unwrap();
         assert!(read(&f, 1 << 20)
             .unwrap_err()
+            .to_string()
             .contains("not a valid gzip file"));
         std::fs::remove_dir_all(&dir).ok();
     }

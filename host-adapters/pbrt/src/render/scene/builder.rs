@@ -263,7 +263,7 @@ impl Builder {
         p: &ParamDict,
     ) -> Result<(), Error> {
         let names = pbrt_v4::parameters(kind, ty).unwrap_or_default();
-        for (loc, w) in p.report_unused(what, &names).map_err(|e| e.to_string())? {
+        for (loc, w) in p.report_unused(what, &names)? {
             self.warn(&loc, w);
         }
         Ok(())

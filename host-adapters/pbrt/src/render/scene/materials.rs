@@ -138,10 +138,11 @@ impl Builder {
         let n = self.bins.n();
         for (name, s) in [(eta_name, &eta), (k_name, &k)] {
             if let Some(bad) = s.0[..n].iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-                let at = p.get(name).map(|q| q.loc.to_string()).unwrap_or_default();
-                return Err(format!(
-                    "{at}: \"{name}\": {bad}: expected finite values >= 0"
-                ));
+                let m = format!("\"{name}\": {bad}: expected finite values >= 0");
+                return Err(match p.get(name) {
+                    Some(q) => err(&q.loc, m),
+                    None => Error::value(m),
+                });
             }
         }
         Ok(Metal::Index { eta, k })

@@ -18,11 +18,11 @@ use glam::{DAffine3, DMat4, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// A scene error: where and what.
-pub type Error = String;
+use crate::Error;
 
+/// A statement at `loc` refused.
 fn err(loc: &Loc, m: impl std::fmt::Display) -> Error {
-    format!("{loc}: {m}")
+    Error::at(loc, m)
 }
 
 /// A spectrum texture.
@@ -189,17 +189,17 @@ pub struct Portal {
 
 impl Portal {
     /// The portal through corners p₀…p₃ (in order), or why it is not one: pbrt-v4 asks for a planar rectangle.
-    pub fn new(p: [Vec3A; 4]) -> Result<Portal, String> {
+    pub fn new(p: [Vec3A; 4]) -> Result<Portal, Error> {
         let (e1, e2) = (p[1] - p[0], p[3] - p[0]);
         let n = e2.cross(e1);
         let area = n.length();
         let planar = (p[2] - (p[0] + e1 + e2)).length() <= 1e-3 * e1.length().max(e2.length());
         let square = e1.normalize_or_zero().dot(e2.normalize_or_zero()).abs() < 1e-3;
         if !(area > 0.0 && area.is_finite() && planar && square) {
-            return Err(format!(
+            return Err(Error::value(format!(
                 "\"point3 portal\" {:?}: expected the four corners of a rectangle, in order (as pbrt-v4)",
                 p.map(|v| v.to_array())
-            ));
+            )));
         }
         Ok(Portal {
             p0: p[0],
@@ -386,12 +386,14 @@ pub fn typed_params(
                         .filter(|p| components.contains(&p.component.as_str()))
                         .map(|p| p.name.as_str())
                         .collect();
-                    format!(
+                    Error::value(format!(
                         "{flag} {name}={value}: {what} has no parameter \"{name}\" (it has {})",
                         names.join(", ")
-                    )
+                    ))
                 })?;
-            let bad = |kind: &str| format!("{flag} {name}={value}: \"{value}\" is not {kind}");
+            let bad = |kind: &str| {
+                Error::value(format!("{flag} {name}={value}: \"{value}\" is not {kind}"))
+            };
             Ok(match info.ty.as_str() {
                 "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
                 "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
@@ -419,17 +421,16 @@ pub fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Err
 /// covers the pixels [⌈W x0⌉, ⌈W x1⌉) × [⌈H y0⌉, ⌈H y1⌉); else pixel bounds, clamped to the film; else the film.
 fn pixel_bounds(b: &Builder, ov: &Overrides, path: &Path) -> Result<[usize; 4], Error> {
     let (w, h) = (b.res.0 as f64, b.res.1 as f64);
-    let at = |loc: Option<&Loc>| {
-        loc.map_or_else(
-            || format!("{}: command line", path.display()),
-            |l| l.to_string(),
-        )
+    // Where a window was given: its statement, or the command line (named after the scene).
+    let refuse = |loc: Option<&Loc>, m: String| match loc {
+        Some(l) => Error::at(l, m),
+        None => Error::file(path.display(), format!("command line: {m}")),
     };
     let crop = ov
         .crop
         .map(|c| (c, None))
         .or(b.crop.as_ref().map(|(c, l)| (*c, Some(l))));
-    let bounds = if let Some((c, loc)) = crop {
+    let bounds = if let Some((c, _)) = crop {
         let (cx0, cx1) = (
             c[0].min(c[1]).clamp(0.0, 1.0),
             c[0].max(c[1]).clamp(0.0, 1.0),
@@ -445,10 +446,6 @@ fn pixel_bounds(b: &Builder, ov: &Overrides, path: &Path) -> Result<[usize; 4], 
             (h * cy1).ceil(),
         ]
         .map(|v| v as usize)
-        .into_iter()
-        .collect::<Vec<_>>()
-        .try_into()
-        .map_err(|_| at(loc))?
     } else if let Some((p, loc)) = ov
         .pixel_bounds
         .map(|p| (p, None))
@@ -462,18 +459,19 @@ fn pixel_bounds(b: &Builder, ov: &Overrides, path: &Path) -> Result<[usize; 4], 
             clamp(p[3], h),
         ];
         if r[1] <= r[0] || r[3] <= r[2] {
-            return Err(format!("{}: pixel bounds {p:?} leave no pixel of the {}×{} film: expected x0 < x1, y0 < y1 inside it", at(loc), b.res.0, b.res.1));
+            return Err(refuse(loc, format!("pixel bounds {p:?} leave no pixel of the {}×{} film: expected x0 < x1, y0 < y1 inside it", b.res.0, b.res.1)));
         }
         r
     } else {
         [0, b.res.0, 0, b.res.1]
     };
     if bounds[1] <= bounds[0] || bounds[3] <= bounds[2] {
-        return Err(format!(
-            "{}: the crop window leaves no pixel of the {}×{} film",
-            at(crop.and_then(|c| c.1)),
-            b.res.0,
-            b.res.1
+        return Err(refuse(
+            crop.and_then(|c| c.1),
+            format!(
+                "the crop window leaves no pixel of the {}×{} film",
+                b.res.0, b.res.1
+            ),
         ));
     }
     Ok(bounds)
@@ -516,7 +514,7 @@ pub struct Overrides {
 /// parsing alone — nothing is loaded or built (a farm cuts the film into tiles before any node renders it).
 pub fn film_resolution(path: &Path) -> Result<(usize, usize), Error> {
     let mut c = Collect::default();
-    parse_file(path, &mut c).map_err(|e| e.to_string())?;
+    parse_file(path, &mut c)?;
     let mut res = (1280, 720);
     for (d, loc) in &c.0 {
         if let Directive::Film(_, params) = d {
@@ -526,8 +524,9 @@ pub fn film_resolution(path: &Path) -> Result<(usize, usize), Error> {
                 if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
                     Ok(v as usize)
                 } else {
-                    Err(format!(
-                        "{loc}: film: \"integer {name}\" {v}: expected 1 to 65536 pixels"
+                    Err(err(
+                        loc,
+                        format!("film: \"integer {name}\" {v}: expected 1 to 65536 pixels"),
                     ))
                 }
             };
@@ -540,7 +539,7 @@ pub fn film_resolution(path: &Path) -> Result<(usize, usize), Error> {
 /// Parses and builds the scene at `path`.
 pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let mut c = Collect::default();
-    parse_file(path, &mut c).map_err(|e| e.to_string())?;
+    parse_file(path, &mut c)?;
     // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
     // photometric scale.
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -612,13 +611,15 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         }
     }
     if n > super::spectrum::MAX_CHANNELS {
-        return Err(format!(
-            "{}: {n} spectral bins; the renderer supports at most {}",
+        return Err(Error::file(
             path.display(),
-            super::spectrum::MAX_CHANNELS
+            format!(
+                "{n} spectral bins; the renderer supports at most {}",
+                super::spectrum::MAX_CHANNELS
+            ),
         ));
     }
-    let grid = SpectralGrid::new(lo, hi, n).map_err(|e| format!("{}: {e}", path.display()))?;
+    let grid = SpectralGrid::new(lo, hi, n).map_err(|e| Error::file(path.display(), e))?;
     // The film records Y in cd/m² (nits) either way. With a fire, radiance is absolute (683 lm/W); without one it
     // is in pbrt-v4's units, whose film records ∫ L ȳ dλ as it is (K = 1): a pbrt scene's numbers are pbrt-v4's.
     // Lights are normalised to their luminance in both (`Builder::emitted`), and a pbrt grid in a fire's scene is
@@ -713,7 +714,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     let (camera_type, cp, camera_from_world, medium, _) = b
         .camera
         .take()
-        .ok_or_else(|| format!("{}: no Camera directive", path.display()))?;
+        .ok_or_else(|| Error::file(path.display(), "no Camera directive"))?;
     let cp = &ParamDict::new(&cp);
     if let Some(r) = ov.res {
         b.res = r;
@@ -760,11 +761,13 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     // pbrt-v4's imaging ratio: the shutter interval × ISO / 100 (1 by default).
     let exposure = num(cp, "shutterclose", 1.0) - num(cp, "shutteropen", 0.0);
     if !(exposure > 0.0 && exposure <= 1e6) {
-        return Err(format!(
-            "{}: camera: the shutter is open from {} to {}: expected an interval of up to 1e6 s",
+        return Err(Error::file(
             path.display(),
-            num(cp, "shutteropen", 0.0),
-            num(cp, "shutterclose", 1.0)
+            format!(
+                "camera: the shutter is open from {} to {}: expected an interval of up to 1e6 s",
+                num(cp, "shutteropen", 0.0),
+                num(cp, "shutterclose", 1.0)
+            ),
         ));
     }
     let f = b.film_response;
@@ -774,13 +777,14 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         // A named camera: its curves through pbrt-v4's calibration matrix, per bin and in the film's units (K:
         // the film's ȳ weights over the CIE ones), replace the CMFs; the calibration white-balances.
         let m = crate::render::sensors::xyz_from_sensor(name, f.white_k).ok_or_else(|| {
-            format!(
-                "{}: film: sensor \"{name}\": its calibration failed",
-                path.display()
+            Error::file(
+                path.display(),
+                format!("film: sensor \"{name}\": its calibration failed"),
             )
         })?;
-        let curves = crate::render::sensors::curves(name)
-            .ok_or_else(|| format!("{}: film: sensor \"{name}\" unknown", path.display()))?;
+        let curves = crate::render::sensors::curves(name).ok_or_else(|| {
+            Error::file(path.display(), format!("film: sensor \"{name}\" unknown"))
+        })?;
         let cie = firemedium_core::cie::bin_weights_of(&bins.grid, firemedium_core::cie::cmf, 1.0);
         let k = bins.xyz.iter().map(|w| w.y).sum::<f64>() / cie.iter().map(|w| w.y).sum::<f64>();
         response.white_balance = None;
@@ -838,7 +842,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                         if let Some(rep) = b.media_reports.get_mut(r) {
                             rep.light = Some(LightReport {
                                 info: light.info(),
-                                line_channels: light.line_channels().map_err(|e| e.to_string())?,
+                                line_channels: light.line_channels()?,
                             });
                         }
                         b.lights.push(Light::Fire {
@@ -850,9 +854,9 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                     Err(firemedium_loader::Error::Status { message, .. })
                         if message.contains("no emitting voxel") => {}
                     Err(e) => {
-                        return Err(format!(
-                            "{}: fire light of medium {mi}: {e}",
-                            path.display()
+                        return Err(Error::file(
+                            path.display(),
+                            format!("fire light of medium {mi}: {e}"),
                         ))
                     }
                 }
@@ -907,4 +911,39 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         warnings: b.warnings,
         media_reports: b.media_reports,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A refused statement comes back as data: its file, line and column, not a message to re-parse; a scene
+    /// that cannot be read is a parse error, a missing camera the file's own.
+    #[test]
+    fn a_refused_statement_carries_its_location() {
+        let dir = std::env::temp_dir().join(format!("firemedium-scene-err-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = dir.join("bad.pbrt");
+        std::fs::write(
+            &scene,
+            "Camera \"perspective\"\nWorldBegin\n  Material \"diffuse\"\n    Shape \"sphere\" \"float radius\" [ -1 ]\n    PixelFilter \"bogus\"\n",
+        )
+        .unwrap();
+        let e = load(&scene, &Overrides::default()).unwrap_err();
+        let loc = e.loc().expect("a statement's location");
+        assert_eq!((loc.line, loc.col), (5, 5), "{e}");
+        assert!(matches!(e, Error::Scene { .. }), "{e:?}");
+        assert_eq!(e.exit_status(), 1);
+
+        std::fs::write(&scene, "WorldBegin\n").unwrap();
+        let e = load(&scene, &Overrides::default()).unwrap_err();
+        assert!(
+            matches!(&e, Error::File { message, .. } if message == "no Camera directive"),
+            "{e:?}"
+        );
+
+        let e = load(&dir.join("missing.pbrt"), &Overrides::default()).unwrap_err();
+        assert!(matches!(e, Error::Parse(_)), "{e:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
