@@ -11,11 +11,11 @@
 
 use super::bsdf::{Lobes, Mode};
 use super::material;
+use super::media::{to_space, Track};
 use super::pixel::Samples;
 use super::scene::{Light, Medium, Scene};
 use super::shapes::{sample_area, Hit};
 use super::spectrum::S;
-use firemedium_loader::Ray as FRay;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
 
@@ -232,28 +232,6 @@ impl Spot {
     }
 }
 
-/// World point `o` and direction `d` in the space `xf` maps to.
-fn to_space(xf: &DAffine3, o: Vec3A, d: Vec3A) -> (DVec3, DVec3) {
-    let f = |v: Vec3A| DVec3::from(v.to_array().map(f64::from));
-    (xf.transform_point3(f(o)), xf.transform_vector3(f(d)))
-}
-
-/// The plugin ray of the world segment o + t·d, t ∈ [0, t_end] (unbounded: 1e30), in medium space.
-fn plugin_ray(to_medium: &DAffine3, o: Vec3A, d: Vec3A, t_end: f32, seed: u64) -> FRay {
-    let (om, dm) = to_space(to_medium, o, d);
-    FRay {
-        origin: om.to_array(),
-        direction: dm.to_array(),
-        tmin: 0.0,
-        tmax: if t_end.is_finite() {
-            t_end as f64
-        } else {
-            1e30
-        },
-        seed,
-    }
-}
-
 /// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
 /// from `o` at `time` (frames: the embers move).
 fn fire_pdf_direction(
@@ -311,140 +289,6 @@ pub struct Integrator<'a> {
 impl Integrator<'_> {
     fn rng2(rng: &mut Samples) -> [f32; 2] {
         [rng.next_f64() as f32, rng.next_f64() as f32]
-    }
-
-    /// Transmittance of medium `m` along o + t·d, t ∈ [0, t_end], and (optionally) the emission it adds.
-    fn medium_segment(
-        &self,
-        m: usize,
-        o: Vec3A,
-        d: Vec3A,
-        t_end: f32,
-        rng: &mut Samples,
-        emission: bool,
-    ) -> (S, S) {
-        let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission, false);
-        (l, t)
-    }
-
-    /// The emission and transmittance of plugin medium `m` along o + t·d, t ∈ [0, t_end], as its fire light
-    /// estimates them for a light sample's direction (`light_integrate`: a coarser march on a large fire).
-    fn light_segment(
-        &self,
-        light: &firemedium_loader::Light,
-        m: usize,
-        o: Vec3A,
-        d: Vec3A,
-        t_end: f32,
-        rng: &mut Samples,
-    ) -> (S, S) {
-        let Medium::Plugin {
-            to_medium, units, ..
-        } = &self.scene.media[m]
-        else {
-            return self.medium_segment(m, o, d, t_end, rng, true);
-        };
-        let n = self.scene.bins.n();
-        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
-        let (mut l, mut t) = (
-            [0f32; super::spectrum::MAX_CHANNELS],
-            [0f32; super::spectrum::MAX_CHANNELS],
-        );
-        let estimated = light.integrate_at(
-            std::slice::from_ref(&ray),
-            Some(&[rng.time]),
-            &mut l[..n],
-            Some(&mut t[..n]),
-        );
-        if self.failures.note(estimated).is_none() {
-            return (S::ZERO, S::ZERO);
-        }
-        (S(l) * *units, S(t))
-    }
-
-    /// As [`medium_segment`](Self::medium_segment), and — when `want_exit` — where the ray leaves if a
-    /// refracting plugin medium bent it (world space: point, unit direction); None when it went straight.
-    /// Without `want_exit` the plugin integrates the straight ray (NEE and light paths).
-    #[allow(clippy::too_many_arguments)]
-    fn medium_segment_exit(
-        &self,
-        m: usize,
-        o: Vec3A,
-        d: Vec3A,
-        t_end: f32,
-        rng: &mut Samples,
-        emission: bool,
-        want_exit: bool,
-    ) -> (S, S, Option<(Vec3A, Vec3A)>) {
-        let n = self.scene.bins.n();
-        match &self.scene.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                to_world,
-                units,
-                ..
-            } => {
-                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
-                let time = [rng.time];
-                let (mut l, mut t) = (
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                );
-                let mut exit = [firemedium_loader::Exit::default()];
-                let done = if emission {
-                    vol.integrate_at(
-                        std::slice::from_ref(&ray),
-                        Some(&time),
-                        &mut l[..n],
-                        Some(&mut t[..n]),
-                        want_exit.then_some(&mut exit[..]),
-                    )
-                } else {
-                    vol.transmittance_at(std::slice::from_ref(&ray), Some(&time), &mut t[..n])
-                };
-                if self.failures.note(done).is_none() {
-                    return (S::ZERO, S::ZERO, None);
-                }
-                let bent = (emission && want_exit).then(|| {
-                    let de = DVec3::from(exit[0].direction);
-                    let dn = DVec3::from(ray.direction).normalize_or_zero();
-                    (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
-                        let p = to_world.transform_point3(DVec3::from(exit[0].point));
-                        let w = to_world.transform_vector3(de).normalize_or_zero();
-                        (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
-                    })
-                });
-                (S(l) * *units, S(t), bent.flatten())
-            }
-            Medium::Homogeneous { sa, ss, le, .. } => {
-                let len = if t_end.is_finite() {
-                    t_end * d.length()
-                } else {
-                    f32::INFINITY
-                };
-                let st = *sa + *ss;
-                let mut tr = S::ZERO;
-                let mut l = S::ZERO;
-                for i in 0..n {
-                    let tau = st.0[i] * len;
-                    tr.0[i] = (-tau).exp();
-                    if emission && st.0[i] > 0.0 {
-                        l.0[i] = sa.0[i] * le.0[i] * -(-tau).exp_m1() / st.0[i];
-                    }
-                }
-                (l, tr, None)
-            }
-            Medium::RgbGrid(grid) => {
-                let speed = d.length();
-                if !(speed > 0.0) {
-                    return (S::ZERO, S::splat(1.0), None);
-                }
-                let (l, tr) =
-                    grid.segment(o, d / speed, t_end * speed, || rng.next_f64(), emission);
-                (l, tr, None)
-            }
-        }
     }
 
     /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
@@ -815,161 +659,46 @@ impl Integrator<'_> {
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
             if let Some(m) = medium {
-                let scatters = matches!(&sc.media[m], Medium::Plugin { scatters: true, .. });
-                if scatters {
-                    if let Medium::Plugin {
-                        vol,
-                        to_medium,
-                        g,
-                        units,
-                        ..
-                    } = &sc.media[m]
-                    {
-                        let n = sc.bins.n();
-                        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
-                        let mut ev = [firemedium_loader::Scatter::default()];
-                        let (mut w, mut e) = (
-                            [0f32; super::spectrum::MAX_CHANNELS],
-                            [0f32; super::spectrum::MAX_CHANNELS],
-                        );
-                        // (The emission collected at delta tracking's tentative collisions, as pbrt-v4's volpath:
-                        // marching it along every segment instead cost 7× the time for no less error on a
-                        // scattering fire — docs/RESULTS.md.)
-                        let tracked = vol.sample_scatter_at(
-                            std::slice::from_ref(&ray),
-                            Some(&[rng.time]),
-                            &mut ev,
-                            &mut w[..n],
-                            Some(&mut e[..n]),
-                        );
-                        if self.failures.note(tracked).is_none() {
-                            break;
-                        }
-                        let e = S(e);
+                let (emitted, track) = self.track(m, o, d, t_end, rng);
+                if depth < sc.maxdepth {
+                    match emitted.fire_units {
                         // (MIS's density only for light that is there: a dark segment needs no walk.)
-                        if !e.is_black() && depth < sc.maxdepth {
+                        Some(units) if !emitted.l.is_black() => {
                             l += beta
-                                * e
-                                * (*units * self.emission_weight(m, mis, skipped, d, rng.time));
+                                * emitted.l
+                                * (units * self.emission_weight(m, mis, skipped, d, rng.time));
                         }
-                        match ev[0].event {
-                            firemedium_abi::FM_EVENT_SCATTERED => {
-                                beta *= S(w);
-                                if depth >= sc.maxdepth {
-                                    break;
-                                }
-                                let p = o + d * ev[0].t as f32;
-                                Split::mark(&mut split, depth, l);
-                                let (wi, pdf) = self.scatter_vertex(
-                                    p, d, *g as f32, medium, depth, beta, &mut l, rng,
-                                );
-                                (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
-                                depth += 1;
-                                continue;
-                            }
-                            firemedium_abi::FM_EVENT_ABSORBED => break,
-                            _ => beta *= S(w),
-                        }
+                        Some(_) => {}
+                        None => l += beta * emitted.l,
                     }
-                } else if let Medium::Homogeneous { sa, ss, g, .. } = &sc.media[m] {
-                    // Emission over the whole segment in closed form; in-scattering by sampling a distance from the
-                    // channel-mean extinction σ̄ with spectral weights T_c(s) σ_s,c / p(s).
-                    let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
-                    if depth < sc.maxdepth {
-                        l += beta * le;
-                    }
-                    if ss.is_black() {
-                        beta *= tr;
-                    } else {
-                        let n = sc.bins.n();
-                        let st = *sa + *ss;
-                        let sbar = st.0[..n].iter().sum::<f32>() / n as f32;
-                        let speed = d.length();
-                        let s_hit = -(1.0 - rng.next_f64() as f32).ln() / sbar;
-                        let s_end = t_end * speed;
-                        if s_hit < s_end {
-                            let mut w = S::ZERO;
-                            for c in 0..n {
-                                w.0[c] = (-(st.0[c] - sbar) * s_hit).exp() * ss.0[c] / sbar;
-                            }
-                            beta *= w;
-                            if depth >= sc.maxdepth {
-                                break;
-                            }
-                            let p = o + d * (s_hit / speed);
-                            Split::mark(&mut split, depth, l);
-                            let (wi, pdf) = self
-                                .scatter_vertex(p, d, *g as f32, medium, depth, beta, &mut l, rng);
-                            (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
-                            depth += 1;
-                            continue;
-                        }
-                        let mut w = S::ZERO;
-                        for c in 0..n {
-                            w.0[c] = if s_end.is_finite() {
-                                (-(st.0[c] - sbar) * s_end).exp()
-                            } else {
-                                0.0
-                            };
-                        }
-                        beta *= w;
-                    }
-                } else if let Medium::RgbGrid(grid) = &sc.media[m] {
-                    let speed = d.length();
-                    let track = grid.track(o, d / speed, t_end * speed, || rng.next_f64());
-                    match track {
-                        super::rgbgrid::Track::Scattered { s, weight, emitted } => {
-                            if depth < sc.maxdepth {
-                                l += beta * emitted;
-                            }
-                            beta *= weight;
-                            if depth >= sc.maxdepth {
-                                break;
-                            }
-                            let p = o + d * (s / speed);
-                            Split::mark(&mut split, depth, l);
-                            let (wi, pdf) = self.scatter_vertex(
-                                p,
-                                d,
-                                grid.g as f32,
-                                medium,
-                                depth,
-                                beta,
-                                &mut l,
-                                rng,
-                            );
-                            (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
-                            depth += 1;
-                            continue;
-                        }
-                        super::rgbgrid::Track::Passed { weight, emitted } => {
-                            if depth < sc.maxdepth {
-                                l += beta * emitted;
-                            }
-                            beta *= weight;
-                        }
-                        super::rgbgrid::Track::Absorbed { emitted } => {
-                            if depth < sc.maxdepth {
-                                l += beta * emitted;
-                            }
+                }
+                match track {
+                    Track::Scattered { t, weight, g } => {
+                        beta *= weight;
+                        if depth >= sc.maxdepth {
                             break;
                         }
-                    }
-                } else {
-                    let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
-                    if !le.is_black() && depth < sc.maxdepth {
-                        l += beta * le * self.emission_weight(m, mis, skipped, d, rng.time);
-                    }
-                    beta *= tr;
-                    // A refracting fire bent the ray: continue from where it left, in its new direction (the
-                    // surface hit found along the straight line no longer applies).
-                    if let Some((p, w)) = bent {
-                        if beta.max() <= 0.0 {
-                            break;
-                        }
-                        (o, d) = (p, w);
+                        let p = o + d * t;
+                        Split::mark(&mut split, depth, l);
+                        let (wi, pdf) =
+                            self.scatter_vertex(p, d, g, medium, depth, beta, &mut l, rng);
+                        (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
+                        depth += 1;
                         continue;
                     }
+                    Track::Passed { weight, bent } => {
+                        beta *= weight;
+                        // A refracting fire bent the ray: continue from where it left, in its new direction
+                        // (the surface hit found along the straight line no longer applies).
+                        if let Some((p, w)) = bent {
+                            if beta.max() <= 0.0 {
+                                break;
+                            }
+                            (o, d) = (p, w);
+                            continue;
+                        }
+                    }
+                    Track::Absorbed => break,
                 }
                 if beta.max() <= 0.0 {
                     break;

@@ -11,6 +11,7 @@ pub mod film;
 pub mod integrator;
 pub mod layered;
 pub mod material;
+mod media;
 pub mod media_presets;
 pub mod microfacet;
 pub mod named_spectra;

@@ -1,0 +1,335 @@
+//! The media as the integrator sees them. Each kind — pbrt-v4's `homogeneous` in closed form, its `rgbgrid`
+//! tracked in the host ([`super::rgbgrid`]), a plugin medium through the ABI's whole-ray queries — answers the
+//! same two questions here: what one segment of a path does ([`Integrator::track`]: scattered where, with what
+//! weight and phase function; passed, with what transmittance, perhaps bent; absorbed — and the emission it
+//! added), and what a segment transmits and emits ([`Integrator::medium_segment`], for shadow rays and light
+//! walks). The integrator asks these and never which kind it holds; a new kind is one arm in each.
+
+use super::integrator::Integrator;
+use super::pixel::Samples;
+use super::scene::Medium;
+use super::spectrum::S;
+use firemedium_loader::Ray as FRay;
+use glam::{DAffine3, DVec3, Vec3A};
+
+/// What a medium did to a path along one segment.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Track {
+    /// Scattered at o + t·d: the path's weight there (transmittance × σ_s / pdf) and the phase function's g.
+    Scattered { t: f32, weight: S, g: f32 },
+    /// Crossed the segment: its weight; a refracting medium bent the ray (world point and unit direction where
+    /// it leaves).
+    Passed {
+        weight: S,
+        bent: Option<(Vec3A, Vec3A)>,
+    },
+    /// Absorbed (or a plugin call failed, counted): the path ends.
+    Absorbed,
+}
+
+/// The emission a segment added, before the path's weight.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Emitted {
+    pub l: S,
+    /// A fire medium's emission, which its fire light also samples: weighted by MIS, scaled by these units
+    /// (None: nothing else samples it, added as it is).
+    pub fire_units: Option<f32>,
+}
+
+/// World point `o` and direction `d` in the space `xf` maps to.
+pub(super) fn to_space(xf: &DAffine3, o: Vec3A, d: Vec3A) -> (DVec3, DVec3) {
+    let f = |v: Vec3A| DVec3::from(v.to_array().map(f64::from));
+    (xf.transform_point3(f(o)), xf.transform_vector3(f(d)))
+}
+
+/// The plugin ray of the world segment o + t·d, t ∈ [0, t_end] (unbounded: 1e30), in medium space.
+pub(super) fn plugin_ray(to_medium: &DAffine3, o: Vec3A, d: Vec3A, t_end: f32, seed: u64) -> FRay {
+    let (om, dm) = to_space(to_medium, o, d);
+    FRay {
+        origin: om.to_array(),
+        direction: dm.to_array(),
+        tmin: 0.0,
+        tmax: if t_end.is_finite() {
+            t_end as f64
+        } else {
+            1e30
+        },
+        seed,
+    }
+}
+
+impl Integrator<'_> {
+    /// Transmittance of medium `m` along o + t·d, t ∈ [0, t_end], and (optionally) the emission it adds.
+    pub(super) fn medium_segment(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        emission: bool,
+    ) -> (S, S) {
+        let (l, t, _) = self.medium_segment_exit(m, o, d, t_end, rng, emission, false);
+        (l, t)
+    }
+
+    /// The emission and transmittance of plugin medium `m` along o + t·d, t ∈ [0, t_end], as its fire light
+    /// estimates them for a light sample's direction (`light_integrate`: a coarser march on a large fire).
+    pub(super) fn light_segment(
+        &self,
+        light: &firemedium_loader::Light,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+    ) -> (S, S) {
+        let Medium::Plugin {
+            to_medium, units, ..
+        } = &self.scene.media[m]
+        else {
+            return self.medium_segment(m, o, d, t_end, rng, true);
+        };
+        let n = self.scene.bins.n();
+        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+        let (mut l, mut t) = (
+            [0f32; super::spectrum::MAX_CHANNELS],
+            [0f32; super::spectrum::MAX_CHANNELS],
+        );
+        let estimated = light.integrate_at(
+            std::slice::from_ref(&ray),
+            Some(&[rng.time]),
+            &mut l[..n],
+            Some(&mut t[..n]),
+        );
+        if self.failures.note(estimated).is_none() {
+            return (S::ZERO, S::ZERO);
+        }
+        (S(l) * *units, S(t))
+    }
+
+    /// As [`medium_segment`](Self::medium_segment), and — when `want_exit` — where the ray leaves if a
+    /// refracting plugin medium bent it (world space: point, unit direction); None when it went straight.
+    /// Without `want_exit` the plugin integrates the straight ray (NEE and light paths).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn medium_segment_exit(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        emission: bool,
+        want_exit: bool,
+    ) -> (S, S, Option<(Vec3A, Vec3A)>) {
+        let n = self.scene.bins.n();
+        match &self.scene.media[m] {
+            Medium::Plugin {
+                vol,
+                to_medium,
+                to_world,
+                units,
+                ..
+            } => {
+                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+                let time = [rng.time];
+                let (mut l, mut t) = (
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                );
+                let mut exit = [firemedium_loader::Exit::default()];
+                let done = if emission {
+                    vol.integrate_at(
+                        std::slice::from_ref(&ray),
+                        Some(&time),
+                        &mut l[..n],
+                        Some(&mut t[..n]),
+                        want_exit.then_some(&mut exit[..]),
+                    )
+                } else {
+                    vol.transmittance_at(std::slice::from_ref(&ray), Some(&time), &mut t[..n])
+                };
+                if self.failures.note(done).is_none() {
+                    return (S::ZERO, S::ZERO, None);
+                }
+                let bent = (emission && want_exit).then(|| {
+                    let de = DVec3::from(exit[0].direction);
+                    let dn = DVec3::from(ray.direction).normalize_or_zero();
+                    (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
+                        let p = to_world.transform_point3(DVec3::from(exit[0].point));
+                        let w = to_world.transform_vector3(de).normalize_or_zero();
+                        (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
+                    })
+                });
+                (S(l) * *units, S(t), bent.flatten())
+            }
+            Medium::Homogeneous { sa, ss, le, .. } => {
+                let len = if t_end.is_finite() {
+                    t_end * d.length()
+                } else {
+                    f32::INFINITY
+                };
+                let st = *sa + *ss;
+                let mut tr = S::ZERO;
+                let mut l = S::ZERO;
+                for i in 0..n {
+                    let tau = st.0[i] * len;
+                    tr.0[i] = (-tau).exp();
+                    if emission && st.0[i] > 0.0 {
+                        l.0[i] = sa.0[i] * le.0[i] * -(-tau).exp_m1() / st.0[i];
+                    }
+                }
+                (l, tr, None)
+            }
+            Medium::RgbGrid(grid) => {
+                let speed = d.length();
+                if !(speed > 0.0) {
+                    return (S::ZERO, S::splat(1.0), None);
+                }
+                let (l, tr) =
+                    grid.segment(o, d / speed, t_end * speed, || rng.next_f64(), emission);
+                (l, tr, None)
+            }
+        }
+    }
+
+    /// What medium `m` does to the path along o + t·d, t ∈ [0, t_end]: the emission it adds (at delta tracking's
+    /// tentative collisions for a scattering plugin medium, as pbrt-v4's volpath; along the whole segment
+    /// otherwise) and how the segment ends.
+    pub(super) fn track(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+    ) -> (Emitted, Track) {
+        let sc = self.scene;
+        let n = sc.bins.n();
+        let plain = |l: S| Emitted {
+            l,
+            fire_units: None,
+        };
+        match &sc.media[m] {
+            Medium::Plugin {
+                vol,
+                to_medium,
+                g,
+                units,
+                scatters: true,
+                ..
+            } => {
+                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+                let mut ev = [firemedium_loader::Scatter::default()];
+                let (mut w, mut e) = (
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                    [0f32; super::spectrum::MAX_CHANNELS],
+                );
+                // (Emission at the tentative collisions: marching it along every segment instead cost 7× the
+                // time for no less error on a scattering fire — docs/RESULTS.md.)
+                let tracked = vol.sample_scatter_at(
+                    std::slice::from_ref(&ray),
+                    Some(&[rng.time]),
+                    &mut ev,
+                    &mut w[..n],
+                    Some(&mut e[..n]),
+                );
+                if self.failures.note(tracked).is_none() {
+                    return (plain(S::ZERO), Track::Absorbed);
+                }
+                let emitted = Emitted {
+                    l: S(e),
+                    fire_units: Some(*units),
+                };
+                let track = match ev[0].event {
+                    firemedium_abi::FM_EVENT_SCATTERED => Track::Scattered {
+                        t: ev[0].t as f32,
+                        weight: S(w),
+                        g: *g as f32,
+                    },
+                    firemedium_abi::FM_EVENT_ABSORBED => Track::Absorbed,
+                    _ => Track::Passed {
+                        weight: S(w),
+                        bent: None,
+                    },
+                };
+                (emitted, track)
+            }
+            Medium::Plugin { .. } => {
+                let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
+                let emitted = Emitted {
+                    l: le,
+                    fire_units: Some(1.0),
+                };
+                (emitted, Track::Passed { weight: tr, bent })
+            }
+            Medium::Homogeneous { sa, ss, g, .. } => {
+                // Emission over the whole segment in closed form; in-scattering by sampling a distance from the
+                // channel-mean extinction σ̄ with spectral weights T_c(s) σ_s,c / p(s).
+                let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
+                if ss.is_black() {
+                    return (
+                        plain(le),
+                        Track::Passed {
+                            weight: tr,
+                            bent: None,
+                        },
+                    );
+                }
+                let st = *sa + *ss;
+                let sbar = st.0[..n].iter().sum::<f32>() / n as f32;
+                let speed = d.length();
+                let s_hit = -(1.0 - rng.next_f64() as f32).ln() / sbar;
+                let s_end = t_end * speed;
+                let mut w = S::ZERO;
+                if s_hit < s_end {
+                    for c in 0..n {
+                        w.0[c] = (-(st.0[c] - sbar) * s_hit).exp() * ss.0[c] / sbar;
+                    }
+                    let t = s_hit / speed;
+                    return (
+                        plain(le),
+                        Track::Scattered {
+                            t,
+                            weight: w,
+                            g: *g as f32,
+                        },
+                    );
+                }
+                for c in 0..n {
+                    w.0[c] = if s_end.is_finite() {
+                        (-(st.0[c] - sbar) * s_end).exp()
+                    } else {
+                        0.0
+                    };
+                }
+                (
+                    plain(le),
+                    Track::Passed {
+                        weight: w,
+                        bent: None,
+                    },
+                )
+            }
+            Medium::RgbGrid(grid) => {
+                let speed = d.length();
+                match grid.track(o, d / speed, t_end * speed, || rng.next_f64()) {
+                    super::rgbgrid::Track::Scattered { s, weight, emitted } => (
+                        plain(emitted),
+                        Track::Scattered {
+                            t: s / speed,
+                            weight,
+                            g: grid.g as f32,
+                        },
+                    ),
+                    super::rgbgrid::Track::Passed { weight, emitted } => {
+                        (plain(emitted), Track::Passed { weight, bent: None })
+                    }
+                    super::rgbgrid::Track::Absorbed { emitted } => {
+                        (plain(emitted), Track::Absorbed)
+                    }
+                }
+            }
+        }
+    }
+}
