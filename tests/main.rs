@@ -36,5 +36,6 @@ mod robustness {
 /// The C ABI: the loader over the built cdylib, and C programs compiled against the header.
 mod abi {
     mod c_header;
+    mod host_tracking;
     mod plugin_abi;
 }

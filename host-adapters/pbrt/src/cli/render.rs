@@ -59,6 +59,12 @@ pub struct RenderArgs {
     /// a light sample's line through the fire costs more than it saves there).
     #[arg(long = "fire-light-inside")]
     fire_light_inside: bool,
+    /// Who tracks the fire's media: `plugin` (its whole-ray queries: the fast path) or `host` (the renderer,
+    /// through the plugin's medium level — majorant grid and coefficients at points —, as pbrt-v4 or Mitsuba 3
+    /// would; refused, naming the layer, for a fire with refraction, embers, lines, art direction, diffusion or
+    /// motion). Both render the same image up to noise.
+    #[arg(long, value_name = "WHO", default_value = "plugin", value_parser = ["plugin", "host"])]
+    tracking: String,
     /// The PNG preview's display transform: agx (default: Sobotka's AgX, the fire's core in its soft shoulder),
     /// aces, naka-rushton (the paper's cone responses), exposure or reinhard — as `firemedium tonemap --operator`.
     #[arg(long, value_enum, default_value = "agx")]
@@ -312,6 +318,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         fire_light_forced: a.fire_light != "auto",
         fire_light_params: a.fire_light_param.clone(),
         fire_light_inside: a.fire_light_inside,
+        host_tracking: a.tracking == "host",
         res: a.resolution,
         crop: four(&a.cropwindow),
         pixel_bounds: four(&a.pixelbounds),

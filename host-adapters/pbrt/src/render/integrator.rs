@@ -10,13 +10,13 @@
 //! dispersive dielectric keeps one bin from there on ([`super::material::Eta`]).
 
 use super::bsdf::{Lobes, Mode};
+use super::lights;
 use super::material;
-use super::media::{to_space, Track};
+use super::media::Track;
 use super::pixel::Samples;
-use super::scene::{Light, Medium, Scene};
-use super::shapes::{sample_area, Hit};
+use super::scene::Scene;
 use super::spectrum::S;
-use glam::{DAffine3, DVec3, Vec3A};
+use glam::Vec3A;
 use std::f32::consts::PI;
 
 /// The surface a camera ray sees first (pbrt-v4's `VisibleSurface`), for the `gbuffer` film: world-space point,
@@ -88,13 +88,6 @@ fn from_local(n: Vec3A, w: Vec3A) -> Vec3A {
     (t * w.x + b * w.y + n * w.z).normalize_or_zero()
 }
 
-fn uniform_sphere(u: [f32; 2]) -> Vec3A {
-    let z = 1.0 - 2.0 * u[0];
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
-}
-
 /// Henyey–Greenstein phase function value (eq. 4) for cosθ between wo-reversed and wi (pbrt's convention).
 fn hg(cos: f32, g: f32) -> f32 {
     let d = 1.0 + g * g + 2.0 * g * cos;
@@ -125,65 +118,10 @@ fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     (t * (sin * phi.cos()) + b * (sin * phi.sin()) + d * cos).normalize_or_zero()
 }
 
-/// Radiance of an infinite light toward direction `-w` (seen looking along `w`); zero for other lights.
-fn env(light: &Light, w: Vec3A) -> S {
-    match light {
-        Light::Infinite {
-            portal: Some(portal),
-            ..
-        }
-        | Light::InfiniteMap {
-            portal: Some(portal),
-            ..
-        } if !(w.dot(portal.n) > 0.0) => S::ZERO,
-        Light::Infinite { l, .. } => *l,
-        Light::InfiniteMap {
-            img,
-            to_light,
-            scale,
-            basis,
-            ..
-        } => {
-            let d = (*to_light * w).normalize_or_zero();
-            let [u, v] = if img.w == img.h {
-                crate::imageio::equal_area_sphere_to_square(d.to_array())
-            } else {
-                [
-                    0.5 + d.y.atan2(d.x) / (2.0 * PI),
-                    d.z.clamp(-1.0, 1.0).acos() / PI,
-                ]
-            };
-            let c = img.bilerp(u, v, crate::imageio::Wrap::Clamp);
-            (basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]) * *scale
-        }
-        _ => S::ZERO,
-    }
-}
-
-/// The density (per steradian, before choosing among the scene's lights) with which next-event estimation from
-/// `origin` picks world direction `w` toward an infinite light; 0 for other lights.
-fn env_pdf(light: &Light, origin: Vec3A, w: Vec3A) -> f32 {
-    match light {
-        Light::Infinite {
-            portal: Some(portal),
-            ..
-        }
-        | Light::InfiniteMap {
-            portal: Some(portal),
-            ..
-        } => portal.pdf(origin, w),
-        Light::Infinite { .. } => 1.0 / (4.0 * PI),
-        Light::InfiniteMap { to_light, dist, .. } => {
-            dist.pdf((*to_light * w).normalize_or_zero().to_array())
-        }
-        _ => 0.0,
-    }
-}
-
 /// Where next-event estimation leaves from: a surface point (the side a direction leaves by picks the offset
 /// and the medium) or a point inside a medium.
 #[derive(Debug, Clone, Copy)]
-enum Spot {
+pub(super) enum Spot {
     Surface {
         p: Vec3A,
         ng: Vec3A,
@@ -199,13 +137,13 @@ enum Spot {
 }
 
 impl Spot {
-    fn p(&self) -> Vec3A {
+    pub(super) fn p(&self) -> Vec3A {
         match self {
             Spot::Surface { p, .. } | Spot::Medium { p, .. } => *p,
         }
     }
     /// The origin and medium of a ray leaving along `w`.
-    fn leave(&self, w: Vec3A) -> (Vec3A, Option<usize>) {
+    pub(super) fn leave(&self, w: Vec3A) -> (Vec3A, Option<usize>) {
         match *self {
             Spot::Medium { p, medium } => (p, medium),
             Spot::Surface {
@@ -230,21 +168,6 @@ impl Spot {
             }
         }
     }
-}
-
-/// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
-/// from `o` at `time` (frames: the embers move).
-fn fire_pdf_direction(
-    light: &firemedium_loader::Light,
-    to_medium: &DAffine3,
-    o: Vec3A,
-    d: Vec3A,
-    time: f64,
-) -> Result<f64, firemedium_loader::Error> {
-    let (om, dm) = to_space(to_medium, o, d);
-    let mut pd = [0.0f64];
-    light.pdf_direction_at(&[om.to_array()], &[dm.to_array()], Some(&[time]), &mut pd)?;
-    Ok(pd[0])
 }
 
 /// Plugin calls that failed inside the render: counted, the first one's message kept, for the render's report
@@ -287,7 +210,7 @@ pub struct Integrator<'a> {
 }
 
 impl Integrator<'_> {
-    fn rng2(rng: &mut Samples) -> [f32; 2] {
+    pub(super) fn rng2(rng: &mut Samples) -> [f32; 2] {
         [rng.next_f64() as f32, rng.next_f64() as f32]
     }
 
@@ -296,7 +219,7 @@ impl Integrator<'_> {
     /// the way, attenuated by every medium in front of it, as its fire light estimates it). With `fire` the walk
     /// ends where the fire's shapes can no longer be reached, its transmittance then only that far (a light
     /// sample wants the emission alone).
-    fn walk_media(
+    pub(super) fn walk_media(
         &self,
         mut o: Vec3A,
         d: Vec3A,
@@ -361,219 +284,6 @@ impl Integrator<'_> {
         !(near > far || far < 0.5 * self.scene.eps || near > t_max)
     }
 
-    /// Radiance from one light toward `spot` (NEE), already divided by the light's selection probability:
-    /// (incident radiance × visibility, direction, the light's solid-angle pdf of that direction including the
-    /// selection probability — for MIS; 0 for delta lights, which paths cannot hit by themselves).
-    /// `dark(wi)`: whether the vertex reflects nothing toward `wi` (a surface's BSDF is zero there), so a fire
-    /// light sample in that direction skips the march along it.
-    fn sample_light(
-        &self,
-        li: usize,
-        spot: &Spot,
-        rng: &mut Samples,
-        dark: &dyn Fn(Vec3A) -> bool,
-    ) -> Option<(S, Vec3A, f32)> {
-        let sc = self.scene;
-        let u = Self::rng2(rng);
-        let nl = sc.lights.len() as f32;
-        let p = spot.p();
-        let (wi, dist, le, pl) = match &sc.lights[li] {
-            Light::Fire { light, medium: fm } => {
-                let Medium::Plugin {
-                    to_medium,
-                    to_world,
-                    ..
-                } = &sc.media[*fm]
-                else {
-                    return None;
-                };
-                // The sampled point only chooses the direction (density pdf_direction); the estimate is the
-                // fire's whole emission along it, Σ T·L_e up to the first opaque surface, divided by that
-                // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
-                let uu = [(); 6].map(|_| rng.next_f64());
-                let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
-                self.failures.note(light.sample_at(
-                    &[uu],
-                    Some(&[rng.time]),
-                    &mut pt,
-                    &mut pdf,
-                    None,
-                ))?;
-                if !(pdf[0] > 0.0) {
-                    return None;
-                }
-                self.fire_samples
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let xw = to_world.transform_point3(DVec3::from(pt[0]));
-                let wi = (Vec3A::from(xw.as_vec3()) - p).normalize_or_zero();
-                if wi == Vec3A::ZERO || !wi.is_finite() || dark(wi) {
-                    return None;
-                }
-                let (o, medium) = spot.leave(wi);
-                // The fire's emission along wi, up to the first opaque surface.
-                let le = self
-                    .walk_media(o, wi, f32::INFINITY, medium, Some((*fm, light)), rng)
-                    .1;
-                // (A line that brings no light — the fire hidden behind a surface — needs no density: the walk
-                // over the pdf's bricks comes after it.)
-                if le.is_black() {
-                    return None;
-                }
-                // Solid angle in medium space equals world solid angle for a similarity transform.
-                let pdf_dir = self
-                    .failures
-                    .note(fire_pdf_direction(light, to_medium, p, wi, rng.time))?
-                    as f32
-                    / nl;
-                if !(pdf_dir > 0.0) {
-                    return None;
-                }
-                let l = (le / pdf_dir).finite_or_zero();
-                return (!l.is_black()).then_some((l, wi, pdf_dir));
-            }
-            Light::Point { p: lp, i } => {
-                let v = *lp - p;
-                let d2 = v.length_squared();
-                (v.normalize_or_zero(), d2.sqrt(), *i / d2, 0.0)
-            }
-            Light::Spot {
-                p: lp,
-                dir,
-                cos_total,
-                cos_falloff,
-                i,
-            } => {
-                let v = *lp - p;
-                let d2 = v.length_squared();
-                let w = v.normalize_or_zero();
-                let c = (-w).dot(*dir);
-                let f = if c < *cos_total {
-                    0.0
-                } else if c >= *cos_falloff {
-                    1.0
-                } else {
-                    ((c - cos_total) / (cos_falloff - cos_total)).powi(4)
-                };
-                (w, d2.sqrt(), *i * (f / d2), 0.0)
-            }
-            Light::Distant { to_light, l } => (*to_light, f32::INFINITY, *l, 0.0),
-            Light::Infinite {
-                portal: Some(portal),
-                ..
-            }
-            | Light::InfiniteMap {
-                portal: Some(portal),
-                ..
-            } => {
-                let (w, _, pdf) = portal.sample(p, u)?;
-                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf, pdf / nl)
-            }
-            Light::Infinite { l, .. } => {
-                let w = uniform_sphere(u);
-                (w, f32::INFINITY, *l * (4.0 * PI), 1.0 / (4.0 * PI * nl))
-            }
-            Light::InfiniteMap { to_light, dist, .. } => {
-                // A direction by the map's luminance, taken from the map's space to the world's.
-                let (dl, pdf) = dist.sample(u);
-                if !(pdf > 0.0) {
-                    return None;
-                }
-                let w = (to_light.inverse() * Vec3A::from(dl)).normalize_or_zero();
-                (w, f32::INFINITY, env(&sc.lights[li], w) / pdf, pdf / nl)
-            }
-            Light::Area { prim, l, twosided } => {
-                let (q, n, pdf_a) = sample_area(&sc.bvh.prims[*prim], u);
-                let v = q - p;
-                let d2 = v.length_squared();
-                let w = v.normalize_or_zero();
-                let cos_l = n.dot(-w);
-                if cos_l <= 0.0 && !twosided {
-                    return None;
-                }
-                let pdf_w = pdf_a * d2 / cos_l.abs();
-                (w, d2.sqrt(), *l / pdf_w, pdf_w / nl)
-            }
-        };
-        if le.max() <= 0.0 || !wi.is_finite() {
-            return None;
-        }
-        let (o, medium) = spot.leave(wi);
-        let t_max = if dist.is_finite() {
-            (dist - (o - p).length()).max(0.0) * (1.0 - 1e-4)
-        } else {
-            1e30
-        };
-        let vis = self.walk_media(o, wi, t_max, medium, None, rng).0;
-        let l = (le * vis * nl).finite_or_zero();
-        (!l.is_black() && pl.is_finite()).then_some((l, wi, pl))
-    }
-
-    /// The solid-angle density with which next-event estimation picks the point `h` of area light `li` from
-    /// `origin` (including the light's selection probability).
-    fn area_pdf(&self, li: usize, origin: Vec3A, h: &Hit) -> f32 {
-        let sc = self.scene;
-        let Light::Area { prim, .. } = &sc.lights[li] else {
-            return 0.0;
-        };
-        let pdf_a = sample_area(&sc.bvh.prims[*prim], [0.5, 0.5]).2;
-        let v = h.p - origin;
-        let d = v.normalize_or_zero();
-        let cos_l = h.ng.dot(-d).abs();
-        if cos_l == 0.0 {
-            return 0.0;
-        }
-        let p = pdf_a * v.length_squared() / cos_l / sc.lights.len() as f32;
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
-    }
-
-    /// The MIS weight of emission that a path sampled with density `pdf_b` (solid angle) from `origin` along `d`
-    /// collects in medium `m`: pdf_b / (pdf_b + the fire light's directional pdf), or 1 when `m` has no fire
-    /// light or the path was not sampled by a BSDF/phase function (camera rays, specular bounces).
-    /// `skipped`: the medium whose fire light the path's last vertex (a scattering event inside it) did not
-    /// sample — its emission then has weight 1.
-    fn emission_weight(
-        &self,
-        m: usize,
-        mis: Option<(Vec3A, f32)>,
-        skipped: Option<usize>,
-        d: Vec3A,
-        time: f64,
-    ) -> f32 {
-        let Some((origin, pdf_b)) = mis else {
-            return 1.0;
-        };
-        if skipped == Some(m) && !self.scene.fire_light_inside {
-            return 1.0;
-        }
-        let sc = self.scene;
-        let Medium::Plugin { to_medium, .. } = &sc.media[m] else {
-            return 1.0;
-        };
-        for l in &sc.lights {
-            if let Light::Fire { light, medium } = l {
-                if *medium == m {
-                    let Some(pd) = self
-                        .failures
-                        .note(fire_pdf_direction(light, to_medium, origin, d, time))
-                    else {
-                        return 1.0;
-                    };
-                    let pl = pd as f32 / sc.lights.len() as f32;
-                    return if pdf_b + pl > 0.0 {
-                        pdf_b / (pdf_b + pl)
-                    } else {
-                        1.0
-                    };
-                }
-            }
-        }
-        1.0
-    }
-
     /// A real scattering event in a medium at `p`: NEE with the Henyey–Greenstein phase function (MIS-weighted
     /// against phase sampling for the fire light), then the next direction sampled from it (weight 1) and its
     /// solid-angle pdf.
@@ -602,21 +312,6 @@ impl Integrator<'_> {
         }
         let wi = sample_hg(d, g, Self::rng2(rng));
         (wi, hg((-d).dot(wi), g))
-    }
-
-    /// Whether light `li` counts for a path whose next segment is at `depth` (bounces so far): a fire light
-    /// samples a medium's emission, which pbrt-v4's `VolPathIntegrator` adds only while `depth < maxdepth`
-    /// (a real scattering event counts as a bounce); the other lights always count, as there.
-    fn light_counts(&self, li: usize, depth: usize) -> bool {
-        depth < self.scene.maxdepth || !matches!(self.scene.lights[li], Light::Fire { .. })
-    }
-
-    /// Whether a scattering event in `medium` leaves light `li` unsampled: the fire light of that very medium,
-    /// unless the scene asks for it ([`super::scene::Scene::fire_light_inside`]). The emission the next segment
-    /// finds in that medium then has MIS weight 1 ([`Self::emission_weight`]'s `skipped`).
-    fn skips_inside(&self, li: usize, medium: Option<usize>) -> bool {
-        !self.scene.fire_light_inside
-            && matches!(self.scene.lights[li], Light::Fire { medium: fm, .. } if Some(fm) == medium)
     }
 
     /// Radiance along a camera ray.
@@ -708,10 +403,10 @@ impl Integrator<'_> {
                 // Escaped: the infinite lights, weighted against their next-event estimation when the
                 // direction was sampled by a BSDF or phase function.
                 for light in &sc.lights {
-                    let le = env(light, d);
+                    let le = lights::env(light, d);
                     if !le.is_black() {
                         let w = mis.map_or(1.0, |(origin, pb)| {
-                            let pl = env_pdf(light, origin, d) / sc.lights.len() as f32;
+                            let pl = lights::env_pdf(light, origin, d) / sc.lights.len() as f32;
                             if pb + pl > 0.0 {
                                 pb / (pb + pl)
                             } else {
@@ -737,26 +432,22 @@ impl Integrator<'_> {
                 break;
             };
             let prim = sc.bvh.prim(&h);
-            if let Some(li) = prim.area_light {
-                if let Light::Area {
-                    l: le, twosided, ..
-                } = &sc.lights[li]
-                {
-                    if *twosided || h.ng.dot(-d) > 0.0 {
-                        let w = mis.map_or(1.0, |(origin, pb)| {
-                            let pl = self.area_pdf(li, origin, &h);
-                            if pb + pl > 0.0 {
-                                pb / (pb + pl)
-                            } else {
-                                1.0
-                            }
-                        });
-                        l += beta * *le * w;
-                        if depth == 0 {
-                            if let Some(sp) = split.as_deref_mut() {
-                                sp.emission += beta * *le * w;
-                            }
-                        }
+            if let Some((li, le)) = prim
+                .area_light
+                .and_then(|li| Some((li, self.area_le(li, &h, d)?)))
+            {
+                let w = mis.map_or(1.0, |(origin, pb)| {
+                    let pl = self.area_pdf(li, origin, &h);
+                    if pb + pl > 0.0 {
+                        pb / (pb + pl)
+                    } else {
+                        1.0
+                    }
+                });
+                l += beta * le * w;
+                if depth == 0 {
+                    if let Some(sp) = split.as_deref_mut() {
+                        sp.emission += beta * le * w;
                     }
                 }
             }

@@ -9,6 +9,7 @@ use super::integrator::Integrator;
 use super::pixel::Samples;
 use super::scene::Medium;
 use super::spectrum::S;
+use super::tracker::{self, PluginMedium, Tracked};
 use firemedium_loader::Ray as FRay;
 use glam::{DAffine3, DVec3, Vec3A};
 
@@ -127,6 +128,24 @@ impl Integrator<'_> {
             Medium::Plugin {
                 vol,
                 to_medium,
+                units,
+                g,
+                host: Some(grid),
+                ..
+            } => {
+                let pm = PluginMedium {
+                    vol,
+                    grid,
+                    to_medium,
+                    units: *units,
+                    bins: n,
+                    g: *g,
+                };
+                self.host_segment(&pm, o, d, t_end, rng, emission)
+            }
+            Medium::Plugin {
+                vol,
+                to_medium,
                 to_world,
                 units,
                 ..
@@ -181,21 +200,81 @@ impl Integrator<'_> {
                 }
                 (l, tr, None)
             }
-            Medium::RgbGrid(grid) => {
-                let speed = d.length();
-                if !(speed > 0.0) {
-                    return (S::ZERO, S::splat(1.0), None);
-                }
-                let (l, tr) =
-                    grid.segment(o, d / speed, t_end * speed, || rng.next_f64(), emission);
-                (l, tr, None)
+            Medium::RgbGrid(grid) => self.host_segment(&**grid, o, d, t_end, rng, emission),
+        }
+    }
+
+    /// Transmittance and emission of a medium the host tracks, by ratio tracking (a failed query is counted and
+    /// blocks the segment).
+    fn host_segment(
+        &self,
+        medium: &impl Tracked,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        emission: bool,
+    ) -> (S, S, Option<(Vec3A, Vec3A)>) {
+        let speed = d.length();
+        if !(speed > 0.0) {
+            return (S::ZERO, S::splat(1.0), None);
+        }
+        let r = tracker::segment(
+            medium,
+            o,
+            d / speed,
+            t_end * speed,
+            || rng.next_f64(),
+            emission,
+        );
+        match self.failures.note(r) {
+            Some((l, tr)) => (l, tr, None),
+            None => (S::ZERO, S::ZERO, None),
+        }
+    }
+
+    /// Delta tracking through a medium the host tracks, as [`Self::track`] answers it; `fire_units`: the
+    /// emission's MIS with a fire light (Some(1): a plugin medium's, already in the film's units).
+    fn host_track(
+        &self,
+        medium: &impl Tracked,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        fire_units: Option<f32>,
+    ) -> (Emitted, Track) {
+        let speed = d.length();
+        let r = tracker::track(medium, o, d / speed, t_end * speed, || rng.next_f64());
+        let Some(t) = self.failures.note(r) else {
+            let l = S::ZERO;
+            return (Emitted { l, fire_units }, Track::Absorbed);
+        };
+        let emitted = |l: S| Emitted { l, fire_units };
+        match t {
+            tracker::Track::Scattered {
+                s,
+                weight,
+                emitted: l,
+            } => (
+                emitted(l),
+                Track::Scattered {
+                    t: s / speed,
+                    weight,
+                    g: medium.g() as f32,
+                },
+            ),
+            tracker::Track::Passed { weight, emitted: l } => {
+                (emitted(l), Track::Passed { weight, bent: None })
             }
+            tracker::Track::Absorbed { emitted: l } => (emitted(l), Track::Absorbed),
         }
     }
 
     /// What medium `m` does to the path along o + t·d, t ∈ [0, t_end]: the emission it adds (at delta tracking's
     /// tentative collisions for a scattering plugin medium, as pbrt-v4's volpath; along the whole segment
     /// otherwise) and how the segment ends.
+    #[inline]
     pub(super) fn track(
         &self,
         m: usize,
@@ -211,6 +290,24 @@ impl Integrator<'_> {
             fire_units: None,
         };
         match &sc.media[m] {
+            Medium::Plugin {
+                vol,
+                to_medium,
+                g,
+                units,
+                host: Some(grid),
+                ..
+            } => {
+                let pm = PluginMedium {
+                    vol,
+                    grid,
+                    to_medium,
+                    units: *units,
+                    bins: n,
+                    g: *g,
+                };
+                self.host_track(&pm, o, d, t_end, rng, Some(1.0))
+            }
             Medium::Plugin {
                 vol,
                 to_medium,
@@ -311,25 +408,7 @@ impl Integrator<'_> {
                     },
                 )
             }
-            Medium::RgbGrid(grid) => {
-                let speed = d.length();
-                match grid.track(o, d / speed, t_end * speed, || rng.next_f64()) {
-                    super::rgbgrid::Track::Scattered { s, weight, emitted } => (
-                        plain(emitted),
-                        Track::Scattered {
-                            t: s / speed,
-                            weight,
-                            g: grid.g as f32,
-                        },
-                    ),
-                    super::rgbgrid::Track::Passed { weight, emitted } => {
-                        (plain(emitted), Track::Passed { weight, bent: None })
-                    }
-                    super::rgbgrid::Track::Absorbed { emitted } => {
-                        (plain(emitted), Track::Absorbed)
-                    }
-                }
-            }
+            Medium::RgbGrid(grid) => self.host_track(&**grid, o, d, t_end, rng, None),
         }
     }
 }

@@ -10,6 +10,7 @@ pub mod envmap;
 pub mod film;
 pub mod integrator;
 pub mod layered;
+mod lights;
 pub mod material;
 mod media;
 pub mod media_presets;
@@ -24,6 +25,7 @@ pub mod sensors;
 pub mod shapes;
 pub mod spectrum;
 pub mod subdiv;
+pub mod tracker;
 
 use aov::Aov;
 use firemedium_core::cie;

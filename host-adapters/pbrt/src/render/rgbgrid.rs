@@ -9,10 +9,8 @@
 //! centres' neighbours (so values fade to zero over the box's outer half-voxel). Distances are the world's (the
 //! σ's apply per unit length of the rendering space, as pbrt-v4 normalises the ray before transforming it).
 //!
-//! Tracking uses one majorant, the largest σ_t in any bin and voxel (pbrt-v4 uses a 16³ majorant grid: the same
-//! estimate, more null collisions here): transmittance and emission by ratio tracking (at each tentative
-//! collision sᵢ, emission T̂(sᵢ) σ_a Le / σ̄ with T̂ the running product of 1 − σ_t/σ̄ — unbiased, Novák et al.
-//! 2014), scattering by delta tracking with the bins' mean σ's as event probabilities and spectral weights.
+//! Tracked by the host's one tracker ([`super::tracker`]) with one majorant, the largest σ_t in any bin and voxel
+//! (pbrt-v4 uses a 16³ majorant grid: the same estimate, more null collisions here).
 
 use super::spectrum::S;
 use glam::{DAffine3, DVec3, Vec3A};
@@ -41,16 +39,6 @@ pub struct RgbGrid {
 pub enum Grid {
     Voxels(Vec<S>),
     Constant(Box<S>),
-}
-
-/// What delta tracking found along a segment: scattered at distance s, or left it; each with the spectral
-/// weight accumulated on the way (null collisions) and the emission it collected (relative to the path's
-/// throughput at the segment's start).
-#[derive(Debug)]
-pub enum Track {
-    Scattered { s: f32, weight: S, emitted: S },
-    Passed { weight: S, emitted: S },
-    Absorbed { emitted: S },
 }
 
 impl RgbGrid {
@@ -135,98 +123,30 @@ impl RgbGrid {
         }
         (s0 < s1 && s0.is_finite()).then_some((s0, s1, om, dm))
     }
+}
 
-    /// The tentative collisions along o + s·w, s ∈ [0, s_max] (world distances), at the majorant's rate: `visit`
-    /// gets each one's distance, σ_a, σ_s and σ_a·Le (and the random numbers), until it returns a result or the
-    /// ray leaves the box. Bounded: an absurd majorant over a long box cannot hang a render.
-    fn collisions<R>(
-        &self,
-        o: Vec3A,
-        w: Vec3A,
-        s_max: f32,
-        u: &mut dyn FnMut() -> f64,
-        mut visit: impl FnMut(f64, S, S, S, &mut dyn FnMut() -> f64) -> Option<R>,
-    ) -> Option<R> {
-        let (s0, s1, om, dm) = self.clip(o, w, s_max)?;
-        let maj = self.majorant as f64;
-        if !(maj > 0.0) {
-            return None;
-        }
-        let mut s = s0;
-        for _ in 0..1_000_000 {
-            s += -(1.0 - u()).ln() / maj;
-            if s >= s1 {
-                break;
-            }
-            let (sa, ss, e) = self.at(om + dm * s);
-            if let Some(r) = visit(s, sa, ss, e, u) {
-                return Some(r);
-            }
-        }
-        None
+impl super::tracker::Tracked for RgbGrid {
+    /// The ray in the medium's space.
+    type Ray = (DVec3, DVec3);
+
+    fn bins(&self) -> usize {
+        self.bins
     }
 
-    /// Transmittance and (with `emission`) emitted radiance along o + s·w, s ∈ [0, s_max] (world distances), by
-    /// ratio tracking.
-    pub fn segment(
-        &self,
-        o: Vec3A,
-        w: Vec3A,
-        s_max: f32,
-        mut u: impl FnMut() -> f64,
-        emission: bool,
-    ) -> (S, S) {
-        let mut tr = S::splat(1.0);
-        let mut l = S::ZERO;
-        let maj = self.majorant;
-        self.collisions(o, w, s_max, &mut u, |_, sa, ss, e, _| {
-            for c in 0..self.bins {
-                if emission {
-                    l.0[c] += tr.0[c] * e.0[c] / maj;
-                }
-                tr.0[c] *= 1.0 - (sa.0[c] + ss.0[c]) / maj;
-            }
-            (tr.max() <= 0.0).then_some(())
-        });
-        (l, tr)
+    fn g(&self) -> f64 {
+        self.g
     }
 
-    /// Delta tracking along o + s·w, s ∈ [0, s_max]: where the path scatters, if it does.
-    pub fn track(&self, o: Vec3A, w: Vec3A, s_max: f32, mut u: impl FnMut() -> f64) -> Track {
-        let mut weight = S::splat(1.0);
-        let mut emitted = S::ZERO;
-        let (maj, bins) = (self.majorant, self.bins);
-        let n = bins.max(1) as f32;
-        let event = self.collisions(o, w, s_max, &mut u, |s, sa, ss, e, u| {
-            for c in 0..bins {
-                emitted.0[c] += weight.0[c] * e.0[c] / maj;
-            }
-            // Event probabilities from the bins' means (they sum to 1: σ_a + σ_s + σ_n = σ̄ in every bin).
-            let mean = |x: &S| x.0[..bins].iter().sum::<f32>() / n;
-            let (pa, ps) = (mean(&sa) / maj, mean(&ss) / maj);
-            let x = u() as f32;
-            if x < pa {
-                return Some(Track::Absorbed { emitted });
-            }
-            if x < pa + ps {
-                for c in 0..bins {
-                    weight.0[c] *= ss.0[c] / (maj * ps);
-                }
-                return Some(Track::Scattered {
-                    s: s as f32,
-                    weight,
-                    emitted,
-                });
-            }
-            let pn = 1.0 - pa - ps;
-            if !(pn > 0.0) {
-                return Some(Track::Absorbed { emitted });
-            }
-            for c in 0..bins {
-                weight.0[c] *= (maj - sa.0[c] - ss.0[c]) / (maj * pn);
-            }
-            None
-        });
-        event.unwrap_or(Track::Passed { weight, emitted })
+    fn clip(&self, o: Vec3A, w: Vec3A, s_max: f32) -> Option<((DVec3, DVec3), f64, f64)> {
+        RgbGrid::clip(self, o, w, s_max).map(|(s0, s1, om, dm)| ((om, dm), s0, s1))
+    }
+
+    /// One majorant over the whole box.
+    fn majorant(&self, _: &(DVec3, DVec3), _: f64, s1: f64) -> (f32, f64) {
+        (self.majorant, s1)
+    }
+
+    fn at(&self, (om, dm): &(DVec3, DVec3), s: f64) -> Result<(S, S, S), firemedium_loader::Error> {
+        Ok(RgbGrid::at(self, *om + *dm * s))
     }
 }

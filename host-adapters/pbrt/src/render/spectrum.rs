@@ -29,15 +29,19 @@ impl Default for S {
 
 impl S {
     pub const ZERO: S = S([0.0; MAX_CHANNELS]);
+    #[inline]
     pub fn splat(v: f32) -> S {
         S([v; MAX_CHANNELS])
     }
+    #[inline]
     pub fn max(&self) -> f32 {
         self.0.iter().copied().fold(0.0, f32::max)
     }
+    #[inline]
     pub fn is_black(&self) -> bool {
         self.0.iter().all(|&v| v == 0.0)
     }
+    #[inline]
     pub fn finite_or_zero(self) -> S {
         S(self.0.map(|v| if v.is_finite() { v } else { 0.0 }))
     }
@@ -47,6 +51,7 @@ macro_rules! op {
     ($t:ident, $f:ident, $op:tt) => {
         impl std::ops::$t for S {
             type Output = S;
+            #[inline]
             fn $f(self, o: S) -> S {
                 let mut r = self;
                 for i in 0..MAX_CHANNELS {
@@ -57,6 +62,7 @@ macro_rules! op {
         }
         impl std::ops::$t<f32> for S {
             type Output = S;
+            #[inline]
             fn $f(self, o: f32) -> S {
                 S(self.0.map(|v| v $op o))
             }
@@ -69,11 +75,13 @@ op!(Sub, sub, -);
 op!(Div, div, /);
 
 impl std::ops::AddAssign for S {
+    #[inline]
     fn add_assign(&mut self, o: S) {
         *self = *self + o;
     }
 }
 impl std::ops::MulAssign for S {
+    #[inline]
     fn mul_assign(&mut self, o: S) {
         *self = *self * o;
     }

@@ -96,6 +96,8 @@ pub(super) struct Builder {
     pub(super) threads: Option<usize>,
     /// The frame for every plugin medium (`--frames`), unless the scene sets one.
     pub(super) frame: Option<i64>,
+    /// Plugin media tracked by the renderer through the medium level (`Overrides::host_tracking`).
+    pub(super) host_tracking: bool,
     /// The camera's shutter (frames) once a medium blurs by its velocity: each camera sample then draws a
     /// time in it.
     pub(super) shutter: Option<[f64; 2]>,
@@ -853,7 +855,8 @@ impl Builder {
                 }
                 self.media_bytes = self.media_bytes.saturating_add(info.bytes);
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
-                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units }
+                let host = if self.host_tracking { Some(host_majorants(&vol).map_err(|m| err(loc, format!("medium \"{name}\": --tracking host: {m}")))?) } else { None };
+                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
             other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
@@ -991,6 +994,22 @@ pub(crate) fn lines_outside(sym: &str, t: f64, (lo, hi): (f64, f64)) -> Option<S
         "species {sym}: its lines at {} nm carry {:.0} % of its visible line emission (luminance-weighted at {t:.0} K) and lie outside the render's bins, {lo:.0}–{hi:.0} nm: they are left out (widen the bins with \"float lambdamin\" / \"float lambdamax\", up to 380–780 nm)",
         names.join(", "),
         100.0 * lost / total
+    ))
+}
+
+/// The majorant grid of a volume the renderer will track itself, or why it cannot: a layer the medium level
+/// cannot carry (named by the plugin), or motion (its per-bin coefficients have no time).
+fn host_majorants(vol: &Volume) -> Result<crate::render::tracker::Majorants, String> {
+    let m = vol
+        .medium()
+        .map_err(|e| format!("{e}; render it with --tracking plugin"))?;
+    if m.features() & firemedium_abi::FM_FEATURE_MOTION != 0 {
+        return Err("it moves (motion blur), and the medium level's coefficients in bins have no time; render it with --tracking plugin".into());
+    }
+    let info = vol.info();
+    Ok(crate::render::tracker::Majorants::of(
+        m.majorant_grid(),
+        [info.bounds_min, info.bounds_max],
     ))
 }
 

@@ -140,6 +140,9 @@ pub enum Medium {
         scatters: bool,
         g: f64,
         name: String,
+        /// The medium's majorant grid when the renderer tracks it itself (`--tracking host`; None: the
+        /// plugin's whole-ray queries).
+        host: Option<crate::render::tracker::Majorants>,
         /// The factor that takes the medium's radiance to the film's units: 1, or 1/683 for a pbrt grid (its
         /// radiance in pbrt-v4's units, Y = ∫ L ȳ) in a scene whose film is absolute (a fire's, Y = 683 ∫ L ȳ).
         units: f32,
@@ -508,6 +511,9 @@ pub struct Overrides {
     pub frame: Option<i64>,
     /// Output variables written beside the beauty (`--aov`).
     pub aovs: Vec<crate::render::aov::Aov>,
+    /// Plugin media tracked by the renderer through the ABI's medium level (majorant grid and point
+    /// coefficients), as pbrt-v4 or Mitsuba 3 would, instead of the plugin's whole-ray queries (`--tracking host`).
+    pub host_tracking: bool,
 }
 
 /// The film's resolution the scene at `path` asks for (pbrt-v4's 1280 × 720 when its Film does not say), read by
@@ -698,6 +704,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         film_xyz: None,
         threads: ov.threads,
         frame: ov.frame,
+        host_tracking: ov.host_tracking,
         max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     };
     // pbrt's default material: diffuse 0.5.
