@@ -33,6 +33,9 @@ mod robustness {
     mod mutated_inputs;
 }
 
+/// The code's shape: imports run one way between a crate's modules; no file past ~800 lines of code.
+mod structure;
+
 /// The C ABI: the loader over the built cdylib, and C programs compiled against the header.
 mod abi {
     mod c_header;

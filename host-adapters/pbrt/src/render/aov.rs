@@ -14,10 +14,55 @@
 //! directional albedo as linear sRGB and its world-space shading normal — a denoiser's guides) and `samples`
 //! (samples taken per pixel).
 
-use super::integrator::{Split, Visible};
-use super::scene::Scene;
 use super::spectrum::S;
-use glam::DVec3;
+use glam::Vec3A;
+
+/// The surface a camera ray sees first (pbrt-v4's `VisibleSurface`), for the `gbuffer` film: world-space point,
+/// geometric and shading normals, and the material's directional albedo ρ(wo) (one-sample estimate).
+#[derive(Debug, Clone, Copy)]
+pub struct Visible {
+    pub p: Vec3A,
+    pub ng: Vec3A,
+    pub ns: Vec3A,
+    pub albedo: S,
+}
+
+/// Where a camera sample's light came from, for the AOVs: the radiance the path had gathered when it reached
+/// its first and its second scattering vertex (all of it so far was seen from the camera, then the first vertex's
+/// direct light), the lights it saw directly, and the coverage of its camera ray. Contributions come in that
+/// order along a path, so two marks split it: seen = first mark, direct = second − first, indirect = the rest.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Split {
+    /// The path's radiance at its first and second scattering vertex (none: the path ended before).
+    pub marks: [Option<S>; 2],
+    /// Lights (area, infinite) seen from the camera: the rest of what was seen is the media's emission.
+    pub emission: S,
+    /// 1 − the camera ray's transmittance when it escaped (none: a surface or a medium stopped it: 1).
+    pub alpha: Option<f32>,
+}
+
+impl Split {
+    /// Marks the radiance `l` gathered when the path reaches a scattering vertex at `depth`.
+    pub(super) fn mark(split: &mut Option<&mut Split>, depth: usize, l: S) {
+        if let Some(sp) = split.as_deref_mut() {
+            if depth < 2 && sp.marks[depth].is_none() {
+                sp.marks[depth] = Some(l);
+            }
+        }
+    }
+    /// The path's radiance `l` in four parts: media emission seen from the camera, lights seen from the camera,
+    /// direct and indirect light (they sum to `l`, to rounding).
+    pub fn parts(&self, l: S) -> [S; 4] {
+        let first = self.marks[0].unwrap_or(l);
+        let second = self.marks[1].unwrap_or(l);
+        [
+            first - self.emission,
+            self.emission,
+            second - first,
+            l - second,
+        ]
+    }
+}
 
 /// One output variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -108,92 +153,6 @@ pub fn channel_names(aovs: &[Aov]) -> Vec<String> {
     aovs.iter()
         .flat_map(|a| a.channels().iter().map(|c| c.to_string()))
         .collect()
-}
-
-/// A pixel's AOV sums over its samples.
-#[derive(Debug, Clone, Default)]
-pub struct Pixel {
-    /// The four parts' sensor XYZ, weighted (fire, emission, direct, indirect).
-    parts: [DVec3; 4],
-    alpha: f64,
-    albedo: DVec3,
-    normal: DVec3,
-    /// Camera-space z of the nearest surface seen.
-    depth: Option<f64>,
-    seen: f64,
-}
-
-impl Pixel {
-    /// Adds one sample of weight `w`: its radiance `l` split by `split`, the sensor transform of the beauty
-    /// (`xyz` of a spectrum) with the beauty's clamp factor `clamp`, and the surface it saw.
-    pub fn add(
-        &mut self,
-        scene: &Scene,
-        w: f64,
-        l: S,
-        split: &Split,
-        clamp: f64,
-        visible: Option<&Visible>,
-    ) {
-        for (sum, part) in self.parts.iter_mut().zip(split.parts(l)) {
-            *sum += scene.response.sensor_xyz(&scene.bins, &part) * (clamp * w);
-        }
-        self.alpha += split.alpha.map_or(1.0, f64::from) * w;
-        if let Some(v) = visible {
-            let z = scene
-                .camera
-                .to_world
-                .inverse()
-                .transform_point3(v.p.as_dvec3())
-                .z;
-            self.depth = Some(self.depth.map_or(z, |d| d.min(z)));
-            self.normal += v.ns.as_dvec3() * w;
-            self.albedo += albedo_rgb(scene, &v.albedo) * w;
-            self.seen += w;
-        }
-    }
-
-    /// The pixel's channels for `aovs` ([`channel_names`]' order), given the weight of all its samples.
-    pub fn finish(&self, scene: &Scene, aovs: &[Aov], weights: f64) -> Vec<f32> {
-        let k = if weights != 0.0 { 1.0 / weights } else { 0.0 };
-        let rgb = |xyz: DVec3| {
-            firemedium_core::cie::xyz_to_linear_srgb(scene.response.finish(xyz * k)).to_array()
-        };
-        let mut out = Vec::new();
-        for a in aovs {
-            match a {
-                Aov::Fire => out.extend(rgb(self.parts[0])),
-                Aov::Emission => out.extend(rgb(self.parts[1])),
-                Aov::Direct => out.extend(rgb(self.parts[2])),
-                Aov::Indirect => out.extend(rgb(self.parts[3])),
-                Aov::Alpha => out.push(self.alpha * k),
-                Aov::Depth => out.push(self.depth.unwrap_or(f64::INFINITY)),
-                Aov::Albedo => {
-                    let a = if self.seen > 0.0 {
-                        self.albedo / self.seen
-                    } else {
-                        DVec3::ZERO
-                    };
-                    out.extend(a.to_array());
-                }
-                Aov::Normal => out.extend(self.normal.normalize_or_zero().to_array()),
-                Aov::Samples => out.push(scene.spp as f64),
-            }
-        }
-        out.into_iter().map(|v| v as f32).collect()
-    }
-}
-
-/// A directional albedo (a reflectance spectrum) as linear sRGB under D65 (white stays white).
-pub(super) fn albedo_rgb(scene: &Scene, albedo: &S) -> DVec3 {
-    let d65 = scene.bins.d65();
-    let mut lit = *albedo;
-    for (a, e) in lit.0.iter_mut().zip(d65.0) {
-        *a *= e;
-    }
-    let white = scene.bins.luminance(&d65);
-    let xyz = scene.bins.to_xyz(&lit) / if white > 0.0 { white } else { 1.0 };
-    firemedium_core::cie::xyz_to_linear_srgb(xyz)
 }
 
 #[cfg(test)]

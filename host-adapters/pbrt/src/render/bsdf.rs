@@ -14,82 +14,12 @@
 //!
 //! Every call is total: a direction on the horizon, a zero pdf or a NaN gives no sample or zero, never a panic.
 
-use super::layered::Layered;
+use super::layered::{Interface, Layered};
+pub use super::lobes::{same_hemisphere, Flags, Lobes, Mode, Sample};
 use super::microfacet::TrowbridgeReitz;
 use super::spectrum::S;
 use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
-
-/// Which quantity flows along the path: radiance (camera paths) or importance (the adjoint, used inside the
-/// layered BSDF): they differ only in the 1/η² of refraction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    Radiance,
-    Importance,
-}
-
-impl Mode {
-    pub fn flip(self) -> Mode {
-        match self {
-            Mode::Radiance => Mode::Importance,
-            Mode::Importance => Mode::Radiance,
-        }
-    }
-}
-
-/// Which lobes a sample or a pdf may use (pbrt-v4's `BxDFReflTransFlags`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Lobes {
-    pub reflection: bool,
-    pub transmission: bool,
-}
-
-impl Lobes {
-    pub const ALL: Lobes = Lobes {
-        reflection: true,
-        transmission: true,
-    };
-    pub const REFLECTION: Lobes = Lobes {
-        reflection: true,
-        transmission: false,
-    };
-    pub const TRANSMISSION: Lobes = Lobes {
-        reflection: false,
-        transmission: true,
-    };
-}
-
-/// What a BxDF can do (pbrt-v4's `BxDFFlags`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Flags {
-    pub reflection: bool,
-    pub transmission: bool,
-    pub diffuse: bool,
-    pub glossy: bool,
-    pub specular: bool,
-}
-
-impl Flags {
-    /// Has a lobe that next-event estimation can evaluate (diffuse or glossy).
-    pub fn non_specular(&self) -> bool {
-        self.diffuse || self.glossy
-    }
-}
-
-/// A sampled direction: f (not multiplied by the cosine), wi, its pdf, and what kind of scattering it was.
-#[derive(Debug, Clone, Copy)]
-pub struct Sample {
-    pub f: S,
-    pub wi: Vec3A,
-    pub pdf: f32,
-    pub specular: bool,
-    pub reflection: bool,
-    /// The relative index crossed (η for refraction into the medium below, 1 for reflection).
-    pub etap: f32,
-    /// The pdf is only proportional to the true density (the layered BSDF's random walk): MIS must ask
-    /// [`Bxdf::pdf`] for the direction instead.
-    pub proportional: bool,
-}
 
 /// One BxDF, evaluated in the local shading frame.
 #[derive(Debug, Clone)]
@@ -115,11 +45,7 @@ pub enum Bxdf {
     ThinDielectric {
         eta: f32,
     },
-    Layered(Box<Layered>),
-}
-
-pub(crate) fn same_hemisphere(a: Vec3A, b: Vec3A) -> bool {
-    a.z * b.z > 0.0
+    Layered(Box<Layered<Bxdf>>),
 }
 
 /// A cosine-distributed direction in the upper hemisphere (Malley's method on a concentric disk).
@@ -690,6 +616,30 @@ fn dielectric_sample(
         }
     };
     (s.pdf > 0.0 && s.pdf.is_finite() && s.f.0[0].is_finite()).then_some(s)
+}
+
+/// The layered BSDF's interfaces are BxDFs.
+impl Interface for Bxdf {
+    fn flags(&self) -> Flags {
+        Bxdf::flags(self)
+    }
+    fn f(&self, wo: Vec3A, wi: Vec3A, mode: Mode, seed: u64) -> S {
+        Bxdf::f(self, wo, wi, mode, seed)
+    }
+    fn sample_f(
+        &self,
+        wo: Vec3A,
+        uc: f32,
+        u: [f32; 2],
+        mode: Mode,
+        lobes: Lobes,
+        seed: u64,
+    ) -> Option<Sample> {
+        Bxdf::sample_f(self, wo, uc, u, mode, lobes, seed)
+    }
+    fn pdf(&self, wo: Vec3A, wi: Vec3A, mode: Mode, lobes: Lobes, seed: u64) -> f32 {
+        Bxdf::pdf(self, wo, wi, mode, lobes, seed)
+    }
 }
 
 #[cfg(test)]

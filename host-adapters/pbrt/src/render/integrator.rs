@@ -9,62 +9,17 @@
 //! that finds it; delta lights (point, spot, distant) by next-event estimation only. A path that meets a
 //! dispersive dielectric keeps one bin from there on ([`super::material::Eta`]).
 
+use super::aov::{Split, Visible};
 use super::bsdf::{Lobes, Mode};
 use super::lights;
 use super::material;
 use super::media::Track;
+use super::paths::Spot;
+pub use super::paths::{Failures, Integrator};
 use super::pixel::Samples;
-use super::scene::Scene;
 use super::spectrum::S;
 use glam::Vec3A;
 use std::f32::consts::PI;
-
-/// The surface a camera ray sees first (pbrt-v4's `VisibleSurface`), for the `gbuffer` film: world-space point,
-/// geometric and shading normals, and the material's directional albedo ρ(wo) (one-sample estimate).
-#[derive(Debug, Clone, Copy)]
-pub struct Visible {
-    pub p: Vec3A,
-    pub ng: Vec3A,
-    pub ns: Vec3A,
-    pub albedo: S,
-}
-
-/// Where a camera sample's light came from, for the AOVs: the radiance the path had gathered when it reached
-/// its first and its second scattering vertex (all of it so far was seen from the camera, then the first vertex's
-/// direct light), the lights it saw directly, and the coverage of its camera ray. Contributions come in that
-/// order along a path, so two marks split it: seen = first mark, direct = second − first, indirect = the rest.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Split {
-    /// The path's radiance at its first and second scattering vertex (none: the path ended before).
-    pub marks: [Option<S>; 2],
-    /// Lights (area, infinite) seen from the camera: the rest of what was seen is the media's emission.
-    pub emission: S,
-    /// 1 − the camera ray's transmittance when it escaped (none: a surface or a medium stopped it: 1).
-    pub alpha: Option<f32>,
-}
-
-impl Split {
-    /// Marks the radiance `l` gathered when the path reaches a scattering vertex at `depth`.
-    fn mark(split: &mut Option<&mut Split>, depth: usize, l: S) {
-        if let Some(sp) = split.as_deref_mut() {
-            if depth < 2 && sp.marks[depth].is_none() {
-                sp.marks[depth] = Some(l);
-            }
-        }
-    }
-    /// The path's radiance `l` in four parts: media emission seen from the camera, lights seen from the camera,
-    /// direct and indirect light (they sum to `l`, to rounding).
-    pub fn parts(&self, l: S) -> [S; 4] {
-        let first = self.marks[0].unwrap_or(l);
-        let second = self.marks[1].unwrap_or(l);
-        [
-            first - self.emission,
-            self.emission,
-            second - first,
-            l - second,
-        ]
-    }
-}
 
 fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
     let s = if n.z < 0.0 { -1.0 } else { 1.0 };
@@ -118,172 +73,7 @@ fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     (t * (sin * phi.cos()) + b * (sin * phi.sin()) + d * cos).normalize_or_zero()
 }
 
-/// Where next-event estimation leaves from: a surface point (the side a direction leaves by picks the offset
-/// and the medium) or a point inside a medium.
-#[derive(Debug, Clone, Copy)]
-pub(super) enum Spot {
-    Surface {
-        p: Vec3A,
-        ng: Vec3A,
-        eps: f32,
-        /// The shape's (inside, outside) media, or the medium the path is in when the shape has none.
-        media: Option<(Option<usize>, Option<usize>)>,
-        medium: Option<usize>,
-    },
-    Medium {
-        p: Vec3A,
-        medium: Option<usize>,
-    },
-}
-
-impl Spot {
-    pub(super) fn p(&self) -> Vec3A {
-        match self {
-            Spot::Surface { p, .. } | Spot::Medium { p, .. } => *p,
-        }
-    }
-    /// The origin and medium of a ray leaving along `w`.
-    pub(super) fn leave(&self, w: Vec3A) -> (Vec3A, Option<usize>) {
-        match *self {
-            Spot::Medium { p, medium } => (p, medium),
-            Spot::Surface {
-                p,
-                ng,
-                eps,
-                media,
-                medium,
-            } => {
-                let out = w.dot(ng) > 0.0;
-                let m = match media {
-                    Some((inside, outside)) => {
-                        if out {
-                            outside
-                        } else {
-                            inside
-                        }
-                    }
-                    None => medium,
-                };
-                (p + if out { ng } else { -ng } * eps, m)
-            }
-        }
-    }
-}
-
-/// Plugin calls that failed inside the render: counted, the first one's message kept, for the render's report
-/// (a path whose call failed contributes nothing from there on — never silently).
-#[derive(Debug, Default)]
-pub struct Failures {
-    count: std::sync::atomic::AtomicU64,
-    first: std::sync::OnceLock<String>,
-}
-
-impl Failures {
-    /// `r`'s value, or `None` with the failure counted.
-    pub fn note<T>(&self, r: Result<T, firemedium_loader::Error>) -> Option<T> {
-        match r {
-            Ok(v) => Some(v),
-            Err(e) => {
-                self.count
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let _ = self.first.set(e.to_string());
-                None
-            }
-        }
-    }
-
-    /// How many failed, and the first one's message.
-    pub fn into_report(self) -> (u64, Option<String>) {
-        (self.count.into_inner(), self.first.into_inner())
-    }
-}
-
-/// Renders radiance along camera rays.
-#[derive(Debug)]
-pub struct Integrator<'a> {
-    pub scene: &'a Scene,
-    pub mask: S,
-    /// Fire-light samples taken (next-event estimation toward a fire), for the render's statistics.
-    pub fire_samples: std::sync::atomic::AtomicU64,
-    /// Plugin calls that failed inside the render.
-    pub failures: Failures,
-}
-
 impl Integrator<'_> {
-    pub(super) fn rng2(rng: &mut Samples) -> [f32; 2] {
-        [rng.next_f64() as f32, rng.next_f64() as f32]
-    }
-
-    /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
-    /// (transmittance — zero if an opaque surface is in the way —, the emission of medium `fire` seen along
-    /// the way, attenuated by every medium in front of it, as its fire light estimates it). With `fire` the walk
-    /// ends where the fire's shapes can no longer be reached, its transmittance then only that far (a light
-    /// sample wants the emission alone).
-    pub(super) fn walk_media(
-        &self,
-        mut o: Vec3A,
-        d: Vec3A,
-        mut t_max: f32,
-        mut medium: Option<usize>,
-        fire: Option<(usize, &firemedium_loader::Light)>,
-        rng: &mut Samples,
-    ) -> (S, S) {
-        let eps = self.scene.eps;
-        let mut tr = self.mask;
-        let mut l = S::ZERO;
-        for _ in 0..64 {
-            let hit = self.scene.bvh.intersect(o, d, eps, t_max - eps);
-            let seg = hit.map(|h| h.t).unwrap_or(t_max);
-            if let Some(m) = medium {
-                let light = fire.filter(|f| f.0 == m).map(|f| f.1);
-                let (le, t) = match light {
-                    Some(light) => self.light_segment(light, m, o, d, seg, rng),
-                    None => self.medium_segment(m, o, d, seg, rng, false),
-                };
-                if light.is_some() {
-                    l += tr * le;
-                }
-                tr *= t;
-                if tr.max() <= 0.0 {
-                    return (S::ZERO, l);
-                }
-            }
-            let Some(h) = hit else { return (tr, l) };
-            let prim = self.scene.bvh.prim(&h);
-            if prim.material.is_some() {
-                return (S::ZERO, l);
-            }
-            if let Some((inside, outside)) = prim.media {
-                medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
-            }
-            o = h.p;
-            t_max -= h.t;
-            // A light's walk outside its fire that cannot reach a shape bounding the fire's medium again has
-            // gathered all the fire's light it will (its transmittance from here on is not wanted): the rest of
-            // the walk — a traversal to the wall behind — is skipped.
-            if let Some((f, _)) = fire {
-                if medium != Some(f) && !self.reaches(f, o, d, t_max) {
-                    return (tr, l);
-                }
-            }
-        }
-        (tr, l)
-    }
-
-    /// Whether o + t·d, t ∈ (eps / 2, t_max), meets the box of the shapes bounding medium `m` (the slab test).
-    fn reaches(&self, m: usize, o: Vec3A, d: Vec3A, t_max: f32) -> bool {
-        let Some(Some(b)) = self.scene.media_boxes.get(m) else {
-            return false;
-        };
-        let inv = d.recip();
-        let (t0, t1) = ((b.min - o) * inv, (b.max - o) * inv);
-        let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
-        // (The walk's next traversal starts at t = eps — from a point on the box's face, `far` is 0 up to
-        // rounding —, so a box that ends before eps / 2 holds nothing it could hit. NaN from 0 × ∞ on a face's
-        // plane: counted as reaching, the walk goes on as before.)
-        !(near > far || far < 0.5 * self.scene.eps || near > t_max)
-    }
-
     /// A real scattering event in a medium at `p`: NEE with the Henyey–Greenstein phase function (MIS-weighted
     /// against phase sampling for the fire light), then the next direction sampled from it (weight 1) and its
     /// solid-angle pdf.

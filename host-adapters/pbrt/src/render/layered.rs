@@ -18,17 +18,34 @@
 //! sum to one when the coat is rough, and f comes out 7 % above the sampler's own estimate (test
 //! `a_coated_diffuse_surface_sampled_and_integrated_agree`, coat roughness 0.3); with this one they agree.
 
-use super::bsdf::{same_hemisphere, Bxdf, Flags, Lobes, Mode, Sample};
+use super::lobes::{same_hemisphere, Flags, Lobes, Mode, Sample};
 use super::spectrum::S;
 use firemedium_core::rng::Rng;
 use glam::Vec3A;
 use std::f32::consts::PI;
 
+/// What the layered BSDF asks of its two interfaces (the renderer's BxDFs, `bsdf::Bxdf`).
+pub trait Interface {
+    fn flags(&self) -> Flags;
+    fn f(&self, wo: Vec3A, wi: Vec3A, mode: Mode, seed: u64) -> S;
+    #[allow(clippy::too_many_arguments)]
+    fn sample_f(
+        &self,
+        wo: Vec3A,
+        uc: f32,
+        u: [f32; 2],
+        mode: Mode,
+        lobes: Lobes,
+        seed: u64,
+    ) -> Option<Sample>;
+    fn pdf(&self, wo: Vec3A, wi: Vec3A, mode: Mode, lobes: Lobes, seed: u64) -> f32;
+}
+
 /// A coat over a base, with an optional medium between them.
 #[derive(Debug, Clone)]
-pub struct Layered {
-    pub top: Bxdf,
-    pub bottom: Bxdf,
+pub struct Layered<B> {
+    pub top: B,
+    pub bottom: B,
     pub thickness: f32,
     pub albedo: S,
     pub g: f32,
@@ -110,7 +127,7 @@ fn valid(s: &Option<Sample>) -> bool {
         .is_some_and(|s| !s.f.is_black() && s.pdf > 0.0 && s.wi.z != 0.0)
 }
 
-impl Layered {
+impl<B: Interface> Layered<B> {
     fn has_medium(&self) -> bool {
         !self.albedo.is_black()
     }

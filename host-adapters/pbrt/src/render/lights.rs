@@ -4,11 +4,12 @@
 //! light's inside [`Integrator::emission_weight`]) and the radiance a path finds ([`env`],
 //! [`Integrator::area_le`]). The integrator weighs them by MIS in one place and never asks which kind it holds.
 
-use super::integrator::{Integrator, Spot};
+use super::area::sample_area;
 use super::media::to_space;
+use super::paths::{Integrator, Spot};
 use super::pixel::Samples;
 use super::scene::{Light, Medium};
-use super::shapes::{sample_area, Hit};
+use super::shapes::Hit;
 use super::spectrum::S;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;

@@ -11,9 +11,63 @@
 use super::bsdf::Bxdf;
 use super::layered::Layered;
 use super::microfacet::TrowbridgeReitz;
-use super::scene::Tex;
 use super::spectrum::S;
 use glam::{Vec2, Vec3A};
+
+/// A spectrum texture.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // constants are the common case; boxing them would cost a pointer chase per lookup
+pub enum Tex {
+    Const(S),
+    /// (Its two textures shared, not copied: a texture naming another twice at each of 20 levels is 20 nodes,
+    /// not 2²⁰ — it took 4.9 GB.)
+    Checker {
+        a: std::sync::Arc<Tex>,
+        b: std::sync::Arc<Tex>,
+        su: f32,
+        sv: f32,
+    },
+    /// An image: linear RGB × scale (1 − it when inverted), uplifted with the bins' box basis.
+    Image {
+        img: std::sync::Arc<crate::imageio::RgbImage>,
+        scale: f32,
+        invert: bool,
+        wrap: crate::imageio::Wrap,
+        basis: [S; 3],
+    },
+}
+
+impl Tex {
+    pub fn eval(&self, uv: Vec2) -> S {
+        match self {
+            Tex::Const(s) => *s,
+            Tex::Checker { a, b, su, sv } => {
+                if ((uv.x * su).floor() as i64 + (uv.y * sv).floor() as i64) % 2 == 0 {
+                    a.eval(uv)
+                } else {
+                    b.eval(uv)
+                }
+            }
+            Tex::Image {
+                img,
+                scale,
+                invert,
+                wrap,
+                basis,
+            } => {
+                // pbrt-v4 flips t: row 0 of the image is v = 1.
+                let c = img.bilerp(uv.x, 1.0 - uv.y, *wrap).map(|x| {
+                    if *invert {
+                        (1.0 - x * *scale).max(0.0)
+                    } else {
+                        x * *scale
+                    }
+                });
+                basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]
+            }
+        }
+    }
+}
 
 /// A float parameter: a constant or a texture (its mean over the active bins).
 #[derive(Debug, Clone)]

@@ -5,7 +5,7 @@
 //! added), and what a segment transmits and emits ([`Integrator::medium_segment`], for shadow rays and light
 //! walks). The integrator asks these and never which kind it holds; a new kind is one arm in each.
 
-use super::integrator::Integrator;
+use super::paths::Integrator;
 use super::pixel::Samples;
 use super::scene::Medium;
 use super::spectrum::S;
@@ -410,5 +410,75 @@ impl Integrator<'_> {
             }
             Medium::RgbGrid(grid) => self.host_track(&**grid, o, d, t_end, rng, None),
         }
+    }
+
+    /// Walks from `o` along `d` for distance parameter `t_max` through surfaces that are only medium boundaries:
+    /// (transmittance — zero if an opaque surface is in the way —, the emission of medium `fire` seen along
+    /// the way, attenuated by every medium in front of it, as its fire light estimates it). With `fire` the walk
+    /// ends where the fire's shapes can no longer be reached, its transmittance then only that far (a light
+    /// sample wants the emission alone).
+    pub(super) fn walk_media(
+        &self,
+        mut o: Vec3A,
+        d: Vec3A,
+        mut t_max: f32,
+        mut medium: Option<usize>,
+        fire: Option<(usize, &firemedium_loader::Light)>,
+        rng: &mut Samples,
+    ) -> (S, S) {
+        let eps = self.scene.eps;
+        let mut tr = self.mask;
+        let mut l = S::ZERO;
+        for _ in 0..64 {
+            let hit = self.scene.bvh.intersect(o, d, eps, t_max - eps);
+            let seg = hit.map(|h| h.t).unwrap_or(t_max);
+            if let Some(m) = medium {
+                let light = fire.filter(|f| f.0 == m).map(|f| f.1);
+                let (le, t) = match light {
+                    Some(light) => self.light_segment(light, m, o, d, seg, rng),
+                    None => self.medium_segment(m, o, d, seg, rng, false),
+                };
+                if light.is_some() {
+                    l += tr * le;
+                }
+                tr *= t;
+                if tr.max() <= 0.0 {
+                    return (S::ZERO, l);
+                }
+            }
+            let Some(h) = hit else { return (tr, l) };
+            let prim = self.scene.bvh.prim(&h);
+            if prim.material.is_some() {
+                return (S::ZERO, l);
+            }
+            if let Some((inside, outside)) = prim.media {
+                medium = if d.dot(h.ng) > 0.0 { outside } else { inside };
+            }
+            o = h.p;
+            t_max -= h.t;
+            // A light's walk outside its fire that cannot reach a shape bounding the fire's medium again has
+            // gathered all the fire's light it will (its transmittance from here on is not wanted): the rest of
+            // the walk — a traversal to the wall behind — is skipped.
+            if let Some((f, _)) = fire {
+                if medium != Some(f) && !self.reaches(f, o, d, t_max) {
+                    return (tr, l);
+                }
+            }
+        }
+        (tr, l)
+    }
+
+    /// Whether o + t·d, t ∈ (eps / 2, t_max), meets the box of the shapes bounding medium `m` (the slab test).
+    pub(super) fn reaches(&self, m: usize, o: Vec3A, d: Vec3A, t_max: f32) -> bool {
+        let Some(Some(b)) = self.scene.media_boxes.get(m) else {
+            return false;
+        };
+        let inv = d.recip();
+        let (t0, t1) = ((b.min - o) * inv, (b.max - o) * inv);
+        let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
+        // (The walk's next traversal starts at t = eps — from a point on the box's face, `far` is 0 up to
+        // rounding —, so a box that ends before eps / 2 holds nothing it could hit. NaN from 0 × ∞ on a face's
+        // plane: counted as reaching, the walk goes on as before.)
+        !(near > far || far < 0.5 * self.scene.eps || near > t_max)
     }
 }

@@ -2,7 +2,9 @@
 //! (media through the plugin), `integrator` is `volpath`, and [`render`] runs it over tiles in parallel into an
 //! [`Image`] (linear sRGB and XYZ, absolute units), which [`Image::write_exr`] writes.
 
+mod accum;
 pub mod aov;
+pub mod area;
 pub mod bsdf;
 pub mod cloud;
 pub mod distrib;
@@ -11,11 +13,13 @@ pub mod film;
 pub mod integrator;
 pub mod layered;
 mod lights;
+pub mod lobes;
 pub mod material;
 mod media;
 pub mod media_presets;
 pub mod microfacet;
 pub mod named_spectra;
+mod paths;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;
@@ -187,7 +191,7 @@ pub fn render(
                     // The spectral film's radiance per bin (only when the film is spectral).
                     let mut spectrum = [0.0f64; spectrum::MAX_CHANNELS];
                     let mut gpixel = film::GPixel::default();
-                    let mut apixel = aov::Pixel::default();
+                    let mut apixel = accum::Pixel::default();
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
                     for s in 0..scene.spp {
@@ -210,7 +214,7 @@ pub fn render(
                         let (o, d) = camera_ray(scene, fx, fy, &mut rng);
                         let mut visible = None;
                         let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
-                        let mut split = integrator::Split::default();
+                        let mut split = aov::Split::default();
                         let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
                         let l = integ.li_visible(o, d, &mut rng, want, aovs);
                         let raw = scene.response.sensor_xyz(&scene.bins, &l);
@@ -358,13 +362,7 @@ impl GSpace {
     /// One camera sample's visible surface in the gbuffer's space: the albedo as an rgb reflectance under D65
     /// (pbrt-v4 multiplies it by the colour space's illuminant), and dz/dx, dz/dy from where the pinhole rays
     /// one pixel over meet the surface's tangent plane.
-    fn sample(
-        &self,
-        scene: &scene::Scene,
-        fx: f64,
-        fy: f64,
-        v: &integrator::Visible,
-    ) -> film::GSample {
+    fn sample(&self, scene: &scene::Scene, fx: f64, fy: f64, v: &aov::Visible) -> film::GSample {
         let p = v.p.as_dvec3();
         let ng = v.ng.as_dvec3();
         let dz = |fx: f64, fy: f64| {
@@ -379,7 +377,7 @@ impl GSpace {
                 .z
         };
         film::GSample {
-            albedo_rgb: aov::albedo_rgb(scene, &v.albedo),
+            albedo_rgb: accum::albedo_rgb(scene, &v.albedo),
             p: self.from_world.transform_point3(p),
             n: (self.normals * ng).normalize_or_zero(),
             ns: (self.normals * v.ns.as_dvec3()).normalize_or_zero(),

@@ -6,15 +6,18 @@
 mod builder;
 mod directives;
 mod materials;
+mod media;
+use media::light_params;
+pub use media::{load_plugin, typed_params};
 
 use super::pbrt_v4::Kind;
 use super::shapes::Bvh;
 use super::spectrum::{Bins, S};
 use builder::{affine, num, nums, string, Builder, State};
 use firemedium_core::spectrum::SpectralGrid;
-use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
+use firemedium_loader::{Param as LParam, Value, Volume};
 use firemedium_pbrt_parser::{parse_file, Collect, Directive, Loc, ParamDict};
-use glam::{DAffine3, DMat4, Mat3A, Vec2, Vec3A};
+use glam::{DAffine3, DMat4, Mat3A, Vec3A};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -25,62 +28,7 @@ fn err(loc: &Loc, m: impl std::fmt::Display) -> Error {
     Error::at(loc, m)
 }
 
-/// A spectrum texture.
-#[derive(Debug, Clone)]
-#[allow(clippy::large_enum_variant)] // constants are the common case; boxing them would cost a pointer chase per lookup
-pub enum Tex {
-    Const(S),
-    /// (Its two textures shared, not copied: a texture naming another twice at each of 20 levels is 20 nodes,
-    /// not 2²⁰ — it took 4.9 GB.)
-    Checker {
-        a: std::sync::Arc<Tex>,
-        b: std::sync::Arc<Tex>,
-        su: f32,
-        sv: f32,
-    },
-    /// An image: linear RGB × scale (1 − it when inverted), uplifted with the bins' box basis.
-    Image {
-        img: std::sync::Arc<crate::imageio::RgbImage>,
-        scale: f32,
-        invert: bool,
-        wrap: crate::imageio::Wrap,
-        basis: [S; 3],
-    },
-}
-
-impl Tex {
-    pub fn eval(&self, uv: Vec2) -> S {
-        match self {
-            Tex::Const(s) => *s,
-            Tex::Checker { a, b, su, sv } => {
-                if ((uv.x * su).floor() as i64 + (uv.y * sv).floor() as i64) % 2 == 0 {
-                    a.eval(uv)
-                } else {
-                    b.eval(uv)
-                }
-            }
-            Tex::Image {
-                img,
-                scale,
-                invert,
-                wrap,
-                basis,
-            } => {
-                // pbrt-v4 flips t: row 0 of the image is v = 1.
-                let c = img.bilerp(uv.x, 1.0 - uv.y, *wrap).map(|x| {
-                    if *invert {
-                        (1.0 - x * *scale).max(0.0)
-                    } else {
-                        x * *scale
-                    }
-                });
-                basis[0] * c[0] + basis[1] * c[1] + basis[2] * c[2]
-            }
-        }
-    }
-}
-
-pub use crate::render::material::Material;
+pub use crate::render::material::{Material, Tex};
 
 /// Lights (area lights live on primitives).
 #[derive(Debug, Clone)]
@@ -352,71 +300,6 @@ impl Scene {
             })
             .filter(|t| *t > 0.0)
             .reduce(f64::max)
-    }
-}
-
-/// The command line's `NAME=VALUE` light parameters typed as the plugin's table declares them (the light's own
-/// or the volume's).
-fn light_params(plugin: &Plugin, given: &[(String, String)]) -> Result<Vec<LParam>, Error> {
-    typed_params(
-        plugin,
-        &["light"],
-        "the fire light",
-        "--fire-light-param",
-        given,
-    )
-}
-
-/// `NAME=VALUE` parameters from a command line (`flag`) typed as the plugin's table declares them for
-/// `components` (`what` names them in an error, which lists the parameters they have).
-pub fn typed_params(
-    plugin: &Plugin,
-    components: &[&str],
-    what: &str,
-    flag: &str,
-    given: &[(String, String)],
-) -> Result<Vec<LParam>, Error> {
-    let table = plugin.parameters();
-    given
-        .iter()
-        .map(|(name, value)| {
-            let info = table
-                .iter()
-                .find(|p| components.contains(&p.component.as_str()) && &p.name == name)
-                .ok_or_else(|| {
-                    let names: Vec<&str> = table
-                        .iter()
-                        .filter(|p| components.contains(&p.component.as_str()))
-                        .map(|p| p.name.as_str())
-                        .collect();
-                    Error::value(format!(
-                        "{flag} {name}={value}: {what} has no parameter \"{name}\" (it has {})",
-                        names.join(", ")
-                    ))
-                })?;
-            let bad = |kind: &str| {
-                Error::value(format!("{flag} {name}={value}: \"{value}\" is not {kind}"))
-            };
-            Ok(match info.ty.as_str() {
-                "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
-                "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
-                "bool" => LParam::bool(name, value.parse().map_err(|_| bad("true or false"))?),
-                _ => LParam::string(name, value),
-            })
-        })
-        .collect()
-}
-
-/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
-/// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
-/// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
-#[allow(unsafe_code)]
-pub fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
-    match path {
-        // SAFETY: a plugin file the user named; the loader checks its ABI version, size and entries.
-        Some(p) => unsafe { Plugin::load(p) },
-        // SAFETY: the file the user's environment names, or the plugin built beside this executable.
-        None => unsafe { Plugin::from_env() },
     }
 }
 

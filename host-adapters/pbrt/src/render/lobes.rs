@@ -1,0 +1,81 @@
+//! What every BxDF shares, below the BxDFs themselves (`bsdf`) and the layered BSDF built from them (`layered`):
+//! the quantity transported, the lobes a query may use, what a BxDF can do, a sampled direction.
+
+use super::spectrum::S;
+use glam::Vec3A;
+
+/// Which quantity flows along the path: radiance (camera paths) or importance (the adjoint, used inside the
+/// layered BSDF): they differ only in the 1/η² of refraction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Radiance,
+    Importance,
+}
+
+impl Mode {
+    pub fn flip(self) -> Mode {
+        match self {
+            Mode::Radiance => Mode::Importance,
+            Mode::Importance => Mode::Radiance,
+        }
+    }
+}
+
+/// Which lobes a sample or a pdf may use (pbrt-v4's `BxDFReflTransFlags`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Lobes {
+    pub reflection: bool,
+    pub transmission: bool,
+}
+
+impl Lobes {
+    pub const ALL: Lobes = Lobes {
+        reflection: true,
+        transmission: true,
+    };
+    pub const REFLECTION: Lobes = Lobes {
+        reflection: true,
+        transmission: false,
+    };
+    pub const TRANSMISSION: Lobes = Lobes {
+        reflection: false,
+        transmission: true,
+    };
+}
+
+/// What a BxDF can do (pbrt-v4's `BxDFFlags`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Flags {
+    pub reflection: bool,
+    pub transmission: bool,
+    pub diffuse: bool,
+    pub glossy: bool,
+    pub specular: bool,
+}
+
+impl Flags {
+    /// Has a lobe that next-event estimation can evaluate (diffuse or glossy).
+    pub fn non_specular(&self) -> bool {
+        self.diffuse || self.glossy
+    }
+}
+
+/// A sampled direction: f (not multiplied by the cosine), wi, its pdf, and what kind of scattering it was.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample {
+    pub f: S,
+    pub wi: Vec3A,
+    pub pdf: f32,
+    pub specular: bool,
+    pub reflection: bool,
+    /// The relative index crossed (η for refraction into the medium below, 1 for reflection).
+    pub etap: f32,
+    /// The pdf is only proportional to the true density (the layered BSDF's random walk): MIS must ask
+    /// `Bxdf::pdf` for the direction instead.
+    pub proportional: bool,
+}
+
+/// Whether `a` and `b` lie on the same side of the shading plane.
+pub fn same_hemisphere(a: Vec3A, b: Vec3A) -> bool {
+    a.z * b.z > 0.0
+}

@@ -1,0 +1,595 @@
+//! Scene building, media: `MakeNamedMedium` through the plugin (fire, pbrt-v4's grids, the procedural cloud baked
+//! into one), pbrt-v4's `homogeneous` and `rgbgrid` in the host, the plugin's colour weights checked against the
+//! film's, and what a medium needs when the renderer tracks it itself (`--tracking host`).
+
+use super::builder::{affine, num, nums, string, Builder};
+use super::{err, Error, Medium, MediumReport};
+use crate::render::spectrum::S;
+use firemedium_core::rgb_spectrum::RgbUse;
+use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
+use firemedium_pbrt_parser::{Loc, ParamDict};
+use glam::DVec3;
+use std::path::Path;
+
+impl Builder {
+    /// The plugin `load` found for the scene's plugin media (from `--plugin`, the first such medium's
+    /// `"string plugin"`, or the environment).
+    pub(super) fn plugin(&self, loc: &Loc) -> Result<Plugin, Error> {
+        self.plugin
+            .clone()
+            .ok_or_else(|| err(loc, "no firemedium plugin was loaded for this medium"))
+    }
+
+    /// Takes the film's colour from the plugin: the medium's bins must be the renderer's, and the first medium in
+    /// the film's units (a `fire` when the scene has one, else any) gives the XYZ weights of every bin. A further
+    /// medium must agree with them up to its units' scale, so a plugin built from another commit, or media that
+    /// project their bins differently, are refused instead of rendering a silently wrong colour. Returns the
+    /// factor that takes the medium's radiance to the film's units (its weights' luminance over the film's:
+    /// 1 in its own units, 1/683 for a pbrt grid beside a fire).
+    pub(super) fn check_colour(
+        &mut self,
+        name: &str,
+        fire: bool,
+        vol: &Volume,
+        loc: &Loc,
+    ) -> Result<f32, Error> {
+        let info = vol.info();
+        let (lo, hi) = (self.bins.grid.min_nm(), self.bins.grid.max_nm());
+        if (info.lambda_min - lo).abs() > 1e-9 * hi || (info.lambda_max - hi).abs() > 1e-9 * hi {
+            return Err(err(loc, format!("medium \"{name}\": the plugin's bins span {}–{} nm, the renderer's {lo}–{hi} nm (all media share the scene's bins)", info.lambda_min, info.lambda_max)));
+        }
+        let xyz: Vec<DVec3> = vol
+            .channel_xyz()
+            .map_err(|e| err(loc, format!("medium \"{name}\": {e}")))?
+            .into_iter()
+            .map(DVec3::from_array)
+            .collect();
+        let y = |w: &[DVec3]| w.iter().map(|v| v.y).sum::<f64>();
+        // The film's weights are the renderer's own until the first medium in its units replaces them.
+        let film = match &self.film_xyz {
+            Some((_, want)) => y(want),
+            None => y(&self.bins.xyz),
+        };
+        let units = y(&xyz) / film;
+        let units = if (units - 1.0).abs() < 1e-6 {
+            1.0
+        } else {
+            units as f32
+        };
+        if !(units > 0.0 && units.is_finite()) {
+            return Err(err(loc, format!("medium \"{name}\": its bins' colour weights have luminance {}; expected a positive one", y(&xyz))));
+        }
+        match &self.film_xyz {
+            // The medium that sets the film's weights is in the film's units by definition.
+            None if fire || !self.has_fire => {
+                self.film_xyz = Some((name.to_string(), xyz));
+                Ok(1.0)
+            }
+            None => Ok(units),
+            Some((first, want)) => {
+                // The same projection up to one scale (physical and pbrt units differ by a constant).
+                let k = y(want) / y(&xyz);
+                let worst = want
+                    .iter()
+                    .zip(&xyz)
+                    .map(|(a, b)| {
+                        (*a - *b * k).abs().max_element() / a.abs().max_element().max(1e-300)
+                    })
+                    .fold(0.0, f64::max);
+                if worst.is_finite() && worst < 1e-6 {
+                    Ok(units)
+                } else {
+                    Err(err(loc, format!("medium \"{name}\": its bins project to XYZ differently from medium \"{first}\"'s (largest relative difference {worst:.3e}); are both from the same plugin?")))
+                }
+            }
+        }
+    }
+
+    /// pbrt-v4's `rgbgrid` medium (see [`crate::render::rgbgrid`]), its rgb grids made bin spectra per voxel.
+    fn rgbgrid(
+        &mut self,
+        name: &str,
+        params: &ParamDict,
+        to_medium: glam::DAffine3,
+        loc: &Loc,
+    ) -> Result<crate::render::rgbgrid::RgbGrid, Error> {
+        use crate::render::rgbgrid::{Grid, RgbGrid};
+        let what = format!("rgbgrid medium \"{name}\"");
+        let dims: Vec<usize> = ["nx", "ny", "nz"]
+            .iter()
+            .map(|k| {
+                let v = num(params, k, 1.0);
+                if v.fract() == 0.0 && (1.0..=1e6).contains(&v) {
+                    Ok(v as usize)
+                } else {
+                    Err(err(
+                        loc,
+                        format!("{what}: \"integer {k}\" {v}: expected 1 to 1000000"),
+                    ))
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let count = dims
+            .iter()
+            .try_fold(1usize, |a, &b| a.checked_mul(b))
+            .unwrap_or(usize::MAX);
+        // Three grids of bin spectra at most.
+        crate::budget::check(
+            &format!("{what}: {count} voxels"),
+            count as u64,
+            3 * std::mem::size_of::<S>() as u64,
+            self.max_memory.saturating_sub(self.media_bytes),
+        )
+        .map_err(|e| err(loc, e))?;
+        let rgbs = |key: &str| -> Result<Option<&[f64]>, Error> {
+            let Some(p) = params.get(key) else {
+                return Ok(None);
+            };
+            let firemedium_pbrt_parser::Values::Numbers(v) = &p.values else {
+                return Err(err(
+                    &p.loc,
+                    format!("{what}: \"{key}\": expected \"rgb {key}\" values"),
+                ));
+            };
+            if p.ty != "rgb" {
+                return Err(err(&p.loc, format!("{what}: \"{} {key}\": pbrt-v4's rgbgrid takes \"rgb {key}\" (one rgb per voxel)", p.ty)));
+            }
+            if v.len() != 3 * count {
+                return Err(err(
+                    &p.loc,
+                    format!(
+                        "{what}: \"rgb {key}\" has {} values: expected 3 × nx·ny·nz = {}",
+                        v.len(),
+                        3 * count
+                    ),
+                ));
+            }
+            if let Some((i, x)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !(x.is_finite() && **x >= 0.0))
+            {
+                return Err(err(
+                    &p.loc,
+                    format!("{what}: \"rgb {key}\" [{i}] = {x}: expected a finite value >= 0"),
+                ));
+            }
+            Ok(Some(v.as_slice()))
+        };
+        let (sa, ss, le) = (rgbs("sigma_a")?, rgbs("sigma_s")?, rgbs("Le")?);
+        if sa.is_none() && ss.is_none() {
+            return Err(err(
+                loc,
+                format!("{what}: give \"rgb sigma_a\" and/or \"rgb sigma_s\" (as pbrt-v4)"),
+            ));
+        }
+        if le.is_some() && sa.is_none() {
+            return Err(err(
+                loc,
+                format!("{what}: \"rgb Le\" needs \"rgb sigma_a\" (as pbrt-v4)"),
+            ));
+        }
+        let scale = num(params, "scale", 1.0) as f32;
+        // pbrt-v4's RGBIlluminantSpectrum: the fit times D65 with ∫ D65 ȳ = ∫ ȳ (the uplift gives ∫ s ȳ = 1 for
+        // white), not photometrically normalised; in the film's units (÷ its K: 683 beside a fire).
+        let y_integral: f64 = firemedium_core::cie::cmf_table::CMF
+            .iter()
+            .map(|c| c[1])
+            .sum::<f64>()
+            * firemedium_core::cie::cmf_table::CMF_STEP_NM;
+        let k = if self.has_fire {
+            firemedium_core::constants::LUMINOUS_EFFICACY
+        } else {
+            1.0
+        };
+        let le_scale = (num(params, "Lescale", 1.0) * y_integral / k) as f32;
+        let mut cache: std::collections::HashMap<([u64; 3], bool), S> =
+            std::collections::HashMap::new();
+        let mut spectra = |v: &[f64], illuminant: bool, k: f32| -> Vec<S> {
+            v.chunks(3)
+                .map(|c| {
+                    let key = ([c[0].to_bits(), c[1].to_bits(), c[2].to_bits()], illuminant);
+                    *cache.entry(key).or_insert_with(|| {
+                        let usage = if illuminant {
+                            RgbUse::Illuminant
+                        } else {
+                            RgbUse::Unbounded
+                        };
+                        self.bins.uplift([c[0], c[1], c[2]], usage) * k
+                    })
+                })
+                .collect()
+        };
+        let grid = |g: Option<Vec<S>>| match g {
+            Some(v) => Grid::Voxels(v),
+            None => Grid::Constant(Box::new(self.bins.mask() * scale)),
+        };
+        let sa = grid(sa.map(|v| spectra(v, false, scale)));
+        let ss = grid(ss.map(|v| spectra(v, false, scale)));
+        let le = le.map(|v| spectra(v, true, le_scale));
+        let n = self.bins.n();
+        let max = |g: &Grid| match g {
+            Grid::Voxels(v) => v
+                .iter()
+                .flat_map(|s| s.0[..n].iter().copied())
+                .fold(0.0f32, f32::max),
+            Grid::Constant(s) => s.max(),
+        };
+        let majorant = max(&sa) + max(&ss);
+        if !majorant.is_finite() {
+            return Err(err(
+                loc,
+                format!("{what}: σ_t reaches {majorant}: expected finite values (check \"scale\")"),
+            ));
+        }
+        let pt = |key: &str, def: [f64; 3]| {
+            nums(params, key)
+                .filter(|v| v.len() == 3)
+                .map_or(DVec3::from_array(def), |v| DVec3::new(v[0], v[1], v[2]))
+        };
+        let (p0, p1) = (pt("p0", [0.0; 3]), pt("p1", [1.0; 3]));
+        if !(p0.is_finite() && p1.is_finite() && (p1 - p0).abs().min_element() > 0.0) {
+            return Err(err(
+                loc,
+                format!("{what}: p0 {p0} and p1 {p1}: expected a box of positive size"),
+            ));
+        }
+        self.media_bytes = self
+            .media_bytes
+            .saturating_add((count * 3 * std::mem::size_of::<S>()) as u64);
+        Ok(RgbGrid {
+            n: [dims[0], dims[1], dims[2]],
+            p0,
+            p1,
+            sa,
+            ss,
+            le,
+            majorant,
+            to_medium,
+            g: num(params, "g", 0.0).clamp(-0.99, 0.99),
+            bins: n,
+        })
+    }
+
+    pub(super) fn medium(
+        &mut self,
+        name: &str,
+        params: &ParamDict,
+        loc: &Loc,
+    ) -> Result<(), Error> {
+        let ty = string(params, "type").unwrap_or("").to_string();
+        let to_medium = affine(&self.st.ctm.inverse());
+        let m = match ty.as_str() {
+            "homogeneous" => {
+                let scale = num(params, "scale", 1.0) as f32;
+                // pbrt-v4: a named preset (measured, mm⁻¹) replaces sigma_a and sigma_s; an unknown one warns.
+                let preset = string(params, "preset").filter(|n| !n.is_empty());
+                let found = preset.and_then(crate::render::media_presets::preset);
+                if let (Some(n), None) = (preset, found) {
+                    self.warn(loc, format!("homogeneous medium \"{name}\": preset \"{n}\" not found (pbrt-v4's named media: Apple, Skin1, Wholemilk, Ketchup, …); sigma_a and sigma_s are used"));
+                }
+                let (sa, ss) = match found {
+                    Some((s, a)) => (self.bins.uplift(a, RgbUse::Unbounded), self.bins.uplift(s, RgbUse::Unbounded)),
+                    None => (
+                        self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)?,
+                        self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)?,
+                    ),
+                };
+                let (sa, ss) = (sa * scale, ss * scale);
+                let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
+                Medium::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) }
+            }
+            "rgbgrid" => Medium::RgbGrid(std::sync::Arc::new(self.rgbgrid(name, params, to_medium, loc)?)),
+            "fire" | "uniformgrid" | "nanovdb" | "cloud" => {
+                // Parameters pass to the plugin unchanged, but for the type, the plugin file (read by `load`'s
+                // pre-scan, which loaded the plugin), and relative paths.
+                let plugin = self.plugin(loc)?;
+                // The plugin reads and checks every parameter itself, reporting any it does not use.
+                params.mark_all_used();
+                let mut list: Vec<LParam> = Vec::new();
+                for p in params.params() {
+                    if p.name == "type" || p.name == "plugin" {
+                        continue;
+                    }
+                    // pbrt-v4's `nanovdb` names its grids `gridname` (default "density") and `temperaturename`
+                    // (default "temperature"): the plugin's `densitygrid` and `temperaturegrid`.
+                    let key = match (ty.as_str(), p.name.as_str()) {
+                        ("nanovdb", "gridname") => "densitygrid",
+                        ("nanovdb", "temperaturename") => "temperaturegrid",
+                        (_, n) => n,
+                    };
+                    if key != p.name && params.params().iter().any(|q| q.name == key) {
+                        return Err(err(&p.loc, format!("nanovdb medium \"{name}\": \"{}\" and \"{key}\" both name a grid: give one (pbrt-v4 reads \"{}\")", p.name, p.name)));
+                    }
+                    let value = match (&p.values, p.ty.as_str()) {
+                        // (File names as the scene wrote them: the plugin resolves its own against the scene's
+                        // folder, `Context::directory`.)
+                        (firemedium_pbrt_parser::Values::Strings(v), _) => Value::String(v.clone()),
+                        (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "integer") => Value::Integer(v.iter().map(|&x| x as i64).collect()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
+                        (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
+                        // pbrt-v4's `BlackbodySpectrum(T)`, peak-normalised, as 1 nm (λ, value) pairs over 360–830.
+                        (firemedium_pbrt_parser::Values::Numbers(v), "blackbody") => {
+                            let t = v.first().copied().unwrap_or(0.0);
+                            let peak = firemedium_core::blackbody::spectral_radiance(t, firemedium_core::blackbody::WIEN / t * 1e9);
+                            Value::Spectrum((360..=830).flat_map(|l| [l as f64, if t > 0.0 && peak > 0.0 { firemedium_core::blackbody::spectral_radiance(t, l as f64) / peak } else { 0.0 }]).collect())
+                        }
+                        (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
+                    };
+                    list.push(LParam { name: key.to_string(), value, at: Some(p.loc.to_string()) });
+                }
+                if ty == "cloud" {
+                    // pbrt-v4's procedural cloud, baked into a grid the plugin renders as a pbrt grid medium.
+                    let take = |list: &mut Vec<LParam>, name: &str, def: f64| -> f64 {
+                        match list.iter().position(|p| p.name == name) {
+                            Some(i) => match list.remove(i).value {
+                                Value::Float(v) => v.first().copied().unwrap_or(def),
+                                _ => def,
+                            },
+                            None => def,
+                        }
+                    };
+                    let (dens, wisp, freq) = (take(&mut list, "density", 1.0), take(&mut list, "wispiness", 1.0), take(&mut list, "frequency", 5.0));
+                    if ![dens, wisp, freq].iter().all(|v| v.is_finite() && *v >= 0.0 && *v <= 1e6) {
+                        return Err(err(loc, format!("cloud medium \"{name}\": density {dens}, wispiness {wisp}, frequency {freq}: expected values from 0 to 1e6")));
+                    }
+                    let corner = |name: &str, def: f64| {
+                        list.iter()
+                            .find(|p| p.name == name)
+                            .and_then(|p| match &p.value { Value::Point3(v) if v.len() == 3 => Some(DVec3::new(v[0], v[1], v[2])), _ => None })
+                            .unwrap_or(DVec3::splat(def))
+                    };
+                    let (p0, p1) = (corner("p0", 0.0), corner("p1", 1.0));
+                    let n = crate::render::cloud::BAKE as i64;
+                    // The bake (f64 here, f32 in the plugin) must fit in what the media built so far left.
+                    crate::budget::check(
+                        &format!("cloud medium \"{name}\": its {n}³ baked grid"),
+                        (n * n * n) as u64,
+                        12,
+                        self.max_memory.saturating_sub(self.media_bytes),
+                    )
+                    .map_err(|e| err(loc, e))?;
+                    for axis in ["nx", "ny", "nz"] {
+                        list.push(LParam::int(axis, n));
+                    }
+                    list.push(LParam { name: "density".into(), value: Value::Float(crate::render::cloud::bake(p0, p1, dens, wisp, freq)), at: Some(loc.to_string()) });
+                }
+                if ty != "fire" {
+                    list.push(LParam::string("mode", "pbrt"));
+                }
+                for b in &self.bins_params {
+                    if !list.iter().any(|p| p.name == b.name) {
+                        list.push(b.clone());
+                    }
+                }
+                // The renderer's context goes beside the scene's parameters, not among them (a parameter the scene
+                // sets itself wins in the plugin).
+                let mut context = firemedium_loader::Context {
+                    threads: self.threads.map(|n| n as u32),
+                    frame: self.frame,
+                    directory: Some(self.dir.clone()),
+                    ..Default::default()
+                };
+                // Motion blur: a velocity grid or embers (which move by their own velocities) see the camera's
+                // shutter (unless the medium sets its own), and the camera then draws a time per sample.
+                let velocity = list.iter().any(|p| {
+                    (p.name == "velocitygrid" || p.name == "embers")
+                        && matches!(&p.value, Value::String(v) if v.iter().any(|s| !s.is_empty()))
+                });
+                if velocity {
+                    let camera = self.camera_shutter();
+                    let mut shutter = camera;
+                    for (k, n) in ["shutteropen", "shutterclose"].into_iter().enumerate() {
+                        if let Some(Value::Float(v)) = list.iter().find(|p| p.name == n).map(|p| &p.value) {
+                            if v.len() == 1 {
+                                shutter[k] = v[0];
+                            }
+                        }
+                    }
+                    context.shutter = Some(camera);
+                    // The camera draws its times in its own shutter; the plugin holds each in the medium's.
+                    if shutter[1] > shutter[0] {
+                        self.shutter = Some(camera);
+                    }
+                }
+                // The budget is shared: each medium may use what the media built before it left.
+                context.max_bytes = Some(self.max_memory.saturating_sub(self.media_bytes).max(1));
+                let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
+                    // An error about one parameter carries where it was given (the plugin's error detail, not its
+                    // text): report it there, the message without that prefix.
+                    let text = e.to_string();
+                    let given = match &e {
+                        firemedium_loader::Error::Status { detail, .. } => detail.location.clone(),
+                        _ => None,
+                    };
+                    let at = given.and_then(|g| params.params().iter().find(|p| p.loc.to_string() == g)).map(|p| {
+                        let prefix = format!("{}: ", p.loc);
+                        (&p.loc, text.strip_prefix(&prefix).unwrap_or(&text))
+                    });
+                    match at {
+                        Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
+                        None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
+                    }
+                })?;
+                let info = vol.info();
+                if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
+                    return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
+                }
+                let units = self.check_colour(name, ty == "fire", &vol, loc)?;
+                // Species whose strong lines lie outside the render's bins emit nothing there: say so.
+                if ty == "fire" {
+                    let hot = vol.temperature_range().ok().flatten().map_or(2000.0, |[_, hi]| hi.max(1000.0));
+                    let species = list.iter().filter(|p| p.name == "species").flat_map(|p| match &p.value {
+                        Value::String(v) => v.clone(),
+                        _ => Vec::new(),
+                    });
+                    for sym in species {
+                        if let Some(m) = lines_outside(&sym, hot, (info.lambda_min, info.lambda_max)) {
+                            self.warn(loc, format!("medium \"{name}\": {m}"));
+                        }
+                    }
+                }
+                // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
+                // fire black: say so, with the presets that read each tool's units.
+                if let (true, Ok(Some([_, hi]))) = (ty == "fire", vol.temperature_range()) {
+                    if hi > 0.0 && hi < 500.0 {
+                        self.warn(loc, format!("medium \"{name}\": its temperature peaks at {hi:.3} K, too cool to glow visibly (below 500 K): if the grid is not in kelvin, set \"string source\" (\"houdini\": × 5000 K; \"blender\": a Mantaflow flame grid) or \"float temperatureremap\" [a b ka kb]"));
+                    }
+                }
+                self.media_bytes = self.media_bytes.saturating_add(info.bytes);
+                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
+                let host = if self.host_tracking { Some(host_majorants(&vol).map_err(|m| err(loc, format!("medium \"{name}\": --tracking host: {m}")))?) } else { None };
+                Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host }
+            }
+            "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
+            other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
+        };
+        self.named_media.insert(name.to_string(), self.media.len());
+        self.media.push(m);
+        Ok(())
+    }
+}
+
+/// The command line's `NAME=VALUE` light parameters typed as the plugin's table declares them (the light's own
+/// or the volume's).
+pub(super) fn light_params(
+    plugin: &Plugin,
+    given: &[(String, String)],
+) -> Result<Vec<LParam>, Error> {
+    typed_params(
+        plugin,
+        &["light"],
+        "the fire light",
+        "--fire-light-param",
+        given,
+    )
+}
+
+/// `NAME=VALUE` parameters from a command line (`flag`) typed as the plugin's table declares them for
+/// `components` (`what` names them in an error, which lists the parameters they have).
+pub fn typed_params(
+    plugin: &Plugin,
+    components: &[&str],
+    what: &str,
+    flag: &str,
+    given: &[(String, String)],
+) -> Result<Vec<LParam>, Error> {
+    let table = plugin.parameters();
+    given
+        .iter()
+        .map(|(name, value)| {
+            let info = table
+                .iter()
+                .find(|p| components.contains(&p.component.as_str()) && &p.name == name)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = table
+                        .iter()
+                        .filter(|p| components.contains(&p.component.as_str()))
+                        .map(|p| p.name.as_str())
+                        .collect();
+                    Error::value(format!(
+                        "{flag} {name}={value}: {what} has no parameter \"{name}\" (it has {})",
+                        names.join(", ")
+                    ))
+                })?;
+            let bad = |kind: &str| {
+                Error::value(format!("{flag} {name}={value}: \"{value}\" is not {kind}"))
+            };
+            Ok(match info.ty.as_str() {
+                "integer" => LParam::int(name, value.parse().map_err(|_| bad("an integer"))?),
+                "float" => LParam::float(name, value.parse().map_err(|_| bad("a number"))?),
+                "bool" => LParam::bool(name, value.parse().map_err(|_| bad("true or false"))?),
+                _ => LParam::string(name, value),
+            })
+        })
+        .collect()
+}
+
+/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
+/// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
+/// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
+#[allow(unsafe_code)]
+pub fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Error> {
+    match path {
+        // SAFETY: a plugin file the user named; the loader checks its ABI version, size and entries.
+        Some(p) => unsafe { Plugin::load(p) },
+        // SAFETY: the file the user's environment names, or the plugin built beside this executable.
+        None => unsafe { Plugin::from_env() },
+    }
+}
+
+/// When species `sym`'s lines outside the bins `lo`–`hi` nm carry more than a tenth of its visible line emission
+/// at `t` K (each line's power g_k A_ki e^(−E_k/kT) hc/λ, weighted by the eye's ȳ): what is lost, and how to keep it.
+pub(crate) fn lines_outside(sym: &str, t: f64, (lo, hi): (f64, f64)) -> Option<String> {
+    use firemedium_core::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
+    let e = firemedium_core::species::Element::by_symbol(sym).ok()?;
+    let lum = |l: &firemedium_core::species::Line| {
+        let power =
+            l.g_k as f64 * l.a_ki * (-l.e_k / (BOLTZMANN * t)).exp() * PLANCK * SPEED_OF_LIGHT
+                / (l.lambda_nm * 1e-9);
+        power * firemedium_core::cie::cmf(l.lambda_nm).y
+    };
+    let total: f64 = e.lines().iter().map(lum).sum();
+    let out: Vec<&firemedium_core::species::Line> = e
+        .lines()
+        .iter()
+        .filter(|l| (l.lambda_nm < lo || l.lambda_nm > hi) && lum(l) > 0.0)
+        .collect();
+    let lost: f64 = out.iter().map(|l| lum(l)).sum();
+    if !(total > 0.0 && lost > 0.1 * total) {
+        return None;
+    }
+    let mut strongest = out.clone();
+    strongest.sort_by(|a, b| lum(b).total_cmp(&lum(a)));
+    let names: Vec<String> = strongest
+        .iter()
+        .take(3)
+        .map(|l| format!("{:.1}", l.lambda_nm))
+        .collect();
+    Some(format!(
+        "species {sym}: its lines at {} nm carry {:.0} % of its visible line emission (luminance-weighted at {t:.0} K) and lie outside the render's bins, {lo:.0}–{hi:.0} nm: they are left out (widen the bins with \"float lambdamin\" / \"float lambdamax\", up to 380–780 nm)",
+        names.join(", "),
+        100.0 * lost / total
+    ))
+}
+
+/// The majorant grid of a volume the renderer will track itself, or why it cannot: a layer the medium level
+/// cannot carry (named by the plugin), or motion (its per-bin coefficients have no time).
+fn host_majorants(vol: &Volume) -> Result<crate::render::tracker::Majorants, String> {
+    let m = vol
+        .medium()
+        .map_err(|e| format!("{e}; render it with --tracking plugin"))?;
+    if m.features() & firemedium_abi::FM_FEATURE_MOTION != 0 {
+        return Err("it moves (motion blur), and the medium level's coefficients in bins have no time; render it with --tracking plugin".into());
+    }
+    let info = vol.info();
+    Ok(crate::render::tracker::Majorants::of(
+        m.majorant_grid(),
+        [info.bounds_min, info.bounds_max],
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn species_lines_outside_the_bins_are_reported() {
+        // Potassium's resonance doublet (766.7, 770.1 nm) outside 400–700 nm: nearly all its visible light.
+        let m = super::lines_outside("K", 2000.0, (400.0, 700.0)).expect("a warning");
+        let pct: f64 = m
+            .split(" carry ")
+            .nth(1)
+            .and_then(|r| r.split(" %").next())
+            .and_then(|v| v.parse().ok())
+            .unwrap();
+        assert!(
+            m.contains("766.") && m.contains("770.") && pct > 90.0,
+            "{m}"
+        );
+        // Inside the default 400–780 nm, and sodium's D lines inside 400–700: nothing to say.
+        assert!(super::lines_outside("K", 2000.0, (400.0, 780.0)).is_none());
+        assert!(super::lines_outside("Na", 2000.0, (400.0, 700.0)).is_none());
+    }
+}
