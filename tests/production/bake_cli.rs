@@ -179,3 +179,73 @@ fn a_sequence_bakes_frame_by_frame() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("####"));
 }
+
+#[test]
+fn a_datasets_velocity_is_passed_through_for_motion_blur() {
+    // Mantaflow's cache holds a half-float vector grid `velocity`: baked as the vector grid `velocity` on the
+    // coefficients' lattice, each voxel's value the dataset's there (as it is, its units); `--velocity none`
+    // leaves it out; a name the file does not hold is refused, listing the grids it has.
+    let dir = Scratch::new("bake", "velocity");
+    let cache = root().join("tests/data/valid/vdb/mantaflow_fire_f060.vdb");
+    let bake = |out: &str, extra: &[&str]| {
+        Command::new(exe("firemedium"))
+            .arg("bake")
+            .arg(&cache)
+            .arg("-o")
+            .arg(dir.join(out))
+            .args(["--param", "source=blender"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = bake("with.vdb", &[]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("velocity: the dataset's velocity"), "{text}");
+    let opts = LoadOptions::default();
+    let load = |file: &std::path::Path, names: &[&str]| {
+        let sources: Vec<ChannelSource> =
+            names.iter().map(|n| ChannelSource::new(n, file)).collect();
+        Dataset::load(&sources, &opts).unwrap()
+    };
+    let axes = ["velocity.x", "velocity.y", "velocity.z"];
+    let baked = load(&dir.join("with.vdb"), &axes);
+    let source = load(&cache, &axes);
+    let density = load(&cache, &["density"]);
+    assert_eq!(baked.dims(), density.dims());
+    // Every voxel centre of the lattice: the baked value is the source's there.
+    let (dims, [l0, _], step) = (density.dims(), density.bounds(), density.voxel_size());
+    let (mut moving, mut worst) = (0usize, 0f32);
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let p = l0 + DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * step;
+                for k in 0..3 {
+                    let (b, s) = (baked.sample(k, p), source.sample(k, p));
+                    worst = worst.max((b - s).abs());
+                    moving += usize::from(s != 0.0 && k == 2);
+                }
+            }
+        }
+    }
+    assert!(moving > 1000, "only {moving} voxels move upward");
+    assert!(worst <= 1e-6, "largest difference {worst}");
+
+    let o = bake("without.vdb", &["--velocity", "none"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let names: Vec<String> = firemedium_dataset::list_grids(&dir.join("without.vdb"), &opts)
+        .unwrap()
+        .into_iter()
+        .map(|g| g.name)
+        .collect();
+    assert_eq!(names, ["sigma_a", "sigma_s", "emission"]);
+
+    let o = bake("bad.vdb", &["--velocity", "wind"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--velocity wind") && err.contains("density, shadow"),
+        "{err}"
+    );
+    assert!(!dir.join("bad.vdb").exists());
+}

@@ -5,7 +5,8 @@ The operator "Import firemedium fire" (File ▸ Import, or ``bpy.ops.firemedium.
 ``sigma_a``, ``sigma_s`` and ``emission``: linear Rec.709, per metre, emission in cd/m² per metre — as a volume
 object, and gives it a material whose Volume Coefficients node takes the three grids directly (Blender 4.5+), so
 Cycles renders the fire's physics (soot spectra, absolute Planck emission, the CIE observer) instead of a
-blackbody ramp. A panel on the object (Properties ▸ Object ▸ firemedium fire) shows the fire's parameters and
+blackbody ramp. A simulation's frames bake into a volume sequence, and a velocity in the dataset becomes the
+volume's velocity grid for motion blur. A panel on the object (Properties ▸ Object ▸ firemedium fire) shows the fire's parameters and
 re-bakes after one changes (``bpy.ops.firemedium.rebake``).
 
 Units: a Cycles render of the fire is in the same absolute units as ``firemedium render``'s EXR (Y in cd/m²).
@@ -21,7 +22,7 @@ import subprocess
 from pathlib import Path
 
 import bpy
-from bpy.props import FloatProperty, StringProperty
+from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 
 bl_info = {
     "name": "firemedium",
@@ -44,9 +45,12 @@ def firemedium_command() -> str:
     return exe
 
 
-def bake(dataset: str, output: str, params: dict[str, object]) -> str:
-    """Runs `firemedium bake`; returns what it printed. Raises RuntimeError with its one-line message."""
+def bake(dataset: str, output: str, params: dict[str, object], frames: tuple[int, int] | None = None) -> str:
+    """Runs `firemedium bake` (`frames`: a sequence, the names holding ####); returns what it printed. Raises
+    RuntimeError with its one-line message."""
     args = [firemedium_command(), "bake", dataset, "-o", output]
+    if frames is not None:
+        args += ["--frames", f"{frames[0]}-{frames[1]}"]
     for k, v in params.items():
         args += ["--param", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
     r = subprocess.run(args, capture_output=True, text=True)
@@ -76,15 +80,55 @@ def fire_material(name: str, g: float = 0.0) -> bpy.types.Material:
     return m
 
 
+def frame_name(pattern: str, frame: int) -> str:
+    """`pattern` with its #### (the frame number, zero-padded to the run of #) filled in."""
+    start = pattern.find("#")
+    if start < 0:
+        return pattern
+    end = start
+    while end < len(pattern) and pattern[end] == "#":
+        end += 1
+    return pattern[:start] + str(frame).zfill(end - start) + pattern[end:]
+
+
+def sequence_pattern(path: str) -> str:
+    """A frame file's name with its frame number as #### (`fire_0042.vdb` → `fire_####.vdb`); unchanged without one."""
+    p = Path(path)
+    stem = p.stem
+    digits = len(stem) - len(stem.rstrip("0123456789"))
+    if digits == 0:
+        return path
+    return str(p.with_name(stem[:-digits] + "#" * digits + p.suffix))
+
+
 def import_fire(dataset: str, params: dict[str, object] | None = None, baked: str | None = None,
-                name: str = "fire") -> bpy.types.Object:
-    """Bakes `dataset` (unless `baked` names grids already baked) and links a volume object using them."""
+                name: str = "fire", frames: tuple[int, int] | None = None) -> bpy.types.Object:
+    """Bakes `dataset` (unless `baked` names grids already baked) and links a volume object using them.
+
+    `frames` (first, last): a simulation's frames, the dataset's and the baked names holding #### — baked one by one
+    and loaded as a volume sequence playing frame f of the scene from frame f of the files. A velocity in the
+    dataset is baked beside the coefficients and named as the volume's velocity grid (Cycles' motion blur)."""
     params = dict(params or {})
     if baked is None:
-        baked = str(Path(bpy.app.tempdir or "/tmp") / (Path(dataset).stem + "-firemedium.vdb"))
-        bake(dataset, baked, params)
+        stem = Path(dataset).stem.replace("#", "")
+        suffix = "-####.vdb" if frames is not None else ".vdb"
+        baked = str(Path(bpy.app.tempdir or "/tmp") / (stem.rstrip("_-.") + "-firemedium" + suffix))
+        bake(dataset, baked, params, frames)
     vol = bpy.data.volumes.new(name)
-    vol.filepath = baked
+    if frames is not None:
+        first, last = frames
+        vol.filepath = frame_name(baked, first)
+        vol.is_sequence = True
+        # Blender plays file number (scene frame − start + 1 + offset): files numbered as the scene's frames.
+        vol.frame_start = first
+        vol.frame_offset = first - 1
+        vol.frame_duration = last - first + 1
+    else:
+        vol.filepath = baked
+    vol.grids.load()
+    if any(g.name == "velocity" for g in vol.grids):
+        vol.velocity_grid = "velocity"
+        vol.velocity_unit = "SECOND"
     obj = bpy.data.objects.new(name, vol)
     bpy.context.scene.collection.objects.link(obj)
     vol.materials.append(fire_material(name + " material"))
@@ -93,6 +137,8 @@ def import_fire(dataset: str, params: dict[str, object] | None = None, baked: st
     obj["firemedium_dataset"] = dataset
     obj["firemedium_baked"] = baked
     obj["firemedium_params"] = {k: v for k, v in params.items()}
+    if frames is not None:
+        obj["firemedium_frames"] = list(frames)
     return obj
 
 
@@ -101,9 +147,10 @@ def rebake(obj: bpy.types.Object) -> str:
     if "firemedium_dataset" not in obj:
         raise RuntimeError(f"{obj.name} is not a firemedium fire (import one with File > Import > firemedium fire)")
     params = {k: v for k, v in obj["firemedium_params"].items()}
-    text = bake(obj["firemedium_dataset"], obj["firemedium_baked"], params)
+    frames = tuple(obj["firemedium_frames"]) if "firemedium_frames" in obj else None
+    text = bake(obj["firemedium_dataset"], obj["firemedium_baked"], params, frames)
     obj.data.grids.unload()
-    obj.data.filepath = obj["firemedium_baked"]
+    obj.data.filepath = frame_name(obj["firemedium_baked"], frames[0]) if frames else obj["firemedium_baked"]
     obj.data.update_tag()
     return text
 
@@ -136,11 +183,23 @@ class FIREMEDIUM_OT_import(bpy.types.Operator):
     fuel: StringProperty(name="Fuel", default="propane")
     temperaturescale: FloatProperty(name="Temperature scale", default=1.0, min=0.0)
     sootscale: FloatProperty(name="Soot scale", default=1.0, min=0.0)
+    sequence: BoolProperty(name="Sequence", default=False,
+                           description="The file is one frame of a simulation: bake frames First to Last")
+    frame_first: IntProperty(name="First", default=1)
+    frame_last: IntProperty(name="Last", default=1)
 
     def execute(self, context):
+        params = {"fuel": self.fuel, "temperaturescale": self.temperaturescale, "sootscale": self.sootscale}
         try:
-            import_fire(self.filepath, {"fuel": self.fuel, "temperaturescale": self.temperaturescale,
-                                        "sootscale": self.sootscale})
+            if self.sequence:
+                if self.frame_last < self.frame_first:
+                    raise RuntimeError(f"frames {self.frame_first}-{self.frame_last}: the last is before the first")
+                pattern = sequence_pattern(self.filepath)
+                if pattern == self.filepath:
+                    raise RuntimeError(f"{self.filepath}: no frame number at the end of its name (fire_0001.vdb)")
+                import_fire(pattern, params, frames=(self.frame_first, self.frame_last))
+            else:
+                import_fire(self.filepath, params)
         except RuntimeError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -51,12 +51,38 @@ def read_rgb(path: Path) -> np.ndarray:
     return px
 
 
-def cycles_scene(dataset: str, out: Path) -> None:
+def blackbody_fire(dataset: str) -> None:
+    """The dataset's own grids in a volume object whose material is Cycles' Principled Volume as an artist sets it
+    up for fire: density and temperature from the grids, blackbody intensity 1 (Cycles' "physically based"
+    setting), the temperature input 1 (Cycles multiplies the grid by it: the campfire's grid is in kelvin, a
+    Blender smoke simulation's relative to its default 1000 K), everything else its default."""
+    vol = bpy.data.volumes.new("blackbody")
+    vol.filepath = dataset
+    obj = bpy.data.objects.new("blackbody", vol)
+    bpy.context.scene.collection.objects.link(obj)
+    m = bpy.data.materials.new("blackbody")
+    m.use_nodes = True
+    nt = m.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    pv = nt.nodes.new("ShaderNodeVolumePrincipled")
+    pv.inputs["Blackbody Intensity"].default_value = 1.0
+    pv.inputs["Density Attribute"].default_value = "density"
+    pv.inputs["Temperature Attribute"].default_value = "temperature"
+    pv.inputs["Temperature"].default_value = 1.0
+    nt.links.new(pv.outputs["Volume"], out.inputs["Volume"])
+    vol.materials.append(m)
+
+
+def cycles_scene(dataset: str, out: Path, size: tuple[int, int] = (32, 32), spp: int = SPP,
+                 fire: str = "baked") -> None:
+    """The campfire over a grey floor in Cycles, as tests/data/scenes/campfire-floor.pbrt: `fire` "baked" (the
+    add-on's import) or "blackbody" (Cycles' Principled Volume on the dataset's grids)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    addon.render_settings(scene, samples=SPP)
+    addon.render_settings(scene, samples=spp)
     scene.cycles.seed = 3
-    scene.render.resolution_x = scene.render.resolution_y = 32
+    scene.render.resolution_x, scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
     scene.cycles.pixel_filter_type = "BOX"  # one pixel wide, as the reference's
     scene.cycles.filter_width = 1.0
@@ -64,7 +90,10 @@ def cycles_scene(dataset: str, out: Path) -> None:
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
-    addon.import_fire(dataset, {"fuel": "propane"})
+    if fire == "baked":
+        addon.import_fire(dataset, {"fuel": "propane"})
+    else:
+        blackbody_fire(dataset)
     bpy.ops.mesh.primitive_plane_add(size=20)
     floor = bpy.context.active_object
     m = bpy.data.materials.new("floor")
@@ -76,6 +105,8 @@ def cycles_scene(dataset: str, out: Path) -> None:
     nt.links.new(d.outputs["BSDF"], nt.nodes["Material Output"].inputs["Surface"])
     floor.data.materials.append(m)
     cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    # pbrt-v4's fov spans the film's shorter side (the fit first: the angle sets the lens for the fitted side).
+    cam.data.sensor_fit = "VERTICAL" if size[0] > size[1] else "HORIZONTAL"
     cam.data.angle = math.radians(40)
     scene.collection.objects.link(cam)
     scene.camera = cam
@@ -146,6 +177,33 @@ class Rebake(unittest.TestCase):
                 self.assertIn("fule", str(e.exception))
         finally:
             addon.unregister()
+
+
+
+class Sequence(unittest.TestCase):
+    def test_a_simulations_frames_play_as_a_volume_sequence_with_their_velocity(self):
+        # Two frames of a Mantaflow cache (its velocity grid included), named as a sequence: the add-on bakes both,
+        # loads them as a volume sequence that plays frame f of the files at the scene's frame f, and names the
+        # baked velocity as the volume's velocity grid for Cycles' motion blur.
+        command()
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        with tempfile.TemporaryDirectory(prefix="firemedium-blender-") as d:
+            d = Path(d)
+            for f, src in [(7, "mantaflow_fire_f030.vdb"), (8, "mantaflow_fire_f060.vdb")]:
+                (d / f"fire_{f:04d}.vdb").write_bytes((ROOT / "tests/data/valid/vdb" / src).read_bytes())
+            self.assertEqual(addon.sequence_pattern(str(d / "fire_0007.vdb")), str(d / "fire_####.vdb"))
+            obj = addon.import_fire(str(d / "fire_####.vdb"), {"source": "blender"}, baked=None, frames=(7, 8))
+            vol = obj.data
+            self.assertTrue(vol.is_sequence)
+            self.assertEqual((vol.frame_start, vol.frame_duration), (7, 2))
+            self.assertEqual(vol.velocity_grid, "velocity")
+            seen = {}
+            for frame in (7, 8):
+                bpy.context.scene.frame_set(frame)
+                grids = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.grids
+                seen[frame] = Path(grids.frame_filepath).name
+                self.assertEqual(sorted(g.name for g in grids), ["emission", "sigma_a", "sigma_s", "velocity"])
+            self.assertTrue(seen[7].endswith("-0007.vdb") and seen[8].endswith("-0008.vdb"), seen)
 
 
 if __name__ == "__main__":

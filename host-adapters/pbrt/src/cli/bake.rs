@@ -14,6 +14,9 @@
 //! - `sigma_a`, `sigma_s` (per metre) = the coefficient spectrum averaged with the weight of each channel's light in
 //!   that RGB component (its positive part): a colour renderer's three "wavelengths".
 //!
+//! - `velocity` (a dataset's velocity, `--velocity`, default the first of vel, v, velocity it holds): passed
+//!   through as it is — the same lattice, the dataset's units — for the renderer's motion blur.
+//!
 //! What baking loses is printed with the result: atomic lines become their RGB, refraction's curved rays and embers
 //! do not bake (refused), and the fire light becomes the renderer's own volume sampling.
 
@@ -43,6 +46,11 @@ pub struct BakeArgs {
     /// Frames A-B or A-B:STEP of a sequence: the dataset's and the output's names hold #### (the frame number).
     #[arg(long, value_name = "A-B", value_parser = crate::args::parse_frames)]
     frames: Option<crate::args::Frames>,
+    /// The velocity passed through for Cycles' motion blur: a vector grid, or float grids NAME.x, NAME.y,
+    /// NAME.z; `auto`: the first of vel, v, velocity the dataset holds; `none`: no velocity. Written as the vector
+    /// grid `velocity` on the same lattice, in the dataset's units.
+    #[arg(long, value_name = "NAME", default_value = "auto")]
+    velocity: String,
     /// The memory budget in GB for the grids (default: half the machine's memory).
     #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
     max_memory: Option<f64>,
@@ -88,6 +96,50 @@ pub fn run(a: &BakeArgs) -> firemedium::Result<String> {
     Ok(report)
 }
 
+/// The velocity `--velocity` asks for: its name in the dataset and its three components loaded (x, y, z), or
+/// None (`none`, or `auto` in a dataset without one).
+fn velocity_of(
+    a: &BakeArgs,
+    entries: &[firemedium_dataset::GridEntry],
+    opts: &LoadOptions,
+) -> firemedium::Result<Option<(String, Dataset)>> {
+    let wanted = a.velocity.as_str();
+    if wanted == "none" {
+        return Ok(None);
+    }
+    let has = |n: &str| entries.iter().any(|g| g.name == n);
+    let vector = |n: &str| {
+        entries
+            .iter()
+            .any(|g| g.name == n && g.kind.starts_with("Tree_vec3s"))
+    };
+    let candidates: Vec<&str> = if wanted == "auto" {
+        firemedium_dataset::vdb::VELOCITY_NAMES.to_vec()
+    } else {
+        vec![wanted]
+    };
+    let found = candidates
+        .into_iter()
+        .find(|b| vector(b) || ["x", "y", "z"].iter().all(|c| has(&format!("{b}.{c}"))));
+    let Some(name) = found else {
+        if wanted == "auto" {
+            return Ok(None);
+        }
+        let names: Vec<&str> = entries.iter().map(|g| g.name.as_str()).collect();
+        return Err(Error::value(format!(
+            "--velocity {wanted}: {} has no vector grid {wanted} nor float grids {wanted}.x, .y, .z (its grids: {})",
+            a.dataset.display(),
+            names.join(", ")
+        )));
+    };
+    let sources: Vec<ChannelSource> = ["x", "y", "z"]
+        .iter()
+        .map(|c| ChannelSource::new(&format!("{name}.{c}"), &a.dataset))
+        .collect();
+    let v = Dataset::load(&sources, opts).map_err(|e| Error::input(e.to_string()))?;
+    Ok(Some((name.to_string(), v)))
+}
+
 /// One frame (`None`: the dataset as named) baked into `out`.
 fn bake(
     a: &BakeArgs,
@@ -114,6 +166,7 @@ fn bake(
     let lattice = Dataset::load(&[ChannelSource::new(&first.name, &a.dataset)], &opts)
         .map_err(|e| Error::input(e.to_string()))?;
     let dims = lattice.dims();
+    let velocity = velocity_of(a, &entries, &opts)?;
     // The fire, through the plugin.
     let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
     params.extend(
@@ -165,7 +218,8 @@ fn bake(
             .max(f64::MIN_POSITIVE)
     });
     let n: usize = dims.iter().product();
-    let bytes = (n as u64).saturating_mul(9 * 4);
+    let grid_count = if velocity.is_some() { 12 } else { 9 };
+    let bytes = (n as u64).saturating_mul(grid_count * 4);
     if bytes > budget {
         return Err(Error::input(format!(
                 "{}: the baked grids of {}×{}×{} voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
@@ -186,7 +240,7 @@ fn bake(
             .map_err(|_| Error::input(format!("bake: {n} voxels: out of memory")))
     };
     let mut grids: Vec<[Vec<f32>; 3]> = Vec::new();
-    for _ in 0..3 {
+    for _ in 0..grid_count / 3 {
         grids.push([zeros()?, zeros()?, zeros()?]);
     }
     let [b0, b1] = [info.bounds_min, info.bounds_max];
@@ -248,7 +302,23 @@ fn bake(
             }
         }
     }
-    let names = ["sigma_a", "sigma_s", "emission"];
+    // The velocity at the same voxel centres, in the dataset's space (its lattice's).
+    if let Some((_, v)) = &velocity {
+        let [l0, _] = lattice.bounds();
+        let step = lattice.voxel_size();
+        for at in 0..n {
+            let (x, y, z) = (
+                at % dims[0],
+                (at / dims[0]) % dims[1],
+                at / (dims[0] * dims[1]),
+            );
+            let p = l0 + glam::DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * step;
+            for k in 0..3 {
+                grids[3][k][at] = v.sample(k, p);
+            }
+        }
+    }
+    let names = ["sigma_a", "sigma_s", "emission", "velocity"];
     let vectors: Vec<firemedium_dataset::vdb::VdbVector> = names
         .iter()
         .zip(&grids)
@@ -271,8 +341,11 @@ fn bake(
         0.0
     };
     let lines = features & firemedium_abi::FM_FEATURE_THICK_LINES != 0;
+    let passed = velocity.as_ref().map_or(String::new(), |(name, _)| {
+        format!("; velocity: the dataset's {name}, as it is (its units), for motion blur")
+    });
     Ok(format!(
-        "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre), {:.1} MB in {:.2} s\n\
+        "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre{passed}), {:.1} MB in {:.2} s\n\
          kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n",
         out.display(),
         dims[0],
