@@ -3,7 +3,8 @@
 //!
 //! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters, docs/params.md), and
 //! asked through the C ABI for σ_a, σ_s and the emission coefficient j in its channels at every voxel centre of
-//! the dataset's lattice. They become three vector grids in the renderer's linear working space (Rec.709/sRGB
+//! the dataset's lattice that its grids hold (its 8³ bricks: sparse in, sparse out — two blobs far apart bake as
+//! two leaves, not the box between them). They become three vector grids in the renderer's linear working space (Rec.709/sRGB
 //! primaries, D65), written as OpenVDB on the dataset's transform:
 //!
 //! - `emission` = the sRGB of j's XYZ (Σ_c j_c · XYZ_c, the plugin's own colour weights): per metre of path, in
@@ -157,14 +158,19 @@ fn bake(
     };
     let entries = firemedium_dataset::list_grids(&a.dataset, &opts)
         .map_err(|e| Error::input(e.to_string()))?;
-    let first = entries.iter().find(|g| g.loadable).ok_or_else(|| {
-        Error::input(format!(
+    // The lattice: the dataset's, over the bricks any of its float grids holds (what the fire can be built from).
+    let sources: Vec<ChannelSource> = entries
+        .iter()
+        .filter(|g| g.loadable)
+        .map(|g| ChannelSource::new(&g.name, &a.dataset))
+        .collect();
+    if sources.is_empty() {
+        return Err(Error::input(format!(
             "{}: no float grid: nothing to bake",
             a.dataset.display()
-        ))
-    })?;
-    let lattice = Dataset::load(&[ChannelSource::new(&first.name, &a.dataset)], &opts)
-        .map_err(|e| Error::input(e.to_string()))?;
+        )));
+    }
+    let lattice = Dataset::load(&sources, &opts).map_err(|e| Error::input(e.to_string()))?;
     let dims = lattice.dims();
     let velocity = velocity_of(a, &entries, &opts)?;
     // The fire, through the plugin.
@@ -217,64 +223,76 @@ fn bake(
             .sum::<f64>()
             .max(f64::MIN_POSITIVE)
     });
-    let n: usize = dims.iter().product();
-    let grid_count = if velocity.is_some() { 12 } else { 9 };
-    let bytes = (n as u64).saturating_mul(grid_count * 4);
+    // Only the bricks the dataset holds are baked (sparse in, sparse out): per brick, a leaf of each grid.
+    let topo = lattice.topology().clone();
+    let off = topo.offset();
+    let mut bricks: Vec<[usize; 3]> = Vec::new();
+    topo.for_each_slot(|b, _| bricks.push(b));
+    bricks.sort_by_key(|b| (b[2], b[1], b[0]));
+    let grid_count: u64 = if velocity.is_some() { 4 } else { 3 };
+    let bytes = (bricks.len() as u64).saturating_mul(grid_count * 3 * 512 * 4);
     if bytes > budget {
         return Err(Error::input(format!(
-                "{}: the baked grids of {}×{}×{} voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
+                "{}: the baked grids' {} bricks of 8³ voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
                 a.dataset.display(),
-                dims[0],
-                dims[1],
-                dims[2]
+                bricks.len()
             ),
         ));
     }
-    let zeros = || {
-        let mut v = Vec::new();
-        v.try_reserve_exact(n)
-            .map(|_| {
-                v.resize(n, 0f32);
-                v
-            })
-            .map_err(|_| Error::input(format!("bake: {n} voxels: out of memory")))
-    };
-    let mut grids: Vec<[Vec<f32>; 3]> = Vec::new();
-    for _ in 0..grid_count / 3 {
-        grids.push([zeros()?, zeros()?, zeros()?]);
-    }
-    let [b0, b1] = [info.bounds_min, info.bounds_max];
-    let voxel = [0, 1, 2].map(|k| (b1[k] - b0[k]) / dims[k] as f64);
+    // The lattice's voxel centres, in the dataset's space — the medium space the plugin builds the fire in.
+    let (l0, step) = (lattice.bounds()[0], lattice.voxel_size());
+    let (b0, voxel) = (l0.to_array(), step.to_array());
     let (mut luminance, mut clipped) = (0.0f64, 0.0f64);
-    // Voxels in chunks of a fixed size per call (the buffers' size does not follow the input's).
-    const CHUNK: usize = 16384;
-    let mut points = vec![[0.0; 3]; CHUNK];
-    let (mut sa, mut ss, mut j) = (
-        vec![0f32; CHUNK * channels],
-        vec![0f32; CHUNK * channels],
-        vec![0f32; CHUNK * channels],
-    );
-    for first in (0..n).step_by(CHUNK) {
-        let m = CHUNK.min(n - first);
-        for (i, p) in points[..m].iter_mut().enumerate() {
-            let v = first + i;
-            let (x, y, z) = (
-                v % dims[0],
-                (v / dims[0]) % dims[1],
-                v / (dims[0] * dims[1]),
-            );
-            *p = [
-                b0[0] + (x as f64 + 0.5) * voxel[0],
-                b0[1] + (y as f64 + 0.5) * voxel[1],
-                b0[2] + (z as f64 + 0.5) * voxel[2],
-            ];
+    // Per grid, its leaves: origin (output index space, sample i at i + off), active mask, 3 × 512 values.
+    let mut leaves: Vec<Vec<firemedium_dataset::vdb::VdbLeaf>> =
+        vec![Vec::new(); grid_count as usize];
+    // Bricks in batches of a fixed number of voxels per call (the buffers' size does not follow the input's).
+    const BATCH: usize = 32;
+    let mut points = Vec::with_capacity(BATCH * 512);
+    let mut places: Vec<(usize, usize)> = Vec::with_capacity(BATCH * 512);
+    let cap = BATCH * 512 * channels;
+    let (mut sa, mut ss, mut j) = (vec![0f32; cap], vec![0f32; cap], vec![0f32; cap]);
+    for batch in bricks.chunks(BATCH) {
+        let first_leaf = leaves[0].len();
+        points.clear();
+        places.clear();
+        for (bi, b) in batch.iter().enumerate() {
+            for lv in leaves.iter_mut() {
+                lv.push((b.map(|c| 8 * c as i32), [0u64; 8], vec![0f32; 3 * 512]));
+            }
+            for i in 0..512 {
+                // (The writer's order: z fastest.)
+                let l = [i >> 6, (i >> 3) & 7, i & 7];
+                let v = [0, 1, 2].map(|a| (8 * b[a] + l[a]).checked_sub(off[a]));
+                let [Some(x), Some(y), Some(z)] = v else {
+                    continue;
+                };
+                if x >= dims[0] || y >= dims[1] || z >= dims[2] {
+                    continue;
+                }
+                let centre = [
+                    b0[0] + (x as f64 + 0.5) * voxel[0],
+                    b0[1] + (y as f64 + 0.5) * voxel[1],
+                    b0[2] + (z as f64 + 0.5) * voxel[2],
+                ];
+                points.push(centre);
+                places.push((first_leaf + bi, i));
+                if let Some((_, vel)) = &velocity {
+                    let p = glam::DVec3::from_array(centre);
+                    let leaf = &mut leaves[3][first_leaf + bi];
+                    for k in 0..3 {
+                        leaf.2[3 * i + k] = vel.sample(k, p);
+                    }
+                }
+            }
         }
-        let c = m * channels;
+        let (m, c) = (points.len(), points.len() * channels);
         volume
-            .coefficients(&points[..m], &mut sa[..c], &mut ss[..c], &mut j[..c])
+            .coefficients(&points, &mut sa[..c], &mut ss[..c], &mut j[..c])
             .map_err(|e| Error::input(e.to_string()))?;
-        for i in 0..m {
-            let row = &j[i * channels..(i + 1) * channels];
+        for q in 0..m {
+            let (leaf, i) = places[q];
+            let row = &j[q * channels..(q + 1) * channels];
             let mut e = [0.0f64; 3];
             let mut y_lum = 0.0;
             for (c, v) in row.iter().enumerate() {
@@ -287,47 +305,38 @@ fn bake(
                 0.2126 * e[0].max(0.0) + 0.7152 * e[1].max(0.0) + 0.0722 * e[2].max(0.0);
             luminance += y_lum;
             clipped += y_lum - clipped_y;
-            let at = first + i;
             for k in 0..3 {
-                grids[2][k][at] = e[k] as f32;
+                leaves[2][leaf].2[3 * i + k] = e[k] as f32;
                 for (g, src) in [(0, &sa), (1, &ss)] {
-                    let row = &src[i * channels..(i + 1) * channels];
+                    let row = &src[q * channels..(q + 1) * channels];
                     let s: f64 = row
                         .iter()
                         .zip(&channel_rgb)
                         .map(|(v, c)| *v as f64 * c[k].max(0.0))
                         .sum();
-                    grids[g][k][at] = (s / weight_sum[k]) as f32;
+                    leaves[g][leaf].2[3 * i + k] = (s / weight_sum[k]) as f32;
                 }
             }
         }
     }
-    // The velocity at the same voxel centres, in the dataset's space (its lattice's).
-    if let Some((_, v)) = &velocity {
-        let [l0, _] = lattice.bounds();
-        let step = lattice.voxel_size();
-        for at in 0..n {
-            let (x, y, z) = (
-                at % dims[0],
-                (at / dims[0]) % dims[1],
-                at / (dims[0] * dims[1]),
-            );
-            let p = l0 + glam::DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * step;
-            for k in 0..3 {
-                grids[3][k][at] = v.sample(k, p);
+    // A voxel is active where a component is non-zero; a leaf with none is left out.
+    for lv in leaves.iter_mut() {
+        for (_, mask, vals) in lv.iter_mut() {
+            for i in 0..512 {
+                if vals[3 * i..3 * i + 3].iter().any(|&v| v != 0.0) {
+                    mask[i / 64] |= 1 << (i % 64);
+                }
             }
         }
+        lv.retain(|(_, mask, _)| mask.iter().any(|&w| w != 0));
     }
     let names = ["sigma_a", "sigma_s", "emission", "velocity"];
-    let vectors: Vec<firemedium_dataset::vdb::VdbVector> = names
-        .iter()
-        .zip(&grids)
-        .map(|(name, g)| (*name, dims, [&g[0][..], &g[1][..], &g[2][..]]))
-        .collect();
-    let bytes = firemedium_dataset::vdb::write_with_vectors(
-        &[],
-        &vectors,
-        glam::DVec3::from_array(b0),
+    let grids: Vec<(&str, Vec<firemedium_dataset::vdb::VdbLeaf>)> =
+        names.iter().copied().zip(leaves).collect();
+    let origin = [0, 1, 2].map(|k| b0[k] - off[k] as f64 * voxel[k]);
+    let bytes = firemedium_dataset::vdb::write_sparse_vectors(
+        &grids,
+        glam::DVec3::from_array(origin),
         glam::DVec3::from_array(voxel),
     );
     firemedium::imageio::write_atomic(out, |tmp| {

@@ -623,7 +623,8 @@ pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Ve
 
 mod write;
 pub use write::{
-    write, write_sparse, write_tiled, write_with_vectors, VdbLeaf, VdbTile, VdbVector,
+    write, write_sparse, write_sparse_vectors, write_tiled, write_with_vectors, VdbLeaf, VdbTile,
+    VdbVector,
 };
 
 #[cfg(test)]

@@ -99,6 +99,16 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
     write_grids(&all, p0, voxel)
 }
 
+/// As [`write_sparse`], for vector grids (`Tree_vec3s_5_4_3`): each leaf's values are 3 × 512, a voxel's x, y
+/// and z together (z fastest over the voxels, as [`VdbLeaf`]'s).
+pub fn write_sparse_vectors(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+    let all: Vec<WriteGrid> = grids
+        .iter()
+        .map(|(name, leaves)| (*name, 3, leaves.clone(), Vec::new()))
+        .collect();
+    write_grids(&all, p0, voxel)
+}
+
 /// An active constant tile: origin (a multiple of its size), size (8: a tile of a 4-level node, 128: of a
 /// 5-level node), value.
 pub type VdbTile = ([i32; 3], i32, f32);
