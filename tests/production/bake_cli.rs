@@ -260,7 +260,10 @@ fn a_sparse_dataset_bakes_sparse() {
     let bytes = firemedium_dataset::vdb::write_sparse(
         &[
             ("density", vec![leaf([0, 0, 0], 1.0), leaf(far, 1.0)]),
-            ("temperature", vec![leaf([0, 0, 0], 1600.0), leaf(far, 1600.0)]),
+            (
+                "temperature",
+                vec![leaf([0, 0, 0], 1600.0), leaf(far, 1600.0)],
+            ),
         ],
         DVec3::ZERO,
         DVec3::splat(0.01),
@@ -287,7 +290,10 @@ fn a_sparse_dataset_bakes_sparse() {
     // Each blob glows, at the same level: the same soot at the same temperature.
     let at = |v: [f64; 3]| baked.sample(0, DVec3::from_array(v));
     let (near, far) = (at([0.04, 0.04, 0.04]), at([80.04, 80.04, 80.04]));
-    assert!(near > 0.0 && (far / near - 1.0).abs() < 1e-6, "{near} {far}");
+    assert!(
+        near > 0.0 && (far / near - 1.0).abs() < 1e-6,
+        "{near} {far}"
+    );
     let size = std::fs::metadata(&out).unwrap().len();
     // (Each far leaf costs its own path of internal nodes, whose tables OpenVDB stores whole: 1.8 MB, not the
     // box's terabytes.)

@@ -201,7 +201,7 @@ typedef void FmLight;
 
 typedef struct FmLightInfo {
     size_t struct_size; /* sizeof(FmLightInfo), set by the host */
-    double power_w;  /* whole spectrum, W */
+    double power_w;  /* whole spectrum, W (soot, atoms; the blue core whole; over the bins for an emission grid, tint or ramp) */
     double power_lm; /* over the bins, lm */
     uint64_t voxels;
     uint64_t bytes;

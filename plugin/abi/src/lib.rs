@@ -223,7 +223,9 @@ pub const FM_WEIGHTING_ESCAPING: u32 = 2;
 pub struct FmLightInfo {
     /// Set by the host to `size_of::<FmLightInfo>()`.
     pub struct_size: usize,
-    /// Emitted power over the whole spectrum, W (pbrt mode: over the bins, relative units).
+    /// Emitted power over the whole spectrum, W: the soot's and the atoms' over all wavelengths, the blue core's
+    /// bands whole (over the bins — relative units in pbrt mode — only where the emission does not follow the
+    /// physics: an emission grid, a tint or a colour ramp).
     pub power_w: f64,
     /// Luminous power over the bins, lm.
     pub power_lm: f64,

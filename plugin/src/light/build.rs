@@ -202,6 +202,9 @@ impl FireLight {
                                         v += nn * s.intensity * line_power(e, t);
                                     }
                                 }
+                                if let Some((ch, per_unit)) = s.reaction {
+                                    v += at(ch).max(0.0) as f64 * per_unit;
+                                }
                                 v
                             }
                         };

@@ -217,6 +217,58 @@ fn thin_grey_sphere_radiates_four_kappa_sigma_t4_v() {
     );
 }
 
+#[test]
+fn the_blue_core_adds_its_chemiluminescence_to_the_full_spectrum_power() {
+    // Soot at 1500 K and a reaction zone releasing 1e7 W/m³ in a 16³ box: with the blue core, the light's power
+    // is the soot's full-spectrum power plus the chemiluminescent fraction (1e-4) of the heat released — never
+    // the power over the bins alone (it was: 9 kW of soot read as 65 W).
+    let n = 16usize;
+    let h = 0.01;
+    let dens = vec![1e-7f32; n * n * n];
+    let temp = vec![1500f32; n * n * n];
+    let mut react = vec![0f32; n * n * n];
+    for (i, r) in react.iter_mut().enumerate() {
+        if (i % n) < 8 {
+            *r = 1e7;
+        }
+    }
+    let bytes = crate::dataset::vdb::write(
+        &[
+            ("density", [n; 3], &dens),
+            ("temperature", [n; 3], &temp),
+            ("reaction", [n; 3], &react),
+        ],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(h),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-corepower-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("core.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let power = |core: bool| {
+        let mut list = vec![
+            Param::string("filename", &file.display().to_string()),
+            Param::string("interpolation", "nearest"),
+        ];
+        if core {
+            list.push(Param::string("reactiongrid", "reaction"));
+            list.push(Param::float("chemiluminescence", 1e-4));
+        }
+        let vol = Arc::new(FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}")));
+        FireLight::new(vol, Weighting::Power).unwrap().power_w()
+    };
+    let (soot, both) = (power(false), power(true));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let released = 1e7 * (n * n * n / 2) as f64 * h * h * h;
+    let want = soot + 1e-4 * released;
+    assert!(soot > 1e-4 * released, "{soot} W of soot");
+    assert!(
+        (both / want - 1.0).abs() < 1e-9,
+        "{both} W with the core, want {soot} + {} W",
+        1e-4 * released
+    );
+}
+
 fn vol_kappa(vol: &FireVolume) -> f64 {
     let c = vol.channels();
     let (mut a, mut s, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);

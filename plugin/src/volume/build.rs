@@ -177,8 +177,12 @@ impl FireVolume {
                 sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
                 j: tables::TTable::build(0.0, c, &|_| shape.clone()),
             });
-            // (The light's full-spectrum power follows the soot and atoms: with the blue core, over the bins.)
-            co.source = None;
+            // (The light's full-spectrum power: the soot's and atoms' over the spectrum, the blue core's over the
+            // bins, which hold its bands whole.)
+            if let Some(src) = co.source.as_mut() {
+                // (Its spectrum integrates to 1: one unit emits the channel's scale, W m⁻³ sr⁻¹.)
+                src.reaction = Some((ch, set.chemiluminescence / (4.0 * std::f64::consts::PI)));
+            }
         }
         if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {
             return Err(Error::invalid(

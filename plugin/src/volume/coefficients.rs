@@ -125,6 +125,7 @@ pub(super) fn physical(
             .zip(&species)
             .map(|((_, e, _), sp)| (e.clone(), sp.ch, sp.scale))
             .collect(),
+        reaction: None,
     });
     let s = match sigma_s {
         Some(f) => basis.absorb(&|l| smokescale * f(l)),

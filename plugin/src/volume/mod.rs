@@ -118,6 +118,9 @@ pub(crate) struct Source {
     pub intensity: f64,
     /// (element, channel index, m⁻³ per unit).
     pub species: Vec<(Element, usize, f64)>,
+    /// The blue core (a reaction grid): its channel and the power one unit of it emits per unit volume and
+    /// solid angle, W m⁻³ sr⁻¹ — over the bins, which hold its CH* and C₂* bands whole.
+    pub reaction: Option<(usize, f64)>,
 }
 
 /// What a volume holds beyond absorption ([`FireVolume::features`]).
