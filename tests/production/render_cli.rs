@@ -2535,3 +2535,38 @@ fn degenerate_geometry_builds_in_n_log_n() {
         );
     }
 }
+
+#[test]
+fn an_output_that_cannot_be_written_fails_before_the_scene_is_loaded() {
+    // A missing folder, a folder named as the image, a "folder" that is a file: each refused at once, naming the
+    // path, before any loading or rendering — the scene here would take minutes, and its dataset does not even
+    // exist, so only an early check can give this message.
+    let dir = tmp("unwritable");
+    std::fs::write(dir.join("plain.txt"), "not a folder").unwrap();
+    std::fs::write(
+        dir.join("slow.pbrt"),
+        "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4000 \"integer yresolution\" 4000\nSampler \"independent\" \"integer pixelsamples\" 100000\nWorldBegin\nMakeNamedMedium \"f\" \"string type\" \"fire\" \"string dataset\" \"missing.vdb\"\n",
+    )
+    .unwrap();
+    for (out, says) in [
+        ("nowhere/fire.exr", "does not exist"),
+        (".", "is a folder"),
+        ("plain.txt/fire.exr", "does not exist"),
+    ] {
+        let o = firemedium_in(&dir, &["render", "slow.pbrt", "-q", "-o", out]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{out}: {err}");
+        assert!(err.contains(out.trim_end_matches("/fire.exr")) && err.contains(says), "{out}: {err}");
+        assert!(!err.contains("missing.vdb"), "{out}: the scene was loaded first: {err}");
+    }
+    // Without -o, the film's own name is checked after the scene is read and before the render.
+    std::fs::write(
+        dir.join("film.pbrt"),
+        "Camera \"perspective\"\nFilm \"rgb\" \"string filename\" \"gone/out.exr\" \"integer xresolution\" 4000 \"integer yresolution\" 4000\nSampler \"independent\" \"integer pixelsamples\" 100000\nWorldBegin\nLightSource \"infinite\"\n",
+    )
+    .unwrap();
+    let o = firemedium_in(&dir, &["render", "film.pbrt", "-q"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("gone/out.exr") && err.contains("does not exist"), "{err}");
+}

@@ -197,6 +197,36 @@ fn partial(path: &Path) -> PathBuf {
     path.with_file_name(format!("{stem}.partial{ext}"))
 }
 
+/// An error unless a file can be written at `path`: its folder exists and takes a new file (a probe, created and
+/// removed), and `path` is not a folder.
+fn writable(path: &Path) -> firemedium::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if path.is_dir() {
+        return Err(Error::file(path.display(), "is a folder: expected a file name to write the image to"));
+    }
+    if !dir.is_dir() {
+        return Err(Error::file(
+            path.display(),
+            format!("cannot write the image: its folder {} does not exist", dir.display()),
+        ));
+    }
+    let probe = dir.join(format!(".firemedium-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(Error::file(
+            path.display(),
+            format!("cannot write the image in {}: {e}", dir.display()),
+        )),
+    }
+}
+
 /// Whether the EXR at `path` is a finished frame: it reads whole (every pixel), and its record does not say it
 /// is incomplete (renders before the record said so are taken as complete when they read whole).
 fn finished(path: &Path) -> firemedium::Result<()> {
@@ -370,11 +400,21 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         }
         None
     };
-    // (With `-o`, a frame left out is not even loaded.)
+    // (With `-o`, a frame left out is not even loaded, and an output that cannot be written is said before the
+    // scene is.)
+    if let Some(o) = a.output.as_deref().filter(|o| o.is_dir()) {
+        return Err(Error::file(
+            o.display(),
+            "is a folder: -o takes the image's file name (say, renders/fire.exr)",
+        ));
+    }
     if a.output.is_some() {
-        if let Some(skipped) = exists(&named(None)?.0) {
+        let (exr, png) = named(None)?;
+        if let Some(skipped) = exists(&exr) {
             return Ok(skipped);
         }
+        writable(&exr)?;
+        writable(&png)?;
     }
     let load_start = std::time::Instant::now();
     let sc = scene::load(&a.scene, &ov)?;
@@ -382,6 +422,9 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     if let Some(skipped) = exists(&exr) {
         return Ok(skipped);
     }
+    // (Before the render: an hour of work must not end in "cannot write".)
+    writable(&exr)?;
+    writable(&png)?;
     let seed = a.seed.unwrap_or(sc.seed);
     let seed = frame.map_or(seed, |f| frame_seed(seed, f));
     let load_seconds = load_start.elapsed().as_secs_f64();
