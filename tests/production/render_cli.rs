@@ -2556,8 +2556,14 @@ fn an_output_that_cannot_be_written_fails_before_the_scene_is_loaded() {
         let o = firemedium_in(&dir, &["render", "slow.pbrt", "-q", "-o", out]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{out}: {err}");
-        assert!(err.contains(out.trim_end_matches("/fire.exr")) && err.contains(says), "{out}: {err}");
-        assert!(!err.contains("missing.vdb"), "{out}: the scene was loaded first: {err}");
+        assert!(
+            err.contains(out.trim_end_matches("/fire.exr")) && err.contains(says),
+            "{out}: {err}"
+        );
+        assert!(
+            !err.contains("missing.vdb"),
+            "{out}: the scene was loaded first: {err}"
+        );
     }
     // Without -o, the film's own name is checked after the scene is read and before the render.
     std::fs::write(
@@ -2568,5 +2574,43 @@ fn an_output_that_cannot_be_written_fails_before_the_scene_is_loaded() {
     let o = firemedium_in(&dir, &["render", "film.pbrt", "-q"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("gone/out.exr") && err.contains("does not exist"), "{err}");
+    assert!(
+        err.contains("gone/out.exr") && err.contains("does not exist"),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_types_and_pbrt_v3_names_are_refused_with_what_pbrt_v4_calls_them() {
+    // Each of these rendered (exit 0, no message) or stopped at the first of many v3 names without a word on
+    // what pbrt-v4 calls it: now an error at the statement, naming pbrt-v4's name where pbrt-v3 had another.
+    let dir = tmp("v3");
+    let cases = [
+        ("Film \"image\"\nWorldBegin\n", "2:1", "pbrt-v3's film \"image\" is pbrt-v4's \"rgb\""),
+        ("Film \"bogusfilm\"\nWorldBegin\n", "2:1", "not a pbrt-v4 film (rgb, gbuffer, spectral)"),
+        ("Integrator \"bogus\"\nWorldBegin\n", "2:1", "not a pbrt-v4 integrator"),
+        ("Integrator \"directlighting\"\nWorldBegin\n", "2:1", "pbrt-v4's \"volpath\" with \"integer maxdepth\" 1"),
+        ("WorldBegin\nMaterial \"matte\"\nShape \"sphere\"\n", "3:1", "pbrt-v3's material \"matte\" is pbrt-v4's \"diffuse\""),
+        ("WorldBegin\nMaterial \"diffuse\" \"color Kd\" [.5 .5 .5]\nShape \"sphere\"\n", "3:20", "pbrt-v3's \"Kd\" is pbrt-v4's \"reflectance\""),
+        ("WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"heterogeneous\"\n", "3:1", "pbrt-v4's \"uniformgrid\""),
+        (
+            "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\"\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n",
+            "4:1",
+            "a medium of that name is already defined",
+        ),
+    ];
+    for (body, at, says) in cases {
+        std::fs::write(
+            dir.join("s.pbrt"),
+            format!("Camera \"perspective\"\n{body}"),
+        )
+        .unwrap();
+        let o = firemedium_in(&dir, &["render", "s.pbrt", "-q"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{body}: {err}");
+        assert!(
+            err.contains(&format!("s.pbrt:{at}: ")) && err.contains(says),
+            "{body}: {err}"
+        );
+    }
 }

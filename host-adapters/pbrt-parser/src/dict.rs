@@ -102,6 +102,9 @@ impl<'a> ParamDict<'a> {
                 ));
             } else {
                 let hint = match closest(&p.name, pbrt) {
+                    _ if crate::v3::parameter_hint(&p.name).is_some() => {
+                        crate::v3::parameter_hint(&p.name).unwrap_or_default()
+                    }
                     Some(n) => format!(" (did you mean \"{n}\"?)"),
                     None if pbrt.is_empty() => " (it takes none)".to_string(),
                     None => format!(" (pbrt-v4 reads: {})", pbrt.join(", ")),

@@ -14,6 +14,7 @@
 mod dict;
 mod parser;
 mod tokenizer;
+pub mod v3;
 
 pub use dict::{closest, ParamDict};
 

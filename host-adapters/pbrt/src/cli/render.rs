@@ -205,16 +205,26 @@ fn writable(path: &Path) -> firemedium::Result<()> {
         _ => Path::new("."),
     };
     if path.is_dir() {
-        return Err(Error::file(path.display(), "is a folder: expected a file name to write the image to"));
+        return Err(Error::file(
+            path.display(),
+            "is a folder: expected a file name to write the image to",
+        ));
     }
     if !dir.is_dir() {
         return Err(Error::file(
             path.display(),
-            format!("cannot write the image: its folder {} does not exist", dir.display()),
+            format!(
+                "cannot write the image: its folder {} does not exist",
+                dir.display()
+            ),
         ));
     }
     let probe = dir.join(format!(".firemedium-probe-{}", std::process::id()));
-    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
         Ok(_) => {
             let _ = std::fs::remove_file(&probe);
             Ok(())

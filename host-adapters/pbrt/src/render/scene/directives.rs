@@ -8,6 +8,7 @@ use crate::render::pixel::{Filter, Params as FilterParams, Sampler};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::S;
 use firemedium_core::rgb_spectrum::RgbUse;
+use firemedium_pbrt_parser::v3;
 use firemedium_pbrt_parser::{Directive, Loc, ParamDict};
 use glam::{DMat3, DMat4, DVec3, Mat3A, Vec3A};
 use std::sync::Arc;
@@ -132,6 +133,9 @@ impl Builder {
             }
             Directive::Film(ty, params) => {
                 let p = &ParamDict::new(&params);
+                if !["rgb", "gbuffer", "spectral"].contains(&ty.as_str()) {
+                    return Err(err(loc, format!("film \"{ty}\" is not a pbrt-v4 film (rgb, gbuffer, spectral){}", v3::type_hint("film", &ty))));
+                }
                 // pbrt-v4's gbuffer film: the visible surface's channels beside R, G, B, in camera or world space.
                 self.gbuffer = None;
                 if ty == "gbuffer" {
@@ -270,6 +274,11 @@ impl Builder {
                 self.finish(Kind::Sampler, &ty, &format!("sampler \"{ty}\""), p)?;
             }
             Directive::Integrator(ty, params) => {
+                // pbrt-v4's integrators: all rendered with volpath (a warning); anything else is an error.
+                const PBRT_V4: [&str; 10] = ["volpath", "path", "bdpt", "mlt", "sppm", "simplepath", "simplevolpath", "randomwalk", "lightpath", "ambientocclusion"];
+                if !PBRT_V4.contains(&ty.as_str()) {
+                    return Err(err(loc, format!("integrator \"{ty}\" is not a pbrt-v4 integrator ({}){}", PBRT_V4.join(", "), v3::type_hint("integrator", &ty))));
+                }
                 if ty != "volpath" && ty != "path" {
                     self.warn(loc, format!("integrator \"{ty}\" is rendered with volpath"));
                 }
@@ -511,6 +520,10 @@ impl Builder {
             }
             Directive::MakeNamedMedium(name, params) => {
                 let p = &ParamDict::new(&params);
+                // (pbrt-v4 refuses a redefinition too: the second would silently replace the first.)
+                if self.named_media.contains_key(&name) {
+                    return Err(err(loc, format!("MakeNamedMedium \"{name}\": a medium of that name is already defined; give each medium its own name")));
+                }
                 self.medium(&name, p, loc)?;
                 let ty = string(p, "type").unwrap_or("");
                 self.finish(Kind::Medium, ty, &format!("{ty} medium \"{name}\""), p)?;

@@ -262,7 +262,7 @@ impl Builder {
                 }
             }
             other => {
-                return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission, mix, interface)")));
+                return Err(err(loc, format!("material \"{other}\" is not supported (diffuse, coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission, mix, interface){}", firemedium_pbrt_parser::v3::type_hint("material", other))));
             }
         };
         self.materials.push(m);

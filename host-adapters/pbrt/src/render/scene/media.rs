@@ -445,7 +445,7 @@ impl Builder {
                 Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
-            other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous)"))),
+            other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous, rgbgrid, cloud){}", firemedium_pbrt_parser::v3::type_hint("medium", other)))),
         };
         self.named_media.insert(name.to_string(), self.media.len());
         self.media.push(m);
