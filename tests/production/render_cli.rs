@@ -2614,3 +2614,53 @@ fn unknown_types_and_pbrt_v3_names_are_refused_with_what_pbrt_v4_calls_them() {
         );
     }
 }
+
+#[test]
+fn a_fire_clipped_swapped_or_behind_the_camera_is_warned_about() {
+    // Three scenes that render without an error but not the fire they mean, each warned about at its medium's
+    // statement: shapes that cut the data, a MediumInterface with inside and outside swapped, and a camera inside
+    // the fire's shapes without being in the medium (pbrt-v4's semantics: its rays never enter it). The scene as
+    // meant says nothing.
+    let dir = tmp("boundary");
+    let dataset = crate::common::root().join("scenes/campfire/campfire.vdb");
+    let scene = |eye: &str, interface: &str, top: f64| {
+        let box_ = format!(
+            "[ -0.6 -0.6 0.005 0.6 -0.6 0.005 -0.6 0.6 0.005 0.6 0.6 0.005 -0.6 -0.6 {top} 0.6 -0.6 {top} -0.6 0.6 {top} 0.6 0.6 {top} ]"
+        );
+        format!(
+            "LookAt {eye}  0 0 0.8  0 0 1\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{}\"\nAttributeBegin\nMediumInterface {interface}\nMaterial \"interface\"\nShape \"trianglemesh\" \"point3 P\" {box_} \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]\nAttributeEnd\n",
+            dataset.display()
+        )
+    };
+    let cases = [
+        (scene("0 -4 0.8", "\"fire\" \"\"", 1.6), None),
+        (
+            scene("0 -4 0.8", "\"fire\" \"\"", 1.0),
+            Some("beyond the shapes that bound it"),
+        ),
+        (
+            scene("0 -4 0.8", "\"\" \"fire\"", 1.6),
+            Some("MediumInterface takes the inside medium first"),
+        ),
+        (
+            scene("0 -0.2 0.8", "\"fire\" \"\"", 1.6),
+            Some("the camera is inside the shapes bounding medium \"fire\""),
+        ),
+    ];
+    for (text, says) in cases {
+        std::fs::write(dir.join("s.pbrt"), &text).unwrap();
+        let o = firemedium_in(&dir, &["render", "s.pbrt", "-o", "s.exr"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let warnings: Vec<&str> = err.lines().filter(|l| l.contains("warning")).collect();
+        match says {
+            None => assert!(warnings.is_empty(), "{warnings:?}"),
+            Some(s) => assert!(
+                warnings.len() == 1
+                    && warnings[0].starts_with("s.pbrt:6:1: warning: ")
+                    && warnings[0].contains(s),
+                "{s}: {warnings:?}"
+            ),
+        }
+    }
+}

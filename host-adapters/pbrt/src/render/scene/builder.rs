@@ -68,6 +68,8 @@ pub(super) struct Builder {
     pub(super) prims: Vec<Prim>,
     pub(super) lights: Vec<Light>,
     pub(super) media: Vec<Medium>,
+    /// Where each medium was defined (for what is found about it once the scene is built).
+    pub(super) media_locs: Vec<Loc>,
     pub(super) media_reports: Vec<MediumReport>,
     /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
     pub(super) camera: Option<CameraDirective>,

@@ -3,7 +3,8 @@
 //! film's, and what a medium needs when the renderer tracks it itself (`--tracking host`).
 
 use super::builder::{affine, num, nums, string, Builder};
-use super::{err, Error, Medium, MediumReport};
+use super::{err, Camera, Error, Medium, MediumReport};
+use crate::render::shapes::Bvh;
 use crate::render::spectrum::S;
 use firemedium_core::rgb_spectrum::RgbUse;
 use firemedium_loader::{Param as LParam, Plugin, Value, Volume};
@@ -449,6 +450,7 @@ impl Builder {
         };
         self.named_media.insert(name.to_string(), self.media.len());
         self.media.push(m);
+        self.media_locs.push(loc.clone());
         Ok(())
     }
 }
@@ -519,6 +521,89 @@ pub fn load_plugin(path: Option<&Path>) -> Result<Plugin, firemedium_loader::Err
         // SAFETY: the file the user's environment names, or the plugin built beside this executable.
         None => unsafe { Plugin::from_env() },
     }
+}
+
+/// What a built scene shows about a plugin medium that its statements could not: the camera inside its shapes
+/// without being in the medium (pbrt-v4's semantics: the fire is not seen from there), shapes smaller than its
+/// data (the fire clipped), and the medium only ever outside its shapes while its data lies inside them (the
+/// MediumInterface's inside and outside swapped).
+pub(super) fn boundary_warnings(
+    medium: &Medium,
+    bvh: &Bvh,
+    m: usize,
+    shapes: Option<&obvhs::aabb::Aabb>,
+    camera: &Camera,
+) -> Vec<String> {
+    let (
+        Medium::Plugin {
+            vol,
+            to_world,
+            name,
+            ..
+        },
+        Some(shapes),
+    ) = (medium, shapes)
+    else {
+        return Vec::new();
+    };
+    let info = vol.info();
+    // The data's box in the world: its medium-space bounds' corners placed.
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for c in 0..8 {
+        let corner = DVec3::new(
+            if c & 1 == 0 {
+                info.bounds_min[0]
+            } else {
+                info.bounds_max[0]
+            },
+            if c & 2 == 0 {
+                info.bounds_min[1]
+            } else {
+                info.bounds_max[1]
+            },
+            if c & 4 == 0 {
+                info.bounds_min[2]
+            } else {
+                info.bounds_max[2]
+            },
+        );
+        let w = to_world.transform_point3(corner);
+        lo = lo.min(w);
+        hi = hi.max(w);
+    }
+    let (slo, shi) = (shapes.min.as_dvec3(), shapes.max.as_dvec3());
+    let mut out = Vec::new();
+    let (inside, outside) =
+        bvh.prims
+            .iter()
+            .filter_map(|p| p.media)
+            .fold((0, 0), |(i, o), (pi, po)| {
+                (
+                    i + usize::from(pi == Some(m)),
+                    o + usize::from(po == Some(m)),
+                )
+            });
+    let centre = 0.5 * (lo + hi);
+    let holds = |p: DVec3| (0..3).all(|a| p[a] > slo[a] && p[a] < shi[a]);
+    if inside == 0 && outside > 0 && holds(centre) {
+        out.push(format!("medium \"{name}\" is only ever the outside of the shapes that name it, while its data lies inside them: MediumInterface takes the inside medium first (MediumInterface \"{name}\" \"\")"));
+    }
+    let tolerance = 0.01 * (hi - lo).max_element();
+    if inside > 0 && (0..3).any(|a| lo[a] < slo[a] - tolerance || hi[a] > shi[a] + tolerance) {
+        out.push(format!(
+            "medium \"{name}\": its data reaches ({:.3}, {:.3}, {:.3}) … ({:.3}, {:.3}, {:.3}), beyond the shapes that bound it ({:.3}, {:.3}, {:.3}) … ({:.3}, {:.3}, {:.3}): the fire is cut where they end",
+            lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, slo.x, slo.y, slo.z, shi.x, shi.y, shi.z
+        ));
+    }
+    let eye = camera.to_world.translation;
+    if camera.medium != Some(m)
+        && inside > 0
+        && holds(eye)
+        && (0..3).all(|a| eye[a] > lo[a] && eye[a] < hi[a])
+    {
+        out.push(format!("the camera is inside the shapes bounding medium \"{name}\" but not in the medium: its rays start outside it and cross no boundary into it, so the fire is missing from where it stands (a MediumInterface \"\" \"{name}\" before Camera puts the camera in it)"));
+    }
+    out
 }
 
 /// When species `sym`'s lines outside the bins `lo`–`hi` nm carry more than a tenth of its visible line emission

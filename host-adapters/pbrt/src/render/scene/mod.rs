@@ -7,7 +7,7 @@ mod builder;
 mod directives;
 mod materials;
 mod media;
-use media::light_params;
+use media::{boundary_warnings, light_params};
 pub use media::{load_plugin, typed_params};
 
 use super::pbrt_v4::Kind;
@@ -546,6 +546,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         prims: Vec::new(),
         lights: Vec::new(),
         media: Vec::new(),
+        media_locs: Vec::new(),
         media_reports: Vec::new(),
         camera: None,
         res: (1280, 720),
@@ -773,7 +774,12 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
         spp = spp.next_power_of_two();
     }
     let bvh = Bvh::new(b.prims);
-    let media_boxes = (0..b.media.len()).map(|m| bvh.media_box(m)).collect();
+    let media_boxes: Vec<_> = (0..b.media.len()).map(|m| bvh.media_box(m)).collect();
+    for (m, (medium, loc)) in b.media.iter().zip(&b.media_locs).enumerate() {
+        for w in boundary_warnings(medium, &bvh, m, media_boxes[m].as_ref(), &camera) {
+            b.warnings.push(format!("{loc}: warning: {w}"));
+        }
+    }
     Ok(Scene {
         bins,
         bvh,
