@@ -24,6 +24,7 @@ mod production {
     mod gen_cli;
     mod info_cli;
     mod render_cli;
+    mod scene_cli;
     mod sparse_fire;
     mod tonemap_cli;
 }

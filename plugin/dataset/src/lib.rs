@@ -38,6 +38,7 @@ mod options;
 pub mod par;
 pub mod particles;
 pub mod raw;
+mod source;
 mod sparse;
 mod text;
 pub mod vdb;
@@ -54,6 +55,7 @@ pub use error::{short, Error};
 pub use files::{as_text, open_regular, read_file};
 pub use files::{format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
+pub use source::looks_like;
 
 /// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
 pub const HOUDINI_KELVIN: f64 = 5000.0;

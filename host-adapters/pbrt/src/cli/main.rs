@@ -20,6 +20,7 @@ mod info;
 mod merge;
 mod physics;
 mod render;
+mod scene;
 mod tonemap;
 
 use clap::{Parser, Subcommand};
@@ -45,6 +46,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Render a pbrt-v4 scene (fire media through the plugin) to EXR and a PNG preview.
     Render(render::RenderArgs),
+    /// A starter pbrt-v4 scene around a fire dataset: its box fitted to the data, a camera framing it, a ground.
+    Scene(scene::SceneArgs),
     /// Error of renders against a reference over the pixels that see a surface (luminance MSE).
     Compare(compare::CompareArgs),
     /// Assemble the tiles of one render (`render --cropwindow`/`--pixelbounds`) into the full frame.
@@ -81,7 +84,7 @@ fn main() -> ExitCode {
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
                 eprintln!(
-                    "firemedium: a subcommand is required (render, merge, diff, farm, tonemap, compare, gen, bake, info, physics, bench); see 'firemedium --help'"
+                    "firemedium: a subcommand is required (render, scene, merge, diff, farm, tonemap, compare, gen, bake, info, physics, bench); see 'firemedium --help'"
                 );
                 return ExitCode::from(2);
             }
@@ -96,6 +99,7 @@ fn main() -> ExitCode {
         Command::Physics(args) => physics::run(&args),
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Scene(args) => scene::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Diff(args) => diff::run(&args),
