@@ -146,7 +146,12 @@ fn a_fire_with_a_far_away_copy_renders_in_the_memory_of_two_fires() {
         .output()
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && !e.contains("warning"), "{e}");
+    // (The box bounds the near fire only, on purpose: the far copy's data lies beyond it, which is said.)
+    let others = e
+        .lines()
+        .filter(|l| l.contains("warning") && !l.contains("beyond the shapes that bound it"))
+        .count();
+    assert!(o.status.success() && others == 0, "{e}");
     // What the plugin says it stored: the two blobs' bricks, not the box.
     let info = Command::new(crate::common::exe("firemedium"))
         .args(["info", "--json"])
@@ -214,7 +219,12 @@ fn two_far_leaves_cost_what_two_leaves_cost() {
         60,
     );
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && !e.contains("warning"), "{e}");
+    // (The box bounds the near fire only, on purpose: the far copy's data lies beyond it, which is said.)
+    let others = e
+        .lines()
+        .filter(|l| l.contains("warning") && !l.contains("beyond the shapes that bound it"))
+        .count();
+    assert!(o.status.success() && others == 0, "{e}");
     // (`--stats` reports on stdout.) Each leaf and the fringe its trilinear lookups reach: 2 × 9³ voxels.
     let stats = String::from_utf8_lossy(&o.stdout);
     assert!(

@@ -92,6 +92,8 @@ fn night_makes_the_flame_whiter_than_day() {
             png.to_str().unwrap(),
             "--adapt",
             adapt,
+            "--white",
+            "fire",
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let text = String::from_utf8_lossy(&o.stdout);
@@ -129,6 +131,8 @@ fn night_makes_the_flame_whiter_than_day() {
             "night",
             "--operator",
             "naka-rushton",
+            "--white",
+            "fire",
         ])
         .output()
         .unwrap();
@@ -201,4 +205,84 @@ fn bad_arguments_exit_2_and_bad_files_exit_1() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(e.contains("fake.exr") && e.contains("EXR"), "{e}");
+}
+
+#[test]
+fn the_renders_preview_is_tonemaps_default_and_keeps_the_fires_colour() {
+    // `render` and `tonemap` share one default (Naka–Rushton adapted to the image, a D65 white): re-tonemapping a
+    // render's EXR with no option gives its preview. With that white the flame keeps its colour — orange, red
+    // above blue — where the fire's own white (`--white fire`) turns its core neutral.
+    let dir = tmp("one-default");
+    let exr = dir.join("campfire.exr");
+    let o = run(&[
+        "render",
+        crate::common::root()
+            .join("scenes/campfire/scene.pbrt")
+            .to_str()
+            .unwrap(),
+        "-o",
+        exr.to_str().unwrap(),
+        "--resolution",
+        "96x54",
+        "--spp",
+        "8",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let again = dir.join("again.png");
+    let o = run(&[
+        "tonemap",
+        exr.to_str().unwrap(),
+        "-o",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, a) = read_png(&exr.with_extension("png"));
+    let (_, _, b) = read_png(&again);
+    let worst = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f64::max);
+    assert!(
+        worst <= 1.0 / 255.0 + 1e-9,
+        "preview and tonemap differ by {worst}"
+    );
+    // The flame's pixels (the brightest tenth in the EXR): their mean colour in the preview is warm and
+    // saturated; with the fire's white it is near grey.
+    let hdr = read_exr(&exr);
+    let y = |p: &[f32; 3]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+    let mut ys: Vec<f64> = hdr.iter().map(y).collect();
+    ys.sort_by(f64::total_cmp);
+    let cut = ys[ys.len() * 9 / 10];
+    let flame: Vec<usize> = (0..hdr.len()).filter(|&i| y(&hdr[i]) > cut).collect();
+    let mean = |px: &[[f64; 3]]| {
+        let mut m = [0.0; 3];
+        for &i in &flame {
+            for k in 0..3 {
+                m[k] += px[i][k] / flame.len() as f64;
+            }
+        }
+        m
+    };
+    let fire_white = dir.join("fire-white.png");
+    let o = run(&[
+        "tonemap",
+        exr.to_str().unwrap(),
+        "-o",
+        fire_white.to_str().unwrap(),
+        "--white",
+        "fire",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (_, _, c) = read_png(&fire_white);
+    let (warm, neutral) = (mean(&a), mean(&c));
+    assert!(
+        warm[0] > warm[1] && warm[1] > warm[2] && saturation(warm) > 0.4,
+        "default {warm:?}"
+    );
+    assert!(
+        saturation(neutral) < saturation(warm) / 2.0,
+        "fire white {neutral:?} against {warm:?}"
+    );
 }

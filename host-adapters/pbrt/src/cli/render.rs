@@ -65,18 +65,20 @@ pub struct RenderArgs {
     /// motion). Both render the same image up to noise.
     #[arg(long, value_name = "WHO", default_value = "plugin", value_parser = ["plugin", "host"])]
     tracking: String,
-    /// The PNG preview's display transform: agx (default: Sobotka's AgX, the fire's core in its soft shoulder),
-    /// aces, naka-rushton (the paper's cone responses), exposure or reinhard — as `firemedium tonemap --operator`.
-    #[arg(long, value_enum, default_value = "agx")]
+    /// The PNG preview's display transform, as `firemedium tonemap --operator` (and its default): naka-rushton
+    /// (the paper's cone responses), agx (Sobotka's AgX: the fire's core in a soft shoulder), aces, exposure or
+    /// reinhard.
+    #[arg(long, value_enum, default_value = "naka-rushton")]
     operator: PreviewOperator,
     /// The PNG preview's adaptation, as `firemedium tonemap --adapt`: image (default), night, indoor, day or a
     /// luminance in cd/m².
     #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
     adapt: tonemap::Adapt,
-    /// The PNG preview's white, as `firemedium tonemap --white`: fire (default: the blackbody at the hottest
-    /// temperature of the fires coloured by the physics; D65 without one — a fire coloured by a tint or a colour
-    /// ramp is meant for a D65 white), d65, a temperature (1800K) or a chromaticity (x,y).
-    #[arg(long, default_value = "fire", value_parser = tonemap::parse_white)]
+    /// The PNG preview's white, as `firemedium tonemap --white` (and its default): d65 (the display's white, as
+    /// an observer whose surroundings are daylit or lamplit sees a fire: its colour kept), fire (the blackbody at
+    /// the hottest temperature of the fires coloured by the physics: an eye adapted to the fire alone, which sees
+    /// it nearly white), a temperature (1800K) or a chromaticity (x,y).
+    #[arg(long, default_value = "d65", value_parser = tonemap::parse_white)]
     white: tonemap::WhiteArg,
     /// The memory budget in GB (default: half the machine's memory): the film, images read and each of the
     /// plugin's grids are checked against it before they are allocated.
@@ -497,7 +499,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
             }
         }
     }
-    // The preview: Naka–Rushton adapted to the image, white = the blackbody at the fire's hottest temperature.
+    // The preview: the tonemap command's defaults (Naka–Rushton adapted to the image, a D65 white) unless asked.
     let fire_t = sc.fire_temperature();
     let tone = tonemap::Options {
         white: match a.white {

@@ -23,9 +23,10 @@ pub struct TonemapArgs {
     /// What the eye is adapted to: image (from the image itself), night, indoor, day, or a luminance in cd/m².
     #[arg(long, default_value = "image", value_parser = tonemap::parse_adapt, allow_negative_numbers = true)]
     adapt: Adapt,
-    /// The white (von Kries): fire (the render's hottest temperature; D65 if it records none), d65, a
-    /// temperature (1800K) or a chromaticity (0.3127,0.3290).
-    #[arg(long, default_value = "fire", value_parser = tonemap::parse_white)]
+    /// The white (von Kries): d65 (the display's: the fire's colour kept), fire (the render's hottest
+    /// temperature, D65 if it records none: an eye adapted to the fire alone), a temperature (1800K) or a
+    /// chromaticity (0.3127,0.3290).
+    #[arg(long, default_value = "d65", value_parser = tonemap::parse_white)]
     white: WhiteArg,
     /// Exposure in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
