@@ -2126,7 +2126,12 @@ fn the_readmes_quick_commands_run_as_written() {
     let dir = tmp("readme");
     copy_dir(&root.join("scenes"), &dir.join("scenes"));
     copy_dir(&root.join("tests/data"), &dir.join("tests/data"));
-    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    // (The README's first steps, then the rendering guide its commands moved to.)
+    let readme = ["README.md", "docs/guide/rendering.md"]
+        .iter()
+        .map(|f| std::fs::read_to_string(root.join(f)).unwrap_or_else(|e| panic!("{f}: {e}")))
+        .collect::<Vec<_>>()
+        .join("\n");
     let mut in_sh = false;
     let mut commands: Vec<Vec<String>> = Vec::new();
     for line in readme.lines() {
@@ -2176,7 +2181,7 @@ fn the_readmes_quick_commands_run_as_written() {
     ] {
         assert!(
             names.iter().any(|n| n == want),
-            "the README no longer shows `firemedium {want} …`: {names:?}"
+            "the README and the rendering guide no longer show `firemedium {want} …`: {names:?}"
         );
     }
     for args in &commands {
@@ -2663,4 +2668,45 @@ fn a_fire_clipped_swapped_or_behind_the_camera_is_warned_about() {
             ),
         }
     }
+}
+
+#[test]
+fn the_readme_is_short_and_its_links_lead_somewhere() {
+    // The README is the newcomer's page: what it is, the two commands, a first scene, where to go next — at most
+    // about 8 KB; every relative link in it and in the guides names a file that exists.
+    let root = crate::common::root();
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(
+        readme.len() <= 8 * 1024,
+        "README.md is {} bytes",
+        readme.len()
+    );
+    for want in [
+        "cargo build --release && target/release/firemedium render scenes/campfire/scene.pbrt",
+        "cargo test --workspace --release",
+        "firemedium scene fire.vdb",
+    ] {
+        assert!(readme.contains(want), "the README lost `{want}`");
+    }
+    let mut files = vec![root.join("README.md")];
+    for e in std::fs::read_dir(root.join("docs/guide")).unwrap() {
+        files.push(e.unwrap().path());
+    }
+    let mut broken = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (i, _) in text.match_indices("](") {
+            let link: String = text[i + 2..]
+                .chars()
+                .take_while(|&c| c != ')' && c != '#' && c != ' ')
+                .collect();
+            if link.is_empty() || link.starts_with("http") {
+                continue;
+            }
+            if !f.parent().unwrap().join(&link).exists() {
+                broken.push(format!("{}: {link}", f.display()));
+            }
+        }
+    }
+    assert!(broken.is_empty(), "links to nothing: {broken:?}");
 }
