@@ -452,6 +452,7 @@ pub fn write_channels_exr(
         image.attributes.display_window =
             IntegerBounds::new(Vec2(0, 0), Vec2(window.full.0.max(1), window.full.1.max(1)));
         let meta = with_checksum(meta, pixels_checksum(rgb, names, values, fp16));
+        image.attributes.chromaticities = Some(chromaticities(&meta));
         record_attribute(&mut image.attributes.other, &meta, fire_temperature);
         image
             .write()
@@ -575,6 +576,42 @@ fn meta_text(meta: &[(String, String)]) -> String {
 
 /// The EXR's one attribute of ours (see [`RENDER_ATTRIBUTE`]): the render record with the fire temperature as one
 /// of its lines, or — without a record — the fire temperature as its own attribute.
+/// The record's key naming the RGB channels' colour space (absent: linear Rec.709/sRGB).
+pub const COLORSPACE_KEY: &str = "colorspace";
+
+/// Linear Rec.709 (sRGB's primaries, D65) → ACEScg (AP1 primaries, the ACES white), with the Bradford adaptation:
+/// the ACES project's matrix.
+pub const SRGB_TO_ACESCG: [[f32; 3]; 3] = [
+    [0.613_097_4, 0.339_523_1, 0.047_379_3],
+    [0.070_193_7, 0.916_353_9, 0.013_452_4],
+    [0.020_615_6, 0.109_569_7, 0.869_814_7],
+];
+
+/// The primaries and white the record names (`colorspace=acescg`: AP1 and the ACES white; else Rec.709 and D65),
+/// written as the EXR's `chromaticities` so that a compositor reads the colours as meant.
+fn chromaticities(meta: &[(String, String)]) -> exr::meta::attribute::Chromaticities {
+    use exr::prelude::Vec2;
+    let acescg = meta
+        .iter()
+        .any(|(k, v)| k == COLORSPACE_KEY && v == "acescg");
+    let (r, g, b, w) = if acescg {
+        (
+            (0.713, 0.293),
+            (0.165, 0.830),
+            (0.128, 0.044),
+            (0.32168, 0.33767),
+        )
+    } else {
+        ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06), (0.3127, 0.3290))
+    };
+    exr::meta::attribute::Chromaticities {
+        red: Vec2(r.0, r.1),
+        green: Vec2(g.0, g.1),
+        blue: Vec2(b.0, b.1),
+        white: Vec2(w.0, w.1),
+    }
+}
+
 fn record_attribute(
     other: &mut std::collections::HashMap<exr::prelude::Text, exr::meta::attribute::AttributeValue>,
     meta: &[(String, String)],
@@ -630,6 +667,7 @@ pub fn write_exr_as(
                     Vec2(0, 0),
                     Vec2(window.full.0.max(1), window.full.1.max(1)),
                 );
+                image.attributes.chromaticities = Some(chromaticities(meta));
                 record_attribute(&mut image.attributes.other, meta, fire_temperature);
                 image.write().non_parallel().to_file(tmp).map_err(|e| {
                     crate::Error::file(path.display(), format!("cannot write EXR: {e}"))

@@ -84,6 +84,11 @@ pub struct RenderArgs {
     /// plugin's grids are checked against it before they are allocated.
     #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
     max_memory: Option<f64>,
+    /// The EXR's colour space: srgb (linear Rec.709, D65: pbrt-v4's, the default — a flame's colour lies outside
+    /// it, held as negative components, which the render says) or acescg (ACES AP1, the VFX convention: a
+    /// flame's colour inside it, positive). Written as the EXR's chromaticities either way; AOV colours alike.
+    #[arg(long, value_name = "SPACE", default_value = "srgb", value_parser = ["srgb", "acescg"])]
+    colorspace: String,
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
@@ -611,6 +616,17 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         (partial(&exr), partial(&png))
     };
     img.meta.push((COMPLETE.to_string(), whole.to_string()));
+    // Out of the EXR's gamut: the pixels with a negative component (sRGB), counted before any conversion.
+    let outside = img
+        .rgb
+        .iter()
+        .filter(|p| p.iter().any(|&c| c < 0.0))
+        .count();
+    if a.colorspace == "acescg" {
+        to_acescg(&mut img);
+        img.meta
+            .push((imageio::COLORSPACE_KEY.to_string(), "acescg".to_string()));
+    }
     if st.plugin_failures.0 > 0 {
         img.meta.push((
             "plugin_failures".to_string(),
@@ -619,8 +635,16 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     }
     img.write_exr(&exr, fire_t, sc.response.fp16)?;
     write_preview(&img, &png, &tone)?;
+    let gamut = if outside > 0 && a.colorspace == "srgb" {
+        format!(
+            "; {:.1} % of its pixels hold colour outside sRGB as negative components (kept, linear; --colorspace acescg holds a flame's colour positive)",
+            100.0 * outside as f64 / img.rgb.len().max(1) as f64
+        )
+    } else {
+        String::new()
+    };
     let mut out = format!(
-        "wrote {} and {} ({}×{}, {} spp)\n",
+        "wrote {} and {} ({}×{}, {} spp{gamut})\n",
         exr.display(),
         png.display(),
         img.w,
@@ -730,6 +754,35 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         "seconds": frame_start.elapsed().as_secs_f64(),
     }));
     Ok(Frame::Rendered(out))
+}
+
+/// The image's colours (the beauty and every AOV triplet `NAME.R`, `.G`, `.B`) from linear Rec.709 to ACEScg.
+fn to_acescg(img: &mut Image) {
+    let m = imageio::SRGB_TO_ACESCG;
+    let apply = |p: [f32; 3]| [0, 1, 2].map(|r| m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2]);
+    for p in img.rgb.iter_mut() {
+        *p = apply(*p);
+    }
+    if let Some((names, values)) = &mut img.extra {
+        let n = names.len();
+        let triplets: Vec<[usize; 3]> = names
+            .iter()
+            .enumerate()
+            .filter_map(|(i, name)| {
+                let base = name.strip_suffix(".R")?;
+                let at = |c: &str| names.iter().position(|x| *x == format!("{base}.{c}"));
+                Some([i, at("G")?, at("B")?])
+            })
+            .collect();
+        for px in values.chunks_mut(n.max(1)) {
+            for t in &triplets {
+                let c = apply([px[t[0]], px[t[1]], px[t[2]]]);
+                for k in 0..3 {
+                    px[t[k]] = c[k];
+                }
+            }
+        }
+    }
 }
 
 /// Writes the PNG preview: the visual-adaptation tone mapping with `options`.

@@ -83,6 +83,20 @@ pub fn run(a: &TonemapArgs) -> firemedium::Result<String> {
         adapt: a.adapt,
         stops: a.exposure,
     };
+    // An EXR in ACEScg (`render --colorspace acescg`, as its record says) comes back to linear Rec.709 first.
+    let mut img = img;
+    let acescg = imageio::read_meta(&a.input).is_ok_and(|(_, meta)| {
+        meta.iter()
+            .any(|(k, v)| k == imageio::COLORSPACE_KEY && v == "acescg")
+    });
+    if acescg {
+        let m = imageio::SRGB_TO_ACESCG.map(|r| r.map(f64::from));
+        let inv = glam::DMat3::from_cols_array_2d(&m).transpose().inverse();
+        for p in img.px.iter_mut() {
+            let v = inv * glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            *p = [v.x as f32, v.y as f32, v.z as f32];
+        }
+    }
     let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
     imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16)?;
