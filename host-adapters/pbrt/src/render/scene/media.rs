@@ -374,28 +374,12 @@ impl Builder {
                     directory: Some(self.dir.clone()),
                     ..Default::default()
                 };
-                // Motion blur: a velocity grid or embers (which move by their own velocities) see the camera's
-                // shutter (unless the medium sets its own), and the camera then draws a time per sample.
-                let velocity = list.iter().any(|p| {
-                    (p.name == "velocitygrid" || p.name == "embers")
-                        && matches!(&p.value, Value::String(v) if v.iter().any(|s| !s.is_empty()))
-                });
-                if velocity {
-                    let camera = self.camera_shutter();
-                    let mut shutter = camera;
-                    for (k, n) in ["shutteropen", "shutterclose"].into_iter().enumerate() {
-                        if let Some(Value::Float(v)) = list.iter().find(|p| p.name == n).map(|p| &p.value) {
-                            if v.len() == 1 {
-                                shutter[k] = v[0];
-                            }
-                        }
-                    }
-                    context.shutter = Some(camera);
-                    // The camera draws its times in its own shutter; the plugin holds each in the medium's.
-                    if shutter[1] > shutter[0] {
-                        self.shutter = Some(camera);
-                    }
-                }
+                // Motion blur: every plugin medium gets the camera's shutter (one that does not move ignores it);
+                // once the built volume says it moves — by its velocity, or by its embers' own — the camera draws a
+                // time per sample, the plugin holding each in the medium's own shutter. (The host reads none of the
+                // fire's parameter names for this: the volume's features say it.)
+                let camera = self.camera_shutter();
+                context.shutter = Some(camera);
                 // The budget is shared: each medium may use what the media built before it left.
                 context.max_bytes = Some(self.max_memory.saturating_sub(self.media_bytes).max(1));
                 let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
@@ -439,6 +423,10 @@ impl Builder {
                     if hi > 0.0 && hi < 500.0 {
                         self.warn(loc, format!("medium \"{name}\": its temperature peaks at {hi:.3} K, too cool to glow visibly (below 500 K): if the grid is not in kelvin, set \"string source\" (\"houdini\": × 5000 K; \"blender\": a Mantaflow flame grid) or \"float temperatureremap\" [a b ka kb]"));
                     }
+                }
+                let moves = firemedium_abi::FM_FEATURE_MOTION | firemedium_abi::FM_FEATURE_EMBERS;
+                if camera[1] > camera[0] && vol.features().map_err(|e| err(loc, format!("medium \"{name}\": {e}")))? & moves != 0 {
+                    self.shutter = Some(camera);
                 }
                 self.media_bytes = self.media_bytes.saturating_add(info.bytes);
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
