@@ -52,6 +52,14 @@ fn read_exr(path: &Path) -> Vec<[f32; 3]> {
 }
 
 /// HSV saturation (max − min) / max of a display pixel.
+/// The largest difference of one channel between two images' pixels.
+fn max_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
+        .fold(0.0, f64::max)
+}
+
 fn saturation(p: [f64; 3]) -> f64 {
     let (hi, lo) = (p[0].max(p[1]).max(p[2]), p[0].min(p[1]).min(p[2]));
     if hi > 0.0 {
@@ -139,11 +147,7 @@ fn night_makes_the_flame_whiter_than_day() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (_, _, a) = read_png(&night_render.with_extension("png"));
     let (_, _, b) = read_png(&dir.join("night.png"));
-    let worst = a
-        .iter()
-        .zip(&b)
-        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
-        .fold(0.0, f64::max);
+    let worst = max_difference(&a, &b);
     assert!(
         worst <= 1.0 / 255.0 + 1e-9,
         "render's night preview differs by {worst}"
@@ -239,11 +243,7 @@ fn the_renders_preview_is_tonemaps_default_and_keeps_the_fires_colour() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (_, _, a) = read_png(&exr.with_extension("png"));
     let (_, _, b) = read_png(&again);
-    let worst = a
-        .iter()
-        .zip(&b)
-        .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
-        .fold(0.0, f64::max);
+    let worst = max_difference(&a, &b);
     assert!(
         worst <= 1.0 / 255.0 + 1e-9,
         "preview and tonemap differ by {worst}"

@@ -57,6 +57,24 @@ pub use files::{format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
 pub use source::looks_like;
 
+/// Every float grid `entries` lists for `path` (as [`list_grids`] gives them) loaded on one lattice — the union of
+/// their bricks; `Ok(None)` when the file holds none (a file of vector grids only).
+pub fn load_float_grids(
+    path: &std::path::Path,
+    entries: &[GridEntry],
+    opts: &LoadOptions,
+) -> Result<Option<Dataset>, Error> {
+    let sources: Vec<ChannelSource> = entries
+        .iter()
+        .filter(|g| g.loadable)
+        .map(|g| ChannelSource::new(&g.name, path))
+        .collect();
+    if sources.is_empty() {
+        return Ok(None);
+    }
+    Dataset::load(&sources, opts).map(Some)
+}
+
 /// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
 pub const HOUDINI_KELVIN: f64 = 5000.0;
 pub use raw::{RawCoords, RawValue};

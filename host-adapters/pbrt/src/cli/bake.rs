@@ -159,18 +159,14 @@ fn bake(
     let entries = firemedium_dataset::list_grids(&a.dataset, &opts)
         .map_err(|e| Error::input(e.to_string()))?;
     // The lattice: the dataset's, over the bricks any of its float grids holds (what the fire can be built from).
-    let sources: Vec<ChannelSource> = entries
-        .iter()
-        .filter(|g| g.loadable)
-        .map(|g| ChannelSource::new(&g.name, &a.dataset))
-        .collect();
-    if sources.is_empty() {
-        return Err(Error::input(format!(
-            "{}: no float grid: nothing to bake",
-            a.dataset.display()
-        )));
-    }
-    let lattice = Dataset::load(&sources, &opts).map_err(|e| Error::input(e.to_string()))?;
+    let lattice = firemedium_dataset::load_float_grids(&a.dataset, &entries, &opts)
+        .map_err(|e| Error::input(e.to_string()))?
+        .ok_or_else(|| {
+            Error::input(format!(
+                "{}: no float grid: nothing to bake",
+                a.dataset.display()
+            ))
+        })?;
     let dims = lattice.dims();
     let velocity = velocity_of(a, &entries, &opts)?;
     // The fire, through the plugin.

@@ -4,7 +4,7 @@
 
 use clap::Args;
 use firemedium::Error;
-use firemedium_dataset::{ChannelSource, Dataset, LoadOptions};
+use firemedium_dataset::LoadOptions;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -133,18 +133,14 @@ pub fn run(a: &SceneArgs) -> firemedium::Result<String> {
     let opts = LoadOptions::default();
     let entries = firemedium_dataset::list_grids(&a.dataset, &opts)
         .map_err(|e| Error::input(e.to_string()))?;
-    let sources: Vec<ChannelSource> = entries
-        .iter()
-        .filter(|g| g.loadable)
-        .map(|g| ChannelSource::new(&g.name, &a.dataset))
-        .collect();
-    if sources.is_empty() {
-        return Err(Error::input(format!(
-            "{}: no float grid (density, temperature, …): not a fire dataset",
-            a.dataset.display()
-        )));
-    }
-    let ds = Dataset::load(&sources, &opts).map_err(|e| Error::input(e.to_string()))?;
+    let ds = firemedium_dataset::load_float_grids(&a.dataset, &entries, &opts)
+        .map_err(|e| Error::input(e.to_string()))?
+        .ok_or_else(|| {
+            Error::input(format!(
+                "{}: no float grid (density, temperature, …): not a fire dataset",
+                a.dataset.display()
+            ))
+        })?;
     let [lo, hi] = ds.bounds();
     let source = firemedium_dataset::looks_like(&entries, &ds);
     let name = source.as_ref().map(|s| s.0.as_str());

@@ -43,6 +43,30 @@ fn from_local(n: Vec3A, w: Vec3A) -> Vec3A {
     (t * w.x + b * w.y + n * w.z).normalize_or_zero()
 }
 
+/// The MIS weight of a light a path found by a direction it sampled (density `pb` from `origin`) against
+/// next-event estimation's density of that direction, `pl(origin)`: the balance heuristic; 1 for camera rays and
+/// specular bounces (`mis` None), which next-event estimation cannot take.
+fn found_weight(mis: Option<(Vec3A, f32)>, pl: impl FnOnce(Vec3A) -> f32) -> f32 {
+    mis.map_or(1.0, |(origin, pb)| {
+        let pl = pl(origin);
+        if pb + pl > 0.0 {
+            pb / (pb + pl)
+        } else {
+            1.0
+        }
+    })
+}
+
+/// Adds a light the path found to its radiance, and — seen from the camera — to the AOVs' emission part.
+fn seen(l: &mut S, split: &mut Option<&mut Split>, depth: usize, contribution: S) {
+    *l += contribution;
+    if depth == 0 {
+        if let Some(sp) = split.as_deref_mut() {
+            sp.emission += contribution;
+        }
+    }
+}
+
 /// Henyey–Greenstein phase function value (eq. 4) for cosθ between wo-reversed and wi (pbrt's convention).
 fn hg(cos: f32, g: f32) -> f32 {
     let d = 1.0 + g * g + 2.0 * g * cos;
@@ -195,20 +219,10 @@ impl Integrator<'_> {
                 for light in &sc.lights {
                     let le = lights::env(light, d);
                     if !le.is_black() {
-                        let w = mis.map_or(1.0, |(origin, pb)| {
-                            let pl = lights::env_pdf(light, origin, d) / sc.lights.len() as f32;
-                            if pb + pl > 0.0 {
-                                pb / (pb + pl)
-                            } else {
-                                1.0
-                            }
+                        let w = found_weight(mis, |origin| {
+                            lights::env_pdf(light, origin, d) / sc.lights.len() as f32
                         });
-                        l += beta * le * w;
-                        if depth == 0 {
-                            if let Some(sp) = split.as_deref_mut() {
-                                sp.emission += beta * le * w;
-                            }
-                        }
+                        seen(&mut l, &mut split, depth, beta * le * w);
                     }
                 }
                 // The camera ray escaped: its coverage is what the media it crossed took.
@@ -226,20 +240,8 @@ impl Integrator<'_> {
                 .area_light
                 .and_then(|li| Some((li, self.area_le(li, &h, d)?)))
             {
-                let w = mis.map_or(1.0, |(origin, pb)| {
-                    let pl = self.area_pdf(li, origin, &h);
-                    if pb + pl > 0.0 {
-                        pb / (pb + pl)
-                    } else {
-                        1.0
-                    }
-                });
-                l += beta * le * w;
-                if depth == 0 {
-                    if let Some(sp) = split.as_deref_mut() {
-                        sp.emission += beta * le * w;
-                    }
-                }
+                let w = found_weight(mis, |origin| self.area_pdf(li, origin, &h));
+                seen(&mut l, &mut split, depth, beta * le * w);
             }
             let wo = -d;
             let side_medium = |w: Vec3A| match prim.media {

@@ -124,25 +124,10 @@ impl Integrator<'_> {
         want_exit: bool,
     ) -> (S, S, Option<(Vec3A, Vec3A)>) {
         let n = self.scene.bins.n();
+        if let Some(pm) = self.host_medium(m) {
+            return self.host_segment(&pm, o, d, t_end, rng, emission);
+        }
         match &self.scene.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                units,
-                g,
-                host: Some(grid),
-                ..
-            } => {
-                let pm = PluginMedium {
-                    vol,
-                    grid,
-                    to_medium,
-                    units: *units,
-                    bins: n,
-                    g: *g,
-                };
-                self.host_segment(&pm, o, d, t_end, rng, emission)
-            }
             Medium::Plugin {
                 vol,
                 to_medium,
@@ -201,6 +186,28 @@ impl Integrator<'_> {
                 (l, tr, None)
             }
             Medium::RgbGrid(grid) => self.host_segment(&**grid, o, d, t_end, rng, emission),
+        }
+    }
+
+    /// Plugin medium `m` as the host tracks it (`--tracking host`), if it is one.
+    fn host_medium(&self, m: usize) -> Option<PluginMedium<'_>> {
+        match &self.scene.media[m] {
+            Medium::Plugin {
+                vol,
+                to_medium,
+                units,
+                g,
+                host: Some(grid),
+                ..
+            } => Some(PluginMedium {
+                vol,
+                grid,
+                to_medium,
+                units: *units,
+                bins: self.scene.bins.n(),
+                g: *g,
+            }),
+            _ => None,
         }
     }
 
@@ -289,25 +296,10 @@ impl Integrator<'_> {
             l,
             fire_units: None,
         };
+        if let Some(pm) = self.host_medium(m) {
+            return self.host_track(&pm, o, d, t_end, rng, Some(1.0));
+        }
         match &sc.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                g,
-                units,
-                host: Some(grid),
-                ..
-            } => {
-                let pm = PluginMedium {
-                    vol,
-                    grid,
-                    to_medium,
-                    units: *units,
-                    bins: n,
-                    g: *g,
-                };
-                self.host_track(&pm, o, d, t_end, rng, Some(1.0))
-            }
             Medium::Plugin {
                 vol,
                 to_medium,

@@ -108,20 +108,10 @@ impl RgbGrid {
     fn clip(&self, o: Vec3A, w: Vec3A, s_max: f32) -> Option<(f64, f64, DVec3, DVec3)> {
         let om = self.to_medium.transform_point3(o.as_dvec3());
         let dm = self.to_medium.transform_vector3(w.as_dvec3());
-        let (mut s0, mut s1) = (0.0f64, s_max as f64);
-        for k in 0..3 {
-            let (lo, hi) = (self.p0[k].min(self.p1[k]), self.p0[k].max(self.p1[k]));
-            if dm[k] == 0.0 {
-                if om[k] < lo || om[k] > hi {
-                    return None;
-                }
-                continue;
-            }
-            let (a, b) = ((lo - om[k]) / dm[k], (hi - om[k]) / dm[k]);
-            s0 = s0.max(a.min(b));
-            s1 = s1.min(a.max(b));
-        }
-        (s0 < s1 && s0.is_finite()).then_some((s0, s1, om, dm))
+        let lo = [0, 1, 2].map(|k| self.p0[k].min(self.p1[k]));
+        let hi = [0, 1, 2].map(|k| self.p0[k].max(self.p1[k]));
+        let (s0, s1) = super::tracker::slab(om, dm, lo, hi, s_max)?;
+        Some((s0, s1, om, dm))
     }
 }
 

@@ -153,6 +153,29 @@ pub(super) fn track<M: Tracked>(
     Ok(event?.unwrap_or(Track::Passed { weight, emitted }))
 }
 
+/// The interval [s₀, s₁] ⊂ [0, s_max] of the ray o + s·d inside the box [lo, hi] (the slab test), or None.
+pub(super) fn slab(
+    o: DVec3,
+    d: DVec3,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    s_max: f32,
+) -> Option<(f64, f64)> {
+    let (mut s0, mut s1) = (0.0f64, s_max as f64);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return None;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+        s0 = s0.max(a.min(b));
+        s1 = s1.min(a.max(b));
+    }
+    (s0 < s1 && s0.is_finite()).then_some((s0, s1))
+}
+
 /// A plugin medium's majorant grid, owned by the scene: cells tiling a box in the medium's space, a bound on σ_t
 /// per cell (medium units⁻¹), x fastest; and the volume's bounds, which may reach beyond the cells (pbrt mode's
 /// half-voxel margin, where the nearest cell's bound holds — the ABI's contract).
@@ -217,25 +240,13 @@ impl Tracked for PluginMedium<'_> {
     fn clip(&self, o: Vec3A, w: Vec3A, s_max: f32) -> Option<(MediumRay, f64, f64)> {
         let om = self.to_medium.transform_point3(o.as_dvec3());
         let dm = self.to_medium.transform_vector3(w.as_dvec3());
-        let (mut s0, mut s1) = (0.0f64, s_max as f64);
-        for k in 0..3 {
-            let (lo, hi) = (self.grid.clip[0][k], self.grid.clip[1][k]);
-            if dm[k] == 0.0 {
-                if om[k] < lo || om[k] > hi {
-                    return None;
-                }
-                continue;
-            }
-            let (a, b) = ((lo - om[k]) / dm[k], (hi - om[k]) / dm[k]);
-            s0 = s0.max(a.min(b));
-            s1 = s1.min(a.max(b));
-        }
+        let (s0, s1) = slab(om, dm, self.grid.clip[0], self.grid.clip[1], s_max)?;
         let ray = MediumRay {
             o: om,
             d: dm,
             stretch: dm.length(),
         };
-        (s0 < s1 && s0.is_finite()).then_some((ray, s0, s1))
+        Some((ray, s0, s1))
     }
 
     fn majorant(&self, ray: &MediumRay, s: f64, s1: f64) -> (f32, f64) {
