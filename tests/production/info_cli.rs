@@ -120,3 +120,40 @@ fn refused_files_exit_1_with_one_line() {
     let out = firemedium(&["info", &data("valid/vdb/ramp_16.vdb"), "--sample", "1,2"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn a_file_of_vector_grids_is_described_by_their_components() {
+    // A bake's output (sigma_a, sigma_s, emission) and a velocity cache hold vector grids only: `info` describes
+    // their components instead of refusing the file.
+    let dir = crate::common::scratch::Scratch::new("info", "vectors");
+    let n = 8 * 8 * 8;
+    let (up, zero) = (vec![2.5f32; n], vec![0f32; n]);
+    let bytes = firemedium_dataset::vdb::write_with_vectors(
+        &[],
+        &[("vel", [8, 8, 8], [&zero[..], &zero[..], &up[..]])],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(0.1),
+    );
+    let file = dir.join("vel.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let o = std::process::Command::new(crate::common::exe("firemedium"))
+        .arg("info")
+        .arg(&file)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let row = |name: &str| {
+        text.lines()
+            .find(|l| l.starts_with(name))
+            .unwrap_or_else(|| panic!("no {name} row: {text}"))
+            .split_whitespace()
+            .skip(1)
+            .take(3)
+            .map(|v| v.parse::<f64>().unwrap())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(row("vel.z"), [2.5, 2.5, 2.5]);
+    assert_eq!(row("vel.x"), [0.0, 0.0, 0.0]);
+    assert!(!text.contains("skipped"), "{text}");
+}

@@ -153,11 +153,21 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
     let start = Instant::now();
     let entries = dataset::list_grids(&args.file, &opts).map_err(bad_file)?;
     let names: Vec<String> = if args.grids.is_empty() {
-        entries
+        let floats: Vec<String> = entries
             .iter()
             .filter(|g| g.loadable)
             .map(|g| g.name.clone())
-            .collect()
+            .collect();
+        if floats.is_empty() {
+            // A file of vector grids only (a bake's sigma_a, sigma_s, emission; a velocity): their components.
+            entries
+                .iter()
+                .filter(|g| g.kind.starts_with("Tree_vec3s"))
+                .flat_map(|g| ["x", "y", "z"].map(|c| format!("{}.{c}", g.name)))
+                .collect()
+        } else {
+            floats
+        }
     } else {
         args.grids.clone()
     };
@@ -216,7 +226,11 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
             .collect(),
         skipped_grids: entries
             .iter()
-            .filter(|g| !names.contains(&g.name))
+            .filter(|g| {
+                !names
+                    .iter()
+                    .any(|n| *n == g.name || n.strip_suffix(".x") == Some(&g.name))
+            })
             .map(|g| Skipped {
                 name: g.name.clone(),
                 kind: g.kind.clone(),
