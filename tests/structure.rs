@@ -28,9 +28,8 @@ fn module_graph(root: &Path, prefix: &str) -> BTreeMap<String, BTreeSet<String>>
     for e in std::fs::read_dir(root).unwrap() {
         let p = e.unwrap().path();
         let name = p.file_stem().unwrap().to_string_lossy().to_string();
-        if p.is_dir()
-            || (p.extension().is_some_and(|x| x == "rs")
-                && !["mod", "lib", "main"].contains(&name.as_str()))
+        if (p.is_dir() || p.extension().is_some_and(|x| x == "rs"))
+            && !["mod", "lib", "main", "tests"].contains(&name.as_str())
         {
             nodes.insert(name);
         }
@@ -44,7 +43,15 @@ fn module_graph(root: &Path, prefix: &str) -> BTreeMap<String, BTreeSet<String>>
         } else {
             rust_files(&root.join(node))
         };
-        for f in files {
+        // (Tests do not count: they may reach anywhere to set up a case.)
+        let is_test = |f: &Path| {
+            f.components()
+                .any(|c| c.as_os_str() == "tests" || c.as_os_str() == "tests.rs")
+        };
+        for f in files
+            .into_iter()
+            .filter(|f| !is_test(f.strip_prefix(root).unwrap()))
+        {
             let rel = f.strip_prefix(root).unwrap();
             // A file at root/node.rs or root/node/mod.rs is one level down; root/node/x.rs two.
             let depth = rel.components().count() - usize::from(rel.ends_with("mod.rs"));
@@ -138,8 +145,6 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// (The plugin's own modules are not held to it yet: `volume/` and the crate's top level still import in
-/// circles — parameters, the volume, embers and the light reach into each other.)
 #[test]
 fn imports_between_modules_run_one_way() {
     for (dir, prefix) in [
@@ -148,9 +153,12 @@ fn imports_between_modules_run_one_way() {
         ("plugin/src/light", "crate::light"),
         ("plugin/dataset/src", "crate"),
         ("plugin/core/src", "crate"),
+        ("plugin/src", "crate"),
+        ("plugin/src/volume", "crate::volume"),
+        ("plugin/src/export", "crate::export"),
     ] {
         let g = module_graph(&root().join(dir), prefix);
-        assert!(g.len() > 3, "{dir}: {} modules found", g.len());
+        assert!(g.len() >= 3, "{dir}: {} modules found", g.len());
         let mut g = g;
         let mut found = Vec::new();
         while let Some(c) = circle(&g) {

@@ -223,25 +223,6 @@ macro_rules! choice {
 }
 pub(crate) use choice;
 
-/// Relative file names in `list` (the values of the tables' `Range::Path` rows) made `dir`'s.
-pub fn resolve_paths(list: &mut [Param], dir: &std::path::Path) {
-    let is_path = |name: &str| {
-        crate::volume::params::components()
-            .iter()
-            .flat_map(|c| c.params.iter())
-            .any(|p| p.name == name && p.range == Range::Path)
-    };
-    for p in list.iter_mut().filter(|p| is_path(&p.name)) {
-        if let Values::Strings(v) = &mut p.values {
-            for s in v.iter_mut().filter(|s| !s.is_empty()) {
-                if std::path::Path::new(s.as_str()).is_relative() {
-                    *s = dir.join(&*s).display().to_string();
-                }
-            }
-        }
-    }
-}
-
 /// The table's name of a choice's value.
 pub fn name_of<T: Choice + PartialEq>(v: T) -> &'static str {
     T::VALUES
@@ -304,6 +285,25 @@ pub struct ParamSpec {
     pub range: Range,
     /// One-line doc.
     pub doc: &'static str,
+}
+
+/// One row of a component's table.
+pub(crate) const fn row(
+    name: &'static str,
+    ty: ParamType,
+    default: &'static str,
+    unit: &'static str,
+    range: Range,
+    doc: &'static str,
+) -> ParamSpec {
+    ParamSpec {
+        name,
+        ty,
+        default,
+        unit,
+        range,
+        doc,
+    }
 }
 
 /// A component's table.

@@ -1,7 +1,7 @@
 //! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
 
+use super::buffers::{in_f64, out_f32, out_f64, ray_of, rays, store, times};
 use super::params::read_params;
-use super::volume::{out_f32, ray_of, rays, store, times};
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
 use firemedium_abi::*;
@@ -35,7 +35,7 @@ pub(super) unsafe extern "C" fn light_create(
         }
         // SAFETY: the caller's contract for `params`/`count`.
         let list = unsafe { read_params(params, std::ptr::null(), count) }?;
-        let r = crate::params::ParamReader::new("light", &list, &[&crate::volume::params::LIGHT]);
+        let r = crate::params::ParamReader::new("light", &list, &[&crate::light::params::LIGHT]);
         r.check_names().map_err(fail)?;
         let weighting: Weighting = r.choice("weighting").map_err(fail)?;
         let cell = r.int("cell").map_err(fail)?;
@@ -92,60 +92,6 @@ pub(super) unsafe extern "C" fn light_info(l: *const FmLight, out: *mut FmLightI
         unsafe { out.write_unaligned(info) };
         Ok(())
     })
-}
-
-/// `n × k` doubles at `p`, required.
-///
-/// # Safety
-/// `p` is null or points to `n × k` doubles.
-pub(super) unsafe fn in_f64<'a>(
-    p: *const f64,
-    n: usize,
-    k: usize,
-    what: &str,
-) -> Result<&'a [f64], (FmStatus, String)> {
-    if n == 0 {
-        return Ok(&[]);
-    }
-    if p.is_null() {
-        return Err(bad(format!("{what} is null")));
-    }
-    let len = n
-        .checked_mul(k)
-        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
-    super::span::<f64>(len, what)?;
-    // SAFETY: caller provides n × k doubles (contract).
-    let v = unsafe { std::slice::from_raw_parts(p, len) };
-    // Every number is checked: a NaN would propagate into a sample or a pdf the host then trusts.
-    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        return Err(bad(format!(
-            "{what}[{i}] = {}: expected finite numbers ({n} rows of {k})",
-            v[i]
-        )));
-    }
-    Ok(v)
-}
-
-/// # Safety
-/// `p` is null or points to `n × k` writable doubles.
-pub(super) unsafe fn out_f64<'a>(
-    p: *mut f64,
-    n: usize,
-    k: usize,
-    what: &str,
-) -> Result<&'a mut [f64], (FmStatus, String)> {
-    if n == 0 {
-        return Ok(&mut []);
-    }
-    if p.is_null() {
-        return Err(bad(format!("{what} is null")));
-    }
-    let len = n
-        .checked_mul(k)
-        .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
-    super::span::<f64>(len, what)?;
-    // SAFETY: caller provides n × k writable doubles (contract).
-    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
 }
 
 pub(super) unsafe extern "C" fn light_sample(

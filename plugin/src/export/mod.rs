@@ -2,6 +2,7 @@
 //! under `catch_unwind`, and returns a status; messages go to a per-thread last-error slot. No Rust type
 //! crosses the boundary: the table and its types are `firemedium-abi`'s `#[repr(C)]` ones.
 
+mod buffers;
 mod light;
 mod params;
 mod volume;
@@ -204,7 +205,7 @@ fn param_rows() -> &'static [[CString; 7]] {
     static ROWS: OnceLock<Vec<[CString; 7]>> = OnceLock::new();
     ROWS.get_or_init(|| {
         let c = |s: &str| CString::new(s.replace('\0', " ")).unwrap_or_default();
-        crate::volume::params::components()
+        params::components()
             .iter()
             .flat_map(|comp| {
                 comp.params.iter().map(move |p| {

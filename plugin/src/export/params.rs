@@ -2,7 +2,9 @@
 //! pointer checked, every string UTF-8, each value array read with the type its tag names.
 
 use super::bad;
-use crate::params::{Param, ParamType, Values};
+use crate::light::params::LIGHT;
+use crate::params::{Component, Param, ParamType, Range, Values};
+use crate::volume::params::{DATASET, VOLUME};
 use firemedium_abi::*;
 use std::ffi::{c_char, CStr};
 
@@ -134,4 +136,79 @@ pub(super) unsafe fn read_params(
         });
     }
     Ok(out)
+}
+
+/// Every public component, in documentation order.
+pub(crate) fn components() -> [&'static Component; 3] {
+    [&DATASET, &VOLUME, &LIGHT]
+}
+
+/// Relative file names in `list` (the values of the tables' `Range::Path` rows) made `dir`'s.
+pub(crate) fn resolve_paths(list: &mut [Param], dir: &std::path::Path) {
+    let is_path = |name: &str| {
+        components()
+            .iter()
+            .flat_map(|c| c.params.iter())
+            .any(|p| p.name == name && p.range == Range::Path)
+    };
+    for p in list.iter_mut().filter(|p| is_path(&p.name)) {
+        if let Values::Strings(v) = &mut p.values {
+            for s in v.iter_mut().filter(|s| !s.is_empty()) {
+                if std::path::Path::new(s.as_str()).is_relative() {
+                    *s = dir.join(&*s).display().to_string();
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::ParamType as T;
+    use crate::volume::params::FAULTS;
+
+    #[test]
+    fn params_doc_is_current() {
+        // docs/params.md is generated from these tables; regenerate with FIREMEDIUM_BLESS=1.
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/params.md");
+        let want = crate::params::markdown(&components());
+        if std::env::var_os("FIREMEDIUM_BLESS").is_some() {
+            std::fs::write(path, &want).unwrap();
+        }
+        let have = std::fs::read_to_string(path).unwrap_or_default();
+        assert!(have == want, "docs/params.md is stale: run FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc");
+    }
+
+    #[test]
+    fn names_are_unique_and_defaults_parse() {
+        let mut seen = std::collections::HashSet::new();
+        for c in components().iter().chain([&&FAULTS]) {
+            for p in c.params {
+                assert!(seen.insert(p.name), "parameter '{}' declared twice", p.name);
+                if !p.default.is_empty() {
+                    match p.ty {
+                        T::Float => p
+                            .default
+                            .parse::<f64>()
+                            .map(|_| ())
+                            .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default)),
+                        T::Integer => p.default.split_whitespace().for_each(|v| {
+                            v.parse::<i64>()
+                                .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default));
+                        }),
+                        _ => {}
+                    }
+                }
+                if let Range::Choices(c) = p.range {
+                    assert!(
+                        c.contains(&p.default),
+                        "{}: default {:?} not among {c:?}",
+                        p.name,
+                        p.default
+                    );
+                }
+            }
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! The fire volume's entries: create (from the host's creation info), destroy, describe, the fast whole-ray query
 //! (integrate, transmittance, scattering events), point coefficients in the channels, temperature range.
 
-use super::light::{in_f64, out_f64};
+use super::buffers::{in_f64, out_f32, out_f64, ray_of, rays, store, times};
 use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::par::Pool;
@@ -36,7 +36,7 @@ pub(super) unsafe extern "C" fn volume_create(
                     dir.to_string_lossy()
                 ))
             })?;
-            crate::params::resolve_paths(&mut list, std::path::Path::new(dir));
+            super::params::resolve_paths(&mut list, std::path::Path::new(dir));
         }
         // The host's context, where the scene does not set the same itself.
         let mut context = Vec::new();
@@ -131,66 +131,6 @@ pub(super) unsafe fn vol<'a>(
     Ok(unsafe { &(*(v as *const VolumeHandle)).volume })
 }
 
-/// `n × c` mutable f32 outputs at `p` (null → None).
-///
-/// # Safety
-/// `p` is null or points to `n × c` writable f32.
-pub(super) unsafe fn out_f32<'a>(
-    p: *mut f32,
-    n: usize,
-    c: usize,
-) -> Result<Option<&'a mut [f32]>, (FmStatus, String)> {
-    if p.is_null() {
-        return Ok(None);
-    }
-    let len = n
-        .checked_mul(c)
-        .ok_or_else(|| bad(format!("{n} rays × {c} channels overflow")))?;
-    super::span::<f32>(len, "outputs")?;
-    // SAFETY: caller provides n × c floats (contract).
-    Ok(Some(unsafe { std::slice::from_raw_parts_mut(p, len) }))
-}
-
-/// # Safety
-/// `rays` points to `n` rays.
-pub(super) unsafe fn rays<'a>(
-    rays: *const FmRay,
-    n: usize,
-) -> Result<&'a [FmRay], (FmStatus, String)> {
-    if n == 0 {
-        return Ok(&[]);
-    }
-    if rays.is_null() {
-        return Err(bad(format!("{n} rays at a null pointer")));
-    }
-    super::span::<FmRay>(n, "rays")?;
-    // SAFETY: n rays (contract).
-    let rs = unsafe { std::slice::from_raw_parts(rays, n) };
-    // Origins and directions finite, tmin and tmax not NaN (tmax may be +∞; tmin ≥ tmax is an empty segment):
-    // a NaN would reach a sample's arithmetic; this checks it once per call instead of once per step.
-    for (i, r) in rs.iter().enumerate() {
-        let finite = r.origin.iter().chain(&r.direction).all(|x| x.is_finite());
-        if !finite || r.tmin.is_nan() || r.tmax.is_nan() {
-            return Err(bad(format!(
-                "ray {i}: origin {:?}, direction {:?}, t in [{}, {}]: expected a finite origin and direction and t not NaN",
-                r.origin, r.direction, r.tmin, r.tmax
-            )));
-        }
-    }
-    Ok(rs)
-}
-
-pub(super) fn ray_of(r: &FmRay) -> Ray {
-    Ray {
-        o: DVec3::from(r.origin),
-        d: DVec3::from(r.direction),
-        t0: r.tmin,
-        t1: r.tmax,
-        seed: r.seed,
-        first: None,
-    }
-}
-
 /// `n` first uniform numbers at `p` (null: none given), each checked to lie in [0, 1).
 ///
 /// # Safety
@@ -276,53 +216,6 @@ pub(super) unsafe extern "C" fn volume_channel_xyz(
         }
         Ok(())
     })
-}
-
-/// Ray `i`'s channels `v` into its row of `out` (rows of `v.len()` floats).
-pub(super) fn store(out: &mut [f32], i: usize, v: &[f64]) {
-    let c = v.len();
-    for (o, x) in out[i * c..(i + 1) * c].iter_mut().zip(v) {
-        *o = *x as f32;
-    }
-}
-
-/// A call's ray times: the caller's (checked finite), or every ray at time 0 (the grids' own). Indexed per ray,
-/// without a copy (hosts call with one ray at a time).
-pub(super) struct Times<'a>(Option<&'a [f64]>);
-
-impl std::ops::Index<usize> for Times<'_> {
-    type Output = f64;
-    fn index(&self, i: usize) -> &f64 {
-        match self.0 {
-            Some(t) => &t[i],
-            None => &0.0,
-        }
-    }
-}
-
-/// `n` ray times at `p` (null: every ray at time 0).
-///
-/// # Safety
-/// `p` is null or points to `n` doubles.
-pub(super) unsafe fn times<'a>(
-    p: *const f64,
-    n: usize,
-    what: &str,
-) -> Result<Times<'a>, (FmStatus, String)> {
-    if p.is_null() || n == 0 {
-        return Ok(Times(None));
-    }
-    super::span::<f64>(n, what)?;
-    // SAFETY: `p` is non-null and holds `n` doubles (caller contract).
-    let t = unsafe { std::slice::from_raw_parts(p, n) };
-    // Every time is checked (the message is made only for a bad one).
-    if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-        return Err(bad(format!(
-            "{what}: times[{i}] = {}: expected finite numbers ({n} rows of 1)",
-            t[i]
-        )));
-    }
-    Ok(Times(Some(t)))
 }
 
 pub(super) unsafe extern "C" fn volume_query(

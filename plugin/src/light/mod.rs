@@ -359,6 +359,7 @@ impl FireLight {
 
 mod build;
 mod line;
+pub mod params;
 mod pdf;
 #[cfg(test)]
 mod tests;

@@ -114,7 +114,7 @@ fn cells_are_sampled_in_proportion_to_their_weights() {
 #[test]
 fn the_parameter_table_states_the_lights_defaults() {
     let default = |name: &str| {
-        crate::volume::params::LIGHT
+        crate::light::params::LIGHT
             .params
             .iter()
             .find(|p| p.name == name)

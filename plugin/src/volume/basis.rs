@@ -170,7 +170,7 @@ impl Basis {
     /// What [`lines`](Self::lines) needs besides the element: the rgb bands' fine grid and its CMF weights, and
     /// the spectral bins' line split.
     pub(super) fn line_aux(&self) -> LineAux {
-        let (fine, fine_w) = super::coefficients::fine_cmf();
+        let (fine, fine_w) = fine_cmf();
         let split = match self.mode {
             ColorMode::Spectral(g) if self.line_split => Some(LineSplit::new(&g)),
             _ => None,
@@ -247,4 +247,13 @@ pub(super) struct LineAux {
 pub(super) struct Nodes {
     pub(super) lambda: Vec<f64>,
     pub(super) terms: Vec<(usize, usize, f64)>,
+}
+
+/// The 1 nm grid over the CMFs that rgb mode bins lines on, and each bin's ∫ x̄ȳz̄.
+pub(super) fn fine_cmf() -> (SpectralGrid, Vec<DVec3>) {
+    let fine = SpectralGrid::new(380.0, 780.0, 400).unwrap_or_default();
+    let w = (0..400)
+        .map(|i| cie::cmf_integral(380.0 + i as f64, 381.0 + i as f64))
+        .collect();
+    (fine, w)
 }

@@ -221,10 +221,10 @@ impl FireVolume {
                 voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
             });
             let dense = match set.lattice {
-                settings::Lattice::Dense => Some(true),
-                settings::Lattice::Bricks => Some(false),
-                settings::Lattice::Off => None,
-                settings::Lattice::Auto => Some(dense_fits),
+                params::Lattice::Dense => Some(true),
+                params::Lattice::Bricks => Some(false),
+                params::Lattice::Off => None,
+                params::Lattice::Auto => Some(dense_fits),
             };
             let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
             match dense {

@@ -11,14 +11,12 @@ use super::settings::SpectrumFn;
 use super::tables::{RangeMax, SpeciesChannel, TTable};
 use super::{ColorMode, Source, TableReport};
 use crate::blackbody::{spectral_radiance, WIEN};
-use crate::cie::{self, cmf_table::CMF};
+use crate::cie::cmf_table::CMF;
 use crate::dataset::Dataset;
 use crate::majorant::MajorantGrid;
 use crate::soot::SootOptics;
 use crate::species::Element;
-use crate::spectrum::SpectralGrid;
 use crate::Error;
-use glam::DVec3;
 use std::time::Instant;
 
 /// Per-channel coefficients per unit density and the temperature tables.
@@ -253,15 +251,6 @@ fn species_tables(
         });
     }
     out
-}
-
-/// The 1 nm grid over the CMFs that rgb mode bins lines on, and each bin's ∫ x̄ȳz̄.
-pub(super) fn fine_cmf() -> (SpectralGrid, Vec<DVec3>) {
-    let fine = SpectralGrid::new(380.0, 780.0, 400).unwrap_or_default();
-    let w = (0..400)
-        .map(|i| cie::cmf_integral(380.0 + i as f64, 381.0 + i as f64))
-        .collect();
-    (fine, w)
 }
 
 /// The largest σ_t of each majorant brick over all channels: its largest density times the largest σ_a + σ_s

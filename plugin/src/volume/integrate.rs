@@ -816,3 +816,13 @@ pub(crate) mod tests {
         );
     }
 }
+
+thread_local! {
+    pub(super) static EVALUATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many times any fire volume evaluated its coefficients on this thread (a counter for benchmarks: read it
+/// before and after the work, on the same thread).
+pub fn evaluations_on_this_thread() -> u64 {
+    EVALUATIONS.with(|n| n.get())
+}

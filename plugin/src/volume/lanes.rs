@@ -14,12 +14,8 @@
 //! (docs/RESULTS.md).
 
 use super::tables::TTable;
+pub(crate) use super::tables::{Lane, W};
 use super::FireVolume;
-
-/// Channels per lane.
-pub(crate) const W: usize = 8;
-/// One lane of channels.
-pub(crate) type Lane = [f32; W];
 
 impl TTable {
     /// The two rows around T and the fraction between them, as lanes.

@@ -6,7 +6,7 @@
 //! [`Stepper`] is the march's per-step work for paths the volume does not trace itself: refraction's curved
 //! rays.
 
-use super::integrate::{self, Medium, Scratch};
+use super::integrate::{self, Medium, Scratch, EVALUATIONS};
 use super::{kernel, lanes, FireVolume, Ray};
 use glam::DVec3;
 
@@ -367,16 +367,6 @@ impl LaneScratch {
             t[c] = self.t[c / lanes::W][c % lanes::W] as f64;
         }
     }
-}
-
-thread_local! {
-    pub(super) static EVALUATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
-}
-
-/// How many times any fire volume evaluated its coefficients on this thread (a counter for benchmarks: read it
-/// before and after the work, on the same thread).
-pub fn evaluations_on_this_thread() -> u64 {
-    EVALUATIONS.with(|n| n.get())
 }
 
 #[cfg(test)]

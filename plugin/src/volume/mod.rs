@@ -52,12 +52,12 @@ mod settings;
 mod subset;
 mod tables;
 
+pub use integrate::evaluations_on_this_thread;
+use integrate::EVALUATIONS;
 pub(crate) use integrate::MAX_STEPS;
 pub use integrate::{Event, Integrator, Ray};
 use integrate::{Medium, Scratch};
-pub use march::evaluations_on_this_thread;
 pub(crate) use march::Stepper;
-use march::EVALUATIONS;
 pub use point::PointCoefficients;
 pub use query::{Answer, Want};
 use settings::{Emission, Settings};

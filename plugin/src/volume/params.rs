@@ -1,28 +1,9 @@
 //! The parameter tables of the voxel dataset and fire volume components (docs/params.md is generated from
 //! them).
 
-use super::settings::{
-    ColourSpace, Fuel, Lattice, LineColour, LineShape, Precision, RefractionIntegrator, Scattering,
-};
-use crate::params::{Choice, Component, ParamSpec, ParamType as T, Range};
-
-const fn p(
-    name: &'static str,
-    ty: T,
-    default: &'static str,
-    unit: &'static str,
-    range: Range,
-    doc: &'static str,
-) -> ParamSpec {
-    ParamSpec {
-        name,
-        ty,
-        default,
-        unit,
-        range,
-        doc,
-    }
-}
+use super::{Integrator, Mode};
+use crate::params::choice;
+use crate::params::{row as p, Choice, Component, ParamType as T, Range};
 
 /// The voxel dataset component.
 pub static DATASET: Component = Component {
@@ -80,7 +61,7 @@ pub static VOLUME: Component = Component {
     name: "volume",
     doc: "Soot absorption and blackbody emission (Pegoraro & Parker 2006 eq. 5–6), atomic lines (eq. 7–12), optional scattering, integrated along rays (eq. 1–3).",
     params: &[
-        p("mode", T::String, "physical", "", Range::Choices(<super::Mode as Choice>::NAMES), "physical: the paper's fire; pbrt: pbrt-v4 uniformgrid/nanovdb semantics (σ spectra × density, peak-normalised blackbody × Lescale above 100 K)."),
+        p("mode", T::String, "physical", "", Range::Choices(<Mode as Choice>::NAMES), "physical: the paper's fire; pbrt: pbrt-v4 uniformgrid/nanovdb semantics (σ spectra × density, peak-normalised blackbody × Lescale above 100 K)."),
         p("look", T::String, "", "", Range::Choices(&super::looks::CHOICES), "A named set of this table's parameters, each overridden by the scene's own: candle (smokescale 0.3), campfire (sigma_s 2e6, g 0.6: soot aggregates' albedo ≈ 0.2), gasburner (sootscale 0.02, smokescale 0, a blue colorramp with physical 0: art direction for the reaction zone's chemiluminescence), explosion (fuel acetylene, smokescale 3, sigma_s 2e6, g 0.6)."),
         p("multiplescattering", T::String, "pathtraced", "", Range::Choices(<Scattering as Choice>::NAMES), "How the smoke scatters: pathtraced — the host samples scattering events (every light, unbiased); diffusion — the fire's own light in its smoke solved once by the diffusion equation on a coarse grid (Stam & Fiume §5) and added to the emission: no scattering events and no noise from them, other lights not scattered; within 8 % of path tracing in smoke up to an optical thickness of ~10 that the grid resolves, too bright where it does not (thick scattering flames: docs/RESULTS.md, \"Multiple scattering by diffusion\")."),
         p("diffusionresolution", T::Integer, "32", "cells", Range::Between(2.0, 256.0), "Cells of the diffusion grid along the box's longest side."),
@@ -108,7 +89,7 @@ pub static VOLUME: Component = Component {
         p("lambdamin", T::Float, "400", "nm", Range::Between(200.0, 2000.0), "Lower end of the spectral bins."),
         p("lambdamax", T::Float, "780", "nm", Range::Between(200.0, 2000.0), "Upper end of the spectral bins (CIE ȳ continues to 780 nm: on a soot flame 700 leaves out about 0.4 % of the luminance, 780 keeps it)."),
         p("stepsize", T::Float, "0.5", "voxels", Range::Between(1e-4, 1e9), "March step, in voxels (the paper's half voxel); from 1e-4 (a step count per ray that still ends)."),
-        p("integrator", T::String, "", "", Range::Choices(<Option<super::Integrator> as Choice>::NAMES), "march: fixed steps, eq. 3 (a step thicker than steptau split in sub-steps); ratio/delta: unbiased tracking over the majorant bricks (ratio: pbrt-v4's own estimator). Unset: march."),
+        p("integrator", T::String, "", "", Range::Choices(<Option<Integrator> as Choice>::NAMES), "march: fixed steps, eq. 3 (a step thicker than steptau split in sub-steps); ratio/delta: unbiased tracking over the majorant bricks (ratio: pbrt-v4's own estimator). Unset: march."),
         p("steptau", T::Float, "", "", Range::Between(1e-6, 1e30), "march: the largest optical depth of one step, at its midpoint; a thicker step is split into sub-steps of at most this depth (at most 4096). Unset: 0.1 in pbrt mode, never in physical mode."),
         p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
         p("lattice", T::String, "auto", "", Range::Choices(<Lattice as Choice>::NAMES), "The copy of the grids the f32 march reads: dense over the box, or a padded copy per brick holding data (memory follows the data); auto: dense while it costs at most 4× the grids' storage, else bricks; off: the march reads the grids (slower, least memory)."),
@@ -129,60 +110,6 @@ pub static VOLUME: Component = Component {
     ],
 };
 
-/// The fire light component (created from a fire volume; docs/params.md).
-pub static LIGHT: Component = Component {
-    name: "light",
-    doc: "The fire as a light (Selle's piecewise-constant 3D pdf over emitting voxels), created from a fire volume: its parameters are the volume's plus these.",
-    params: &[p(
-        "weighting",
-        T::String,
-        "power",
-        "",
-        Range::Choices(<crate::light::Weighting as Choice>::NAMES),
-        "Voxel weights: power, ∫ j dλ over the bins; luminance, Σ j Y; or escaping, power times the share that leaves the fire (e^{−τ} to the grid's edge along the axes, from the bricks' mean extinction; at least 5 %). Power measured 0.4–0.7 % lower error than luminance on the default scene (docs/RESULTS.md).",
-    ),
-    p(
-        "cell",
-        T::Integer,
-        "8",
-        "voxels",
-        Range::Between(1.0, 8.0),
-        "Voxels per side of the pdf's cells, 1, 2, 4 or 8: the light picks a cell by its emission and a point uniform in it, and the density of a direction walks cells, not voxels (docs/RESULTS.md, the fire light at production scale).",
-    ),
-    p(
-        "linestep",
-        T::Float,
-        "0",
-        "voxels",
-        Range::Between(0.0, 1e6),
-        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 16, 32 or 64 steps — with lineblock 0, the coarsest whose line (through a copy or the fire's voxels) stays within 0.5 % of the volume's march on 1024 of the light's rays, 64 if none does; with lineblock given, 64. Never shorter than the volume's own step (then it is the volume's march).",
-    ),
-    p(
-        "linecorrection",
-        T::Float,
-        "0",
-        "",
-        Range::Between(0.0, 1.0),
-        "The probability of correcting a coarse line estimate by the volume's own march (the difference over the probability: unbiased against it); 0: the coarse march alone.",
-    ),
-    p(
-        "lineblock",
-        T::Integer,
-        "0",
-        "voxels",
-        Range::Between(0.0, 8.0),
-        "The blocks of the copy of the fire the coarse line marches through (density their mean, temperature the one that emits their mean: a copy that stays in the caches): 2, 4 or 8 voxels per side; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays within 0.5 % of the volume's march on 1024 of the light's rays (checked when the light is built). Volumes with species, emission or Lescale grids, motion blur, refraction, diffusion, thick lines or embers march their own voxels.",
-    ),
-    p(
-        "linechannels",
-        T::Integer,
-        "0",
-        "channels",
-        Range::Between(0.0, 1e6),
-        "How many of the spectral bins the coarse line marches, the others following from them (transmittance exactly from the column of soot, radiance by interpolation in 1/λ of the logarithm of its ratio to a slab of that soot at the fire's hottest temperature): 0, 8 bins where the line's X, Y and Z stay within 0.2 % of every bin's on 1024 of the light's rays (checked when the light is built), else all; 2 to 32, that many; at least the volume's bins, all of them. Only a soot fire's bins (no species' lines, no emission or Lescale grid, and as lineblock's list); rgb marches its 3.",
-    )],
-};
-
 /// Test-only parameters: compiled into the plugin's own unit tests, never into the shipped library.
 #[cfg(test)]
 pub static FAULTS: Component = Component {
@@ -198,56 +125,80 @@ pub static FAULTS: Component = Component {
     )],
 };
 
-/// Every public component, in documentation order.
-pub fn components() -> [&'static Component; 3] {
-    [&DATASET, &VOLUME, &LIGHT]
+/// `precision`: the march's per-sample arithmetic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Precision {
+    F32,
+    F64,
 }
+choice!(Precision { Precision::F32 => "f32", Precision::F64 => "f64" });
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn params_doc_is_current() {
-        // docs/params.md is generated from these tables; regenerate with FIREMEDIUM_BLESS=1.
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/params.md");
-        let want = crate::params::markdown(&components());
-        if std::env::var_os("FIREMEDIUM_BLESS").is_some() {
-            std::fs::write(path, &want).unwrap();
-        }
-        let have = std::fs::read_to_string(path).unwrap_or_default();
-        assert!(have == want, "docs/params.md is stale: run FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc");
-    }
-
-    #[test]
-    fn names_are_unique_and_defaults_parse() {
-        let mut seen = std::collections::HashSet::new();
-        for c in components().iter().chain([&&FAULTS]) {
-            for p in c.params {
-                assert!(seen.insert(p.name), "parameter '{}' declared twice", p.name);
-                if !p.default.is_empty() {
-                    match p.ty {
-                        T::Float => p
-                            .default
-                            .parse::<f64>()
-                            .map(|_| ())
-                            .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default)),
-                        T::Integer => p.default.split_whitespace().for_each(|v| {
-                            v.parse::<i64>()
-                                .unwrap_or_else(|_| panic!("{}: default {}", p.name, p.default));
-                        }),
-                        _ => {}
-                    }
-                }
-                if let Range::Choices(c) = p.range {
-                    assert!(
-                        c.contains(&p.default),
-                        "{}: default {:?} not among {c:?}",
-                        p.name,
-                        p.default
-                    );
-                }
-            }
-        }
-    }
+/// `lattice`: the copy of the grids the f32 march reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lattice {
+    /// Dense while it costs at most 4× the grids' storage, else bricks.
+    Auto,
+    Dense,
+    Bricks,
+    /// No copy: the march reads the grids.
+    Off,
 }
+choice!(Lattice { Lattice::Auto => "auto", Lattice::Dense => "dense", Lattice::Bricks => "bricks", Lattice::Off => "off" });
+
+/// `lineshape`: atomic lines' profiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LineShape {
+    Voigt,
+    Box,
+}
+choice!(LineShape { LineShape::Voigt => "voigt", LineShape::Box => "box" });
+
+/// `multiplescattering`: how the smoke scatters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scattering {
+    PathTraced,
+    Diffusion,
+}
+choice!(Scattering { Scattering::PathTraced => "pathtraced", Scattering::Diffusion => "diffusion" });
+
+/// `refractionintegrator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RefractionIntegrator {
+    Verlet,
+    Rk4,
+}
+choice!(RefractionIntegrator { RefractionIntegrator::Verlet => "verlet", RefractionIntegrator::Rk4 => "rk4" });
+
+/// `colormode`: spectral bins or XYZ bands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ColourSpace {
+    Spectral,
+    Rgb,
+}
+choice!(ColourSpace { ColourSpace::Spectral => "spectral", ColourSpace::Rgb => "rgb" });
+
+/// `linecolour`: how spectral bins carry an atomic line's light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LineColour {
+    OwnWavelength,
+    BinMean,
+}
+choice!(LineColour { LineColour::OwnWavelength => "ownwavelength", LineColour::BinMean => "binmean" });
+
+/// `fuel`: the soot's optical constants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Fuel {
+    Propane,
+    Acetylene,
+    /// `fuelnk`'s table.
+    Custom,
+}
+choice!(Fuel { Fuel::Propane => "propane", Fuel::Acetylene => "acetylene", Fuel::Custom => "custom" });
+
+choice!(Mode { Mode::Physical => "physical", Mode::Pbrt => "pbrt" });
+choice!(Option<Integrator> {
+    None => "",
+    Some(Integrator::March) => "march",
+    Some(Integrator::Ratio) => "ratio",
+    Some(Integrator::Delta) => "delta",
+});

@@ -3,10 +3,14 @@
 //! dataset's own parameters are read by [`crate::dataset::params`].
 
 use super::basis::Basis;
-use super::{params, ColorMode, Integrator, Mode};
+use super::params::{
+    self, ColourSpace, Fuel, Lattice, LineColour, LineShape, Precision, RefractionIntegrator,
+    Scattering,
+};
+use super::{ColorMode, Integrator, Mode};
 use crate::ciddor::Air;
 use crate::cie::cmf_table::{CMF, CMF_START_NM};
-use crate::params::{choice, Component, Param, ParamReader, ParamType, Values};
+use crate::params::{Component, Param, ParamReader, ParamType, Values};
 use crate::rgb_spectrum::{RgbSpectrum, RgbUse};
 use crate::soot::SootOptics;
 use crate::species::Element;
@@ -517,81 +521,3 @@ fn spectrum_param(
         a.1 + (l - a.0) / (b.0 - a.0) * (b.1 - a.1)
     })))
 }
-
-/// `precision`: the march's per-sample arithmetic.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Precision {
-    F32,
-    F64,
-}
-choice!(Precision { Precision::F32 => "f32", Precision::F64 => "f64" });
-
-/// `lattice`: the copy of the grids the f32 march reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Lattice {
-    /// Dense while it costs at most 4× the grids' storage, else bricks.
-    Auto,
-    Dense,
-    Bricks,
-    /// No copy: the march reads the grids.
-    Off,
-}
-choice!(Lattice { Lattice::Auto => "auto", Lattice::Dense => "dense", Lattice::Bricks => "bricks", Lattice::Off => "off" });
-
-/// `lineshape`: atomic lines' profiles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum LineShape {
-    Voigt,
-    Box,
-}
-choice!(LineShape { LineShape::Voigt => "voigt", LineShape::Box => "box" });
-
-/// `multiplescattering`: how the smoke scatters.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Scattering {
-    PathTraced,
-    Diffusion,
-}
-choice!(Scattering { Scattering::PathTraced => "pathtraced", Scattering::Diffusion => "diffusion" });
-
-/// `refractionintegrator`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum RefractionIntegrator {
-    Verlet,
-    Rk4,
-}
-choice!(RefractionIntegrator { RefractionIntegrator::Verlet => "verlet", RefractionIntegrator::Rk4 => "rk4" });
-
-/// `colormode`: spectral bins or XYZ bands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum ColourSpace {
-    Spectral,
-    Rgb,
-}
-choice!(ColourSpace { ColourSpace::Spectral => "spectral", ColourSpace::Rgb => "rgb" });
-
-/// `linecolour`: how spectral bins carry an atomic line's light.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum LineColour {
-    OwnWavelength,
-    BinMean,
-}
-choice!(LineColour { LineColour::OwnWavelength => "ownwavelength", LineColour::BinMean => "binmean" });
-
-/// `fuel`: the soot's optical constants.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Fuel {
-    Propane,
-    Acetylene,
-    /// `fuelnk`'s table.
-    Custom,
-}
-choice!(Fuel { Fuel::Propane => "propane", Fuel::Acetylene => "acetylene", Fuel::Custom => "custom" });
-
-choice!(Mode { Mode::Physical => "physical", Mode::Pbrt => "pbrt" });
-choice!(Option<Integrator> {
-    None => "",
-    Some(Integrator::March) => "march",
-    Some(Integrator::Ratio) => "ratio",
-    Some(Integrator::Delta) => "delta",
-});

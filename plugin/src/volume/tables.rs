@@ -3,9 +3,12 @@
 //! in lanes the f32 march reads directly, interpolated linearly; and [`RangeMax`], their maxima over any
 //! temperature range in O(1), for the majorant bricks.
 
-use super::lanes;
+/// Channels per lane (the march's `f32` lanes, [`super::lanes`]).
+pub(crate) const W: usize = 8;
+/// One lane of channels.
+pub(crate) type Lane = [f32; W];
 
-/// A temperature table: `rows` × C values, row r at T = r·dt, each row stored as lanes of `lanes::W` channels
+/// A temperature table: `rows` × C values, row r at T = r·dt, each row stored as lanes of `W` channels
 /// (zero-padded), which the f32 march reads directly.
 #[derive(Debug, Clone, Default)]
 pub(super) struct TTable {
@@ -15,7 +18,7 @@ pub(super) struct TTable {
     pub(super) rows: usize,
     /// Lanes per row.
     pub(super) chunks: usize,
-    pub(super) v: Vec<lanes::Lane>,
+    pub(super) v: Vec<Lane>,
 }
 
 impl TTable {
@@ -36,8 +39,8 @@ impl TTable {
         } else {
             1.0
         };
-        let chunks = c.div_ceil(lanes::W).max(1);
-        let mut v = vec![[0f32; lanes::W]; rows * chunks];
+        let chunks = c.div_ceil(W).max(1);
+        let mut v = vec![[0f32; W]; rows * chunks];
         let threads = crate::par::threads(8);
         let chunk = rows.div_ceil(threads);
         crate::par::scope(|s| {
@@ -45,7 +48,7 @@ impl TTable {
                 s.spawn(move || {
                     for (r, row) in part.chunks_mut(chunks).enumerate() {
                         for (ch, x) in f((k * chunk + r) as f64 * dt).into_iter().enumerate() {
-                            row[ch / lanes::W][ch % lanes::W] = x as f32;
+                            row[ch / W][ch % W] = x as f32;
                         }
                     }
                 });
@@ -61,14 +64,14 @@ impl TTable {
     }
     /// The table of channels 0..c and the table of the rest (one build that computes both, split).
     pub(super) fn split(&self, c: usize) -> (TTable, TTable) {
-        let total = self.chunks * lanes::W;
+        let total = self.chunks * W;
         let part = |from: usize, to: usize| {
             let n = to - from;
-            let chunks = n.div_ceil(lanes::W).max(1);
-            let mut v = vec![[0f32; lanes::W]; self.rows * chunks];
+            let chunks = n.div_ceil(W).max(1);
+            let mut v = vec![[0f32; W]; self.rows * chunks];
             for r in 0..self.rows {
                 for ch in 0..n {
-                    v[r * chunks + ch / lanes::W][ch % lanes::W] = self.value(r, from + ch);
+                    v[r * chunks + ch / W][ch % W] = self.value(r, from + ch);
                 }
             }
             TTable {
@@ -94,7 +97,7 @@ impl TTable {
     }
     #[inline]
     pub(super) fn value(&self, r: usize, c: usize) -> f32 {
-        self.v[r * self.chunks + c / lanes::W][c % lanes::W]
+        self.v[r * self.chunks + c / W][c % W]
     }
     #[inline]
     pub(super) fn at(&self, (i, fr): (usize, f32), c: usize) -> f32 {
@@ -102,7 +105,7 @@ impl TTable {
         a + fr * (self.value(i + 1, c) - a)
     }
     pub(super) fn bytes(&self) -> usize {
-        self.v.len() * std::mem::size_of::<lanes::Lane>()
+        self.v.len() * std::mem::size_of::<Lane>()
     }
 }
 

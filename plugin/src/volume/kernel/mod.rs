@@ -20,10 +20,9 @@
 //!
 //! Accuracy (tests, docs/RESULTS.md): the same image as the f64 march to the lanes' f32 rounding.
 
-use super::integrate::{Span, MAX_STEPS};
+use super::integrate::{Span, EVALUATIONS, MAX_STEPS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
 use super::lattice::Lattice;
-use super::march::EVALUATIONS;
 use super::tables::TTable;
 use super::{FireVolume, Ray};
 

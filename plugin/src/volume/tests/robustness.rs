@@ -225,9 +225,9 @@ fn tracking_in_4096_bins_stops_within_the_same_work() {
     let c = v.channels();
     assert_eq!(c, 4096);
     let (mut l, mut w) = (vec![0.0; c], vec![0.0; c]);
-    let evals = super::march::EVALUATIONS.with(|n| n.get());
+    let evals = super::integrate::EVALUATIONS.with(|n| n.get());
     v.sample_scatter(&ray_x(1), &mut l, &mut w);
-    let taken = super::march::EVALUATIONS.with(|n| n.get()) - evals;
+    let taken = super::integrate::EVALUATIONS.with(|n| n.get()) - evals;
     assert_eq!(v.capped_rays(), 1, "{taken} collisions");
     assert!(
         taken <= super::integrate::MAX_TRACKING_WORK / 4096 + 1,
@@ -252,9 +252,9 @@ fn a_march_at_4096_bins_takes_at_most_its_share_of_the_steps() {
     .unwrap();
     let c = v.channels();
     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
-    let before = super::march::EVALUATIONS.with(|n| n.get());
+    let before = super::integrate::EVALUATIONS.with(|n| n.get());
     v.integrate(&ray_x(1), &mut l, &mut t);
-    let steps = super::march::EVALUATIONS.with(|n| n.get()) - before;
+    let steps = super::integrate::EVALUATIONS.with(|n| n.get()) - before;
     let most = super::integrate::max_steps(4096);
     assert_eq!(most, 131_072.0);
     assert!(
