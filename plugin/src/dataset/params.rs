@@ -64,23 +64,18 @@ fn preset_names(source: Tool) -> Option<(&'static [&'static str], &'static [&'st
     }
 }
 
-/// The grid a preset reads for `param`: the one the scene names, else the first of `names` the file holds
-/// (an error listing them and the file's grids when it holds none).
+/// The grid a preset reads: the first of `names` the file holds (an error listing them and the file's grids
+/// when it holds none).
 fn preset_grid(
-    r: &ParamReader,
-    param: &str,
     names: &[&str],
-    file: &str,
+    file: &std::path::Path,
     opts: &LoadOptions,
 ) -> Result<String, Error> {
-    if r.list_has(param) {
-        return r.string(param);
-    }
-    let grids = super::list_grids(std::path::Path::new(file), opts)?;
+    let grids = super::list_grids(file, opts)?;
     match names.iter().find(|n| grids.iter().any(|g| g.name == **n)) {
         Some(n) => Ok(n.to_string()),
         None => Err(super::missing_grid(
-            file,
+            &file.display().to_string(),
             &names.join("' or '"),
             grids.iter().map(|g| g.name.as_str()),
         )),
@@ -109,7 +104,7 @@ fn velocity_grids(r: &ParamReader) -> Result<Option<[String; 3]>, Error> {
     }
 }
 
-/// What [`load`] gives a volume.
+/// What [`Request::load`] gives a volume.
 pub(crate) struct Loaded {
     pub ds: Dataset,
     /// The channel that scales emission per voxel: pbrt-v4's inline `Lescale`, or the `emissiongrid`.
@@ -136,17 +131,14 @@ pub(crate) struct EmberFile {
     pub fps: f64,
 }
 
-/// The `embers` file (frame-substituted), read and checked; `None` when not given.
+/// The `embers` file (frame-substituted), read and checked.
 fn read_embers(
-    r: &ParamReader,
+    name: &str,
     opts: &LoadOptions,
     shutter: [f64; 2],
-) -> Result<Option<EmberFile>, Error> {
-    let name = r.string("embers")?;
-    if name.is_empty() {
-        return Ok(None);
-    }
-    let path = frame_path(std::path::Path::new(&name), opts.frame)?;
+    fps: f64,
+) -> Result<EmberFile, Error> {
+    let path = frame_path(std::path::Path::new(name), opts.frame)?;
     let file = path.display().to_string();
     let (_, len) = crate::dataset::open_regular(&path)?;
     if len > opts.max_bytes {
@@ -159,19 +151,51 @@ fn read_embers(
     }
     let bytes = crate::dataset::read_file(&path)?;
     let particles = super::particles::parse(&file, &bytes, opts.max_bytes)?;
-    Ok(Some(EmberFile {
+    Ok(EmberFile {
         file,
         particles,
         shutter,
-        fps: r.float("fps")?,
-    }))
+        fps,
+    })
 }
 
 /// The dataset's channels of the scatter colour (`scattercolorgrid`).
 pub(crate) const SCATTER_COLOR: [&str; 3] = ["scattercolor.r", "scattercolor.g", "scattercolor.b"];
 
-/// Loads the dataset the parameters describe (pbrt-v4's grid media when `pbrt`).
-pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
+/// What the dataset's parameters ask for, read and checked without opening a file ([`read`]); [`Request::load`]
+/// then reads the files. A mistake in the parameters is reported before a large file is read.
+pub(crate) struct Request {
+    opts: LoadOptions,
+    interp: Interpolation,
+    grids: Grids,
+    /// Medium units per frame per unit of velocity, and the shutter in frames.
+    per_frame: f64,
+    shutter: [f64; 2],
+    /// The `embers` file and the frame rate its particles move at.
+    embers: Option<(String, f64)>,
+}
+
+/// Where the grids come from.
+enum Grids {
+    /// pbrt-v4's inline arrays: (name, values), the last `Lescale` when `lescale`.
+    Inline {
+        dims: [usize; 3],
+        bounds: [DVec3; 2],
+        arrays: Vec<(&'static str, Vec<f32>)>,
+        lescale: bool,
+    },
+    /// Files: each channel's source; `presets` — (source, names) — name the grids a `source` preset tries in
+    /// its file, the first found taken; whether an emission and a reaction grid were asked for.
+    Files {
+        sources: Vec<ChannelSource>,
+        presets: Vec<(usize, &'static [&'static str])>,
+        emission: bool,
+        reaction: bool,
+    },
+}
+
+/// Reads the dataset's parameters (pbrt-v4's grid media when `pbrt`), touching no file.
+pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
     let shutter = [r.float("shutteropen")?, r.float("shutterclose")?];
     if shutter[1] < shutter[0] {
         return Err(Error::invalid(
@@ -355,9 +379,7 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
     }
     let inline_density = r.numbers("density")?;
     let lescale_values = r.numbers("Lescale")?;
-    let (mut ds, lescale, emission_grid, motion, scatter_color, reaction) = if let Some(dens) =
-        inline_density
-    {
+    let grids = if let Some(dens) = inline_density {
         let dims = [
             r.int("nx")? as usize,
             r.int("ny")? as usize,
@@ -374,14 +396,14 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         let les = lescale_values
             .filter(|v| v.len() > 1 || dims == [1, 1, 1])
             .map(|v| to32(&v));
-        let mut arrays: Vec<(&str, &[f32])> = vec![("density", &dens)];
-        if let Some(t) = &temp {
+        let lescale = les.is_some();
+        let mut arrays = vec![("density", dens)];
+        if let Some(t) = temp {
             arrays.push(("temperature", t));
         }
-        if let Some(l) = &les {
+        if let Some(l) = les {
             arrays.push(("Lescale", l));
         }
-        let [b0, b1] = bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]);
         if velocity.is_some() {
             return Err(Error::invalid(
                 "dataset",
@@ -400,9 +422,12 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 ));
             }
         }
-        let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
-        let li = les.as_ref().map(|_| arrays.len() - 1);
-        (ds, li, false, None, None, None)
+        Grids::Inline {
+            dims,
+            bounds: bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]),
+            arrays,
+            lescale,
+        }
     } else {
         let filename = match (r.string("filename")?, r.string("dataset")?) {
             (f, d) if !f.is_empty() && !d.is_empty() => {
@@ -436,11 +461,20 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         } else {
             filename.clone()
         };
+        // A preset's grid is found in its file when the files are read (`presets`); its name here stands for it.
+        let mut presets = Vec::new();
         let (dgrid, tgrid) = match preset_names(tool) {
-            Some((d, t)) => (
-                preset_grid(r, "densitygrid", d, &dfile, &opts)?,
-                preset_grid(r, "temperaturegrid", t, &tfile, &opts)?,
-            ),
+            Some((d, t)) => {
+                let mut named = |param: &str, names: &'static [&'static str], at: usize| {
+                    if r.list_has(param) {
+                        r.string(param)
+                    } else {
+                        presets.push((at, names));
+                        Ok(names[0].to_string())
+                    }
+                };
+                (named("densitygrid", d, 0)?, named("temperaturegrid", t, 1)?)
+            }
             None if blender && !r.list_has("temperaturegrid") => {
                 (r.string("densitygrid")?, "flame".to_string())
             }
@@ -459,7 +493,9 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
         );
         // A single-grid file cannot hold temperature too: without a temperature file there is none.
         let no_temperature = tgrid.is_empty() || (single && tfile == dfile);
-        if !no_temperature {
+        if no_temperature {
+            presets.retain(|&(at, _)| at != 1);
+        } else {
             sources.push(ChannelSource {
                 name: "temperature".into(),
                 file: tfile.into(),
@@ -546,35 +582,95 @@ pub(crate) fn load(r: &ParamReader, pbrt: bool) -> Result<Loaded, Error> {
                 mapping: Mapping::default(),
             });
         }
-        let ds = Dataset::load(&sources, &opts)?;
-        let at = |n: &str| ds.channels().iter().position(|c| c.name == n);
-        let emission = at("emission").filter(|_| !egrid.is_empty());
-        let motion = match VELOCITY.map(at) {
-            [Some(x), Some(y), Some(z)] => Some(Motion {
-                channels: [x, y, z],
-                per_frame,
-                shutter,
-            }),
-            _ => None,
-        };
-        let scatter = match SCATTER_COLOR.map(at) {
-            [Some(r), Some(g), Some(b)] => Some([r, g, b]),
-            _ => None,
-        };
-        let reaction = at("reaction").filter(|_| !rgrid.is_empty());
-        (ds, emission, emission.is_some(), motion, scatter, reaction)
+        Grids::Files {
+            sources,
+            presets,
+            emission: !egrid.is_empty(),
+            reaction: !rgrid.is_empty(),
+        }
     };
-    ds = ds.with_interpolation(interp);
-    let embers = read_embers(r, &opts, shutter)?;
-    Ok(Loaded {
-        ds,
-        lescale,
-        emission_grid,
-        motion,
-        scatter_color,
-        reaction,
+    let embers = r.string("embers")?;
+    let embers = if embers.is_empty() {
+        None
+    } else {
+        Some((embers, r.float("fps")?))
+    };
+    Ok(Request {
+        opts,
+        interp,
+        grids,
+        per_frame,
+        shutter,
         embers,
     })
+}
+
+impl Request {
+    /// Reads the files the parameters name (or takes the inline arrays) into the dataset.
+    pub(crate) fn load(self) -> Result<Loaded, Error> {
+        let Request {
+            opts,
+            interp,
+            grids,
+            per_frame,
+            shutter,
+            embers,
+        } = self;
+        let (ds, lescale, emission_grid, motion, scatter_color, reaction) = match grids {
+            Grids::Inline {
+                dims,
+                bounds: [b0, b1],
+                arrays,
+                lescale,
+            } => {
+                let arrays: Vec<(&str, &[f32])> =
+                    arrays.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+                let ds = Dataset::from_inline(dims, b0, b1, &arrays, &opts)?;
+                let li = lescale.then_some(arrays.len() - 1);
+                (ds, li, false, None, None, None)
+            }
+            Grids::Files {
+                mut sources,
+                presets,
+                emission,
+                reaction,
+            } => {
+                for (at, names) in presets {
+                    sources[at].grid = Some(preset_grid(names, &sources[at].file, &opts)?);
+                }
+                let ds = Dataset::load(&sources, &opts)?;
+                let at = |n: &str| ds.channels().iter().position(|c| c.name == n);
+                let emission = at("emission").filter(|_| emission);
+                let motion = match VELOCITY.map(at) {
+                    [Some(x), Some(y), Some(z)] => Some(Motion {
+                        channels: [x, y, z],
+                        per_frame,
+                        shutter,
+                    }),
+                    _ => None,
+                };
+                let scatter = match SCATTER_COLOR.map(at) {
+                    [Some(r), Some(g), Some(b)] => Some([r, g, b]),
+                    _ => None,
+                };
+                let reaction = at("reaction").filter(|_| reaction);
+                (ds, emission, emission.is_some(), motion, scatter, reaction)
+            }
+        };
+        let embers = match embers {
+            Some((name, fps)) => Some(read_embers(&name, &opts, shutter, fps)?),
+            None => None,
+        };
+        Ok(Loaded {
+            ds: ds.with_interpolation(interp),
+            lescale,
+            emission_grid,
+            motion,
+            scatter_color,
+            reaction,
+            embers,
+        })
+    }
 }
 
 /// Whether `Lescale` is a per-voxel grid (pbrt-v4: any `Lescale` array of an inline grid is one, a single value

@@ -25,8 +25,10 @@ impl FireVolume {
         let threads = r.int("threads")? as usize;
         let budget = r.float("maxbytes")? as u64;
         crate::par::with_budget(threads, || {
-            let loaded = crate::dataset::params::load(&r, set.mode == Mode::Pbrt)?;
+            // Every parameter read and checked before a file is opened.
+            let request = crate::dataset::params::read(&r, set.mode == Mode::Pbrt)?;
             r.finish()?;
+            let loaded = request.load()?;
             let mut v = Self::build(set, loaded, budget, start)?;
             v.report.threads = threads;
             Ok(v)

@@ -116,6 +116,42 @@ fn parameter_errors_suggest_and_explain() {
 }
 
 #[test]
+fn parameters_are_checked_before_a_file_is_opened() {
+    // A mistake in the parameters is reported without reading the dataset: here the file does not exist, and
+    // each error names the parameter, not the file (a preset's grid, looked up in the file, included).
+    let missing = std::env::temp_dir().join("firemedium-no-such-dir/fire.vdb");
+    let file = missing.display().to_string();
+    let cases = [
+        (vec![Param::int("nx", 4)], "'nx'"),
+        (
+            vec![
+                Param::string("embers", "sparks.ply"),
+                Param::float("fps", -1.0),
+            ],
+            "fps",
+        ),
+        (
+            vec![Param::string("source", "houdini"), Param::int("nx", 4)],
+            "'nx'",
+        ),
+    ];
+    for (extra, want) in cases {
+        let mut l = vec![Param::string("filename", &file)];
+        l.extend(extra);
+        let e = FireVolume::new(&l).unwrap_err().to_string();
+        assert!(
+            e.contains(want) && !e.contains("firemedium-no-such-dir"),
+            "{e}"
+        );
+    }
+    // With the parameters right, the file is what is wrong, and the error names it.
+    let e = FireVolume::new(&[Param::string("filename", &file)])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("firemedium-no-such-dir"), "{e}");
+}
+
+#[test]
 fn pbrt_nanovdb_clips_to_nanovdbs_world_box() {
     // ramp16.nvdb: NanoVDB's world box is [-0.46875, 0.53125]³ (index 0 → its centre, index 16 → +1 voxel).
     let f = concat!(
