@@ -1890,7 +1890,7 @@ fn an_ember_lights_the_floor_as_a_glowing_sphere_does() {
 fn the_diffusion_scene_agrees_with_its_path_traced_twin() {
     // scenes/diffusion: a glowing cube of smoke (albedo 0.9, optical thickness ~3) by the diffusion equation and
     // path traced. The cube's face (the central pixels) and the floor it lights (the bottom rows) agree within the
-    // diffusion approximation's error at this depth: measured against 2048 spp, −7.5 % and −7.4 %
+    // diffusion approximation's error at this depth: measured against 2048 spp, −8.9 % and −7.9 %
     // (docs/RESULTS.md, "Multiple scattering by diffusion").
     let root = crate::common::root().join("scenes/diffusion");
     let mean = |name: &str, extra: &[&str]| {

@@ -532,6 +532,8 @@ impl FireVolume {
                 ));
             }
             let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
+            // The march samples the scattered light at least twice per diffusion cell.
+            vol.estimator.step = vol.estimator.step.min(0.5 * df.cell());
             vol.report.tables.push(TableReport {
                 name: format!("diffusion ({} iterations)", df.iterations),
                 bytes: df.bytes(),
