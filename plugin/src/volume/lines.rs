@@ -12,8 +12,9 @@
 //! (so every estimator — march, ratio, delta — sees the continuum and the thin lines) and are added back by the
 //! correction below. `coefficients` still reports them as bin means (what a bin's coefficient is).
 //!
-//! **Groups and nodes.** The thick lines of one window — ±20 nm around each line, overlapping windows merged
-//! (the wings beyond carry < 1 % of a line's light up to N·L = 1e20 m⁻²) — form a group. Each line owns the window up to the midpoints between its
+//! **Groups and nodes.** The thick lines of one window — ±20 nm around each line, or wider where its collisional
+//! wing is still thicker than [`WING_TAU`] (a dense flame's wings are thick tens of nm out), overlapping windows
+//! merged — form a group. Each line owns the window up to the midpoints between its
 //! neighbours; across it the nodes are a core node each side (offsets below δ₀ = 0.3 σ_D at 300 K) and
 //! 3-point Gauss–Legendre panels, one per decade of offset, in u = ln δ (the integrand δ·g(δ) is a smooth bump
 //! in u from the Doppler core to the Lorentz wings; 3.4e-3 against a 2e-5 nm grid, tested). Na D: 58 nodes.
@@ -44,7 +45,9 @@ use super::{ColorMode, FireVolume, Ray};
 use crate::blackbody::spectral_radiance;
 use crate::constants::BOLTZMANN;
 use crate::dataset::Dataset;
-use crate::species::profile::{atomic_mass_u, doppler_sigma_nm, line_profile_nm};
+use crate::species::profile::{
+    atomic_mass_u, doppler_sigma_nm, line_profile_nm, lorentz_hwhm_nm, voigt_nm,
+};
 use crate::species::{line_cross_sections, Element, Line};
 use crate::Error;
 use glam::DVec3;
@@ -53,9 +56,14 @@ use glam::DVec3;
 /// integrated across its profile.
 pub(super) const THICK: f64 = 0.01;
 
-/// Half width of the window across a line, nm: its wings beyond carry < 1 % of its light up to N·L = 1e20 m⁻²
-/// (Na D) and stay out.
+/// The least half width of the window across a line, nm: its wings beyond carry < 1 % of its light up to N·L =
+/// 1e20 m⁻² (Na D) and stay out.
 const HALF_WINDOW: f64 = 20.0;
+
+/// The optical depth of a line's collisional wing at the edge of its window (at the species' largest number
+/// density over the fire's diagonal, at the temperature where the line absorbs most): a denser fire's window
+/// widens until its wing there is this thin, so the light its wings hold beyond stays under 1 % of B in any bin.
+const WING_TAU: f64 = 0.01;
 
 /// 3-point Gauss–Legendre nodes and weights on [−1, 1].
 const GL3: [(f64, f64); 3] = [
@@ -81,8 +89,8 @@ pub(super) struct Input<'a> {
     pub budget: u64,
 }
 
-/// A window's [λ₀, λ₁] (nm) and its lines (species index, line).
-type Window = ([f64; 2], Vec<(usize, Line)>);
+/// A window's [λ₀, λ₁] (nm) and its lines (species index, line, the line's own half window).
+type Window = ([f64; 2], Vec<(usize, Line, f64)>);
 
 /// The line tables' temperature step: 2 K, or coarser for a hotter grid (at most 4096 rows; the populations
 /// and widths change smoothly in T).
@@ -124,6 +132,38 @@ pub(super) fn select(inp: &Input) -> Vec<Vec<bool>> {
                 .collect()
         })
         .collect()
+}
+
+/// A thick line's half window (nm): [`HALF_WINDOW`], or wider where its Lorentz wing, σ(Δλ) ≈ S γ / (π Δλ²), is
+/// still thicker than [`WING_TAU`] there — Δλ = √(N_max L S γ / (π WING_TAU)) at the temperature (of `select`'s)
+/// where S γ is largest.
+fn half_window(inp: &Input, species: usize, line: &Line) -> f64 {
+    let (sym, e, scale) = &inp.species[species];
+    let [lo, hi] = inp.ds.bounds();
+    let length = (hi - lo).length();
+    let n_max = inp
+        .ds
+        .channels()
+        .iter()
+        .find(|c| &c.name == sym)
+        .map_or(0.0, |c| c.stats.max.max(0.0) as f64 * scale);
+    let [t_lo, t_hi] = inp.t_range;
+    let (t_lo, t_hi) = (t_lo.max(1.0), t_hi.max(1.0));
+    let widest = (0..=32)
+        .map(|i| t_lo * (t_hi / t_lo).powf(i as f64 / 32.0))
+        .map(|t| {
+            // (The strength per unit of φ per nm, as the tables take it.)
+            let strength =
+                line_cross_sections(line, BOLTZMANN * t, e.ln_partition_function(t), 1e9).0;
+            let gamma = lorentz_hwhm_nm(line.lambda_nm, t, inp.broadening);
+            (n_max * length * strength * gamma / (std::f64::consts::PI * WING_TAU)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    if widest.is_finite() {
+        widest.max(HALF_WINDOW)
+    } else {
+        HALF_WINDOW
+    }
 }
 
 /// Whether a line at λ lands in the basis's channels (a bin, or the CMFs' 380–780 nm).
@@ -291,21 +331,60 @@ impl ThickLines {
         if all.is_empty() {
             return Ok(None);
         }
-        // The tables' bytes before they are built: at most 44 nodes a line (a core node and three per decade
-        // of offset each side, from 0.3 σ_D of the heaviest atom at 300 K to 20 nm), two values a node, per row,
-        // twice (the lanes and the contiguous rows), and the bins' means.
+        all.sort_by(|a, b| a.1.lambda_nm.total_cmp(&b.1.lambda_nm));
+        // Windows: each line's own half window around it (clipped to the channels' range: nodes beyond reach no
+        // channel), overlapping ones merged.
+        let [lo, hi] = match inp.basis.mode {
+            ColorMode::Spectral(g) => [g.min_nm(), g.max_nm()],
+            ColorMode::Rgb => [380.0, 780.0],
+        };
+        let mut windows: Vec<Window> = Vec::new();
+        for (s, l) in all {
+            let hw = half_window(inp, s, &l);
+            let w = [
+                (l.lambda_nm - hw).max(lo.min(l.lambda_nm)),
+                (l.lambda_nm + hw).min(hi.max(l.lambda_nm)),
+            ];
+            match windows.last_mut() {
+                Some((last, members)) if w[0] < last[1] => {
+                    last[1] = last[1].max(w[1]);
+                    last[0] = last[0].min(w[0]);
+                    members.push((s, l, hw));
+                }
+                _ => windows.push((w, vec![(s, l, hw)])),
+            }
+            // (A wide window may reach back over the one before: merged, their lines stay in order.)
+            while windows.len() > 1
+                && windows[windows.len() - 1].0[0] < windows[windows.len() - 2].0[1]
+            {
+                let (w, members) = windows.pop().unwrap_or_default();
+                if let Some((last, m)) = windows.last_mut() {
+                    *last = [last[0].min(w[0]), last[1].max(w[1])];
+                    m.extend(members);
+                }
+            }
+        }
+        // The tables' bytes before they are built: two values a node per row for each species with lines in the
+        // window, twice (the lanes and the contiguous rows), and the bins' means.
         let rows = (t_max / step(t_max)).ceil() + 2.0;
-        let need = rows
-            * 8.0
-            * (2.0 * 44.0 * all.len() as f64
-                + 2.0 * inp.basis.channels() as f64 * inp.species.len() as f64);
+        let per_row: f64 = windows
+            .iter()
+            .map(|(w, members)| {
+                let mut species: Vec<usize> = members.iter().map(|m| m.0).collect();
+                species.sort_unstable();
+                species.dedup();
+                2.0 * Self::window_of(inp, *w, members).0.len() as f64 * species.len() as f64
+            })
+            .sum();
+        let lines = windows.iter().map(|w| w.1.len()).sum::<usize>();
+        let need =
+            rows * 8.0 * (per_row + 2.0 * inp.basis.channels() as f64 * inp.species.len() as f64);
         if need > inp.budget as f64 {
             return Err(Error::invalid(
                 "volume",
                 "lineshape",
                 format!(
-                    "\"voigt\" for {} optically thick lines up to {t_max:.0} K ({:.0} MB of tables)",
-                    all.len(),
+                    "\"voigt\" for {lines} optically thick lines up to {t_max:.0} K ({:.0} MB of tables)",
                     need / 1e6
                 ),
                 format!(
@@ -313,19 +392,6 @@ impl ThickLines {
                     inp.budget as f64 / 1e6
                 ),
             ));
-        }
-        all.sort_by(|a, b| a.1.lambda_nm.total_cmp(&b.1.lambda_nm));
-        // Windows: ±20 nm around each line, overlapping ones merged.
-        let mut windows: Vec<Window> = Vec::new();
-        for (s, l) in all {
-            let w = [l.lambda_nm - HALF_WINDOW, l.lambda_nm + HALF_WINDOW];
-            match windows.last_mut() {
-                Some((last, members)) if w[0] < last[1] => {
-                    last[1] = last[1].max(w[1]);
-                    members.push((s, l));
-                }
-                _ => windows.push((w, vec![(s, l)])),
-            }
         }
         let c = inp.basis.channels();
         let groups = windows
@@ -362,10 +428,11 @@ impl ThickLines {
         }))
     }
 
-    fn group(inp: &Input, w: [f64; 2], members: &[(usize, Line)], t_max: f64) -> Group {
+    /// The nodes (λ, Δλ) across window `w` of `members`' lines.
+    fn window_of(inp: &Input, w: [f64; 2], members: &[(usize, Line, f64)]) -> (Vec<f64>, Vec<f64>) {
         let mut centres: Vec<f64> = Vec::new();
         let mut d0 = f64::INFINITY;
-        for (s, l) in members {
+        for (s, l, _) in members {
             let mass = atomic_mass_u(inp.species[*s].1.symbol()).unwrap_or(1.0);
             d0 = d0.min(0.3 * doppler_sigma_nm(l.lambda_nm, 300.0, mass));
             if centres.last().is_none_or(|&c| l.lambda_nm - c > 1e-3) {
@@ -378,9 +445,14 @@ impl ThickLines {
                 .collect(),
             ColorMode::Rgb => Vec::new(),
         };
-        let (lambda, width) = window_nodes(w[0], w[1], &centres, d0, &breaks);
+        window_nodes(w[0], w[1], &centres, d0, &breaks)
+    }
+
+    fn group(inp: &Input, w: [f64; 2], members: &[(usize, Line, f64)], t_max: f64) -> Group {
+        let (lambda, width) = Self::window_of(inp, w, members);
         // The continuum's wavelength: the lines' mean (within a bin, or 10 nm, of each of them).
-        let lambda_c = members.iter().map(|(_, l)| l.lambda_nm).sum::<f64>() / members.len() as f64;
+        let lambda_c =
+            members.iter().map(|(_, l, _)| l.lambda_nm).sum::<f64>() / members.len() as f64;
         let cont = (inp.continuum)(lambda_c);
         let mut fold = Vec::new();
         match inp.basis.mode {
@@ -422,7 +494,11 @@ impl ThickLines {
         }
         let mut species = Vec::new();
         for (s, (sym, e, scale)) in inp.species.iter().enumerate() {
-            let lines: Vec<Line> = members.iter().filter(|m| m.0 == s).map(|m| m.1).collect();
+            let lines: Vec<(Line, f64)> = members
+                .iter()
+                .filter(|m| m.0 == s)
+                .map(|m| (m.1, m.2))
+                .collect();
             if lines.is_empty() {
                 continue;
             }
@@ -436,16 +512,19 @@ impl ThickLines {
                     return row;
                 }
                 let (kt, ln_z) = (BOLTZMANN * t, e.ln_partition_function(t));
-                for line in &lines {
+                for (line, hw) in &lines {
+                    // σ is linear in the profile: the line's strength (its cross-section per unit of φ, per
+                    // nm) and its widths once per row, the Voigt profile per node.
+                    let strength = line_cross_sections(line, kt, ln_z, 1e9).0;
+                    let sigma = doppler_sigma_nm(line.lambda_nm, t, mass);
+                    let gamma = lorentz_hwhm_nm(line.lambda_nm, t, broadening);
+                    // (Out to the line's own window: its wings beyond are thinner than WING_TAU — as the
+                    // windows were drawn — and a merged window of many lines would otherwise cost lines × nodes.)
                     for (n, &l) in lam.iter().enumerate() {
-                        let phi = line_profile_nm(
-                            l - line.lambda_nm,
-                            line.lambda_nm,
-                            t,
-                            mass,
-                            broadening,
-                        );
-                        row[n] += line_cross_sections(line, kt, ln_z, phi * 1e9).0;
+                        let offset = l - line.lambda_nm;
+                        if offset.abs() <= *hw {
+                            row[n] += strength * voigt_nm(offset, sigma, gamma);
+                        }
                     }
                 }
                 // Kirchhoff at each node's own wavelength (a wing 10 nm out sees Planck 12 % off the centre's).
