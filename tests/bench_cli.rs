@@ -1,5 +1,5 @@
 //! `firemedium-bench …` (what `firemedium bench …` runs) from the command line, at tiny sizes: each runs, writes
-//! what it says, and its numbers are sane. (The measurements themselves are in docs/RESULTS.md; no timing is asserted here.)
+//! what it says, and its numbers are sane. (The measurements themselves are in docs/results/log.md; no timing is asserted here.)
 
 use std::path::PathBuf;
 use std::process::{Command, Output};

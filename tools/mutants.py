@@ -20,7 +20,7 @@ duplicated and truncated runs):
 Outcome per run: ok (exit 0), refused (exit 1 or 2 with one line on stderr), panic (exit 101), abort (a
 signal: SIGABRT, SIGSEGV…), hang (killed at the time limit), or over the RSS limit (peak RSS above --rss-gb,
 measured by /usr/bin/time). It prints the counts and exits 1 if any run was not ok or refused, 0 otherwise.
-Failing inputs are kept under --keep for replay. Used for issue 21 (docs/RESULTS.md has the runs).
+Failing inputs are kept under --keep for replay. Used for issue 21 (docs/results/log.md has the runs).
 """
 import argparse
 import os

@@ -1,6 +1,6 @@
 """The campfire over a grey floor three ways, side by side: `firemedium render`, Cycles with the baked grids (the
 add-on), and Cycles' own Principled Volume blackbody on the dataset's grids — the picture and the numbers of the
-Blender guide (docs/guide/blender.md, docs/RESULTS.md).
+Blender guide (docs/guide/blender.md, docs/results/log.md).
 
     python3 host-adapters/blender/compare.py [--size 160x120] [--spp 64] [-o docs/img/blender-side-by-side.png]
 

@@ -17,7 +17,7 @@ halves a fire needs, written against ABI 1.0's medium level:
   sampled too, their shadow rays attenuated through the fire by ratio tracking.
 
 It runs in Mitsuba's ``scalar_spectral`` variant (the fire's colour is its spectrum; Python media and integrators
-run per ray there: small images, or many cores). The medium's parameters are the plugin's (``docs/params.md``), given as the medium's
+run per ray there: small images, or many cores). The medium's parameters are the plugin's (``docs/reference/params.md``), given as the medium's
 properties; ``to_world`` places the fire's medium space in the scene (rotation, translation and a uniform scale).
 
     import mitsuba as mi

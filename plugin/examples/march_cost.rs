@@ -6,7 +6,7 @@
 //!
 //! Default: the committed campfire (scenes/campfire/campfire.vdb), 96 pixels, 5 rounds. LATTICES is a comma list
 //! of the volume's `lattice` values (auto, dense, bricks, off), each configuration run with each, interleaved;
-//! its f32 rows are compared with the f64 row of the same lattice. Results are in docs/RESULTS.md.
+//! its f32 rows are compared with the f64 row of the same lattice. Results are in docs/results/log.md.
 
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{evaluations_on_this_thread, FireVolume};

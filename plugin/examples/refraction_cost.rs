@@ -3,7 +3,7 @@
 //!
 //!     cargo run --release -p firemedium-plugin --example refraction_cost
 //!
-//! Results are in docs/RESULTS.md.
+//! Results are in docs/results/log.md.
 
 use firemedium_plugin::params::Param;
 use firemedium_plugin::volume::{FireVolume, Ray};

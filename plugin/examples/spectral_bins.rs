@@ -7,7 +7,7 @@
 //! Default: the committed campfire, 96 pixels, ½ voxel, 12,16,20,24,30,240 (the last is the reference). The
 //! camera is the perf bench's pinhole. Last, what the default range (400–700 nm, DESIGN) leaves out: the
 //! reference against the same march over ȳ's whole support, 380–780 nm, at the reference's bin width. Results
-//! are in docs/RESULTS.md.
+//! are in docs/results/log.md.
 
 use firemedium_plugin::cie::{bin_integrals, bin_weights};
 use firemedium_plugin::params::Param;

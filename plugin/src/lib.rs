@@ -15,7 +15,7 @@
 //! | [`volume`] | fire volume | settings → coefficient tables → march lattice and majorants → the RTE along rays (march, ratio, delta) |
 //! | [`refraction`] | fire volume | the index of hot air (Ciddor) baked to a field; curved rays through it |
 //! | [`light`] | fire light | Selle's piecewise-constant 3D pdf over emitting voxels; samples, pdfs, power |
-//! | [`params`] | all | one table per component drives parsing, validation, docs/params.md and the ABI's self-description |
+//! | [`params`] | all | one table per component drives parsing, validation, docs/reference/params.md and the ABI's self-description |
 //! | [`export`] | all | the C ABI: the crate's only `unsafe`, every entry checked and guarded against panics |
 //!
 //! Invariants: components are immutable once built and `Send + Sync`; per-sample code cannot fail (values are

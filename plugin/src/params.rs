@@ -3,7 +3,7 @@
 //! A [`ParamList`] has the shape of a pbrt-v4 parameter list — name, type, values — so an adapter passes a
 //! scene's parameters through unchanged. Each component declares its parameters once, in a table of
 //! [`ParamSpec`] (name, type, default, unit, range, doc). That table parses and validates the list
-//! ([`ParamReader`]), renders `docs/params.md` ([`markdown`]) and answers the ABI's self-description. A
+//! ([`ParamReader`]), renders `docs/reference/params.md` ([`markdown`]) and answers the ABI's self-description. A
 //! parameter nobody read is an error naming the closest valid name.
 
 use crate::Error;
@@ -204,7 +204,7 @@ pub type ParamList = Vec<Param>;
 
 /// A parameter whose value names one of a type's values: the names in the table's order, and the values in the
 /// same order. A table row's range is `Range::Choices(T::NAMES)` and the reader's [`ParamReader::choice`] gives
-/// the value, so docs/params.md, the ABI's self-description, the check and the parse read one list.
+/// the value, so docs/reference/params.md, the ABI's self-description, the check and the parse read one list.
 pub trait Choice: Sized + Copy + 'static {
     /// The names, in the table's order.
     const NAMES: &'static [&'static str];
@@ -592,7 +592,7 @@ impl<'a> ParamReader<'a> {
                     .min();
                 let hint = match best {
                     Some((d, n)) if d <= 3.max(p.name.len() / 3) => format!("did you mean '{n}'?"),
-                    _ => "docs/params.md lists the known ones".to_string(),
+                    _ => "docs/reference/params.md lists the known ones".to_string(),
                 };
                 // (An empty value: the parameter's name is the problem — "unknown parameter".)
                 return Err(Error::invalid(self.component, &p.name, "", hint));
@@ -614,13 +614,13 @@ impl<'a> ParamReader<'a> {
                 self.component,
                 &p.name,
                 "given, but nothing in this configuration reads it",
-                "only the parameters that apply (docs/params.md says when each does)",
+                "only the parameters that apply (docs/reference/params.md says when each does)",
             )),
         }
     }
 }
 
-/// The Markdown reference of the given component tables (docs/params.md).
+/// The Markdown reference of the given component tables (docs/reference/params.md).
 pub fn markdown(components: &[&Component]) -> String {
     let mut s = String::from(
         "# Parameters\n\n<!-- Generated from the parameter tables in plugin/src (params::markdown); a test fails when this file is stale.\n     Regenerate: FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc -->\n\n",
@@ -769,7 +769,10 @@ mod tests {
             .finish()
             .unwrap_err()
             .to_string();
-        assert!(e.contains("docs/params.md lists the known ones"), "{e}");
+        assert!(
+            e.contains("docs/reference/params.md lists the known ones"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -786,7 +789,7 @@ mod tests {
             .to_string();
         assert_eq!(
             e,
-            "fire.pbrt:3:7: volume: parameter 'mode' = given, but nothing in this configuration reads it: expected only the parameters that apply (docs/params.md says when each does)"
+            "fire.pbrt:3:7: volume: parameter 'mode' = given, but nothing in this configuration reads it: expected only the parameters that apply (docs/reference/params.md says when each does)"
         );
         r.string("mode").unwrap();
         r.finish().unwrap();

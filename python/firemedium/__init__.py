@@ -1,6 +1,6 @@
 """firemedium from Python: the fire medium plugin through its C ABI, over numpy arrays.
 
-A fire is a :class:`Volume` made from a dataset and the plugin's parameters (``docs/params.md``)::
+A fire is a :class:`Volume` made from a dataset and the plugin's parameters (``docs/reference/params.md``)::
 
     import numpy as np
     import firemedium
@@ -245,7 +245,7 @@ def plugin() -> Plugin:
 
 
 class Volume:
-    """A fire volume: a dataset with the fire's parameters (``docs/params.md``), built once, then queried.
+    """A fire volume: a dataset with the fire's parameters (``docs/reference/params.md``), built once, then queried.
 
     ``params`` maps parameter names to values: a ``str`` (or path) for strings, numbers, bools, sequences for
     arrays (a ``point3`` as 3 numbers, a spectrum as (nm, value) pairs flattened). Relative file names are
@@ -416,7 +416,7 @@ class Volume:
         return tr
 
     def light(self, params: Mapping[str, Any] | None = None) -> "Light":
-        """The fire light of this volume (``docs/params.md``, the light's table; ``{"weighting": "power"}`` by
+        """The fire light of this volume (``docs/reference/params.md``, the light's table; ``{"weighting": "power"}`` by
         default): Selle's pdf over the emitting voxels, for next-event estimation towards the fire."""
         return Light(self, params or {})
 

@@ -1891,7 +1891,7 @@ fn the_diffusion_scene_agrees_with_its_path_traced_twin() {
     // scenes/diffusion: a glowing cube of smoke (albedo 0.9, optical thickness ~3) by the diffusion equation and
     // path traced. The cube's face (the central pixels) and the floor it lights (the bottom rows) agree within the
     // diffusion approximation's error at this depth: measured against 2048 spp, −8.9 % and −7.9 %
-    // (docs/RESULTS.md, "Multiple scattering by diffusion").
+    // (docs/results/log.md, "Multiple scattering by diffusion").
     let root = crate::common::root().join("scenes/diffusion");
     let mean = |name: &str, extra: &[&str]| {
         let mut args = vec!["--resolution", "64x48"];
@@ -2709,6 +2709,51 @@ fn the_readme_is_short_and_its_links_lead_somewhere() {
         }
     }
     assert!(broken.is_empty(), "links to nothing: {broken:?}");
+}
+
+#[test]
+fn the_results_page_gives_each_figure_a_command_and_a_log_entry_that_exists() {
+    // docs/results/README.md: one row per topic — the current figure, the command that reproduces it, and a link
+    // to the log entry that measured it, whose heading must still exist (GitHub's anchor: lower case, spaces to
+    // hyphens, punctuation dropped). No internal issue numbers in it.
+    let dir = crate::common::root().join("docs/results");
+    let page = std::fs::read_to_string(dir.join("README.md")).unwrap();
+    let log = std::fs::read_to_string(dir.join("log.md")).unwrap();
+    let anchors: Vec<String> = log
+        .lines()
+        .filter_map(|l| l.strip_prefix("## "))
+        .map(|h| {
+            h.trim()
+                .to_lowercase()
+                .chars()
+                .filter(|c| c.is_alphanumeric() || *c == '-' || *c == '_' || *c == ' ')
+                .map(|c| if c == ' ' { '-' } else { c })
+                .collect()
+        })
+        .collect();
+    let rows: Vec<&str> = page
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| topic"))
+        .collect();
+    assert!(rows.len() >= 10, "{} rows", rows.len());
+    for row in rows {
+        let cells: Vec<&str> = row.split(" | ").collect();
+        assert!(cells.len() >= 4, "{row}");
+        assert!(cells[2].contains('`'), "no command: {row}");
+        let anchor = row
+            .split("(log.md#")
+            .nth(1)
+            .and_then(|r| r.split(')').next())
+            .unwrap_or_else(|| panic!("no log entry: {row}"));
+        assert!(
+            anchors.iter().any(|a| a == anchor),
+            "no log heading for #{anchor}"
+        );
+    }
+    assert!(
+        !page.to_lowercase().contains("issue "),
+        "an issue number in the results page"
+    );
 }
 
 #[test]

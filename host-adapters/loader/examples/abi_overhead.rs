@@ -4,7 +4,7 @@
 //!     cargo run --release -p firemedium-loader --example abi_overhead -- target/release/libfiremedium_plugin.so FIRE.vdb
 //!
 //! FIRE.vdb: `firemedium gen campfire --resolution 256` (the bench's box is assumed for the camera). Results in
-//! docs/RESULTS.md.
+//! docs/results/log.md.
 use firemedium_loader::{Param, Plugin, Ray};
 use std::time::Instant;
 fn main() {

@@ -38,7 +38,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     println!("plugin {} (ABI {major}.{minor})", plugin.path().display());
 
     // The fire: the dataset's density (a soot volume fraction) and temperature (K), propane soot. Every parameter
-    // the plugin reads is in docs/params.md (or `plugin.parameters()`).
+    // the plugin reads is in docs/reference/params.md (or `plugin.parameters()`).
     let fire = plugin.create_volume(&[
         Param::string("dataset", &dataset),
         Param::string("fuel", "propane"),

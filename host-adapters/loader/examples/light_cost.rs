@@ -10,7 +10,7 @@
 //! point is a float, `linestep=16.0`); none: the default. `LC_N` sets the calls per round (default 20 000; more
 //! for a profiler, whose samples then fall mostly outside the light's build).
 //! The rays start on the room's floor and back wall and aim at points the light samples. Results in
-//! docs/RESULTS.md.
+//! docs/results/log.md.
 use firemedium_loader::{Param, Plugin, Ray};
 use std::time::Instant;
 

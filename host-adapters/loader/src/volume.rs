@@ -65,7 +65,7 @@ impl Volume {
         self.create_light_with(&params)
     }
 
-    /// Builds the fire light of this volume with the light's parameters (docs/params.md, `light`: `weighting`,
+    /// Builds the fire light of this volume with the light's parameters (docs/reference/params.md, `light`: `weighting`,
     /// `cell`, …).
     pub fn create_light_with(&self, params: &[crate::Param]) -> Result<Light, Error> {
         let api = self.inner.api();

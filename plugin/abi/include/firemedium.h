@@ -260,7 +260,7 @@ typedef struct FmApi {
      * < param_count(). A row's strings are static. The volume's parameters a host needs first: "dataset" (or
      * "filename": an OpenVDB/NanoVDB file), "densitygrid" and "temperaturegrid" (grid names; defaults "density",
      * "temperature"), "fuel" (propane, acetylene, ...), "stepsize" (voxels), "bins"/"lambdamin"/"lambdamax" or
-     * "colormode" "rgb", "maxbytes" (the memory budget) — all in docs/params.md. */
+     * "colormode" "rgb", "maxbytes" (the memory budget) — all in docs/reference/params.md. */
     size_t (*param_count)(void);
     FmStatus (*param_info)(size_t index, FmParamInfo *out /* required, struct_size set */);
     /* A fire volume from a creation info (FmCreateInfo above; required); *out (required) receives the handle. An

@@ -436,7 +436,7 @@ pub struct FmCreateInfo {
     /// The pool's own pointer, handed back to `parallel_for` (may be null).
     pub pool: *mut c_void,
     /// The folder relative file names are in (a scene's: NUL-terminated UTF-8), or null: the process's working
-    /// directory. The plugin resolves its own file parameters (the `Range::Path` rows of its tables, docs/params.md)
+    /// directory. The plugin resolves its own file parameters (the `Range::Path` rows of its tables, docs/reference/params.md)
     /// against it, so a host need not know which of the fire's parameters name files.
     pub directory: *const c_char,
 }

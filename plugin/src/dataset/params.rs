@@ -1,4 +1,4 @@
-//! The voxel dataset's parameters (the `dataset` table, docs/params.md) mapped to what it loads: a file (its
+//! The voxel dataset's parameters (the `dataset` table, docs/reference/params.md) mapped to what it loads: a file (its
 //! format, grid names, temperature mapping, the thesis formats' options, species grids) or pbrt-v4's inline
 //! arrays, with the policies and the memory cap.
 

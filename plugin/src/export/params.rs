@@ -170,14 +170,14 @@ mod tests {
 
     #[test]
     fn params_doc_is_current() {
-        // docs/params.md is generated from these tables; regenerate with FIREMEDIUM_BLESS=1.
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/params.md");
+        // docs/reference/params.md is generated from these tables; regenerate with FIREMEDIUM_BLESS=1.
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/reference/params.md");
         let want = crate::params::markdown(&components());
         if std::env::var_os("FIREMEDIUM_BLESS").is_some() {
             std::fs::write(path, &want).unwrap();
         }
         let have = std::fs::read_to_string(path).unwrap_or_default();
-        assert!(have == want, "docs/params.md is stale: run FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc");
+        assert!(have == want, "docs/reference/params.md is stale: run FIREMEDIUM_BLESS=1 cargo test -p firemedium-plugin params_doc");
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //!
 //! ## Weights
 //! A voxel's weight is its emission at the voxel centre, either `power` (∫ j dλ over the volume's bins, the
-//! default: 0.4–0.7 % lower error on the default scene, docs/RESULTS.md) or `luminance` (Σ_c j_c Y_c). The light's total power
+//! default: 0.4–0.7 % lower error on the default scene, docs/results/log.md) or `luminance` (Σ_c j_c Y_c). The light's total power
 //! is 4π V Σ ∫ j dλ over the **whole** spectrum (W) — soot ∫ κ(λ) B(T, λ) dλ over 10 nm–1 mm, lines summed —
 //! and 4π V Σ_c j_c Y_c over the bins (lm). Medium units are taken as metres.
 //!
@@ -54,7 +54,7 @@ pub const LINE_STEPS: f64 = 64.0;
 /// The steps across the fire's longest side `linestep` 0 and `lineblock` 0 try, coarsest first: the first whose
 /// line stays within [`BLOCK_BIAS`] of the volume's march on the light's rays is taken (the last unchecked). On
 /// issue 29's room at 256³ the 16 steps' line through the copy of 8³ blocks costs half the 64 steps' through 2³
-/// blocks, with no more error in the image (docs/RESULTS.md).
+/// blocks, with no more error in the image (docs/results/log.md).
 pub const LINE_STEPS_TRIED: [f64; 3] = [16.0, 32.0, LINE_STEPS];
 
 /// How the light estimates the fire's emission along a sampled direction (next-event estimation).

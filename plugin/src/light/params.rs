@@ -1,8 +1,8 @@
-//! The fire light's parameter table (docs/params.md is generated from it with the dataset's and the volume's).
+//! The fire light's parameter table (docs/reference/params.md is generated from it with the dataset's and the volume's).
 
 use crate::params::{row as p, Choice, Component, ParamType as T, Range};
 
-/// The fire light component (created from a fire volume; docs/params.md).
+/// The fire light component (created from a fire volume; docs/reference/params.md).
 pub static LIGHT: Component = Component {
     name: "light",
     doc: "The fire as a light (Selle's piecewise-constant 3D pdf over emitting voxels), created from a fire volume: its parameters are the volume's plus these.",
@@ -12,7 +12,7 @@ pub static LIGHT: Component = Component {
         "power",
         "",
         Range::Choices(<super::Weighting as Choice>::NAMES),
-        "Voxel weights: power, ∫ j dλ over the bins; luminance, Σ j Y; or escaping, power times the share that leaves the fire (e^{−τ} to the grid's edge along the axes, from the bricks' mean extinction; at least 5 %). Power measured 0.4–0.7 % lower error than luminance on the default scene (docs/RESULTS.md).",
+        "Voxel weights: power, ∫ j dλ over the bins; luminance, Σ j Y; or escaping, power times the share that leaves the fire (e^{−τ} to the grid's edge along the axes, from the bricks' mean extinction; at least 5 %). Power measured 0.4–0.7 % lower error than luminance on the default scene (docs/results/log.md).",
     ),
     p(
         "cell",
@@ -20,7 +20,7 @@ pub static LIGHT: Component = Component {
         "8",
         "voxels",
         Range::Between(1.0, 8.0),
-        "Voxels per side of the pdf's cells, 1, 2, 4 or 8: the light picks a cell by its emission and a point uniform in it, and the density of a direction walks cells, not voxels (docs/RESULTS.md, the fire light at production scale).",
+        "Voxels per side of the pdf's cells, 1, 2, 4 or 8: the light picks a cell by its emission and a point uniform in it, and the density of a direction walks cells, not voxels (docs/results/log.md, the fire light at production scale).",
     ),
     p(
         "linestep",

@@ -30,7 +30,7 @@
 //! converges to the continuous field's at second order in the voxel size, and its integral along an axis
 //! telescopes to the change of n²/2, so a ray leaves a slab of parallel layers in the direction it entered
 //! (Snell's invariant) — the analytic gradient of the trilinear n, tried first, is discontinuous at every plane of
-//! samples and cost the Verlet march 10 % of the deflection (docs/RESULTS.md). Voxels colder than `T_amb` (0 K
+//! samples and cost the Verlet march 10 % of the deflection (docs/results/log.md). Voxels colder than `T_amb` (0 K
 //! where a simulation holds no data) count as ambient air. `scale` is the paper's Figure 2 exaggeration of
 //! (n − 1).
 

@@ -5,7 +5,7 @@
 use super::*;
 
 impl FireVolume {
-    /// Builds a fire volume from a parameter list (the `dataset` and `volume` tables, docs/params.md): the
+    /// Builds a fire volume from a parameter list (the `dataset` and `volume` tables, docs/reference/params.md): the
     /// parameters are read and checked first ([`Settings`]), then the dataset is loaded, then the coefficient
     /// tables, the march lattice, the majorant bricks and (if asked for) the refraction field are built.
     pub fn new(list: &[Param]) -> Result<FireVolume, Error> {

@@ -11,7 +11,7 @@
 //! (and the volume marches in `f64`) when the largest density, emission scale or species density times the
 //! largest coefficient could leave `f32`'s range. **Accuracy** (tested): one step is within 4e-7 relative of
 //! the closed form for every τ from 1e-12 to 1e8; the campfire image within 1e-6 of the f64 march
-//! (docs/RESULTS.md).
+//! (docs/results/log.md).
 
 use super::tables::TTable;
 pub(crate) use super::tables::{Lane, W};

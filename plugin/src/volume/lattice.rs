@@ -28,7 +28,7 @@
 //!   bricks share one block.
 //!
 //! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks
-//! (`lattice` parameter; docs/RESULTS.md has both measured on the same fires).
+//! (`lattice` parameter; docs/results/log.md has both measured on the same fires).
 
 use crate::grid::{Grid, Topology, BRICK};
 use crate::majorant::{BrickRanges, Ranges};

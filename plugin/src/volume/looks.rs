@@ -1,5 +1,5 @@
 //! Looks: named parameter sets for the fires artists ask for (`"string look"`), each a set of defaults the
-//! scene's own parameters override. Every value is an ordinary parameter of docs/params.md, so a look says
+//! scene's own parameters override. Every value is an ordinary parameter of docs/reference/params.md, so a look says
 //! exactly what it changes:
 //!
 //! - `candle`: propane-like soot (paraffin's optical constants are close to propane's; Dalzell & Sarofim

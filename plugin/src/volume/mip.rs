@@ -10,7 +10,7 @@
 //! block's density-weighted mean: the block emits what its voxels emit, with the spectrum of one temperature.
 //! What that costs in accuracy (the colour where a block spans the flame's sheet, the transmittance's
 //! nonlinearity) is the line's bias against the volume's own march, measured in the tests and
-//! docs/RESULTS.md; the light's `linecorrection` removes it.
+//! docs/results/log.md; the light's `linecorrection` removes it.
 
 use super::parts;
 use super::{lanes, lattice, CapCounter, FireVolume, Integrator};

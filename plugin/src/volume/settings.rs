@@ -18,13 +18,13 @@ use crate::spectrum::SpectralGrid;
 use crate::Error;
 
 /// pbrt mode's largest optical depth of one march step (`steptau`'s default there): measured in
-/// docs/pbrt-compat.md.
+/// docs/reference/pbrt-compat.md.
 pub(super) const PBRT_STEP_TAU: f64 = 0.1;
 
 /// The largest optical depth of one march step when the smoke's light is diffusion's (`steptau`'s default
 /// then): the scattered light is emission that rises over a diffusion length from the smoke's surface, and
 /// the light that leaves comes from its first optical depth — a step sampling it once, deeper, is too bright
-/// (+59 % at τ 105 across a metre, half-voxel steps of a 4-voxel grid; −8 % at this depth; docs/RESULTS.md).
+/// (+59 % at τ 105 across a metre, half-voxel steps of a 4-voxel grid; −8 % at this depth; docs/results/log.md).
 pub(super) const DIFFUSION_STEP_TAU: f64 = 1.0;
 
 /// Everything the volume's build reads from its parameters.
@@ -138,7 +138,7 @@ impl Settings {
         // tracking, is `integrator "ratio"`). In pbrt mode a step thicker than `steptau` is split, so the march
         // follows a voxel far denser than its step (a 1-voxel grid σ_a = 1000 has τ = 500 per half-voxel step,
         // where the midpoint's emission is 80× brighter than the surface layer pbrt-v4 sees); its bias against
-        // pbrt-v4's expected image is measured in docs/pbrt-compat.md.
+        // pbrt-v4's expected image is measured in docs/reference/pbrt-compat.md.
         let integrator = r
             .choice::<Option<Integrator>>("integrator")?
             .unwrap_or(Integrator::March);

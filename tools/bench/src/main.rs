@@ -1,4 +1,4 @@
-//! `firemedium-bench` (run as `firemedium bench …`): the measurements behind docs/RESULTS.md, as commands anyone
+//! `firemedium-bench` (run as `firemedium bench …`): the measurements behind docs/results/log.md, as commands anyone
 //! can rerun. It links the plugin as a library to time its parts in process (the march kernel, the components'
 //! build costs, the stability cases), and renders the user's path with the `firemedium` program beside it.
 

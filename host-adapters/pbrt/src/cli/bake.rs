@@ -1,7 +1,7 @@
 //! `firemedium bake DATASET -o OUT.vdb`: the fire's coefficients as RGB grids, for a renderer that cannot load the
 //! plugin (Blender's Cycles reads them through its Volume Coefficients node).
 //!
-//! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters, docs/params.md), and
+//! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters, docs/reference/params.md), and
 //! asked through the C ABI for σ_a, σ_s and the emission coefficient j in its channels at every voxel centre of
 //! the dataset's lattice that its grids hold (its 8³ bricks: sparse in, sparse out — two blobs far apart bake as
 //! two leaves, not the box between them). They become three vector grids in the renderer's linear working space (Rec.709/sRGB
@@ -37,7 +37,7 @@ pub struct BakeArgs {
     /// The baked OpenVDB file (vector grids `sigma_a`, `sigma_s`, `emission`).
     #[arg(short, long)]
     output: PathBuf,
-    /// A fire parameter NAME=VALUE (repeatable; docs/params.md, the dataset's and the volume's): `fuel=propane`,
+    /// A fire parameter NAME=VALUE (repeatable; docs/reference/params.md, the dataset's and the volume's): `fuel=propane`,
     /// `temperaturescale=1000`, `source=houdini` ...
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
     params: Vec<(String, String)>,

@@ -1,7 +1,7 @@
 //! `firemedium compare SCENE.pbrt REFERENCE.exr IMAGE.exr…`: the error of renders against a reference, over the
 //! pixels where the camera sees a diffuse surface (so the fire seen directly or in a mirror — the same in every
 //! render — does not drown the lighting error). Used for the fire light's equal-time comparison
-//! (docs/RESULTS.md).
+//! (docs/results/log.md).
 
 use crate::args::parse_resolution;
 use clap::Args;

@@ -49,7 +49,7 @@ pub struct RenderArgs {
     #[arg(long = "fire-light", value_name = "auto|power|luminance|escaping|off", default_value = "auto",
           value_parser = ["auto", "power", "luminance", "escaping", "off"])]
     fire_light: String,
-    /// A parameter of the fire light, NAME=VALUE (repeatable; docs/params.md, `light`): e.g. `cell=8` (the
+    /// A parameter of the fire light, NAME=VALUE (repeatable; docs/reference/params.md, `light`): e.g. `cell=8` (the
     /// pdf's cells, voxels per side), `linestep=2` (the march step along a light sample's direction, voxels),
     /// `linecorrection=0.1`.
     #[arg(long = "fire-light-param", value_name = "NAME=VALUE", value_parser = parse_light_param)]

@@ -81,7 +81,7 @@ fn scene_text(
     let source_line = source.map_or(String::new(), |s| format!("\n  \"string source\" \"{s}\""));
     format!(
         "# A starter scene for {dataset} (written by `firemedium scene`): the fire's boundary box fitted to its data, a\n\
-         # camera framing it, a ground. Render it with `firemedium render` (docs/params.md lists the fire's parameters:\n\
+         # camera framing it, a ground. Render it with `firemedium render` (docs/reference/params.md lists the fire's parameters:\n\
          # add them to the medium; \"float stepsize\" 1 renders faster, `--spp 16` for a first look).\n\
          LookAt {}   {}   {}\n\
          Camera \"perspective\" \"float fov\" 40\n\

@@ -315,7 +315,7 @@ impl Integrator<'_> {
                     [0f32; super::spectrum::MAX_CHANNELS],
                 );
                 // (Emission at the tentative collisions: marching it along every segment instead cost 7× the
-                // time for no less error on a scattering fire — docs/RESULTS.md.)
+                // time for no less error on a scattering fire — docs/results/log.md.)
                 let tracked = vol.sample_scatter_at(
                     std::slice::from_ref(&ray),
                     Some(&[rng.time]),

@@ -252,9 +252,9 @@ mod tests {
 
     #[test]
     fn pbrt_compat_lists_every_parameter() {
-        // docs/pbrt-compat.md has a row per pbrt-v4 directive and type, and every parameter pbrt-v4 reads for it
+        // docs/reference/pbrt-compat.md has a row per pbrt-v4 directive and type, and every parameter pbrt-v4 reads for it
         // appears (`name`) in that row or the directive's "(all)" row.
-        let doc = include_str!("../../../../docs/pbrt-compat.md");
+        let doc = include_str!("../../../../docs/reference/pbrt-compat.md");
         let rows: Vec<Vec<&str>> = doc
             .lines()
             .filter(|l| l.starts_with('|'))
@@ -384,13 +384,13 @@ mod tests {
                     .find(|r| r[1] == *directive && r[2].split(", ").any(|t| t == *ty))
                     .map(|r| r.join("|"))
                     .unwrap_or_else(|| {
-                        panic!("docs/pbrt-compat.md: no row for {directive} \"{ty}\"")
+                        panic!("docs/reference/pbrt-compat.md: no row for {directive} \"{ty}\"")
                     });
                 for name in parameters(*kind, ty).unwrap_or_default() {
                     let quoted = format!("`{name}`");
                     assert!(
                         row.contains(&quoted) || all.contains(&quoted),
-                        "docs/pbrt-compat.md: {directive} \"{ty}\" does not say what becomes of {quoted}"
+                        "docs/reference/pbrt-compat.md: {directive} \"{ty}\" does not say what becomes of {quoted}"
                     );
                 }
             }

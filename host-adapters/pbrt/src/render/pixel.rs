@@ -14,7 +14,7 @@
 //! each index permuted per dimension (Ahmed & Wonka 2020): a pixel's samples are an aligned block of it, so
 //! stratified as `paddedsobol`'s, and neighbouring pixels' samples stratify each other (`sobol` renders as
 //! `zsobol`). `halton` gives dimension d < 16 the radical inverse in the d-th prime of the permuted index, its digits
-//! scrambled per dimension (the rest at random). Their measured convergence rates are in docs/RESULTS.md (`convergence` tests).
+//! scrambled per dimension (the rest at random). Their measured convergence rates are in docs/results/log.md (`convergence` tests).
 //!
 //! **Filters.** A pixel sample u ∈ [0, 1)² becomes a film offset p = F⁻¹(u) from the pixel's centre, drawn from the
 //! filter f itself: `box` and `triangle` exactly (weight 1), `gaussian`, `mitchell` and `sinc` (Lanczos) from

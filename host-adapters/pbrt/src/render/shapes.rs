@@ -554,7 +554,7 @@ impl Bvh {
     pub fn new(prims: Vec<Prim>) -> Bvh {
         // Leaves of at most 2 primitives, not obvhs's 8 (sized for SIMD leaf tests): the traversal here tests a
         // leaf's primitives one by one. On the fire-lit room the traversals' share of a render fell from 15.4 %
-        // to 12.3–13.6 %, the images the same bit for bit (docs/RESULTS.md).
+        // to 12.3–13.6 %, the images the same bit for bit (docs/results/log.md).
         fn build<T: Boundable>(items: &[T]) -> Option<Bvh2> {
             (!items.is_empty()).then(|| {
                 obvhs::bvh2::builder::build_bvh2(

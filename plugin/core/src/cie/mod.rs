@@ -115,7 +115,7 @@ pub fn spectrum_to_xyz(radiance: impl Fn(f64) -> f64) -> DVec3 {
 /// The plain product of a bin's mean radiance and its integrated CMF ([`bin_integrals`]) misses the
 /// covariance of the radiance and the CMF inside the bin: on the perf workload's fire (soot's emission rising
 /// steeply toward red where ȳ falls) 30 bins of 10 nm were 1.7e-3 off the luminance of 240 bins, 16 bins
-/// 5.8e-3; with these weights 3.2e-4 and 1.1e-3 (docs/RESULTS.md). A narrow line still keeps its energy (the
+/// 5.8e-3; with these weights 3.2e-4 and 1.1e-3 (docs/results/log.md). A narrow line still keeps its energy (the
 /// bin means are the same); its colour weight is the rebuilt spectrum's, which tends to the CMF at the line as
 /// bins shrink, as the plain weight does. Fewer than three bins take the plain weights.
 pub fn bin_weights(grid: &SpectralGrid) -> Vec<DVec3> {

@@ -18,7 +18,7 @@
 //! - **no code for what the volume lacks**: species (`S`) and T-dependent absorption (`A`) are const generics;
 //! - **fused multiply–adds** where the CPU has them (`F`, set by the AVX2 + FMA and AVX-512 clones).
 //!
-//! Accuracy (tests, docs/RESULTS.md): the same image as the f64 march to the lanes' f32 rounding.
+//! Accuracy (tests, docs/results/log.md): the same image as the f64 march to the lanes' f32 rounding.
 
 use super::integrate::{Span, EVALUATIONS, MAX_STEPS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
@@ -319,7 +319,7 @@ fn general(v: &FireVolume, p: glam::DVec3, b: usize, dt: &mut [[f32; 2]; BATCH],
 const OUTSIDE: f32 = -1.0;
 
 /// Samples whose grid values are read before they are stepped through: more reads in flight, less per-batch
-/// bookkeeping per sample. Measured (docs/RESULTS.md, session 8): 8 → 16 took a sample from 17.2 to 14.0 ns at 16
+/// bookkeeping per sample. Measured (docs/results/log.md, session 8): 8 → 16 took a sample from 17.2 to 14.0 ns at 16
 /// bins (rgb 17.8 → 14.4, 30 bins 21.8 → 18.3); 24 is a further 5–10 % below 16; 32 is slower than 24.
 const BATCH: usize = 24;
 
@@ -915,7 +915,7 @@ fn thin_step<const V: usize, const F: bool>(
 }
 
 /// One step of one lane for any τ (as [`super::lanes::step`]). (Kept apart from [`thin_step`]: one function
-/// with a const switch between the two measured rgb 17.9 → 21.2 ns per sample, docs/RESULTS.md.)
+/// with a const switch between the two measured rgb 17.9 → 21.2 ns per sample, docs/results/log.md.)
 #[inline(always)]
 fn full_step<const V: usize, const F: bool>(
     sig: &[f32; V],

@@ -279,7 +279,7 @@ fn spectral_and_rgb_agree_on_luminance_and_differ_documentedly() {
             to_xyz(&rgb, &run(&rgb, &ray_x(0)).0),
         );
         let rel = (a - b).abs() / a;
-        // Measured (docs/RESULTS.md): ≤ 4.9e-3 in every channel, thin to opaque, with the rgb bands'
+        // Measured (docs/results/log.md): ≤ 4.9e-3 in every channel, thin to opaque, with the rgb bands'
         // Planck-mean absorption (a plain band mean gave 9.3e-2 in X when opaque).
         assert!(
             rel.is_finite() && rel.max_element() < 1e-2,

@@ -280,7 +280,7 @@ pub struct Scene {
     pub aovs: Vec<crate::render::aov::Aov>,
     pub maxdepth: usize,
     /// Whether a scattering event inside a fire samples that fire's own light (`--fire-light-inside`); by
-    /// default only surfaces and the events in other media do (docs/RESULTS.md measures both).
+    /// default only surfaces and the events in other media do (docs/results/log.md measures both).
     pub fire_light_inside: bool,
     pub film_name: Option<String>,
     pub eps: f32,
@@ -375,7 +375,7 @@ pub struct Overrides {
     /// A fire light for every emitting medium, a scattering one's too (`--fire-light` given by name; `auto`
     /// leaves a scattering fire's out).
     pub fire_light_forced: bool,
-    /// More of the fire lights' parameters, (name, value) as given (docs/params.md, `light`: `cell`,
+    /// More of the fire lights' parameters, (name, value) as given (docs/reference/params.md, `light`: `cell`,
     /// `linestep`, …), typed by the plugin's table.
     pub fire_light_params: Vec<(String, String)>,
     /// Scattering events inside a fire sample its own light too ([`Scene::fire_light_inside`]).
@@ -710,7 +710,7 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
                 // A fire that scatters: its light is left out unless asked for by name (measured: the light's
                 // line estimates the emission that leaves the fire unscattered, while the paths' delta tracking
                 // is cheap and finds the scattered rest — on a fire-lit room at albedo 0.8 the light made the
-                // render 0.4× as efficient, at albedo 0.3 0.9×: docs/RESULTS.md).
+                // render 0.4× as efficient, at albedo 0.3 0.9×: docs/results/log.md).
                 if *scatters && !ov.fire_light_forced {
                     if let Some(rep) = b.media_reports.get_mut(r) {
                         rep.light_left_out = Some(
