@@ -2621,6 +2621,43 @@ fn unknown_types_and_pbrt_v3_names_are_refused_with_what_pbrt_v4_calls_them() {
 }
 
 #[test]
+fn a_species_whose_flame_colour_is_molecular_is_warned_about() {
+    // The spectroscopy scene's five flames: barium, copper and potassium photograph in colours their atomic lines
+    // do not give (molecular bands; potassium's lilac a camera's), each warned about at its medium; lithium and
+    // sodium, whose colours are their lines, not.
+    let dir = tmp("molecular");
+    let scene = crate::common::root().join("scenes/spectroscopy/scene.pbrt");
+    let o = firemedium_in(
+        &dir,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "--resolution",
+            "20x10",
+            "--spp",
+            "1",
+            "-o",
+            "s.exr",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let warned: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("warning") && l.contains("photographs"))
+        .collect();
+    assert_eq!(warned.len(), 3, "{warned:?}");
+    for (sym, seen) in [("Ba", "pale green"), ("Cu", "blue-green"), ("K", "lilac")] {
+        assert!(
+            warned
+                .iter()
+                .any(|w| w.contains(&format!("species {sym}: its flame photographs {seen}"))),
+            "{sym}: {warned:?}"
+        );
+    }
+}
+
+#[test]
 fn a_fire_clipped_swapped_or_behind_the_camera_is_warned_about() {
     // Three scenes that render without an error but not the fire they mean, each warned about at its medium's
     // statement: shapes that cut the data, a MediumInterface with inside and outside swapped, and a camera inside

@@ -269,6 +269,27 @@ impl Element {
     }
 }
 
+/// What a flame coloured by `symbol` looks like in a photograph when that colour comes from emitters the
+/// shipped atomic lines do not hold: (the colour a photograph shows, where it comes from, what the atomic lines
+/// alone render). `None` for lithium and sodium, whose flame colours are their atomic lines (Li 670.8 nm crimson,
+/// Na D yellow).
+///
+/// The bands are the metal's hydroxide and chloride, formed in the flame (approximate positions, as flame
+/// spectroscopy and pyrotechnics give them — e.g. Pearse & Gaydon, *The Identification of Molecular Spectra*):
+/// SrOH and SrCl 600–690 nm, CaOH 554 and 622 nm, BaOH and BaCl 487–532 nm, CuCl and CuOH 428–555 nm. The
+/// renders (a 1 m slab at 2200 K, 10¹⁸ m⁻³, the CIE 1931 observer): Sr xy (0.166, 0.057), Ca (0.269, 0.115), Ba
+/// (0.437, 0.553) — docs/results/log.md, "Flame-test colours".
+pub fn molecular_colour(symbol: &str) -> Option<(&'static str, &'static str, &'static str)> {
+    Some(match symbol {
+        "Sr" => ("crimson", "SrOH and SrCl bands at 600–690 nm, which the model does not hold", "violet-blue (Sr I 460.7 nm)"),
+        "Ca" => ("orange-red", "CaOH bands at 554 and 622 nm, which the model does not hold", "violet (Ca I 422.7 nm)"),
+        "Ba" => ("pale green", "BaOH and BaCl bands at 487–532 nm, which the model does not hold", "yellow-green (Ba I 553.5 nm)"),
+        "Cu" => ("blue-green", "CuCl and CuOH bands at 428–555 nm, which the model does not hold", "faintly (Cu I 510–578 nm, weak below 2500 K)"),
+        "K" => ("lilac", "a camera's red channel reaching its 766/770 nm doublet beside the violet 404 nm one, where the CIE observer sees almost nothing", "orange-red"),
+        _ => return None,
+    })
+}
+
 /// (σ_a/N in m², j/N in W·sr⁻¹·nm⁻¹) of one line with line shape `phi` (m⁻¹), at kT (J), given ln Z.
 pub fn line_cross_sections(line: &Line, kt: f64, ln_z: f64, phi: f64) -> (f64, f64) {
     let lambda = line.lambda_nm * 1e-9;

@@ -415,6 +415,10 @@ impl Builder {
                         if let Some(m) = lines_outside(&sym, hot, (info.lambda_min, info.lambda_max)) {
                             self.warn(loc, format!("medium \"{name}\": {m}"));
                         }
+                        // A flame-test colour that comes from molecular bands: the render will not show it.
+                        if let Some((seen, from, here)) = firemedium_core::species::molecular_colour(&sym) {
+                            self.warn(loc, format!("medium \"{name}\": species {sym}: its flame photographs {seen}, from {from}; from its atomic lines alone it renders {here}"));
+                        }
                     }
                 }
                 // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
