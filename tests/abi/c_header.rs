@@ -371,3 +371,148 @@ fn the_c_example_host_renders_the_campfire() {
     assert!(e.is_finite() && e > 0.0, "{e}");
     done(&exe);
 }
+
+/// docs/reference/abi.md from the header: its opening (how a host loads the plugin), the status codes, the
+/// constants a host sets or reads, the table's conventions and each entry with its comment — so the reference and
+/// the header cannot disagree.
+fn abi_reference(header: &str) -> String {
+    // A C comment's text, one paragraph: the leading '*' of each line and the delimiters gone.
+    let comment = |c: &str| -> String {
+        c.trim()
+            .trim_start_matches("/*")
+            .trim_end_matches("*/")
+            .lines()
+            .map(|l| l.trim().trim_start_matches('*').trim())
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut out = String::from(
+        "# The C ABI\n\n<!-- Generated from plugin/abi/include/firemedium.h by tests/abi/c_header.rs.\n     Regenerate: FIREMEDIUM_BLESS=1 cargo test --release -p firemedium --test end_to_end abi_reference -->\n\n",
+    );
+    let opening = header.split("*/").next().unwrap_or("");
+    out += &comment(opening);
+    out += "\n\n## Constants\n\n| name | value | meaning |\n|---|---|---|\n";
+    for line in header.lines().filter(|l| l.starts_with("#define FM_")) {
+        let (def, note) = match line.split_once("/*") {
+            Some((d, n)) => (d, comment(&format!("/*{n}"))),
+            None => (line, String::new()),
+        };
+        let mut parts = def.trim_start_matches("#define ").split_whitespace();
+        let (name, value) = (
+            parts.next().unwrap_or(""),
+            parts.collect::<Vec<_>>().join(" "),
+        );
+        out += &format!("| `{name}` | `{value}` | {note} |\n");
+    }
+    // The structs a host fills or reads, as the header declares them (the table's own comes last).
+    out += "\n## Structs\n\n";
+    let mut from = 0;
+    while let Some(i) = header[from..].find("typedef struct Fm") {
+        let at = from + i;
+        let name: String = header[at + 15..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric())
+            .collect();
+        let Some(end) = header[at..].find(&format!("}} {name};")) else {
+            break;
+        };
+        let decl = &header[at..at + end + name.len() + 3];
+        from = at + end;
+        if name == "FmApi" || !decl.contains('{') {
+            continue;
+        }
+        out += &format!("### `{name}`\n\n```c\n{decl}\n```\n\n");
+    }
+    // The table: its conventions (the comment before it), then each entry with the comment before it (an
+    // entry without one shares the previous comment's group).
+    let start = header.find("typedef struct FmApi").unwrap_or(0);
+    let before = &header[..start];
+    let conventions = before
+        .rfind("/*")
+        .map(|i| {
+            comment(&before[i..])
+                .replace(" - ", "\n- ")
+                .replacen(":\n- ", ":\n\n- ", 1)
+        })
+        .unwrap_or_default();
+    out += &format!("## The function table, `FmApi`\n\n{conventions}\n\n| entry | signature | what it does |\n|---|---|---|\n");
+    let body = &header[start
+        ..header[start..]
+            .find("} FmApi;")
+            .map_or(header.len(), |e| start + e)];
+    let mut pending = String::new();
+    // (The last comment, and the entry it came with.)
+    let mut group = (String::new(), String::new());
+    let mut rest = body;
+    while !rest.is_empty() {
+        let c = rest.find("/*");
+        let f = rest.find("(*");
+        match (c, f) {
+            (Some(ci), fi) if fi.is_none_or(|fi| ci < fi) => {
+                let end = rest[ci..].find("*/").map_or(rest.len(), |e| ci + e + 2);
+                pending = comment(&rest[ci..end]);
+                rest = &rest[end..];
+            }
+            (_, Some(fi)) => {
+                let line_start = rest[..fi].rfind(['\n', ';']).map_or(0, |i| i + 1);
+                let end = rest[fi..].find(';').map_or(rest.len(), |e| fi + e + 1);
+                let decl = rest[line_start..end]
+                    .split_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                let name = decl[decl.find("(*").unwrap_or(0) + 2..]
+                    .split(')')
+                    .next()
+                    .unwrap_or("")
+                    .to_string();
+                // An entry without a comment of its own that the last comment names is described there.
+                let what = if !pending.is_empty() {
+                    group = (pending.clone(), name.clone());
+                    pending.clone()
+                } else if group.0.contains(name.as_str()) {
+                    format!("With `{}`, above.", group.1)
+                } else {
+                    String::new()
+                };
+                out += &format!(
+                    "| `{name}` | `{}` | {} |\n",
+                    decl.replace('|', "\\|"),
+                    what.replace('|', "\\|")
+                );
+                pending.clear();
+                rest = &rest[end..];
+            }
+            _ => break,
+        }
+    }
+    out
+}
+
+#[test]
+fn abi_reference_is_current() {
+    // docs/reference/abi.md is generated from the header; regenerate with FIREMEDIUM_BLESS=1.
+    let header = std::fs::read_to_string(root().join("plugin/abi/include/firemedium.h")).unwrap();
+    let want = abi_reference(&header);
+    let path = root().join("docs/reference/abi.md");
+    if std::env::var_os("FIREMEDIUM_BLESS").is_some() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let have = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        have == want,
+        "docs/reference/abi.md is stale: run FIREMEDIUM_BLESS=1 cargo test --release -p firemedium --test end_to_end abi_reference"
+    );
+    // Every entry of the table is there, with its words.
+    for entry in [
+        "volume_create",
+        "volume_point",
+        "volume_majorant_grid",
+        "volume_query",
+        "light_sample",
+        "light_pdf_direction",
+    ] {
+        assert!(want.contains(&format!("| `{entry}` |")), "{entry} missing");
+    }
+    assert!(want.contains("| `FM_FEATURE_MOTION` |"));
+}

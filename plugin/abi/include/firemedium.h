@@ -1,7 +1,7 @@
 /*
  * firemedium.h — the C ABI of the firemedium plugin (a physically based fire medium for path tracers).
  *
- * Hand-written to match the Rust crate firemedium-abi (plugin/abi/src/lib.rs); tests/c_header.rs compiles a C
+ * Hand-written to match the Rust crate firemedium-abi (plugin/abi/src/lib.rs); tests/abi/c_header.rs compiles a C
  * program against this header, checks every struct size against the Rust layout, loads the built plugin and
  * renders a ray through it.
  *
