@@ -22,7 +22,7 @@ pub(crate) use crate::dataset::particles::Particle;
 
 use crate::majorant::walk;
 use crate::Error;
-use firemedium_core::ember::{cooled_temperature, cooling_constant};
+use firemedium_core::ember::{burn, cooled_temperature, cooling_constant, Char};
 use glam::DVec3;
 
 /// An ember's material (the volume's `ember*` parameters) and its surroundings.
@@ -35,6 +35,8 @@ pub(crate) struct Material {
     pub heat_capacity: f64,
     /// K.
     pub ambient: f64,
+    /// The air's oxygen mass fraction: the char burns in it (0: the embers only cool).
+    pub oxygen: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -48,6 +50,9 @@ struct Ember {
     t: f64,
     /// Cooling constant, K⁻³ s⁻¹.
     k: f64,
+    /// A burning ember's temperatures at the shutter's [`Embers::burn_times`] (K), between which it is
+    /// interpolated linearly (its char burns over seconds; a shutter lasts a fraction of a frame).
+    burning: Option<[f64; 3]>,
 }
 
 /// A volume's embers.
@@ -57,6 +62,9 @@ pub(crate) struct Embers {
     seconds_per_frame: f64,
     /// Frames; times outside are held at its ends (the grid covers the embers' boxes over it alone).
     shutter: [f64; 2],
+    /// Frames at which a burning ember's temperature is known: the shutter's ends and, between, the frame's
+    /// time when the shutter holds it (else the middle).
+    burn_times: [f64; 3],
     ambient: f64,
     emissivity: f64,
     /// Per row of temperature (step `dt`), the radiance per channel: ε B(T) × the fire's intensity.
@@ -97,18 +105,50 @@ impl Embers {
         let mut e: Vec<Ember> = crate::alloc::with_capacity(n)
             .ok_or_else(|| too_large(format!("{n} embers"), (n * 64) as u64))?;
         let mut t_max: f64 = 0.0;
+        let burn_times = [
+            shutter[0],
+            if shutter[0] <= 0.0 && 0.0 <= shutter[1] {
+                0.0
+            } else {
+                0.5 * (shutter[0] + shutter[1])
+            },
+            shutter[1],
+        ];
+        let char_ = Char {
+            emissivity: mat.emissivity,
+            density: mat.density,
+            heat_capacity: mat.heat_capacity,
+            ambient: mat.ambient,
+            oxygen: mat.oxygen,
+        };
         for p in particles {
             let k = cooling_constant(mat.emissivity, mat.density, mat.heat_capacity, p.r);
-            let t = cooled_temperature(p.t, p.age, k, mat.ambient);
-            // The hottest it is inside the shutter: at its opening (cooling runs forwards in time).
-            let hottest = cooled_temperature(t, shutter[0].min(0.0) * spf, k, mat.ambient);
-            t_max = t_max.max(hottest).max(t);
+            let (t, r, burning) = if mat.oxygen > 0.0 {
+                // Burning: its temperature and radius by integration from its birth, at its age (its char may
+                // be gone) and at the shutter's times (before its birth: as born).
+                let (t, r) = burn(p.t, p.r, p.age, &char_);
+                if !(r > 0.0) {
+                    continue;
+                }
+                let at = |s: f64| burn(p.t, p.r, (p.age + s * spf).max(0.0), &char_).0;
+                let temps = burn_times.map(at);
+                t_max = temps.iter().fold(t_max, |m, &x| m.max(x));
+                (t, r, Some(temps))
+            } else {
+                let t = cooled_temperature(p.t, p.age, k, mat.ambient);
+                // The hottest it is inside the shutter: at its opening (cooling runs forwards in time).
+                let hottest = cooled_temperature(t, shutter[0].min(0.0) * spf, k, mat.ambient);
+                t_max = t_max.max(hottest);
+                (t, p.r, None)
+            };
+            t_max = t_max.max(t);
             e.push(Ember {
                 c: p.p,
                 v: p.v * spf,
-                r: p.r,
+                r,
                 t,
                 k,
+                burning,
             });
         }
         let channels = radiance(1000.0).len();
@@ -205,6 +245,7 @@ impl Embers {
             e,
             seconds_per_frame: spf,
             shutter,
+            burn_times,
             ambient: mat.ambient,
             emissivity: mat.emissivity,
             table,
@@ -255,9 +296,21 @@ impl Embers {
         let m = &self.e[i];
         let time = self.held(time);
         if time == 0.0 {
-            m.t
-        } else {
-            cooled_temperature(m.t, time * self.seconds_per_frame, m.k, self.ambient)
+            return m.t;
+        }
+        match m.burning {
+            None => cooled_temperature(m.t, time * self.seconds_per_frame, m.k, self.ambient),
+            Some(temps) => {
+                let s = self.burn_times;
+                let (i, j) = if time <= s[1] { (0, 1) } else { (1, 2) };
+                let span = s[j] - s[i];
+                if span > 0.0 {
+                    let f = ((time - s[i]) / span).clamp(0.0, 1.0);
+                    temps[i] + f * (temps[j] - temps[i])
+                } else {
+                    temps[j]
+                }
+            }
         }
     }
 

@@ -216,6 +216,8 @@ fn an_ember_is_an_opaque_grey_body_at_its_cooled_temperature() {
             Param::float("emberemissivity", 0.8),
             Param::float("ambienttemperature", 1.0),
             Param::float("intensity", 2.0),
+            // (Radiation alone, as this test's closed form: no oxygen to burn in.)
+            Param::float("emberoxygen", 0.0),
         ],
     );
     // Through the first ember's centre: 0.8 · 2 · B(1300 K) in every bin, nothing behind.
@@ -246,6 +248,56 @@ fn an_ember_is_an_opaque_grey_body_at_its_cooled_temperature() {
             l[k]
         );
     }
+}
+
+#[test]
+fn a_burning_ember_glows_at_its_burning_temperature_for_seconds() {
+    // Two 1 mm sparks thrown at 1650 K, 3 s ago: in air their char burns and holds each near the temperature
+    // where oxidation meets radiation and convection (the steady root of that balance, firemedium_core's
+    // `burning_temperature` at the radius it has burnt down to: measured, its radiance 0.97–0.98 of that
+    // temperature's, 1302 K), where radiation alone would have cooled it to 600 K, all but black. Without
+    // oxygen, that cooled one.
+    let csv = "x,y,z,radius,temperature,age\n0.5,0.5,0.5,0.001,1650,3\n";
+    let render = |oxygen: f64| {
+        let (v, _f) = ember_volume(csv, vec![Param::float("emberoxygen", oxygen)]);
+        shoot(&v, DVec3::new(-0.5, 0.5, 0.5), DVec3::X, 0.0).0
+    };
+    let (burning, cooling) = (render(0.233), render(0.0));
+    let air = firemedium_core::ember::Char {
+        emissivity: 0.9,
+        density: 250.0,
+        heat_capacity: 1200.0,
+        ambient: 293.15,
+        oxygen: 0.233,
+    };
+    let (_, r_now) = firemedium_core::ember::burn(1650.0, 1e-3, 3.0, &air);
+    let steady = firemedium_core::ember::burning_temperature(r_now, &air).unwrap();
+    let k = 3.0 * 0.9 * 5.670_374_419e-8 / (250.0 * 1200.0 * 1e-3);
+    let cooled = firemedium_core::ember::cooled_temperature(1650.0, 3.0, k, 293.15);
+    for bin in [5, 24] {
+        let (b, c) = (0.9 * planck_bin(steady, bin), 0.9 * planck_bin(cooled, bin));
+        // (At 1300 K and 650 nm, 1 % in T is 17 % in B: 5 % in radiance holds T to 0.3 %.)
+        assert!(
+            (burning[bin] / b - 1.0).abs() < 0.05,
+            "bin {bin}: {} vs {b} ({steady} K)",
+            burning[bin]
+        );
+        assert!(
+            (cooling[bin] / c - 1.0).abs() < 2e-3,
+            "bin {bin}: {} vs {c}",
+            cooling[bin]
+        );
+    }
+    assert!(
+        burning[24] > 1e3 * cooling[24],
+        "{} vs {}",
+        burning[24],
+        cooling[24]
+    );
+    assert!(
+        (1200.0..1400.0).contains(&steady) && cooled < 700.0,
+        "{steady} K, {cooled} K"
+    );
 }
 
 #[test]

@@ -176,6 +176,7 @@ impl Settings {
             density: r.float("emberdensity")?,
             heat_capacity: r.float("emberheatcapacity")?,
             ambient: r.float("ambienttemperature")?,
+            oxygen: r.float("emberoxygen")?,
         };
         Ok(Settings {
             mode,

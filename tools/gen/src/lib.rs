@@ -189,6 +189,8 @@ pub struct Sim {
     pub warp: Option<(f64, f64)>,
     /// Embers thrown from the burning fuel, per second (`None`: none, and no random number is drawn for them).
     pub ember_rate: Option<f64>,
+    /// The embers' char and the air they burn in ([`EMBER_CHAR`], the plugin's defaults).
+    pub ember_char: firemedium_core::ember::Char,
     pub embers: Vec<Ember>,
     /// Embers thrown so far.
     pub embers_born: usize,
@@ -198,25 +200,35 @@ pub struct Sim {
 }
 
 /// An ember in flight: thrown from a burning fuel cell, carried by drag towards the gas's velocity, falling,
-/// cooling by radiation (`firemedium_core::ember`, the plugin's defaults for char).
+/// burning its char in the air and cooling by radiation and convection (`firemedium_core::ember::burn`, the
+/// plugin's defaults for char and air).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ember {
     pub x: DVec3,
     pub v: DVec3,
-    /// Radius, m.
+    /// Radius at birth, m (what the particle file holds: the plugin burns it down from there).
     pub r: f64,
     /// Temperature at birth, K.
     pub t0: f64,
     /// Seconds since birth.
     pub age: f64,
+    /// Its temperature (K) and radius (m) now.
+    pub now: (f64, f64),
 }
+
+/// The char of the embers and the air they burn in (the plugin's defaults).
+pub const EMBER_CHAR: firemedium_core::ember::Char = firemedium_core::ember::Char {
+    emissivity: firemedium_core::ember::CHAR_EMISSIVITY,
+    density: firemedium_core::ember::CHAR_DENSITY,
+    heat_capacity: firemedium_core::ember::CHAR_HEAT_CAPACITY,
+    ambient: T_AMB,
+    oxygen: firemedium_core::ember::AIR_OXYGEN,
+};
 
 impl Ember {
     /// Its temperature now (K).
     pub fn temperature(&self) -> f64 {
-        use firemedium_core::ember::*;
-        let k = cooling_constant(CHAR_EMISSIVITY, CHAR_DENSITY, CHAR_HEAT_CAPACITY, self.r);
-        cooled_temperature(self.t0, self.age, k, T_AMB)
+        self.now.0
     }
 }
 

@@ -67,6 +67,7 @@ impl Sim {
             time: 0.0,
             warp: None,
             ember_rate: None,
+            ember_char: crate::EMBER_CHAR,
             embers: Vec::new(),
             embers_born: 0,
             rng: Rng::new(seed ^ 0x5EED_F1AE),
@@ -228,7 +229,7 @@ impl Sim {
                     let out = DVec3::new(a.cos(), a.sin(), 0.0) * (0.5 + g.next_f64());
                     let v = out + DVec3::Z * (2.0 + 3.0 * g.next_f64());
                     // Born at the gas's temperature where the fuel burns (a millimetre of char reaches it in the
-                    // flame within a fraction of a second), then cooled by radiation alone once thrown.
+                    // flame within a fraction of a second), then burning in the air once thrown.
                     let t0 = b.t;
                     self.embers_born += 1;
                     self.embers.push(Ember {
@@ -237,6 +238,7 @@ impl Sim {
                         r,
                         t0,
                         age: 0.0,
+                        now: (t0, r),
                     });
                 }
             }
@@ -252,7 +254,7 @@ impl Sim {
                     let rho_air = 353.0 / tg;
                     let w = v - self.wind(x, tg);
                     -DVec3::Z * 9.81 * (1.0 - rho_air / CHAR_DENSITY)
-                        - w * (w.length() * 3.0 * 0.47 * rho_air / (8.0 * CHAR_DENSITY * e.r))
+                        - w * (w.length() * 3.0 * 0.47 * rho_air / (8.0 * CHAR_DENSITY * e.now.1))
                 };
                 // Midpoint in (x, v).
                 let a0 = accel(e.x, e.v);
@@ -262,6 +264,7 @@ impl Sim {
                     x: e.x + vm * dt,
                     v: e.v + am * dt,
                     age: e.age + dt,
+                    now: firemedium_core::ember::burn(e.now.0, e.now.1, dt, &self.ember_char),
                     ..*e
                 }
             })
@@ -269,7 +272,10 @@ impl Sim {
         self.embers = moved
             .into_iter()
             .filter(|e| {
-                e.x.cmpge(lo).all() && e.x.cmple(hi).all() && e.temperature() > EMBER_DEAD_K
+                e.x.cmpge(lo).all()
+                    && e.x.cmple(hi).all()
+                    && e.now.1 > 0.0
+                    && e.temperature() > EMBER_DEAD_K
             })
             .collect();
     }

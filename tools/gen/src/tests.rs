@@ -14,7 +14,8 @@ fn embers_are_thrown_at_their_rate_and_kept_while_they_glow_inside_the_domain() 
     assert!(!sim.embers.is_empty() && sim.embers.len() < sim.embers_born);
     for e in &sim.embers {
         assert!(e.x.z >= 0.0 && e.x.z <= m.height && e.x.x.abs() <= m.half_width);
-        assert!(e.temperature() > EMBER_DEAD_K && e.temperature() <= e.t0);
+        // (Burning, a small spark may run hotter than it was born; it is never cold.)
+        assert!(e.temperature() > EMBER_DEAD_K && e.temperature() < 2500.0);
         assert!(e.age > 0.0 && e.age <= t + 1e-9);
         assert!((0.5e-3..=3.0e-3).contains(&e.r));
     }
@@ -44,6 +45,8 @@ fn an_ember_in_still_air_falls_as_quadratic_drag_says() {
     let mut sim = Sim::new(Kind::Campfire, 1);
     sim.model.turbulence = 0.0;
     sim.model.dt = 1e-3;
+    // (Its char not burning: the radius the closed form assumes stays.)
+    sim.ember_char.oxygen = 0.0;
     let r = 1e-3;
     sim.embers.push(Ember {
         x: DVec3::new(0.0, 0.0, 1.55),
@@ -51,6 +54,7 @@ fn an_ember_in_still_air_falls_as_quadratic_drag_says() {
         r,
         t0: 5000.0,
         age: 0.0,
+        now: (5000.0, r),
     });
     for _ in 0..300 {
         sim.step_embers(0.0, &[]);
