@@ -98,24 +98,40 @@ fn step(t_max: f64) -> f64 {
     (t_max / 4096.0).max(2.0)
 }
 
-/// The thick-capable lines of each species (per line of its element).
-pub(super) fn select(inp: &Input) -> Vec<Vec<bool>> {
+/// The fire's diagonal, m: the longest path through it.
+fn diagonal(inp: &Input) -> f64 {
     let [lo, hi] = inp.ds.bounds();
-    let length = (hi - lo).length();
+    (hi - lo).length()
+}
+
+/// Species `s`'s largest number density in the dataset, m⁻³.
+fn largest_density(inp: &Input, s: usize) -> f64 {
+    let (sym, _, scale) = &inp.species[s];
+    inp.ds
+        .channels()
+        .iter()
+        .find(|c| &c.name == sym)
+        .map_or(0.0, |c| c.stats.max.max(0.0) as f64 * scale)
+}
+
+/// 33 temperatures spaced geometrically over the grid's range, where a line's strength is sampled.
+fn temperatures(inp: &Input) -> Vec<f64> {
     let [t_lo, t_hi] = inp.t_range;
     let (t_lo, t_hi) = (t_lo.max(1.0), t_hi.max(1.0));
-    let temps: Vec<f64> = (0..=32)
+    (0..=32)
         .map(|i| t_lo * (t_hi / t_lo).powf(i as f64 / 32.0))
-        .collect();
+        .collect()
+}
+
+/// The thick-capable lines of each species (per line of its element).
+pub(super) fn select(inp: &Input) -> Vec<Vec<bool>> {
+    let length = diagonal(inp);
+    let temps = temperatures(inp);
     inp.species
         .iter()
-        .map(|(sym, e, scale)| {
-            let n_max = inp
-                .ds
-                .channels()
-                .iter()
-                .find(|c| &c.name == sym)
-                .map_or(0.0, |c| c.stats.max.max(0.0) as f64 * scale);
+        .enumerate()
+        .map(|(s, (_, e, _))| {
+            let n_max = largest_density(inp, s);
             let mass = atomic_mass_u(e.symbol()).unwrap_or(1.0);
             e.lines()
                 .iter()
@@ -138,19 +154,10 @@ pub(super) fn select(inp: &Input) -> Vec<Vec<bool>> {
 /// still thicker than [`WING_TAU`] there — Δλ = √(N_max L S γ / (π WING_TAU)) at the temperature (of `select`'s)
 /// where S γ is largest.
 fn half_window(inp: &Input, species: usize, line: &Line) -> f64 {
-    let (sym, e, scale) = &inp.species[species];
-    let [lo, hi] = inp.ds.bounds();
-    let length = (hi - lo).length();
-    let n_max = inp
-        .ds
-        .channels()
-        .iter()
-        .find(|c| &c.name == sym)
-        .map_or(0.0, |c| c.stats.max.max(0.0) as f64 * scale);
-    let [t_lo, t_hi] = inp.t_range;
-    let (t_lo, t_hi) = (t_lo.max(1.0), t_hi.max(1.0));
-    let widest = (0..=32)
-        .map(|i| t_lo * (t_hi / t_lo).powf(i as f64 / 32.0))
+    let e = &inp.species[species].1;
+    let (length, n_max) = (diagonal(inp), largest_density(inp, species));
+    let widest = temperatures(inp)
+        .into_iter()
         .map(|t| {
             // (The strength per unit of φ per nm, as the tables take it.)
             let strength =
