@@ -104,6 +104,22 @@ fn velocity_grids(r: &ParamReader) -> Result<Option<[String; 3]>, Error> {
     }
 }
 
+/// The grid the scene names for a channel: by our parameter `ours` or by pbrt-v4's nanovdb name `theirs`
+/// (`gridname`, `temperaturename`); `None` when neither is given; an error when both are.
+fn grid_name(r: &ParamReader, ours: &str, theirs: &str) -> Result<Option<String>, Error> {
+    match (r.list_has(ours), r.list_has(theirs)) {
+        (true, true) => Err(Error::invalid(
+            "dataset",
+            theirs,
+            format!("\"{theirs}\" and \"{ours}\" both given"),
+            format!("one name for the grid (pbrt-v4 reads \"{theirs}\")"),
+        )),
+        (true, false) => r.string(ours).map(Some),
+        (false, true) => r.string(theirs).map(Some),
+        (false, false) => Ok(None),
+    }
+}
+
 /// What [`Request::load`] gives a volume.
 pub(crate) struct Loaded {
     pub ds: Dataset,
@@ -461,24 +477,30 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
         } else {
             filename.clone()
         };
+        // The grids the scene names, by our names or pbrt-v4's nanovdb ones.
+        let dg = grid_name(r, "densitygrid", "gridname")?;
+        let tg = grid_name(r, "temperaturegrid", "temperaturename")?;
         // A preset's grid is found in its file when the files are read (`presets`); its name here stands for it.
         let mut presets = Vec::new();
         let (dgrid, tgrid) = match preset_names(tool) {
             Some((d, t)) => {
-                let mut named = |param: &str, names: &'static [&'static str], at: usize| {
-                    if r.list_has(param) {
-                        r.string(param)
-                    } else {
-                        presets.push((at, names));
-                        Ok(names[0].to_string())
-                    }
-                };
-                (named("densitygrid", d, 0)?, named("temperaturegrid", t, 1)?)
+                let mut named =
+                    |given: Option<String>, names: &'static [&'static str], at: usize| {
+                        given.unwrap_or_else(|| {
+                            presets.push((at, names));
+                            names[0].to_string()
+                        })
+                    };
+                (named(dg, d, 0), named(tg, t, 1))
             }
-            None if blender && !r.list_has("temperaturegrid") => {
-                (r.string("densitygrid")?, "flame".to_string())
-            }
-            None => (r.string("densitygrid")?, r.string("temperaturegrid")?),
+            None => (
+                dg.map_or_else(|| r.string("densitygrid"), Ok)?,
+                match tg {
+                    Some(t) => t,
+                    None if blender => "flame".to_string(),
+                    None => r.string("temperaturegrid")?,
+                },
+            ),
         };
         let mut sources = vec![ChannelSource {
             name: "density".into(),

@@ -17,6 +17,8 @@ pub static DATASET: Component = Component {
         p("format", T::String, "", "", Range::Choices(<Option<crate::dataset::Format> as Choice>::NAMES), "File format; empty: from the extension."),
         p("densitygrid", T::String, "density", "", Range::Any, "Name of the density grid in a VDB/NanoVDB file."),
         p("temperaturegrid", T::String, "temperature", "", Range::Any, "Name of the temperature grid; empty for none (no emission from temperature)."),
+        p("gridname", T::String, "", "", Range::Any, "pbrt-v4's nanovdb name for densitygrid (give one of the two)."),
+        p("temperaturename", T::String, "", "", Range::Any, "pbrt-v4's nanovdb name for temperaturegrid (give one of the two)."),
         p("species", T::String, "", "", Range::Any, "Element symbols of species grids (Na, Li, K, Ca, Sr, Ba, Cu); each grid is named by its symbol."),
         p("speciesfiles", T::String, "", "", Range::Path, "Files of the species grids, one per symbol, when not in `filename`."),
         p("speciesscale", T::Float, "1", "m⁻³ per unit", Range::Between(0.0, 1e40), "Multiplier turning species grid values into number densities (one value, or one per species)."),

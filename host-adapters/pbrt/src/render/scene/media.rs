@@ -292,16 +292,6 @@ impl Builder {
                     if p.name == "type" || p.name == "plugin" {
                         continue;
                     }
-                    // pbrt-v4's `nanovdb` names its grids `gridname` (default "density") and `temperaturename`
-                    // (default "temperature"): the plugin's `densitygrid` and `temperaturegrid`.
-                    let key = match (ty.as_str(), p.name.as_str()) {
-                        ("nanovdb", "gridname") => "densitygrid",
-                        ("nanovdb", "temperaturename") => "temperaturegrid",
-                        (_, n) => n,
-                    };
-                    if key != p.name && params.params().iter().any(|q| q.name == key) {
-                        return Err(err(&p.loc, format!("nanovdb medium \"{name}\": \"{}\" and \"{key}\" both name a grid: give one (pbrt-v4 reads \"{}\")", p.name, p.name)));
-                    }
                     let value = match (&p.values, p.ty.as_str()) {
                         // (File names as the scene wrote them: the plugin resolves its own against the scene's
                         // folder, `Context::directory`.)
@@ -320,7 +310,7 @@ impl Builder {
                         }
                         (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
                     };
-                    list.push(LParam { name: key.to_string(), value, at: Some(p.loc.to_string()) });
+                    list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
                 }
                 if ty == "cloud" {
                     // pbrt-v4's procedural cloud, baked into a grid the plugin renders as a pbrt grid medium.
