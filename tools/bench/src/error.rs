@@ -10,7 +10,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// One point of the plot.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Point {
     pub estimator: String,
     pub setting: String,
@@ -232,6 +232,72 @@ pub fn winner(points: &[Point]) -> Option<usize> {
     (0..points.len())
         .filter(|&i| points[i].seconds <= budget * 1.0001)
         .min_by(|&a, &b| points[a].rel_rmse.total_cmp(&points[b].rel_rmse))
+}
+
+/// The points of a CSV [`csv`] wrote: an error naming the line, the column and what it expected.
+pub fn parse_csv(text: &str) -> Result<Vec<Point>, String> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim() == "estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations" => {}
+        _ => {
+            return Err(
+                "line 1: expected the header estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations"
+                    .into(),
+            )
+        }
+    }
+    let mut points = Vec::new();
+    for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
+        let f = split_csv_line(line);
+        if f.len() != 6 {
+            return Err(format!("line {}: {} fields, expected 6", i + 1, f.len()));
+        }
+        let num = |k: usize, what: &str| -> Result<f64, String> {
+            f[k].trim()
+                .parse::<f64>()
+                .map_err(|_| format!("line {}: {what} {:?}: expected a number", i + 1, f[k]))
+        };
+        let evaluations = match f[5].trim() {
+            "" => None,
+            v => Some(v.parse::<u64>().map_err(|_| {
+                format!(
+                    "line {}: medium_evaluations {v:?}: expected a count or nothing",
+                    i + 1
+                )
+            })?),
+        };
+        points.push(Point {
+            estimator: f[0].clone(),
+            setting: f[1].clone(),
+            seconds: num(2, "seconds")?,
+            rel_rmse: num(3, "rel_rmse")?,
+            rel_mse: num(4, "rel_mse")?,
+            evaluations,
+        });
+    }
+    if points.is_empty() {
+        return Err("no points".into());
+    }
+    Ok(points)
+}
+
+/// One CSV line's fields, quoted ones unquoted (RFC 4180: a doubled quote inside is one quote).
+fn split_csv_line(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => fields.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
 }
 
 pub fn csv(points: &[Point]) -> String {

@@ -42,6 +42,21 @@ enum What {
     /// room, with the campfire at several resolutions: error against time (CSV + log–log plot per resolution),
     /// error × time, and a light sample's cost beside a camera path.
     FireLight(FireLightArgs),
+    /// Redraws a ladder's plot (SVG, PNG) from its CSV, as `error-vs-time` and `fire-light` write it: the plots
+    /// of committed measurements, without measuring again.
+    Plot(PlotArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PlotArgs {
+    /// The ladder's CSV (estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations).
+    csv: std::path::PathBuf,
+    /// The plot's title.
+    #[arg(long)]
+    title: String,
+    /// Output prefix: PREFIX.svg and PREFIX.png (default: the CSV's path without its extension).
+    #[arg(short, long)]
+    output: Option<std::path::PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -175,6 +190,7 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
         What::ErrorVsTime(e) => error_report(e).map_err(|m| (1, m)),
         What::Components(c) => components_report(c).map_err(|m| (1, m)),
         What::FireLight(f) => fire_light_report(f).map_err(|m| (1, m)),
+        What::Plot(p) => plot_report(p).map_err(|m| (1, m)),
         What::Stability => {
             let start = std::time::Instant::now();
             let cases = stability::cases();
@@ -503,6 +519,36 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
 
 /// Writes the ladder's CSV, SVG and PNG; `mark`: the point the plots circle (and the text names) as the equal-time
 /// winner, if any.
+/// `bench plot`: a ladder's CSV read back (every row checked) and drawn as the bench draws it.
+fn plot_report(a: &PlotArgs) -> Result<String, String> {
+    let name = a.csv.display();
+    let text = std::fs::read_to_string(&a.csv).map_err(|e| format!("{name}: cannot read: {e}"))?;
+    let points = error::parse_csv(&text).map_err(|m| format!("{name}: {m}"))?;
+    let prefix = a.output.clone().unwrap_or_else(|| a.csv.with_extension(""));
+    let (svg_path, png_path) = (prefix.with_extension("svg"), prefix.with_extension("png"));
+    let mark = error::winner(&points);
+    let write = |path: &std::path::Path, bytes: &[u8]| {
+        firemedium::imageio::write_atomic(path, |tmp| {
+            std::fs::write(tmp, bytes)
+                .map_err(|e| firemedium::Error::file(path.display(), format!("cannot write: {e}")))
+        })
+        .map_err(|e| e.to_string())
+    };
+    write(&svg_path, error::svg(&points, &a.title, mark).as_bytes())?;
+    let (w, h, rgb, why) = error::png(&points, &a.title, mark);
+    if let Some(why) = why {
+        eprintln!("firemedium: {}: {why}", png_path.display());
+    }
+    firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)
+        .map_err(|e| e.to_string())?;
+    Ok(format!(
+        "{} points from {name}: wrote {} and {}\n",
+        points.len(),
+        svg_path.display(),
+        png_path.display()
+    ))
+}
+
 fn write_ladder(
     prefix: &std::path::Path,
     suffix: &str,
@@ -771,6 +817,45 @@ mod tests {
             text.lines().nth(1),
             Some("\"brick pdf, coarse \"\"march\"\"\",4 spp,1.500000,2.500000e-1,5.000000e-1,")
         );
+    }
+
+    #[test]
+    fn a_ladders_csv_reads_back_as_its_points_and_bad_rows_say_where() {
+        let points = vec![
+            super::error::Point {
+                estimator: "brick pdf, coarse \"march\"".into(),
+                setting: "4 spp".into(),
+                seconds: 1.5,
+                rel_rmse: 0.25,
+                rel_mse: 0.0625,
+                evaluations: None,
+            },
+            super::error::Point {
+                estimator: "march spectral".into(),
+                setting: "step 1 voxel".into(),
+                seconds: 0.009696,
+                rel_rmse: 2.057536e-3,
+                rel_mse: 3.422771e-6,
+                evaluations: Some(503258),
+            },
+        ];
+        let back = super::error::parse_csv(&super::error::csv(&points)).unwrap();
+        assert_eq!(back, points);
+        let head = "estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations\n";
+        for (body, says) in [
+            (
+                "march,step 1,fast,0.1,0.01,\n",
+                "line 2: seconds \"fast\": expected a number",
+            ),
+            ("march,step 1,0.1\n", "line 2: 3 fields, expected 6"),
+            ("", "no points"),
+        ] {
+            let e = super::error::parse_csv(&format!("{head}{body}")).unwrap_err();
+            assert_eq!(e, says);
+        }
+        assert!(super::error::parse_csv("a,b\n")
+            .unwrap_err()
+            .starts_with("line 1:"));
     }
 
     #[test]
