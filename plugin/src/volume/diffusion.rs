@@ -178,40 +178,26 @@ impl Diffusion {
         let f = DVec3::new(clamp(f.x, nx), clamp(f.y, ny), clamp(f.z, nz));
         let (i, jy, k) = (f.x as usize, f.y as usize, f.z as usize);
         let t = f - DVec3::new(i as f64, jy as f64, k as f64);
-        let c = self.c.min(j.len());
-        let mut sum = [0.0f64; 64];
-        let big = c > sum.len();
-        for dz in 0..2 {
-            for dy in 0..2 {
-                for dx in 0..2 {
-                    let w = (if dx == 1 { t.x } else { 1.0 - t.x })
-                        * (if dy == 1 { t.y } else { 1.0 - t.y })
-                        * (if dz == 1 { t.z } else { 1.0 - t.z });
-                    if w == 0.0 {
-                        continue;
-                    }
-                    let (a, b, d) = (
-                        (i + dx).min(nx - 1),
-                        (jy + dy).min(ny - 1),
-                        (k + dz).min(nz - 1),
-                    );
-                    let base = (a + nx * (b + ny * d)) * self.c;
-                    if big {
-                        for ch in 0..c {
-                            j[ch] += w * ss[ch] * self.l_in[base + ch] as f64;
-                        }
-                    } else {
-                        for ch in 0..c {
-                            sum[ch] += w * self.l_in[base + ch] as f64;
-                        }
-                    }
-                }
-            }
+        // The eight corners' offsets into `l_in` and weights, then per channel their sum (never below 0).
+        let mut corners = [(0usize, 0.0f64); 8];
+        for (n, corner) in corners.iter_mut().enumerate() {
+            let (dx, dy, dz) = (n & 1, (n >> 1) & 1, n >> 2);
+            let w = (if dx == 1 { t.x } else { 1.0 - t.x })
+                * (if dy == 1 { t.y } else { 1.0 - t.y })
+                * (if dz == 1 { t.z } else { 1.0 - t.z });
+            let (a, b, d) = (
+                (i + dx).min(nx - 1),
+                (jy + dy).min(ny - 1),
+                (k + dz).min(nz - 1),
+            );
+            *corner = ((a + nx * (b + ny * d)) * self.c, w);
         }
-        if !big {
-            for ch in 0..c {
-                j[ch] += ss[ch] * sum[ch].max(0.0);
-            }
+        for ch in 0..self.c.min(j.len()).min(ss.len()) {
+            let l: f64 = corners
+                .iter()
+                .map(|&(base, w)| w * self.l_in[base + ch] as f64)
+                .sum();
+            j[ch] += ss[ch] * l.max(0.0);
         }
     }
 }
