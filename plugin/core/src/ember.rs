@@ -28,11 +28,12 @@
 //! D_O2 = 1.8e-5 (T_f/298)^1.75 m²/s at the film temperature T_f = (T + T_a)/2 (Incropera's tables of air, fitted).
 //! The char burns away at constant density, r shrinking by J/ρ. A 1 mm spark settles near 1390 K and burns for
 //! about 20 s; below ~850 K the kinetics cannot keep up with the losses and it goes out — cooling as above. The
-//! two equations are integrated by classical RK4 in steps of at most a quarter of the ember's thermal time
-//! constant (and 5 ms).
+//! two equations are integrated by classical RK4 in steps of at most half the ember's thermal time constant
+//! (and 50 ms).
 //!
 //! Used by the plugin (an ember's temperature at the ray's time) and by `gen` (which ages the embers it emits),
-//! so the two agree (by construction while an ember only cools; to the integration's 1e-4 while it burns).
+//! so the two agree (by construction while an ember only cools; within 1e-7 while it burns: measured, one
+//! integration over 3 s against 360 steps of a frame).
 
 use crate::constants::STEFAN_BOLTZMANN;
 
@@ -196,12 +197,12 @@ pub fn burn(t0: f64, r0: f64, seconds: f64, c: &Char) -> (f64, f64) {
         if r < GONE {
             return (c.ambient.max(0.0), 0.0);
         }
-        // A quarter of the thermal time constant ρ c r / 3 over the losses' conductance (radiation's
-        // 4εσT³ and convection's h), and 5 ms.
+        // Half the thermal time constant ρ c r / 3 over the losses' conductance (radiation's 4εσT³ and
+        // convection's h), and 50 ms (RK4 is stable to 2.8 of them; at a half its error is ~3e-4 per step).
         let g = 4.0 * c.emissivity.max(0.0) * STEFAN_BOLTZMANN * t.max(c.ambient).powi(3)
             + SPHERE_NU * 0.0263 * (t.max(300.0) / 300.0).powf(0.8) / (2.0 * r);
         let tau = c.density * c.heat_capacity * r / 3.0 / g.max(1e-12);
-        let h = (0.25 * tau).clamp(1e-6, 5e-3).min(left);
+        let h = (0.5 * tau).clamp(1e-6, 0.05).min(left);
         let f = |t: f64, r: f64| rates(t.max(1.0), r.max(0.5 * GONE), c);
         let (a1, b1) = f(t, r);
         let (a2, b2) = f(t + 0.5 * h * a1, r + 0.5 * h * b1);

@@ -126,12 +126,23 @@ impl Embers {
             let (t, r, burning) = if mat.oxygen > 0.0 {
                 // Burning: its temperature and radius by integration from its birth, at its age (its char may
                 // be gone) and at the shutter's times (before its birth: as born).
-                let (t, r) = burn(p.t, p.r, p.age, &char_);
+                // (One integration from its birth through the four ages, in order.)
+                let mut ages = [0usize, 1, 2, 3].map(|k| {
+                    let s = if k < 3 { burn_times[k] } else { 0.0 };
+                    ((p.age + s * spf).max(0.0), k)
+                });
+                ages.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let (mut state, mut at, mut out) = ((p.t, p.r), 0.0, [(0.0, 0.0); 4]);
+                for (age, k) in ages {
+                    state = burn(state.0, state.1, age - at, &char_);
+                    at = age;
+                    out[k] = state;
+                }
+                let (t, r) = out[3];
                 if !(r > 0.0) {
                     continue;
                 }
-                let at = |s: f64| burn(p.t, p.r, (p.age + s * spf).max(0.0), &char_).0;
-                let temps = burn_times.map(at);
+                let temps = [out[0].0, out[1].0, out[2].0];
                 t_max = temps.iter().fold(t_max, |m, &x| m.max(x));
                 (t, r, Some(temps))
             } else {
