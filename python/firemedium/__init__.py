@@ -26,6 +26,7 @@ import shutil
 import subprocess
 import sys
 import threading
+import warnings
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -304,6 +305,24 @@ class Volume:
         """What the fire holds: a subset of :data:`FEATURES`. A host tracking the medium itself refuses or
         falls back for ``refraction``, ``embers``, ``thick_lines`` and ``diffusion``, which the medium level
         cannot express."""
+        self.notes = self._notes()
+        """What the plugin's build found that a user should hear (species whose lines fall outside the channels,
+        flame colours the model cannot give), one line each; each is also issued as a :class:`UserWarning`."""
+        for note in self.notes:
+            warnings.warn(f"firemedium: {note}", stacklevel=2)
+
+    def _notes(self) -> list[str]:
+        p = self.plugin
+        count = C.c_size_t()
+        p._check(p.api.volume_note_count(self._h, C.byref(count)))
+        out = []
+        for i in range(count.value):
+            n = C.c_size_t()
+            p._check(p.api.volume_note(self._h, i, None, 0, C.byref(n)))
+            buf = C.create_string_buffer(n.value + 1)
+            p._check(p.api.volume_note(self._h, i, buf, len(buf), C.byref(n)))
+            out.append(buf.value.decode("utf-8", "replace"))
+        return out
 
     def __del__(self):
         h = getattr(self, "_h", None)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes as C
 
 ABI_MAJOR = 1
-ABI_MINOR = 0
+ABI_MINOR = 1
 ENTRY_SYMBOL = "firemedium_plugin_entry"
 
 OK, INVALID_ARGUMENT, INVALID_PARAMETER, DATASET, UNSUPPORTED, PANIC = range(6)
@@ -236,4 +236,7 @@ class FmApi(C.Structure):
         ("light_pdf_direction", C.CFUNCTYPE(_S, _V, c_double_p, c_double_p, c_double_p, C.c_size_t, c_double_p)),
         ("light_integrate", C.CFUNCTYPE(_S, _V, C.POINTER(FmRay), c_double_p, C.c_size_t, c_float_p, c_float_p)),
         ("light_line_channels", C.CFUNCTYPE(_S, _V, C.POINTER(C.c_uint32))),
+        # 1.1
+        ("volume_note_count", C.CFUNCTYPE(_S, _V, C.POINTER(C.c_size_t))),
+        ("volume_note", C.CFUNCTYPE(_S, _V, C.c_size_t, C.c_char_p, C.c_size_t, C.POINTER(C.c_size_t))),
     ]

@@ -32,6 +32,18 @@ class Package(unittest.TestCase):
         self.assertEqual(xyz.shape, (32, 3))
         self.assertTrue((xyz[:, 1] >= 0).all() and xyz[:, 1].max() > 0)
 
+    def test_the_plugins_notes_are_warnings(self):
+        # A barium flame's colour is molecular (BaOH, BaCl bands), which the model does not hold: the plugin says
+        # so whatever the host, and the package issues it as a warning; sodium's colour is its lines: nothing.
+        torch = str(ROOT / "scenes" / "spectroscopy" / "torch.vdb")
+        with self.assertWarns(UserWarning) as w:
+            ba = fm.Volume({"filename": torch, "species": "Ba", "sootscale": 1e-6})
+        self.assertEqual(len(ba.notes), 1, ba.notes)
+        self.assertTrue(ba.notes[0].startswith("species Ba: its flame photographs pale green"), ba.notes)
+        self.assertIn("photographs pale green", str(w.warning))
+        na = fm.Volume({"filename": torch, "species": "Na", "sootscale": 1e-6})
+        self.assertEqual(na.notes, [])
+
     def test_the_medium_level_integrates_to_the_fast_path(self):
         # Along a ray through the flame: emission and transmittance from point queries (1 mm quadrature at the
         # bins' centres) against the plugin's own march, seen through the film's Y weights.

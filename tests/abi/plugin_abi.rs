@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (1, 0));
+    assert_eq!(p.version(), (1, 1));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -137,6 +137,30 @@ fn loads_describes_and_integrates() {
         assert!(exits[i].t <= r.tmax);
     }
     assert!(lit > 10, "only {lit} of 64 rays saw the fire");
+}
+
+#[test]
+fn a_volumes_notes_cross_the_abi() {
+    // ABI 1.1: what the build found a user should hear, read by count and index (the length asked first, then the
+    // text): a barium flame's colour is molecular; a sodium flame's is its lines, and there is nothing to say.
+    let p = plugin();
+    let torch = crate::common::root().join("scenes/spectroscopy/torch.vdb");
+    let fire = |sym: &str| {
+        p.create_volume(&[
+            Param::string("filename", torch.to_str().unwrap()),
+            Param::string("species", sym),
+            Param::float("sootscale", 1e-6),
+        ])
+        .unwrap()
+    };
+    let notes = fire("Ba").notes().unwrap();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(
+        notes[0]
+            .starts_with("species Ba: its flame photographs pale green, from BaOH and BaCl bands"),
+        "{notes:?}"
+    );
+    assert!(fire("Na").notes().unwrap().is_empty());
 }
 
 #[test]

@@ -362,7 +362,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 24] = [
+const ENTRIES: [&str; 26] = [
     "last_error",
     "last_error_detail",
     "param_count",
@@ -387,6 +387,8 @@ const ENTRIES: [&str; 24] = [
     "light_pdf_direction",
     "light_integrate",
     "light_line_channels",
+    "volume_note_count",
+    "volume_note",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

@@ -104,6 +104,42 @@ impl Volume {
         Ok((out != [0.0, 0.0]).then_some(out))
     }
 
+    /// What the volume's build found that a user should hear (species whose lines fall outside the channels,
+    /// flame colours the model cannot give), one line each: a host shows them as warnings.
+    pub fn notes(&self) -> Result<Vec<String>, Error> {
+        let api = self.inner.api();
+        let mut count = 0usize;
+        // SAFETY: a live handle and a writable usize.
+        let s = unsafe { (api.volume_note_count)(self.handle, &mut count) };
+        self.inner.check(s)?;
+        let mut out = Vec::new();
+        for i in 0..count {
+            let mut len = 0usize;
+            // SAFETY: a live handle; a null buffer asks for the length into a writable usize.
+            let s = unsafe { (api.volume_note)(self.handle, i, std::ptr::null_mut(), 0, &mut len) };
+            self.inner.check(s)?;
+            // (A note is a line of text: a length past 64 KiB is a broken plugin's, not a buffer to allocate.)
+            let len = len.min(1 << 16);
+            let mut buf = vec![0u8; len + 1];
+            let mut full = 0usize;
+            // SAFETY: `buf` holds len + 1 writable bytes, as `cap` says.
+            let s = unsafe {
+                (api.volume_note)(
+                    self.handle,
+                    i,
+                    buf.as_mut_ptr().cast(),
+                    buf.len(),
+                    &mut full,
+                )
+            };
+            self.inner.check(s)?;
+            let len = full.min(len);
+            buf.truncate(len);
+            out.push(String::from_utf8_lossy(&buf).into_owned());
+        }
+        Ok(out)
+    }
+
     /// The temperature whose blackbody a viewer adapts to for this volume (K): its hottest when its colour is
     /// the physics', `None` when its colour is art-directed (a tint or a colour ramp: seen against D65) or it has
     /// no temperature grid.

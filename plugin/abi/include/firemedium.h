@@ -29,7 +29,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 1u
-#define FM_ABI_MINOR 0u
+#define FM_ABI_MINOR 1u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -329,6 +329,12 @@ typedef struct FmApi {
     /* How many of the volume's channels the light's line estimate marches, into *out (required): the volume's
      * channel count, or fewer ("linechannels": a soot fire's spectral bins, the others following from them). */
     FmStatus (*light_line_channels)(const FmLight *light, uint32_t *out);
+    /* (1.1) How many notes the volume's build left, into *out (required): what a user should hear whatever host
+     * renders it — species whose lines fall outside the channels, flame colours the model cannot give. */
+    FmStatus (*volume_note_count)(const FmVolume *volume, size_t *out);
+    /* (1.1) Note index (< the count), UTF-8, NUL-terminated and truncated to cap bytes, into buf (may be NULL to
+     * ask for the length); its full length in bytes without the NUL into *len (required). */
+    FmStatus (*volume_note)(const FmVolume *volume, size_t index, char *buf, size_t cap, size_t *len);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

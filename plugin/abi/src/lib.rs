@@ -32,7 +32,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 1;
 /// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 0;
+pub const ABI_MINOR: u32 = 1;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -672,6 +672,19 @@ pub struct FmApi {
     /// How many of the volume's channels the light's line estimate marches, into `*out` (required): the volume's
     /// channel count, or fewer (`linechannels`: a soot fire's spectral bins, the others following from them).
     pub light_line_channels: unsafe extern "C" fn(light: *const FmLight, out: *mut u32) -> FmStatus,
+    /// (1.1) How many notes the volume's build left, into `*out` (required): what a user should hear whatever
+    /// host renders it — species whose lines fall outside the channels, flame colours the model cannot give.
+    pub volume_note_count:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut usize) -> FmStatus,
+    /// (1.1) Note `index` (< the count), UTF-8, NUL-terminated and truncated to `cap` bytes, into `buf` (may be
+    /// null to ask for the length); its full length in bytes without the NUL into `*len` (required).
+    pub volume_note: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        index: usize,
+        buf: *mut c_char,
+        cap: usize,
+        len: *mut usize,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.

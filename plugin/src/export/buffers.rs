@@ -168,3 +168,20 @@ pub(super) unsafe fn times<'a>(
     }
     Ok(Times(Some(t)))
 }
+
+/// `bytes` into the host's `buf` of `cap` bytes (null or 0: nothing written), truncated to `cap − 1` and
+/// NUL-terminated; returns the full length.
+///
+/// # Safety
+/// `buf` is null or points to `cap` writable bytes.
+pub(super) unsafe fn copy_c_string(bytes: &[u8], buf: *mut std::ffi::c_char, cap: usize) -> usize {
+    if !buf.is_null() && cap > 0 {
+        let n = bytes.len().min(cap - 1);
+        // SAFETY: `buf` holds `cap` writable bytes (caller contract); n + 1 ≤ cap are written.
+        unsafe {
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
+            *buf.add(n) = 0;
+        }
+    }
+    bytes.len()
+}

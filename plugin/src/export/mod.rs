@@ -186,17 +186,8 @@ fn span<T>(n: usize, what: &str) -> Result<(), (FmStatus, String)> {
 
 unsafe extern "C" fn last_error(buf: *mut c_char, cap: usize) -> usize {
     LAST_ERROR.with(|e| {
-        let e = e.borrow();
-        let bytes = e.as_bytes();
-        if !buf.is_null() && cap > 0 {
-            let n = bytes.len().min(cap - 1);
-            // SAFETY: the caller passes a writable buffer of `cap` bytes (ABI contract); we write n + 1 ≤ cap.
-            unsafe {
-                std::ptr::copy_nonoverlapping(bytes.as_ptr(), buf as *mut u8, n);
-                *buf.add(n) = 0;
-            }
-        }
-        bytes.len()
+        // SAFETY: `buf` is null or holds `cap` writable bytes (ABI contract).
+        unsafe { buffers::copy_c_string(e.borrow().as_bytes(), buf, cap) }
     })
 }
 
@@ -285,6 +276,8 @@ static API: FmApi = FmApi {
     light_pdf_direction,
     light_integrate,
     light_line_channels,
+    volume_note_count,
+    volume_note,
 };
 
 /// The plugin's entry point: the static function table.

@@ -455,6 +455,49 @@ pub(super) unsafe extern "C" fn volume_capped_rays(
     })
 }
 
+pub(super) unsafe extern "C" fn volume_note_count(
+    volume: *const FmVolume,
+    out: *mut usize,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_note_count") }?;
+        if out.is_null() {
+            return Err(bad("volume_note_count: out is null"));
+        }
+        // SAFETY: non-null (checked) and writable (caller contract).
+        unsafe { *out = v.notes().len() };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_note(
+    volume: *const FmVolume,
+    index: usize,
+    buf: *mut std::ffi::c_char,
+    cap: usize,
+    len: *mut usize,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_note") }?;
+        if len.is_null() {
+            return Err(bad("volume_note: len is null"));
+        }
+        let notes = v.notes();
+        let Some(note) = notes.get(index) else {
+            return Err(bad(format!(
+                "volume_note: index {index}: expected one below the volume's {} notes",
+                notes.len()
+            )));
+        };
+        // SAFETY: `buf` is null or holds `cap` writable bytes, `len` is non-null (checked) and writable (caller
+        // contract).
+        unsafe { *len = super::buffers::copy_c_string(note.as_bytes(), buf, cap) };
+        Ok(())
+    })
+}
+
 pub(super) unsafe extern "C" fn volume_features(
     volume: *const FmVolume,
     out: *mut u64,

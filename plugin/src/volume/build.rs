@@ -64,6 +64,22 @@ impl FireVolume {
             .map(|i| ds.channels()[i].stats.max as f64)
             .unwrap_or(0.0)
             .max(0.0);
+        // ---- what a user should hear about its species (at its hottest; 2000 K without a temperature grid)
+        let notes = match &set.emission {
+            Emission::Physical { species, .. } => {
+                let range = match basis.mode {
+                    ColorMode::Spectral(g) => (g.min_nm(), g.max_nm()),
+                    ColorMode::Rgb => (380.0, 780.0),
+                };
+                let hot = if temperature.is_some() {
+                    t_max.max(1000.0)
+                } else {
+                    2000.0
+                };
+                notes::species(species, hot, range)
+            }
+            Emission::Pbrt { .. } => Vec::new(),
+        };
         let mut tables = Vec::new();
         let mut thick = None;
         let mut co = match &set.emission {
@@ -474,6 +490,7 @@ impl FireVolume {
                 source: co.source,
                 spare: 0,
                 threads: 0,
+                notes,
             },
             capped: CapCounter::default(),
             #[cfg(test)]

@@ -210,6 +210,7 @@ impl FireVolume {
                 source: None,
                 spare: 0,
                 threads: self.report.threads,
+                notes: Vec::new(),
             },
             capped: CapCounter::default(),
             #[cfg(test)]

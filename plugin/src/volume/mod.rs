@@ -44,6 +44,7 @@ mod looks;
 mod march;
 mod mip;
 mod motion;
+mod notes;
 pub mod params;
 mod parts;
 mod point;
@@ -255,6 +256,12 @@ impl FireVolume {
             .grid
             .stats();
         Some([s.min as f64, s.max as f64])
+    }
+
+    /// What the build found that a user should hear (species whose lines fall outside the channels, flame colours
+    /// the model cannot give), one line each.
+    pub fn notes(&self) -> &[String] {
+        &self.report.notes
     }
 
     /// The build's thread budget (`threads`; 0: every core).

@@ -98,4 +98,6 @@ pub(super) struct Report {
     pub(super) spare: u64,
     /// The build's thread budget (`threads`), which the fire light's build keeps to as well.
     pub(super) threads: usize,
+    /// What the build found that a user should hear ([`super::notes`]).
+    pub(super) notes: Vec<String>,
 }

@@ -394,22 +394,10 @@ impl Builder {
                     return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
                 }
                 let units = self.check_colour(name, ty == "fire", &vol, loc)?;
-                // Species whose strong lines lie outside the render's bins emit nothing there: say so.
-                if ty == "fire" {
-                    let hot = vol.temperature_range().ok().flatten().map_or(2000.0, |[_, hi]| hi.max(1000.0));
-                    let species = list.iter().filter(|p| p.name == "species").flat_map(|p| match &p.value {
-                        Value::String(v) => v.clone(),
-                        _ => Vec::new(),
-                    });
-                    for sym in species {
-                        if let Some(m) = lines_outside(&sym, hot, (info.lambda_min, info.lambda_max)) {
-                            self.warn(loc, format!("medium \"{name}\": {m}"));
-                        }
-                        // A flame-test colour that comes from molecular bands: the render will not show it.
-                        if let Some((seen, from, here)) = firemedium_core::species::molecular_colour(&sym) {
-                            self.warn(loc, format!("medium \"{name}\": species {sym}: its flame photographs {seen}, from {from}; from its atomic lines alone it renders {here}"));
-                        }
-                    }
+                // What the plugin's build found a user should hear (species' lines outside the bins, flame colours
+                // the model cannot give).
+                for m in vol.notes().map_err(|e| err(loc, format!("medium \"{name}\": {e}")))? {
+                    self.warn(loc, format!("medium \"{name}\": {m}"));
                 }
                 // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
                 // fire black: say so, with the presets that read each tool's units.
@@ -588,41 +576,6 @@ pub(super) fn boundary_warnings(
     out
 }
 
-/// When species `sym`'s lines outside the bins `lo`–`hi` nm carry more than a tenth of its visible line emission
-/// at `t` K (each line's power g_k A_ki e^(−E_k/kT) hc/λ, weighted by the eye's ȳ): what is lost, and how to keep it.
-pub(crate) fn lines_outside(sym: &str, t: f64, (lo, hi): (f64, f64)) -> Option<String> {
-    use firemedium_core::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
-    let e = firemedium_core::species::Element::by_symbol(sym).ok()?;
-    let lum = |l: &firemedium_core::species::Line| {
-        let power =
-            l.g_k as f64 * l.a_ki * (-l.e_k / (BOLTZMANN * t)).exp() * PLANCK * SPEED_OF_LIGHT
-                / (l.lambda_nm * 1e-9);
-        power * firemedium_core::cie::cmf(l.lambda_nm).y
-    };
-    let total: f64 = e.lines().iter().map(lum).sum();
-    let out: Vec<&firemedium_core::species::Line> = e
-        .lines()
-        .iter()
-        .filter(|l| (l.lambda_nm < lo || l.lambda_nm > hi) && lum(l) > 0.0)
-        .collect();
-    let lost: f64 = out.iter().map(|l| lum(l)).sum();
-    if !(total > 0.0 && lost > 0.1 * total) {
-        return None;
-    }
-    let mut strongest = out.clone();
-    strongest.sort_by(|a, b| lum(b).total_cmp(&lum(a)));
-    let names: Vec<String> = strongest
-        .iter()
-        .take(3)
-        .map(|l| format!("{:.1}", l.lambda_nm))
-        .collect();
-    Some(format!(
-        "species {sym}: its lines at {} nm carry {:.0} % of its visible line emission (luminance-weighted at {t:.0} K) and lie outside the render's bins, {lo:.0}–{hi:.0} nm: they are left out (widen the bins with \"float lambdamin\" / \"float lambdamax\", up to 380–780 nm)",
-        names.join(", "),
-        100.0 * lost / total
-    ))
-}
-
 /// The majorant grid of a volume the renderer will track itself, or why it cannot: a layer the medium level
 /// cannot carry (named by the plugin), or motion (its per-bin coefficients have no time).
 fn host_majorants(vol: &Volume) -> Result<crate::render::tracker::Majorants, String> {
@@ -637,26 +590,4 @@ fn host_majorants(vol: &Volume) -> Result<crate::render::tracker::Majorants, Str
         m.majorant_grid(),
         [info.bounds_min, info.bounds_max],
     ))
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn species_lines_outside_the_bins_are_reported() {
-        // Potassium's resonance doublet (766.7, 770.1 nm) outside 400–700 nm: nearly all its visible light.
-        let m = super::lines_outside("K", 2000.0, (400.0, 700.0)).expect("a warning");
-        let pct: f64 = m
-            .split(" carry ")
-            .nth(1)
-            .and_then(|r| r.split(" %").next())
-            .and_then(|v| v.parse().ok())
-            .unwrap();
-        assert!(
-            m.contains("766.") && m.contains("770.") && pct > 90.0,
-            "{m}"
-        );
-        // Inside the default 400–780 nm, and sodium's D lines inside 400–700: nothing to say.
-        assert!(super::lines_outside("K", 2000.0, (400.0, 780.0)).is_none());
-        assert!(super::lines_outside("Na", 2000.0, (400.0, 700.0)).is_none());
-    }
 }
