@@ -705,7 +705,7 @@ mod tests {
         assert!(compatible(ABI_MAJOR, ABI_MINOR, ABI_MAJOR, ABI_MINOR));
         assert!(compatible(1, 3, 1, 0));
         assert!(!compatible(1, 0, 1, 2));
-        // A host built for 0.x and a 1.0 plugin, both ways.
+        // A host built for 0.x and a 1.x plugin, both ways.
         assert!(!compatible(1, 0, 0, 13));
         assert!(!compatible(0, 13, 1, 0));
     }
@@ -721,7 +721,7 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 64);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 56);
         // Four u32 fields, then one pointer per entry.
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 24 * 8);
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 26 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
         assert_eq!(core::mem::size_of::<FmCreateInfo>(), 96);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
