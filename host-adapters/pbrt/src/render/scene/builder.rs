@@ -1,28 +1,30 @@
-//! The scene builder's state (pbrt-v4's graphics state and the named things a scene declares) and what it
-//! builds per directive: media (through the plugin), shapes, materials, spectra from parameters; every
-//! directive's parameters are read through a `ParamDict` and the rest reported (`finish`).
+//! The scene builder: what is built so far (materials, primitives, lights, media, the film's settings) and the
+//! host's context (threads, memory budget, frame), with the helpers every `create` uses — spectra from
+//! parameters, shapes' primitives, unread parameters reported (`finish`). The graphics state lives in the
+//! reading (`description`); here each entity arrives with its own.
 
+use super::description::Shape;
 use super::{err, Error, Light, Material, Medium, MediumReport, Tex};
 use crate::render::pbrt_v4::{self, Kind};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::{Bins, S};
 use firemedium_core::rgb_spectrum::RgbUse;
 use firemedium_loader::{Param as LParam, Plugin};
-use firemedium_pbrt_parser::{Loc, Param, ParamDict};
+use firemedium_pbrt_parser::{Loc, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-#[derive(Clone)]
-pub(super) struct State {
-    pub(super) ctm: DMat4,
-    pub(super) reverse: bool,
+/// Where a shape's primitives go and what they are given: its material (built), area light, media (inside,
+/// outside; built) and orientation.
+#[derive(Clone, Copy)]
+pub(super) struct Placement {
     pub(super) material: Option<usize>,
-    /// The area light of the shapes that follow: (L, two-sided, the `power` in W each shape emits, or 0).
+    /// The area light of its primitives: (L, two-sided, the `power` in W each shape emits, or 0).
     pub(super) area: Option<(S, bool, f32)>,
-    pub(super) inside: String,
-    pub(super) outside: String,
+    pub(super) media: Option<(Option<usize>, Option<usize>)>,
+    pub(super) reverse: bool,
 }
 
 /// What the `Film` directive says of the sensor and the output (the camera's shutter completes it in `load`).
@@ -49,18 +51,12 @@ impl Default for FilmParams {
     }
 }
 
-/// A `Camera` directive as given: its type, parameters, camera-from-world, medium and place (read once the film
-/// is known).
-pub(super) type CameraDirective = (String, Vec<Param>, DMat4, Option<usize>, Loc);
-
 pub(super) struct Builder {
     pub(super) dir: PathBuf,
     pub(super) bins: Bins,
     pub(super) plugin: Option<Plugin>,
-    pub(super) st: State,
-    /// Saved states, with where each was saved (AttributeBegin, TransformBegin, ObjectBegin).
-    pub(super) stack: Vec<(State, Loc)>,
-    pub(super) named_coords: HashMap<String, DMat4>,
+    /// The place in the scene's order of the statement being built (its warnings are reported in that order).
+    pub(super) order: usize,
     pub(super) named_materials: HashMap<String, usize>,
     pub(super) textures: HashMap<String, Tex>,
     pub(super) named_media: HashMap<String, usize>,
@@ -71,8 +67,8 @@ pub(super) struct Builder {
     /// Where each medium was defined (for what is found about it once the scene is built).
     pub(super) media_locs: Vec<Loc>,
     pub(super) media_reports: Vec<MediumReport>,
-    /// The Camera directive: parameters, camera-from-world, medium, position (built once the film is known).
-    pub(super) camera: Option<CameraDirective>,
+    /// The camera's `shutteropen` and `shutterclose` (pbrt-v4's 0 and 1 when not given).
+    pub(super) camera_shutter: [f64; 2],
     pub(super) res: (usize, usize),
     pub(super) spp: usize,
     pub(super) sampler: crate::render::pixel::Sampler,
@@ -80,16 +76,15 @@ pub(super) struct Builder {
     pub(super) film_response: FilmParams,
     pub(super) spectral: Option<crate::render::film::Buckets>,
     pub(super) gbuffer: Option<crate::render::film::GBuffer>,
-    /// `Option "integer seed"` and `Option "bool disablepixeljitter"`.
-    pub(super) seed: u64,
-    pub(super) pixel_jitter: bool,
     /// The film's `cropwindow` (x0, x1, y0, y1 in [0, 1]) or `pixelbounds` (pixels), with where each was given.
     pub(super) crop: Option<([f64; 4], Loc)>,
     pub(super) pixel_bounds: Option<([f64; 4], Loc)>,
     pub(super) maxdepth: usize,
     pub(super) film_name: Option<String>,
-    pub(super) warnings: Vec<String>,
-    pub(super) objects: HashMap<String, Arc<Bvh>>,
+    /// Warnings, with the place in the scene's order of the statement each is about.
+    pub(super) warnings: Vec<(usize, String)>,
+    /// The objects' BVHs, in the description's order.
+    pub(super) objects: Vec<Arc<Bvh>>,
     /// Primitives held by the objects defined so far (each once, however often it is instanced).
     pub(super) object_prims: usize,
     pub(super) current_object: Option<(String, Vec<Prim>)>,
@@ -114,18 +109,6 @@ pub(super) struct Builder {
     pub(super) film_xyz: Option<(String, Vec<DVec3>)>,
 }
 
-impl Builder {
-    /// The Camera directive's `shutteropen` and `shutterclose` (pbrt-v4's 0 and 1 when not given, or before
-    /// the camera).
-    pub(super) fn camera_shutter(&self) -> [f64; 2] {
-        let Some((_, cp, ..)) = &self.camera else {
-            return [0.0, 1.0];
-        };
-        let cp = ParamDict::new(cp);
-        [num(&cp, "shutteropen", 0.0), num(&cp, "shutterclose", 1.0)]
-    }
-}
-
 pub(super) fn nums<'a>(p: &ParamDict<'a>, name: &str) -> Option<&'a [f64]> {
     p.numbers(name)
 }
@@ -146,25 +129,6 @@ pub(super) fn affine_f32(m: &DMat4) -> Affine3A {
         matrix3: Mat3A::from(a.matrix3.as_mat3()),
         translation: a.translation.as_vec3().into(),
     }
-}
-
-/// pbrt-v4's LookAt: the camera-from-world matrix (pbrt's left-handed camera space).
-pub(super) fn look_at(v: &[f64; 9]) -> DMat4 {
-    let (pos, look, up) = (
-        DVec3::new(v[0], v[1], v[2]),
-        DVec3::new(v[3], v[4], v[5]),
-        DVec3::new(v[6], v[7], v[8]),
-    );
-    let dir = (look - pos).normalize_or_zero();
-    let right = up.normalize_or_zero().cross(dir).normalize_or_zero();
-    let new_up = dir.cross(right);
-    let world_from_camera = DMat4::from_cols(
-        right.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
-        pos.extend(1.0),
-    );
-    world_from_camera.inverse()
 }
 
 impl Builder {
@@ -254,7 +218,8 @@ impl Builder {
     }
 
     pub(super) fn warn(&mut self, loc: &Loc, m: impl std::fmt::Display) {
-        self.warnings.push(format!("{loc}: warning: {m}"));
+        self.warnings
+            .push((self.order, format!("{loc}: warning: {m}")));
     }
 
     /// Names every parameter of a directive that nothing read: a warning at the parameter when pbrt-v4 reads it
@@ -273,33 +238,20 @@ impl Builder {
         Ok(())
     }
 
-    pub(super) fn add_prim(&mut self, geom: Geom) {
-        let light = self.st.area;
-        let media = if self.st.inside.is_empty() && self.st.outside.is_empty() {
-            None
-        } else {
-            let look = |n: &str| {
-                if n.is_empty() {
-                    None
-                } else {
-                    self.named_media.get(n).copied()
-                }
-            };
-            Some((look(&self.st.inside), look(&self.st.outside)))
-        };
+    pub(super) fn add_prim(&mut self, geom: Geom, at: &Placement) {
         let mut prim = Prim {
             geom,
-            material: self.st.material,
+            material: at.material,
             area_light: None,
-            media,
-            reverse: self.st.reverse,
+            media: at.media,
+            reverse: at.reverse,
         };
         if let Some((_, objs)) = self.current_object.as_mut() {
-            // An object's primitives are no area lights (pbrt-v4 leaves them out too; `shape` warns).
+            // An object's primitives are no area lights (pbrt-v4 leaves them out too; the reading warns).
             objs.push(prim);
             return;
         }
-        if let Some((mut l, twosided, power)) = light {
+        if let Some((mut l, twosided, power)) = at.area {
             // pbrt-v4 makes an area light per shape (per triangle of a mesh): `power` is each one's, over its
             // area A and both sides when two-sided: L · (sides · A · π) = power.
             if power > 0.0 {
@@ -428,12 +380,11 @@ impl Builder {
         Ok(())
     }
 
-    pub(super) fn shape(&mut self, ty: &str, p: &ParamDict, loc: &Loc) -> Result<(), Error> {
-        if let (Some(_), Some((object, _))) = (self.st.area, &self.current_object) {
-            let m = format!("{ty} in object \"{object}\": area lights are not supported with object instancing (as pbrt-v4): the shape is kept, its emission left out");
-            self.warn(loc, m);
-        }
-        let to_world = affine_f32(&self.st.ctm);
+    /// A shape's primitives, placed by `at` (built from the shape's state by `load`).
+    pub(super) fn shape(&mut self, shape: &Shape, at: &Placement) -> Result<(), Error> {
+        let (ty, loc) = (shape.entity.ty.as_str(), &shape.entity.loc);
+        let p = &ParamDict::new(&shape.entity.params);
+        let to_world = affine_f32(&shape.ctm);
         let to_obj = to_world.inverse();
         let first = self.prim_count();
         match ty {
@@ -454,16 +405,16 @@ impl Builder {
                     zmin: z0.min(z1) as f32,
                     zmax: z0.max(z1) as f32,
                     phimax: phimax as f32,
-                });
+                }, at);
             }
             "disk" => {
                 let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians() as f32;
-                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32, phimax });
+                self.add_prim(Geom::Disk { to_world, to_obj, h: num(p, "height", 0.0) as f32, r: num(p, "radius", 1.0) as f32, ri: num(p, "innerradius", 0.0) as f32, phimax }, at);
             }
             "cylinder" => {
                 let phimax = num(p, "phimax", 360.0).clamp(0.0, 360.0).to_radians() as f32;
                 let (z0, z1) = (num(p, "zmin", -1.0), num(p, "zmax", 1.0));
-                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: z0.min(z1) as f32, zmax: z0.max(z1) as f32, phimax });
+                self.add_prim(Geom::Cylinder { to_world, to_obj, r: num(p, "radius", 1.0) as f32, zmin: z0.min(z1) as f32, zmax: z0.max(z1) as f32, phimax }, at);
             }
             "trianglemesh" | "bilinearmesh" | "plymesh" | "loopsubdiv" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
@@ -495,7 +446,7 @@ impl Builder {
                 if idx.len() % per != 0 || idx.iter().any(|&i| i >= nv) {
                     return Err(err(loc, format!("{ty}: indices must come in {per}s and be below the {nv} vertices")));
                 }
-                let m = self.st.ctm;
+                let m = shape.ctm;
                 let vp = |i: usize| Vec3A::from(m.transform_point3(DVec3::new(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2])).as_vec3());
                 let nm = DMat3::from_mat4(m).inverse().transpose();
                 let vn = |i: usize| normals.as_ref().filter(|n| n.len() == pos.len()).map(|n| Vec3A::from((nm * DVec3::new(n[3 * i], n[3 * i + 1], n[3 * i + 2])).normalize_or_zero().as_vec3()));
@@ -505,7 +456,7 @@ impl Builder {
                         (Some(x), Some(y), Some(z)) => Some([x, y, z]),
                         _ => None,
                     };
-                    b.add_prim(Geom::Triangle { p: [vp(a), vp(c), vp(d)], n, uv: [vt(a), vt(c), vt(d)] });
+                    b.add_prim(Geom::Triangle { p: [vp(a), vp(c), vp(d)], n, uv: [vt(a), vt(c), vt(d)] }, at);
                 };
                 for f in idx.chunks(per) {
                     if per == 4 {
@@ -520,6 +471,6 @@ impl Builder {
             other => return Err(err(loc, format!("shape \"{other}\" is not supported (sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh, loopsubdiv)"))),
         }
         self.check_bounds(first, ty, loc)?;
-        Ok(())
+        self.finish(Kind::Shape, ty, ty, p)
     }
 }

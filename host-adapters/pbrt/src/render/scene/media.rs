@@ -4,6 +4,7 @@
 
 use super::builder::{affine, num, nums, string, Builder};
 use super::{err, Camera, Error, Medium, MediumReport};
+use crate::render::pbrt_v4::Kind;
 use crate::render::shapes::Bvh;
 use crate::render::spectrum::S;
 use firemedium_core::rgb_spectrum::RgbUse;
@@ -252,15 +253,13 @@ impl Builder {
         })
     }
 
-    pub(super) fn medium(
-        &mut self,
-        name: &str,
-        params: &ParamDict,
-        loc: &Loc,
-    ) -> Result<(), Error> {
-        let ty = string(params, "type").unwrap_or("").to_string();
-        let to_medium = affine(&self.st.ctm.inverse());
-        let m = match ty.as_str() {
+    /// A named medium under its transform (`MakeNamedMedium`).
+    pub(super) fn medium(&mut self, m: &super::description::Medium) -> Result<(), Error> {
+        let (name, loc) = (m.name.as_str(), &m.entity.loc);
+        let params = &ParamDict::new(&m.entity.params);
+        let ty = m.entity.ty.clone();
+        let to_medium = affine(&m.ctm.inverse());
+        let built = match ty.as_str() {
             "homogeneous" => {
                 let scale = num(params, "scale", 1.0) as f32;
                 // pbrt-v4: a named preset (measured, mm⁻¹) replaces sigma_a and sigma_s; an unknown one warns.
@@ -368,7 +367,7 @@ impl Builder {
                 // once the built volume says it moves — by its velocity, or by its embers' own — the camera draws a
                 // time per sample, the plugin holding each in the medium's own shutter. (The host reads none of the
                 // fire's parameter names for this: the volume's features say it.)
-                let camera = self.camera_shutter();
+                let camera = self.camera_shutter;
                 context.shutter = Some(camera);
                 // The budget is shared: each medium may use what the media built before it left.
                 context.max_bytes = Some(self.max_memory.saturating_sub(self.media_bytes).max(1));
@@ -419,9 +418,10 @@ impl Builder {
             other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous, rgbgrid, cloud){}", firemedium_pbrt_parser::v3::type_hint("medium", other)))),
         };
         self.named_media.insert(name.to_string(), self.media.len());
-        self.media.push(m);
+        self.media.push(built);
         self.media_locs.push(loc.clone());
-        Ok(())
+        let ty = string(params, "type").unwrap_or("");
+        self.finish(Kind::Medium, ty, &format!("{ty} medium \"{name}\""), params)
     }
 }
 
