@@ -411,7 +411,7 @@ impl Builder {
                 }
                 self.media_bytes = self.media_bytes.saturating_add(info.bytes);
                 self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
-                let host = if self.host_tracking { Some(host_majorants(&vol).map_err(|m| err(loc, format!("medium \"{name}\": --tracking host: {m}")))?) } else { None };
+                let host = if self.host_tracking { Some(host_majorants(&vol, name, loc)?) } else { None };
                 Medium::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host }
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
@@ -576,14 +576,25 @@ pub(super) fn boundary_warnings(
     out
 }
 
-/// The majorant grid of a volume the renderer will track itself, or why it cannot: a layer the medium level
-/// cannot carry (named by the plugin), or motion (its per-bin coefficients have no time).
-fn host_majorants(vol: &Volume) -> Result<crate::render::tracker::Majorants, String> {
-    let m = vol
-        .medium()
-        .map_err(|e| format!("{e}; render it with --tracking plugin"))?;
+/// The majorant grid of the volume of medium `name` (defined at `loc`) that the renderer will track itself, or
+/// why it cannot: a layer the medium level cannot carry (named by the plugin), or motion (its per-bin
+/// coefficients have no time).
+fn host_majorants(
+    vol: &Volume,
+    name: &str,
+    loc: &Loc,
+) -> Result<crate::render::tracker::Majorants, Error> {
+    let refuse = |why: &dyn std::fmt::Display| {
+        err(
+            loc,
+            format!("medium \"{name}\": --tracking host: {why}; render it with --tracking plugin"),
+        )
+    };
+    let m = vol.medium().map_err(|e| refuse(&e))?;
     if m.features() & firemedium_abi::FM_FEATURE_MOTION != 0 {
-        return Err("it moves (motion blur), and the medium level's coefficients in bins have no time; render it with --tracking plugin".into());
+        return Err(refuse(
+            &"it moves (motion blur), and the medium level's coefficients in bins have no time",
+        ));
     }
     let info = vol.info();
     Ok(crate::render::tracker::Majorants::of(
