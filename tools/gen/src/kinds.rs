@@ -2,6 +2,8 @@
 
 use super::*;
 
+/// Cells over a cylinder's side (`along` × `around`; `upper_only`: those facing more up than down), and the
+/// links between neighbours along and around it, their conductance the geometry's w/Δx (× the fuel's k·d later).
 fn cylinder_cells(
     a: DVec3,
     b: DVec3,
@@ -9,7 +11,7 @@ fn cylinder_cells(
     along: usize,
     around: usize,
     upper_only: bool,
-) -> Vec<Cell> {
+) -> (Vec<Cell>, Vec<Link>) {
     let axis = (b - a).normalize();
     let u = if axis.z.abs() < 0.9 {
         axis.cross(DVec3::Z).normalize()
@@ -18,7 +20,12 @@ fn cylinder_cells(
     };
     let v = axis.cross(u);
     let len = (b - a).length();
+    let (dl, dphi) = (
+        len / along as f64,
+        2.0 * std::f64::consts::PI * r / around as f64,
+    );
     let mut cells = Vec::new();
+    let mut index = vec![None; along * around];
     for i in 0..along {
         for j in 0..around {
             let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / around as f64;
@@ -26,16 +33,40 @@ fn cylinder_cells(
             if upper_only && n.z < -0.2 {
                 continue;
             }
+            index[i * around + j] = Some(cells.len());
             cells.push(Cell {
                 p: a + axis * (len * (i as f64 + 0.5) / along as f64) + n * r,
                 normal: n,
-                area: len / along as f64 * 2.0 * std::f64::consts::PI * r / around as f64,
+                area: dl * dphi,
                 load: 0.0,
                 t: T_AMB,
             });
         }
     }
-    cells
+    let mut links = Vec::new();
+    for i in 0..along {
+        for j in 0..around {
+            let Some(here) = index[i * around + j] else {
+                continue;
+            };
+            let next_along = (i + 1 < along)
+                .then(|| index[(i + 1) * around + j])
+                .flatten();
+            let next_around = (around > 2)
+                .then(|| index[i * around + (j + 1) % around])
+                .flatten();
+            for (there, g) in [(next_along, dphi / dl), (next_around, dl / dphi)] {
+                if let Some(b) = there {
+                    links.push(Link {
+                        a: here,
+                        b,
+                        conductance: g,
+                    });
+                }
+            }
+        }
+    }
+    (cells, links)
 }
 
 fn disk_cells(centre: DVec3, r: f64, rings: usize) -> Vec<Cell> {
@@ -62,8 +93,16 @@ fn disk_cells(centre: DVec3, r: f64, rings: usize) -> Vec<Cell> {
 }
 
 impl Kind {
-    /// The model constants and fuel surfaces of this kind.
-    pub fn setup(self) -> (Model, Vec<Cell>) {
+    /// The model constants, fuel surfaces and their links (conductances in W/K) of this kind.
+    pub fn setup(self) -> (Model, Vec<Cell>, Vec<Link>) {
+        let (m, cells, mut links) = self.surfaces();
+        for l in &mut links {
+            l.conductance *= m.fuel_conduction;
+        }
+        (m, cells, links)
+    }
+
+    fn surfaces(self) -> (Model, Vec<Cell>, Vec<Link>) {
         let base = Model {
             half_width: 0.6,
             height: 1.6,
@@ -73,9 +112,12 @@ impl Kind {
             release: 750.0,
             heat_capacity: 2.1e4,
             mixing_time: 0.35,
-            alpha_flame: 30.0,
-            feedback: 0.05,
+            fuel_absorptance: 0.9,
+            flame_contact: 20.0,
+            // Wood, 0.12 W/(m K), over the 5 mm a heat capacity of 4 kJ/(m² K) holds (ρc ≈ 7.5e5 J/(m³ K)).
+            fuel_conduction: 0.12 * 5.3e-3,
             fuel_heat_capacity: 4.0e3,
+            gasification: 1.8e6,
             nu_b: 3.0,
             t_s: 600.0,
             smoke_decay: 0.8,
@@ -85,33 +127,41 @@ impl Kind {
             turbulence: 1.2,
             turbulence_scale: 0.15,
             soot_yield: 0.015,
+            // A match (kindling) under the logs' raised tips, for its first seconds: the rest catches from it.
             match_at: DVec3::new(0.0, 0.0, 0.1),
-            match_radius: 0.5,
+            match_radius: 0.25,
             t_match: 900.0,
-            match_seconds: 1.0,
+            match_seconds: 5.0,
             dt: 1.0 / 120.0,
         };
         match self {
             Kind::Campfire => {
                 // Four logs (r 6 cm, 70 cm) lying as a cross on the ground, tips raised towards the centre.
-                let mut cells = Vec::new();
+                let (mut cells, mut links) = (Vec::new(), Vec::new());
                 for k in 0..4 {
                     let a = std::f64::consts::FRAC_PI_4 + k as f64 * std::f64::consts::FRAC_PI_2;
                     let dir = DVec3::new(a.cos(), a.sin(), 0.0);
-                    cells.extend(cylinder_cells(
+                    let (c, l) = cylinder_cells(
                         dir * 0.42 + DVec3::Z * 0.06,
                         dir * 0.04 + DVec3::Z * 0.16,
                         0.06,
                         14,
                         10,
                         true,
-                    ));
+                    );
+                    let first = cells.len();
+                    links.extend(l.into_iter().map(|l| Link {
+                        a: l.a + first,
+                        b: l.b + first,
+                        ..l
+                    }));
+                    cells.extend(c);
                 }
-                (base, cells)
+                (base, cells, links)
             }
             Kind::Candle => {
                 // A wick 1 cm tall (r 1 mm) above a 2 cm wax column; laminar, small, hot, little soot.
-                let cells = cylinder_cells(
+                let (cells, links) = cylinder_cells(
                     DVec3::new(0.0, 0.0, 0.02),
                     DVec3::new(0.0, 0.0, 0.03),
                     0.001,
@@ -126,7 +176,9 @@ impl Kind {
                     release: 1200.0,
                     heat_capacity: 1.07e4,
                     mixing_time: 0.03,
-                    feedback: 0.0,
+                    // The wick is fed by the molten wax and held at its temperature: nothing heats or cools it.
+                    fuel_absorptance: 0.0,
+                    flame_contact: 0.0,
                     t_s: 500.0,
                     nu_b: 1.0,
                     smoke_decay: 5.0,
@@ -143,18 +195,18 @@ impl Kind {
                     dt: 1.0 / 480.0,
                     ..base
                 };
-                (m, cells)
+                (m, cells, links)
             }
             Kind::Pool => {
                 // A heptane pool of radius 0.5 m, lit over its whole surface; sooty, turbulent.
-                let cells = disk_cells(DVec3::new(0.0, 0.0, 0.005), 0.5, 12);
+                // (A liquid: no conduction between cells.)
+                let (cells, links) = (disk_cells(DVec3::new(0.0, 0.0, 0.005), 0.5, 12), Vec::new());
                 let m = Model {
                     half_width: 1.0,
                     height: 3.0,
                     release: 600.0,
                     heat_capacity: 3.56e4,
                     mixing_time: 0.6,
-                    feedback: 0.05,
                     sigma0: 0.04,
                     kappa: 3.0e-3,
                     buoyancy: 3.5,
@@ -162,13 +214,15 @@ impl Kind {
                     turbulence_scale: 0.4,
                     soot_yield: 0.037,
                     match_radius: 1.0,
+                    // Heptane (Drysdale, after Tewarson).
+                    gasification: 0.48e6,
                     ..base
                 };
-                (m, cells)
+                (m, cells, links)
             }
             Kind::Torch => {
                 // A rag head (r 4 cm, 10 cm tall) on a stick, lit at once.
-                let cells = cylinder_cells(
+                let (cells, links) = cylinder_cells(
                     DVec3::new(0.0, 0.0, 0.12),
                     DVec3::new(0.0, 0.0, 0.22),
                     0.04,
@@ -190,7 +244,7 @@ impl Kind {
                     match_radius: 0.2,
                     ..base
                 };
-                (m, cells)
+                (m, cells, links)
             }
         }
     }

@@ -1,51 +1,64 @@
 //! Fire datasets of our own: Stam & Fiume's (1995, §6) blob fire model, run over time and voxelised.
 //!
 //! **Fuel** lies on surfaces (logs, a pool, a wick, a torch head) as cells with a fuel load ρ_fuel (kg/m²) and
-//! a temperature T_fuel. A cell heats by the radiation of the flames that reaches it and cools by its own
-//! (§6: S_T,fuel = α_f F σ T_flame⁴, L_T,fuel = 2 α_f σ T⁴, per unit area, over a heat capacity per area) — an
-//! implicit step, stable for any dt. "Striking a match" holds the ignition cells at `t_match` for the first
-//! `match_seconds`. Fuel turns into flame by the Arrhenius rate k = ν_a exp(−T_a / T_fuel) (eq. 10), integrated
-//! exactly over a step: the cell loses ρ_fuel (1 − e^{−k dt}) per area, and that mass leaves as a new **flame
-//! blob** (production equals consumption to rounding).
+//! a temperature T_fuel. Each cell's surface balances, per area, over a heat capacity per area (`fuel`):
+//!
+//!   C dT/dt = a (E_flames + E_fuel) + h (T_gas − T) + Q_cond / A − a σ (T⁴ − T_amb⁴) − L ṁ(T),
+//!
+//! - E_flames: the flames' radiation arriving at the cell — every blob a point source of its radiated power
+//!   (below), through the cosine at the cell and the inverse square (§6's S_T,fuel, shot from each blob near the
+//!   cell and from each 15 cm cube's power centre farther away, where §6 shoots from "a couple of blob
+//!   clusters");
+//! - E_fuel: the other cells' surfaces facing it (glowing logs keep each other burning: a small-patch view
+//!   factor, no occlusion); `a` the surface's absorptance, which is also its emissivity (char, 0.9);
+//! - h (T_gas − T): the flame gas touching it (its temperature from the blobs' kernels there; h = 20 W/(m² K),
+//!   fires' flames 10–30);
+//! - Q_cond: conduction from its neighbours along the fuel (wood's 0.12 W/(m K) through the layer whose heat
+//!   capacity C is) — §6.1's diffusion over the fuel map; tiny against radiation at these scales, as it is;
+//! - L ṁ(T): the heat its wood takes to gasify (1.8 MJ/kg) at the Arrhenius rate ṁ = ρ_fuel ν_a e^{−T_a/T}
+//!   (eq. 10): the sink that holds a burning surface near 600–700 K and its burning rate near wood's 5–20
+//!   g/(m² s).
+//!
+//! The step is implicit in T (one monotone equation: stable for any dt). **Striking a match** holds the
+//! cells within `match_radius` of `match_at` at `t_match` for the first `match_seconds` (the campfire's
+//! kindling under the logs' raised tips); the rest of the fire catches from their flames and burns on
+//! without them. The fuel a step gasifies, ρ_fuel (1 − e^{−k dt}) per area, leaves as a new **flame blob**
+//! (production equals consumption to rounding).
 //!
 //! **Blobs** are Gaussian kernels (eq. 6–9 of §4) of flame mass m_f and smoke mass m_s at a temperature T. Each
 //! moves with the wind — a buoyant updraft B √((T − T_amb)/T_amb) plus a divergence-free turbulent field (the curl
 //! of a seeded noise potential, after Stam & Fiume 1993), by a midpoint step — and grows by diffusion,
 //! σ² = σ₀² + 2κ·age. Flame turns into smoke at ν_b exp(−T / T_s) (§6), exactly over a step (the masses' sum
 //! is kept); smoke decays at `smoke_decay`. A new blob starts at T_fuel + `release` (the heat of the reaction,
-//! §6's S_T,flame); it cools by radiation, dT/dt = −K T⁴ with K = 4π α_flame σ / c (§6's L_T,flame per unit
-//! heat capacity), integrated exactly — T(t + dt) = (T⁻³ + 3K dt)^(−1/3), never below ambient — so a stiff K
-//! or a long step cannot overshoot; then mixing with entrained air relaxes T − T_amb by e^{−dt/τ} (our
-//! addition: with radiation alone the smoke stays glowing-hot for metres). The radiation that cools the flames is what heats the fuel: the fuel sees
-//! the flames' total radiant power from their power-weighted centre (one "blob cluster", as §6 shoots from a
-//! couple), times the view factor `feedback`.
+//! §6's S_T,flame). It **radiates what the renderer renders its soot emitting** ([`radiation`]): the blob's
+//! soot, Y_s kg per kg of fuel, at the plugin's soot optics (propane), radiates 4 f_v κ̂_P(T) σT⁴ per volume, so
+//! dT/dt = −K(T) T⁴ with K = 4σ κ̂_P(T) Y_s / (ρ_s c) — one constant, derived (§6's 4π α_flame form counts σT⁴
+//! as a radiance, π too much) — integrated exactly over a step, never below ambient; then mixing with
+//! entrained air relaxes T − T_amb by e^{−dt/τ} (our addition: with radiation alone the smoke stays glowing-hot
+//! for metres). The same power heats the fuel.
 //!
 //! **Voxelisation** sums the kernels: flame and smoke mass densities ρ (kg of fuel per m³) and the mass-weighted
 //! temperature (§4: θ = Σ m θ W / Σ m W); it writes `density` = soot volume fraction Y_s (ρ_f + ρ_s) / ρ_soot,
 //! `temperature` in K (0 where there is no mass, the file's background), and per `--species SYM:N` a number
 //! density N · ρ_f / max ρ_f that follows the flame, as an OpenVDB file the dataset reader loads.
 //!
-//! **The radiative constants, against the fire light's convention.** An optically thin emitter of absorption
-//! cross-section α per kg radiates 4·α·m·σT⁴ (its emission coefficient α ρ σT⁴/π over 4π sr: the fire light's
-//! power). §6 writes 4π·α·σT⁴ — σT⁴ taken as a radiance — and the generator keeps the paper's form, so its
-//! `alpha_flame` is an *effective* cross-section: the blobs radiate as thin emitters of cross-section π·α
-//! (the campfire's `alpha_flame` of 30 m²/kg cools and heats as 94 m²/kg would in the fire light's convention). The fuel's loss
-//! 2·α_f·σT⁴ per area is a surface's grey emission (α_f σT⁴ per side) from both sides, where §6 writes 2π — the
-//! same slip the other way. Both are kept as written so that the committed datasets stay the generator's; a test
-//! checks the blobs' energy bookkeeping against the effective constant.
-//!
 //! **Warped blobs** (§4, opt-in: `gen --warp`): the kernels are evaluated at points traced back through the
 //! turbulent wind, so blobs stretch and curl with it instead of staying round ([`Warp`]).
 //!
-//! Not modelled (documented): fuel spread by conduction, oxygen depletion.
+//! Not modelled (documented): oxygen depletion, the fuel's change of shape as it burns, occlusion between
+//! fuel surfaces, and the liquid pool's surface held at its boiling point (its cells burn as a solid's).
 
+mod fuel;
 mod kinds;
+pub mod radiation;
 mod sim;
 mod voxel;
 mod write;
 
+pub use fuel::Link;
+pub use radiation::Cooling;
 use sim::Noise;
-pub use sim::{implicit_fuel_temperature, radiative_cooling};
+pub use sim::{implicit_fuel_temperature, FuelBalance};
 pub use voxel::{voxelise, Fields, HEAT_OF_COMBUSTION, REACTION_TIME};
 pub use write::{embers_ply, frame, frame_as, Frame, Style};
 
@@ -102,11 +115,16 @@ pub struct Model {
     /// Cooling by mixing with the entrained air: T − T_amb decays by e^{−dt/τ} (s; not in §6, whose flames
     /// cool by radiation only and so stay hot as smoke far too long).
     pub mixing_time: f64,
-    /// Flame absorption cross-section per kg (m²/kg): a blob radiates 4π α m σ T⁴ (which cools it and heats
-    /// the fuel).
-    pub alpha_flame: f64,
-    /// Fraction of the flames' radiant power density a fuel cell absorbs (view factor × absorptance).
-    pub feedback: f64,
+    /// The fuel surface's absorptance, which is its emissivity (char: 0.9).
+    pub fuel_absorptance: f64,
+    /// Heat transfer from the flame gas touching the fuel, W/(m² K) (fires' flames: 10–30).
+    pub flame_contact: f64,
+    /// The fuel layer's conductivity × thickness, W/K (wood, 0.12 W/(m K) × the layer whose heat capacity is
+    /// `fuel_heat_capacity`): conduction between neighbouring cells.
+    pub fuel_conduction: f64,
+    /// The heat the fuel takes to gasify, J/kg (wood: 1.8 MJ/kg, Drysdale, *An Introduction to Fire Dynamics*,
+    /// after Tewarson): the sink that holds a burning surface near 650–700 K.
+    pub gasification: f64,
     /// Fuel heat capacity per area, J/(m² K).
     pub fuel_heat_capacity: f64,
     /// Smoke: ν_b (1/s), T_s (K), decay (1/s).
@@ -129,14 +147,6 @@ pub struct Model {
     pub match_seconds: f64,
     /// Time step, s.
     pub dt: f64,
-}
-
-impl Model {
-    /// Radiative cooling constant K = 4π α σ / c, 1/(K³ s): dT/dt = −K T⁴ is the blob's radiated power
-    /// 4π α m σ T⁴ over its heat capacity c m.
-    pub fn k_rad(&self) -> f64 {
-        4.0 * std::f64::consts::PI * self.alpha_flame * SIGMA / self.heat_capacity
-    }
 }
 
 /// A patch of fuel surface.
@@ -182,6 +192,10 @@ pub struct StepLedger {
 pub struct Sim {
     pub model: Model,
     pub cells: Vec<Cell>,
+    /// Neighbouring fuel cells, for conduction.
+    pub links: Vec<Link>,
+    /// The flames' radiative cooling, from the renderer's soot.
+    pub cooling: Cooling,
     pub blobs: Vec<Blob>,
     pub time: f64,
     /// Warped blobs (§4) when voxelising: the back-trace time t₀ (s) and the spread η (m/s) — `None`: round

@@ -56,13 +56,15 @@ impl Noise {
 
 impl Sim {
     pub fn new(kind: Kind, seed: u64) -> Sim {
-        let (model, mut cells) = kind.setup();
+        let (model, mut cells, links) = kind.setup();
         for c in &mut cells {
             c.load = model.fuel_load;
         }
         Sim {
+            cooling: Cooling::new(model.soot_yield, model.heat_capacity),
             model,
             cells,
+            links,
             blobs: Vec::new(),
             time: 0.0,
             warp: None,
@@ -97,34 +99,40 @@ impl Sim {
         let m = self.model.clone();
         let dt = m.dt;
         let mut ledger = StepLedger::default();
-        // The flames' radiant power and its power-weighted centre (one "blob cluster").
-        let (mut power, mut centre) = (0.0, DVec3::ZERO);
-        for b in &self.blobs {
-            let p = 4.0 * std::f64::consts::PI * m.alpha_flame * b.m_flame * SIGMA * b.t.powi(4);
-            power += p;
-            centre += b.x * p;
-        }
-        if power > 0.0 {
-            centre /= power;
-        }
-        // Fuel cells: heat (implicit in T), burn (exact in the load), emit a flame blob.
+        // Fuel cells: heat (implicit in T), burn (exact in the load), emit a flame blob. Each cell is heated by
+        // what reaches it: the flames' radiation (each blob a point source near it, far ones by hash cell) and
+        // the flame gas touching it; it conducts to its neighbours along the fuel and loses its own radiation.
         let matching = self.time < m.match_seconds;
+        let heating = if m.fuel_absorptance > 0.0 || m.flame_contact > 0.0 {
+            self.fuel_heating()
+        } else {
+            vec![(0.0, T_AMB); self.cells.len()]
+        };
+        let conduction = self.conduction();
+        let exchange = self.fuel_exchange();
         let mut born = Vec::new();
-        for c in &mut self.cells {
-            let flux = if power > 0.0 {
-                let d = centre - c.p;
-                let r2 = d.length_squared().max(m.sigma0 * m.sigma0 * 4.0);
-                let cos = (d.dot(c.normal) / r2.sqrt()).max(0.0);
-                m.feedback * power * cos / (4.0 * std::f64::consts::PI * r2)
-            } else {
-                0.0
+        for (i, c) in self.cells.iter_mut().enumerate() {
+            let (radiation, t_gas) = heating[i];
+            let balance = FuelBalance {
+                flux: m.fuel_absorptance * (radiation + exchange[i]) + conduction[i] / c.area,
+                h: m.flame_contact,
+                t_gas,
+                emissivity: m.fuel_absorptance,
+                heat_capacity: m.fuel_heat_capacity,
+                load: c.load,
+                nu_a: m.nu_a,
+                t_a: m.t_a,
+                gasification: m.gasification,
             };
-            c.t = implicit_fuel_temperature(c.t, flux, m.fuel_heat_capacity, dt);
+            c.t = implicit_fuel_temperature(c.t, &balance, dt);
             if matching && (c.p - m.match_at).length() < m.match_radius {
                 c.t = c.t.max(m.t_match);
             }
-            let k = m.nu_a * (-m.t_a / c.t).exp();
-            let burnt = c.load * -(-k * dt).exp_m1();
+            let burnt = FuelBalance {
+                load: c.load,
+                ..balance
+            }
+            .burnt(c.t, dt);
             let mass = burnt * c.area;
             if !(mass > 1e-15) {
                 continue;
@@ -162,7 +170,7 @@ impl Sim {
         for (b, (x, _)) in self.blobs.iter().zip(moved) {
             let mut b = *b;
             b.x = x;
-            b.t = radiative_cooling(b.t, m.k_rad(), dt);
+            b.t = self.cooling.step(b.t, dt);
             b.t = T_AMB + (b.t - T_AMB) * (-dt / m.mixing_time).exp();
             let to_smoke = b.m_flame * -(-m.nu_b * (-b.t / m.t_s).exp() * dt).exp_m1();
             b.m_flame -= to_smoke;
@@ -310,19 +318,52 @@ impl Sim {
     }
 }
 
-/// The fuel temperature after dt: C (T₁ − T₀)/dt = flux − 2σ (T₁⁴ − T_amb⁴), solved for T₁ (a monotone
-/// equation: Newton from above, safeguarded by bisection), stable for any dt and flux.
-pub fn implicit_fuel_temperature(t0: f64, flux: f64, c: f64, dt: f64) -> f64 {
-    let f = |t: f64| c * (t - t0) / dt - flux + 2.0 * SIGMA * (t.powi(4) - T_AMB.powi(4));
-    let (mut lo, mut hi) = (0.0f64, t0.max(T_AMB) + flux.max(0.0) * dt / c + 1.0);
-    // f(lo) < 0 < f(hi) whenever flux ≥ 0; widen hi if not.
+/// What a fuel cell's surface exchanges over a step: the flux it absorbs from outside (W/m², radiation and
+/// conduction), the flame gas touching it (`h` W/(m² K) at `t_gas`), its own radiation (grey, `emissivity`), and
+/// the heat its fuel takes to gasify (`gasification` J/kg, at the Arrhenius rate of its `load` kg/m²: ν_a, T_a).
+#[derive(Debug, Clone, Copy)]
+pub struct FuelBalance {
+    pub flux: f64,
+    pub h: f64,
+    pub t_gas: f64,
+    pub emissivity: f64,
+    /// Heat capacity per area, J/(m² K).
+    pub heat_capacity: f64,
+    pub load: f64,
+    pub nu_a: f64,
+    pub t_a: f64,
+    pub gasification: f64,
+}
+
+impl FuelBalance {
+    /// The mass gasified over dt at the surface temperature t, kg/m² (exact in the load: ρ (1 − e^{−k dt})).
+    pub fn burnt(&self, t: f64, dt: f64) -> f64 {
+        let k = self.nu_a * (-self.t_a / t).exp();
+        self.load * -(-k * dt).exp_m1()
+    }
+}
+
+/// The fuel temperature after dt: C (T₁ − T₀)/dt = flux + h (T_gas − T₁) − ε σ (T₁⁴ − T_amb⁴) − L ṁ(T₁), with ṁ(T₁)
+/// the mass gasified over the step at T₁ per dt — solved for T₁. Every term is monotone in T₁, so the equation
+/// has one root: Newton from above safeguarded by bisection, stable for any dt and flux (the gasification's
+/// Arrhenius stiffness included).
+pub fn implicit_fuel_temperature(t0: f64, s: &FuelBalance, dt: f64) -> f64 {
+    let c = s.heat_capacity;
+    let f = |t: f64| {
+        c * (t - t0) / dt - s.flux - s.h * (s.t_gas - t)
+            + s.emissivity * SIGMA * (t.powi(4) - T_AMB.powi(4))
+            + s.gasification * s.burnt(t, dt) / dt
+    };
+    let gain = s.flux.max(0.0) + s.h * s.t_gas.max(0.0);
+    let (mut lo, mut hi) = (0.0f64, t0.max(T_AMB).max(s.t_gas) + gain * dt / c + 1.0);
+    // f(lo) < 0 < f(hi) whenever the gains are ≥ 0; widen hi if not.
     while f(hi) < 0.0 && hi < 1e7 {
         hi *= 2.0;
     }
     let mut t = hi;
-    for _ in 0..100 {
+    for _ in 0..200 {
         let ft = f(t);
-        if ft.abs() < 1e-12 * c {
+        if ft.abs() < 1e-12 * c || hi - lo < 1e-12 * hi {
             break;
         }
         if ft > 0.0 {
@@ -330,7 +371,9 @@ pub fn implicit_fuel_temperature(t0: f64, flux: f64, c: f64, dt: f64) -> f64 {
         } else {
             lo = t;
         }
-        let d = c / dt + 8.0 * SIGMA * t.powi(3);
+        let k = s.nu_a * (-s.t_a / t).exp();
+        let dburn = s.gasification * s.load * k * s.t_a / (t * t) * (-k * dt).exp();
+        let d = c / dt + s.h + 4.0 * s.emissivity * SIGMA * t.powi(3) + dburn;
         let next = t - ft / d;
         t = if next > lo && next < hi {
             next
@@ -339,13 +382,4 @@ pub fn implicit_fuel_temperature(t0: f64, flux: f64, c: f64, dt: f64) -> f64 {
         };
     }
     t
-}
-
-/// Radiative cooling dT/dt = −K T⁴ over dt, exactly: (T⁻³ + 3K dt)^(−1/3), floored at ambient.
-pub fn radiative_cooling(t: f64, k: f64, dt: f64) -> f64 {
-    if !(t > T_AMB) {
-        return T_AMB;
-    }
-    let inv3 = t.powi(-3) + 3.0 * k * dt;
-    inv3.powf(-1.0 / 3.0).max(T_AMB)
 }

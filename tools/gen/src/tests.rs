@@ -131,58 +131,195 @@ fn flame_production_equals_fuel_consumption_every_step() {
 
 #[test]
 fn stiff_radiative_cooling_is_exact_and_never_overshoots() {
-    // Exact solution of dT/dt = −K T⁴ against many small steps, and a stiff K·dt.
-    let (k, t0) = (1e-9, 1800.0);
-    let mut t = t0;
-    for _ in 0..1000 {
-        t = radiative_cooling(t, k, 1e-4);
-    }
-    let exact = (t0.powi(-3) + 3.0 * k * 0.1).powf(-1.0 / 3.0);
-    assert!((t / exact - 1.0).abs() < 1e-12, "{t} vs {exact}");
-    for (k, dt) in [(1e3, 1.0), (1e-9, 1e9), (0.0, 1.0)] {
-        let t1 = radiative_cooling(2500.0, k, dt);
+    // dT/dt = −K(T) T⁴ with the soot-derived K: the table's exact step against 100 000 RK4 steps, over one
+    // step and over a second; a stiff step never passes ambient; the map is monotone in T and in dt.
+    let (m, ..) = Kind::Campfire.setup();
+    let cool = Cooling::new(m.soot_yield, m.heat_capacity);
+    let rate = |t: f64| -cool.k(t) * t.powi(4);
+    for (t0, span) in [(1800.0f64, 1.0 / 120.0), (2400.0, 1.0), (900.0, 10.0)] {
+        let n = 100_000;
+        let h = span / n as f64;
+        let mut t = t0;
+        for _ in 0..n {
+            let k1 = rate(t);
+            let k2 = rate(t + 0.5 * h * k1);
+            let k3 = rate(t + 0.5 * h * k2);
+            let k4 = rate(t + h * k3);
+            t += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        let exact = cool.step(t0, span);
         assert!(
-            t1.is_finite() && (T_AMB..=2500.0).contains(&t1),
-            "{k} {dt}: {t1}"
+            ((exact - t) / (t0 - t)).abs() < 1e-4,
+            "T0 {t0}, {span} s: table {exact} vs RK4 {t} (drop {})",
+            t0 - t
         );
     }
-    assert_eq!(radiative_cooling(f64::NAN, 1e-9, 1.0), T_AMB);
-    // The implicit fuel step: stable for a huge step and flux (the radiative equilibrium), no overshoot.
-    let eq = implicit_fuel_temperature(300.0, 3e4, 4e3, 1e12);
-    let want = (3e4 / (2.0 * SIGMA) + T_AMB.powi(4)).powf(0.25);
-    assert!((eq / want - 1.0).abs() < 1e-9, "{eq} vs {want}");
-    let small = implicit_fuel_temperature(300.0, 3e4, 4e3, 1e-3);
-    assert!(small > 300.0 && small < 301.0, "{small}");
-    assert!(implicit_fuel_temperature(2000.0, 0.0, 4e3, 1e9) >= T_AMB - 1e-6);
+    let mut last = f64::INFINITY;
+    for dt in [1e-4, 1e-2, 1.0, 1e3, 1e9] {
+        let t1 = cool.step(2500.0, dt);
+        assert!(
+            t1.is_finite() && (T_AMB..2500.0).contains(&t1) && t1 <= last,
+            "{dt}: {t1}"
+        );
+        last = t1;
+    }
+    assert!(cool.step(1500.0, 0.01) < cool.step(1600.0, 0.01));
+    assert_eq!(cool.step(f64::NAN, 1.0), T_AMB);
+    assert_eq!(cool.step(250.0, 1.0), T_AMB);
 }
 
 #[test]
-fn the_heat_a_flame_loses_is_the_energy_it_radiates() {
-    // Energy bookkeeping of radiative cooling: over one step, c·m·(T₀ − T₁) equals ∫ 4π α m σ T(t)⁴ dt, the
-    // power that heats the fuel, integrated by Simpson's rule over the exact T(t) — for every kind's constants
-    // and a stiff (1 s) step.
+fn a_flame_radiates_what_the_renderer_renders_its_soot_emitting() {
+    // The power a blob's cooling removes is what the plugin's soot of the same volume fraction emits: 4π ∫ σ_a
+    // B_λ dλ over the blob's volume, here by a plain trapezoid in λ (10 nm to 0.1 mm in 0.05 nm steps), for every
+    // kind's constants — the heat the flames lose and the light the renderer draws are the same number.
+    use firemedium_core::blackbody::spectral_radiance;
+    use firemedium_core::soot::{SootOptics, HOTTEL_ALPHA};
+    let soot = SootOptics::propane();
     for kind in Kind::ALL {
-        let (m, _) = kind.setup();
+        let (m, ..) = kind.setup();
+        let cool = Cooling::new(m.soot_yield, m.heat_capacity);
         let mass = 1e-4;
-        for (t0, dt) in [(1700.0f64, m.dt), (2400.0, 1.0)] {
-            let t_at = |t: f64| (t0.powi(-3) + 3.0 * m.k_rad() * t).powf(-1.0 / 3.0);
-            let lost = m.heat_capacity * mass * (t0 - radiative_cooling(t0, m.k_rad(), dt));
-            let n = 20_000;
-            let h = dt / n as f64;
-            let power = |t: f64| {
-                4.0 * std::f64::consts::PI * m.alpha_flame * mass * SIGMA * t_at(t).powi(4)
-            };
-            let mut radiated = power(0.0) + power(dt);
-            for i in 1..n {
-                radiated += power(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        // (Any volume: f_v = Y_s ρ / ρ_s, σ_a = f_v κ(λ), so σ_a V = κ(λ) Y_s m / ρ_s.)
+        let fv_volume = m.soot_yield * mass / super::RHO_SOOT;
+        for t in [800.0, 1400.0, 2200.0] {
+            let (mut sum, mut l) = (0.0, 10.0);
+            let h = 0.05;
+            let f = |l: f64| soot.kappa(l, 1.0, HOTTEL_ALPHA) * spectral_radiance(t, l);
+            while l < 1e5 {
+                sum += 0.5 * h * (f(l) + f(l + h));
+                l += h;
             }
-            radiated *= h / 3.0;
+            let emitted = 4.0 * std::f64::consts::PI * fv_volume * sum;
+            let lost = cool.power(t, mass, m.heat_capacity);
             assert!(
-                (lost / radiated - 1.0).abs() < 1e-6,
-                "{kind:?} T0 {t0} dt {dt}: lost {lost} J vs radiated {radiated} J"
+                (lost / emitted - 1.0).abs() < 2e-3,
+                "{kind:?} at {t} K: cooling {lost} W vs soot emitting {emitted} W"
             );
         }
     }
+}
+
+#[test]
+fn the_fuel_step_balances_its_surface_exactly() {
+    let s = FuelBalance {
+        flux: 2e4,
+        h: 20.0,
+        t_gas: 1300.0,
+        emissivity: 0.9,
+        heat_capacity: 4e3,
+        load: 20.0,
+        nu_a: 3e3,
+        t_a: 1e4,
+        gasification: 1.8e6,
+    };
+    // The step satisfies its equation, for short and stiff steps.
+    for (t0, dt) in [
+        (300.0, 1.0 / 120.0),
+        (900.0, 1.0 / 120.0),
+        (600.0, 10.0),
+        (2000.0, 1e6),
+    ] {
+        let t = implicit_fuel_temperature(t0, &s, dt);
+        let residual = s.heat_capacity * (t - t0) / dt - s.flux - s.h * (s.t_gas - t)
+            + s.emissivity * SIGMA * (t.powi(4) - T_AMB.powi(4))
+            + s.gasification * s.burnt(t, dt) / dt;
+        let scale = s.flux + s.h * s.t_gas;
+        assert!(
+            residual.abs() < 1e-8 * scale,
+            "T0 {t0} dt {dt}: T {t}, residual {residual} W/m²"
+        );
+        assert!(t > T_AMB && t < 2000.0_f64.max(t0) + 1.0, "{t}");
+    }
+    // Without gasification or contact, a long step reaches the radiative equilibrium ε σ (T⁴ − T_amb⁴) = flux.
+    let bare = FuelBalance {
+        h: 0.0,
+        gasification: 0.0,
+        ..s
+    };
+    let eq = implicit_fuel_temperature(300.0, &bare, 1e12);
+    let want = (3e4_f64.min(2e4) / (0.9 * SIGMA) + T_AMB.powi(4)).powf(0.25);
+    assert!((eq / want - 1.0).abs() < 1e-9, "{eq} vs {want}");
+    // Gasification holds a burning surface down: the same heating, with the fuel taking 1.8 MJ/kg to gasify,
+    // settles well below the bare equilibrium.
+    let held = implicit_fuel_temperature(300.0, &FuelBalance { h: 0.0, ..s }, 1e3);
+    assert!(held < eq - 50.0 && held > 500.0, "{held} vs {eq}");
+    assert!(implicit_fuel_temperature(300.0, &FuelBalance { flux: 3e4, ..bare }, 1e-3) < 301.0);
+}
+
+#[test]
+fn conduction_along_a_log_decays_a_ring_mode_as_diffusion_says() {
+    // A ring of cells around a log (links' conductance G = k·d·w/Δx): a temperature mode cos(2πj/n) decays at
+    // the discrete rate 2G(1 − cos(2π/n))/(C A) (the fuel map's diffusion, Stam & Fiume §6.1), here against
+    // the generator's own links and 2 000 explicit steps.
+    let (m, cells, links) = Kind::Torch.setup();
+    let around = 12;
+    // The torch head's first ring: cells 0..12, linked around.
+    let ring: Vec<&Link> = links
+        .iter()
+        .filter(|l| l.a < around && l.b < around)
+        .collect();
+    assert_eq!(ring.len(), around);
+    let g = ring[0].conductance;
+    let ca = m.fuel_heat_capacity * cells[0].area;
+    let rate = 2.0 * g * (1.0 - (2.0 * std::f64::consts::PI / around as f64).cos()) / ca;
+    let mut t: Vec<f64> = (0..around)
+        .map(|j| 600.0 + 100.0 * (2.0 * std::f64::consts::PI * j as f64 / around as f64).cos())
+        .collect();
+    let (steps, dt) = (2000, 10.0);
+    for _ in 0..steps {
+        let mut q = vec![0.0; around];
+        for l in &ring {
+            let flow = l.conductance * (t[l.b] - t[l.a]);
+            q[l.a] += flow;
+            q[l.b] -= flow;
+        }
+        for j in 0..around {
+            t[j] += dt * q[j] / ca;
+        }
+    }
+    let amplitude = t[0] - 600.0;
+    let want = 100.0 * (-rate * dt * steps as f64).exp();
+    assert!(
+        (amplitude / want - 1.0).abs() < 0.01,
+        "{amplitude} vs {want} (rate {rate} 1/s)"
+    );
+    assert!(want < 99.0, "the mode barely moved: {want}");
+}
+
+#[test]
+fn the_campfire_catches_from_its_kindling_and_burns_on_without_it() {
+    // The kindling lights the logs' raised tips (within 25 cm of the centre) for 5 s; the logs' own flames
+    // then keep those cells burning, heated by the flames' radiation and the gas touching them against their
+    // emission and the heat their wood takes to gasify, and heat the next cells. 15 s after the kindling is
+    // out, every cell it lit still burns, near the surface temperatures of burning wood, at wood's burning
+    // rate (5–20 g/(m² s)).
+    let mut sim = Sim::new(Kind::Campfire, 1);
+    let m = sim.model.clone();
+    let lit: Vec<usize> = (0..sim.cells.len())
+        .filter(|&i| (sim.cells[i].p - m.match_at).length() < m.match_radius)
+        .collect();
+    assert!(
+        lit.len() > 50 && lit.len() < sim.cells.len(),
+        "{}",
+        lit.len()
+    );
+    sim.run_to(m.match_seconds + 15.0);
+    let load0: Vec<f64> = sim.cells.iter().map(|c| c.load).collect();
+    sim.run_to(m.match_seconds + 20.0);
+    for &i in &lit {
+        let c = &sim.cells[i];
+        assert!((560.0..760.0).contains(&c.t), "cell {i}: {} K", c.t);
+        let rate = (load0[i] - c.load) / 5.0;
+        assert!((5e-3..2e-2).contains(&rate), "cell {i}: {rate} kg/(m² s)");
+    }
+    // The flames have begun to heat the cells beyond the kindling, and the fire is not out.
+    let beyond = (0..sim.cells.len())
+        .filter(|i| !lit.contains(i))
+        .map(|i| sim.cells[i].t)
+        .fold(0.0, f64::max);
+    assert!(beyond > 400.0, "{beyond}");
+    assert!(sim.blobs.iter().any(|b| b.t > 1300.0));
 }
 
 #[test]
@@ -206,8 +343,8 @@ fn the_same_seed_gives_the_same_fields_and_another_seed_does_not() {
 fn warped_blobs_keep_their_mass_and_change_their_shape() {
     // §4's warp through the campfire's turbulent wind (t₀ = 0.1 s: ~0.1 m at its ~1 m/s): the kernels are
     // evaluated at back-traced points and scaled by the back-trace's Jacobian — the fire's total flame mass
-    // stays within 5 % of the round blobs' (3.6 %: the round kernels are cut at a 3σ box, the warped at
-    // 6σ), while the field itself changes (blobs stretched along the wind: 17 % of the mass moves; asserted
+    // stays within 7 % of the round blobs' (5.4 %: the round kernels are cut at a 3σ box, the warped at
+    // 6σ; 3.6 % with the wider fire of the generator before its kindling was local), while the field itself changes (blobs stretched along the wind: 17 % of the mass moves; asserted
     // > 10 %). Through a still wind the warp is the identity.
     let mut sim = Sim::new(Kind::Campfire, 3);
     sim.run_to(0.75);
@@ -217,7 +354,7 @@ fn warped_blobs_keep_their_mass_and_change_their_shape() {
     let warped = voxelise(&sim, 40, false);
     let (a, b) = (total(&round), total(&warped));
     assert!(
-        a > 0.0 && (b / a - 1.0).abs() < 0.05,
+        a > 0.0 && (b / a - 1.0).abs() < 0.07,
         "mass {a} round, {b} warped"
     );
     let moved: f64 = round
@@ -238,7 +375,11 @@ fn warped_blobs_keep_their_mass_and_change_their_shape() {
     // the half-voxel floor already.)
     let conc = |f: &Fields| f.flame.iter().map(|&v| (v as f64).powi(2)).sum::<f64>();
     let (c1, c0) = (conc(&tight), conc(&warped));
-    assert!(c1 > 1.01 * c0 && (total(&tight) / a - 1.0).abs() < 0.05);
+    assert!(
+        c1 > 1.01 * c0 && (total(&tight) / a - 1.0).abs() < 0.07,
+        "concentration {c1} vs {c0}, mass {} vs {a}",
+        total(&tight)
+    );
     // A still wind: the identity (to rounding, and the e⁻¹⁸ beyond the warped kernels' 6σ cut).
     sim.model.turbulence = 0.0;
     sim.warp = None;
