@@ -175,8 +175,11 @@ fn the_committed_campfires_are_what_the_generator_makes() {
     // the same with and without them).
     let root = crate::common::root().join("scenes/campfire");
     for (name, extra) in [
-        ("campfire.vdb", &["--embers", "200"][..]),
-        ("campfire-warped.vdb", &["--warp", "0.1"][..]),
+        ("campfire.vdb", &["--frame", "720", "--embers", "200"][..]),
+        (
+            "campfire-warped.vdb",
+            &["--frame", "720", "--warp", "0.1"][..],
+        ),
     ] {
         let dir = tmp("campfire");
         let out = dir.join(name);

@@ -12,7 +12,9 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(30.0);
     let mut sim = Sim::new(Kind::Campfire, 1);
-    println!("t (s) | cells > 500 K | their mean T (K) | fuel left | flame mass (kg) | hottest blob (K)");
+    println!(
+        "t (s) | cells > 500 K | their mean T (K) | fuel left | flame mass (kg) | hottest blob (K)"
+    );
     for t in [1.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 90.0, 120.0] {
         if t > until {
             break;
@@ -21,7 +23,10 @@ fn main() {
         let (hot, _, mean, left) = sim.fuel_summary();
         let flame: f64 = sim.blobs.iter().map(|b| b.m_flame).sum();
         let hottest = sim.blobs.iter().map(|b| b.t).fold(0.0, f64::max);
-        println!("{t} | {hot} | {mean:.0} | {:.1} % | {flame:.2e} | {hottest:.0}", 100.0 * left);
+        println!(
+            "{t} | {hot} | {mean:.0} | {:.1} % | {flame:.2e} | {hottest:.0}",
+            100.0 * left
+        );
     }
     let m = sim.model.clone();
     let (heat, exchange) = (sim.fuel_heating(), sim.fuel_exchange());
