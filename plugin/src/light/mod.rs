@@ -277,8 +277,7 @@ impl FireLight {
             };
             let mut within = |light: &FireLight, m: &FireVolume| {
                 let f = *fine.get_or_insert_with(|| light.line_sum(&light.vol, None));
-                let bias = light.line_sum(m, Some(light.line_step)) / f - 1.0;
-                bias.abs() <= BLOCK_BIAS
+                light.block_bias(m, f).abs() <= BLOCK_BIAS
             };
             for &f in sizes {
                 if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {

@@ -28,7 +28,7 @@ pub static LIGHT: Component = Component {
         "0",
         "voxels",
         Range::Between(0.0, 1e6),
-        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 16, 32 or 64 steps — with lineblock 0, the coarsest whose line (through a copy or the fire's voxels) stays within 0.5 % of the volume's march on 1024 of the light's rays, 64 if none does; with lineblock given, 64. Never shorter than the volume's own step (then it is the volume's march).",
+        "The march step of the fire's emission along a sampled direction (next-event estimation); 0: the fire's longest side over 16, 32 or 64 steps — with lineblock 0, the coarsest whose line (through a copy or the fire's voxels) stays within 0.5 % of the volume's march on 1024 of the light's rays (their lines over their directions' densities, and within 1 % in their plain sum), 64 if none does; with lineblock given, 64. Never shorter than the volume's own step (then it is the volume's march).",
     ),
     p(
         "linecorrection",
@@ -44,7 +44,7 @@ pub static LIGHT: Component = Component {
         "0",
         "voxels",
         Range::Between(0.0, 8.0),
-        "The blocks of the copy of the fire the coarse line marches through (density their mean, temperature the one that emits their mean: a copy that stays in the caches): 2, 4 or 8 voxels per side; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays within 0.5 % of the volume's march on 1024 of the light's rays (checked when the light is built). Volumes with species, emission or Lescale grids, motion blur, refraction, diffusion, thick lines or embers march their own voxels.",
+        "The blocks of the copy of the fire the coarse line marches through (density their mean, temperature the one that emits their mean: a copy that stays in the caches): 2, 4 or 8 voxels per side; 1, the fire's own voxels; 0, the coarsest copy no coarser than the step whose line stays within 0.5 % of the volume's march on 1024 of the light's rays (their lines over their directions' densities, and within 1 % in their plain sum) (checked when the light is built). Volumes with species, emission or Lescale grids, motion blur, refraction, diffusion, thick lines or embers march their own voxels.",
     ),
     p(
         "linechannels",
