@@ -24,10 +24,11 @@ class Package(unittest.TestCase):
         self.assertEqual(v.channels, 32)
         self.assertEqual(v.features, frozenset({"emits"}))
         lo, hi = v.bounds
+        # (The campfire's grid: its data from (−0.6, −0.6, 0.033) to (0.567, 0.6, 1.6) m, hottest near 1391 K.)
         self.assertAlmostEqual(lo[0], -0.6, places=6)
         self.assertAlmostEqual(hi[2], 1.6, places=6)
         t0, t1 = v.temperature_range()
-        self.assertTrue(1500.0 < t1 < 2000.0, t1)
+        self.assertTrue(1300.0 < t1 < 1500.0, t1)
         xyz = v.channel_xyz()
         self.assertEqual(xyz.shape, (32, 3))
         self.assertTrue((xyz[:, 1] >= 0).all() and xyz[:, 1].max() > 0)
@@ -69,8 +70,8 @@ class Package(unittest.TestCase):
         g = v.majorant_grid()
         rng = np.random.default_rng(1)
         b = np.array(g["bounds"])
-        pts = b[:3] + rng.random((2000, 3)) * (b[3:] - b[:3])
-        lam = rng.uniform(400.0, 780.0, (2000, 4))
+        pts = b[:3] + rng.random((20000, 3)) * (b[3:] - b[:3])
+        lam = rng.uniform(400.0, 780.0, (20000, 4))
         c = v.point(pts, lam)
         st = (c["sigma_a"] + c["sigma_s"]).max(axis=1)
         idx = np.minimum(((pts - b[:3]) / np.array(g["cell"])).astype(int), np.array(g["counts"]) - 1)
@@ -80,7 +81,8 @@ class Package(unittest.TestCase):
 
     def test_the_lights_densities_are_its_samples(self):
         light = self.fire.light()
-        self.assertTrue(1e5 < light.power_w < 3e5, light.power_w)
+        # (`firemedium render scenes/campfire/scene.pbrt --stats` prints the same light's power.)
+        self.assertTrue(3600.0 < light.power_w < 3750.0, light.power_w)
         pts, pdf, em = light.sample(np.random.default_rng(2).random((64, 6)))
         np.testing.assert_allclose(light.pdf(pts), pdf, rtol=1e-9)
         # (Its support is dilated around the emitting voxels, so a sample may land where the fire is dark.)
@@ -96,7 +98,9 @@ class Package(unittest.TestCase):
         ground = np.array([[0.0, -1.0, 0.05]])
         pts, _, _ = light.sample(np.random.default_rng(3).random((1024, 6)))
         fast, _ = self.fire.integrate(ground, pts - ground)
-        for params, tol in [({}, 0.01), ({"linecorrection": 1.0}, 1e-6)]:
+        # (The line's copy must hold both the light's weighted sum and the plain one: a 2³-voxel copy that held
+        # the first summed 2.2–2.9 % low here; the campfire's light now marches its own voxels.)
+        for params, tol in [({}, 0.01), ({"lineblock": 1}, 0.01), ({"linecorrection": 1.0}, 1e-6)]:
             rad, _ = self.fire.light(params).integrate(ground, pts - ground)
             self.assertLess(abs((rad @ y).sum() / (fast @ y).sum() - 1.0), tol, params)
 

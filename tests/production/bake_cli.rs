@@ -28,7 +28,7 @@ fn baked_grids_integrate_to_the_fires_luminance() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
-        text.contains("67×69×93 voxels") && text.contains("lost in baking"),
+        text.contains("70×72×94 voxels") && text.contains("lost in baking"),
         "{text}"
     );
     // The grids, on the dataset's lattice and transform.

@@ -30,7 +30,7 @@ fn a_starter_scene_frames_the_users_fire_and_renders_it() {
         "{text}"
     );
     assert!(
-        text.contains("-0.55 -0.583333 0.05155") && text.contains("0.566667 0.566667 1.6 ]"),
+        text.contains("-0.6 -0.6 0.0349") && text.contains("0.566667 0.6 1.6 ]"),
         "{text}"
     );
     // It renders as written, with no warning (the camera outside the box, the box holding the data).

@@ -29,7 +29,7 @@ except ImportError:
 
 import firemedium_blender as addon  # noqa: E402
 
-SPP = 32
+SPP = 256
 # Linear Rec.709 → XYZ.
 M = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750], [0.0193339, 0.1191920, 0.9503041]])
 
@@ -91,7 +91,8 @@ def cycles_scene(dataset: str, out: Path, size: tuple[int, int] = (32, 32), spp:
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
     if fire == "baked":
-        addon.import_fire(dataset, {"fuel": "propane"})
+        # (As the reference scene: its emission and absorption × 15.)
+        addon.import_fire(dataset, {"fuel": "propane", "firescale": 15, "smokescale": 15})
     else:
         blackbody_fire(dataset)
     bpy.ops.mesh.primitive_plane_add(size=20)
