@@ -25,7 +25,8 @@ pub struct Run {
     pub image: Vec<f64>,
 }
 
-/// The dataset: the campfire at `res` voxels along its longest side, generated once into `dir` under a name keyed
+/// The dataset: the campfire 30 s after its kindling (the default scene's moment: burning on its own) at `res`
+/// voxels along its longest side, generated once into `dir` under a name keyed
 /// by what makes it — this build's version and generator source (FNV-1a of the firemedium-gen crate's files) — so a file another build
 /// or tool left there under the plain name is never taken for it. Written atomically: a killed run leaves none.
 pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
@@ -33,6 +34,8 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
         include_str!("../../gen/src/lib.rs"),
         include_str!("../../gen/src/kinds.rs"),
         include_str!("../../gen/src/sim.rs"),
+        include_str!("../../gen/src/fuel.rs"),
+        include_str!("../../gen/src/radiation.rs"),
         include_str!("../../gen/src/voxel.rs"),
         include_str!("../../gen/src/write.rs"),
     ]
@@ -45,7 +48,7 @@ pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
     let path = dir.join(format!("firemedium-bench-campfire-{res}-{key:016x}.vdb"));
     if !path.is_file() {
         let mut sim = Sim::new(Kind::Campfire, 1);
-        sim.run_to(2.0);
+        sim.run_to(30.0);
         let f = frame(&sim, res, &[], false).map_err(|e| format!("{}: {e}", path.display()))?;
         firemedium::imageio::write_atomic(&path, |tmp| {
             std::fs::write(tmp, &f.bytes)
