@@ -45,8 +45,9 @@ impl Sim {
             h: 10.0 * m.sigma0,
             cubes: HashMap::new(),
         };
-        for (i, b) in self.blobs.iter().enumerate() {
-            let p = self.blob_power(b);
+        // (Each blob's power once per step: the cells near it read it again.)
+        let power: Vec<f64> = self.blobs.iter().map(|b| self.blob_power(b)).collect();
+        for (i, (b, &p)) in self.blobs.iter().zip(&power).enumerate() {
             let key = bins.key(b.x);
             let e = bins
                 .cubes
@@ -93,10 +94,8 @@ impl Sim {
                             for &i in ids {
                                 let b = &self.blobs[i];
                                 let s = b.sigma(m.kappa);
-                                e += point(b.x, self.blob_power(b), 4.0 * s * s, c);
-                                let d2 = (at - b.x).length_squared();
-                                if d2 < 9.0 * s * s {
-                                    let k = (-0.5 * d2 / (s * s)).exp();
+                                e += point(b.x, power[i], 4.0 * s * s, c);
+                                if let Some(k) = b.weight_at(at, s) {
                                     w += k;
                                     wt += k * (b.t - T_AMB);
                                 }

@@ -174,6 +174,11 @@ impl Blob {
     pub fn sigma(&self, kappa: f64) -> f64 {
         (self.sigma0 * self.sigma0 + 2.0 * kappa * self.age).sqrt()
     }
+    /// Its kernel's weight at `x` (unnormalised, 1 at its centre) given its σ `s`: none beyond 3σ.
+    pub fn weight_at(&self, x: DVec3, s: f64) -> Option<f64> {
+        let d2 = (x - self.x).length_squared();
+        (d2 < 9.0 * s * s).then(|| (-0.5 * d2 / (s * s)).exp())
+    }
 }
 
 /// What one step did to the masses (kg), for bookkeeping.

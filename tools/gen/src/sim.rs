@@ -128,11 +128,7 @@ impl Sim {
             if matching && (c.p - m.match_at).length() < m.match_radius {
                 c.t = c.t.max(m.t_match);
             }
-            let burnt = FuelBalance {
-                load: c.load,
-                ..balance
-            }
-            .burnt(c.t, dt);
+            let burnt = balance.burnt(c.t, dt);
             let mass = burnt * c.area;
             if !(mass > 1e-15) {
                 continue;
@@ -203,10 +199,7 @@ impl Sim {
         let kappa = self.model.kappa;
         let (mut w, mut wt) = (0.0, 0.0);
         for b in &self.blobs {
-            let s = b.sigma(kappa);
-            let d2 = (x - b.x).length_squared();
-            if d2 < 9.0 * s * s {
-                let k = (-0.5 * d2 / (s * s)).exp();
+            if let Some(k) = b.weight_at(x, b.sigma(kappa)) {
                 w += k;
                 wt += k * (b.t - T_AMB);
             }

@@ -15,6 +15,26 @@ use firemedium_pbrt_parser::{Loc, ParamDict};
 use glam::{DMat3, DMat4, DVec3, Mat3A, Vec3A};
 use std::sync::Arc;
 
+/// The film's resolution (pbrt-v4's 1280 × 720 where it does not say): 1 to 65 536 pixels a side, as
+/// --resolution (zero and negative were clamped to 1 silently, 1e9 allocated until the process aborted); the
+/// film's bytes are checked against the budget in `build`. Read through the film's `p` (its parameters then
+/// count as read), refused at the parameter or else at the film (`loc`).
+pub(super) fn film_resolution(p: &ParamDict, loc: &Loc) -> Result<(usize, usize), Error> {
+    let side = |name: &str, default: f64| -> Result<usize, Error> {
+        let v = num(p, name, default);
+        if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
+            Ok(v as usize)
+        } else {
+            let at = p.get(name).map_or(loc.clone(), |q| q.loc.clone());
+            Err(err(
+                &at,
+                format!("film: \"integer {name}\" {v}: expected 1 to 65536 pixels"),
+            ))
+        }
+    };
+    Ok((side("xresolution", 1280.0)?, side("yresolution", 720.0)?))
+}
+
 impl Builder {
     /// The film: its resolution, sensor, response, crop and outputs (pbrt-v4's `rgb`, `gbuffer`, `spectral`).
     pub(super) fn film(&mut self, e: &Entity) -> Result<(), Error> {
@@ -44,21 +64,7 @@ impl Builder {
             };
             self.gbuffer = Some(crate::render::film::GBuffer { world });
         }
-        // 1 to 65 536 pixels a side, as --resolution (zero and negative were clamped to 1 silently, 1e9
-        // allocated until the process aborted); the film's bytes are checked against the budget in `load`.
-        let side = |name: &str, default: f64| -> Result<usize, Error> {
-            let v = num(p, name, default);
-            if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
-                Ok(v as usize)
-            } else {
-                let at = p.get(name).map_or(loc.clone(), |q| q.loc.clone());
-                Err(err(
-                    &at,
-                    format!("film: \"integer {name}\" {v}: expected 1 to 65536 pixels"),
-                ))
-            }
-        };
-        self.res = (side("xresolution", 1280.0)?, side("yresolution", 720.0)?);
+        self.res = film_resolution(p, loc)?;
         self.film_name = string(p, "filename").map(String::from);
         // pbrt-v4's spectral film: RGB plus `nbuckets` channels of spectral radiance over its range.
         self.spectral = None;

@@ -312,22 +312,10 @@ pub struct Overrides {
 /// The film's resolution the scene at `path` asks for (pbrt-v4's 1280 × 720 when its Film does not say), read by
 /// parsing alone — nothing is loaded or built (a farm cuts the film into tiles before any node renders it).
 pub fn film_resolution(path: &Path) -> Result<(usize, usize), Error> {
-    let Some(film) = read(path)?.film else {
-        return Ok((1280, 720));
-    };
-    let p = ParamDict::new(&film.params);
-    let side = |name: &str, default: f64| -> Result<usize, Error> {
-        let v = p.float(name, default);
-        if v.fract() == 0.0 && (1.0..=65536.0).contains(&v) {
-            Ok(v as usize)
-        } else {
-            Err(err(
-                &film.loc,
-                format!("film: \"integer {name}\" {v}: expected 1 to 65536 pixels"),
-            ))
-        }
-    };
-    Ok((side("xresolution", 1280.0)?, side("yresolution", 720.0)?))
+    match read(path)?.film {
+        Some(film) => create::film_resolution(&ParamDict::new(&film.params), &film.loc),
+        None => Ok((1280, 720)),
+    }
 }
 
 /// The scene at `path` as read: nothing built, no file but the scene's (and its includes) opened.
