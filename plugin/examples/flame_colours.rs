@@ -1,6 +1,6 @@
 //! Flame-test colours: the chromaticity (CIE 1931) of the radiance through a 1 m slab at 2200 K seeded with one
-//! species, for each species with shipped lines, at three number densities; soot at f_v 1e-12, so the lines
-//! dominate wherever they are bright. Results are in docs/results/log.md, "Flame-test colours".
+//! species, for each species with shipped lines (and bands), at three number densities, without soot. Results are
+//! in docs/results/log.md, "Flame-test colours" and "Molecular bands".
 //!
 //!     cargo run --release -p firemedium-plugin --example flame_colours
 
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(p.display().to_string())
     };
     let (d, t, s) = (
-        grid("d.txt", 1e-12)?,
+        grid("d.txt", 0.0)?,
         grid("t.txt", 2200.0)?,
         grid("s.txt", 1.0)?,
     );

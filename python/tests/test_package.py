@@ -34,14 +34,14 @@ class Package(unittest.TestCase):
         self.assertTrue((xyz[:, 1] >= 0).all() and xyz[:, 1].max() > 0)
 
     def test_the_plugins_notes_are_warnings(self):
-        # A barium flame's colour is molecular (BaOH, BaCl bands), which the model does not hold: the plugin says
-        # so whatever the host, and the package issues it as a warning; sodium's colour is its lines: nothing.
+        # A barium flame with a chlorine donor is coloured by BaCl bands, which the model does not hold: the plugin
+        # says so whatever the host, and the package issues it as a warning; sodium's colour is its lines: nothing.
         torch = str(ROOT / "scenes" / "spectroscopy" / "torch.vdb")
         with self.assertWarns(UserWarning) as w:
             ba = fm.Volume({"filename": torch, "species": "Ba", "sootscale": 1e-6})
         self.assertEqual(len(ba.notes), 1, ba.notes)
-        self.assertTrue(ba.notes[0].startswith("species Ba: its flame photographs pale green"), ba.notes)
-        self.assertIn("photographs pale green", str(w.warning))
+        self.assertTrue(ba.notes[0].startswith("species Ba: its bands here are BaOH's and BaO's"), ba.notes)
+        self.assertIn("from BaCl bands at 507–532 nm", str(w.warning))
         na = fm.Volume({"filename": torch, "species": "Na", "sootscale": 1e-6})
         self.assertEqual(na.notes, [])
 

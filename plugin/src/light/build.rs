@@ -462,7 +462,8 @@ fn dilate(
     Some(w.iter().zip(&m).map(|(&a, &b)| a.max(f * b)).collect())
 }
 
-/// Full line emission per unit number density, W·sr⁻¹ (all shipped lines of `e` at T).
+/// Full line and band emission per unit number density, W·sr⁻¹ (all shipped lines of `e`, and its molecular bands,
+/// at T).
 fn line_power(e: &crate::species::Element, t: f64) -> f64 {
     use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
     if !(t > 0.0) {
@@ -470,14 +471,15 @@ fn line_power(e: &crate::species::Element, t: f64) -> f64 {
     }
     let kt = BOLTZMANN * t;
     let z = e.partition_function(t);
-    e.lines()
-        .iter()
-        .map(|l| {
-            PLANCK * SPEED_OF_LIGHT / (4.0 * std::f64::consts::PI * l.lambda_nm * 1e-9)
-                * l.a_ki
-                * l.g_k as f64
-                * (-l.e_k / kt).exp()
-                / z
-        })
-        .sum()
+    e.bands().iter().map(|b| b.power(t)).sum::<f64>()
+        + e.lines()
+            .iter()
+            .map(|l| {
+                PLANCK * SPEED_OF_LIGHT / (4.0 * std::f64::consts::PI * l.lambda_nm * 1e-9)
+                    * l.a_ki
+                    * l.g_k as f64
+                    * (-l.e_k / kt).exp()
+                    / z
+            })
+            .sum::<f64>()
 }

@@ -412,12 +412,15 @@ impl ThickLines {
             .zip(thick)
             .filter(|(_, marks)| marks.iter().any(|&m| m))
             .map(|((sym, e, scale), marks)| {
-                let only = e.with_lines(&|l| {
-                    e.lines()
-                        .iter()
-                        .zip(marks)
-                        .any(|(x, &m)| m && x.lambda_nm == l.lambda_nm)
-                });
+                // The thick lines alone: the bands stay with the thin rest.
+                let only = e
+                    .with_lines(&|l| {
+                        e.lines()
+                            .iter()
+                            .zip(marks)
+                            .any(|(x, &m)| m && x.lambda_nm == l.lambda_nm)
+                    })
+                    .without_bands();
                 let (basis, intensity) = (inp.basis.clone(), inp.intensity);
                 let aux = basis.line_aux();
                 let tab = TTable::build_step(t_max, step(t_max), 2 * c, &move |t| {

@@ -1,6 +1,6 @@
 //! What a volume's build found that a user should hear, whatever host renders it: species whose strong lines fall
-//! outside the channels, and species whose flame colour is molecular (a photograph shows what the model does not
-//! hold). Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints them as warnings at the
+//! outside the channels, and species whose photographed colour the model does not hold (barium's and copper's
+//! chloride bands, potassium's camera lilac). Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints them as warnings at the
 //! medium's statement.
 
 use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
@@ -18,10 +18,8 @@ pub(super) fn species(
         if let Some(m) = lines_outside(sym, e, t_hot, range) {
             out.push(m);
         }
-        if let Some((seen, from, here)) = molecular_colour(sym) {
-            out.push(format!(
-                "species {sym}: its flame photographs {seen}, from {from}; from its atomic lines alone it renders {here}"
-            ));
+        if let Some(note) = molecular_colour(sym) {
+            out.push(format!("species {sym}: {note}"));
         }
     }
     out
@@ -83,18 +81,20 @@ mod tests {
         assert!(lines_outside("K", &k, 2000.0, (400.0, 780.0)).is_none());
         let na = Element::by_symbol("Na").unwrap();
         assert!(lines_outside("Na", &na, 2000.0, (400.0, 700.0)).is_none());
-        // Sodium's colour is its lines; strontium's is not, and says so.
+        // Sodium's colour is its lines and strontium's its bands; copper's chloride blue is not held, and says so.
         let all = species(
             &[
                 ("Na".into(), na, 1.0),
                 ("Sr".into(), Element::by_symbol("Sr").unwrap(), 1.0),
+                ("Cu".into(), Element::by_symbol("Cu").unwrap(), 1.0),
             ],
             2000.0,
             (380.0, 780.0),
         );
         assert_eq!(all.len(), 1, "{all:?}");
         assert!(
-            all[0].starts_with("species Sr: its flame photographs crimson"),
+            all[0].starts_with("species Cu: its bands here are CuOH's and CuO's")
+                && all[0].contains("CuCl"),
             "{all:?}"
         );
     }

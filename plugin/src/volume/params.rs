@@ -19,7 +19,7 @@ pub static DATASET: Component = Component {
         p("temperaturegrid", T::String, "temperature", "", Range::Any, "Name of the temperature grid; empty for none (no emission from temperature)."),
         p("gridname", T::String, "", "", Range::Any, "pbrt-v4's nanovdb name for densitygrid (give one of the two)."),
         p("temperaturename", T::String, "", "", Range::Any, "pbrt-v4's nanovdb name for temperaturegrid (give one of the two)."),
-        p("species", T::String, "", "", Range::Any, "Element symbols of species grids (Na, Li, K, Ca, Sr, Ba, Cu); each grid is named by its symbol."),
+        p("species", T::String, "", "", Range::Any, "Element symbols of species grids (Na, Li, K, Ca, Sr, Ba, Cu); each grid is named by its symbol and holds the element's free atoms. Ca, Sr, Ba and Cu also carry the bands of the hydroxides (and Ba's and Cu's oxides) they form in a flame, at the share a gas flame holds them in: their flame-test colours."),
         p("speciesfiles", T::String, "", "", Range::Path, "Files of the species grids, one per symbol, when not in `filename`."),
         p("speciesscale", T::Float, "1", "m⁻³ per unit", Range::Between(0.0, 1e40), "Multiplier turning species grid values into number densities (one value, or one per species)."),
         p("order", T::String, "x", "", Range::Choices(<crate::dataset::AxisOrder as Choice>::NAMES), "Dense ASCII value order: x fastest (the thesis text) or z fastest (its shader code)."),

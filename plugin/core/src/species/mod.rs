@@ -1,4 +1,5 @@
-//! Atomic emission and absorption lines (Pegoraro & Parker 2006, eq. 7–12), from NIST data, in LTE.
+//! Atomic emission and absorption lines (Pegoraro & Parker 2006, eq. 7–12), from NIST data, in LTE; and the molecular
+//! bands the flame-colouring metals form ([`bands`]).
 //!
 //! For a line from an upper level k (energy E_k, weight g_k) to a lower level i (E_i) at vacuum wavelength λ,
 //! with Einstein coefficient A_ki, number density N (m⁻³) of the element and line shape φ (m⁻¹):
@@ -27,6 +28,7 @@
 //! (sources named in the file; regenerate with `tools/gen_tables.py`). Air wavelengths are converted to
 //! vacuum with [`crate::ciddor::air_to_vacuum_nm`] (standard air).
 
+pub mod bands;
 pub mod line_table;
 pub mod profile;
 
@@ -87,6 +89,8 @@ pub struct Element {
     symbol: &'static str,
     lines: Vec<Line>,
     levels: Vec<Level>,
+    /// The bands of the molecules the element forms in a flame ([`bands`]).
+    bands: Vec<bands::Bands>,
 }
 
 /// Symbols of the elements with shipped line data.
@@ -166,6 +170,9 @@ impl Element {
             symbol: sym,
             lines,
             levels: unique,
+            bands: bands::molecules_of(sym)
+                .map(|m| bands::Bands::new(m, bands::WIDTH_NM))
+                .collect(),
         })
     }
 
@@ -177,13 +184,25 @@ impl Element {
     pub fn lines(&self) -> &[Line] {
         &self.lines
     }
-    /// The same element with only the lines `keep` accepts (the levels, and so Z(T), unchanged).
+    /// The same element with only the lines `keep` accepts (the levels, and so Z(T), and the bands unchanged).
     pub fn with_lines(&self, keep: &dyn Fn(&Line) -> bool) -> Element {
         Element {
             symbol: self.symbol,
             lines: self.lines.iter().copied().filter(|l| keep(l)).collect(),
             levels: self.levels.clone(),
+            bands: self.bands.clone(),
         }
+    }
+    /// The same element without its molecular bands (its lines alone).
+    pub fn without_bands(&self) -> Element {
+        Element {
+            bands: Vec::new(),
+            ..self.clone()
+        }
+    }
+    /// The molecular bands it colours a flame with.
+    pub fn bands(&self) -> &[bands::Bands] {
+        &self.bands
     }
     /// The levels summed in the partition function.
     pub fn levels(&self) -> &[Level] {
@@ -209,8 +228,9 @@ impl Element {
     /// Adds this element's lines to binned coefficients **per unit number density** of the element:
     /// `absorption[i] += σ_a/N` (m², a cross-section) and `emission[i] += j/N` (W·sr⁻¹·nm⁻¹ per atom: the
     /// emission coefficient in W·m⁻³·sr⁻¹·nm⁻¹ divided by N in m⁻³), at temperature `t_k`, each line in the
-    /// bin of `grid` holding its vacuum wavelength with φ = 1/Δλ. Multiply by N (m⁻³): both are exactly linear
-    /// in N. T < 1 mK acts as 1 mK (only ground-level absorption remains, emission is 0).
+    /// bin of `grid` holding its vacuum wavelength with φ = 1/Δλ, and its molecular bands' bin means
+    /// ([`bands::Bands::add_binned`]). Multiply by N (m⁻³): both are exactly linear in N. T < 1 mK acts as 1 mK
+    /// (only ground-level absorption remains, emission is 0).
     pub fn add_binned_cross_sections(
         &self,
         t_k: f64,
@@ -266,26 +286,26 @@ impl Element {
                 }
             }
         }
+        for b in &self.bands {
+            b.add_binned(t, grid, absorption, emission);
+        }
     }
 }
 
-/// What a flame coloured by `symbol` looks like in a photograph when that colour comes from emitters the
-/// shipped atomic lines do not hold: (the colour a photograph shows, where it comes from, what the atomic lines
-/// alone render). `None` for lithium and sodium, whose flame colours are their atomic lines (Li 670.8 nm crimson,
-/// Na D yellow).
+/// What a photograph of a flame coloured by `symbol` shows that this model does not render, and why — `None` where
+/// the model holds its colour: lithium's and sodium's lines, strontium's and calcium's hydroxide bands (their
+/// monochlorides, with a chlorine donor, colour alike: red and orange).
 ///
-/// The bands are the metal's hydroxide and chloride, formed in the flame (approximate positions, as flame
-/// spectroscopy and pyrotechnics give them — e.g. Pearse & Gaydon, *The Identification of Molecular Spectra*):
-/// SrOH and SrCl 600–690 nm, CaOH 554 and 622 nm, BaOH and BaCl 487–532 nm, CuCl and CuOH 428–555 nm. The
-/// renders (a 1 m slab at 2200 K, 10¹⁸ m⁻³, the CIE 1931 observer): Sr xy (0.166, 0.057), Ca (0.269, 0.115), Ba
-/// (0.437, 0.553) — docs/results/log.md, "Flame-test colours".
-pub fn molecular_colour(symbol: &str) -> Option<(&'static str, &'static str, &'static str)> {
+/// - Barium and copper: their bands here are the hydroxide's and oxide's, the yellow-green and green of a gas flame
+///   without chlorine; with a chlorine donor (a pyrotechnic green or blue) BaCl (507–532 nm) and CuCl (430–500 nm)
+///   take over, which no table reachable here held.
+/// - Potassium: a photograph shows lilac — a camera's red channel reaching its 766/770 nm doublet beside the violet
+///   404 nm line, where the CIE observer sees almost nothing of the doublet.
+pub fn molecular_colour(symbol: &str) -> Option<&'static str> {
     Some(match symbol {
-        "Sr" => ("crimson", "SrOH and SrCl bands at 600–690 nm, which the model does not hold", "violet-blue (Sr I 460.7 nm)"),
-        "Ca" => ("orange-red", "CaOH bands at 554 and 622 nm, which the model does not hold", "violet (Ca I 422.7 nm)"),
-        "Ba" => ("pale green", "BaOH and BaCl bands at 487–532 nm, which the model does not hold", "yellow-green (Ba I 553.5 nm)"),
-        "Cu" => ("blue-green", "CuCl and CuOH bands at 428–555 nm, which the model does not hold", "faintly (Cu I 510–578 nm, weak below 2500 K)"),
-        "K" => ("lilac", "a camera's red channel reaching its 766/770 nm doublet beside the violet 404 nm one, where the CIE observer sees almost nothing", "orange-red"),
+        "Ba" => "its bands here are BaOH's and BaO's, the yellow-green of a flame without chlorine; with a chlorine donor its flame photographs green, from BaCl bands at 507–532 nm, which the model does not hold",
+        "Cu" => "its bands here are CuOH's and CuO's, the green of a flame without chlorine; with a chlorine donor its flame photographs blue, from CuCl bands at 430–500 nm, which the model does not hold",
+        "K" => "its flame photographs lilac, from a camera's red channel reaching its 766/770 nm doublet beside the violet 404 nm one, where the CIE observer sees almost nothing; it renders red",
         _ => return None,
     })
 }

@@ -321,6 +321,7 @@ fn random_walk_radiance(v: &FireVolume, ray: &Ray, paths: usize) -> Vec<f64> {
 
 mod art;
 mod diffusion;
+mod flame_colours;
 mod lattice;
 mod lines;
 mod physics;
