@@ -299,13 +299,14 @@ impl Element {
 /// - Barium and copper: their bands here are the hydroxide's and oxide's, the yellow-green and green of a gas flame
 ///   without chlorine; with a chlorine donor (a pyrotechnic green or blue) BaCl (507–532 nm) and CuCl (430–500 nm)
 ///   take over, which no table reachable here held.
-/// - Potassium: a photograph shows lilac — a camera's red channel reaching its 766/770 nm doublet beside the violet
-///   404 nm line, where the CIE observer sees almost nothing of the doublet.
+/// - Potassium: a photograph shows lilac — the gas flame's blue through potassium's weak visible light (its
+///   766/770 nm doublet, where the CIE observer sees almost nothing, and 404 nm), and a camera's red channel
+///   reaching the doublet.
 pub fn molecular_colour(symbol: &str) -> Option<&'static str> {
     Some(match symbol {
         "Ba" => "its bands here are BaOH's and BaO's, the yellow-green of a flame without chlorine; with a chlorine donor its flame photographs green, from BaCl bands at 507–532 nm, which the model does not hold",
         "Cu" => "its bands here are CuOH's and CuO's, the green of a flame without chlorine; with a chlorine donor its flame photographs blue, from CuCl bands at 430–500 nm, which the model does not hold",
-        "K" => "its flame photographs lilac, from a camera's red channel reaching its 766/770 nm doublet beside the violet 404 nm one, where the CIE observer sees almost nothing; it renders red",
+        "K" => "its flame photographs lilac: the gas flame's own blue showing through its weak visible light (give the fire a reaction grid's chemiluminescence), and a camera's red channel reaching its 766/770 nm doublet, which the CIE observer barely sees; alone it renders red",
         _ => return None,
     })
 }
