@@ -73,134 +73,56 @@ pub struct Molecule {
     pub bands: &'static [(f64, f64)],
     /// S, the band system's oscillator strength per atom of the element.
     pub strength: f64,
-    /// What S was calibrated from, in the flame-test spectrum: (band nm, its height, the element's line nm, its
-    /// height), heights in counts above the local continuum.
-    pub calibration: (f64, f64, f64, f64),
+    /// What S was calibrated from, in the flame-test spectrum.
+    pub calibration: Calibration,
+}
+
+/// A band's and its element's line's peak heights in a flame-test spectrum (counts above the local continuum, at the
+/// spectrometer's 1.3 nm FWHM), which S reproduces at [`T_REF`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration {
+    /// The band's air wavelength (one of the molecule's), nm.
+    pub band_nm: f64,
+    /// Its height.
+    pub band_height: f64,
+    /// The element's line, air wavelength, nm.
+    pub line_nm: f64,
+    /// Its height.
+    pub line_height: f64,
 }
 
 /// The shipped band systems.
+#[rustfmt::skip]
 pub const MOLECULES: [Molecule; 6] = [
     Molecule {
-        name: "SrOH",
-        element: "Sr",
-        bands: &[
-            (606.0, 59.0),
-            (620.0, 2.0),
-            (626.0, 2.0),
-            (649.0, 13.0),
-            (659.0, 33.0),
-            (671.0, 70.0),
-            (682.0, 100.0),
-            (707.0, 9.0),
-            (722.0, 1.0),
-        ],
-        strength: 9.434,
-        calibration: (682.0, 442.4, 460.7331, 35.3),
+        name: "SrOH", element: "Sr", strength: 9.434,
+        bands: &[(606.0, 59.0), (620.0, 2.0), (626.0, 2.0), (649.0, 13.0), (659.0, 33.0), (671.0, 70.0), (682.0, 100.0), (707.0, 9.0), (722.0, 1.0)],
+        calibration: Calibration { band_nm: 682.0, band_height: 442.4, line_nm: 460.7331, line_height: 35.3 },
     },
     Molecule {
-        name: "CaOH",
-        element: "Ca",
-        bands: &[
-            (555.0, 45.0),
-            (572.0, 1.0),
-            (594.0, 7.0),
-            (600.0, 11.0),
-            (604.0, 14.0),
-            (625.0, 100.0),
-            (645.0, 10.0),
-            (665.0, 1.0),
-        ],
-        strength: 1.818,
-        calibration: (625.0, 38.2, 422.673, 6.5),
+        name: "CaOH", element: "Ca", strength: 1.818,
+        bands: &[(555.0, 45.0), (572.0, 1.0), (594.0, 7.0), (600.0, 11.0), (604.0, 14.0), (625.0, 100.0), (645.0, 10.0), (665.0, 1.0)],
+        calibration: Calibration { band_nm: 625.0, band_height: 38.2, line_nm: 422.673, line_height: 6.5 },
     },
     Molecule {
-        name: "BaOH",
-        element: "Ba",
-        bands: &[
-            (488.0, 72.0),
-            (502.0, 30.0),
-            (513.0, 100.0),
-            (524.0, 86.0),
-            (745.0, 47.0),
-        ],
-        strength: 29.98,
-        calibration: (513.0, 86.8, 553.5481, 161.0),
+        name: "BaOH", element: "Ba", strength: 29.98,
+        bands: &[(488.0, 72.0), (502.0, 30.0), (513.0, 100.0), (524.0, 86.0), (745.0, 47.0)],
+        calibration: Calibration { band_nm: 513.0, band_height: 86.8, line_nm: 553.5481, line_height: 161.0 },
     },
     Molecule {
-        name: "BaO",
-        element: "Ba",
-        bands: &[
-            (485.0, 72.0),
-            (497.0, 100.0),
-            (514.0, 87.0),
-            (526.0, 97.0),
-            (533.0, 100.0),
-            (535.0, 90.0),
-            (546.0, 16.0),
-            (551.0, 68.0),
-            (567.0, 51.0),
-            (574.0, 36.0),
-            (583.0, 32.0),
-            (589.0, 93.0),
-            (608.0, 88.0),
-            (612.0, 59.0),
-            (617.0, 34.0),
-            (623.0, 32.0),
-            (626.0, 29.0),
-            (632.0, 79.0),
-            (642.0, 26.0),
-            (653.0, 71.0),
-            (656.0, 57.0),
-            (663.0, 39.0),
-            (682.0, 56.0),
-            (686.0, 33.0),
-            (693.0, 26.0),
-            (701.0, 10.0),
-            (710.0, 50.0),
-            (718.0, 46.0),
-            (725.0, 14.0),
-            (734.0, 32.0),
-            (744.0, 16.0),
-            (752.0, 26.0),
-            (761.0, 41.0),
-        ],
-        strength: 45.83,
-        calibration: (608.0, 61.7, 553.5481, 161.0),
+        name: "BaO", element: "Ba", strength: 45.83,
+        bands: &[(485.0, 72.0), (497.0, 100.0), (514.0, 87.0), (526.0, 97.0), (533.0, 100.0), (535.0, 90.0), (546.0, 16.0), (551.0, 68.0), (567.0, 51.0), (574.0, 36.0), (583.0, 32.0), (589.0, 93.0), (608.0, 88.0), (612.0, 59.0), (617.0, 34.0), (623.0, 32.0), (626.0, 29.0), (632.0, 79.0), (642.0, 26.0), (653.0, 71.0), (656.0, 57.0), (663.0, 39.0), (682.0, 56.0), (686.0, 33.0), (693.0, 26.0), (701.0, 10.0), (710.0, 50.0), (718.0, 46.0), (725.0, 14.0), (734.0, 32.0), (744.0, 16.0), (752.0, 26.0), (761.0, 41.0)],
+        calibration: Calibration { band_nm: 608.0, band_height: 61.7, line_nm: 553.5481, line_height: 161.0 },
     },
     Molecule {
-        name: "CuOH",
-        element: "Cu",
-        bands: &[
-            (505.0, 46.0),
-            (512.0, 44.0),
-            (524.0, 75.0),
-            (533.0, 84.0),
-            (546.0, 100.0),
-            (605.0, 10.0),
-        ],
-        strength: 1.574e-3,
-        calibration: (546.0, 89.0, 510.5541, 3.3),
+        name: "CuOH", element: "Cu", strength: 1.574e-3,
+        bands: &[(505.0, 46.0), (512.0, 44.0), (524.0, 75.0), (533.0, 84.0), (546.0, 100.0), (605.0, 10.0)],
+        calibration: Calibration { band_nm: 546.0, band_height: 89.0, line_nm: 510.5541, line_height: 3.3 },
     },
     Molecule {
-        name: "CuO",
-        element: "Cu",
-        bands: &[
-            (450.0, 25.0),
-            (453.0, 27.0),
-            (458.0, 33.0),
-            (467.0, 52.0),
-            (471.0, 53.0),
-            (477.0, 57.0),
-            (480.0, 66.0),
-            (486.0, 69.0),
-            (488.0, 83.0),
-            (492.0, 100.0),
-            (606.0, 42.0),
-            (616.0, 59.0),
-            (632.0, 47.0),
-        ],
-        strength: 1.603e-3,
-        calibration: (492.0, 23.0, 510.5541, 3.3),
+        name: "CuO", element: "Cu", strength: 1.603e-3,
+        bands: &[(450.0, 25.0), (453.0, 27.0), (458.0, 33.0), (467.0, 52.0), (471.0, 53.0), (477.0, 57.0), (480.0, 66.0), (486.0, 69.0), (488.0, 83.0), (492.0, 100.0), (606.0, 42.0), (616.0, 59.0), (632.0, 47.0)],
+        calibration: Calibration { band_nm: 492.0, band_height: 23.0, line_nm: 510.5541, line_height: 3.3 },
     },
 ];
 
@@ -482,7 +404,12 @@ mod tests {
     fn bands_are_calibrated_against_the_flame_spectrum() {
         let s_inst = 1.3 / (8.0 * std::f64::consts::LN_2).sqrt();
         for m in &MOLECULES {
-            let (band_nm, band_h, line_nm, line_h) = m.calibration;
+            let Calibration {
+                band_nm,
+                band_height: band_h,
+                line_nm,
+                line_height: line_h,
+            } = m.calibration;
             let e = Element::by_symbol(m.element).unwrap();
             let line_vac = air_to_vacuum_nm(line_nm);
             let line = e
