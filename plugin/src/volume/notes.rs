@@ -1,10 +1,10 @@
 //! What a volume's build found that a user should hear, whatever host renders it: species whose strong lines fall
 //! outside the channels, and species whose photographed colour the model does not hold (barium's and copper's
-//! chloride bands, potassium's camera lilac). Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints them as warnings at the
-//! medium's statement.
+//! chloride bands, potassium's lilac). Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints
+//! them as warnings at the medium's statement.
 
 use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
-use crate::species::{molecular_colour, Element, Line};
+use crate::species::{colour_note, Element, Line};
 
 /// The notes about a fire's `species` ((symbol, element, scale)), at its hottest temperature `t_hot` (K; 2000 K
 /// when it has no temperature grid), for channels over `range` nm.
@@ -18,7 +18,7 @@ pub(super) fn species(
         if let Some(m) = lines_outside(sym, e, t_hot, range) {
             out.push(m);
         }
-        if let Some(note) = molecular_colour(sym) {
+        if let Some(note) = colour_note(sym) {
             out.push(format!("species {sym}: {note}"));
         }
     }

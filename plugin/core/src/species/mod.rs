@@ -302,7 +302,7 @@ impl Element {
 /// - Potassium: a photograph shows lilac — the gas flame's blue through potassium's weak visible light (its
 ///   766/770 nm doublet, where the CIE observer sees almost nothing, and 404 nm), and a camera's red channel
 ///   reaching the doublet.
-pub fn molecular_colour(symbol: &str) -> Option<&'static str> {
+pub fn colour_note(symbol: &str) -> Option<&'static str> {
     Some(match symbol {
         "Ba" => "its bands here are BaOH's and BaO's, the yellow-green of a flame without chlorine; with a chlorine donor its flame photographs green, from BaCl bands at 507–532 nm, which the model does not hold",
         "Cu" => "its bands here are CuOH's and CuO's, the green of a flame without chlorine; with a chlorine donor its flame photographs blue, from CuCl bands at 430–500 nm, which the model does not hold",
