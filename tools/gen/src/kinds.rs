@@ -117,6 +117,7 @@ impl Kind {
             // Wood, 0.12 W/(m K), over the 5 mm a heat capacity of 4 kJ/(m² K) holds (ρc ≈ 7.5e5 J/(m³ K)).
             fuel_conduction: 0.12 * 5.3e-3,
             fuel_heat_capacity: 4.0e3,
+            boiling: 0.0,
             gasification: 1.8e6,
             nu_b: 3.0,
             t_s: 600.0,
@@ -204,13 +205,13 @@ impl Kind {
                 (m, cells, links)
             }
             Kind::Pool => {
-                // A heptane pool of radius 0.5 m, lit over its whole surface; sooty, turbulent.
-                // (A liquid: no conduction between cells.)
+                // A heptane pool of radius 0.5 m, lit over its whole surface by a pilot flame; sooty, turbulent.
+                // (A liquid: no conduction between cells; its surface held at its boiling point, 371.6 K.)
                 let (cells, links) = (disk_cells(DVec3::new(0.0, 0.0, 0.005), 0.5, 12), Vec::new());
                 let m = Model {
                     half_width: 1.0,
                     height: 3.0,
-                    release: 600.0,
+                    release: 900.0,
                     heat_capacity: 3.56e4,
                     mixing_time: 0.6,
                     sigma0: 0.04,
@@ -220,7 +221,9 @@ impl Kind {
                     turbulence_scale: 0.4,
                     soot_yield: 0.037,
                     match_radius: 1.0,
-                    // Heptane (Drysdale, after Tewarson).
+                    // Heptane: boiling at 371.6 K; its heat of gasification (latent heat and the sensible heat
+                    // to boiling) 0.48 MJ/kg (Drysdale, after Tewarson).
+                    boiling: 371.6,
                     gasification: 0.48e6,
                     ..base
                 };

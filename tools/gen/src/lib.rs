@@ -23,7 +23,10 @@
 //! cells within `match_radius` of `match_at` at `t_match` for the first `match_seconds` (the campfire's
 //! kindling under the logs' raised tips); the rest of the fire catches from their flames and burns on
 //! without them. The fuel a step gasifies, ρ_fuel (1 − e^{−k dt}) per area, leaves as a new **flame blob**
-//! (production equals consumption to rounding).
+//! (production equals consumption to rounding). **A liquid** (the pool's heptane, `boiling`) does not gasify by
+//! Arrhenius: its surface stays at its boiling point and what heat reaches it beyond what holds it there
+//! evaporates fuel at its heat of gasification (the pool then burns at large heptane pools' 0.06–0.07 kg/(m² s));
+//! its match is a pilot flame over it.
 //!
 //! **Blobs** are Gaussian kernels (eq. 6–9 of §4) of flame mass m_f and smoke mass m_s at a temperature T. Each
 //! moves with the wind — a buoyant updraft B √((T − T_amb)/T_amb) plus a divergence-free turbulent field (the curl
@@ -58,7 +61,7 @@ mod write;
 pub use fuel::Link;
 pub use radiation::Cooling;
 use sim::Noise;
-pub use sim::{implicit_fuel_temperature, FuelBalance};
+pub use sim::{implicit_fuel_temperature, liquid_fuel_step, FuelBalance};
 pub use voxel::{voxelise, Fields, HEAT_OF_COMBUSTION, REACTION_TIME};
 pub use write::{embers_ply, frame, frame_as, Frame, Style};
 
@@ -127,6 +130,10 @@ pub struct Model {
     pub gasification: f64,
     /// Fuel heat capacity per area, J/(m² K).
     pub fuel_heat_capacity: f64,
+    /// A liquid fuel's boiling point, K (0: a solid, gasifying at the Arrhenius rate). A liquid's surface never
+    /// passes it: what heat reaches the surface beyond what holds it there evaporates fuel at `gasification`
+    /// J/kg, and a match is a pilot flame over it (the gas touching it at `t_match`), not a hot surface.
+    pub boiling: f64,
     /// Smoke: ν_b (1/s), T_s (K), decay (1/s).
     pub nu_b: f64,
     pub t_s: f64,

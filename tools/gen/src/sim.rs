@@ -113,6 +113,14 @@ impl Sim {
         let mut born = Vec::new();
         for (i, c) in self.cells.iter_mut().enumerate() {
             let (radiation, t_gas) = heating[i];
+            let lit = matching && (c.p - m.match_at).length() < m.match_radius;
+            let liquid = m.boiling > 0.0;
+            // A liquid's match is a pilot flame over it.
+            let t_gas = if liquid && lit {
+                t_gas.max(m.t_match)
+            } else {
+                t_gas
+            };
             let balance = FuelBalance {
                 flux: m.fuel_absorptance * (radiation + exchange[i]) + conduction[i] / c.area,
                 h: m.flame_contact,
@@ -124,11 +132,20 @@ impl Sim {
                 t_a: m.t_a,
                 gasification: m.gasification,
             };
-            c.t = implicit_fuel_temperature(c.t, &balance, dt);
-            if matching && (c.p - m.match_at).length() < m.match_radius {
-                c.t = c.t.max(m.t_match);
-            }
-            let burnt = balance.burnt(c.t, dt);
+            let burnt = if liquid {
+                // Lit, its surface layer is at its boiling point (heptane's flash point is below the room's: it
+                // burns at once, its surface within a second at boiling).
+                let t0 = if lit { c.t.max(m.boiling) } else { c.t };
+                let (t, burnt) = liquid_fuel_step(t0, &balance, m.boiling, dt);
+                c.t = t;
+                burnt
+            } else {
+                c.t = implicit_fuel_temperature(c.t, &balance, dt);
+                if lit {
+                    c.t = c.t.max(m.t_match);
+                }
+                balance.burnt(c.t, dt)
+            };
             let mass = burnt * c.area;
             if !(mass > 1e-15) {
                 continue;
@@ -281,13 +298,19 @@ impl Sim {
             .collect();
     }
 
-    /// The fuel: (cells above 500 K, cells, their mean temperature, fraction of the fuel left).
+    /// The fuel: (cells burning — above 500 K, a liquid at its boiling point —, cells, their mean temperature,
+    /// fraction of the fuel left).
     pub fn fuel_summary(&self) -> (usize, usize, f64, f64) {
+        let burning = if self.model.boiling > 0.0 {
+            self.model.boiling
+        } else {
+            500.0
+        };
         let hot: Vec<f64> = self
             .cells
             .iter()
             .map(|c| c.t)
-            .filter(|t| *t > 500.0)
+            .filter(|t| *t >= burning)
             .collect();
         let total: f64 = self
             .cells
@@ -334,6 +357,24 @@ impl FuelBalance {
         let k = self.nu_a * (-self.t_a / t).exp();
         self.load * -(-k * dt).exp_m1()
     }
+}
+
+/// A liquid fuel's step (boiling at `t_b` K): below its boiling point it heats as a solid that does not gasify;
+/// at it, the surface stays there and the heat beyond what holds it — the flux, the flame gas, less its own
+/// radiation and what warming it to `t_b` took — evaporates fuel at `gasification` J/kg. Returns (T₁, the mass
+/// evaporated over dt, kg/m², at most the load).
+pub fn liquid_fuel_step(t0: f64, s: &FuelBalance, t_b: f64, dt: f64) -> (f64, f64) {
+    let dry = FuelBalance {
+        gasification: 0.0,
+        ..*s
+    };
+    let t1 = implicit_fuel_temperature(t0, &dry, dt);
+    if t1 <= t_b {
+        return (t1, 0.0);
+    }
+    let net = s.flux + s.h * (s.t_gas - t_b) - s.emissivity * SIGMA * (t_b.powi(4) - T_AMB.powi(4));
+    let heat = net * dt - s.heat_capacity * (t_b - t0);
+    (t_b, (heat / s.gasification).clamp(0.0, s.load))
 }
 
 /// The fuel temperature after dt: C (T₁ − T₀)/dt = flux + h (T_gas − T₁) − ε σ (T₁⁴ − T_amb⁴) − L ṁ(T₁), with ṁ(T₁)

@@ -430,3 +430,75 @@ fn the_reaction_field_holds_the_heat_the_young_blobs_release() {
         "{on_grid} W on the grid vs {from_blobs} W from the blobs"
     );
 }
+
+#[test]
+fn a_liquid_surface_stays_at_its_boiling_point_and_evaporates_the_heat_beyond() {
+    let t_b = 371.6;
+    let s = FuelBalance {
+        flux: 2e4,
+        h: 20.0,
+        t_gas: 1200.0,
+        emissivity: 0.9,
+        heat_capacity: 4e3,
+        load: 20.0,
+        nu_a: 3e3,
+        t_a: 1e4,
+        gasification: 0.48e6,
+    };
+    // At its boiling point, a step evaporates what reaches the surface beyond its own radiation, at L.
+    let dt = 1.0 / 120.0;
+    let (t, burnt) = liquid_fuel_step(t_b, &s, t_b, dt);
+    let net = 2e4 + 20.0 * (1200.0 - t_b) - 0.9 * SIGMA * (t_b.powi(4) - T_AMB.powi(4));
+    assert_eq!(t, t_b);
+    assert!((burnt / (net * dt / 0.48e6) - 1.0).abs() < 1e-12, "{burnt}");
+    // From below, the heat that warms it to boiling is taken first (over a step long enough to reach it); a cold
+    // surface under a weak flux only warms.
+    let (t, burnt) = liquid_fuel_step(360.0, &s, t_b, 10.0);
+    assert!(
+        (burnt / ((net * 10.0 - 4e3 * (t_b - 360.0)) / 0.48e6) - 1.0).abs() < 1e-12 && t == t_b
+    );
+    let (t, burnt) = liquid_fuel_step(360.0, &s, t_b, dt);
+    assert!(burnt == 0.0 && t > 360.0 && t < t_b, "{t} {burnt}");
+    let weak = FuelBalance {
+        flux: 100.0,
+        h: 0.0,
+        ..s
+    };
+    let (t, burnt) = liquid_fuel_step(300.0, &weak, t_b, dt);
+    assert!(burnt == 0.0 && t > 300.0 && t < 301.0, "{t} {burnt}");
+    // Never more than the load.
+    let (_, burnt) = liquid_fuel_step(t_b, &FuelBalance { load: 1e-6, ..s }, t_b, 10.0);
+    assert_eq!(burnt, 1e-6);
+}
+
+/// The heptane pool (1 m across) burns at the rate large pool fires do: Babrauskas' correlation
+/// ṁ″ = ṁ″∞ (1 − e^{−kβ D}), heptane ṁ″∞ = 0.101 kg/(m² s), kβ = 1.1 m⁻¹ (SFPE Handbook) — 0.0675 kg/(m² s) — within
+/// 25 %, its surface at its boiling point, and burning on at the same rate once the pilot flame is gone.
+#[test]
+fn a_heptane_pool_burns_at_the_rate_large_pool_fires_do() {
+    let mut sim = Sim::new(Kind::Pool, 1);
+    let area: f64 = sim.cells.iter().map(|c| c.area).sum();
+    let fuel = |sim: &Sim| sim.cells.iter().map(|c| c.area * c.load).sum::<f64>();
+    let rate = |sim: &mut Sim, from: f64, to: f64| {
+        sim.run_to(from);
+        let before = fuel(sim);
+        sim.run_to(to);
+        (before - fuel(sim)) / ((to - from) * area)
+    };
+    let lit = rate(&mut sim, 2.0, 4.0);
+    let pilot = sim.model.match_seconds;
+    let on = rate(&mut sim, pilot + 1.0, pilot + 4.0);
+    let want = 0.101 * (1.0 - (-1.1_f64 * 1.0).exp());
+    assert!(
+        (lit / want - 1.0).abs() < 0.25,
+        "{lit} kg/(m² s) against {want}"
+    );
+    assert!(
+        (on / lit - 1.0).abs() < 0.1,
+        "{on} after the pilot, {lit} with it"
+    );
+    assert!(
+        sim.cells.iter().all(|c| (c.t - 371.6).abs() < 1e-9),
+        "the surface boils"
+    );
+}
