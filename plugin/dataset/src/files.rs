@@ -164,6 +164,14 @@ pub fn format_of(path: &Path, opts: &LoadOptions) -> Result<Format, Error> {
         })
 }
 
+/// What wrote the OpenVDB file at `path`: its file metadata's `creator` string (`None`: it names none). An error
+/// when the file is not an OpenVDB file.
+pub fn creator_of(path: &Path) -> Result<Option<String>, Error> {
+    let file = path.display().to_string();
+    let (f, len) = open_regular(path)?;
+    Ok(vdb::read_header_from(&file, Bytes::File { file: &f, len })?.creator)
+}
+
 /// The grids a file holds (after frame substitution). Single-grid formats hold one grid, `density`.
 pub fn list_grids(path: &Path, opts: &LoadOptions) -> Result<Vec<GridEntry>, Error> {
     let path = frame_path(path, opts.frame)?;

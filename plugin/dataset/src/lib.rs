@@ -29,6 +29,7 @@
 pub mod alloc;
 mod ascii;
 mod compress;
+pub mod convention;
 mod cursor;
 mod error;
 mod files;
@@ -38,7 +39,6 @@ mod options;
 pub mod par;
 pub mod particles;
 pub mod raw;
-mod source;
 mod sparse;
 mod text;
 pub mod vdb;
@@ -53,9 +53,8 @@ use std::time::Instant;
 use cursor::Bytes;
 pub use error::{short, Error};
 pub use files::{as_text, open_regular, read_file};
-pub use files::{format_of, frame_path, list_grids, GridEntry};
+pub use files::{creator_of, format_of, frame_path, list_grids, GridEntry};
 pub use options::{AxisOrder, ChannelSource, Format, LoadOptions, Mapping, Policy};
-pub use source::looks_like;
 
 /// Every float grid `entries` lists for `path` (as [`list_grids`] gives them) loaded on one lattice — the union of
 /// their bricks; `Ok(None)` when the file holds none (a file of vector grids only).
@@ -75,8 +74,7 @@ pub fn load_float_grids(
     Dataset::load(&sources, opts).map(Some)
 }
 
-/// Kelvin per unit of Houdini's temperature field: its Pyro shader's blackbody maps 1 to 5000 K by default.
-pub const HOUDINI_KELVIN: f64 = 5000.0;
+pub use convention::HOUDINI_KELVIN;
 pub use raw::{RawCoords, RawValue};
 
 /// `f` over `items`, one thread per item (a dataset has a handful of grids; each is independent work of tens
@@ -538,6 +536,14 @@ impl Dataset {
     /// The channel named `name`.
     pub fn channel(&self, name: &str) -> Option<&Channel> {
         self.channels.iter().find(|c| c.name == name)
+    }
+    /// Multiplies channel `index`'s values by `k` in place and updates its statistics (a unit found once the
+    /// grid was read); `None` when there is no such channel.
+    pub fn scale_channel(&mut self, index: usize, k: f32) -> Option<()> {
+        let c = self.channels.get_mut(index)?;
+        c.grid.values_mut().iter_mut().for_each(|v| *v *= k);
+        c.stats = c.grid.stats();
+        Some(())
     }
     /// Sets the interpolation used by [`Dataset::sample`].
     pub fn with_interpolation(mut self, interp: Interpolation) -> Self {

@@ -499,6 +499,23 @@ impl Topology {
         }
     }
 
+    /// Calls `f` with every sample of the lattice a stored brick holds and where a grid of this topology stores it
+    /// (bricks that share a constant block are each visited; the background's empty bricks are not).
+    pub fn for_each_stored_voxel(&self, mut f: impl FnMut([usize; 3], usize)) {
+        self.for_each_slot(|b, slot| {
+            let span = [0, 1, 2].map(|a| self.brick_span(b[a], a));
+            for k in span[2].0..span[2].1 {
+                for j in span[1].0..span[1].1 {
+                    let row = slot * BRICK_VOXELS
+                        + BRICK * ((j + self.off[1]) % BRICK + BRICK * ((k + self.off[2]) % BRICK));
+                    for i in span[0].0..span[0].1 {
+                        f([i, j, k], row + (i + self.off[0]) % BRICK);
+                    }
+                }
+            }
+        });
+    }
+
     /// The values a grid of this topology stores: 512 per block, the background's included.
     pub fn values_len(&self) -> usize {
         (self.blocks_stored + 1) * BRICK_VOXELS
@@ -635,6 +652,10 @@ impl Grid {
         self.values
             .get(s * BRICK_VOXELS..(s + 1) * BRICK_VOXELS)
             .is_some_and(|b| b.iter().all(|&x| x == v))
+    }
+    /// The stored values (slot 0 first: the background), as [`Topology::for_each_stored_voxel`] indexes them.
+    pub fn values(&self) -> &[f32] {
+        &self.values
     }
     /// The stored values (slot 0 first: the background), for load-time policies.
     pub fn values_mut(&mut self) -> &mut [f32] {

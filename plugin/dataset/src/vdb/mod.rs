@@ -53,6 +53,8 @@ pub struct Header {
     pub library: (u32, u32),
     /// The grids in file order.
     pub grids: Vec<GridInfo>,
+    /// The file metadata's `creator` string (what wrote the file), when it has one.
+    pub creator: Option<String>,
 }
 
 fn string<'a>(c: &mut Cursor<'a>, what: &str) -> Result<String, Error> {
@@ -70,6 +72,11 @@ fn string<'a>(c: &mut Cursor<'a>, what: &str) -> Result<String, Error> {
 /// Skips a metadata table (OpenVDB `MetaMap`): every value carries its byte size, so unknown types (such as
 /// Mantaflow's `__delayedload`) are skipped safely.
 fn skip_metadata(c: &mut Cursor, whose: &str) -> Result<(), Error> {
+    metadata_string(c, whose, "").map(|_| ())
+}
+
+/// Reads a metadata table as [`skip_metadata`] does, returning the string entry named `wanted`, if any.
+fn metadata_string(c: &mut Cursor, whose: &str, wanted: &str) -> Result<Option<String>, Error> {
     let count = c.u32(&format!("the {whose} metadata count"))?;
     if count as usize > c.remaining() {
         c.pos -= 4;
@@ -78,13 +85,20 @@ fn skip_metadata(c: &mut Cursor, whose: &str) -> Result<(), Error> {
             count,
         ));
     }
+    let mut found = None;
     for _ in 0..count {
-        string(c, "a metadata name")?;
-        string(c, "a metadata type")?;
+        let name = string(c, "a metadata name")?;
+        let ty = string(c, "a metadata type")?;
         let size = c.u32("a metadata size")?;
-        c.skip(size as usize, "a metadata value")?;
+        if !wanted.is_empty() && name == wanted && ty == "string" && size <= 1 << 16 {
+            found = Some(
+                String::from_utf8_lossy(c.bytes(size as usize, "a metadata value")?).into_owned(),
+            );
+        } else {
+            c.skip(size as usize, "a metadata value")?;
+        }
     }
-    Ok(())
+    Ok(found)
 }
 
 /// Reads the header and the grid table.
@@ -125,7 +139,7 @@ pub fn read_header_from(file: &str, src: Bytes) -> Result<Header, Error> {
         });
     }
     c.skip(36, "the file UUID")?;
-    skip_metadata(&mut c, "file")?;
+    let creator = metadata_string(&mut c, "file", "creator")?;
     let count = c.i32("the grid count")?;
     if count < 0 || count as usize > c.remaining() {
         c.pos -= 4;
@@ -168,6 +182,7 @@ pub fn read_header_from(file: &str, src: Bytes) -> Result<Header, Error> {
         file_version,
         library,
         grids,
+        creator,
     })
 }
 
@@ -623,8 +638,8 @@ pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Ve
 
 mod write;
 pub use write::{
-    write, write_sparse, write_sparse_vectors, write_tiled, write_with_vectors, VdbLeaf, VdbTile,
-    VdbVector,
+    write, write_sparse, write_sparse_vectors, write_sparse_vectors_by, write_tiled,
+    write_with_vectors, VdbLeaf, VdbTile, VdbVector,
 };
 
 #[cfg(test)]

@@ -102,11 +102,21 @@ pub fn write_sparse(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> 
 /// As [`write_sparse`], for vector grids (`Tree_vec3s_5_4_3`): each leaf's values are 3 × 512, a voxel's x, y
 /// and z together (z fastest over the voxels, as [`VdbLeaf`]'s).
 pub fn write_sparse_vectors(grids: &[(&str, Vec<VdbLeaf>)], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+    write_sparse_vectors_by(None, grids, p0, voxel)
+}
+
+/// [`write_sparse_vectors`], the file's metadata naming its `creator`.
+pub fn write_sparse_vectors_by(
+    creator: Option<&str>,
+    grids: &[(&str, Vec<VdbLeaf>)],
+    p0: DVec3,
+    voxel: DVec3,
+) -> Vec<u8> {
     let all: Vec<WriteGrid> = grids
         .iter()
         .map(|(name, leaves)| (*name, 3, leaves.clone(), Vec::new()))
         .collect();
-    write_grids(&all, p0, voxel)
+    write_grids_by(creator, &all, p0, voxel)
 }
 
 /// An active constant tile: origin (a multiple of its size), size (8: a tile of a 4-level node, 128: of a
@@ -188,6 +198,12 @@ type WriteGrid<'a> = (&'a str, usize, Vec<VdbLeaf>, Vec<VdbTile>);
 /// The writer: grids of `comps` floats per voxel (1: float, 3: vec3s), their leaves' values `comps` per voxel,
 /// and tiles (float grids).
 fn write_grids(grids: &[WriteGrid], p0: DVec3, voxel: DVec3) -> Vec<u8> {
+    write_grids_by(None, grids, p0, voxel)
+}
+
+/// [`write_grids`] with the file metadata's `creator` string (what wrote the file: a command that replaces only
+/// the files it wrote reads it back, [`super::Header::creator`]).
+fn write_grids_by(creator: Option<&str>, grids: &[WriteGrid], p0: DVec3, voxel: DVec3) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC.to_le_bytes());
     out.extend_from_slice(&224u32.to_le_bytes());
@@ -195,12 +211,21 @@ fn write_grids(grids: &[WriteGrid], p0: DVec3, voxel: DVec3) -> Vec<u8> {
     out.extend_from_slice(&0u32.to_le_bytes());
     out.push(1); // grid offsets
     out.extend_from_slice(b"00000000-0000-0000-0000-000000000000");
-    out.extend_from_slice(&0u32.to_le_bytes()); // file metadata
-    out.extend_from_slice(&(grids.len() as i32).to_le_bytes());
     let put_str = |out: &mut Vec<u8>, s: &str| {
         out.extend_from_slice(&(s.len() as u32).to_le_bytes());
         out.extend_from_slice(s.as_bytes());
     };
+    // File metadata: the creator, or none.
+    match creator {
+        Some(c) => {
+            out.extend_from_slice(&1u32.to_le_bytes());
+            put_str(&mut out, "creator");
+            put_str(&mut out, "string");
+            put_str(&mut out, c);
+        }
+        None => out.extend_from_slice(&0u32.to_le_bytes()),
+    }
+    out.extend_from_slice(&(grids.len() as i32).to_le_bytes());
     for (name, comps, leaves, tiles) in grids {
         let comps = *comps;
         put_str(&mut out, name);
