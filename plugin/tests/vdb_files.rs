@@ -503,7 +503,13 @@ fn the_blender_source_reads_the_flame_as_cycles_does() {
             ],
             "temperaturescale",
         ),
-        (vec![Param::float("flamemax", 2.0)], "flamemax"),
+        (
+            vec![
+                Param::string("source", "kelvin"),
+                Param::float("flamemax", 2.0),
+            ],
+            "flamemax",
+        ),
         (
             vec![
                 Param::string("source", "blender"),

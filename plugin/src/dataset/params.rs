@@ -26,23 +26,26 @@ pub(crate) struct Motion {
 /// The velocity channels' names in a dataset.
 const VELOCITY: [&str; 3] = ["velocity.x", "velocity.y", "velocity.z"];
 
-use super::HOUDINI_KELVIN;
+use firemedium_dataset::convention;
 
 /// `source`: the tool whose conventions the grids follow.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Tool {
+    /// Found from the file's grid names and data (`firemedium_dataset::convention`); kelvin for inline grids and
+    /// single-grid formats.
+    Auto,
     /// Density and temperature in K (our gen, the thesis's files).
     Kelvin,
     /// pbrt-v4's nanovdb: as kelvin.
     Pbrt,
     /// A Mantaflow domain cache: the flame grid as Cycles maps it.
     Blender,
-    /// Pyro: temperature × 5000 K.
+    /// Pyro: a relative temperature (× 5000 K, or less to hold its peak at 1500 K).
     Houdini,
     /// EmberGen: smoke and temperature in K.
     EmberGen,
 }
-choice!(Tool { Tool::Kelvin => "kelvin", Tool::Pbrt => "pbrt", Tool::Blender => "blender", Tool::Houdini => "houdini", Tool::EmberGen => "embergen" });
+choice!(Tool { Tool::Auto => "auto", Tool::Kelvin => "kelvin", Tool::Pbrt => "pbrt", Tool::Blender => "blender", Tool::Houdini => "houdini", Tool::EmberGen => "embergen" });
 choice!(Option<Format> {
     None => "",
     Some(Format::AsciiDense) => "ascii",
@@ -60,7 +63,38 @@ fn preset_names(source: Tool) -> Option<(&'static [&'static str], &'static [&'st
         Tool::Houdini => Some((&["density"], &["temperature", "heat"])),
         // EmberGen: smoke, temperature (kelvin), flames, fuel, velocity.
         Tool::EmberGen => Some((&["smoke", "density"], &["temperature"])),
-        Tool::Kelvin | Tool::Pbrt | Tool::Blender => None,
+        Tool::Auto | Tool::Kelvin | Tool::Pbrt | Tool::Blender => None,
+    }
+}
+
+impl Tool {
+    fn of(t: convention::Tool) -> Tool {
+        match t {
+            convention::Tool::Kelvin => Tool::Kelvin,
+            convention::Tool::Pbrt => Tool::Pbrt,
+            convention::Tool::Blender => Tool::Blender,
+            convention::Tool::Houdini => Tool::Houdini,
+            convention::Tool::EmberGen => Tool::EmberGen,
+        }
+    }
+    fn convention(self) -> convention::Tool {
+        match self {
+            Tool::Auto | Tool::Kelvin => convention::Tool::Kelvin,
+            Tool::Pbrt => convention::Tool::Pbrt,
+            Tool::Blender => convention::Tool::Blender,
+            Tool::Houdini => convention::Tool::Houdini,
+            Tool::EmberGen => convention::Tool::EmberGen,
+        }
+    }
+}
+
+/// Blender's flame grid as Cycles maps it: 1000 K · (ignition + flame · (maximum − ignition)) where flame > 0.
+fn flame_mapping(ignition: f64, maximum: f64) -> Mapping {
+    Mapping {
+        scale: 1000.0 * (maximum - ignition),
+        offset: 1000.0 * ignition,
+        pbrt_offset: 0.0,
+        zero_at_or_below: Some(0.0),
     }
 }
 
@@ -136,6 +170,11 @@ pub(crate) struct Loaded {
     pub reaction: Option<usize>,
     /// The `embers` particle file, read.
     pub embers: Option<EmberFile>,
+    /// The tool whose conventions the grids were read in (`source`, or what `auto` found).
+    pub tool: convention::Tool,
+    /// What `source "auto"` chose and what the temperature's unit was found to be, a sentence each (the
+    /// volume's notes).
+    pub chosen: Vec<String>,
 }
 
 /// An `embers` file's particles, and the shutter and frame rate they move in.
@@ -189,6 +228,15 @@ pub(crate) struct Request {
     shutter: [f64; 2],
     /// The `embers` file and the frame rate its particles move at.
     embers: Option<(String, f64)>,
+    /// The tool the parameters name.
+    tool: Tool,
+    /// Whether the temperature's unit is found from its peak once read (`auto` and `houdini` without a mapping
+    /// of the scene's own).
+    find_unit: bool,
+    /// Whether the scene named the density and the temperature grid (`auto` leaves those alone).
+    named: [bool; 2],
+    /// Blender's flame mapping (`flameignition`, `flamemax`), for a Mantaflow cache `auto` finds.
+    flame: Mapping,
 }
 
 /// Where the grids come from.
@@ -285,57 +333,40 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
     let tool: Tool = r.choice("source")?;
     let source = crate::params::name_of(tool);
     let blender = tool == Tool::Blender;
-    // Houdini's Pyro shader maps its temperature field linearly onto kelvin, 0 → 0 K and 1 → its blackbody's
-    // "temperature high", 5000 K by default (SideFX, Pyro Shader / Blackbody COP docs); EmberGen's grids hold
-    // kelvin already, under their own names.
-    let relative = (tool == Tool::Houdini).then_some(HOUDINI_KELVIN);
-    if blender || relative.is_some() {
-        let given = [
-            "temperaturescale",
-            "temperatureoffset",
-            "temperaturecutoff",
-            "temperatureremap",
-        ]
-        .into_iter()
-        .find(|n| r.list_has(n));
-        if let Some(n) = given {
+    // Houdini's Pyro shader maps its relative temperature linearly onto kelvin, 1 → its blackbody's "temperature
+    // high", 5000 K by default (SideFX, Pyro Shader / Blackbody COP docs) — unless that puts the flame above a
+    // sooty flame's 2000 K (convention::unit, once the grid is read); EmberGen's grids hold kelvin, under their
+    // own names. A mapping of the scene's own replaces the preset's.
+    let mapping_given = [
+        "temperaturescale",
+        "temperatureoffset",
+        "temperaturecutoff",
+        "temperatureremap",
+    ]
+    .into_iter()
+    .find(|n| r.list_has(n));
+    if blender {
+        if let Some(n) = mapping_given {
             return Err(Error::invalid(
                 "dataset",
                 n,
                 format!("given with source \"{source}\""),
-                if blender {
-                    "the blender source's own mapping (set flameignition and flamemax to the domain's)".to_string()
-                } else {
-                    format!("the {source} source's own mapping (temperature × {HOUDINI_KELVIN} K), or source \"kelvin\" with a mapping of your own")
-                },
+                "the blender source's own mapping (set flameignition and flamemax to the domain's)",
             ));
         }
     }
-    if let Some(k) = relative {
-        tmap = Mapping {
-            scale: k,
-            offset: 0.0,
-            pbrt_offset: 0.0,
-            zero_at_or_below: None,
-        };
+    let (ign, max) = (r.float("flameignition")?, r.float("flamemax")?);
+    if !(max > ign) {
+        return Err(Error::invalid(
+            "dataset",
+            "flamemax",
+            format!("{max} (flameignition {ign})"),
+            "a maximum above the ignition temperature",
+        ));
     }
     if blender {
-        let (ign, max) = (r.float("flameignition")?, r.float("flamemax")?);
-        if !(max > ign) {
-            return Err(Error::invalid(
-                "dataset",
-                "flamemax",
-                format!("{max} (flameignition {ign})"),
-                "a maximum above the ignition temperature",
-            ));
-        }
-        tmap = Mapping {
-            scale: 1000.0 * (max - ign),
-            offset: 1000.0 * ign,
-            pbrt_offset: 0.0,
-            zero_at_or_below: Some(0.0),
-        };
-    } else if r.list_has("flameignition") || r.list_has("flamemax") {
+        tmap = flame_mapping(ign, max);
+    } else if tool != Tool::Auto && (r.list_has("flameignition") || r.list_has("flamemax")) {
         return Err(Error::invalid(
             "dataset",
             if r.list_has("flameignition") {
@@ -343,10 +374,15 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
             } else {
                 "flamemax"
             },
-            "given without source \"blender\"",
-            "source \"blender\" (they are its domain's flame settings)",
+            format!("given with source \"{source}\""),
+            "source \"blender\" or \"auto\" (they are a Mantaflow domain's flame settings)",
         ));
     }
+    if tool == Tool::Houdini && mapping_given.is_none() {
+        tmap.scale = convention::HOUDINI_KELVIN;
+    }
+    // `auto` finds the unit from the grid's peak once it is read (convention::unit), unless the scene maps it.
+    let find_unit = tool == Tool::Auto && mapping_given.is_none() && !pbrt;
     // Art direction: the grid's range [a, b] onto kelvin [ka, kb], linearly — the same map as a scale and an
     // offset, T = (t − (a − ka/s)) · s with s = (kb − ka)/(b − a).
     if let Some(v) = r.numbers("temperatureremap")? {
@@ -394,6 +430,7 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
         ));
     }
     let inline_density = r.numbers("density")?;
+    let mut named = [true, true];
     let lescale_values = r.numbers("Lescale")?;
     let grids = if let Some(dens) = inline_density {
         let dims = [
@@ -480,6 +517,7 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
         // The grids the scene names, by our names or pbrt-v4's nanovdb ones.
         let dg = grid_name(r, "densitygrid", "gridname")?;
         let tg = grid_name(r, "temperaturegrid", "temperaturename")?;
+        named = [dg.is_some(), tg.is_some()];
         // A preset's grid is found in its file when the files are read (`presets`); its name here stands for it.
         let mut presets = Vec::new();
         let (dgrid, tgrid) = match preset_names(tool) {
@@ -624,6 +662,16 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
         per_frame,
         shutter,
         embers,
+        tool,
+        find_unit,
+        named,
+        // `auto`'s flame grid: a fire's luminous soot's temperatures unless the scene gives Blender's.
+        flame: if r.list_has("flameignition") || r.list_has("flamemax") {
+            flame_mapping(ign, max)
+        } else {
+            let (a, b) = convention::FLAME_RANGE;
+            flame_mapping(a, b)
+        },
     })
 }
 
@@ -637,7 +685,13 @@ impl Request {
             per_frame,
             shutter,
             embers,
+            tool,
+            find_unit,
+            named,
+            flame,
         } = self;
+        let mut chosen = Vec::new();
+        let mut resolved = tool;
         let (ds, lescale, emission_grid, motion, scatter_color, reaction) = match grids {
             Grids::Inline {
                 dims,
@@ -660,7 +714,46 @@ impl Request {
                 for (at, names) in presets {
                     sources[at].grid = Some(preset_grid(names, &sources[at].file, &opts)?);
                 }
-                let ds = Dataset::load(&sources, &opts)?;
+                let heat = if tool == Tool::Auto {
+                    auto_grids(
+                        &mut sources,
+                        named,
+                        find_unit.then_some(flame),
+                        &opts,
+                        &mut resolved,
+                        &mut chosen,
+                    )?
+                } else {
+                    None
+                };
+                let mut ds = Dataset::load(&sources, &opts)?;
+                let temperature = (sources.len() > 1 && sources[1].name == "temperature")
+                    .then(|| ds.channels().iter().position(|c| c.name == "temperature"))
+                    .flatten();
+                if let (true, Some(t), false) = (
+                    find_unit,
+                    temperature,
+                    heat == Some(convention::HeatKind::Flame),
+                ) {
+                    let grid = sources[1].grid.clone().unwrap_or_default();
+                    let peak = convention::peak(&ds.channels()[t].grid);
+                    let (unit, warning) =
+                        convention::unit(&grid, convention::HeatKind::Temperature, peak);
+                    if let convention::Unit::Relative { kelvin_per_unit } = unit.value {
+                        ds.scale_channel(t, kelvin_per_unit as f32).ok_or_else(|| {
+                            Error::invalid(
+                                "dataset",
+                                "temperaturegrid",
+                                format!("'{grid}' × {kelvin_per_unit}"),
+                                "a temperature the memory allows to scale",
+                            )
+                        })?;
+                    }
+                    if unit.value != convention::Unit::Kelvin {
+                        chosen.push(format!("temperature unit: {}", unit.why));
+                    }
+                    chosen.extend(warning);
+                }
                 let at = |n: &str| ds.channels().iter().position(|c| c.name == n);
                 let emission = at("emission").filter(|_| emission);
                 let motion = match VELOCITY.map(at) {
@@ -691,8 +784,74 @@ impl Request {
             scatter_color,
             reaction,
             embers,
+            tool: resolved.convention(),
+            chosen,
         })
     }
+}
+
+/// `source "auto"` on a file: the grids its names choose (convention::names) for the density and the
+/// temperature the scene did not name, the flame mapping for a Mantaflow cache's flame; the tool found goes to
+/// `resolved` and what was chosen, a sentence each, to `chosen`; `flame`: the mapping of a flame grid (`None`: the
+/// scene gave a mapping of its own). Returns what the heat grid holds (`None`: the
+/// names chose nothing — inline, a single-grid format, or names no convention knows — and the defaults stand).
+fn auto_grids(
+    sources: &mut [ChannelSource],
+    named: [bool; 2],
+    flame: Option<Mapping>,
+    opts: &LoadOptions,
+    resolved: &mut Tool,
+    chosen: &mut Vec<String>,
+) -> Result<Option<convention::HeatKind>, Error> {
+    *resolved = Tool::Kelvin;
+    let file = sources[0].file.clone();
+    let format = super::format_of(&file, opts)?;
+    if !matches!(format, Format::Vdb | Format::NanoVdb) {
+        return Ok(None);
+    }
+    let entries = super::list_grids(&file, opts)?;
+    let label = file.display().to_string();
+    let Ok(n) = convention::names(&label, &entries, format == Format::NanoVdb) else {
+        return Ok(None);
+    };
+    *resolved = Tool::of(n.tool.value);
+    // A generic density + temperature file is what `kelvin` always read: nothing to say.
+    let plain = matches!(
+        n.tool.value,
+        convention::Tool::Kelvin | convention::Tool::Pbrt
+    );
+    let mut say = |s: String| {
+        if !plain {
+            chosen.push(s);
+        }
+    };
+    say(format!("source \"auto\": {}", n.tool.why));
+    if !named[0] {
+        sources[0].grid = Some(n.smoke.value.clone());
+        say(format!("density: {}", n.smoke.why));
+    }
+    let has_temperature = sources.len() > 1 && sources[1].name == "temperature";
+    let (grid, kind) = n.heat.value.clone();
+    // A flame grid stands for the temperature only with auto's own mapping: a mapping the scene gives is for the
+    // grid it names, 'temperature' by default.
+    if !named[1]
+        && has_temperature
+        && (kind == convention::HeatKind::Temperature || flame.is_some())
+    {
+        sources[1].grid = Some(grid);
+        if let (convention::HeatKind::Flame, Some(m)) = (kind, flame) {
+            sources[1].mapping = m;
+            chosen.push(format!("temperature: {}", n.heat.why));
+            chosen.push(format!(
+                "temperature unit: {}",
+                convention::unit(&n.heat.value.0, kind, 1.0).0.why
+            ));
+        } else {
+            say(format!("temperature: {}", n.heat.why));
+        }
+        return Ok(Some(kind));
+    }
+    Ok(has_temperature.then_some(convention::HeatKind::Temperature))
 }
 
 /// Whether `Lescale` is a per-voxel grid (pbrt-v4: any `Lescale` array of an inline grid is one, a single value

@@ -38,7 +38,7 @@ impl FireVolume {
     /// `budget`: the volume's memory budget (`maxbytes`); what it derives beyond its grids must fit in what the
     /// grids leave of it.
     pub(super) fn build(
-        set: Settings,
+        mut set: Settings,
         loaded: crate::dataset::params::Loaded,
         budget: u64,
         start: Instant,
@@ -51,11 +51,33 @@ impl FireVolume {
             scatter_color,
             reaction,
             embers,
+            tool,
+            chosen,
         } = loaded;
         let spare = budget.saturating_sub(ds.bytes() as u64);
         let channel = |name: &str| ds.channels().iter().position(|c| c.name == name);
         let density = channel("density").unwrap_or(0);
         let temperature = channel("temperature");
+        // ---- what the dataset's conventions chose, and the soot scale a simulator's density needs
+        let mut said = chosen;
+        if set.soot_auto {
+            let kappa = match &set.emission {
+                Emission::Physical { optics, alpha, .. } => optics.kappa(550.0, 1.0, *alpha),
+                Emission::Pbrt { .. } => 0.0,
+            };
+            if let Some(s) = auto_soot(&ds, density, temperature, tool, kappa, spare)? {
+                said.push(format!("sootscale: {}", s.why));
+                if let Emission::Physical { sootscale, .. } = &mut set.emission {
+                    *sootscale = s.value;
+                }
+            }
+        }
+        if let Some(t) = temperature {
+            let st = ds.channels()[t].stats;
+            if st.max as f64 > crate::dataset::convention::HOTTEST_FLAME {
+                said.push(format!("the temperature reaches {:.0} K (its grid mapped to {:.0}–{:.0} K), beyond any flame (above {:.0} K): is the grid already in kelvin and scaled again (temperaturescale), or in another unit (temperatureremap [a b ka kb])?", st.max, st.min, st.max, crate::dataset::convention::HOTTEST_FLAME));
+            }
+        }
         let basis = set.basis;
         let c = basis.channels();
 
@@ -76,9 +98,10 @@ impl FireVolume {
                 } else {
                     2000.0
                 };
-                notes::species(species, hot, range)
+                said.extend(notes::species(species, hot, range));
+                said
             }
-            Emission::Pbrt { .. } => Vec::new(),
+            Emission::Pbrt { .. } => said,
         };
         let mut tables = Vec::new();
         let mut thick = None;
@@ -563,4 +586,53 @@ impl FireVolume {
         vol.report.build_seconds = start.elapsed().as_secs_f64();
         Ok(vol)
     }
+}
+
+/// The soot scale for a file's density whose `sootscale` the scene left unset (`convention::soot_scale`, up from
+/// the data with `tool`'s convention breaking a tie, the soot absorbing `kappa` m⁻¹ per unit volume fraction at
+/// 550 nm); `None` for inline grids and single-grid formats (1 stands)
+/// and for a density that is a volume fraction already.
+fn auto_soot(
+    ds: &Dataset,
+    density: usize,
+    temperature: Option<usize>,
+    tool: crate::dataset::convention::Tool,
+    kappa: f64,
+    spare: u64,
+) -> Result<Option<crate::dataset::convention::Choice<f64>>, Error> {
+    use crate::dataset::convention;
+    if !matches!(ds.format(), Format::Vdb | Format::NanoVdb) {
+        return Ok(None);
+    }
+    let smoke = &ds.channels()[density];
+    let peak = convention::peak(&smoke.grid);
+    if peak <= convention::VOLUME_FRACTION_PEAK {
+        return Ok(None);
+    }
+    let up = match temperature {
+        Some(t) => {
+            let heat = &ds.channels()[t].grid;
+            let hot = convention::hot_threshold(
+                convention::HeatKind::Temperature,
+                convention::peak(heat),
+            );
+            let ev = convention::evidence(&smoke.grid, heat, hot, &|t| t as f64);
+            convention::up(&ev, tool).0.value
+        }
+        None => tool.up(),
+    };
+    let cols = convention::columns(&smoke.grid, ds.voxel_size(), spare).ok_or_else(|| {
+        Error::TooLarge {
+            file: smoke.report.file.clone(),
+            what: "the smoke's column sums (the soot scale of an unset sootscale)".into(),
+            bytes: convention::column_bytes(ds.topology().active_bricks()),
+            cap: spare,
+        }
+    })?;
+    Ok(Some(convention::soot_scale(
+        &smoke.name,
+        peak,
+        convention::thickest_across(cols, up),
+        kappa,
+    )))
 }

@@ -61,6 +61,8 @@ pub(super) struct Settings {
     pub refraction: Option<RefractionSettings>,
     /// The embers' char and the air around them.
     pub ember: crate::embers::Material,
+    /// Whether `sootscale` was left unset: the build finds it from a file's density (`convention::soot_scale`).
+    pub soot_auto: bool,
     #[cfg(test)]
     pub fault: String,
 }
@@ -197,6 +199,7 @@ impl Settings {
             diffusion,
             refraction: on.then_some(refraction),
             ember,
+            soot_auto: mode == Mode::Physical && r.opt_float("sootscale")?.is_none(),
             #[cfg(test)]
             fault,
         })
@@ -278,7 +281,8 @@ fn read_physical(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         Fuel::Acetylene => SootOptics::acetylene(),
     };
     let alpha = r.float("alpha")?;
-    let sootscale = r.float("sootscale")?;
+    // Unset: 1 until the build reads the density (`Settings::soot_auto`).
+    let sootscale = r.opt_float("sootscale")?.unwrap_or(1.0);
     // `firescale`: the compositing name of `intensity` (one of the two).
     let intensity = match (r.opt_float("intensity")?, r.opt_float("firescale")?) {
         (Some(_), Some(_)) => {
