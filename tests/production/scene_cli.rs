@@ -24,9 +24,12 @@ fn a_starter_scene_frames_the_users_fire_and_renders_it() {
     let o = firemedium(&dir, &["scene", "campfire.vdb"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(dir.join("campfire.pbrt")).unwrap();
-    // The dataset named beside the scene; kelvin is the default, so no source line; the box is the data's.
+    // The dataset named beside the scene, its convention written out (a generic kelvin file, its density a soot
+    // volume fraction already); the box is the data's.
     assert!(
-        text.contains("\"string dataset\" \"campfire.vdb\"") && !text.contains("string source"),
+        text.contains("\"string dataset\" \"campfire.vdb\"")
+            && text.contains("\"string source\" \"kelvin\"")
+            && text.contains("\"float sootscale\" 1\n"),
         "{text}"
     );
     assert!(
@@ -108,4 +111,124 @@ fn a_file_without_a_float_grid_is_not_a_fire() {
         "{err}"
     );
     assert!(!dir.join("vel.pbrt").exists());
+}
+
+/// A dataset in `dir` at `name` holding `grids` over an n³ lattice of 5 cm voxels (x fastest).
+fn write_grids(dir: &Path, name: &str, n: usize, grids: &[(&str, Vec<f32>)]) {
+    let list: Vec<(&str, [usize; 3], &[f32])> = grids
+        .iter()
+        .map(|(g, v)| (*g, [n, n, n], v.as_slice()))
+        .collect();
+    let bytes = firemedium_dataset::vdb::write(&list, glam::DVec3::ZERO, glam::DVec3::splat(0.05));
+    std::fs::write(dir.join(name), bytes).unwrap();
+}
+
+#[test]
+fn odd_files_are_said_plainly() {
+    let dir = Scratch::new("scene", "odd");
+    let n = 16;
+    let at = |f: &dyn Fn(usize, usize, usize) -> f32| -> Vec<f32> {
+        (0..n * n * n)
+            .map(|i| f(i % n, (i / n) % n, i / (n * n)))
+            .collect()
+    };
+    let cube = |i: usize, j: usize, k: usize| {
+        if (4..12).contains(&i) && (4..12).contains(&j) && (4..12).contains(&k) {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    // Smoke alone: no grid carries heat; refused, the file's grids listed, nothing written.
+    write_grids(&dir, "smoke.vdb", n, &[("density", at(&cube))]);
+    let o = firemedium(&dir, &["scene", "smoke.vdb"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("smoke.vdb") && err.contains("'density'") && err.contains("heat"),
+        "{err}"
+    );
+    assert!(!dir.join("smoke.pbrt").exists());
+    // Empty grids: refused, naming them.
+    write_grids(
+        &dir,
+        "empty.vdb",
+        n,
+        &[
+            ("density", vec![0.0; n * n * n]),
+            ("temperature", vec![0.0; n * n * n]),
+        ],
+    );
+    let o = firemedium(&dir, &["scene", "empty.vdb"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1) && err.contains("empty.vdb") && err.contains("empty"),
+        "{err}"
+    );
+    // A temperature peaking at 200: neither kelvin that glows nor a relative one — written, with a warning that
+    // says how to map it.
+    let warm = at(&|i, j, k| 200.0 * cube(i, j, k));
+    write_grids(
+        &dir,
+        "cool.vdb",
+        n,
+        &[("density", at(&cube)), ("temperature", warm)],
+    );
+    let o = firemedium(&dir, &["scene", "cool.vdb"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("warning: the temperature grid 'temperature' peaks at 200")
+            && out.contains("temperatureremap"),
+        "{out}"
+    );
+    // A plume rising along the diagonal of y and z: two candidate up axes, said, the tool's convention taken.
+    let rise = |j: usize, k: usize| (j + k) as f32 / (2 * n) as f32;
+    let dens = at(&|i, j, k| {
+        if (6..10).contains(&i) {
+            rise(j, k)
+        } else {
+            0.0
+        }
+    });
+    let temp = at(&|i, j, k| {
+        if (6..10).contains(&i) && rise(j, k) < 0.25 {
+            1500.0
+        } else if (6..10).contains(&i) {
+            400.0
+        } else {
+            0.0
+        }
+    });
+    write_grids(
+        &dir,
+        "tilted.vdb",
+        n,
+        &[("density", dens), ("temperature", temp)],
+    );
+    let o = firemedium(&dir, &["scene", "tilted.vdb"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("warning: two candidate up axes, +y") && out.contains("+z taken"),
+        "{out}"
+    );
+    // --up settles it; a scene named as the dataset is refused before anything is read.
+    let o = firemedium(&dir, &["scene", "tilted.vdb", "--up", "y", "--force"]);
+    assert!(o.status.success() && !String::from_utf8_lossy(&o.stdout).contains("warning"));
+    let o = firemedium(
+        &dir,
+        &["scene", "tilted.vdb", "-o", "tilted.vdb", "--force"],
+    );
+    assert!(
+        o.status.code() == Some(1)
+            && String::from_utf8_lossy(&o.stderr).contains("is the dataset itself"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(firemedium_dataset::list_grids(
+        &dir.join("tilted.vdb"),
+        &firemedium_dataset::LoadOptions::default()
+    )
+    .is_ok());
 }

@@ -242,7 +242,12 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
         brick_table_bytes: ds.topology().bytes(),
         bytes: ds.bytes(),
         load_seconds,
-        source: firemedium_dataset::looks_like(&entries, &ds),
+        source: source_of(
+            &args.file.display().to_string(),
+            &entries,
+            &ds,
+            ds.format() == Format::NanoVdb,
+        ),
         sample,
     };
     if args.json {
@@ -325,4 +330,27 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
         s += "\n";
     }
     Ok(s)
+}
+
+/// The `source` convention the grids follow and why (`firemedium_dataset::convention`: the names, and the
+/// temperature's unit from its peak); `None` when no grid can be the smoke or carry the heat.
+fn source_of(
+    file: &str,
+    entries: &[firemedium_dataset::GridEntry],
+    ds: &Dataset,
+    nanovdb: bool,
+) -> Option<(String, String)> {
+    use firemedium_dataset::convention;
+    let n = convention::names(file, entries, nanovdb).ok()?;
+    let (grid, kind) = &n.heat.value;
+    let unit = ds.channel(grid).map(|c| {
+        convention::unit(grid, *kind, convention::peak(&c.grid))
+            .0
+            .why
+    });
+    let why = match unit {
+        Some(u) => format!("{}; {u}", n.tool.why),
+        None => n.tool.why.clone(),
+    };
+    Some((n.tool.value.name().to_string(), why))
 }
