@@ -7,7 +7,7 @@
 //! Out: the film as a linear float EXR (with the fire's hottest temperature as an attribute), display pixels as
 //! an 8/16-bit sRGB PNG; every file is written to a temporary name beside it and renamed into place.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Linear RGB pixels, row-major, row 0 at the top.
 #[derive(Debug, Clone)]
@@ -331,16 +331,70 @@ pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
     [0.5 * (u + 1.0), 0.5 * (v + 1.0)]
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file beside it, then a rename.
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), crate::Error>,
-) -> Result<(), crate::Error> {
+/// The longest file name, in bytes, a file system holds (Linux's NAME_MAX, and that of ext4, xfs, btrfs, NTFS).
+pub const NAME_MAX: usize = 255;
+
+/// The temporary file [`write_atomic`] writes before renaming it to `path`: `NAME.tmp-PID.EXT` beside it, or —
+/// when that name would not fit a file system's 255 bytes — `.firemedium-PID.tmp`, so that a legal output name
+/// always has a temporary that fits.
+fn temporary_of(path: &Path) -> PathBuf {
     let tmp = path.with_extension(format!(
         "tmp-{}.{}",
         std::process::id(),
         path.extension().and_then(|e| e.to_str()).unwrap_or("out")
     ));
+    match tmp.file_name() {
+        Some(n) if n.len() <= NAME_MAX => tmp,
+        _ => path.with_file_name(format!(".firemedium-{}.tmp", std::process::id())),
+    }
+}
+
+/// Whether `path` can be written, checked before the work that fills it: its name fits a file system (255
+/// bytes), it is not a folder, and its folder exists and takes a new file (a probe created and removed). The
+/// error names the file and why.
+pub fn check_writable(path: &Path) -> Result<(), crate::Error> {
+    let shown = path.display();
+    let name = path
+        .file_name()
+        .ok_or_else(|| crate::Error::file(&shown, "names no file (it ends in a folder)"))?;
+    if name.len() > NAME_MAX {
+        return Err(crate::Error::file(
+            &shown,
+            format!(
+                "its name is {} bytes, longer than the {NAME_MAX} a file system's file name holds",
+                name.len()
+            ),
+        ));
+    }
+    if path.is_dir() {
+        return Err(crate::Error::file(&shown, "is a folder"));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(crate::Error::file(
+            &shown,
+            format!("its folder {} does not exist", dir.display()),
+        ));
+    }
+    let probe = temporary_of(path);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(|e| crate::Error::file(&shown, format!("cannot be written: {e}")))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it ([`temporary_of`]), then a rename.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), crate::Error>,
+) -> Result<(), crate::Error> {
+    let tmp = temporary_of(path);
     remove_stale_temporaries(path);
     write(&tmp).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);

@@ -27,7 +27,7 @@ use firemedium::Error;
 use firemedium_core::cie::XYZ_TO_SRGB_ROWS;
 use firemedium_dataset::{ChannelSource, Dataset, LoadOptions};
 use firemedium_loader::{Context, Param};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Debug, Args)]
@@ -55,7 +55,17 @@ pub struct BakeArgs {
     /// The memory budget in GB for the grids (default: half the machine's memory).
     #[arg(long, value_name = "GB", value_parser = crate::args::parse_gb)]
     max_memory: Option<f64>,
+    /// Replace an output file that `firemedium bake` did not write (by default only its own bakes are replaced).
+    #[arg(long)]
+    force: bool,
+    /// Print the result as JSON (one object per frame, a line each): the file, its voxels, the fire's luminance
+    /// seen from its side and the view exposure that shows it.
+    #[arg(long)]
+    json: bool,
 }
+
+/// What a bake writes into its file's metadata as the `creator`: the files it may replace without `--force`.
+const CREATOR: &str = "firemedium bake";
 
 fn parse_param(s: &str) -> Result<(String, String), Error> {
     s.split_once('=')
@@ -80,6 +90,7 @@ const REFUSED: [(u64, &str); 3] = [
 pub fn run(a: &BakeArgs) -> firemedium::Result<String> {
     let plugin = load_plugin(a.plugin.as_deref()).map_err(|e| Error::input(e.to_string()))?;
     let Some(frames) = &a.frames else {
+        check_output(a, &a.dataset, &a.output)?;
         return bake(a, &plugin, None, &a.output);
     };
     if !a.output.to_string_lossy().contains('#') {
@@ -88,13 +99,49 @@ pub fn run(a: &BakeArgs) -> firemedium::Result<String> {
             a.output.display()
         )));
     }
-    let mut report = String::new();
+    // Every frame's output checked before the first is baked.
+    let mut outs = Vec::with_capacity(frames.0.len());
     for &f in &frames.0 {
         let out = firemedium_dataset::frame_path(&a.output, Some(f))
             .map_err(|e| Error::value(e.to_string()))?;
+        let input = firemedium_dataset::frame_path(&a.dataset, Some(f))
+            .map_err(|e| Error::value(e.to_string()))?;
+        check_output(a, &input, &out)?;
+        outs.push((f, out));
+    }
+    let mut report = String::new();
+    for (f, out) in outs {
         report += &bake(a, &plugin, Some(f), &out)?;
     }
     Ok(report)
+}
+
+/// Refuses, before any work, an output that is the dataset itself, a folder, or a file `firemedium bake` did not
+/// write (unless `--force`): a bake replaces only its own files.
+fn check_output(a: &BakeArgs, dataset: &Path, out: &Path) -> firemedium::Result<()> {
+    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    if abs(dataset) == abs(out) {
+        return Err(Error::file(
+            out.display(),
+            "is the dataset itself: give the baked grids another name with -o",
+        ));
+    }
+    if out.is_dir() {
+        return Err(Error::file(
+            out.display(),
+            "is a folder: name a .vdb file with -o",
+        ));
+    }
+    if out.exists() && !a.force {
+        let creator = firemedium_dataset::creator_of(out).ok().flatten();
+        if creator.as_deref() != Some(CREATOR) {
+            return Err(Error::file(
+                out.display(),
+                "exists and is not a file firemedium bake wrote: give another name with -o, or --force to replace it",
+            ));
+        }
+    }
+    firemedium::imageio::check_writable(out)
 }
 
 /// The velocity `--velocity` asks for: its name in the dataset and its three components loaded (x, y, z), or
@@ -315,6 +362,8 @@ fn bake(
             }
         }
     }
+    // The fire seen from its side (before empty leaves are dropped: `leaves` line up with `bricks`).
+    let seen = side_luminance(&bricks, &leaves, voxel, side_axes(a, &opts));
     // A voxel is active where a component is non-zero; a leaf with none is left out.
     for lv in leaves.iter_mut() {
         for (_, mask, vals) in lv.iter_mut() {
@@ -330,7 +379,8 @@ fn bake(
     let grids: Vec<(&str, Vec<firemedium_dataset::vdb::VdbLeaf>)> =
         names.iter().copied().zip(leaves).collect();
     let origin = [0, 1, 2].map(|k| b0[k] - off[k] as f64 * voxel[k]);
-    let bytes = firemedium_dataset::vdb::write_sparse_vectors(
+    let bytes = firemedium_dataset::vdb::write_sparse_vectors_by(
+        Some(CREATOR),
         &grids,
         glam::DVec3::from_array(origin),
         glam::DVec3::from_array(voxel),
@@ -349,9 +399,28 @@ fn bake(
     let passed = velocity.as_ref().map_or(String::new(), |(name, _)| {
         format!("; velocity: the dataset's {name}, as it is (its units), for motion blur")
     });
+    let exposure = seen.map(|l| (2.0 / l).log2());
+    if a.json {
+        return Ok(serde_json::json!({
+            "output": out.display().to_string(),
+            "frame": frame,
+            "dims": dims,
+            "bytes": bytes.len(),
+            "seconds": start.elapsed().as_secs_f64(),
+            "luminance_p99": seen,
+            "exposure": exposure,
+            "out_of_gamut_change_percent": change,
+        })
+        .to_string()
+            + "\n");
+    }
+    let seen_line = match (seen, exposure) {
+        (Some(l), Some(e)) => format!("the fire seen from its side: {l:.4} cd/m² at its brightest (99th percentile of its lines of sight); a view exposure of {e:+.2} stops shows it (in AgX, that luminance at 2, a stop above diffuse white), as firemedium's own preview does\n"),
+        _ => "the fire emits nothing visible from its side\n".to_string(),
+    };
     Ok(format!(
         "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre{passed}), {:.1} MB in {:.2} s\n\
-         kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n",
+         kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n{seen_line}",
         out.display(),
         dims[0],
         dims[1],
@@ -361,4 +430,86 @@ fn bake(
         if lines { "atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption); " } else { "" },
         info.g,
     ))
+}
+
+/// The axes the fire is seen along from its side: the two other than its up axis (`firemedium_dataset::convention`
+/// from the dataset's grids; z up when they do not say).
+fn side_axes(a: &BakeArgs, opts: &LoadOptions) -> [usize; 2] {
+    let up =
+        firemedium_dataset::convention::survey(std::slice::from_ref(&a.dataset), opts, None, 1.0)
+            .map_or(2, |r| r.up.value.axis);
+    match up {
+        0 => [1, 2],
+        1 => [0, 2],
+        _ => [0, 1],
+    }
+}
+
+/// The 99th percentile of the luminance (cd/m²) along the lattice's lines of sight through the baked grids, along
+/// `axes` (orthographic views of the fire from its side, front to back: L = Σ T · Y(emission) ds, T = e^(−τ) with
+/// τ from the luminance-weighted σ_a + σ_s), over the lines that see any; `None` when none does. `leaves[g][i]` is
+/// brick `bricks[i]`'s leaf of grid g (0 σ_a, 1 σ_s, 2 emission), values z fastest.
+fn side_luminance(
+    bricks: &[[usize; 3]],
+    leaves: &[Vec<firemedium_dataset::vdb::VdbLeaf>],
+    voxel: [f64; 3],
+    axes: [usize; 2],
+) -> Option<f64> {
+    let y = |v: &[f32]| 0.2126 * v[0] as f64 + 0.7152 * v[1] as f64 + 0.0722 * v[2] as f64;
+    // Luminance in log bins of 1/100 decade from 1e-12 to 1e12 cd/m².
+    const BINS: usize = 2400;
+    let mut hist = vec![0u64; BINS];
+    for along in axes {
+        let (u, w) = match along {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        // The bricks in the order a line of sight along `along` crosses them, row by row.
+        let mut order: Vec<usize> = (0..bricks.len()).collect();
+        order.sort_by_key(|&i| (bricks[i][w], bricks[i][u], bricks[i][along]));
+        let ds = voxel[along];
+        let mut k = 0;
+        while k < order.len() {
+            let row = (bricks[order[k]][w], bricks[order[k]][u]);
+            let (mut l, mut t) = ([0f64; 64], [1f64; 64]);
+            while k < order.len() && (bricks[order[k]][w], bricks[order[k]][u]) == row {
+                let b = order[k];
+                for s in 0..8 {
+                    for line in 0..64 {
+                        let mut p = [0usize; 3];
+                        p[along] = s;
+                        p[u] = line % 8;
+                        p[w] = line / 8;
+                        // (The leaves' order: z fastest.)
+                        let i = 3 * (p[0] * 64 + p[1] * 8 + p[2]);
+                        let e = y(&leaves[2][b].2[i..i + 3]);
+                        let st = y(&leaves[0][b].2[i..i + 3]) + y(&leaves[1][b].2[i..i + 3]);
+                        l[line] += t[line] * e.max(0.0) * ds;
+                        t[line] *= (-st.max(0.0) * ds).exp();
+                    }
+                }
+                k += 1;
+            }
+            for v in l {
+                if v > 0.0 {
+                    let bin = ((v.log10() + 12.0) * 100.0).clamp(0.0, (BINS - 1) as f64) as usize;
+                    hist[bin] += 1;
+                }
+            }
+        }
+    }
+    let total: u64 = hist.iter().sum();
+    if total == 0 {
+        return None;
+    }
+    let want = (total as f64 * 0.99).ceil() as u64;
+    let mut seen = 0;
+    for (b, &c) in hist.iter().enumerate() {
+        seen += c;
+        if seen >= want {
+            return Some(10f64.powf((b as f64 + 0.5) / 100.0 - 12.0));
+        }
+    }
+    None
 }
