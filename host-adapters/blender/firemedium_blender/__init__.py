@@ -9,12 +9,20 @@ blackbody ramp. A simulation's frames bake into a volume sequence, and a velocit
 volume's velocity grid for motion blur. A panel on the object (Properties ▸ Object ▸ firemedium fire) shows the fire's parameters and
 re-bakes after one changes (``bpy.ops.firemedium.rebake``).
 
+Where the bake goes: beside the saved ``.blend`` (``//firemedium/``, a path relative to it, which Blender remaps
+when the file is saved elsewhere), else beside the dataset, or in a folder you choose — never Blender's temporary
+folder, which Blender deletes when it quits. The add-on writes only its own bake files (``NAME-firemedium.vdb``)
+and ``firemedium bake`` replaces only files it wrote.
+
 Units: a Cycles render of the fire is in the same absolute units as ``firemedium render``'s EXR (Y in cd/m²).
-Set the view's exposure to about −log2 of the flame's luminance (``exposure_for`` below) to see it.
+The import sets the scene's view exposure from the baked fire's luminance as ``firemedium bake`` measures it
+(the 99th percentile of its lines of sight from the side, two stops above mid-grey, as firemedium's AgX preview
+does), so the fire reads at once.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
@@ -29,6 +37,7 @@ bl_info = {
     "author": "firemedium",
     "version": (0, 1, 0),
     "blender": (4, 5, 0),
+    # (Blender 4.2+ installs the same module as an extension: blender_manifest.toml beside this file.)
     "location": "File > Import > firemedium fire",
     "description": "Physically based fire (Pegoraro & Parker 2006) baked to Cycles' Volume Coefficients",
     "category": "Import-Export",
@@ -45,18 +54,52 @@ def firemedium_command() -> str:
     return exe
 
 
-def bake(dataset: str, output: str, params: dict[str, object], frames: tuple[int, int] | None = None) -> str:
-    """Runs `firemedium bake` (`frames`: a sequence, the names holding ####); returns what it printed. Raises
-    RuntimeError with its one-line message."""
-    args = [firemedium_command(), "bake", dataset, "-o", output]
+# What the add-on's bake files end with: it writes and re-bakes no other file.
+BAKE_SUFFIX = "-firemedium"
+
+
+def bake(dataset: str, output: str, params: dict[str, object],
+         frames: tuple[int, int] | None = None) -> list[dict]:
+    """Runs `firemedium bake` (`frames`: a sequence, the names holding ####) and returns its JSON reports, one per
+    frame (the file, the fire's luminance seen from its side, the exposure that shows it). The dataset is passed
+    after `--` (a name starting with '-' is a file, not an option) and every parameter as one `--param=NAME=VALUE`
+    word. Raises RuntimeError with the command's one-line message."""
+    args = [firemedium_command(), "bake", "--json", "-o", output]
     if frames is not None:
-        args += ["--frames", f"{frames[0]}-{frames[1]}"]
+        args.append(f"--frames={frames[0]}-{frames[1]}")
     for k, v in params.items():
-        args += ["--param", f"{k}={str(v).lower() if isinstance(v, bool) else v}"]
+        args.append(f"--param={k}={str(v).lower() if isinstance(v, bool) else v}")
+    args += ["--", dataset]
     r = subprocess.run(args, capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(r.stderr.strip())
-    return r.stdout
+    return [json.loads(line) for line in r.stdout.splitlines() if line.strip()]
+
+
+def bake_path(dataset: str, directory: str | None = None, sequence: bool = False) -> str:
+    """Where the add-on bakes `dataset`, as Blender stores it: in `directory` (a folder, `//` relative to the
+    .blend allowed) when given; else `//firemedium/` beside the saved .blend; else beside the dataset. The file is
+    the dataset's name with -firemedium (and -#### for a sequence). Never Blender's temporary folder, which it
+    deletes on quitting."""
+    stem = Path(dataset).stem.replace("#", "").rstrip("_-.") or "fire"
+    name = stem + BAKE_SUFFIX + ("-####" if sequence else "") + ".vdb"
+    if directory:
+        folder = directory
+    elif bpy.data.filepath:
+        folder = "//firemedium"
+    else:
+        folder = os.path.dirname(os.path.abspath(dataset))
+    temp = Path(bpy.app.tempdir).resolve() if bpy.app.tempdir else None
+    if temp is not None and Path(bpy.path.abspath(folder)).resolve().is_relative_to(temp):
+        raise RuntimeError(f"{folder}: inside Blender's temporary folder, which Blender deletes on quitting; "
+                           "choose another folder")
+    return folder.rstrip("/\\") + "/" + name
+
+
+def is_own_bake(path: str) -> bool:
+    """Whether `path` is a name the add-on bakes into (NAME-firemedium.vdb, NAME-firemedium-####.vdb)."""
+    stem = Path(path).name
+    return stem.endswith(BAKE_SUFFIX + ".vdb") or stem.endswith(BAKE_SUFFIX + "-####.vdb")
 
 
 def fire_material(name: str, g: float = 0.0) -> bpy.types.Material:
@@ -102,18 +145,22 @@ def sequence_pattern(path: str) -> str:
 
 
 def import_fire(dataset: str, params: dict[str, object] | None = None, baked: str | None = None,
-                name: str = "fire", frames: tuple[int, int] | None = None) -> bpy.types.Object:
-    """Bakes `dataset` (unless `baked` names grids already baked) and links a volume object using them.
+                name: str = "fire", frames: tuple[int, int] | None = None, directory: str | None = None,
+                exposure: bool = True) -> bpy.types.Object:
+    """Bakes `dataset` (unless `baked` names grids already baked) into `bake_path(dataset, directory)` and links
+    a volume object using them, selected and active; with `exposure`, sets the scene's view exposure to show the
+    fire (the bake's measure of its luminance) and the view transform to AgX.
 
     `frames` (first, last): a simulation's frames, the dataset's and the baked names holding #### — baked one by one
     and loaded as a volume sequence playing frame f of the scene from frame f of the files. A velocity in the
     dataset is baked beside the coefficients and named as the volume's velocity grid (Cycles' motion blur)."""
     params = dict(params or {})
+    reports: list[dict] = []
     if baked is None:
-        stem = Path(dataset).stem.replace("#", "")
-        suffix = "-####.vdb" if frames is not None else ".vdb"
-        baked = str(Path(bpy.app.tempdir or "/tmp") / (stem.rstrip("_-.") + "-firemedium" + suffix))
-        bake(dataset, baked, params, frames)
+        baked = bake_path(dataset, directory, frames is not None)
+        target = bpy.path.abspath(baked)
+        os.makedirs(os.path.dirname(target), exist_ok=True)
+        reports = bake(dataset, target, params, frames)
     vol = bpy.data.volumes.new(name)
     if frames is not None:
         first, last = frames
@@ -132,6 +179,17 @@ def import_fire(dataset: str, params: dict[str, object] | None = None, baked: st
     obj = bpy.data.objects.new(name, vol)
     bpy.context.scene.collection.objects.link(obj)
     vol.materials.append(fire_material(name + " material"))
+    # Selected and active, as an imported object is.
+    for o in bpy.context.view_layer.objects:
+        o.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    stops = [r["exposure"] for r in reports if r.get("exposure") is not None]
+    if exposure and stops:
+        view = bpy.context.scene.view_settings
+        view.view_transform = "AgX"
+        # The brightest frame's: the sequence never clips harder than its brightest frame.
+        view.exposure = min(stops)
     # What re-baking needs, on the object: the dataset, the baked file and the fire's parameters (edited in the
     # panel, or as the object's custom properties).
     obj["firemedium_dataset"] = dataset
@@ -143,16 +201,21 @@ def import_fire(dataset: str, params: dict[str, object] | None = None, baked: st
 
 
 def rebake(obj: bpy.types.Object) -> str:
-    """Bakes `obj`'s dataset again with its (edited) parameters into its file, and reloads the grids."""
+    """Bakes `obj`'s dataset again with its (edited) parameters into its bake file, and reloads the grids. Only a
+    file the add-on names as its own (NAME-firemedium.vdb) is written — a .blend's saved properties cannot make it
+    write anywhere else — and `firemedium bake` itself replaces only files it wrote."""
     if "firemedium_dataset" not in obj:
         raise RuntimeError(f"{obj.name} is not a firemedium fire (import one with File > Import > firemedium fire)")
+    baked = str(obj["firemedium_baked"])
+    if not is_own_bake(baked):
+        raise RuntimeError(f"{baked}: not a firemedium bake file (NAME{BAKE_SUFFIX}.vdb); re-import the fire")
     params = {k: v for k, v in obj["firemedium_params"].items()}
     frames = tuple(obj["firemedium_frames"]) if "firemedium_frames" in obj else None
-    text = bake(obj["firemedium_dataset"], obj["firemedium_baked"], params, frames)
+    reports = bake(str(obj["firemedium_dataset"]), bpy.path.abspath(baked), params, frames)
     obj.data.grids.unload()
-    obj.data.filepath = frame_name(obj["firemedium_baked"], frames[0]) if frames else obj["firemedium_baked"]
+    obj.data.filepath = frame_name(baked, frames[0]) if frames else baked
     obj.data.update_tag()
-    return text
+    return "\n".join(json.dumps(r) for r in reports)
 
 
 def exposure_for(luminance_cd_m2: float) -> float:
@@ -169,7 +232,7 @@ def render_settings(scene: bpy.types.Scene, samples: int = 64) -> None:
     scene.cycles.volume_step_rate = 1.0
     scene.cycles.volume_bounces = 1
     scene.cycles.max_bounces = 4
-    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.view_transform = "AgX"
 
 
 class FIREMEDIUM_OT_import(bpy.types.Operator):
@@ -181,15 +244,25 @@ class FIREMEDIUM_OT_import(bpy.types.Operator):
 
     filepath: StringProperty(subtype="FILE_PATH")
     fuel: StringProperty(name="Fuel", default="propane")
-    temperaturescale: FloatProperty(name="Temperature scale", default=1.0, min=0.0)
-    sootscale: FloatProperty(name="Soot scale", default=1.0, min=0.0)
+    temperaturescale: FloatProperty(name="Temperature scale", default=0.0, min=0.0,
+                                    description="Kelvin per unit of the temperature grid; 0: found from the data")
+    sootscale: FloatProperty(name="Soot scale", default=0.0, min=0.0,
+                             description="Soot volume fraction per unit density; 0: found from the data")
     sequence: BoolProperty(name="Sequence", default=False,
                            description="The file is one frame of a simulation: bake frames First to Last")
     frame_first: IntProperty(name="First", default=1)
     frame_last: IntProperty(name="Last", default=1)
+    directory_bake: StringProperty(name="Bake folder", subtype="DIR_PATH", default="",
+                                   description="Where the baked grids go (default: //firemedium beside the saved "
+                                               ".blend, else beside the dataset)")
 
     def execute(self, context):
-        params = {"fuel": self.fuel, "temperaturescale": self.temperaturescale, "sootscale": self.sootscale}
+        # Unset scales are the fire's own choices (a simulator's density and temperature read from the data).
+        params = {"fuel": self.fuel}
+        if self.temperaturescale > 0.0:
+            params["temperaturescale"] = self.temperaturescale
+        if self.sootscale > 0.0:
+            params["sootscale"] = self.sootscale
         try:
             if self.sequence:
                 if self.frame_last < self.frame_first:
@@ -197,9 +270,10 @@ class FIREMEDIUM_OT_import(bpy.types.Operator):
                 pattern = sequence_pattern(self.filepath)
                 if pattern == self.filepath:
                     raise RuntimeError(f"{self.filepath}: no frame number at the end of its name (fire_0001.vdb)")
-                import_fire(pattern, params, frames=(self.frame_first, self.frame_last))
+                import_fire(pattern, params, frames=(self.frame_first, self.frame_last),
+                            directory=self.directory_bake or None)
             else:
-                import_fire(self.filepath, params)
+                import_fire(self.filepath, params, directory=self.directory_bake or None)
         except RuntimeError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

@@ -92,7 +92,8 @@ def cycles_scene(dataset: str, out: Path, size: tuple[int, int] = (32, 32), spp:
     scene.world = world
     if fire == "baked":
         # (As the reference scene: its emission and absorption × 15.)
-        addon.import_fire(dataset, {"fuel": "propane", "firescale": 15, "smokescale": 15})
+        addon.import_fire(dataset, {"fuel": "propane", "firescale": 15, "smokescale": 15},
+                          directory=str(Path(out).parent))
     else:
         blackbody_fire(dataset)
     bpy.ops.mesh.primitive_plane_add(size=20)
@@ -158,7 +159,7 @@ class Rebake(unittest.TestCase):
         addon.register()
         try:
             with tempfile.TemporaryDirectory(prefix="firemedium-blender-") as d:
-                baked = str(Path(d) / "fire.vdb")
+                baked = str(Path(d) / "fire-firemedium.vdb")
                 addon.bake(str(ROOT / "scenes/campfire/campfire.vdb"), baked, {"fuel": "propane"})
                 obj = addon.import_fire(str(ROOT / "scenes/campfire/campfire.vdb"), {"fuel": "propane"}, baked=baked)
                 before = Path(baked).read_bytes()
