@@ -32,6 +32,7 @@ mod production {
 /// Bad input never crashes: mutated datasets, scenes, images and meshes.
 mod robustness {
     mod mutated_inputs;
+    mod round_four;
 }
 
 /// The code's shape: imports run one way between a crate's modules; no file past ~800 lines of code.

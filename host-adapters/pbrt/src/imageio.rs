@@ -666,6 +666,18 @@ fn chromaticities(meta: &[(String, String)]) -> exr::meta::attribute::Chromatici
     }
 }
 
+/// An EXR text attribute holding `s` as its UTF-8 bytes — any text, where the exr crate's `Text::from` takes only
+/// characters up to U+00FF and panics past them (a scene path in Chinese, a euro sign, an emoji). OpenEXR's text
+/// attributes are byte strings; OpenEXR's own tools write and show UTF-8 so.
+fn text_of(s: &str) -> exr::prelude::Text {
+    exr::prelude::Text::from_slice_unchecked(s.as_bytes())
+}
+
+/// A text attribute's bytes as a string (UTF-8, any invalid byte replaced).
+fn string_of(t: &exr::prelude::Text) -> String {
+    String::from_utf8_lossy(t.bytes()).into_owned()
+}
+
 fn record_attribute(
     other: &mut std::collections::HashMap<exr::prelude::Text, exr::meta::attribute::AttributeValue>,
     meta: &[(String, String)],
@@ -687,7 +699,7 @@ fn record_attribute(
     }
     other.insert(
         Text::from(RENDER_ATTRIBUTE),
-        AttributeValue::Text(Text::from(meta_text(&record).as_str())),
+        AttributeValue::Text(text_of(&meta_text(&record))),
     );
 }
 
@@ -779,7 +791,7 @@ pub fn read_meta(path: &Path) -> Result<(Window, Meta), crate::Error> {
         .get(&key)
         .or_else(|| h.own_attributes.other.get(&key))
     {
-        Some(exr::meta::attribute::AttributeValue::Text(t)) => t.to_string(),
+        Some(exr::meta::attribute::AttributeValue::Text(t)) => string_of(t),
         _ => String::new(),
     };
     let mut attrs: Meta = text
@@ -809,7 +821,7 @@ pub fn read_fire_temperature(path: &Path) -> Result<Option<f64>, crate::Error> {
         let t = match (get(&key), get(&record)) {
             (Some(exr::meta::attribute::AttributeValue::F64(t)), _) => Some(*t),
             (_, Some(exr::meta::attribute::AttributeValue::Text(r))) => {
-                r.to_string().lines().find_map(|l| {
+                string_of(r).lines().find_map(|l| {
                     l.strip_prefix(FIRE_TEMPERATURE_KEY)?
                         .strip_prefix('=')?
                         .parse()

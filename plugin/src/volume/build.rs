@@ -103,6 +103,26 @@ impl FireVolume {
             }
             Emission::Pbrt { .. } => said,
         };
+        // The temperature tables' bytes, counted against what the grids leave of the budget before any is built.
+        let n_species = match &set.emission {
+            Emission::Physical { species, .. } => species.len(),
+            Emission::Pbrt { .. } => 0,
+        };
+        let rgb = matches!(basis.mode, ColorMode::Rgb);
+        let need = tables::bytes_for(t_max, c, n_species, rgb);
+        if need > spare {
+            return Err(Error::TooLarge {
+                file: ds
+                    .channels()
+                    .first()
+                    .map_or_else(String::new, |ch| ch.report.file.clone()),
+                what: format!(
+                    "the temperature tables ({c} channels up to {t_max:.0} K: the soot's, {n_species} species' σ and j, and their range maxima)"
+                ),
+                bytes: need,
+                cap: spare,
+            });
+        }
         let mut tables = Vec::new();
         let mut thick = None;
         let mut co = match &set.emission {

@@ -8,6 +8,35 @@ pub(crate) const W: usize = 8;
 /// One lane of channels.
 pub(crate) type Lane = [f32; W];
 
+/// The rows of a temperature table up to `t_max` K with rows at most `step` K apart.
+fn rows_for(t_max: f64, step: f64) -> usize {
+    ((t_max / step).ceil() as usize)
+        .saturating_add(2)
+        .clamp(2, 65_536)
+}
+
+/// The most bytes the temperature tables of a volume of `c` channels up to `t_max` K take while they are built,
+/// counted before any is made (a table's size follows the input: the hottest voxel and the bins a scene asks for):
+/// the soot's emission and absorption built together and split (four tables' worth), each of `species`' σ and j,
+/// and the range maxima — a level per power of two of rows — over each temperature-dependent absorption table
+/// (each species', and the soot's when `t_absorption`, rgb mode). Saturating.
+pub(super) fn bytes_for(t_max: f64, c: usize, species: usize, t_absorption: bool) -> u64 {
+    let rows = rows_for(t_max, 0.5) as u64;
+    let lane = std::mem::size_of::<Lane>() as u64;
+    let table = rows
+        .saturating_mul(c.div_ceil(W).max(1) as u64)
+        .saturating_mul(lane);
+    let levels = u64::from(u64::BITS - rows.leading_zeros());
+    let range_max = rows
+        .saturating_mul(c as u64)
+        .saturating_mul(4)
+        .saturating_mul(levels);
+    let maxed = species as u64 + u64::from(t_absorption);
+    table
+        .saturating_mul(4 + 2 * species as u64)
+        .saturating_add(range_max.saturating_mul(maxed))
+}
+
 /// A temperature table: `rows` × C values, row r at T = r·dt, each row stored as lanes of `W` channels
 /// (zero-padded), which the f32 march reads directly.
 #[derive(Debug, Clone, Default)]
@@ -33,7 +62,7 @@ impl TTable {
         c: usize,
         f: &(dyn Fn(f64) -> Vec<f64> + Sync),
     ) -> TTable {
-        let rows = ((t_max / step).ceil() as usize + 2).clamp(2, 65_536);
+        let rows = rows_for(t_max, step);
         let dt = if t_max > 0.0 {
             t_max / (rows - 2) as f64
         } else {

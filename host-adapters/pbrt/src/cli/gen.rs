@@ -147,6 +147,18 @@ pub fn run(a: &GenArgs) -> firemedium::Result<String> {
         None => (a.frame, a.frame),
     };
     let style = Style::from_name(&a.style).unwrap_or(Style::Kelvin);
+    // Every frame's outputs (and its embers') checked before the simulation runs.
+    for frame in first..=last {
+        let path = PathBuf::from(
+            a.output
+                .to_string_lossy()
+                .replace("####", &format!("{frame:04}")),
+        );
+        firemedium::imageio::check_writable(&path)?;
+        if a.embers.is_some() {
+            firemedium::imageio::check_writable(&embers_path(&path))?;
+        }
+    }
     let start = std::time::Instant::now();
     let mut sim = Sim::new(kind, a.seed);
     sim.warp = a.warp.map(|t| (t, a.warp_spread));

@@ -24,6 +24,8 @@ pub struct MergeArgs {
 }
 
 pub fn run(a: &MergeArgs) -> firemedium::Result<String> {
+    // (Before the tiles are read and assembled: their work must not end in "cannot write".)
+    firemedium::imageio::check_writable(&a.output)?;
     let budget = crate::args::budget(a.max_memory);
     // The first tile's film, attributes and name: every other tile must match them.
     let mut frame: Option<(imageio::Window, imageio::Meta, &PathBuf)> = None;

@@ -191,9 +191,10 @@ impl JsonLog {
 /// The EXR record's attribute saying whether every tile was rendered ("true") or the render was interrupted.
 const COMPLETE: &str = "complete";
 
-/// `path` with `.partial` before its extension: where an interrupted render writes what it finished.
+/// `path` with `.partial` before its extension: where an interrupted render writes what it finished. A stem too
+/// long for the name to fit a file system's 255 bytes is shortened (at a character) so that it always does.
 fn partial(path: &Path) -> PathBuf {
-    let stem = path
+    let mut stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
@@ -201,47 +202,17 @@ fn partial(path: &Path) -> PathBuf {
         .extension()
         .map(|e| format!(".{}", e.to_string_lossy()))
         .unwrap_or_default();
+    let room = firemedium::imageio::NAME_MAX.saturating_sub(".partial".len() + ext.len());
+    while stem.len() > room {
+        stem.pop();
+    }
     path.with_file_name(format!("{stem}.partial{ext}"))
 }
 
-/// An error unless a file can be written at `path`: its folder exists and takes a new file (a probe, created and
-/// removed), and `path` is not a folder.
+/// An error unless the image can be written at `path` (imageio::check_writable: its name fits, its folder takes a
+/// file), said before the scene is loaded or rendered.
 fn writable(path: &Path) -> firemedium::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if path.is_dir() {
-        return Err(Error::file(
-            path.display(),
-            "is a folder: expected a file name to write the image to",
-        ));
-    }
-    if !dir.is_dir() {
-        return Err(Error::file(
-            path.display(),
-            format!(
-                "cannot write the image: its folder {} does not exist",
-                dir.display()
-            ),
-        ));
-    }
-    let probe = dir.join(format!(".firemedium-probe-{}", std::process::id()));
-    match std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)
-    {
-        Ok(_) => {
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
-        Err(e) => Err(Error::file(
-            path.display(),
-            format!("cannot write the image in {}: {e}", dir.display()),
-        )),
-    }
+    firemedium::imageio::check_writable(path)
 }
 
 /// Whether the EXR at `path` is a finished frame: it reads whole (every pixel), and its record does not say it

@@ -51,6 +51,7 @@ pub fn run(a: &TonemapArgs) -> firemedium::Result<String> {
         )));
     }
     let budget = crate::args::budget(a.max_memory);
+    firemedium::imageio::check_writable(&a.output)?;
     let img = imageio::read_within(&a.input, false, budget)?;
     // (The map's working copies: XYZ in f64 and the display's values, per pixel.)
     firemedium::budget::check(
