@@ -110,8 +110,16 @@ def find_plugin() -> Path:
     )
 
 
+def _floats(a: Any, what: str) -> np.ndarray:
+    """`a` as float64 values: real numbers only (a complex array would lose its imaginary part silently)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"{what}: expected real numbers, got an array of {arr.dtype}")
+    return arr.astype(np.float64, copy=False)
+
+
 def _as_points(a: Any, what: str) -> np.ndarray:
-    arr = np.ascontiguousarray(np.asarray(a, dtype=np.float64))
+    arr = np.ascontiguousarray(_floats(a, what))
     if arr.ndim == 1 and arr.size == 3:
         arr = arr.reshape(1, 3)
     if arr.ndim != 2 or arr.shape[1] != 3:
@@ -120,10 +128,29 @@ def _as_points(a: Any, what: str) -> np.ndarray:
 
 
 def _per_item(a: Any, n: int, what: str) -> np.ndarray | None:
+    """`a` as n float64 values, one per item (a single number is repeated): checked here, before the plugin reads
+    n of them; None stays None."""
     if a is None:
         return None
-    arr = np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=np.float64), (n,)))
-    return arr
+    arr = _floats(a, what)
+    if arr.ndim > 1 or (arr.ndim == 1 and arr.size not in (1, n)):
+        raise ValueError(f"{what}: expected a number or {n} values (one per item), got shape {arr.shape}")
+    return np.ascontiguousarray(np.broadcast_to(arr.reshape(-1) if arr.ndim else arr, (n,)))
+
+
+def _paired(origins: Any, directions: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Origins and directions as (n, 3) arrays of the same n (one origin for every direction is repeated):
+    checked here, before the plugin reads n rows of each."""
+    o = _as_points(origins, "origins")
+    d = _as_points(directions, "directions")
+    if len(o) == 1 and len(d) > 1:
+        o = np.ascontiguousarray(np.broadcast_to(o, d.shape))
+    if len(o) != len(d):
+        raise ValueError(f"origins and directions: {len(o)} against {len(d)} rows (expected the same, or one origin)")
+    return o, d
+
+
+_INT64 = (-(1 << 63), (1 << 63) - 1)
 
 
 def _dp(a: np.ndarray | None):
@@ -216,10 +243,23 @@ class Plugin:
             values = value if isinstance(value, (list, tuple, np.ndarray)) else [value]
             if code == abi.TYPE_STRING:
                 enc = [os.fsencode(v) if isinstance(v, os.PathLike) else str(v).encode() for v in values]
+                for e in enc:
+                    # (A C string ends at its first NUL: the plugin would read a shorter name than given.)
+                    if b"\0" in e:
+                        raise ValueError(f"{name}: {e!r} holds a NUL character, which a parameter's string cannot")
                 arr = (C.c_char_p * len(enc))(*enc)
                 keep.append(enc)
             elif code == abi.TYPE_INTEGER:
-                arr = (C.c_int64 * len(values))(*[int(v) for v in values])
+                ints = []
+                for v in values:
+                    if isinstance(v, float) and not v.is_integer():
+                        raise ValueError(f"{name}: {v} is not an integer")
+                    iv = int(v)
+                    # (ctypes wraps an integer past 64 bits silently: 2**64 + 8 would reach the plugin as 8.)
+                    if not _INT64[0] <= iv <= _INT64[1]:
+                        raise ValueError(f"{name}: {iv} does not fit a 64-bit integer")
+                    ints.append(iv)
+                arr = (C.c_int64 * len(ints))(*ints)
             elif code == abi.TYPE_BOOL:
                 arr = (C.c_uint8 * len(values))(*[1 if v else 0 for v in values])
             else:
@@ -373,12 +413,14 @@ class Volume:
         """
         pts = _as_points(points, "points")
         n = len(pts)
-        lam = np.asarray(lambdas, dtype=np.float64)
+        lam = _floats(lambdas, "lambdas")
+        if lam.ndim == 0:
+            lam = lam.reshape(1)
         if lam.ndim == 1:
             lam = np.broadcast_to(lam, (n, lam.size))
         lam = np.ascontiguousarray(lam)
-        if lam.shape[0] != n:
-            raise ValueError(f"lambdas: expected {n} rows (one per point), got shape {lam.shape}")
+        if lam.ndim != 2 or lam.shape[0] != n or lam.shape[1] == 0:
+            raise ValueError(f"lambdas: expected (k,) or ({n}, k) wavelengths (one row per point), got shape {lam.shape}")
         k = lam.shape[1]
         t = _per_item(times, n, "times")
         out = {name: np.zeros((n, k)) for name in ("sigma_a", "sigma_s", "le", "j")}
@@ -391,16 +433,14 @@ class Volume:
     # -- the fast path ----------------------------------------------------------------------------------------
 
     def _rays(self, origins: Any, directions: Any, tmin: Any, tmax: Any, seed: int):
-        o = _as_points(origins, "origins")
-        d = _as_points(directions, "directions")
-        if len(o) == 1 and len(d) > 1:
-            o = np.ascontiguousarray(np.broadcast_to(o, d.shape))
-        if len(o) != len(d):
-            raise ValueError(f"origins and directions: {len(o)} against {len(d)} rows")
+        o, d = _paired(origins, directions)
         n = len(o)
+        if not isinstance(seed, (int, np.integer)) or not 0 <= int(seed) < (1 << 64):
+            raise ValueError(f"seed: expected an integer from 0 to 2**64 - 1, got {seed!r}")
+        seed = int(seed)
         rays = (abi.FmRay * max(n, 1))()
-        lo = np.broadcast_to(np.asarray(tmin, dtype=np.float64), (n,))
-        hi = np.broadcast_to(np.asarray(tmax, dtype=np.float64), (n,))
+        lo = _per_item(tmin, n, "tmin")
+        hi = _per_item(tmax, n, "tmax")
         for i in range(n):
             rays[i].origin[:] = o[i].tolist()
             rays[i].direction[:] = d[i].tolist()
@@ -470,7 +510,12 @@ class Light:
     def sample(self, u: Any, times: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Points sampled by the fire's power from ``u``, (n, 6) uniform numbers in [0, 1): (points (n, 3),
         pdf (n,) per unit medium volume, emission j at each point (n, channels))."""
-        uu = np.ascontiguousarray(np.asarray(u, dtype=np.float64).reshape(-1, 6))
+        uu = _floats(u, "u")
+        if uu.ndim == 1 and uu.size == 6:
+            uu = uu.reshape(1, 6)
+        if uu.ndim != 2 or uu.shape[1] != 6:
+            raise ValueError(f"u: expected an array of shape (n, 6), got shape {uu.shape}")
+        uu = np.ascontiguousarray(uu)
         n = len(uu)
         t = _per_item(times, n, "times")
         pts = np.zeros((n, 3))
@@ -489,10 +534,7 @@ class Light:
 
     def pdf_direction(self, origins: Any, directions: Any, times: Any = None) -> np.ndarray:
         """The solid-angle density with which a sampled point lies in each direction from each origin: (n,)."""
-        o = _as_points(origins, "origins")
-        d = _as_points(directions, "directions")
-        if len(o) == 1 and len(d) > 1:
-            o = np.ascontiguousarray(np.broadcast_to(o, d.shape))
+        o, d = _paired(origins, directions)
         t = _per_item(times, len(d), "times")
         out = np.zeros(len(d))
         self.plugin._check(self.plugin.api.light_pdf_direction(self._h, _dp(o), _dp(d), _dp(t), len(d), _dp(out)))

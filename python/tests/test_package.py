@@ -140,3 +140,66 @@ class Package(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class Arrays(unittest.TestCase):
+    """Every array the package hands the plugin is checked in Python first: mismatched counts, wrong shapes and
+    dtypes, values a C type cannot hold are a ValueError (or TypeError) naming the argument — never a read past an
+    array (a crash of the interpreter, or numbers from another array), never a value silently wrapped or cut."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.fire = fm.Volume({"filename": CAMPFIRE, "fuel": "propane"})
+        cls.light = cls.fire.light()
+
+    def refused(self, f, *args, **kw):
+        with self.assertRaises((ValueError, TypeError)) as e:
+            f(*args, **kw)
+        return str(e.exception)
+
+    def test_every_public_call_refuses_mismatched_arrays(self):
+        v, l = self.fire, self.light
+        three, five = np.zeros((3, 3)), np.tile([0.0, 0.0, 1.0], (5, 1))
+        cases = [
+            # (call, arguments, keywords, the argument the message names)
+            (v.point, (three, np.zeros((4, 2))), {}, "lambdas"),
+            (v.point, (three, [550.0]), {"times": [0.0, 1.0]}, "times"),
+            (v.point, (np.zeros((3, 2)), [550.0]), {}, "points"),
+            (v.point, (three, np.zeros((3, 0))), {}, "lambdas"),
+            (v.integrate, (three, five), {}, "origins and directions"),
+            (v.integrate, (three, three), {"tmin": [0.0, 1.0]}, "tmin"),
+            (v.integrate, (three, three), {"tmax": np.zeros((3, 3))}, "tmax"),
+            (v.integrate, (three, three), {"times": [0.0] * 4}, "times"),
+            (v.integrate, (three, three), {"seed": -1}, "seed"),
+            (v.integrate, (three, three), {"seed": 2 ** 64}, "seed"),
+            (v.transmittance, (three, five), {}, "origins and directions"),
+            (l.sample, (np.zeros((4, 5)),), {}, "u"),
+            (l.sample, (np.zeros((4, 6)),), {"times": [0.0, 0.5]}, "times"),
+            (l.pdf, (np.zeros((4, 4)),), {}, "points"),
+            (l.pdf, (three,), {"times": [0.0] * 5}, "times"),
+            (l.pdf_direction, (three, five), {}, "origins and directions"),
+            (l.pdf_direction, (five[:2], five), {}, "origins and directions"),
+            (l.pdf_direction, (three, three), {"times": [0.0] * 7}, "times"),
+            (l.integrate, (three, five), {}, "origins and directions"),
+        ]
+        for call, args, kw, name in cases:
+            with self.subTest(call=call.__name__, name=name, kw=kw):
+                self.assertIn(name, self.refused(call, *args, **kw))
+        # A dtype numpy cannot make a float of.
+        self.refused(v.point, [["a", "b", "c"]], [550.0])
+        self.refused(l.pdf_direction, np.zeros((3, 3), dtype=complex), three)
+        # The one-origin broadcast and a single time still work; a non-contiguous view is copied, not misread.
+        self.assertEqual(l.pdf_direction([0.0, -2.0, 0.5], five, times=0.0).shape, (5,))
+        strided = np.tile([[0.0, -2.0, 0.5, 9.0]], (5, 1))[:, :3]
+        self.assertFalse(strided.flags["C_CONTIGUOUS"])
+        np.testing.assert_array_equal(l.pdf_direction(strided, five), l.pdf_direction(np.ascontiguousarray(strided), five))
+
+    def test_parameters_a_c_type_cannot_hold_are_refused_not_wrapped(self):
+        # 2**64 + 8 reached the plugin as 8; a string with a NUL was cut at it.
+        for params, name in [({"bins": 2 ** 64 + 8}, "bins"), ({"bins": -2 ** 63 - 1}, "bins"),
+                             ({"bins": 32.5}, "bins"), ({"fuel": "propane\0acetylene"}, "fuel"),
+                             ({"filename": CAMPFIRE + "\0.txt"}, "filename")]:
+            with self.subTest(params=params):
+                self.assertIn(name, self.refused(fm.Volume, {"filename": CAMPFIRE, **params}))
+        with self.assertRaises(fm.FiremediumError):
+            fm.Volume({"filename": CAMPFIRE, "bins": 2 ** 40})
