@@ -36,7 +36,12 @@ fn gcc(args: &[&str]) {
 /// Compiles the C host `src` (relative to the repository) against the header into the executable `name`, as a user
 /// would (`-std=c99 -Wall -Wextra -Werror`, linked with libdl and libm).
 fn c_host(name: &str, src: &str) -> PathBuf {
-    let include = root().join("plugin/abi/include");
+    c_host_with(name, src, "plugin/abi/include")
+}
+
+/// As [`c_host`], against the header in `include` (relative to the repository).
+fn c_host_with(name: &str, src: &str, include: &str) -> PathBuf {
+    let include = root().join(include);
     let exe = tmp(name);
     gcc(&[
         "-std=c99",
@@ -309,6 +314,49 @@ fn every_entry_refuses_bad_arguments_from_c() {
         "{text}"
     );
     done(&exe);
+}
+
+/// An ABI 1.0 host keeps working with every 1.x plugin: the example host as it was at 1.0, compiled against the
+/// 1.0 header (tests/c/abi-1.0, from the commit that declared 1.0: its FmCreateInfo ends before `directory`, 88
+/// bytes), renders the campfire through today's plugin — which refused every volume_create it made ("struct_size
+/// 88, expected at least 96") — to the same brightest ray as the current example.
+#[test]
+fn an_abi_1_0_host_renders_with_todays_plugin() {
+    let fire = root().join("scenes/campfire/campfire.vdb");
+    let run = |exe: &PathBuf| {
+        let out = Command::new(exe)
+            .arg(plugin_path())
+            .arg(&fire)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let old = c_host_with(
+        "fire_pixel_1_0",
+        "tests/c/abi-1.0/fire_pixel.c",
+        "tests/c/abi-1.0",
+    );
+    let new = c_host("fire_pixel_now", "plugin/abi/examples/fire_pixel.c");
+    let brightest = |text: &str| -> String {
+        text.lines()
+            .find(|l| l.starts_with("brightest"))
+            .unwrap_or_else(|| panic!("no brightest ray in\n{text}"))
+            .to_string()
+    };
+    let (a, b) = (run(&old), run(&new));
+    assert_eq!(brightest(&a), brightest(&b), "{a}\n{b}");
+    // The 1.0 struct is smaller than today's, and today's plugin reads it as far as it goes.
+    assert!(
+        firemedium_abi::FM_CREATE_INFO_SIZE_1_0
+            < std::mem::size_of::<firemedium_abi::FmCreateInfo>()
+    );
+    done(&old);
+    done(&new);
 }
 
 #[test]

@@ -11,7 +11,9 @@
  * on failure last_error() gives the message. Volumes are immutable and safe to query from many threads.
  * Batch outputs hold n * channels floats, channel fastest. Rays are in the medium's space. Every struct that
  * crosses the boundary begins with struct_size, which the host sets to sizeof the struct it was built with (array
- * elements -- FmParam, FmRay, FmExit, FmScatter -- have the layout of the major version). A host asks a medium
+ * elements -- FmParam, FmRay, FmExit, FmScatter -- have the layout of the major version); a struct grows only at
+ * its end between minor versions, and the plugin reads only the fields a host's struct_size covers, the newer
+ * ones taking their defaults, so a host built against an older 1.x header keeps working. A host asks a medium
  * the two questions pbrt-v4 and Mitsuba 3 ask (volume_point: the coefficients at a point, at the host's
  * wavelengths and time; volume_majorant_grid: a bound on sigma_t), or hands it whole rays (volume_query, the fast
  * path). Each entry of FmApi below says which arrays it reads and writes, their layout, and which outputs may be

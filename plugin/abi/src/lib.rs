@@ -441,6 +441,10 @@ pub struct FmCreateInfo {
     pub directory: *const c_char,
 }
 
+/// The size [`FmCreateInfo`] had in ABI 1.0, before `directory` was appended (1.1): the least a host may pass. A
+/// 1.0 host's struct is read as far as its `struct_size` covers it, the newer fields taking their defaults.
+pub const FM_CREATE_INFO_SIZE_1_0: usize = core::mem::offset_of!(FmCreateInfo, directory);
+
 /// A part of the plugin's build work ([`FmParallelFor`]): `task(data, index)`; it never unwinds into the host.
 pub type FmTask = unsafe extern "C" fn(data: *mut c_void, index: usize);
 /// A host's thread pool ([`FmCreateInfo::parallel_for`]): runs `task(data, i)` for every i in 0..count — on its

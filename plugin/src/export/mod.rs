@@ -129,6 +129,41 @@ unsafe fn sized<T>(p: *const T, what: &str, c_type: &str) -> Result<(), (FmStatu
     Ok(())
 }
 
+/// Reads a struct the host passed whose first field is its `struct_size`, as far as that size covers it: a struct
+/// grows only at its end between minor versions, so an older host's smaller struct is read as this plugin's with
+/// the newer fields zero — their defaults — and a newer host's larger one as far as this plugin knows it.
+/// Refused when null or smaller than `min` (the size the struct had in ABI 1.0).
+///
+/// # Safety
+/// `p` is null or points at `struct_size` readable bytes that begin with that `size_t` (the caller's contract);
+/// `T` is a `repr(C)` struct every field of which is valid as zero bytes (integers, floats, raw pointers, `Option`s
+/// of function pointers).
+unsafe fn read_sized<T>(
+    p: *const T,
+    min: usize,
+    what: &str,
+    c_type: &str,
+) -> Result<T, (FmStatus, String)> {
+    if p.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    // SAFETY: non-null (checked); the host's struct starts with its size (contract).
+    let size = unsafe { p.cast::<usize>().read_unaligned() };
+    if size < min {
+        return Err(bad(format!(
+            "{what}->struct_size {size}, expected at least {min} (set it to sizeof({c_type}))"
+        )));
+    }
+    let mut v = std::mem::MaybeUninit::<T>::zeroed();
+    let n = size.min(std::mem::size_of::<T>());
+    // SAFETY: the host's `size` ≥ n bytes are readable (contract), `v` has size_of::<T>() ≥ n writable bytes; the
+    // rest stay zero, which every field of T holds validly (this function's contract on T).
+    unsafe {
+        std::ptr::copy_nonoverlapping(p.cast::<u8>(), v.as_mut_ptr().cast::<u8>(), n);
+        Ok(v.assume_init())
+    }
+}
+
 unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
     // (A misuse is itself the last error then: its message, and a detail of its status alone.)
     // SAFETY: null or the host's FmErrorDetail (contract).

@@ -21,10 +21,16 @@ pub(super) unsafe extern "C" fn volume_create(
         if out.is_null() {
             return Err(bad("volume_create: out is null"));
         }
-        // SAFETY: null or the host's FmCreateInfo (contract).
-        unsafe { super::sized(info, "volume_create: info", "FmCreateInfo") }?;
-        // SAFETY: non-null and at least size_of::<FmCreateInfo>() readable bytes (checked above).
-        let ci = unsafe { info.read_unaligned() };
+        // SAFETY: null or the host's FmCreateInfo of its struct_size (contract); its fields are integers, pointers
+        // and an Option of a function pointer, each valid as zero (a 1.0 host's struct lacks `directory`: null).
+        let ci = unsafe {
+            super::read_sized(
+                info,
+                firemedium_abi::FM_CREATE_INFO_SIZE_1_0,
+                "volume_create: info",
+                "FmCreateInfo",
+            )
+        }?;
         // SAFETY: the caller's contract for the parameter arrays (documented in FmCreateInfo).
         let mut list = unsafe { read_params(ci.params, ci.locations, ci.count) }?;
         if !ci.directory.is_null() {
@@ -225,10 +231,15 @@ pub(super) unsafe extern "C" fn volume_query(
     guard(|| {
         // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
         let v = unsafe { vol(volume, "volume_query") }?;
-        // SAFETY: null or the host's FmRayQuery (contract).
-        unsafe { super::sized(query, "volume_query: query", "FmRayQuery") }?;
-        // SAFETY: non-null and at least size_of::<FmRayQuery>() readable bytes (checked above).
-        let q = unsafe { query.read_unaligned() };
+        // SAFETY: null or the host's FmRayQuery of its struct_size (contract); integers and pointers, valid as zero.
+        let q = unsafe {
+            super::read_sized(
+                query,
+                std::mem::size_of::<FmRayQuery>(),
+                "volume_query: query",
+                "FmRayQuery",
+            )
+        }?;
         let n = q.n;
         // SAFETY: `rays` holds `n` rays (caller contract); null or absurd counts are refused.
         let rs = unsafe { rays(q.rays, n) }?;
@@ -571,10 +582,16 @@ pub(super) unsafe extern "C" fn volume_point(
     guard(|| {
         // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
         let v = unsafe { vol(volume, "volume_point") }?;
-        // SAFETY: null or the host's FmPointQuery (contract).
-        unsafe { super::sized(query, "volume_point: query", "FmPointQuery") }?;
-        // SAFETY: non-null and at least size_of::<FmPointQuery>() readable bytes (checked above).
-        let q = unsafe { query.read_unaligned() };
+        // SAFETY: null or the host's FmPointQuery of its struct_size (contract); integers and pointers, valid as
+        // zero.
+        let q = unsafe {
+            super::read_sized(
+                query,
+                std::mem::size_of::<FmPointQuery>(),
+                "volume_point: query",
+                "FmPointQuery",
+            )
+        }?;
         let (n, k) = (q.n, q.k as usize);
         // SAFETY: the query's arrays as its contract sizes them (null refused or, for times, read as 0).
         let points = unsafe { in_f64(q.points, n, 3, "volume_point: points") }?;
