@@ -249,3 +249,99 @@ fn temperature_tables_past_the_budget_are_refused_before_they_are_built() {
         );
     }
 }
+
+/// A cube of soot at `t` K (8³ voxels of 10 cm) in `dir`.
+fn hot_cube(dir: &Path, name: &str, t: f32) -> PathBuf {
+    let n = 8;
+    let (d, temp) = (vec![1e-6f32; n * n * n], vec![t; n * n * n]);
+    let bytes = firemedium_dataset::vdb::write(
+        &[("density", [n; 3], &d), ("temperature", [n; 3], &temp)],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(0.1),
+    );
+    std::fs::write(dir.join(name), bytes).unwrap();
+    dir.join(name)
+}
+
+/// Class F: silent NaN or black for extreme but legal numbers. A fire at 1e9 K integrates finite; hotter is
+/// refused naming its temperature and the range (at 1e30 K the radiance was NaN with FM_OK); a wavelength of
+/// 1e-61 nm is refused naming it and the range (its emission was NaN), 1 nm and 1e6 nm answer finite; ray
+/// directions of length 1e-201 or 1e301 are refused naming their length (they silently missed the fire), 1e-100
+/// and 1e100 see what a unit direction sees.
+#[test]
+fn extreme_numbers_answer_finite_or_are_refused_by_name() {
+    use firemedium_loader::{Param, Plugin, Point, Ray};
+    let dir = Scratch::new("round4", "extremes");
+    // SAFETY: the plugin this cargo invocation built.
+    let plugin = unsafe { Plugin::load(crate::common::plugin_file()) }.unwrap();
+    let volume = |t: f32| {
+        let file = hot_cube(&dir, &format!("t{t:e}.vdb"), t);
+        plugin.create_volume(&[
+            Param::string("filename", file.to_str().unwrap()),
+            Param::float("sootscale", 1.0),
+        ])
+    };
+    let ray = |d: f64| Ray {
+        origin: [0.4, -1.0, 0.4],
+        direction: [0.0, d, 0.0],
+        tmin: 0.0,
+        tmax: f64::INFINITY,
+        seed: 0,
+    };
+    let v = volume(1e9).unwrap();
+    let c = v.info().channels as usize;
+    let mut rad = vec![0f32; c];
+    v.integrate(&[ray(1.0)], &mut rad, None, None).unwrap();
+    assert!(
+        rad.iter().all(|x| x.is_finite()) && rad.iter().any(|&x| x > 0.0),
+        "{rad:?}"
+    );
+    let unit = rad.clone();
+    for d in [1e-100, 1e100] {
+        v.integrate(&[ray(d)], &mut rad, None, None).unwrap();
+        for (a, b) in rad.iter().zip(&unit) {
+            assert!((a / b - 1.0).abs() < 1e-4, "direction {d}: {a} against {b}");
+        }
+    }
+    for d in [1e-201, 1e301, 0.0] {
+        let e = v
+            .integrate(&[ray(d)], &mut rad, None, None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("ray 0") && e.contains("expected a length from 1e-150 to 1e150"),
+            "{d}: {e}"
+        );
+    }
+    let mut out = vec![Point::default(); 2];
+    for (lambdas, ok) in [
+        ([550.0, 1e-61], false),
+        ([1.0, 1e6], true),
+        ([550.0, 2e6], false),
+    ] {
+        let r = v.point(&[[0.4, 0.4, 0.4]], None, &lambdas, &mut out);
+        match (r, ok) {
+            (Ok(()), true) => assert!(
+                out.iter().all(|p| [p.sigma_a, p.sigma_s, p.le, p.j]
+                    .iter()
+                    .all(|x| x.is_finite())),
+                "{out:?}"
+            ),
+            (Err(e), false) => {
+                let e = e.to_string();
+                assert!(
+                    e.contains("lambdas[1]") && e.contains("expected wavelengths from 1 nm"),
+                    "{e}"
+                );
+            }
+            (r, _) => panic!("{lambdas:?}: {r:?}"),
+        }
+    }
+    for t in [1e19f32, 1e30] {
+        let e = volume(t).map(|_| ()).unwrap_err().to_string();
+        assert!(
+            e.contains("K (its grid's hottest voxel") && e.contains("to 1e9 K"),
+            "{t}: {e}"
+        );
+    }
+}

@@ -441,6 +441,13 @@ pub struct FmCreateInfo {
     pub directory: *const c_char,
 }
 
+/// The wavelengths a host may ask the medium level about, nm: from the far ultraviolet to the far infrared (a
+/// wavelength outside is refused, naming it: the soot's κ ∝ λ^−α and Planck's λ^−5 have no meaning there).
+pub const FM_WAVELENGTH_RANGE_NM: (f64, f64) = (1.0, 1.0e6);
+/// A ray direction's length the plugin takes, from the smallest to the largest: outside, |d|² under- or
+/// overflows and the ray would silently miss; refused, naming it.
+pub const FM_DIRECTION_LENGTH_RANGE: (f64, f64) = (1.0e-150, 1.0e150);
+
 /// The size [`FmCreateInfo`] had in ABI 1.0, before `directory` was appended (1.1): the least a host may pass. A
 /// 1.0 host's struct is read as far as its `struct_size` covers it, the newer fields taking their defaults.
 pub const FM_CREATE_INFO_SIZE_1_0: usize = core::mem::offset_of!(FmCreateInfo, directory);

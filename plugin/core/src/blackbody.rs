@@ -52,8 +52,13 @@ pub fn spectral_radiance_si(t_k: f64, lambda_m: f64) -> f64 {
         return 0.0;
     }
     let x = C2 / (lambda_m * t_k);
+    let b = bose_einstein(x);
+    // (Far short of the peak e^−x underflows to 0 while λ⁵ may too: the radiance is 0, not 0 / 0.)
+    if b == 0.0 {
+        return 0.0;
+    }
     let l5 = lambda_m * lambda_m * lambda_m * lambda_m * lambda_m;
-    C1 / l5 * bose_einstein(x)
+    C1 / l5 * b
 }
 
 /// Spectral radiance B_λ(T), W·m⁻²·sr⁻¹·nm⁻¹, at vacuum wavelength `lambda_nm` (nm), in vacuum (n = 1).

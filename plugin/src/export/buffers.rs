@@ -106,8 +106,28 @@ pub(super) unsafe fn rays<'a>(
                 r.origin, r.direction, r.tmin, r.tmax
             )));
         }
+        direction(r.direction).map_err(|e| bad(format!("ray {i}: {e}")))?;
     }
     Ok(rs)
+}
+
+/// Refuses a finite direction whose length lies outside [`firemedium_abi::FM_DIRECTION_LENGTH_RANGE`] (zero
+/// included): its length computed without under- or overflow, scaled by its largest component.
+pub(super) fn direction(d: [f64; 3]) -> Result<(), String> {
+    let (short, long) = firemedium_abi::FM_DIRECTION_LENGTH_RANGE;
+    let m = d.iter().fold(0f64, |a, x| a.max(x.abs()));
+    let len = if m > 0.0 {
+        m * d.iter().map(|x| (x / m) * (x / m)).sum::<f64>().sqrt()
+    } else {
+        0.0
+    };
+    if (short..=long).contains(&len) {
+        Ok(())
+    } else {
+        Err(format!(
+            "direction {d:?} of length {len:e}: expected a length from {short:e} to {long:e}"
+        ))
+    }
 }
 
 /// The plugin's ray from the host's (checked by [`rays`]).

@@ -186,9 +186,12 @@ pub(super) unsafe extern "C" fn light_pdf_direction(
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
         let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
         for i in 0..n {
+            let di = [d[3 * i], d[3 * i + 1], d[3 * i + 2]];
+            super::buffers::direction(di)
+                .map_err(|e| bad(format!("light_pdf_direction: directions row {i}: {e}")))?;
             pd[i] = lt.pdf_direction_at(
                 DVec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]),
-                DVec3::new(d[3 * i], d[3 * i + 1], d[3 * i + 2]),
+                DVec3::from(di),
                 ts[i],
             );
         }

@@ -603,9 +603,11 @@ pub(super) unsafe extern "C" fn volume_point(
             // SAFETY: as above.
             Some(unsafe { in_f64(q.times, n, 1, "volume_point: times") }?)
         };
-        if let Some(i) = lambdas.iter().position(|&l| !(l > 0.0)) {
+        // (The soot's κ ∝ λ^−α and Planck's λ^−5 have no meaning, and no finite f64, far outside light.)
+        let (lo, hi) = firemedium_abi::FM_WAVELENGTH_RANGE_NM;
+        if let Some(i) = lambdas.iter().position(|&l| !(lo..=hi).contains(&l)) {
             return Err(bad(format!(
-                "volume_point: lambdas[{i}] = {}: expected wavelengths in nm above 0",
+                "volume_point: lambdas[{i}] = {:e}: expected wavelengths from {lo} nm to {hi:e} nm",
                 lambdas[i]
             )));
         }

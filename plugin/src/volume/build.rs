@@ -86,6 +86,16 @@ impl FireVolume {
             .map(|i| ds.channels()[i].stats.max as f64)
             .unwrap_or(0.0)
             .max(0.0);
+        // Temperatures past any the model holds (Planck's and the soot's tables, f32 sums) are refused, not left to
+        // overflow into NaN far down the line.
+        if t_max > MAX_TEMPERATURE {
+            return Err(Error::invalid(
+                "dataset",
+                "temperature",
+                format!("{t_max:e} K (its grid's hottest voxel, after any mapping)"),
+                format!("temperatures from 0 to {MAX_TEMPERATURE:e} K (check temperaturescale and the grid's unit)"),
+            ));
+        }
         // ---- what a user should hear about its species (at its hottest; 2000 K without a temperature grid)
         let notes = match &set.emission {
             Emission::Physical { species, .. } => {
@@ -607,6 +617,10 @@ impl FireVolume {
         Ok(vol)
     }
 }
+
+/// The hottest temperature a volume takes, K: far past any flame (the notes warn above 5000 K), and where the
+/// tables and the march's f32 sums stay finite.
+const MAX_TEMPERATURE: f64 = 1e9;
 
 /// The soot scale for a file's density whose `sootscale` the scene left unset (`convention::soot_scale`, up from
 /// the data with `tool`'s convention breaking a tie, the soot absorbing `kappa` m⁻¹ per unit volume fraction at
