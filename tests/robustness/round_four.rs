@@ -225,6 +225,9 @@ fn temperature_tables_past_the_budget_are_refused_before_they_are_built() {
                 at: None,
             },
             Param::int("bins", 4096),
+            // (Boxed lines: the species' temperature tables themselves, not the thick lines' own, which were
+            // already counted.)
+            Param::string("lineshape", "box"),
         ];
         let context = Context {
             max_bytes: budget,
@@ -344,4 +347,84 @@ fn extreme_numbers_answer_finite_or_are_refused_by_name() {
             "{t}: {e}"
         );
     }
+}
+
+/// Class I, the smaller ones: a value echoed back never carries a terminal escape sequence (clap quoted it raw);
+/// `gen --species Na:1e300` is refused (it wrote a grid of NaN and exited 0); `bake` refuses a 17 KB file of
+/// constant tiles whose grids would need 19 GB at once, from its header's bricks (it built the whole fire first,
+/// 8–16 s).
+#[test]
+fn smaller_refusals_come_before_the_work_and_echo_no_escapes() {
+    let dir = Scratch::new("round4", "smaller");
+    let esc = "\u{1b}[2J\u{1b}]0;pwned\u{7}";
+    for args in [
+        vec!["render", "x.pbrt", "--spp", esc],
+        vec!["gen", "candle", "--resolution", esc],
+        vec!["scene", "x.vdb", "--up", esc],
+        vec!["tonemap", "x.exr", "--operator", esc],
+    ] {
+        let args: Vec<&OsStr> = args.iter().map(|a| os(a)).collect();
+        let o = firemedium(&dir, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            !err.contains('\u{1b}') && !err.contains('\u{7}'),
+            "{args:?}: {err:?}"
+        );
+        assert!(err.contains("\\u{1b}"), "{args:?}: {err:?}");
+    }
+    let o = firemedium(
+        &dir,
+        &[
+            os("gen"),
+            os("candle"),
+            os("--species"),
+            os("Na:1e300"),
+            os("-o"),
+            os("n.vdb"),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && err.contains("PEAK ≤ 2.5e25"),
+        "{err}"
+    );
+    assert!(!dir.join("n.vdb").exists());
+    // 1024 × 1024 × 512 voxels of constant tiles, two grids: under 300 KB on disk (OpenVDB's own writer makes the
+    // same 18 KB).
+    let tiles: Vec<firemedium_dataset::vdb::VdbTile> = (0..8)
+        .flat_map(|x| {
+            (0..8).flat_map(move |y| (0..4).map(move |z| ([128 * x, 128 * y, 128 * z], 128, 0.0)))
+        })
+        .collect();
+    let with = |v: f32| tiles.iter().map(|&(o, s, _)| (o, s, v)).collect::<Vec<_>>();
+    let bytes = firemedium_dataset::vdb::write_tiled(
+        &[
+            ("density", vec![], with(1e-7)),
+            ("temperature", vec![], with(1500.0)),
+        ],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(0.01),
+    );
+    assert!(bytes.len() < 300 * 1024, "{}", bytes.len());
+    std::fs::write(dir.join("tiles.vdb"), bytes).unwrap();
+    let o = firemedium(
+        &dir,
+        &[
+            os("bake"),
+            os("tiles.vdb"),
+            os("-o"),
+            os("t-firemedium.vdb"),
+            os("--max-memory"),
+            os("4"),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(1)
+            && err.contains("1048576 bricks")
+            && err.contains("memory budget"),
+        "{err}"
+    );
+    assert!(!dir.join("t-firemedium.vdb").exists());
 }

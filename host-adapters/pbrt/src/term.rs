@@ -28,7 +28,8 @@ pub fn printable(s: &str, max: usize) -> String {
 
 /// clap's error as one line: its first paragraph (the problem, and the arguments it names on the lines below)
 /// and its usage line — "the following required arguments were not provided: <SCENE> <REFERENCE> (usage:
-/// firemedium compare <SCENE> <REFERENCE> <IMAGES>...)".
+/// firemedium compare <SCENE> <REFERENCE> <IMAGES>...)" —, made [`printable`]: clap echoes the value a user
+/// gave, and an escape sequence in it must reach the terminal as text.
 pub fn one_line(text: &str) -> String {
     let mut lines = text.lines();
     let mut out: Vec<&str> = Vec::new();
@@ -46,7 +47,7 @@ pub fn one_line(text: &str) -> String {
     if let Some(usage) = lines.find_map(|l| l.trim().strip_prefix("Usage: ")) {
         msg += &format!(" (usage: {usage}; see --help)");
     }
-    msg
+    printable(&msg, MAX_MESSAGE_CHARS)
 }
 
 #[cfg(test)]

@@ -226,10 +226,7 @@ pub fn names(file: &str, entries: &[GridEntry], nanovdb: bool) -> Result<Names, 
             "a NanoVDB file with a density grid: pbrt-v4's nanovdb convention",
         )
     } else {
-        (
-            Tool::Kelvin,
-            "no simulator's grid names: a generic density + temperature file",
-        )
+        (Tool::Kelvin, "no simulator's grid names")
     };
     let smoke_names: &[&str] = if tool == Tool::EmberGen {
         &["smoke", "density"]

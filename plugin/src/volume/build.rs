@@ -133,6 +133,8 @@ impl FireVolume {
                 cap: spare,
             });
         }
+        // (What the rest of the build may take: the grids' and the tables' share of the budget set aside.)
+        let spare = spare - need;
         let mut tables = Vec::new();
         let mut thick = None;
         let mut co = match &set.emission {

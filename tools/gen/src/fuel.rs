@@ -37,7 +37,7 @@ impl Sim {
     /// Per fuel cell: the flames' radiation arriving on its outer face, W/m², and the temperature of the gas
     /// touching it (K). Blobs in the cubes around the cell count one by one — a point source at its centre, no
     /// nearer than twice its σ, through the cosine at the cell; the gas temperature from their kernels as
-    /// [`Sim::gas_temperature`] weighs them — and farther cubes by their total power from their power-weighted
+    /// [`Sim::gas_temperature_of`] weighs them — and farther cubes by their total power from their power-weighted
     /// centre (their contribution is a few per cent of a cell's: measured, docs/results/log.md).
     pub fn fuel_heating(&self) -> Vec<(f64, f64)> {
         let m = &self.model;

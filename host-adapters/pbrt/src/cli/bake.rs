@@ -215,6 +215,30 @@ fn bake(
             ))
         })?;
     let dims = lattice.dims();
+    // The baked grids' bytes, refused before the fire is built or the velocity read: a small file of constant
+    // tiles can stand for billions of voxels.
+    let has = |n: &str| {
+        entries
+            .iter()
+            .any(|g| g.name == n || g.name == format!("{n}.x"))
+    };
+    let velocity_named = match a.velocity.as_str() {
+        "none" => false,
+        "auto" => firemedium_dataset::vdb::VELOCITY_NAMES
+            .iter()
+            .any(|n| has(n)),
+        _ => true,
+    };
+    let grid_count: u64 = if velocity_named { 4 } else { 3 };
+    let bytes =
+        (lattice.topology().active_bricks() as u64).saturating_mul(grid_count * 3 * 512 * 4);
+    if bytes > budget {
+        return Err(Error::input(format!(
+            "{}: the baked grids' {} bricks of 8³ voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
+            a.dataset.display(),
+            lattice.topology().active_bricks()
+        )));
+    }
     let velocity = velocity_of(a, &entries, &opts)?;
     // The fire, through the plugin.
     let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
@@ -273,15 +297,6 @@ fn bake(
     topo.for_each_slot(|b, _| bricks.push(b));
     bricks.sort_by_key(|b| (b[2], b[1], b[0]));
     let grid_count: u64 = if velocity.is_some() { 4 } else { 3 };
-    let bytes = (bricks.len() as u64).saturating_mul(grid_count * 3 * 512 * 4);
-    if bytes > budget {
-        return Err(Error::input(format!(
-                "{}: the baked grids' {} bricks of 8³ voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
-                a.dataset.display(),
-                bricks.len()
-            ),
-        ));
-    }
     // The lattice's voxel centres, in the dataset's space — the medium space the plugin builds the fire in.
     let (l0, step) = (lattice.bounds()[0], lattice.voxel_size());
     let (b0, voxel) = (l0.to_array(), step.to_array());

@@ -58,13 +58,17 @@ pub struct GenArgs {
 
 const SPECIES: [&str; 7] = ["Na", "Li", "K", "Ca", "Sr", "Ba", "Cu"];
 
+/// The most atoms of a species a flame's gas holds per m³: all of it (p/kT, 1 atm at 300 K). The grids are f32,
+/// so a number past this (1e300) would not even be stored: it became infinite, then NaN, and was written.
+const MAX_SPECIES_DENSITY: f64 = 2.5e25;
+
 fn parse_species(s: &str) -> Result<(String, f64), Error> {
     let bad = || {
-        Error::value(format!("--species '{s}': expected SYMBOL:PEAK with SYMBOL one of {} and PEAK a number density in m⁻³ (> 0), e.g. Na:1e17", SPECIES.join(", ")))
+        Error::value(format!("--species '{s}': expected SYMBOL:PEAK with SYMBOL one of {} and PEAK a number density in m⁻³, 0 < PEAK ≤ {MAX_SPECIES_DENSITY:e} (the gas itself at 1 atm), e.g. Na:1e17", SPECIES.join(", ")))
     };
     let (sym, n) = s.split_once(':').ok_or_else(bad)?;
     let n: f64 = n.parse().map_err(|_| bad())?;
-    if !(SPECIES.contains(&sym) && n > 0.0 && n.is_finite()) {
+    if !(SPECIES.contains(&sym) && n > 0.0 && n <= MAX_SPECIES_DENSITY) {
         return Err(bad());
     }
     Ok((sym.to_string(), n))

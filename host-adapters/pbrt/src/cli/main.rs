@@ -109,7 +109,10 @@ fn main() -> ExitCode {
         Command::Bake(args) => bake::run(&args),
         Command::Bench { args } => {
             return bench::forward(&args).unwrap_or_else(|(status, msg)| {
-                eprintln!("firemedium: {msg}");
+                eprintln!(
+                    "firemedium: {}",
+                    firemedium::term::printable(&msg, firemedium::term::MAX_MESSAGE_CHARS)
+                );
                 ExitCode::from(status)
             })
         }

@@ -168,13 +168,17 @@ fn line_light_takes_its_own_wavelengths_colour() {
 
 #[test]
 fn thick_line_tables_beyond_the_memory_budget_are_an_error_before_they_are_built() {
-    // Two thick D lines at 2000 K want ~1.9 MB of tables: a 1 MB budget refuses them by name, with the way out.
+    // Two thick D lines at 2000 K want ~1.9 MB of tables: 1 MB beyond the temperature tables' share of the budget
+    // refuses them by name, with the way out.
     let dir = std::env::temp_dir().join(format!("firemedium-linebudget-{}", std::process::id()));
     let list = |maxbytes: f64| {
         let extra = vec![Param::float("maxbytes", maxbytes)];
         sodium_params(&dir, 1e18, [2000.0; 2], 0.0, extra)
     };
-    let e = FireVolume::new(&list(1e6)).unwrap_err().to_string();
+    let tables = super::super::tables::bytes_for(2000.0, 30, 1, false) as f64;
+    let e = FireVolume::new(&list(tables + 1e6))
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("lineshape") && e.contains("\"box\"") && e.contains("MB"),
         "{e}"
