@@ -16,10 +16,15 @@ duplicated and truncated runs):
     render of the file as a fire lighting a floor (so the lattice, majorants and fire light walk it too).
 
     python3 tools/mutants.py --count 20000 --kinds vdb-tree,nvdb-tree   # the node-table run alone
+  - names, bake, python, abi: the surfaces beside files (tools/surface_mutants.py): `scene` and `render` under
+    hostile names, `bake` with the plugin's parameters at extreme values, the Python package's calls with arrays
+    of any shape, the C ABI's structs at every struct_size (older and newer minor versions' hosts).
+
+    python3 tools/mutants.py --count 5000 --kinds names,bake,python,abi   # the new surfaces alone
 
 Outcome per run: ok (exit 0), refused (exit 1 or 2 with one line on stderr), panic (exit 101), abort (a
-signal: SIGABRT, SIGSEGV…), hang (killed at the time limit), or over the RSS limit (peak RSS above --rss-gb,
-measured by /usr/bin/time). It prints the counts and exits 1 if any run was not ok or refused, 0 otherwise.
+signal: SIGABRT, SIGSEGV…), hang (killed at the time limit), over the RSS limit (peak RSS above --rss-gb,
+measured by /usr/bin/time), nan (NaN given as an answer) or lost (work said done, its output missing). It prints the counts and exits 1 if any run was not ok or refused, 0 otherwise.
 Failing inputs are kept under --keep for replay. Used for issue 21 (docs/results/log.md has the runs).
 """
 import argparse
@@ -34,6 +39,7 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import surface_mutants  # noqa: E402
 import tree_mutants  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -98,17 +104,21 @@ class Harness:
         self.bin = os.path.join(ROOT, "target", "release", "firemedium")
         self.work = tempfile.mkdtemp(prefix="firemedium-mutants-")
         self.seeds = self.make_seeds()
-        every = ["dataset", "dataset", "scene", "scene", "image", "mesh", "vdb-tree", "nvdb-tree"]
+        every = ["dataset", "dataset", "scene", "scene", "image", "mesh", "vdb-tree", "nvdb-tree"] + \
+            surface_mutants.KINDS
+        # The Python package's and the ABI's cases load the plugin this build made.
+        lib = os.path.join(ROOT, "target", "release", "libfiremedium_plugin.so")
+        self.env = dict(os.environ, FIREMEDIUM_PLUGIN=lib)
         self.kinds = [k for k in every if not a.kinds or k in a.kinds.split(",")]
         if not self.kinds:
             sys.exit(f"--kinds {a.kinds}: expected some of {', '.join(sorted(set(every)))}")
 
-    def run(self, argv, cwd):
+    def run(self, argv, cwd, env=None):
         limit = self.a.limit_gb * 1024 * 1024
         cmd = ["/usr/bin/time", "-f", "RSS %M", "bash", "-c",
                f"ulimit -v {limit}; exec \"$@\"", "x"] + argv
         try:
-            p = subprocess.run(cmd, cwd=cwd, capture_output=True, timeout=self.a.timeout)
+            p = subprocess.run(cmd, cwd=cwd, capture_output=True, timeout=self.a.timeout, env=env)
         except subprocess.TimeoutExpired:
             return "hang", ""
         err = p.stderr.decode("utf-8", "replace")
@@ -128,7 +138,10 @@ class Harness:
             kind = "abort"
         if rss_kb > self.a.rss_gb * 1024 * 1024:
             kind = "rss"
-        return kind, err.strip().splitlines()[-1] if err.strip() else ""
+        out = p.stdout.decode("utf-8", "replace").strip()
+        self.last_stdout = out
+        last = err.strip().splitlines()[-1] if err.strip() else (out.splitlines()[-1] if out else "")
+        return kind, last
 
     def make_seeds(self):
         s = {}
@@ -185,6 +198,10 @@ class Harness:
         kind = rng.choice(self.kinds)
         d = os.path.join(self.work, f"m{k}")
         os.makedirs(d, exist_ok=True)
+        if kind in surface_mutants.KINDS:
+            results = surface_mutants.run_case(self, kind, rng, d)
+            shutil.rmtree(d, ignore_errors=True)
+            return [(kind, outcome, last) for outcome, last in results]
         if kind == "dataset":
             ext, data = rng.choice(self.seeds["dataset"])
             f = os.path.join(d, "m" + ext)
@@ -232,6 +249,10 @@ class Harness:
             open(scene, "w").write('Camera "perspective"\nFilm "rgb" "integer xresolution" 8 "integer yresolution" 8\n'
                                    'WorldBegin\nLightSource "distant"\nShape "plymesh" "string filename" "m.ply"\n')
             argv = [self.bin, "render", scene, "--spp", "1", "-q", "--max-memory", "1", "-o", os.path.join(d, "o.exr")]
+        return [self.finish(k, kind, argv, d, f)]
+
+    def finish(self, k, kind, argv, d, f):
+        """Runs mutant `k`'s command and keeps its input when it failed: (kind, outcome, last line)."""
         outcome, last = self.run(argv, d)
         if kind == "scene":
             if outcome not in ("ok", "refused") and self.a.keep:
@@ -247,16 +268,19 @@ class Harness:
             os.makedirs(self.a.keep, exist_ok=True)
         counts = {}
         bad = []
+        cases = 0
         with ThreadPoolExecutor(self.a.jobs) as pool:
-            for i, (kind, outcome, last) in enumerate(pool.map(self.one, range(self.a.count))):
-                counts.setdefault(kind, {}).setdefault(outcome, 0)
-                counts[kind][outcome] += 1
-                if outcome not in ("ok", "refused"):
-                    bad.append((i, kind, outcome, last))
+            for i, results in enumerate(pool.map(self.one, range(self.a.count))):
+                for kind, outcome, last in results:
+                    cases += 1
+                    counts.setdefault(kind, {}).setdefault(outcome, 0)
+                    counts[kind][outcome] += 1
+                    if outcome not in ("ok", "refused"):
+                        bad.append((i, kind, outcome, last))
                 if (i + 1) % 1000 == 0:
                     print(f"{i + 1} mutants", file=sys.stderr, flush=True)
         shutil.rmtree(self.work, ignore_errors=True)
-        outcomes = ["ok", "refused", "panic", "abort", "hang", "rss"]
+        outcomes = ["ok", "refused", "panic", "abort", "hang", "rss", "nan", "lost"]
         print(f"| kind | {' | '.join(outcomes)} |")
         print("|---|" + "---|" * len(outcomes))
         for kind in sorted(counts):
@@ -266,7 +290,7 @@ class Harness:
         for i, kind, outcome, last in bad[:50]:
             print(f"mutant {i} ({kind}): {outcome} {last}")
         # The plain closing line CI reads: a mutant passes when it rendered or was refused with one line.
-        print(f"mutants: {self.a.count - len(bad)} passed, {len(bad)} failed")
+        print(f"mutants: {cases - len(bad)} passed, {len(bad)} failed")
         return 1 if bad else 0
 
 
