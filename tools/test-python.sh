@@ -12,6 +12,17 @@ python3 -c 'import mitsuba, sys; sys.exit(mitsuba.__version__ != "3.9.1")' 2>/de
 python3 -c 'import bpy, sys; sys.exit(bpy.app.version < (4, 5, 0))' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "bpy>=4.5,<5"
 python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --force-reinstall --no-deps ./python
+# pip alone gives a working package: a fresh venv (numpy from the outer site-packages), no FIREMEDIUM_* variable,
+# no firemedium on the PATH — the plugin pip built into the package is found.
+venv="$(mktemp -d /tmp/firemedium-venv.XXXXXX)"
+python3 -m venv --system-site-packages "$venv"
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check --no-deps ./python
+(cd / && env -u FIREMEDIUM_PLUGIN -u FIREMEDIUM_PLUGIN_PATH PATH=/usr/bin:/bin "$venv/bin/python" -c '
+import sys, firemedium as fm
+p = fm.plugin().path
+assert str(p).startswith(sys.prefix), p
+print("pip-installed package: plugin", p, "ABI", fm.plugin().abi_version)')
+rm -rf "$venv"
 lib=libfiremedium_plugin.so
 plugin="target/release/$lib"
 [[ -f "$plugin" ]] || plugin="target/release/deps/$lib"

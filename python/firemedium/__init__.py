@@ -88,14 +88,16 @@ def find_plugin() -> Path:
     """The plugin library's path, looked up as the ``firemedium`` command looks it up.
 
     In order: the file ``FIREMEDIUM_PLUGIN`` names; the library in each folder of ``FIREMEDIUM_PLUGIN_PATH``;
-    beside the ``firemedium`` command on the ``PATH`` and in its ``../lib/firemedium`` (what ``tools/install.sh``
-    installs). Raises :class:`FiremediumError` naming every place it looked.
+    the one ``pip install`` built into this package (``firemedium/lib``); beside the ``firemedium`` command on
+    the ``PATH`` and in its ``../lib/firemedium`` (what ``tools/install.sh`` installs). Raises
+    :class:`FiremediumError` naming every place it looked.
     """
     named = os.environ.get("FIREMEDIUM_PLUGIN")
     if named:
         return Path(named)
     name = _library_name()
     dirs = [Path(d) for d in os.environ.get("FIREMEDIUM_PLUGIN_PATH", "").split(os.pathsep) if d]
+    dirs.append(Path(__file__).resolve().parent / "lib")
     command = shutil.which("firemedium")
     if command:
         here = Path(command).resolve().parent
