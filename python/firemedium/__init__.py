@@ -341,6 +341,9 @@ class Volume:
         self.step = vi.step
         self.bytes = vi.bytes
         self.build_seconds = vi.build_seconds
+        self.lattice = (tuple(vi.dims), tuple(vi.lattice_min), tuple(vi.lattice_max))
+        """The dataset's lattice: ((nx, ny, nz), lower corner, upper corner), samples cell-centred over the box
+        — where :meth:`coefficients` bakes the fire's grids."""
         mask = C.c_uint64()
         p._check(p.api.volume_features(self._h, C.byref(mask)))
         self.features = frozenset(k for k, bit in abi.FEATURES.items() if mask.value & bit)
@@ -431,6 +434,17 @@ class Volume:
                              le=_dp(out["le"]), j=_dp(out["j"]))
         self.plugin._check(self.plugin.api.volume_point(self._h, C.byref(q)))
         return out
+
+    def coefficients(self, points: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The fire's coefficients at points in its channels (the fast path's tables, as ``firemedium bake``
+        reads them): σ_a, σ_s (per medium unit) and the emission coefficient j, each (n, channels) float32 —
+        at every voxel centre of :attr:`lattice`, a bake of the fire."""
+        pts = _as_points(points, "points")
+        n = len(pts)
+        out = [np.zeros((n, self.channels), dtype=np.float32) for _ in range(3)]
+        self.plugin._check(self.plugin.api.volume_coefficients(self._h, _dp(pts), n, _fp(out[0]), _fp(out[1]),
+                                                               _fp(out[2])))
+        return out[0], out[1], out[2]
 
     # -- the fast path ----------------------------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""The plugin's C ABI 1.0 (plugin/abi/include/firemedium.h) as ctypes declarations.
+"""The plugin's C ABI 1.2 (plugin/abi/include/firemedium.h) as ctypes declarations.
 
 Kept to the header line by line: every struct begins with ``struct_size`` (set here to the size ctypes computes,
 which the plugin checks), arrays of FmParam/FmRay/FmExit/FmScatter have the major version's layout.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes as C
 
 ABI_MAJOR = 1
-ABI_MINOR = 1
+ABI_MINOR = 2
 ENTRY_SYMBOL = "firemedium_plugin_entry"
 
 OK, INVALID_ARGUMENT, INVALID_PARAMETER, DATASET, UNSUPPORTED, PANIC = range(6)
@@ -95,6 +95,10 @@ class FmVolumeInfo(C.Structure):
         ("step", C.c_double),
         ("bytes", C.c_uint64),
         ("build_seconds", C.c_double),
+        ("dims", C.c_uint32 * 3),
+        ("reserved", C.c_uint32),
+        ("lattice_min", C.c_double * 3),
+        ("lattice_max", C.c_double * 3),
     ]
 
 

@@ -63,7 +63,7 @@ fn rays(n: usize) -> Vec<Ray> {
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (1, 1));
+    assert_eq!(p.version(), (1, 2));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -91,6 +91,12 @@ fn loads_describes_and_integrates() {
     let info = v.info();
     // The default spectrum: 32 bins over 400–780 nm (11.875 nm wide).
     assert_eq!(info.channels, 32);
+    // (1.2) The dataset's lattice: the Mantaflow frame's 62 × 62 × 93 samples of 3.125 cm.
+    assert_eq!(info.dims, [62, 62, 93]);
+    for a in 0..3 {
+        let voxel = (info.lattice_max[a] - info.lattice_min[a]) / info.dims[a] as f64;
+        assert!((voxel - 0.03125).abs() < 1e-9, "axis {a}: {voxel}");
+    }
     assert_eq!(info.channel_space, firemedium_abi::FM_SPACE_SPECTRAL);
     assert!(info.bytes > 1_000_000 && info.build_seconds > 0.0);
     let xyz = v.channel_xyz().unwrap();

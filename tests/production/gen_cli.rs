@@ -148,7 +148,10 @@ fn bad_arguments_exit_2_with_one_line() {
             vec!["gen", "torch", "-o", out, "--species", "Xx:1e17"],
             "Na, Li",
         ),
-        (vec!["gen", "torch", "-o", out, "--species", "Na:-1"], "0 < PEAK"),
+        (
+            vec!["gen", "torch", "-o", out, "--species", "Na:-1"],
+            "0 < PEAK",
+        ),
         (vec!["gen", "torch", "-o", out, "--frames", "5-3"], "A-B"),
         (vec!["gen", "torch", "-o", out, "--frames", "1-3"], "####"),
         (

@@ -31,7 +31,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 1u
-#define FM_ABI_MINOR 1u
+#define FM_ABI_MINOR 2u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -102,6 +102,13 @@ typedef struct FmVolumeInfo {
     double step;
     uint64_t bytes;
     double build_seconds;
+    /* (1.2) The dataset's lattice: samples per axis, cell-centred over lattice_min..lattice_max (medium space) --
+     * where a host that bakes or samples the fire's grids asks for them (volume_coefficients). A 1.0/1.1 host's
+     * smaller struct gets the fields it knows. */
+    uint32_t dims[3];
+    uint32_t reserved;
+    double lattice_min[3];
+    double lattice_max[3];
 } FmVolumeInfo;
 
 /* volume_features bits. A host that tracks the medium itself (volume_point at points, the majorant grid for

@@ -31,8 +31,8 @@ use core::ffi::{c_char, c_void};
 
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 1;
-/// Minor version of the C ABI. Grows when entries are appended to the table.
-pub const ABI_MINOR: u32 = 1;
+/// Minor version of the C ABI. Grows when entries are appended to the table or fields to the end of a struct.
+pub const ABI_MINOR: u32 = 2;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -181,7 +181,20 @@ pub struct FmVolumeInfo {
     pub bytes: u64,
     /// Seconds spent creating the volume.
     pub build_seconds: f64,
+    /// (1.2) The dataset's lattice: samples per axis, cell-centred over `lattice_min`..`lattice_max` (medium
+    /// space) — where a host that bakes or samples the fire's grids asks for them (`volume_coefficients`).
+    pub dims: [u32; 3],
+    /// Reserved (0).
+    pub reserved: u32,
+    /// (1.2) The lattice's lower corner, medium space.
+    pub lattice_min: [f64; 3],
+    /// (1.2) Its upper corner.
+    pub lattice_max: [f64; 3],
 }
+
+/// The size [`FmVolumeInfo`] had in ABI 1.0 and 1.1, before the lattice was appended (1.2): the least a host may
+/// pass; the plugin writes no more than the host's `struct_size`.
+pub const FM_VOLUME_INFO_SIZE_1_0: usize = core::mem::offset_of!(FmVolumeInfo, dims);
 
 /// A row of a component's parameter table (strings live as long as the library).
 #[repr(C)]
@@ -258,6 +271,10 @@ impl Default for FmVolumeInfo {
             step: 0.0,
             bytes: 0,
             build_seconds: 0.0,
+            dims: [0; 3],
+            reserved: 0,
+            lattice_min: [0.0; 3],
+            lattice_max: [0.0; 3],
         }
     }
 }

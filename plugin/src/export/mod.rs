@@ -164,6 +164,37 @@ unsafe fn read_sized<T>(
     }
 }
 
+/// Writes `value` into the host's struct at `out`, as far as its `struct_size` covers it (an older minor
+/// version's host gets the fields it knows). Refused when null or smaller than `min` (the struct's ABI 1.0 size).
+///
+/// # Safety
+/// `out` is null or points at `struct_size` writable bytes that begin with that `size_t` (the caller's contract).
+unsafe fn write_sized<T>(
+    out: *mut T,
+    value: T,
+    min: usize,
+    what: &str,
+    c_type: &str,
+) -> Result<(), (FmStatus, String)> {
+    if out.is_null() {
+        return Err(bad(format!("{what} is null")));
+    }
+    // SAFETY: non-null (checked); the host's struct starts with its size (contract).
+    let size = unsafe { out.cast::<usize>().read_unaligned() };
+    if size < min {
+        return Err(bad(format!(
+            "{what}->struct_size {size}, expected at least {min} (set it to sizeof({c_type}))"
+        )));
+    }
+    let n = size.min(std::mem::size_of::<T>());
+    // SAFETY: the host's `size` ≥ n bytes are writable (contract); `value` is n ≥ bytes long, copied as bytes
+    // (its struct_size field included: the plugin's own size, which a host reads as what was written).
+    unsafe {
+        std::ptr::copy_nonoverlapping((&value as *const T).cast::<u8>(), out.cast::<u8>(), n);
+    }
+    Ok(())
+}
+
 unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
     // (A misuse is itself the last error then: its message, and a detail of its status alone.)
     // SAFETY: null or the host's FmErrorDetail (contract).

@@ -168,9 +168,10 @@ pub(super) unsafe extern "C" fn volume_info(
     guard(|| {
         // SAFETY: contract of the handle.
         let v = unsafe { vol(volume, "volume_info") }?;
-        // SAFETY: null or the host's FmVolumeInfo (contract).
-        unsafe { super::sized(out, "volume_info: out", "FmVolumeInfo") }?;
         let [p0, p1] = v.bounds();
+        let ds = v.dataset();
+        let [l0, l1] = ds.bounds();
+        let dims = ds.dims().map(|n| u32::try_from(n).unwrap_or(u32::MAX));
         let (space, lo, hi) = match v.color_mode() {
             ColorMode::Spectral(g) => (FM_SPACE_SPECTRAL, g.min_nm(), g.max_nm()),
             ColorMode::Rgb => (FM_SPACE_XYZ, 380.0, 780.0),
@@ -193,10 +194,21 @@ pub(super) unsafe extern "C" fn volume_info(
             step: v.step_length(),
             bytes: v.bytes() as u64,
             build_seconds: v.build_seconds(),
+            dims,
+            reserved: 0,
+            lattice_min: l0.to_array(),
+            lattice_max: l1.to_array(),
         };
-        // SAFETY: non-null with at least our struct's size writable (checked, contract).
-        unsafe { out.write_unaligned(info) };
-        Ok(())
+        // SAFETY: null or the host's FmVolumeInfo of its struct_size (contract).
+        unsafe {
+            super::write_sized(
+                out,
+                info,
+                FM_VOLUME_INFO_SIZE_1_0,
+                "volume_info: out",
+                "FmVolumeInfo",
+            )
+        }
     })
 }
 
