@@ -9,6 +9,14 @@ cd "$(dirname "$0")/.."
 python3 -c 'import numpy' 2>/dev/null || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore numpy
 python3 -c 'import mitsuba, sys; sys.exit(mitsuba.__version__ != "3.9.1")' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "mitsuba==3.9.1"
+# Mitsuba's vectorised llvm_* variants (the adapter's) need an LLVM Dr.Jit can compile with for these CPUs:
+# Debian's libllvm19 (the system's LLVM 14/15 fail to select `fminimum`).
+llvm=/usr/lib/x86_64-linux-gnu/libLLVM-19.so
+if [[ ! -f "$llvm" ]]; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get install -y -q libllvm19 > /dev/null 2>&1 || { apt-get update -q > /dev/null && apt-get install -y -q libllvm19 > /dev/null; }
+fi
+export DRJIT_LIBLLVM_PATH="$llvm"
 python3 -c 'import bpy, sys; sys.exit(bpy.app.version < (4, 5, 0))' 2>/dev/null \
     || python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "bpy>=4.5,<5"
 python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore --force-reinstall --no-deps ./python

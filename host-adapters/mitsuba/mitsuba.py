@@ -1,27 +1,35 @@
-"""firemedium in Mitsuba 3: a ``firemedium`` medium and a ``firepath`` integrator, registered with Mitsuba.
+"""firemedium in Mitsuba 3: a ``firemedium`` medium and a ``firepath`` integrator, registered with Mitsuba, in
+Mitsuba's vectorised variants (``llvm_*``, ``cuda_*``) at Mitsuba's own speed.
 
-Mitsuba 3 has no emissive media: its volumetric path tracer ignores medium emission. This module adds both
-halves a fire needs, written against ABI 1.0's medium level:
+Mitsuba 3 has no emissive media: its volumetric path tracers ignore a medium's emission. This module adds both
+halves a fire needs (in the vectorised variants; the scalar ones run a Python call per ray, which a fire's
+millions of collisions cannot afford):
 
-- the **medium** ``firemedium`` (a :class:`FireMedium`): Mitsuba asks it what pbrt-v4 asks of a medium — the
-  coefficients σ_a, σ_s at a point at the path's own wavelengths and time (``get_scattering_coefficients``, from the
-  plugin's ``volume_point``), and a majorant (``get_majorant``: the largest cell of the exported majorant grid);
-  its ``emission`` is j = σ_a·Le at the same wavelengths. A fire whose layers the medium level cannot express
-  (refraction's curved rays, embers' opaque spheres, atomic lines across their profiles, diffusion) is refused
-  when the scene loads, naming the feature: the fire would otherwise be silently wrong.
-- the **integrator** ``firepath``: a volumetric path tracer (delta tracking against the majorant, Mitsuba's
-  BSDFs, emitters and phase functions) that collects medium emission as pbrt-v4 does — β·σ_a·Le/σ̄ at every
-  tentative collision — and estimates the fire's light at every surface and medium vertex by next-event
-  estimation towards the fire light (points sampled by the fire's power; its line estimate along the sampled
-  direction), weighed by MIS against the paths that find the fire by themselves. Mitsuba's own emitters are
-  sampled too, their shadow rays attenuated through the fire by ratio tracking.
+- the **medium** ``firemedium`` (a :class:`FireMedium`). At load it builds the fire through the plugin and asks
+  it, through the ABI, for σ_a, σ_s and the emission coefficient j at every voxel centre of the fire's lattice
+  (``volume_coefficients``: the plugin stays the one source of the fire's physics), in the variant's colours — the
+  plugin's spectral bins projected to linear Rec.709 in RGB variants, the bins themselves in spectral ones — and
+  keeps them as Dr.Jit textures. Mitsuba's integrators (``volpath``, ``volpathmis``, ``prbvolpath``) then track it
+  as they track their own ``heterogeneous`` medium — a majorant, coefficients at points — in one compiled kernel,
+  no Python call per point. Its phase function is Henyey–Greenstein with the fire's ``g`` unless the scene gives
+  one (a different one is an error). A fire whose layers the medium level cannot express (refraction's curved
+  rays, embers' opaque spheres, atomic lines across their profiles, diffusion) is refused when the scene loads,
+  naming the feature: the fire would otherwise be silently wrong.
+- the **integrator** ``firepath``: a volumetric path tracer written as one Dr.Jit loop over the wavefront. It
+  tracks every medium of the scene (the fire, and Mitsuba's own) by delta tracking against its majorant, collects
+  the fire's emission at every tentative collision, samples Mitsuba's emitters at surface and medium vertices with
+  MIS against BSDF and phase sampling (as ``volpathmis``), and samples the **fire light** — a point by the fire's
+  emitted luminance, voxel by voxel — with MIS against the emission the path finds by itself. Shadow rays cross
+  null surfaces (the fire's boundary) segment by segment, each segment's length measured from its own origin, and
+  their transmittance is ratio-tracked through every medium.
 
-It runs in Mitsuba's ``scalar_spectral`` variant (the fire's colour is its spectrum; Python media and integrators
-run per ray there: small images, or many cores). The medium's parameters are the plugin's (``docs/reference/params.md``), given as the medium's
-properties; ``to_world`` places the fire's medium space in the scene (rotation, translation and a uniform scale).
+Units: in spectral variants the fire's emission is in W·m⁻³·sr⁻¹·nm⁻¹ (Mitsuba's film: a constant spectrum of 1 is
+Y = 1); in RGB variants the same luminance, so a fire renders at the same level in both (× 683 lm/W · 106.857 nm
+gives ``firemedium render``'s cd/m²). ``to_world`` places the fire's medium space in the scene (rotation,
+translation and a uniform scale).
 
     import mitsuba as mi
-    mi.set_variant("scalar_spectral")
+    mi.set_variant("llvm_ad_rgb")         # llvm_* needs an LLVM Dr.Jit can use (docs/guide/mitsuba.md)
     import firemedium.mitsuba            # registers "firemedium" and "firepath"
     scene = mi.load_dict({...  "medium": {"type": "firemedium", "filename": "campfire.vdb"} ...})
 """
@@ -36,70 +44,88 @@ import numpy as np
 import firemedium as fm
 
 try:
+    import drjit as dr
     import mitsuba as mi
 except ImportError as e:  # pragma: no cover - the message is the point
     raise ImportError("firemedium.mitsuba needs Mitsuba 3: pip install mitsuba==3.9.1") from e
 
 if mi.variant() is None:
-    raise ImportError("firemedium.mitsuba: choose a Mitsuba variant first (mi.set_variant('scalar_spectral'))")
-if mi.variant() != "scalar_spectral":
+    raise ImportError("firemedium.mitsuba: choose a Mitsuba variant first (mi.set_variant('llvm_ad_rgb'))")
+if mi.is_polarized:
+    raise ImportError(f"firemedium.mitsuba: the variant {mi.variant()} tracks polarisation, which the fire does not")
+if not dr.is_jit_v(mi.Float):
     raise ImportError(
-        f"firemedium.mitsuba runs in Mitsuba's scalar_spectral variant (the fire's colour is its spectrum); the variant is {mi.variant()}"
-    )
+        f"firemedium.mitsuba runs in Mitsuba's vectorised variants (llvm_ad_rgb, llvm_ad_spectral, cuda_*), one compiled "
+        f"kernel over the wavefront; the variant is {mi.variant()}. The llvm variants need an LLVM Dr.Jit can use: "
+        "DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so (Debian's libllvm19)")
+
 # Features the medium level cannot express: refused, never silently lost.
 _REFUSED = ("refraction", "embers", "thick_lines", "diffusion")
 # Properties that are Mitsuba's, not the fire's.
-_MITSUBA_PROPS = {"type", "id", "to_world", "sample_emitters", "max_threads"}
+_MITSUBA_PROPS = {"type", "id", "to_world", "sample_emitters", "max_threads", "phase"}
+# Y per unit of Mitsuba's relative film, in cd/m²: 683 lm/W × ∫ȳ dλ (nm).
+CD_M2_PER_UNIT = 683.0 * 106.856895
+# Linear Rec.709 (sRGB primaries, D65) from XYZ.
+_XYZ_TO_RGB = np.array([[3.2404542, -1.5371385, -0.4985314],
+                        [-0.9692660, 1.8760108, 0.0415560],
+                        [0.0556434, -0.2040259, 1.0572252]])
+# The most bytes of textures a fire may take (three of them: σ_t, σ_s, j).
+_TEXTURE_BUDGET = 8 << 30
 
 
-def _lambdas(wavelengths) -> np.ndarray:
-    return np.array([float(wavelengths[i]) for i in range(len(wavelengths))])
+def _fire_params(props: mi.Properties) -> dict[str, Any]:
+    """The fire's parameters from the medium's properties (every one but Mitsuba's own)."""
+    params: dict[str, Any] = {}
+    for name in props.keys():
+        if name in _MITSUBA_PROPS:
+            continue
+        value = props[name]
+        if isinstance(value, mi.VolumeGrid):
+            # An inline grid (pbrt-v4's uniformgrid arrays: density, temperature, Lescale): Mitsuba's own grid
+            # type, x fastest, its shape giving nx, ny, nz unless the scene says them.
+            a = np.array(value, dtype=np.float64)
+            if a.ndim == 4 and a.shape[3] != 1:
+                raise fm.FiremediumError(f"firemedium (Mitsuba): grid '{name}' has {a.shape[3]} channels; expected 1",
+                                         status="invalid parameter", parameter=name)
+            nz, ny, nx = a.shape[:3]
+            for k, v in (("nx", nx), ("ny", ny), ("nz", nz)):
+                if k not in props:
+                    params[k] = v
+            params[name] = a.ravel()
+        elif isinstance(value, mi.Object):
+            continue
+        elif isinstance(value, (str, bool, int, float)):
+            params[name] = value
+        else:
+            # Mitsuba's vectors, points and colours: their components.
+            params[name] = [float(x) for x in value]
+    if mi.is_spectral:
+        # The bins span the wavelengths Mitsuba samples (20 nm: the soot's spectrum is smooth).
+        params.setdefault("lambdamin", 360.0)
+        params.setdefault("lambdamax", 830.0)
+        params.setdefault("bins", 24)
+    return params
 
 
-def _spectrum(values) -> Any:
-    return mi.Spectrum([float(v) for v in values])
+def _phase_g(phase) -> float | None:
+    """The g of a Henyey–Greenstein phase function; 0 for an isotropic one; None for any other."""
+    name = phase.class_name() if hasattr(phase, "class_name") else type(phase).__name__
+    if "Isotropic" in name:
+        return 0.0
+    if "HG" in name or "Henyey" in name:
+        return float(mi.traverse(phase)["g"][0]) if hasattr(mi.traverse(phase)["g"], "__len__") else \
+            float(mi.traverse(phase)["g"])
+    return None
 
 
 class FireMedium(mi.Medium):
     """The fire as a Mitsuba medium (``"type": "firemedium"``); every other property is a fire parameter."""
 
     def __init__(self, props: mi.Properties):
-        super().__init__(props)
-        self.m_is_homogeneous = False
-        self.m_has_spectral_extinction = True
-        params: dict[str, Any] = {}
-        self.to_world = mi.ScalarTransform4f()
-        for name in props.keys():
-            value = props[name]
-            if name == "to_world":
-                self.to_world = mi.ScalarTransform4f(value)
-            elif name in _MITSUBA_PROPS:
-                continue
-            elif isinstance(value, mi.VolumeGrid):
-                # An inline grid (pbrt-v4's uniformgrid arrays: density, temperature, Lescale): Mitsuba's own
-                # grid type, x fastest, its shape giving nx, ny, nz unless the scene says them.
-                a = np.array(value, dtype=np.float64)
-                if a.ndim == 4 and a.shape[3] != 1:
-                    raise fm.FiremediumError(
-                        f"firemedium (Mitsuba): grid '{name}' has {a.shape[3]} channels; expected 1", status="invalid parameter", parameter=name)
-                nz, ny, nx = a.shape[:3]
-                for k, v in (("nx", nx), ("ny", ny), ("nz", nz)):
-                    if k not in props:
-                        params[k] = v
-                params[name] = a.ravel()
-            elif isinstance(value, mi.Object):
-                continue  # the phase function: Mitsuba's, read by Medium
-            elif isinstance(value, (str, bool, int, float)):
-                params[name] = value
-            else:
-                # Mitsuba's vectors, points and colours: their components.
-                params[name] = [float(x) for x in value]
-        # The next-event line estimate reads the fire's bins: span the wavelengths Mitsuba samples.
-        params.setdefault("lambdamin", 360.0)
-        params.setdefault("lambdamax", 830.0)
-        params.setdefault("bins", 47)
-        self.volume = fm.Volume(params)
-        refused = [f for f in _REFUSED if f in self.volume.features]
+        params = _fire_params(props)
+        self.to_world = mi.ScalarTransform4f(props["to_world"]) if "to_world" in props else mi.ScalarTransform4f()
+        volume = fm.Volume(params)
+        refused = [f for f in _REFUSED if f in volume.features]
         if refused:
             raise fm.FiremediumError(
                 "firemedium (Mitsuba): the fire holds " + ", ".join(refused)
@@ -107,139 +133,220 @@ class FireMedium(mi.Medium):
                 "render it with `firemedium render`, or leave those parameters out",
                 status="unsupported",
             )
+        # The phase function: the fire's Henyey–Greenstein g, unless the scene gives one; a different one is an error.
+        given = [props[n] for n in props.keys() if isinstance(props[n], mi.PhaseFunction)]
+        if given:
+            g = _phase_g(given[0])
+            if volume.g != 0.0 and (g is None or abs(g - volume.g) > 1e-6):
+                raise fm.FiremediumError(
+                    f"firemedium (Mitsuba): the scene gives the fire a phase function ({given[0].class_name()}"
+                    f"{'' if g is None else f', g {g}'}) other than its own (Henyey–Greenstein, g {volume.g}): "
+                    "leave the phase out, or give the fire's g",
+                    status="invalid parameter", parameter="phase")
+        elif volume.g != 0.0:
+            props["phase"] = mi.load_dict({"type": "hg", "g": float(volume.g)})
+        super().__init__(props)
+        self.volume = volume
+        self.m_is_homogeneous = False
+        self.m_has_spectral_extinction = True
         self.to_medium = self.to_world.inverse()
-        # Uniform scale of to_world (σ per medium unit → per world unit divides by it).
         m = np.array(self.to_world.matrix, dtype=float)[:3, :3]
+        # Uniform scale of to_world (σ per medium unit → per world unit divides by it).
         self.scale = abs(np.linalg.det(m)) ** (1.0 / 3.0)
-        grid = self.volume.majorant_grid()
-        self.majorant = float(grid["sigma_t"].max()) / self.scale
-        self._grid = grid
-        lo, hi = self.volume.bounds
-        corners = [mi.ScalarPoint3f(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-        self.bbox = mi.BoundingBox3f()
-        for c in corners:
-            self.bbox.expand(mi.Point3f(self.to_world @ c))
-        self.emits = "emits" in self.volume.features
+        self.emits = "emits" in volume.features
+        self._bake()
+        lo, hi = volume.bounds
+        self.bbox = mi.ScalarBoundingBox3f()
+        for c in [mi.ScalarPoint3f(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]:
+            self.bbox.expand(self.to_world @ c)
+        self._to_medium = mi.Transform4f(self.to_medium)
         self._light = None
 
-    # -- the medium level, at Mitsuba's wavelengths ----------------------------------------------------------
+    # -- the fire's grids, baked once -------------------------------------------------------------------------
 
-    def _medium_point(self, p) -> list[float]:
-        q = self.to_medium @ mi.ScalarPoint3f(float(p[0]), float(p[1]), float(p[2]))
-        return [float(q[0]), float(q[1]), float(q[2])]
+    def _channel_weights(self) -> tuple[np.ndarray, np.ndarray]:
+        """How the plugin's channels become the variant's: (σ weights (C, K), emission weights (C, K)) — in RGB
+        variants each channel's linear Rec.709 (σ: by the positive part of its light in each component; j: its
+        colour, scaled to Mitsuba's relative film), in spectral ones the identity (bins)."""
+        c = self.volume.channels
+        if mi.is_spectral:
+            eye = np.eye(c)
+            return eye, eye
+        xyz = self.volume.channel_xyz()
+        rgb = xyz @ _XYZ_TO_RGB.T  # (C, 3)
+        pos = np.maximum(rgb, 0.0)
+        w_sigma = pos / np.maximum(pos.sum(axis=0, keepdims=True), 1e-300)
+        return w_sigma, rgb / CD_M2_PER_UNIT
 
-    def coefficients(self, mei) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """σ_a, σ_s and j = σ_a·Le at the interaction's point, wavelengths and time, per world unit."""
-        c = self.volume.point([self._medium_point(mei.p)], _lambdas(mei.wavelengths), [float(mei.time)])
-        s = self.scale
-        return c["sigma_a"][0] / s, c["sigma_s"][0] / s, c["j"][0] / s
+    def _bake(self):
+        (nx, ny, nz), lo, hi = self.volume.lattice
+        lo, hi = np.array(lo), np.array(hi)
+        voxel = (hi - lo) / np.array([nx, ny, nz])
+        w_sigma, w_emit = self._channel_weights()
+        k = w_sigma.shape[1]
+        need = 3 * 4 * k * (nx + 2) * (ny + 2) * (nz + 2)
+        if need > _TEXTURE_BUDGET:
+            raise fm.FiremediumError(
+                f"firemedium (Mitsuba): the fire's textures need {need / 2**30:.1f} GiB ({nx}×{ny}×{nz} voxels × {k} "
+                f"channels × 3), above {_TEXTURE_BUDGET / 2**30:.0f} GiB: an RGB variant, or fewer bins",
+                status="unsupported")
+        # σ_t, σ_s and j per voxel in the variant's channels, a zero layer around (the lookup fades to 0 past
+        # the outer samples, as the plugin's does), z slab by z slab.
+        sigma_t = np.zeros((nz + 2, ny + 2, nx + 2, k), dtype=np.float32)
+        sigma_s = np.zeros_like(sigma_t)
+        emit = np.zeros_like(sigma_t)
+        xs = lo[0] + (np.arange(nx) + 0.5) * voxel[0]
+        ys = lo[1] + (np.arange(ny) + 0.5) * voxel[1]
+        yy, xx = np.meshgrid(ys, xs, indexing="ij")
+        for z in range(nz):
+            pts = np.stack([xx.ravel(), yy.ravel(), np.full(xx.size, lo[2] + (z + 0.5) * voxel[2])], axis=1)
+            sa, ss, j = self.volume.coefficients(pts)
+            sa, ss, j = (a.astype(np.float64) for a in (sa, ss, j))
+            s_t = (sa + ss) @ w_sigma
+            sigma_t[z + 1, 1:-1, 1:-1] = s_t.reshape(ny, nx, k)
+            sigma_s[z + 1, 1:-1, 1:-1] = (ss @ w_sigma).reshape(ny, nx, k)
+            emit[z + 1, 1:-1, 1:-1] = (j @ w_emit).reshape(ny, nx, k)
+        # World units: σ and j per world unit (the medium's unit × scale).
+        sigma_t /= self.scale
+        sigma_s /= self.scale
+        emit /= self.scale
+        self.channels = k
+        self.majorant_value = float(sigma_t.max())
+        tex = lambda a: mi.Texture3f(mi.TensorXf(a), filter_mode=dr.FilterMode.Linear,
+                                     wrap_mode=dr.WrapMode.Clamp)
+        self.sigma_t_tex, self.sigma_s_tex = tex(sigma_t), tex(sigma_s)
+        self.emit_tex = tex(emit) if self.emits else None
+        # The padded box the textures span (medium space), and the lattice for the fire light.
+        self.tex_lo = mi.ScalarPoint3f(*(lo - voxel))
+        self.tex_size = mi.ScalarVector3f(*((hi - lo) + 2 * voxel))
+        self.lattice = ((nx, ny, nz), lo, voxel)
+        if self.emits:
+            # Each voxel's emitted luminance (its centre's), for the fire light's distribution.
+            if mi.is_spectral:
+                y = self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
+                lum = np.tensordot(emit[1:-1, 1:-1, 1:-1], y, axes=([3], [0]))
+            else:
+                lum = emit[1:-1, 1:-1, 1:-1] @ np.array([0.2126, 0.7152, 0.0722])
+            self._voxel_luminance = np.maximum(lum, 0.0).astype(np.float32)  # (nz, ny, nx)
+        else:
+            self._voxel_luminance = None
 
-    def segments(self, ray, tmax: float):
-        """The majorant along `ray` from its origin to `tmax` (world units), cell by cell of the exported majorant
-        grid (pbrt-v4's DDA majorant iterator): a list of (t0, t1, σ̄ per world unit). The cells at the grid's
-        edges stretch to the volume's bounds, as the ABI says."""
-        ray = mi.Ray3f(ray)
-        ray.maxt = tmax
-        hit, mint, maxt = self.bbox.ray_intersect(ray)
-        if not hit:
-            return []
-        t0, t1 = max(float(mint), 0.0), min(float(maxt), tmax)
-        if not t1 > t0:
-            return []
-        o = np.array(self._medium_point(ray.o))
-        d = np.array(_medium_dir(self, ray.d))
-        g = self._grid
-        b0 = np.array(g["bounds"][:3])
-        cell = np.array(g["cell"])
-        n = np.array(g["counts"])
-        sig = g["sigma_t"]
-        p = o + t0 * d
-        idx = np.clip(np.floor((p - b0) / cell).astype(int), 0, n - 1)
-        step = np.where(d > 0, 1, -1)
-        nxt = np.full(3, math.inf)
-        for a in range(3):
-            if d[a] != 0.0:
-                # The next interior face in the direction of travel (edge cells stretch outwards).
-                k = idx[a] + (1 if d[a] > 0 else 0)
-                if 0 < k < n[a]:
-                    nxt[a] = (b0[a] + k * cell[a] - o[a]) / d[a]
-        out = []
-        t = t0
-        # σ per medium unit → per unit of t: |d_m| (d is a unit world direction).
-        per_t = float(np.linalg.norm(d))
-        for _ in range(int(n.sum()) + 3):
-            a = int(np.argmin(nxt))
-            end = min(float(nxt[a]), t1)
-            if end > t:
-                out.append((t, end, float(sig[idx[2], idx[1], idx[0]]) * per_t))
-            if end >= t1:
-                break
-            t = end
-            idx[a] += step[a]
-            k = idx[a] + (1 if d[a] > 0 else 0)
-            nxt[a] = (b0[a] + k * cell[a] - o[a]) / d[a] if 0 < k < n[a] else math.inf
+    # -- what Mitsuba asks of a medium --------------------------------------------------------------------------
+
+    def _uvw(self, p_world):
+        p = self._to_medium @ p_world
+        return (p - mi.Point3f(self.tex_lo)) / mi.Vector3f(self.tex_size)
+
+    def _lookup(self, tex, mei):
+        """A texture's value at the interaction, in the variant's Spectrum (spectral: each wavelength's bin)."""
+        vals = tex.eval(self._uvw(mei.p))
+        if not mi.is_spectral:
+            return mi.Spectrum(vals[0], vals[1], vals[2]) if not mi.is_monochromatic else mi.Spectrum(vals[0])
+        lo, hi = self.volume.wavelength_range
+        out = dr.zeros(mi.Spectrum)
+        for i in range(dr.size_v(mi.Spectrum)):
+            lam = mei.wavelengths[i]
+            b = mi.Int32(dr.floor((lam - lo) / (hi - lo) * self.channels))
+            v = mi.Float(0.0)
+            for c in range(self.channels):
+                v = dr.select(b == c, vals[c], v)
+            out[i] = v
         return out
 
-    def collisions(self, ray, tmax: float, sampler):
-        """Tentative collisions along `ray` up to `tmax`, sampled against the local majorant: (t, σ̄) pairs."""
-        for a, b, m in self.segments(ray, tmax):
-            if not m > 0.0:
-                continue
-            t = a
-            while True:
-                t -= math.log(1.0 - sampler.next_1d()) / m
-                if t >= b:
-                    break
-                yield t, m
-
     def get_majorant(self, mei, active=True):
-        return mi.Spectrum(self.majorant)
+        return mi.Spectrum(self.majorant_value)
 
     def get_scattering_coefficients(self, mei, active=True):
-        sa, ss, _ = self.coefficients(mei)
-        st = sa + ss
-        return _spectrum(ss), _spectrum(np.maximum(self.majorant - st, 0.0)), _spectrum(st)
+        sigma_t = self._lookup(self.sigma_t_tex, mei)
+        sigma_s = self._lookup(self.sigma_s_tex, mei)
+        sigma_n = dr.maximum(mi.Spectrum(self.majorant_value) - sigma_t, 0.0)
+        return sigma_s, sigma_n, sigma_t
 
-    def emission(self, mei):
-        """The emission coefficient j = σ_a·Le (W·m⁻³·sr⁻¹·nm⁻¹ in world units) at the interaction."""
-        return _spectrum(self.coefficients(mei)[2])
+    def emission(self, mei, active=True):
+        """The emission coefficient j = σ_a·Le at the interaction, per world unit (Mitsuba's units)."""
+        if self.emit_tex is None:
+            return mi.Spectrum(0.0)
+        return dr.select(active, self._lookup(self.emit_tex, mei), mi.Spectrum(0.0))
 
     def intersect_aabb(self, ray):
-        return self.bbox.ray_intersect(ray)
+        bbox = mi.BoundingBox3f(mi.Point3f(self.bbox.min), mi.Point3f(self.bbox.max))
+        return bbox.ray_intersect(ray)
 
-    # -- the fire light ----------------------------------------------------------------------------------------
+    # -- the fire light -----------------------------------------------------------------------------------------
 
-    def light(self) -> fm.Light | None:
-        """The fire light (built on first use), or None for a fire that does not emit."""
-        if self._light is None and self.emits:
-            self._light = self.volume.light({"weighting": "power"})
+    def light(self) -> "FireLight | None":
+        """The fire light (built on first use), or None for a fire that emits nothing."""
+        if self._light is None and self._voxel_luminance is not None and self._voxel_luminance.sum() > 0.0:
+            self._light = FireLight(self)
         return self._light
 
-    def bin_of(self, lam: float) -> int:
-        lo, hi = self.volume.wavelength_range
-        n = self.volume.channels
-        if not lo <= lam < hi:
-            return -1
-        return min(int((lam - lo) / (hi - lo) * n), n - 1)
+    def traverse(self, callback):
+        pass
+
+    def parameters_changed(self, keys):
+        pass
 
     def to_string(self):
         return f"FireMedium[{self.volume!r}]"
 
 
-def _medium_dir(medium: FireMedium, d) -> list[float]:
-    v = medium.to_medium @ mi.ScalarVector3f(float(d[0]), float(d[1]), float(d[2]))
-    return [float(v[0]), float(v[1]), float(v[2])]
+class FireLight:
+    """Selle's piecewise-constant pdf over the fire's voxels, by emitted luminance: a point sampled uniformly in a
+    voxel chosen by its light, and that density at any point (per unit world volume)."""
+
+    def __init__(self, fire: FireMedium):
+        self.fire = fire
+        (nx, ny, nz), lo, voxel = fire.lattice
+        self.n = (nx, ny, nz)
+        self.lo = mi.ScalarPoint3f(*lo)
+        self.voxel = mi.ScalarVector3f(*voxel)
+        w = fire._voxel_luminance.ravel().astype(np.float64)  # x fastest
+        self.dist = mi.DiscreteDistribution(mi.Float(w.astype(np.float32)))
+        self.pmf = mi.Float(w / w.sum())
+        self.voxel_volume_world = float(np.prod(voxel)) * fire.scale ** 3
+
+    def sample(self, u1, u2):
+        """A world point and its density per unit world volume, from uniforms u1 (1D) and u2 (3D as 2D + 1D)."""
+        idx = self.dist.sample(u1)
+        nx, ny, _ = self.n
+        i = idx % nx
+        j = (idx // nx) % ny
+        k = idx // (nx * ny)
+        frac = mi.Vector3f(u2[0], u2[1], u2[2])
+        p_m = mi.Point3f(self.lo) + (mi.Vector3f(mi.Float(i), mi.Float(j), mi.Float(k)) + frac) * \
+            mi.Vector3f(self.voxel)
+        p = mi.Transform4f(self.fire.to_world) @ p_m
+        pdf = dr.gather(mi.Float, self.pmf, idx) / self.voxel_volume_world
+        return p, pdf
+
+    def pdf(self, p_world, active=True):
+        """The density per unit world volume of sampling the point."""
+        p = self.fire._to_medium @ p_world
+        c = (p - mi.Point3f(self.lo)) / mi.Vector3f(self.voxel)
+        nx, ny, nz = self.n
+        i, j, k = mi.Int32(dr.floor(c.x)), mi.Int32(dr.floor(c.y)), mi.Int32(dr.floor(c.z))
+        inside = active & (i >= 0) & (j >= 0) & (k >= 0) & (i < nx) & (j < ny) & (k < nz)
+        idx = mi.UInt32(dr.select(inside, i + nx * (j + ny * k), 0))
+        return dr.select(inside, dr.gather(mi.Float, self.pmf, idx, inside) / self.voxel_volume_world, 0.0)
 
 
-def _luminance_weight(spec) -> float:
-    return max(float(spec[i]) for i in range(len(spec)))
+def _is(medium, fire):
+    """Where the medium pointer is the fire: a mask over the wavefront."""
+    return medium == mi.MediumPtr(fire)
+
+
+def _mis(a, b):
+    """The balance heuristic's weight of a density `a` against `b` (0 where both are 0)."""
+    s = a + b
+    return dr.select(s > 0.0, a / s, 0.0)
 
 
 class FirePath(mi.SamplingIntegrator):
-    """``"type": "firepath"``: Mitsuba's volumetric path tracing with the fire's emission and the fire light.
+    """``"type": "firepath"``: volumetric path tracing with the fire's emission and its light, in one Dr.Jit loop.
 
-    Properties: ``max_depth`` (default 8: scattering events, as Mitsuba counts them), ``rr_depth`` (5), and
-    ``fire_light`` (true: next-event estimation towards every ``firemedium`` medium's fire light).
+    Properties: ``max_depth`` (default 8: scattering events and surface bounces, as Mitsuba counts them),
+    ``rr_depth`` (5), ``fire_light`` (true: next-event estimation towards every ``firemedium`` medium's fire
+    light, MIS against the emission paths find), ``hide_emitters`` (false).
     """
 
     def __init__(self, props: mi.Properties):
@@ -247,6 +354,7 @@ class FirePath(mi.SamplingIntegrator):
         self.max_depth = int(props.get("max_depth", 8))
         self.rr_depth = int(props.get("rr_depth", 5))
         self.fire_light = bool(props.get("fire_light", True))
+        self.hide_emitters = bool(props.get("hide_emitters", False))
         self._fires: list[FireMedium] | None = None
 
     def _fires_of(self, scene) -> list[FireMedium]:
@@ -259,256 +367,218 @@ class FirePath(mi.SamplingIntegrator):
             self._fires = list(found.values())
         return self._fires
 
-    # -- transmittance through media and null surfaces (shadow rays) --------------------------------------
+    # -- transmittance along a shadow segment, through null surfaces and every medium ----------------------------
 
-    def _transmittance(self, scene, sampler, ray, medium, dist: float):
-        """Ratio tracking through the fire media along `ray` up to `dist`, crossing null surfaces; 0 when an
-        opaque surface blocks."""
+    @dr.syntax
+    def _transmittance(self, scene, sampler, it, target, medium, channel, active):
+        """Ratio tracking from the interaction `it` to the world point `target`: each segment (to the next
+        surface, crossed when it is null) starts from its own origin and is measured to the target from there;
+        an opaque surface before the target blocks. Returns the transmittance (0 when blocked)."""
         tr = mi.Spectrum(1.0)
-        ray = mi.Ray3f(ray)
-        left = dist
-        for _ in range(64):
-            ray.maxt = left
-            si = scene.ray_intersect(ray)
-            seg = float(si.t) if si.is_valid() else left
-            if isinstance(medium, FireMedium):
-                for t, m in medium.collisions(ray, seg, sampler):
-                    mei = mi.MediumInteraction3f()
-                    mei.p = ray(t)
-                    mei.wavelengths = ray.wavelengths
-                    mei.time = ray.time
-                    sa, ss, _ = medium.coefficients(mei)
-                    tr *= _spectrum(np.maximum(1.0 - (sa + ss) / m, 0.0))
-                    if _luminance_weight(tr) <= 0.0:
-                        return mi.Spectrum(0.0)
-            if not si.is_valid():
-                return tr
-            bsdf = si.bsdf()
-            if not mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null):
-                return mi.Spectrum(0.0)
-            medium = si.target_medium(ray.d)
-            left -= float(si.t)
-            if left <= 1e-6:
-                return tr
-            ray = si.spawn_ray(ray.d)
+        ray = it.spawn_ray_to(target)
+        active = mi.Bool(active)
+        medium = mi.MediumPtr(medium)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        needs_si = mi.Bool(True)
+        while dr.hint(active, label="firepath shadow ray"):
+            si[needs_si] = scene.ray_intersect(ray, needs_si & active)
+            needs_si &= ~active
+            in_medium = active & (medium != None)
+            mei = medium.sample_interaction(ray, sampler.next_1d(in_medium), channel, in_medium)
+            collided = in_medium & mei.is_valid() & (mei.t < si.t)
+            # A tentative collision: the null share carries on (ratio tracking).
+            tr[collided] *= mei.sigma_n / mei.combined_extinction
+            ray.o[collided] = mei.p
+            ray.maxt[collided] = ray.maxt - mei.t
+            si.t[collided] = si.t - mei.t
+            # No collision before the surface (or the segment's end): the segment is done.
+            at_surface = active & ~collided
+            reached = at_surface & ~si.is_valid()
+            active &= ~reached
+            hit = at_surface & si.is_valid()
+            bsdf = si.bsdf(ray)
+            null = hit & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+            blocked = hit & ~null
+            tr[blocked] = 0.0
+            active &= ~blocked
+            # Cross the null surface: a new segment from it, measured to the target from there.
+            medium[null] = si.target_medium(ray.d)
+            ray[null] = si.spawn_ray_to(target)
+            needs_si |= null
+            active &= dr.any(tr > 0.0)
         return tr
 
-    # -- next-event estimation towards the fire light -------------------------------------------------------
+    # -- next-event estimation ---------------------------------------------------------------------------------
 
-    def _fire_nee(self, scene, sampler, ray_origin_it, eval_fn, time, wavelengths):
-        """The fire lights' contribution at a vertex: per fire, a point sampled by its power, the line
-        estimate along the direction to it, MIS against the vertex's own sampling (eval_fn(wo) → (value, pdf))."""
+    def _emitters_nee(self, scene, sampler, it, medium, channel, eval_fn, active):
+        """Mitsuba's emitters from the vertex `it`: (contribution without the path throughput)."""
+        active = mi.Bool(active)  # (a copy: the caller's mask is not changed in place)
+        ds, em_w = scene.sample_emitter_direction(it, sampler.next_2d(active), False, active)
+        active &= ds.pdf > 0.0
+        value, pdf_other = eval_fn(ds.d, active)
+        tr = self._transmittance(scene, sampler, it, ds.p, medium, channel, active & dr.any(value > 0.0))
+        w = dr.select(ds.delta, 1.0, _mis(ds.pdf, pdf_other))
+        return dr.select(active, value * em_w * tr * w, 0.0)
+
+    def _fire_nee(self, scene, sampler, it, medium, channel, eval_fn, active):
+        """Every fire's light from the vertex `it`: a point sampled by the fire's light, MIS against the emission
+        the path would find along that direction (the same weights as `_emission_weight`)."""
         total = mi.Spectrum(0.0)
         for fire in self._fires_of(scene):
             light = fire.light()
             if light is None:
                 continue
-            u = [sampler.next_1d() for _ in range(6)]
-            pts, pdf_v, _ = light.sample([u], times=[time])
-            if not pdf_v[0] > 0.0:
-                continue
-            target = fire.to_world @ mi.ScalarPoint3f(*[float(x) for x in pts[0]])
-            o = ray_origin_it.p
-            d = mi.Vector3f(target) - o
-            dist = dr_norm(d)
-            if dist <= 1e-7:
-                continue
-            wo = d / dist
-            o_m = fire._medium_point(o)
-            d_m = _medium_dir(fire, wo)
-            pdf_dir = float(light.pdf_direction([o_m], [d_m], times=[time])[0])
-            if not pdf_dir > 0.0:
-                continue
-            value, pdf_other = eval_fn(wo)
-            if _luminance_weight(value) <= 0.0:
-                continue
-            # Opaque surfaces before the fire end the line there; null ones (the fire's boundary) are crossed.
-            reach, blocked = self._reach(scene, ray_origin_it, wo, fire)
-            if blocked:
-                continue
-            rad, _ = light.integrate([o_m], [d_m], tmin=0.0, tmax=reach * 1.0 / fire.scale, times=[time])
-            le = _spectrum([rad[0][fire.bin_of(lam)] if fire.bin_of(lam) >= 0 else 0.0
-                            for lam in _lambdas(wavelengths)])
-            w = pdf_dir / (pdf_dir + pdf_other) if pdf_other > 0.0 else 1.0
-            total += value * le * (w / pdf_dir)
+            u1 = sampler.next_1d(active)
+            u2 = sampler.next_2d(active)
+            u3 = sampler.next_1d(active)
+            p, pdf_v = light.sample(u1, mi.Point3f(u2.x, u2.y, u3))
+            d = p - it.p
+            dist2 = dr.squared_norm(d)
+            ok = active & (pdf_v > 0.0) & (dist2 > 1e-14)
+            wo = d * dr.rsqrt(dist2)
+            value, pdf_dir = eval_fn(wo, ok)
+            ok &= dr.any(value > 0.0)
+            mei = dr.zeros(mi.MediumInteraction3f)
+            mei.p = p
+            mei.wavelengths = it.wavelengths
+            j = fire.emission(mei, ok)
+            tr = self._transmittance(scene, sampler, it, p, medium, channel, ok & dr.any(j > 0.0))
+            # Densities per unit volume at p: the light's, and the path's (its direction's density over t², times
+            # the rate of its tentative collisions, the majorant).
+            p_path = pdf_dir * fire.majorant_value / dist2
+            w = _mis(pdf_v, p_path)
+            total += dr.select(ok, value * tr * j * w / (pdf_v * dist2), 0.0)
         return total
-
-    def _reach(self, scene, it, wo, fire):
-        """How far a line from `it` along `wo` sees (world units) before an opaque surface, and whether an
-        opaque surface hides the fire's box entirely."""
-        ray = it.spawn_ray(wo)
-        hit_box, mint, maxt = fire.intersect_aabb(ray)
-        if not hit_box or float(maxt) <= 0.0:
-            return 0.0, True
-        travelled = 0.0
-        for _ in range(16):
-            si = scene.ray_intersect(ray)
-            if not si.is_valid():
-                return 1e30, False
-            travelled += float(si.t)
-            if not mi.has_flag(si.bsdf().flags(), mi.BSDFFlags.Null):
-                return travelled, travelled <= max(float(mint), 0.0)
-            ray = si.spawn_ray(wo)
-        return travelled, False
 
     # -- the path ---------------------------------------------------------------------------------------------
 
+    @dr.syntax
     def sample(self, scene, sampler, ray, medium=None, active=True):
+        fires = self._fires_of(scene)
         ray = mi.Ray3f(ray)
         L = mi.Spectrum(0.0)
         beta = mi.Spectrum(1.0)
-        depth = 0
-        # The MIS weight's other density for emission a path finds by itself: the fire light's direction density
-        # from the last scattering vertex, computed when the path meets an emitting fire (None: camera ray or
-        # specular vertex, weight 1).
-        prev = None  # (origin interaction, pdf of the sampled direction)
-        fire_w_cache: dict[int, float] = {}
-        si = scene.ray_intersect(ray)
-        for _ in range(1024):
-            if isinstance(medium, FireMedium):
-                surf_t = float(si.t) if si.is_valid() else math.inf
-                event = None
-                for t, m in medium.collisions(ray, surf_t, sampler):
-                    mei = _interaction(ray, t)
-                    sa, ss, j = medium.coefficients(mei)
-                    if medium.emits:
-                        w = self._emission_weight(medium, prev, ray, fire_w_cache)
-                        L += beta * _spectrum(j / m) * w
-                    # Scattering is sampled (hero wavelength), absorption is a weight: pbrt-v4's events with
-                    # the absorbed share carried as ratio tracking, which keeps the fire's emission behind its own
-                    # soot at the noise of a weight instead of a coin.
-                    p_scatter = min(ss[0] / m, 1.0)
-                    if p_scatter > 0.0 and sampler.next_1d() < p_scatter:
-                        event = (mei, ss)
-                        break
-                    beta *= _spectrum(np.maximum(m - (sa + ss), 0.0) / (m - ss[0]))
-                    b = _luminance_weight(beta)
-                    if b < 0.05:
-                        # Russian roulette on the weight (unbiased: survivors carry 1/q).
-                        if sampler.next_1d() >= b / 0.05:
-                            beta = mi.Spectrum(0.0)
-                            break
-                        beta /= b / 0.05
-                if _luminance_weight(beta) <= 0.0:
-                    break
-                if event is not None:
-                    mei, ss = event
-                    beta *= _spectrum(ss / ss[0])
-                    depth += 1
-                    if depth >= self.max_depth:
-                        break
-                    phase = medium.phase_function()
-                    ctx = mi.PhaseFunctionContext(sampler)
-                    # The fire light at the scattering point.
-                    if self.fire_light:
-                        def eval_phase(wo, mei=mei, phase=phase, ctx=ctx):
-                            v, p = phase.eval_pdf(ctx, mei, wo)
-                            return mi.Spectrum(v), float(p)
-                        L += beta * self._fire_nee(scene, sampler, mei, eval_phase, float(ray.time),
-                                                   ray.wavelengths)
-                    wo, w_phase, pdf = phase.sample(ctx, mei, sampler.next_1d(), sampler.next_2d())
-                    if not float(pdf) > 0.0:
-                        break
-                    beta *= mi.Spectrum(w_phase)
-                    prev = (mei, float(pdf))
-                    fire_w_cache = {}
-                    ray = mei.spawn_ray(wo)
-                    si = scene.ray_intersect(ray)
-                    continue
-            if si.is_valid() and mi.has_flag(si.bsdf(ray).flags(), mi.BSDFFlags.Null):
-                # The fire's boundary: cross it, the path's direction and MIS state unchanged.
-                medium = si.target_medium(ray.d)
-                ray = si.spawn_ray(ray.d)
-                si = scene.ray_intersect(ray)
-                continue
-            # Mitsuba's emitters the path finds (an area light, or the environment when it escapes), weighed
-            # against emitter sampling from the last scattering vertex.
-            emitter = si.emitter(scene)
-            if emitter is not None:
-                le = emitter.eval(si)
-                if prev is None:
-                    L += beta * le
-                else:
-                    ds = mi.DirectionSample3f(scene, si, prev[0])
-                    pdf_e = float(scene.pdf_emitter_direction(prev[0], ds))
-                    L += beta * le * (prev[1] / (prev[1] + pdf_e))
-            if not si.is_valid():
-                break
-            bsdf = si.bsdf(ray)
-            depth += 1
-            if depth >= self.max_depth:
-                break
-            ctx = mi.BSDFContext()
-            # Mitsuba's emitters, by emitter sampling (MIS with BSDF sampling; shadow rays through the fire).
-            if len(scene.emitters()) > 0 and mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth):
-                ds, em_w = scene.sample_emitter_direction(si, sampler.next_2d(), False)
-                if float(ds.pdf) > 0.0:
-                    wo_local = si.to_local(ds.d)
-                    v, pdf_b = bsdf.eval_pdf(ctx, si, wo_local)
-                    if _luminance_weight(v) > 0.0:
-                        tr = self._transmittance(scene, sampler, si.spawn_ray(ds.d), si.target_medium(ds.d),
-                                                 float(ds.dist) * (1.0 - 1e-4))
-                        w = 1.0 if ds.delta else float(ds.pdf) / (float(ds.pdf) + float(pdf_b))
-                        L += beta * v * em_w * tr * w
-            # The fire light at the surface.
-            if self.fire_light and mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth):
-                def eval_bsdf(wo, si=si, bsdf=bsdf, ctx=ctx):
-                    v, p = bsdf.eval_pdf(ctx, si, si.to_local(wo))
-                    return v, float(p)
-                L += beta * self._fire_nee(scene, sampler, si, eval_bsdf, float(ray.time), ray.wavelengths)
-            bs, w_bsdf = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d())
-            if not float(bs.pdf) > 0.0:
-                break
-            beta *= w_bsdf
-            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            wo = si.to_world(bs.wo)
-            prev = None if delta else (si, float(bs.pdf))
-            fire_w_cache = {}
-            if depth >= self.rr_depth:
-                q = min(_luminance_weight(beta), 0.95)
-                if sampler.next_1d() >= q:
-                    break
-                beta /= q
-            medium = si.target_medium(wo)
-            ray = si.spawn_ray(wo)
-            si = scene.ray_intersect(ray)
-        return L, True, []
+        depth = mi.UInt32(0)
+        active = mi.Bool(active)
+        medium = dr.zeros(mi.MediumPtr) if medium is None else mi.MediumPtr(medium)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        needs_si = mi.Bool(True)
+        # The last real scattering vertex and the density of the direction sampled there (MIS of what the path
+        # finds after it); `direct`: a camera ray or one after a specular bounce (no other strategy: weight 1).
+        prev = dr.zeros(mi.Interaction3f)
+        prev_pdf = mi.Float(1.0)
+        direct = mi.Bool(True)
+        channel = mi.UInt32(0)
+        if dr.hint(mi.is_rgb, mode="scalar"):
+            n_ch = dr.size_v(mi.Spectrum)
+            channel = mi.UInt32(dr.minimum(n_ch * sampler.next_1d(active), n_ch - 1))
+        while dr.hint(active, label="firepath"):
+            active &= dr.any(beta != 0.0)
+            # Russian roulette on the throughput past rr_depth.
+            q = dr.minimum(dr.max(beta), 0.95)
+            rr = active & (depth >= self.rr_depth)
+            active &= ~rr | (sampler.next_1d(active) < q)
+            beta[rr] = beta / q
 
-    def _emission_weight(self, fire: FireMedium, prev, ray, cache: dict[int, float]) -> float:
-        """MIS weight of emission a path finds by itself along its current direction: its sampling density
-        against the fire light's direction density from the last scattering vertex (the same along the whole
-        straight line, so computed once per fire and segment)."""
-        if prev is None or not self.fire_light or fire.light() is None:
-            return 1.0
-        key = id(fire)
-        if key not in cache:
-            it, pdf_path = prev
-            pdf_light = float(fire.light().pdf_direction([fire._medium_point(it.p)], [_medium_dir(fire, ray.d)],
-                                                         times=[float(ray.time)])[0])
-            cache[key] = pdf_path / (pdf_path + pdf_light)
-        return cache[key]
+            si[needs_si & active] = scene.ray_intersect(ray, needs_si & active)
+            needs_si &= ~active
+            in_medium = active & (medium != None)
+            mei = medium.sample_interaction(ray, sampler.next_1d(in_medium), channel, in_medium)
+            collided = in_medium & mei.is_valid() & (mei.t < si.t)
+
+            # ---- a tentative collision in a medium: the fire's emission, then scatter or carry on
+            for fire in fires:
+                is_fire = collided & _is(medium, fire)
+                j = fire.emission(mei, is_fire)
+                light = fire.light() if self.fire_light else None
+                w = mi.Float(1.0)
+                if light is not None:
+                    t2 = dr.squared_norm(mei.p - prev.p)
+                    p_path = prev_pdf * fire.majorant_value / dr.maximum(t2, 1e-14)
+                    w = dr.select(direct, 1.0, _mis(p_path, light.pdf(mei.p, is_fire)))
+                L[is_fire] += beta * j * w / mei.combined_extinction
+            # Scattering by the mean of the channels' probabilities; absorption and null collisions carry on, the
+            # absorbed share a weight (the fire's emission behind its own soot at the noise of a weight).
+            p_scatter = dr.mean(mei.sigma_s / mei.combined_extinction)
+            want = collided & (sampler.next_1d(collided) < p_scatter)
+            carry = collided & ~want
+            beta[carry] *= mei.sigma_n / (mei.combined_extinction * (1.0 - p_scatter))
+            ray.o[carry] = mei.p
+            ray.maxt[carry] = ray.maxt - mei.t
+            si.t[carry] = si.t - mei.t
+            beta[want] *= mei.sigma_s / (mei.combined_extinction * p_scatter)
+            depth[want] += 1
+            scatter = want & (depth < self.max_depth)
+            active &= ~(want & ~scatter)
+            phase_ctx = mi.PhaseFunctionContext(sampler)
+            phase = mei.medium.phase_function()
+            phase[~scatter] = dr.zeros(mi.PhaseFunctionPtr)
+
+            def eval_phase(wo, act, mei=mei, phase=phase, phase_ctx=phase_ctx):
+                v, p = phase.eval_pdf(phase_ctx, mei, wo, act)
+                return mi.Spectrum(v), p
+
+            L[scatter] += beta * self._emitters_nee(scene, sampler, mei, medium, channel, eval_phase, scatter)
+            if dr.hint(self.fire_light, mode="scalar"):
+                L[scatter] += beta * self._fire_nee(scene, sampler, mei, medium, channel, eval_phase, scatter)
+            wo, w_phase, pdf_phase = phase.sample(phase_ctx, mei, sampler.next_1d(scatter), sampler.next_2d(scatter),
+                                                  scatter)
+            scatter &= pdf_phase > 0.0
+            beta[scatter] *= w_phase
+            prev[scatter] = mei
+            prev_pdf[scatter] = pdf_phase
+            direct[scatter] = False
+            ray[scatter] = mei.spawn_ray(wo)
+            needs_si |= scatter
+
+            # ---- the surface the ray reaches (no collision before it)
+            at_surface = active & ~collided
+            emitter = si.emitter(scene)
+            hit_emitter = at_surface & (emitter != None) & ~(self.hide_emitters & (depth == 0))
+            ds = mi.DirectionSample3f(scene, si, prev)
+            pdf_em = scene.pdf_emitter_direction(prev, ds, hit_emitter & ~direct)
+            le = emitter.eval(si, hit_emitter)
+            L[hit_emitter] += beta * le * dr.select(direct, 1.0, _mis(prev_pdf, pdf_em))
+            at_surface &= si.is_valid()
+            active &= ~(active & ~collided & ~si.is_valid())
+            bsdf = si.bsdf(ray)
+            null = at_surface & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+            # A null surface (the fire's boundary): crossed, the path's direction and MIS state unchanged.
+            medium[null] = si.target_medium(ray.d)
+            ray[null] = si.spawn_ray(ray.d)
+            needs_si |= null
+            real = at_surface & ~null
+            depth[real] += 1
+            real &= depth < self.max_depth
+            active &= ~(at_surface & ~null & (depth >= self.max_depth))
+            ctx = mi.BSDFContext()
+            smooth = real & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+
+            def eval_bsdf(wo, act, si=si, bsdf=bsdf, ctx=ctx):
+                return bsdf.eval_pdf(ctx, si, si.to_local(wo), act)
+
+            L[smooth] += beta * self._emitters_nee(scene, sampler, si, medium, channel, eval_bsdf, smooth)
+            if dr.hint(self.fire_light, mode="scalar"):
+                L[smooth] += beta * self._fire_nee(scene, sampler, si, medium, channel, eval_bsdf, smooth)
+            bs, w_bsdf = bsdf.sample(ctx, si, sampler.next_1d(real), sampler.next_2d(real), real)
+            real &= bs.pdf > 0.0
+            active &= ~(at_surface & ~null & ~real)
+            beta[real] *= w_bsdf
+            wo = si.to_world(bs.wo)
+            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            prev[real] = si
+            prev_pdf[real] = bs.pdf
+            direct[real] = delta
+            medium[real] = si.target_medium(wo)
+            ray[real] = si.spawn_ray(wo)
+            needs_si |= real
+        return L, mi.Bool(True), []
 
     def aov_names(self):
         return []
 
     def to_string(self):
         return f"FirePath[max_depth={self.max_depth}, fire_light={self.fire_light}]"
-
-
-def _interaction(ray, t: float):
-    """A medium interaction at distance `t` along `ray`, as Mitsuba's phase functions read one."""
-    mei = mi.MediumInteraction3f()
-    mei.t = t
-    mei.p = ray(t)
-    mei.wi = -ray.d
-    mei.sh_frame = mi.Frame3f(mei.wi)
-    mei.wavelengths = ray.wavelengths
-    mei.time = ray.time
-    return mei
-
-
-def dr_norm(v) -> float:
-    return math.sqrt(float(v[0]) ** 2 + float(v[1]) ** 2 + float(v[2]) ** 2)
 
 
 mi.register_medium("firemedium", lambda props: FireMedium(props))

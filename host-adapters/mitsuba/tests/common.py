@@ -6,7 +6,7 @@ import unittest
 from pathlib import Path
 
 
-def mitsuba_or_skip(variant: str = "scalar_spectral"):
+def mitsuba_or_skip(variant: str = "llvm_ad_rgb"):
     try:
         import mitsuba as mi
     except ImportError:
