@@ -446,6 +446,35 @@ class Volume:
                                                                _fp(out[2])))
         return out[0], out[1], out[2]
 
+    def tables(self) -> dict[str, Any]:
+        """The fire's coefficients in closed form, for a host that textures it (Dr.Jit, a GPU): ``absorption``
+        (rows, channels) σ_a per unit density over T, ``scattering`` (channels,) σ_s per unit density,
+        ``emission`` (rows, channels) j per unit of e over T (float32; row r at T = r·``dt`` K), ``t_emit`` (it
+        emits where T > t_emit) and ``emission_grid`` (e = les, else d·les). With d, T, les from :meth:`fields`
+        interpolated trilinearly: σ_a = d·A(T), σ_s = d·S, j = e·J(T), the tables linear in T — the volume's own
+        coefficients at every point. :class:`FiremediumError` (``"unsupported"``) naming what is not of that form
+        (atomic lines, a scatter colour grid, diffusion, refraction, embers, motion blur, a dataset not
+        interpolated trilinearly)."""
+        t = abi.FmTables(struct_size=C.sizeof(abi.FmTables))
+        self.plugin._check(self.plugin.api.volume_tables(self._h, C.byref(t)))
+        rows, c = t.rows, t.channels
+        a = np.zeros((rows, c), dtype=np.float32)
+        s = np.zeros(c, dtype=np.float32)
+        j = np.zeros((rows, c), dtype=np.float32)
+        t.absorption, t.scattering, t.emission = _fp(a), _fp(s), _fp(j)
+        self.plugin._check(self.plugin.api.volume_tables(self._h, C.byref(t)))
+        return {"dt": t.dt, "t_emit": t.t_emit, "emission_grid": bool(t.flags & abi.TABLES_EMISSION_GRID),
+                "absorption": a, "scattering": s, "emission": j}
+
+    def fields(self, points: Any) -> np.ndarray:
+        """The fields the closed form (:meth:`tables`) reads at points: (n, 3) float32 of soot density d,
+        temperature T (K) and the Lescale or emission grid's value les (1 without one), as the volume interpolates
+        them; zeros outside. At :attr:`lattice`'s voxel centres, the voxels' own values."""
+        pts = _as_points(points, "points")
+        out = np.zeros((len(pts), 3), dtype=np.float32)
+        self.plugin._check(self.plugin.api.volume_fields(self._h, _dp(pts), len(pts), _fp(out)))
+        return out
+
     # -- the fast path ----------------------------------------------------------------------------------------
 
     def _rays(self, origins: Any, directions: Any, tmin: Any, tmax: Any, seed: int):

@@ -49,6 +49,8 @@ FEATURES = {
     "emits_without_absorption": 1 << 7,
 }
 
+TABLES_EMISSION_GRID = 1 << 0
+
 CREATE_FRAME = 1 << 0
 CREATE_SHUTTER = 1 << 1
 
@@ -110,6 +112,21 @@ class FmMajorantGrid(C.Structure):
         ("counts", C.c_uint32 * 3),
         ("reserved", C.c_uint32),
         ("sigma_t", c_double_p),
+    ]
+
+
+class FmTables(C.Structure):
+    _fields_ = [
+        ("struct_size", C.c_size_t),
+        ("channels", C.c_uint32),
+        ("rows", C.c_uint32),
+        ("flags", C.c_uint32),
+        ("reserved", C.c_uint32),
+        ("dt", C.c_double),
+        ("t_emit", C.c_double),
+        ("absorption", c_float_p),
+        ("scattering", c_float_p),
+        ("emission", c_float_p),
     ]
 
 
@@ -243,4 +260,6 @@ class FmApi(C.Structure):
         # 1.1
         ("volume_note_count", C.CFUNCTYPE(_S, _V, C.POINTER(C.c_size_t))),
         ("volume_note", C.CFUNCTYPE(_S, _V, C.c_size_t, C.c_char_p, C.c_size_t, C.POINTER(C.c_size_t))),
+        ("volume_tables", C.CFUNCTYPE(_S, _V, C.POINTER(FmTables))),
+        ("volume_fields", C.CFUNCTYPE(_S, _V, c_double_p, C.c_size_t, c_float_p)),
     ]

@@ -65,6 +65,36 @@ class Package(unittest.TestCase):
         np.testing.assert_allclose(c["j"], c["sigma_a"] * c["le"], rtol=1e-12, atol=0)
         self.assertEqual(float(np.abs(c["sigma_s"]).max()), 0.0)
 
+    def test_the_closed_form_is_the_volumes_coefficients(self):
+        # The fields at the lattice's voxel centres, interpolated trilinearly (as a texture would), then the tables
+        # at their temperature: the coefficients the volume gives between the centres.
+        v = self.fire
+        t = v.tables()
+        (nx, ny, nz), lo, hi = v.lattice
+        lo, hi = np.array(lo), np.array(hi)
+        cell = (hi - lo) / [nx, ny, nz]
+        rng = np.random.default_rng(4)
+        pts = lo + cell + rng.random((500, 3)) * (hi - lo - 2 * cell)
+        # The eight voxel centres around each point and their weights.
+        u = (pts - lo) / cell - 0.5
+        i0 = np.floor(u).astype(int)
+        fr = u - i0
+        f = np.zeros((len(pts), 3))
+        for corner in range(8):
+            off = np.array([(corner >> a) & 1 for a in range(3)])
+            w = np.prod(np.where(off, fr, 1.0 - fr), axis=1)
+            f += w[:, None] * v.fields(lo + (i0 + off + 0.5) * cell).astype(np.float64)
+        d, temp, les = np.maximum(f[:, 0], 0.0), f[:, 1], f[:, 2]
+        r = np.clip(temp / t["dt"], 0, len(t["emission"]) - 1)
+        r0 = np.minimum(r.astype(int), len(t["emission"]) - 2)
+        w = (r - r0)[:, None]
+        table = lambda a: a[r0] * (1 - w) + a[r0 + 1] * w
+        sa, ss, j = v.coefficients(pts)
+        np.testing.assert_allclose(d[:, None] * table(t["absorption"]), sa, rtol=2e-5, atol=1e-12 * sa.max())
+        np.testing.assert_allclose((d * les)[:, None] * table(t["emission"]) * (temp > t["t_emit"])[:, None], j,
+                                   rtol=2e-5, atol=1e-12 * j.max())
+        self.assertGreater(int((j[:, 20] > 0).sum()), 100)
+
     def test_the_majorant_grid_bounds_every_point(self):
         v = self.fire
         g = v.majorant_grid()
@@ -117,6 +147,13 @@ class Package(unittest.TestCase):
         # A relative file name is the directory's.
         v = fm.Volume({"filename": "campfire.vdb"}, directory=str(ROOT / "scenes" / "campfire"))
         self.assertEqual(v.bounds, self.fire.bounds)
+
+    def test_what_the_closed_form_cannot_express_is_refused_by_name(self):
+        torch = str(ROOT / "scenes" / "spectroscopy" / "torch.vdb")
+        with self.assertRaises(fm.FiremediumError) as e:
+            fm.Volume({"filename": torch, "species": "Na", "lineshape": "box"}).tables()
+        self.assertEqual(e.exception.status, "unsupported")
+        self.assertIn("atomic lines", str(e.exception))
 
     def test_what_the_medium_level_cannot_express_is_refused_by_name(self):
         v = fm.Volume({"filename": CAMPFIRE, "fuel": "propane", "refraction": True})

@@ -136,6 +136,7 @@ fn a_c_host_loads_the_plugin_through_the_header() {
         ("sizeof_FmErrorDetail", std::mem::size_of::<FmErrorDetail>()),
         ("sizeof_FmCreateInfo", std::mem::size_of::<FmCreateInfo>()),
         ("sizeof_FmRayQuery", std::mem::size_of::<FmRayQuery>()),
+        ("sizeof_FmTables", std::mem::size_of::<FmTables>()),
     ] {
         assert_eq!(
             get(k).parse::<usize>().unwrap(),
@@ -173,6 +174,17 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     let tmax: f64 = get("temperature_max").parse().unwrap();
     assert!((tmax - 2974.609).abs() < 1e-3, "{tmax}");
     assert_eq!(get("integrate_status"), "0");
+    // From C, the closed form: j from the fields and the tables is volume_coefficients' j at the same point.
+    assert_eq!(get("tables_status"), "0 0 0");
+    assert!(get("tables_rows").parse::<u32>().unwrap() > 1000);
+    let (jc, jv): (f64, f64) = (
+        get("closed_form_j29").parse().unwrap(),
+        get("coefficients_j29").parse().unwrap(),
+    );
+    assert!(
+        jv > 0.0 && (jc / jv - 1.0).abs() < 1e-5,
+        "{jc} against {jv}"
+    );
     // The same ray through the Rust loader gives the same numbers.
     // SAFETY: the plugin this cargo invocation built.
     let p = unsafe { Plugin::load(plugin_path()) }.unwrap();

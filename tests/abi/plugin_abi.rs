@@ -171,6 +171,84 @@ fn a_volumes_notes_cross_the_abi() {
 }
 
 #[test]
+fn the_closed_form_crosses_the_abi_and_is_the_volumes_coefficients() {
+    // ABI 1.2: the campfire's fields on its lattice and its tables over T give, at points between voxel centres,
+    // the coefficients the volume gives there; a sodium flame (atomic lines) is not of that form, and says so.
+    let p = plugin();
+    let campfire = crate::common::root().join("scenes/campfire/campfire.vdb");
+    let v = p
+        .create_volume(&[Param::string("filename", campfire.to_str().unwrap())])
+        .unwrap();
+    let t = v.tables().unwrap();
+    let c = t.channels;
+    assert!(
+        t.rows > 1000 && c == 32 && !t.emission_grid,
+        "{} rows, {c}",
+        t.rows
+    );
+    let pts: Vec<[f64; 3]> = (0..400)
+        .map(|i| {
+            let f = i as f64 / 400.0;
+            [
+                0.31 * (f * 17.0).sin(),
+                0.27 * (f * 11.0).cos(),
+                0.05 + 0.9 * f,
+            ]
+        })
+        .collect();
+    let mut fields = vec![[0f32; 3]; pts.len()];
+    v.fields(&pts, &mut fields).unwrap();
+    let (mut sa, mut ss, mut j) = (
+        vec![0f32; pts.len() * c],
+        vec![0f32; pts.len() * c],
+        vec![0f32; pts.len() * c],
+    );
+    v.coefficients(&pts, &mut sa, &mut ss, &mut j).unwrap();
+    let mut emitting = 0;
+    for (i, [d, temp, les]) in fields.iter().map(|f| f.map(f64::from)).enumerate() {
+        let r = (temp / t.dt).clamp(0.0, (t.rows - 1) as f64);
+        let r0 = (r as usize).min(t.rows - 2);
+        let fr = r - r0 as f64;
+        let lerp = |tab: &[f32], k: usize| {
+            let a = tab[r0 * c + k] as f64;
+            a + fr * (tab[(r0 + 1) * c + k] as f64 - a)
+        };
+        for k in 0..c {
+            let want = [sa[i * c + k], j[i * c + k]].map(f64::from);
+            let got = [
+                d * lerp(&t.absorption, k),
+                if temp > t.t_emit {
+                    d * les * lerp(&t.emission, k)
+                } else {
+                    0.0
+                },
+            ];
+            for (g, w) in got.iter().zip(want) {
+                assert!(
+                    (g - w).abs() <= 1e-5 * w.abs() + 1e-30,
+                    "point {i}, channel {k}: {g} against {w}"
+                );
+            }
+        }
+        emitting += usize::from(j[i * c + 20] > 0.0);
+    }
+    assert!(emitting > 100, "{emitting} of 400 points emit");
+    let torch = crate::common::root().join("scenes/spectroscopy/torch.vdb");
+    let na = p
+        .create_volume(&[
+            Param::string("filename", torch.to_str().unwrap()),
+            Param::string("species", "Na"),
+            Param::string("lineshape", "box"),
+        ])
+        .unwrap();
+    let e = na.tables().unwrap_err().to_string();
+    assert!(
+        e.contains("atomic lines") && e.contains("volume_coefficients"),
+        "{e}"
+    );
+}
+
+#[test]
 fn four_threads_give_the_single_thread_results() {
     let p = plugin();
     let v = p

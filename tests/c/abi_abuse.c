@@ -150,6 +150,17 @@ int main(int argc, char **argv) {
     expect_failure("volume_coefficients(absurd n)", api->volume_coefficients(vol, x, SIZE_MAX / 2, NULL, NULL, NULL));
     x[0] = NAN;
     expect_failure("volume_coefficients(NaN point)", api->volume_coefficients(vol, x, 1, f, NULL, NULL));
+    expect_failure("volume_fields(null points)", api->volume_fields(vol, NULL, 3, f));
+    expect_failure("volume_fields(null out)", api->volume_fields(vol, x, 1, NULL));
+    expect_failure("volume_fields(absurd n)", api->volume_fields(vol, x, SIZE_MAX / 2, f));
+    expect_failure("volume_fields(NaN point)", api->volume_fields(vol, x, 1, f));
+    expect_failure("volume_fields(null volume)", api->volume_fields(NULL, x, 1, f));
+    {
+        FmTables small_tables = {.struct_size = 8};
+        expect_failure("volume_tables(null out)", api->volume_tables(vol, NULL));
+        expect_failure("volume_tables(unsized)", api->volume_tables(vol, &small_tables));
+        expect_failure("volume_tables(null volume)", api->volume_tables(NULL, &small_tables));
+    }
     expect_failure("volume_temperature_range(null out)", api->volume_temperature_range(vol, NULL));
     expect_failure("volume_capped_rays(null out)", api->volume_capped_rays(vol, NULL));
     expect_failure("volume_capped_rays(null volume)", api->volume_capped_rays(NULL, &u64));

@@ -23,7 +23,7 @@ int main(int argc, char **argv) {
     printf("sizeof_FmParam %zu\nsizeof_FmParamInfo %zu\nsizeof_FmApi %zu\nsizeof_FmLightInfo %zu\n", sizeof(FmParam), sizeof(FmParamInfo), sizeof(FmApi), sizeof(FmLightInfo));
     printf("sizeof_FmMajorantGrid %zu\nsizeof_FmPointQuery %zu\nsizeof_FmErrorDetail %zu\nsizeof_FmCreateInfo %zu\n",
            sizeof(FmMajorantGrid), sizeof(FmPointQuery), sizeof(FmErrorDetail), sizeof(FmCreateInfo));
-    printf("sizeof_FmRayQuery %zu\n", sizeof(FmRayQuery));
+    printf("sizeof_FmRayQuery %zu\nsizeof_FmTables %zu\n", sizeof(FmRayQuery), sizeof(FmTables));
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
     FmEntry entry = (FmEntry)dlsym(lib, FIREMEDIUM_ENTRY_SYMBOL);
@@ -77,6 +77,30 @@ int main(int argc, char **argv) {
     FmPointQuery q = {sizeof q, 1, point, NULL, 2, 0, lambdas, sa, NULL, le, NULL};
     FmStatus ps = api->volume_point(vol, &q);
     printf("point_status %d\npoint_sigma_a_650 %.9g\npoint_le_650 %.9g\n", ps, sa[1], le[1]);
+    /* The closed form (1.2): the tables' size first, then the tables; j at the point from its fields, against
+     * volume_coefficients there. */
+    FmTables tab = {.struct_size = sizeof tab};
+    FmStatus t1 = api->volume_tables(vol, &tab);
+    size_t cells = (size_t)tab.rows * tab.channels;
+    tab.absorption = calloc(cells, sizeof(float));
+    tab.emission = calloc(cells, sizeof(float));
+    tab.scattering = calloc(tab.channels, sizeof(float));
+    FmStatus t2 = api->volume_tables(vol, &tab);
+    float fields[3], j_coef[64];
+    FmStatus fl = api->volume_fields(vol, point, 1, fields);
+    api->volume_coefficients(vol, point, 1, NULL, NULL, j_coef);
+    double r = fields[1] / tab.dt;
+    if (r > tab.rows - 1) r = tab.rows - 1;
+    size_t i0 = (size_t)r < tab.rows - 2 ? (size_t)r : tab.rows - 2;
+    double fr = r - (double)i0, e = (tab.flags & FM_TABLES_EMISSION_GRID) ? fields[2] : fields[0] * fields[2];
+    double j29 = fields[1] > tab.t_emit
+        ? e * (tab.emission[i0 * tab.channels + 29] * (1 - fr) + tab.emission[(i0 + 1) * tab.channels + 29] * fr)
+        : 0.0;
+    printf("tables_status %d %d %d\ntables_rows %u\nclosed_form_j29 %.9g\ncoefficients_j29 %.9g\n", t1, t2, fl, tab.rows,
+           j29, j_coef[29]);
+    free(tab.absorption);
+    free(tab.emission);
+    free(tab.scattering);
     /* The fire light: one sample, its pdf evaluated again. */
     FmLight *light = NULL;
     if (api->light_create(vol, NULL, 0, &light) != FM_OK) return 1;

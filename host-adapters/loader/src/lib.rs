@@ -33,7 +33,7 @@ use std::sync::Arc;
 mod light;
 mod volume;
 pub use light::Light;
-pub use volume::{MajorantGrid, Medium, Point, Sampling, Volume};
+pub use volume::{MajorantGrid, Medium, Point, Sampling, Tables, Volume};
 
 /// What went wrong.
 #[derive(Debug, Clone, PartialEq)]
@@ -362,7 +362,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 26] = [
+const ENTRIES: [&str; 28] = [
     "last_error",
     "last_error_detail",
     "param_count",
@@ -389,6 +389,8 @@ const ENTRIES: [&str; 26] = [
     "light_line_channels",
     "volume_note_count",
     "volume_note",
+    "volume_tables",
+    "volume_fields",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

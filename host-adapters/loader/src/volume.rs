@@ -497,6 +497,89 @@ impl Volume {
         };
         self.inner.check(s)
     }
+
+    /// The fire's coefficients in closed form over its fields (see [`Tables`]), for a host that textures it;
+    /// a status error (`FM_UNSUPPORTED`) naming what is not of that form.
+    pub fn tables(&self) -> Result<Tables, Error> {
+        let api = self.inner.api();
+        let mut t = abi::FmTables::default();
+        // SAFETY: a live handle; a sized FmTables whose null table pointers ask for the sizes.
+        let s = unsafe { (api.volume_tables)(self.handle, &mut t) };
+        self.inner.check(s)?;
+        let (rows, c) = (t.rows as usize, t.channels as usize);
+        let cells = rows.checked_mul(c).ok_or_else(|| {
+            Error::Buffer(format!(
+                "volume_tables: {rows} rows × {c} channels overflow"
+            ))
+        })?;
+        let alloc = |n: usize| {
+            let mut v: Vec<f32> = Vec::new();
+            v.try_reserve_exact(n).map_err(|_| {
+                Error::Buffer(format!("volume_tables: {n} floats do not fit in memory"))
+            })?;
+            v.resize(n, 0.0);
+            Ok::<_, Error>(v)
+        };
+        let (mut a, mut s, mut j) = (alloc(cells)?, alloc(c)?, alloc(cells)?);
+        t.absorption = a.as_mut_ptr();
+        t.scattering = s.as_mut_ptr();
+        t.emission = j.as_mut_ptr();
+        // SAFETY: each buffer holds the floats the first call's rows and channels call for.
+        let status = unsafe { (api.volume_tables)(self.handle, &mut t) };
+        self.inner.check(status)?;
+        Ok(Tables {
+            channels: c,
+            rows,
+            dt: t.dt,
+            t_emit: t.t_emit,
+            emission_grid: t.flags & abi::FM_TABLES_EMISSION_GRID != 0,
+            absorption: a,
+            scattering: s,
+            emission: j,
+        })
+    }
+
+    /// The closed form's fields at medium-space points into `out`: [d, T, les] each, as the volume interpolates
+    /// them (see [`Tables`]).
+    pub fn fields(&self, points: &[[f64; 3]], out: &mut [[f32; 3]]) -> Result<(), Error> {
+        if out.len() < points.len() {
+            return Err(Error::Buffer(format!(
+                "fields: {} outputs for {} points",
+                out.len(),
+                points.len()
+            )));
+        }
+        // SAFETY: `out` holds 3 floats per point (checked); points are 3 contiguous f64 each.
+        let s = unsafe {
+            (self.inner.api().volume_fields)(
+                self.handle,
+                points.as_ptr() as *const f64,
+                points.len(),
+                out.as_mut_ptr() as *mut f32,
+            )
+        };
+        self.inner.check(s)
+    }
+}
+
+/// A volume's coefficients in closed form ([`Volume::tables`]): with d, T and les the fields
+/// ([`Volume::fields`]) interpolated trilinearly from the lattice's voxel values, d and les clamped at 0, and
+/// the tables linear between rows r = clamp(T / dt, 0, rows − 1): σ_a = d·A(r), σ_s = d·S, j = e·J(r) where
+/// T > `t_emit`, e = les with an emission grid, d·les without — the volume's own coefficients at every point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tables {
+    pub channels: usize,
+    pub rows: usize,
+    /// Kelvin between rows.
+    pub dt: f64,
+    pub t_emit: f64,
+    pub emission_grid: bool,
+    /// σ_a per unit density, rows × channels.
+    pub absorption: Vec<f32>,
+    /// σ_s per unit density, per channel.
+    pub scattering: Vec<f32>,
+    /// j per unit of e, rows × channels.
+    pub emission: Vec<f32>,
 }
 
 /// A volume's majorant grid ([`Volume::majorant_grid`]).

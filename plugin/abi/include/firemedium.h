@@ -154,6 +154,29 @@ typedef struct FmPointQuery {
     double *sigma_a, *sigma_s, *le, *j;
 } FmPointQuery;
 
+/* (1.2) The volume's coefficients in closed form (volume_tables), for a host that textures the fire rather than
+ * asking for points. With d, T and les the fields (volume_fields) interpolated trilinearly from the lattice's voxel
+ * values (a zero layer around the lattice; nothing outside the volume's bounds), d and les clamped at 0,
+ * r = clamp(T / dt, 0, rows - 1) and the tables linear between rows:
+ *   sigma_a = d * A(r), sigma_s = d * S, j = e * J(r) where T > t_emit (else 0),
+ *   e = les with FM_TABLES_EMISSION_GRID, d * les without
+ * in the volume's channels, per medium unit: what volume_coefficients gives at every point. The host sets
+ * struct_size and the three table pointers (each may be NULL: a first call learns channels and rows); the plugin
+ * writes the rest. */
+typedef struct FmTables {
+    size_t struct_size;   /* sizeof(FmTables) */
+    uint32_t channels;
+    uint32_t rows;        /* of the temperature tables */
+    uint32_t flags;       /* FM_TABLES_* */
+    uint32_t reserved;
+    double dt;            /* K between rows: row r holds T = r * dt */
+    double t_emit;        /* emits where T > t_emit (pbrt mode's 100 K; 0 physical; -inf without temperature) */
+    float *absorption;    /* host's rows * channels floats (row-major), or NULL: sigma_a per unit density */
+    float *scattering;    /* host's channels floats, or NULL: sigma_s per unit density */
+    float *emission;      /* host's rows * channels floats, or NULL: j per unit of e */
+} FmTables;
+#define FM_TABLES_EMISSION_GRID 1u /* e = les (an emission grid), not d * les */
+
 /* The last error's structure (last_error_detail), beside its message: what a host needs to point its
  * user at the cause without parsing text. Strings are owned by the plugin, valid until the next call on the same
  * thread; NULL when the error has no such part. */
@@ -344,6 +367,15 @@ typedef struct FmApi {
     /* (1.1) Note index (< the count), UTF-8, NUL-terminated and truncated to cap bytes, into buf (may be NULL to
      * ask for the length); its full length in bytes without the NUL into *len (required). */
     FmStatus (*volume_note)(const FmVolume *volume, size_t index, char *buf, size_t cap, size_t *len);
+    /* (1.2) The volume's coefficients in closed form into *out (required, its struct_size and table pointers set;
+     * FmTables above); FM_UNSUPPORTED naming what is not of that form (atomic lines, a scatter colour grid,
+     * diffusion, refraction, embers, motion blur, a dataset not interpolated trilinearly). */
+    FmStatus (*volume_tables)(const FmVolume *volume, FmTables *out);
+    /* (1.2) The closed form's fields at n medium-space points (3n doubles) into out (3n floats, point-major): soot
+     * density d, temperature T (K) and the Lescale or emission grid's value les (1 without one), as the volume
+     * interpolates them; zeros outside. At the lattice's voxel centres, the voxels' own values: what a host
+     * textures. */
+    FmStatus (*volume_fields)(const FmVolume *volume, const double *points, size_t n, float *out);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -311,6 +311,59 @@ pub const FM_FEATURE_DIFFUSION: u64 = 1 << 6;
 /// It emits where it may not absorb (an emission grid): Le = j/σ_a is undefined there, j is not.
 pub const FM_FEATURE_EMITS_WITHOUT_ABSORPTION: u64 = 1 << 7;
 
+/// The volume's coefficients in closed form ([`FmApi::volume_tables`], 1.2), for a host that textures the fire
+/// rather than asking for points: with d, T and les the fields ([`FmApi::volume_fields`]) interpolated trilinearly
+/// from the lattice's voxel values (a zero layer around the lattice; nothing outside the volume's bounds), d and
+/// les clamped at 0, r = clamp(T / dt, 0, rows − 1) and A, J linear between rows,
+/// σ_a = d · A(r), σ_s = d · S, j = e · J(r) where T > t_emit (else 0), e = les with
+/// [`FM_TABLES_EMISSION_GRID`], d · les without — in the volume's channels, per medium unit, as
+/// [`FmApi::volume_coefficients`] gives them at every point. The host sets `struct_size` and the three table
+/// pointers (each may be null: a first call learns `channels` and `rows`); the plugin writes the rest.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct FmTables {
+    /// Set by the host to `size_of::<FmTables>()` before the call.
+    pub struct_size: usize,
+    /// The volume's channels.
+    pub channels: u32,
+    /// Rows of the temperature tables.
+    pub rows: u32,
+    /// `FM_TABLES_*` bits.
+    pub flags: u32,
+    /// Reserved (0).
+    pub reserved: u32,
+    /// Kelvin between rows: row r holds T = r · dt.
+    pub dt: f64,
+    /// The fire emits where T > t_emit (pbrt mode's 100 K; 0 in physical mode; −∞ without a temperature grid).
+    pub t_emit: f64,
+    /// Host's buffer of `rows × channels` floats (row-major), or null: σ_a per unit density over T.
+    pub absorption: *mut f32,
+    /// Host's buffer of `channels` floats, or null: σ_s per unit density.
+    pub scattering: *mut f32,
+    /// Host's buffer of `rows × channels` floats, or null: j per unit of e over T.
+    pub emission: *mut f32,
+}
+
+impl Default for FmTables {
+    fn default() -> Self {
+        FmTables {
+            struct_size: core::mem::size_of::<FmTables>(),
+            channels: 0,
+            rows: 0,
+            flags: 0,
+            reserved: 0,
+            dt: 0.0,
+            t_emit: 0.0,
+            absorption: core::ptr::null_mut(),
+            scattering: core::ptr::null_mut(),
+            emission: core::ptr::null_mut(),
+        }
+    }
+}
+
+/// [`FmTables::flags`]: the emission follows an emission grid (e = les), not the density (e = d · les).
+pub const FM_TABLES_EMISSION_GRID: u32 = 1;
+
 /// A volume's majorant grid ([`FmApi::volume_majorant_grid`]), for a host's own free-path sampling:
 /// cells of `cell` medium units tiling `bounds` (the last per axis may be cut by the box), `counts` of them,
 /// and per cell (x fastest) a bound on σ_t over every channel and every point of the cell — over the shutter
@@ -712,6 +765,22 @@ pub struct FmApi {
         buf: *mut c_char,
         cap: usize,
         len: *mut usize,
+    ) -> FmStatus,
+    /// (1.2) The volume's coefficients in closed form into `*out` (required, its `struct_size` and table
+    /// pointers set by the host; see [`FmTables`]); `FM_UNSUPPORTED` naming what is not of that form (atomic
+    /// lines, a scatter colour grid, diffusion, refraction, embers, motion blur, a dataset not interpolated
+    /// trilinearly).
+    pub volume_tables:
+        unsafe extern "C" fn(volume: *const FmVolume, out: *mut FmTables) -> FmStatus,
+    /// (1.2) The fields of the closed form at `n` medium-space points (3n doubles) into `out` (3n floats, point-major):
+    /// soot density d, temperature T (K) and the Lescale or emission grid's value les (1 without one), as the
+    /// volume interpolates them; zeros outside. At the lattice's voxel centres, the voxels' own values: what a
+    /// host textures.
+    pub volume_fields: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        points: *const f64,
+        n: usize,
+        out: *mut f32,
     ) -> FmStatus,
 }
 

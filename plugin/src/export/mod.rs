@@ -344,6 +344,8 @@ static API: FmApi = FmApi {
     light_line_channels,
     volume_note_count,
     volume_note,
+    volume_tables,
+    volume_fields,
 };
 
 /// The plugin's entry point: the static function table.

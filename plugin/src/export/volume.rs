@@ -432,6 +432,96 @@ pub(super) unsafe extern "C" fn volume_coefficients(
     })
 }
 
+pub(super) unsafe extern "C" fn volume_tables(
+    volume: *const FmVolume,
+    out: *mut FmTables,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_tables") }?;
+        // SAFETY: null or the host's FmTables of its struct_size (contract); integers, floats and pointers, valid
+        // as zero.
+        let host = unsafe {
+            super::read_sized(
+                out,
+                std::mem::size_of::<FmTables>(),
+                "volume_tables: out",
+                "FmTables",
+            )
+        }?;
+        let cf = v.closed_form().map_err(super::fail)?;
+        let (c, rows) = (cf.channels, cf.rows);
+        let to_u32 = |n: usize, what: &str| {
+            u32::try_from(n)
+                .map_err(|_| bad(format!("volume_tables: {n} {what}, more than a u32 holds")))
+        };
+        let tables = FmTables {
+            struct_size: std::mem::size_of::<FmTables>(),
+            channels: to_u32(c, "channels")?,
+            rows: to_u32(rows, "rows")?,
+            flags: if cf.emission_grid {
+                FM_TABLES_EMISSION_GRID
+            } else {
+                0
+            },
+            reserved: 0,
+            dt: cf.dt,
+            t_emit: cf.t_emit,
+            ..host
+        };
+        // SAFETY: each table pointer is null or holds the floats FmTables documents for these rows and channels
+        // (the host learnt them from a first call; contract).
+        let absorption = unsafe { out_f32(host.absorption, rows, c) }?;
+        // SAFETY: as above.
+        let scattering = unsafe { out_f32(host.scattering, 1, c) }?;
+        // SAFETY: as above.
+        let emission = unsafe { out_f32(host.emission, rows, c) }?;
+        if let Some(a) = absorption {
+            for (i, x) in a.iter_mut().enumerate() {
+                *x = cf.absorption(i / c, i % c);
+            }
+        }
+        if let Some(s) = scattering {
+            for (k, x) in s.iter_mut().enumerate() {
+                *x = cf.scattering(k);
+            }
+        }
+        if let Some(j) = emission {
+            for (i, x) in j.iter_mut().enumerate() {
+                *x = cf.emission(i / c, i % c);
+            }
+        }
+        // SAFETY: non-null, struct_size ≥ size_of::<FmTables>() writable bytes (read_sized checked both).
+        unsafe { out.write_unaligned(tables) };
+        Ok(())
+    })
+}
+
+pub(super) unsafe extern "C" fn volume_fields(
+    volume: *const FmVolume,
+    points: *const f64,
+    n: usize,
+    out: *mut f32,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_fields") }?;
+        // SAFETY: `points` holds `3 n` doubles or is null with n = 0 (caller contract); 3 n is checked.
+        let pts = unsafe { in_f64(points, n, 3, "volume_fields: points") }?;
+        // SAFETY: `out` holds `3 n` floats (caller contract).
+        let Some(o) = unsafe { out_f32(out, n, 3) }? else {
+            return Err(bad("volume_fields: out is null"));
+        };
+        for (p, o) in pts.chunks_exact(3).zip(o.chunks_exact_mut(3)) {
+            let f = v.fields(DVec3::new(p[0], p[1], p[2]));
+            for k in 0..3 {
+                o[k] = f[k] as f32;
+            }
+        }
+        Ok(())
+    })
+}
+
 pub(super) unsafe extern "C" fn volume_temperature_range(
     volume: *const FmVolume,
     out: *mut f64,

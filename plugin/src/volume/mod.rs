@@ -33,6 +33,7 @@
 mod basis;
 mod bent;
 mod build;
+mod closed_form;
 mod coefficients;
 mod diffusion;
 mod integrate;
@@ -53,6 +54,7 @@ mod settings;
 mod subset;
 mod tables;
 
+pub use closed_form::ClosedForm;
 pub use integrate::evaluations_on_this_thread;
 use integrate::EVALUATIONS;
 pub(crate) use integrate::MAX_STEPS;
