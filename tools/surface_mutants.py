@@ -9,7 +9,7 @@
   - python: a call of the Python package's public functions with arrays of random shapes, dtypes, counts and
     extreme values, and parameters past what C types hold: a Python exception, or finite numbers — never a crash
     of the interpreter, never NaN returned as an answer;
-  - abi: the C ABI through ctypes with FmCreateInfo, FmRayQuery and FmPointQuery of every struct_size from 0 to
+  - abi: the C ABI through ctypes with FmCreateInfo, FmRayQuery, FmPointQuery and FmTables of every struct_size from 0 to
     past this build's, their tails random bytes (as an older or newer minor version's host passes them): a status,
     never a crash.
 
@@ -126,6 +126,8 @@ PY_CALLS = [
     "l.pdf({a}, times={t})",
     "l.pdf_direction({a}, {b}, times={t})",
     "l.integrate({a}, {b}, times={t})",
+    "v.fields({a})",
+    "fm.Volume(dict(filename=CAMPFIRE, **{params})).tables()['emission']",
     "fm.Volume(dict(filename=CAMPFIRE, **{params}))",
 ]
 
@@ -192,7 +194,7 @@ def case_python(h, rng, d):
 
 
 def case_abi(h, rng, d):
-    cases = [(rng.choice(["create", "query", "point"]),
+    cases = [(rng.choice(["create", "query", "point", "tables"]),
               rng.choice([0, 1, 8, 87, 88, 95, 96, 97, 104, 128, 4096, rng.randint(0, 300)]))
              for _ in range(BATCH)]
     script = (
@@ -230,6 +232,15 @@ def case_abi(h, rng, d):
         "                           radiance=C.cast(out, abi.c_float_p), transmittance=C.cast(tr, abi.c_float_p))\n"
         "        s = api.volume_query(h, C.cast(buf(abi.FmRayQuery, q, size), C.POINTER(abi.FmRayQuery)))\n"
         "        vals = list(out) + list(tr)\n"
+        "    elif which == 'tables':\n"
+        "        t0 = abi.FmTables(struct_size=C.sizeof(abi.FmTables))\n"
+        "        assert api.volume_tables(h, C.byref(t0)) == abi.OK\n"
+        "        a = (C.c_float * (t0.rows * t0.channels))(); j = (C.c_float * (t0.rows * t0.channels))()\n"
+        "        sc = (C.c_float * t0.channels)()\n"
+        "        t = abi.FmTables(struct_size=C.sizeof(abi.FmTables), absorption=C.cast(a, abi.c_float_p),\n"
+        "                         scattering=C.cast(sc, abi.c_float_p), emission=C.cast(j, abi.c_float_p))\n"
+        "        s = api.volume_tables(h, C.cast(buf(abi.FmTables, t, size), C.POINTER(abi.FmTables)))\n"
+        "        vals = list(j)[-64:] + list(a)[-64:]\n"
         "    else:\n"
         "        pts = (C.c_double * 3)(0.0, 0.0, 0.5); lam = (C.c_double * 2)(450.0, 650.0)\n"
         "        o = [(C.c_double * 2)() for _ in range(4)]\n"

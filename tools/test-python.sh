@@ -41,5 +41,7 @@ for f in "$FIREMEDIUM_PLUGIN" "$FIREMEDIUM_COMMAND"; do
 done
 (cd python/tests && python3 -m unittest -v 2>&1)
 (cd host-adapters/mitsuba/tests && python3 -m unittest -v 2>&1)
+# The spectral variant (one variant per process): the emitting fires again, binned over Mitsuba's wavelengths.
+(cd host-adapters/mitsuba/tests && FIREMEDIUM_MITSUBA_VARIANT=llvm_ad_spectral python3 -m unittest -v test_emitting test_refused 2>&1)
 # (Blender's module prints its memory bookkeeping at exit; the result is unittest's.)
 (cd host-adapters/blender/tests && python3 -m unittest -v 2>&1 | grep -v '^Fra:\|leak detector\|Not freed')

@@ -8,6 +8,9 @@
 2. `firepath` on the emitting campfire over a floor (tests/data/scenes/campfire-floor.pbrt) against `firemedium
    render` of the same scene on the same 2 threads: relMSE (against firemedium render at 2048 spp) × time.
 3. The 1280×720, 256-spp time each would take, from the measured time per sample.
+4. (`--accuracy`) The fire's level: the campfire's brightest line of sight (15× its soot) through `firepath`, one
+   pixel at 2¹⁸ samples, against the plugin's own march along it; and the campfire-floor scene and its scattering
+   twin at 2048 spp against `firemedium render` at 16 384 spp (flame pixels and floor rows).
 """
 
 import argparse
@@ -28,6 +31,7 @@ sys.path = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).re
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("--variant", default="llvm_ad_rgb")
 ap.add_argument("--rounds", type=int, default=5)
+ap.add_argument("--accuracy", action="store_true", help="also the fire's level against the plugin's (about a minute)")
 a = ap.parse_args()
 
 import mitsuba as mi  # noqa: E402
@@ -139,3 +143,47 @@ with tempfile.TemporaryDirectory() as tmp:
     print(f"campfire over a floor, 32², {spp} spp: firepath {t_m:.3f} s relMSE {e_m:.3e} (×time {e_m * t_m:.3e}); "
           f"firemedium render {t_f:.3f} s relMSE {e_f:.3e} (×time {e_f * t_f:.3e}): "
           f"{(e_m * t_m) / (e_f * t_f):.2f}x")
+
+if a.accuracy:
+    import firemedium as fm
+
+    campfire = str(ROOT / "scenes" / "campfire" / "campfire.vdb")
+    fire = {"fuel": "propane", "firescale": 15, "smokescale": 15}
+    box = {"type": "cube", "to_world": T().translate([0, 0, 0.8025]).scale([0.6, 0.6, 0.7975]), "bsdf": {"type": "null"}}
+    o, target = [0.0, -3.0, 0.3], [0.0, 0.0, 0.3]
+    sc = mi.load_dict({
+        "type": "scene", "integrator": {"type": "firepath", "max_depth": 2},
+        "sensor": {"type": "perspective", "fov": 0.05, "to_world": T().look_at(origin=o, target=target, up=[0, 0, 1]),
+                   "film": {"type": "hdrfilm", "width": 1, "height": 1, "pixel_format": "xyz",
+                            "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": 1 << 18}},
+        "fire": {**box, "interior": {"type": "firemedium", "filename": campfire, **fire}}})
+    y = float(np.asarray(mi.render(sc), dtype=np.float64)[0, 0, 1]) * fmm.CD_M2_PER_UNIT
+    v = fm.Volume({"dataset": campfire, **fire})
+    rad, _ = v.integrate([o], [[0.0, 1.0, 0.0]])
+    y_ref = float(rad[0] @ v.channel_xyz()[:, 1])
+    print(f"the brightest line of sight: firepath {y:.1f} cd/m², the plugin's march {y_ref:.1f}: {y / y_ref:.4f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, extra in (("campfire-floor.pbrt", {}), ("campfire-floor-scattering.pbrt", {"look": "campfire"})):
+            ref_exr = Path(tmp) / "ref.exr"
+            subprocess.run([exe, "render", str(ROOT / "tests" / "data" / "scenes" / name), "-o", str(ref_exr),
+                            "--quiet", "--spp", "16384"], check=True)
+            lum = lambda a: np.asarray(a, dtype=np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+            ref = lum(mi.Bitmap(str(ref_exr)))
+            sc = mi.load_dict({
+                "type": "scene", "integrator": {"type": "firepath", "max_depth": 2},
+                "sensor": {"type": "perspective", "fov": 40, "fov_axis": "smaller",
+                           "to_world": T().look_at(origin=[0, -4.2, 1.6], target=[0, 0, 0.55], up=[0, 0, 1])
+                           @ T().scale([-1, 1, 1]),
+                           "film": {"type": "hdrfilm", "width": 32, "height": 32, "rfilter": {"type": "box"}},
+                           "sampler": {"type": "independent", "sample_count": 2048}},
+                "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
+                          "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
+                "fire": {**box, "interior": {"type": "firemedium", "filename": campfire, **fire, **extra}}})
+            img = lum(mi.render(sc, seed=3)) * fmm.CD_M2_PER_UNIT
+            flame = ref > 0.05 * ref.max()
+            floor = np.zeros_like(flame)
+            floor[-8:, :] = True
+            floor &= ~flame
+            print(f"{name}, 2048 spp against firemedium render at 16384: flame "
+                  f"{img[flame].mean() / ref[flame].mean():.4f}, floor {img[floor].mean() / ref[floor].mean():.4f}")

@@ -6,11 +6,15 @@ halves a fire needs (in the vectorised variants; the scalar ones run a Python ca
 millions of collisions cannot afford):
 
 - the **medium** ``firemedium`` (a :class:`FireMedium`). At load it builds the fire through the plugin and asks
-  it, through the ABI, for σ_a, σ_s and the emission coefficient j at every voxel centre of the fire's lattice
-  (``volume_coefficients``: the plugin stays the one source of the fire's physics), in the variant's colours — the
-  plugin's spectral bins projected to linear Rec.709 in RGB variants, the bins themselves in spectral ones — and
-  keeps them as Dr.Jit textures. Mitsuba's integrators (``volpath``, ``volpathmis``, ``prbvolpath``) then track it
-  as they track their own ``heterogeneous`` medium — a majorant, coefficients at points — in one compiled kernel,
+  it, through the ABI, for the fire in closed form (``volume_tables``, ``volume_fields``: the plugin stays the one
+  source of the fire's physics): soot density, temperature and emission scale at every voxel centre of the fire's
+  lattice, kept as one Dr.Jit texture, and per unit density σ_a, σ_s and j over temperature — at 1-nm bins read at
+  Mitsuba's own wavelengths in spectral variants, projected to linear Rec.709 in RGB ones — kept as a table
+  texture. A lookup interpolates the fields, as the plugin does, then reads the table: the fire the plugin
+  renders, not its coefficients interpolated between voxels (Planck's law is convex in T: that brightens a
+  flame). A fire not of that form (a scatter colour grid, atomic lines) is baked as coefficients at the voxel
+  centres instead. Mitsuba's integrators (``volpath``, ``volpathmis``, ``prbvolpath``) then track it as they
+  track their own ``heterogeneous`` medium — a majorant, coefficients at points — in one compiled kernel,
   no Python call per point. Its phase function is Henyey–Greenstein with the fire's ``g`` unless the scene gives
   one (a different one is an error). A fire whose layers the medium level cannot express (refraction's curved
   rays, embers' opaque spheres, atomic lines across their profiles, diffusion) is refused when the scene loads,
@@ -37,6 +41,7 @@ translation and a uniform scale).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -63,6 +68,8 @@ if not dr.is_jit_v(mi.Float):
 _REFUSED = ("refraction", "embers", "thick_lines", "diffusion")
 # Properties that are Mitsuba's, not the fire's.
 _MITSUBA_PROPS = {"type", "id", "to_world", "sample_emitters", "max_threads", "phase"}
+# Properties naming files (resolved against the scene's folder as Mitsuba resolves its own).
+_FILE_PROPS = {"filename", "dataset", "embersfile", "densityfile", "temperaturefile", "speciesfiles"}
 # Y per unit of Mitsuba's relative film, in cd/m²: 683 lm/W × ∫ȳ dλ (nm).
 CD_M2_PER_UNIT = 683.0 * 106.856895
 # Linear Rec.709 (sRGB primaries, D65) from XYZ.
@@ -71,6 +78,10 @@ _XYZ_TO_RGB = np.array([[3.2404542, -1.5371385, -0.4985314],
                         [0.0556434, -0.2040259, 1.0572252]])
 # The most bytes of textures a fire may take (three of them: σ_t, σ_s, j).
 _TEXTURE_BUDGET = 8 << 30
+# Spectral variants: the tables' bins over Mitsuba's 360–830 nm (1 nm), and the bins of a fire baked as coefficients.
+_TABLE_BINS, _BAKED_BINS = 470, 24
+# The most temperature rows a table texture keeps (the plugin's are ≤ 0.5 K apart; every k-th row is kept beyond).
+_TABLE_ROWS = 4096
 
 
 def _fire_params(props: mi.Properties) -> dict[str, Any]:
@@ -94,16 +105,21 @@ def _fire_params(props: mi.Properties) -> dict[str, Any]:
             params[name] = a.ravel()
         elif isinstance(value, mi.Object):
             continue
+        elif isinstance(value, str) and name in _FILE_PROPS:
+            # A file named relative to the scene: Mitsuba's file resolver holds the XML file's folder while it loads.
+            resolved = Path(str(mi.Thread.thread().file_resolver().resolve(value)))
+            params[name] = str(resolved) if not Path(value).is_absolute() and resolved.exists() else value
         elif isinstance(value, (str, bool, int, float)):
             params[name] = value
         else:
             # Mitsuba's vectors, points and colours: their components.
             params[name] = [float(x) for x in value]
     if mi.is_spectral:
-        # The bins span the wavelengths Mitsuba samples (20 nm: the soot's spectrum is smooth).
+        # The bins span the wavelengths Mitsuba samples, 1 nm each: the closed form's tables, read between bin
+        # centres at Mitsuba's wavelengths, are the spectrum itself (a fire baked as coefficients takes 24 bins).
         params.setdefault("lambdamin", 360.0)
         params.setdefault("lambdamax", 830.0)
-        params.setdefault("bins", 24)
+        params.setdefault("bins", _TABLE_BINS)
     return params
 
 
@@ -125,6 +141,14 @@ class FireMedium(mi.Medium):
         params = _fire_params(props)
         self.to_world = mi.ScalarTransform4f(props["to_world"]) if "to_world" in props else mi.ScalarTransform4f()
         volume = fm.Volume(params)
+        try:
+            tables = volume.tables()
+        except fm.FiremediumError as e:
+            if e.status != "unsupported":
+                raise
+            tables = None
+            if mi.is_spectral and "bins" not in props:
+                volume = fm.Volume({**params, "bins": _BAKED_BINS})
         refused = [f for f in _REFUSED if f in volume.features]
         if refused:
             raise fm.FiremediumError(
@@ -154,7 +178,11 @@ class FireMedium(mi.Medium):
         # Uniform scale of to_world (σ per medium unit → per world unit divides by it).
         self.scale = abs(np.linalg.det(m)) ** (1.0 / 3.0)
         self.emits = "emits" in volume.features
-        self._bake()
+        self._tables = tables
+        if tables is not None:
+            self._bake_fields(tables)
+        else:
+            self._bake()
         lo, hi = volume.bounds
         self.bbox = mi.ScalarBoundingBox3f()
         for c in [mi.ScalarPoint3f(x, y, z) for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]:
@@ -167,66 +195,144 @@ class FireMedium(mi.Medium):
     def _channel_weights(self) -> tuple[np.ndarray, np.ndarray]:
         """How the plugin's channels become the variant's: (σ weights (C, K), emission weights (C, K)) — in RGB
         variants each channel's linear Rec.709 (σ: by the positive part of its light in each component; j: its
-        colour, scaled to Mitsuba's relative film), in spectral ones the identity (bins)."""
+        colour, scaled to Mitsuba's relative film), in monochromatic ones its luminance, in spectral ones the
+        identity (bins)."""
         c = self.volume.channels
         if mi.is_spectral:
             eye = np.eye(c)
             return eye, eye
         xyz = self.volume.channel_xyz()
+        if mi.is_monochromatic:
+            y = xyz[:, 1:2]
+            return y / max(float(y.sum()), 1e-300), y / CD_M2_PER_UNIT
         rgb = xyz @ _XYZ_TO_RGB.T  # (C, 3)
         pos = np.maximum(rgb, 0.0)
         w_sigma = pos / np.maximum(pos.sum(axis=0, keepdims=True), 1e-300)
         return w_sigma, rgb / CD_M2_PER_UNIT
 
-    def _bake(self):
+    def _lattice_slabs(self, what: str, k: int, per_voxel):
+        """An array (nz + 2, ny + 2, nx + 2, k) of `per_voxel(points)` ((n, k) at the lattice's voxel centres), a
+        zero layer around (the lookup fades to 0 past the outer samples, as the plugin's does), z slab by z slab;
+        refused above the texture budget. Also sets the padded box the textures span and the lattice."""
         (nx, ny, nz), lo, hi = self.volume.lattice
         lo, hi = np.array(lo), np.array(hi)
         voxel = (hi - lo) / np.array([nx, ny, nz])
-        w_sigma, w_emit = self._channel_weights()
-        k = w_sigma.shape[1]
-        need = 3 * 4 * k * (nx + 2) * (ny + 2) * (nz + 2)
+        need = 4 * k * (nx + 2) * (ny + 2) * (nz + 2)
         if need > _TEXTURE_BUDGET:
             raise fm.FiremediumError(
-                f"firemedium (Mitsuba): the fire's textures need {need / 2**30:.1f} GiB ({nx}×{ny}×{nz} voxels × {k} "
-                f"channels × 3), above {_TEXTURE_BUDGET / 2**30:.0f} GiB: an RGB variant, or fewer bins",
+                f"firemedium (Mitsuba): the fire's {what} need {need / 2**30:.1f} GiB ({nx}×{ny}×{nz} voxels × {k} "
+                f"floats), above {_TEXTURE_BUDGET / 2**30:.0f} GiB: an RGB variant, or fewer bins",
                 status="unsupported")
-        # σ_t, σ_s and j per voxel in the variant's channels, a zero layer around (the lookup fades to 0 past
-        # the outer samples, as the plugin's does), z slab by z slab.
-        sigma_t = np.zeros((nz + 2, ny + 2, nx + 2, k), dtype=np.float32)
-        sigma_s = np.zeros_like(sigma_t)
-        emit = np.zeros_like(sigma_t)
+        out = np.zeros((nz + 2, ny + 2, nx + 2, k), dtype=np.float32)
         xs = lo[0] + (np.arange(nx) + 0.5) * voxel[0]
         ys = lo[1] + (np.arange(ny) + 0.5) * voxel[1]
         yy, xx = np.meshgrid(ys, xs, indexing="ij")
         for z in range(nz):
             pts = np.stack([xx.ravel(), yy.ravel(), np.full(xx.size, lo[2] + (z + 0.5) * voxel[2])], axis=1)
-            sa, ss, j = self.volume.coefficients(pts)
-            sa, ss, j = (a.astype(np.float64) for a in (sa, ss, j))
-            s_t = (sa + ss) @ w_sigma
-            sigma_t[z + 1, 1:-1, 1:-1] = s_t.reshape(ny, nx, k)
-            sigma_s[z + 1, 1:-1, 1:-1] = (ss @ w_sigma).reshape(ny, nx, k)
-            emit[z + 1, 1:-1, 1:-1] = (j @ w_emit).reshape(ny, nx, k)
-        # World units: σ and j per world unit (the medium's unit × scale).
-        sigma_t /= self.scale
-        sigma_s /= self.scale
-        emit /= self.scale
-        self.channels = k
-        self.majorant_value = float(sigma_t.max())
-        tex = lambda a: mi.Texture3f(mi.TensorXf(a), filter_mode=dr.FilterMode.Linear,
-                                     wrap_mode=dr.WrapMode.Clamp)
-        self.sigma_t_tex, self.sigma_s_tex = tex(sigma_t), tex(sigma_s)
-        self.emit_tex = tex(emit) if self.emits else None
-        # The padded box the textures span (medium space), and the lattice for the fire light.
+            out[z + 1, 1:-1, 1:-1] = per_voxel(pts).reshape(ny, nx, k)
         self.tex_lo = mi.ScalarPoint3f(*(lo - voxel))
         self.tex_size = mi.ScalarVector3f(*((hi - lo) + 2 * voxel))
         self.lattice = ((nx, ny, nz), lo, voxel)
+        return out
+
+    @staticmethod
+    def _rgb_absorption(a: np.ndarray, j: np.ndarray, w_sigma: np.ndarray, w_emit: np.ndarray) -> np.ndarray:
+        """σ_a per unit density over T in RGB (or luminance) channels, from the bins' (rows × C): each channel's
+        mean of the bins' σ weighted by the light that crosses it — where the fire glows (its luminance at T
+        within 10⁻³ of its hottest), its own: the bins' emission in that channel (a Planck mean, the channel's
+        optically thin and thick limits both exact); where it does not (below 10⁻⁴, smoke lit by other lights),
+        a white light's (the channel's response to each bin); between, a blend. Only where the channel's
+        signed sum is a fifth of its absolute one or more (the colour matching functions' negative lobes could
+        make a mean of anything), and kept within the bins' range. On the campfire's brightest line of sight the
+        white weights alone leave the flame 2.5 % dark against the spectral render; these, 0.2 %."""
+        white = a @ w_sigma
+        signed, absolute = j @ w_emit, j @ np.abs(w_emit)
+        ok = (absolute > 0.0) & (np.abs(signed) >= 0.2 * absolute)
+        glow = np.where(ok, (a * j) @ w_emit / np.where(ok, signed, 1.0), white)
+        glow = np.clip(glow, a.min(axis=1, keepdims=True), a.max(axis=1, keepdims=True))
+        y = signed @ (np.array([0.2126, 0.7152, 0.0722]) if signed.shape[1] == 3 else np.ones(1))
+        level = np.log10(np.maximum(y, 1e-300) / max(float(y.max()), 1e-300))
+        f = np.clip(level + 4.0, 0.0, 1.0)[:, None]
+        return f * glow + (1.0 - f) * white
+
+    def _bake_fields(self, tables: dict):
+        """The closed form: the fields d, T, les on the lattice as one texture, and σ_a, σ_s, j per unit density
+        over T as a table texture in the variant's channels (spectral: [A, S, J] over rows × 1-nm bins)."""
+        fields = self._lattice_slabs("fields", 3, self.volume.fields)
+        a, sc, j = tables["absorption"].astype(np.float64), tables["scattering"].astype(np.float64), \
+            tables["emission"].astype(np.float64)
+        # Every k-th row up to the last (the hottest voxel's T), at most _TABLE_ROWS: the tables are smooth in T.
+        rows = a.shape[0]
+        k = max(1, math.ceil((rows - 1) / (_TABLE_ROWS - 1)))
+        keep = np.minimum(np.arange(math.ceil((rows - 1) / k) + 1) * k, rows - 1)
+        a, j = a[keep], j[keep]
+        self.rows, self.dt = len(keep), tables["dt"] * k
+        self.t_emit = float(tables["t_emit"])
+        self.emission_grid = tables["emission_grid"]
+        w_sigma, w_emit = self._channel_weights()
+        a_rows = a @ w_sigma if mi.is_spectral else self._rgb_absorption(a, j, w_sigma, w_emit)
+        # Per world unit (the medium's unit × scale).
+        a, sc, j = a_rows / self.scale, sc @ w_sigma / self.scale, j @ w_emit / self.scale
+        self.channels = a.shape[1]
+        if mi.is_spectral:
+            tab = np.stack([a, np.broadcast_to(sc, a.shape), j], axis=2).astype(np.float32)  # (rows, bins, 3)
+            self.table_tex = mi.Texture2f(mi.TensorXf(tab), filter_mode=dr.FilterMode.Linear,
+                                          wrap_mode=dr.WrapMode.Clamp)
+        else:
+            tab = np.concatenate([a, np.broadcast_to(sc, a.shape), j], axis=1).astype(np.float32)  # (rows, 3K)
+            self.table_tex = mi.Texture1f(mi.TensorXf(tab), filter_mode=dr.FilterMode.Linear,
+                                          wrap_mode=dr.WrapMode.Clamp)
+        self.fields_tex = mi.Texture3f(mi.TensorXf(fields), filter_mode=dr.FilterMode.Linear,
+                                       wrap_mode=dr.WrapMode.Clamp)
+        d_max = float(np.maximum(fields[..., 0], 0.0).max())
+        self.majorant_value = d_max * float((a + sc).max())
+        lo, hi = self.volume.bounds
+        self._bounds_m = mi.ScalarBoundingBox3f(mi.ScalarPoint3f(*lo), mi.ScalarPoint3f(*hi))
         if self.emits:
             # Each voxel's emitted luminance (its centre's), for the fire light's distribution.
             if mi.is_spectral:
                 y = self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
-                lum = np.tensordot(emit[1:-1, 1:-1, 1:-1], y, axes=([3], [0]))
+            elif mi.is_monochromatic:
+                y = np.ones(1)
             else:
-                lum = emit[1:-1, 1:-1, 1:-1] @ np.array([0.2126, 0.7152, 0.0722])
+                y = np.array([0.2126, 0.7152, 0.0722])
+            y_of_row = j @ y
+            d, t, les = (fields[1:-1, 1:-1, 1:-1, i].astype(np.float64) for i in range(3))
+            e = np.maximum(les, 0.0) if self.emission_grid else np.maximum(d, 0.0) * np.maximum(les, 0.0)
+            lum = e * np.interp(t / self.dt, np.arange(self.rows), y_of_row) * (t > self.t_emit)
+            self._voxel_luminance = np.maximum(lum, 0.0).astype(np.float32)  # (nz, ny, nx)
+        else:
+            self._voxel_luminance = None
+
+    def _bake(self):
+        """A fire not of the closed form: σ_t, σ_s and j at every voxel centre in the variant's channels, each a
+        texture (linear between voxel centres)."""
+        w_sigma, w_emit = self._channel_weights()
+        k = w_sigma.shape[1]
+
+        def coefficients(pts):
+            sa, ss, j = (x.astype(np.float64) for x in self.volume.coefficients(pts))
+            return np.concatenate([(sa + ss) @ w_sigma, ss @ w_sigma, j @ w_emit], axis=1)
+
+        both = self._lattice_slabs("textures", 3 * k, coefficients)
+        # World units: σ and j per world unit (the medium's unit × scale).
+        both /= self.scale
+        sigma_t, sigma_s, emit = both[..., :k], both[..., k:2 * k], both[..., 2 * k:]
+        self.channels = k
+        self.majorant_value = float(sigma_t.max())
+        tex = lambda a: mi.Texture3f(mi.TensorXf(np.ascontiguousarray(a)), filter_mode=dr.FilterMode.Linear,
+                                     wrap_mode=dr.WrapMode.Clamp)
+        self.sigma_t_tex, self.sigma_s_tex = tex(sigma_t), tex(sigma_s)
+        self.emit_tex = tex(emit) if self.emits else None
+        if self.emits:
+            # Each voxel's emitted luminance (its centre's), for the fire light's distribution.
+            if mi.is_spectral:
+                y = self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
+            elif mi.is_monochromatic:
+                y = np.ones(1)
+            else:
+                y = np.array([0.2126, 0.7152, 0.0722])
+            lum = np.tensordot(emit[1:-1, 1:-1, 1:-1], y, axes=([3], [0]))
             self._voxel_luminance = np.maximum(lum, 0.0).astype(np.float32)  # (nz, ny, nx)
         else:
             self._voxel_luminance = None
@@ -238,7 +344,7 @@ class FireMedium(mi.Medium):
         return (p - mi.Point3f(self.tex_lo)) / mi.Vector3f(self.tex_size)
 
     def _lookup(self, tex, mei):
-        """A texture's value at the interaction, in the variant's Spectrum (spectral: each wavelength's bin)."""
+        """A baked texture's value at the interaction, in the variant's Spectrum (spectral: each wavelength's bin)."""
         vals = tex.eval(self._uvw(mei.p))
         if not mi.is_spectral:
             return mi.Spectrum(vals[0], vals[1], vals[2]) if not mi.is_monochromatic else mi.Spectrum(vals[0])
@@ -253,20 +359,50 @@ class FireMedium(mi.Medium):
             out[i] = v
         return out
 
+    def _closed_form(self, mei):
+        """σ_a, σ_s and j at the interaction from the closed form: the fields interpolated (zero outside the
+        volume's bounds, d and les clamped at 0), then the table at their temperature (and, spectral, at each of
+        the interaction's wavelengths)."""
+        p = self._to_medium @ mei.p
+        f = self.fields_tex.eval((p - mi.Point3f(self.tex_lo)) / mi.Vector3f(self.tex_size))
+        inside = mi.BoundingBox3f(mi.Point3f(self._bounds_m.min), mi.Point3f(self._bounds_m.max)).contains(p)
+        d = dr.select(inside, dr.maximum(f[0], 0.0), 0.0)
+        t = f[1]
+        les = dr.select(inside, dr.maximum(f[2], 0.0), 0.0)
+        e = les if self.emission_grid else d * les
+        e = dr.select(t > self.t_emit, e, 0.0)
+        row = (t / self.dt + 0.5) / self.rows
+        if mi.is_spectral:
+            sa, ss, j = dr.zeros(mi.Spectrum), dr.zeros(mi.Spectrum), dr.zeros(mi.Spectrum)
+            lo, hi = self.volume.wavelength_range
+            for i in range(dr.size_v(mi.Spectrum)):
+                v = self.table_tex.eval(mi.Point2f((mei.wavelengths[i] - lo) / (hi - lo), row))
+                sa[i], ss[i], j[i] = v[0], v[1], v[2]
+        else:
+            v = self.table_tex.eval(mi.Point1f(row))
+            k = self.channels
+            sa, ss, j = (mi.Spectrum(*v[o:o + k]) for o in (0, k, 2 * k))
+        return d * sa, d * ss, e * j
+
     def get_majorant(self, mei, active=True):
         return mi.Spectrum(self.majorant_value)
 
     def get_scattering_coefficients(self, mei, active=True):
-        sigma_t = self._lookup(self.sigma_t_tex, mei)
-        sigma_s = self._lookup(self.sigma_s_tex, mei)
+        if self._tables is not None:
+            sigma_a, sigma_s, _ = self._closed_form(mei)
+            sigma_t = sigma_a + sigma_s
+        else:
+            sigma_t = self._lookup(self.sigma_t_tex, mei)
+            sigma_s = self._lookup(self.sigma_s_tex, mei)
         sigma_n = dr.maximum(mi.Spectrum(self.majorant_value) - sigma_t, 0.0)
         return sigma_s, sigma_n, sigma_t
 
     def emission(self, mei, active=True):
         """The emission coefficient j = σ_a·Le at the interaction, per world unit (Mitsuba's units)."""
-        if self.emit_tex is None:
+        if not self.emits:
             return mi.Spectrum(0.0)
-        return dr.select(active, self._lookup(self.emit_tex, mei), mi.Spectrum(0.0))
+        j = self._closed_form(mei)[2] if self._tables is not None else self._lookup(self.emit_tex, mei)
+        return dr.select(active, j, mi.Spectrum(0.0))
 
     def intersect_aabb(self, ray):
         bbox = mi.BoundingBox3f(mi.Point3f(self.bbox.min), mi.Point3f(self.bbox.max))

@@ -1,19 +1,19 @@
-"""What the Mitsuba adapter's tests share: Mitsuba in its scalar spectral variant (or a skip saying why), the
-repository and the built `firemedium` command."""
+"""What the Mitsuba adapter's tests share: Mitsuba in a vectorised variant (llvm_ad_rgb, or
+FIREMEDIUM_MITSUBA_VARIANT; or a skip saying why), the repository and the built `firemedium` command."""
 
 import os
 import unittest
 from pathlib import Path
 
 
-def mitsuba_or_skip(variant: str = "llvm_ad_rgb"):
+def mitsuba_or_skip(variant: str | None = None):
     try:
         import mitsuba as mi
     except ImportError:
         if os.environ.get("FIREMEDIUM_REQUIRE_MITSUBA"):
             raise
         raise unittest.SkipTest("Mitsuba 3 is not installed (pip install mitsuba==3.9.1)")
-    mi.set_variant(variant)
+    mi.set_variant(variant or os.environ.get("FIREMEDIUM_MITSUBA_VARIANT") or "llvm_ad_rgb")
     return mi
 
 
