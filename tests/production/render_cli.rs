@@ -1477,7 +1477,10 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     );
     assert!(get("scene").ends_with("fire.pbrt"));
     assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
-    assert_eq!(get("plugin_abi"), "1.1");
+    assert_eq!(
+        get("plugin_abi"),
+        format!("{}.{}", firemedium_abi::ABI_MAJOR, firemedium_abi::ABI_MINOR)
+    );
     assert!(
         get("camera").starts_with("perspective fov 40")
             && get("camera").contains("screenwindow -1.5 1.5 -1 1"),
