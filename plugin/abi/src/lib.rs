@@ -813,12 +813,14 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmRay>(), 72);
         assert_eq!(core::mem::size_of::<FmExit>(), 56);
         assert_eq!(core::mem::size_of::<FmScatter>(), 40);
-        assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 120);
+        // 1.0/1.1 ended at 120 bytes; 1.2 appended the lattice (dims, reserved, two corners).
+        assert_eq!(FM_VOLUME_INFO_SIZE_1_0, 120);
+        assert_eq!(core::mem::size_of::<FmVolumeInfo>(), 184);
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 64);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 56);
-        // Four u32 fields, then one pointer per entry.
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 26 * 8);
+        // Four u32 fields, then one pointer per entry (26 through 1.1; 1.2 appended volume_tables, volume_fields).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 28 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
         assert_eq!(core::mem::size_of::<FmCreateInfo>(), 96);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
