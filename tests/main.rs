@@ -23,6 +23,7 @@ mod production {
     mod farm_cli;
     mod gen_cli;
     mod info_cli;
+    mod noise_cli;
     mod render_cli;
     mod scene_cli;
     mod sparse_fire;

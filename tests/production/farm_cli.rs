@@ -139,6 +139,65 @@ fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// An adaptive farm: the scripts carry the threshold and the time limit, each tile adapts on its own, and the
+/// tiles merge into a frame whose record names the sampling.
+#[test]
+fn adaptive_farm_tiles_carry_their_sampling_and_merge() {
+    let dir = tmp("adaptive");
+    ok(&run_in(
+        &dir,
+        &[
+            "gen",
+            "torch",
+            "--resolution",
+            "16",
+            "--frames",
+            "30-30",
+            "--velocity",
+            "-o",
+            "torch.####.vdb",
+        ],
+    ));
+    std::fs::write(dir.join("torch.pbrt"), SCENE).unwrap();
+    ok(&run_in(
+        &dir,
+        &[
+            "farm",
+            "slurm",
+            "torch.pbrt",
+            "--frames",
+            "30-30",
+            "--tiles",
+            "3",
+            "--spp",
+            "64",
+            "--noise-threshold",
+            "0.5",
+            "--time-limit",
+            "600",
+        ],
+    ));
+    let farm = dir.join("torch.farm");
+    let render = std::fs::read_to_string(farm.join("render.sbatch")).unwrap();
+    assert!(
+        render.contains("--noise-threshold 0.5 --time-limit 600"),
+        "{render}"
+    );
+    for (script, tasks) in [("render.sbatch", 3), ("merge.sbatch", 1)] {
+        for task in 0..tasks {
+            ok(&Command::new("bash")
+                .arg(farm.join(script))
+                .env("SLURM_ARRAY_TASK_ID", task.to_string())
+                .output()
+                .unwrap());
+        }
+    }
+    // The merged frame's header records how it was sampled.
+    let exr = std::fs::read(dir.join("torch.0030.exr")).unwrap();
+    let needle = b"noise_threshold 0.5 time_limit 600";
+    assert!(exr.windows(needle.len()).any(|w| w == needle));
+}
+
 #[test]
 fn submit_makes_the_merge_wait_for_every_render_task() {
     let dir = tmp("submit");

@@ -1479,7 +1479,11 @@ fn tiles_merge_into_the_full_frame_bit_for_bit() {
     assert_eq!(get("camera_to_world").split_whitespace().count(), 12);
     assert_eq!(
         get("plugin_abi"),
-        format!("{}.{}", firemedium_abi::ABI_MAJOR, firemedium_abi::ABI_MINOR)
+        format!(
+            "{}.{}",
+            firemedium_abi::ABI_MAJOR,
+            firemedium_abi::ABI_MINOR
+        )
     );
     assert!(
         get("camera").starts_with("perspective fov 40")

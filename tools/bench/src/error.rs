@@ -162,8 +162,9 @@ pub fn surface_ladder(
     let reference_scene = load(ref_spp, true).map_err(|e| e.to_string())?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
-    let (reference, st) = render::render(&reference_scene, 99, &|_, _| {});
+    let (reference, st) = render::render(&reference_scene, 99, &|_| {});
     let reference_m = surface_luminance(&reference, &mask);
+    let reference_all: Vec<f64> = reference.xyz.iter().map(|v| v.y).collect();
     // The reference's own error: half its samples against the other half, scaled to the full count.
     let about = format!(
         "reference: fire light on, {ref_spp} spp, {}×{} pixels ({} see a diffuse surface), {:.1} s",
@@ -177,7 +178,7 @@ pub fn surface_ladder(
         let mut spp = 1;
         while spp <= max_spp {
             let s = load(spp, light).map_err(|e| e.to_string())?;
-            let (img, st) = render::render(&s, 7 + spp as u64, &|_, _| {});
+            let (img, st) = render::render(&s, 7 + spp as u64, &|_| {});
             let (rel_rmse, rel_mse) = errors(&surface_luminance(&img, &mask), &reference_m);
             points.push(Point {
                 estimator: if light {
@@ -193,11 +194,34 @@ pub fn surface_ladder(
                 // (The renderer reaches the fire through the plugin library, whose counter is its own.)
                 evaluations: None,
             });
+            // Every render's own estimate of its error beside its true error, both over the whole image.
+            if let (true, Some(estimate)) = (light, st.rel_rmse_estimate) {
+                let all: Vec<f64> = img.xyz.iter().map(|v| v.y).collect();
+                let (true_rmse, true_mse) = errors(&all, &reference_all);
+                for (estimator, rel_rmse, rel_mse) in [
+                    (TRUE_WHOLE, true_rmse, true_mse),
+                    (ESTIMATE_WHOLE, estimate, f64::NAN),
+                ] {
+                    points.push(Point {
+                        estimator: estimator.into(),
+                        setting: format!("{spp} spp"),
+                        seconds: st.seconds,
+                        rel_rmse,
+                        rel_mse,
+                        evaluations: None,
+                    });
+                }
+            }
             spp *= 2;
         }
     }
     Ok((points, about))
 }
+
+/// The surface ladder's series of the fire light on over the whole image: the true error, and the render's own
+/// estimate of it (its relMSE column empty). Measures of the estimate, not estimators: never a ladder's winner.
+pub const TRUE_WHOLE: &str = "fire light on: true error (whole image)";
+pub const ESTIMATE_WHOLE: &str = "fire light on: the render's own estimate";
 
 /// The luminance of the pixels `mask` marks (those that see a surface), in pixel order.
 pub fn surface_luminance(img: &firemedium::render::Image, mask: &[bool]) -> Vec<f64> {
@@ -231,6 +255,7 @@ pub fn winner(points: &[Point]) -> Option<usize> {
     };
     (0..points.len())
         .filter(|&i| points[i].seconds <= budget * 1.0001)
+        .filter(|&i| ![TRUE_WHOLE, ESTIMATE_WHOLE].contains(&points[i].estimator.as_str()))
         .min_by(|&a, &b| points[a].rel_rmse.total_cmp(&points[b].rel_rmse))
 }
 

@@ -316,7 +316,7 @@ pub fn ladder(
     let mask = surface_mask(&reference_scene, &mut rng);
     let mut seconds = 0.0;
     let halves = [99, 100].map(|seed| {
-        let (img, st) = render::render(&reference_scene, seed, &|_, _| {});
+        let (img, st) = render::render(&reference_scene, seed, &|_| {});
         seconds += st.seconds;
         super::error::surface_luminance(&img, &mask)
     });
@@ -349,7 +349,7 @@ pub fn ladder(
             for (q, &n) in spp.iter().enumerate() {
                 let n = if e.light.is_none() { 4 * n } else { n };
                 s.spp = n;
-                let (img, st) = render::render(&s, 7 + n as u64, &|_, _| {});
+                let (img, st) = render::render(&s, 7 + n as u64, &|_| {});
                 let at = k * spp.len() + q;
                 if round > 0 {
                     if let Some(t) = times.get_mut(at) {

@@ -4,6 +4,7 @@
 
 mod error;
 mod fire_light;
+mod noise;
 mod perf;
 mod stability;
 mod user_path;
@@ -33,7 +34,8 @@ enum What {
     /// `--kernel`: the march alone, in process (a micro-benchmark).
     Perf(PerfArgs),
     /// Error against render time of every estimator of the fire seen directly: march (spectral, rgb) at a
-    /// ladder of steps, delta and ratio tracking at a ladder of samples; CSV + log–log plot (SVG, PNG).
+    /// ladder of steps, delta and ratio tracking at a ladder of samples; then the fire lighting surfaces, the fire
+    /// light on and off, with every render's own error estimate beside its true error; CSV + log–log plot (SVG, PNG).
     ErrorVsTime(ErrorArgs),
     /// What the plugin builds for the same fire with and without species, refraction and the fire light:
     /// bytes and set-up time per component (unused parts cost nothing).
@@ -42,6 +44,10 @@ enum What {
     /// room, with the campfire at several resolutions: error against time (CSV + log–log plot per resolution),
     /// error × time, and a light sample's cost beside a camera path.
     FireLight(FireLightArgs),
+    /// Every render's own error estimate against its true error (the scene's sampler and independent samples,
+    /// at a ladder of samples per pixel), and adaptive sampling (`--noise-threshold`) against uniform at equal
+    /// true error, on the campfire scene and the fire-lit room (the campfire at 128³).
+    Noise(noise::NoiseArgs),
     /// Redraws a ladder's plot (SVG, PNG) from its CSV, as `error-vs-time` and `fire-light` write it: the plots
     /// of committed measurements, without measuring again.
     Plot(PlotArgs),
@@ -191,6 +197,7 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
         What::Components(c) => components_report(c).map_err(|m| (1, m)),
         What::FireLight(f) => fire_light_report(f).map_err(|m| (1, m)),
         What::Plot(p) => plot_report(p).map_err(|m| (1, m)),
+        What::Noise(n) => noise::report(n).map_err(|m| (1, m)),
         What::Stability => {
             let start = std::time::Instant::now();
             let cases = stability::cases();
@@ -581,12 +588,15 @@ fn write_ladder(
     let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
     for p in points {
         out += &format!(
-            "| {} | {} | {:.3} | {:.3e} | {:.3e} | {} |\n",
+            "| {} | {} | {:.3} | {:.3e} | {} | {} |\n",
             p.estimator,
             p.setting,
             p.seconds,
             p.rel_rmse,
-            p.rel_mse,
+            match p.rel_mse.is_nan() {
+                true => "—".to_string(),
+                false => format!("{:.3e}", p.rel_mse),
+            },
             p.evaluations
                 .map(|n| n.to_string())
                 .unwrap_or_else(|| "—".into())
@@ -672,7 +682,7 @@ fn components(file: &str) -> Result<Components, String> {
 /// A file of the repository, `rel` from its root: from the working directory when it holds it (a clone's
 /// root), else from the source tree this binary was built from, else `rel` as it is (its absence is then the
 /// error the caller reports, naming it).
-fn repository_file(rel: &str) -> std::path::PathBuf {
+pub(crate) fn repository_file(rel: &str) -> std::path::PathBuf {
     let here = std::path::PathBuf::from(rel);
     if here.exists() {
         return here;

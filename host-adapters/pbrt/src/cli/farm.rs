@@ -52,6 +52,12 @@ pub struct SlurmArgs {
     /// Samples per pixel (default: the Sampler's).
     #[arg(long)]
     spp: Option<usize>,
+    /// Adaptive sampling, as `render --noise-threshold` (each tile's blocks its own).
+    #[arg(long, value_name = "T", value_parser = super::render::parse_noise_threshold)]
+    noise_threshold: Option<f64>,
+    /// As `render --time-limit`: each tile's render stops after the pass that crosses it.
+    #[arg(long, value_name = "SECONDS", value_parser = super::render::parse_time_limit)]
+    time_limit: Option<f64>,
     /// Seed of the pixel samples (each frame's seed follows from it, as for `render --frames`).
     #[arg(long)]
     seed: Option<u64>,
@@ -185,6 +191,12 @@ fn slurm(a: &SlurmArgs) -> firemedium::Result<String> {
     let mut pass = format!("--threads {}", a.cpus);
     if let Some(n) = a.spp {
         write!(pass, " --spp {n}").ok();
+    }
+    if let Some(t) = a.noise_threshold {
+        write!(pass, " --noise-threshold {t}").ok();
+    }
+    if let Some(t) = a.time_limit {
+        write!(pass, " --time-limit {t}").ok();
     }
     if let Some(s) = a.seed {
         write!(pass, " --seed {s}").ok();

@@ -29,9 +29,19 @@ pub struct RenderArgs {
     /// Render only the pixels [x0, x1) × [y0, y1) (pbrt-v4's --pixelbounds).
     #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
     pixelbounds: Option<Vec<f64>>,
-    /// Samples per pixel (default: the Sampler's pixelsamples).
+    /// Samples per pixel (default: the Sampler's pixelsamples); with --noise-threshold or --time-limit, the most
+    /// any pixel takes.
     #[arg(long)]
     spp: Option<usize>,
+    /// Adaptive sampling: blocks of 8×8 pixels stop taking samples once their estimated relative error (the
+    /// two-halves estimate every render reports) is below this, e.g. 0.02; the render ends when every block has,
+    /// or at --spp.
+    #[arg(long, value_name = "T", value_parser = parse_noise_threshold)]
+    noise_threshold: Option<f64>,
+    /// Stop after the pass that ends past this many seconds of rendering (the image whole, each pixel with the
+    /// samples it took; passes shorten as the limit nears).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_time_limit)]
+    time_limit: Option<f64>,
     /// Worker threads, 1 to 1024 (default: all cores); no more are started than there are tiles.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
     threads: Option<u16>,
@@ -429,10 +439,10 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     let tiles = (x1 - x0).div_ceil(16) * (y1 - y0).div_ceil(16);
     // (Loaded, Ctrl-C handled from here on: a farm's scheduler, or a test, may interrupt the render now.)
     log.event(serde_json::json!({"event": "rendering", "frame": frame, "tiles": tiles}));
-    let bar = ProgressBar::new(tiles as u64);
+    let bar = ProgressBar::new(1000);
     let terminal = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
     let show = !a.quiet && terminal;
-    // Off a terminal (a farm's log), progress as plain lines at every tenth of the tiles.
+    // Off a terminal (a farm's log), progress as plain lines at every tenth of the samples.
     let lines = !a.quiet && !terminal;
     let report = lines || log.on();
     let label = frame.map_or(String::new(), |f| format!("frame {f} "));
@@ -443,7 +453,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         ProgressDrawTarget::hidden()
     });
     bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} tiles {elapsed}/{eta}")
+        ProgressStyle::with_template("{bar:40} {percent:>3} % {msg} {elapsed}/{eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let pool = rayon::ThreadPoolBuilder::new()
@@ -451,15 +461,36 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         .num_threads(a.threads.map_or(0, usize::from).min(tiles))
         .build()
         .map_err(|e| Error::input(format!("threads: {e}")))?;
+    // After each pass: its error estimate in the log (error against run time, for any scene) and on the bar.
+    let on_pass = |p: &render::Pass| {
+        if let Some(e) = p.rel_rmse_estimate {
+            bar.set_message(format!("pass {}, rel. RMSE ≈ {:.2} %", p.index, 100.0 * e));
+        }
+        log.event(serde_json::json!({
+            "event": "pass",
+            "frame": frame,
+            "pass": p.index,
+            "seconds": p.seconds,
+            "samples": p.samples,
+            "spp": p.spp,
+            "rel_rmse_estimate": p.rel_rmse_estimate,
+            "active_pixels": p.active_pixels,
+        }));
+    };
+    let opts = render::Progressive {
+        noise_threshold: a.noise_threshold,
+        time_limit: a.time_limit,
+        on_pass: Some(&on_pass),
+    };
     let (img, st) = pool.install(|| {
-        render::render(&sc, seed, &|n, total| {
-            bar.set_position(n as u64);
-            let t = n * 10 / total.max(1);
+        render::render_progressive(&sc, seed, &opts, &|p: render::Progress| {
+            bar.set_position((p.fraction * 1000.0) as u64);
+            let t = (p.fraction * 10.0) as usize;
             if report && t < 10 && t > tenth.fetch_max(t, std::sync::atomic::Ordering::Relaxed) {
                 if lines {
-                    eprintln!("firemedium: {label}{} % ({n}/{total} tiles)", t * 10);
+                    eprintln!("firemedium: {label}{} % (pass {}, {}/{} tiles)", t * 10, p.pass, p.tiles_done, p.tiles);
                 }
-                log.event(serde_json::json!({"event": "progress", "frame": frame, "percent": t * 10, "tiles_done": n, "tiles": total}));
+                log.event(serde_json::json!({"event": "progress", "frame": frame, "percent": t * 10, "pass": p.pass, "tiles_done": p.tiles_done, "tiles": p.tiles}));
             }
         })
     });
@@ -501,6 +532,16 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         ),
         ("seed".to_string(), seed.to_string()),
         ("spp".to_string(), sc.spp.to_string()),
+        (
+            // How the samples were spent (adaptive sampling, a time limit): what `merge` checks tiles against.
+            "sampling".to_string(),
+            format!(
+                "noise_threshold {} time_limit {}",
+                a.noise_threshold
+                    .map_or("none".to_string(), |t| t.to_string()),
+                a.time_limit.map_or("none".to_string(), |t| t.to_string())
+            ),
+        ),
         (
             // pbrt's camera-to-world matrix, row by row (3 × 4), for a compositor matching the render.
             "camera_to_world".to_string(),
@@ -614,13 +655,27 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     } else {
         String::new()
     };
+    // The samples taken: the scene's per pixel, or, where sampling stopped early, their mean and why.
+    let pixels = (img.w * img.h).max(1);
+    let spp = if st.camera_rays == pixels * sc.spp {
+        format!("{} spp", sc.spp)
+    } else {
+        format!(
+            "{:.1} spp on average of at most {}, {}",
+            st.camera_rays as f64 / pixels as f64,
+            sc.spp,
+            st.stop.describe()
+        )
+    };
+    let noise = st.rel_rmse_estimate.map_or(String::new(), |e| {
+        format!(", rel. RMSE ≈ {:.2} % (estimated)", 100.0 * e)
+    });
     let mut out = format!(
-        "wrote {} and {} ({}×{}, {} spp{gamut})\n",
+        "wrote {} and {} ({}×{}, {spp}{noise}{gamut})\n",
         exr.display(),
         png.display(),
         img.w,
         img.h,
-        sc.spp
     );
     if a.stats {
         out += &format!("scene: {:.3} s to load and build, {} primitives, {} lights, {} media, {} bins over {}–{} nm\n", load_seconds, sc.bvh.prims.len(), sc.lights.len(), sc.media.len(), sc.bins.n(), sc.bins.grid.min_nm(), sc.bins.grid.max_nm());
@@ -657,12 +712,17 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
             }
         }
         out += &format!(
-            "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s\n",
+            "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s, {} passes ({})\n",
             st.seconds,
             pool.current_num_threads(),
             st.camera_rays,
-            st.camera_rays as f64 / st.seconds.max(1e-9)
+            st.camera_rays as f64 / st.seconds.max(1e-9),
+            st.passes,
+            st.stop.describe()
         );
+        if let Some(e) = st.rel_rmse_estimate {
+            out += &format!("  estimated relative RMSE {e:.4} (from two interleaved halves of each pixel's samples: docs/guide/rendering.md)\n");
+        }
         if st.fire_light_samples > 0 {
             out += &format!(
                 "  fire light: {} samples, {:.2} per camera ray\n",
@@ -687,7 +747,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         return Err(Error::Interrupted {
             signal: i32::try_from(signal).unwrap_or(2),
             message: format!(
-                "interrupted: wrote the finished tiles to {} and {}",
+                "interrupted: wrote the image as it stood ({:.1} samples per pixel on average, each pixel its own) to {} and {}",
+                st.camera_rays as f64 / pixels as f64,
                 exr.display(),
                 png.display()
             ),
@@ -720,6 +781,10 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         "width": img.w,
         "height": img.h,
         "spp": sc.spp,
+        "samples": st.camera_rays,
+        "passes": st.passes,
+        "stop": format!("{:?}", st.stop).to_lowercase(),
+        "rel_rmse_estimate": st.rel_rmse_estimate,
         "seed": seed,
         "render_seconds": st.seconds,
         "seconds": frame_start.elapsed().as_secs_f64(),
@@ -783,6 +848,24 @@ pub fn outputs(scene_path: &Path, film: Option<&str>, out: Option<&Path>) -> (Pa
 }
 
 /// `NAME=VALUE` (the plugin's table types the value when the light is built).
+pub(crate) fn parse_noise_threshold(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && t < 1e3 => Ok(t),
+        Ok(t) => Err(format!(
+            "{t}: expected a relative error above 0 (0.01 is 1 %)"
+        )),
+        Err(e) => Err(format!("{s:?}: {e}")),
+    }
+}
+
+pub(crate) fn parse_time_limit(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 1e9 => Ok(t),
+        Ok(t) => Err(format!("{t}: expected seconds above 0, at most 1e9")),
+        Err(e) => Err(format!("{s:?}: {e}")),
+    }
+}
+
 fn parse_light_param(s: &str) -> Result<(String, String), Error> {
     s.split_once('=')
         .filter(|(n, v)| !n.is_empty() && !v.is_empty())

@@ -49,8 +49,9 @@ impl Pixel {
         }
     }
 
-    /// The pixel's channels for `aovs` ([`channel_names`]' order), given the weight of all its samples.
-    pub fn finish(&self, scene: &Scene, aovs: &[Aov], weights: f64) -> Vec<f32> {
+    /// The pixel's channels for `aovs` ([`channel_names`]' order), given the weight of all its samples and their
+    /// number.
+    pub fn finish(&self, scene: &Scene, aovs: &[Aov], weights: f64, samples: u32) -> Vec<f32> {
         let k = if weights != 0.0 { 1.0 / weights } else { 0.0 };
         let rgb = |xyz: DVec3| {
             firemedium_core::cie::xyz_to_linear_srgb(scene.response.finish(xyz * k)).to_array()
@@ -73,7 +74,7 @@ impl Pixel {
                     out.extend(a.to_array());
                 }
                 Aov::Normal => out.extend(self.normal.normalize_or_zero().to_array()),
-                Aov::Samples => out.push(scene.spp as f64),
+                Aov::Samples => out.push(samples as f64),
             }
         }
         out.into_iter().map(|v| v as f32).collect()

@@ -7,7 +7,7 @@
 //! estimate stays unbiased; a small floor (1e-4 of the mean) keeps it so for maps with negative-clamped texels.
 
 use super::distrib::Distribution2D;
-use crate::imageio::{equal_area_square_to_sphere, RgbImage};
+use crate::imageio::RgbImage;
 use std::f32::consts::PI;
 
 /// The sampling density of one map.
@@ -97,7 +97,7 @@ impl EnvSampler {
     /// (unit length).
     pub fn pdf(&self, d: [f32; 3]) -> f32 {
         let [s, t] = if self.equal_area {
-            crate::imageio::equal_area_sphere_to_square(d)
+            equal_area_sphere_to_square(d)
         } else {
             [
                 0.5 + d[1].atan2(d[0]) / (2.0 * PI),
@@ -152,9 +152,82 @@ pub fn upper_illuminance(img: &RgbImage) -> f64 {
     e
 }
 
+/// The inverse of [`equal_area_sphere_to_square`]: (u, v) in [0, 1]² → a unit direction.
+pub fn equal_area_square_to_sphere(p: [f32; 2]) -> [f32; 3] {
+    let (u, v) = (2.0 * p[0] - 1.0, 2.0 * p[1] - 1.0);
+    let (up, vp) = (u.abs(), v.abs());
+    let signed = 1.0 - (up + vp);
+    let r = 1.0 - signed.abs();
+    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * std::f32::consts::FRAC_PI_4;
+    let z = (1.0 - r * r).copysign(signed);
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    [phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z]
+}
+
+/// pbrt-v4's equal-area octahedral map (Clarberg 2008): a unit direction → (u, v) in [0, 1]².
+pub fn equal_area_sphere_to_square(d: [f32; 3]) -> [f32; 2] {
+    let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let (a, b) = (x.max(y), x.min(y));
+    let b = if a == 0.0 { 0.0 } else { b / a };
+    let mut phi = b.atan() * std::f32::consts::FRAC_2_PI;
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d[2] < 0.0 {
+        std::mem::swap(&mut u, &mut v);
+        u = 1.0 - u;
+        v = 1.0 - v;
+    }
+    u = u.copysign(d[0]);
+    v = v.copysign(d[1]);
+    [0.5 * (u + 1.0), 0.5 * (v + 1.0)]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn equal_area_map_corners_and_poles() {
+        // +z maps to the centre; −z to the corners; ±x, ±y to the edge midpoints.
+        assert_eq!(equal_area_sphere_to_square([0.0, 0.0, 1.0]), [0.5, 0.5]);
+        let c = equal_area_sphere_to_square([0.0, 0.0, -1.0]);
+        assert!(
+            (c[0] - 0.5).abs() == 0.5 && (c[1] - 0.5).abs() == 0.5,
+            "{c:?}"
+        );
+        let e = equal_area_sphere_to_square([1.0, 0.0, 0.0]);
+        assert!(
+            (e[0] - 1.0).abs() < 1e-6 && (e[1] - 0.5).abs() < 1e-6,
+            "{e:?}"
+        );
+        // Equal area: uniform directions fill the square uniformly (4×4 cells within 4σ).
+        let mut cells = [0u32; 16];
+        let n = 64_000;
+        let mut s = 1u64;
+        for _ in 0..n {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u1 = (s >> 40) as f32 / (1u64 << 24) as f32;
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u2 = (s >> 40) as f32 / (1u64 << 24) as f32;
+            let z = 1.0 - 2.0 * u1;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * std::f32::consts::PI * u2;
+            let [u, v] = equal_area_sphere_to_square([r * phi.cos(), r * phi.sin(), z]);
+            cells[((u * 4.0).min(3.0) as usize) + 4 * ((v * 4.0).min(3.0) as usize)] += 1;
+        }
+        let mean = n as f64 / 16.0;
+        for c in cells {
+            assert!((c as f64 - mean).abs() < 4.0 * mean.sqrt(), "{cells:?}");
+        }
+    }
 
     #[test]
     fn the_density_integrates_to_one_and_follows_the_map() {
@@ -197,7 +270,7 @@ mod tests {
                         let q = s.pdf(d);
                         let edge = {
                             let [a, b] = if img.w == img.h {
-                                crate::imageio::equal_area_sphere_to_square(d)
+                                equal_area_sphere_to_square(d)
                             } else {
                                 [
                                     0.5 + d[1].atan2(d[0]) / (2.0 * PI),
@@ -237,7 +310,7 @@ mod tests {
     fn the_equal_area_map_round_trips() {
         for p in [[0.1f32, 0.2], [0.7, 0.9], [0.5, 0.5], [0.95, 0.05]] {
             let d = equal_area_square_to_sphere(p);
-            let q = crate::imageio::equal_area_sphere_to_square(d);
+            let q = equal_area_sphere_to_square(d);
             assert!(
                 (q[0] - p[0]).abs() < 1e-5 && (q[1] - p[1]).abs() < 1e-5,
                 "{p:?} → {d:?} → {q:?}"

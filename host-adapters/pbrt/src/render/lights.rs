@@ -42,7 +42,7 @@ pub(super) fn env(light: &Light, w: Vec3A) -> S {
         } => {
             let d = (*to_light * w).normalize_or_zero();
             let [u, v] = if img.w == img.h {
-                crate::imageio::equal_area_sphere_to_square(d.to_array())
+                super::envmap::equal_area_sphere_to_square(d.to_array())
             } else {
                 [
                     0.5 + d.y.atan2(d.x) / (2.0 * PI),

@@ -19,6 +19,7 @@ mod media;
 pub mod media_presets;
 pub mod microfacet;
 pub mod named_spectra;
+mod passes;
 mod paths;
 pub mod pbrt_v4;
 pub mod pixel;
@@ -35,6 +36,7 @@ use aov::Aov;
 use firemedium_core::cie;
 use firemedium_core::rng::Rng;
 use glam::{DVec3, Vec3A};
+pub use passes::{render_progressive, Pass, Progress, Progressive, Stop};
 use pixel::Samples;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -119,6 +121,13 @@ pub struct Stats {
     /// Plugin calls that failed inside the render (their paths gave nothing from there on), and the first one's
     /// message.
     pub plugin_failures: (u64, Option<String>),
+    /// Passes over the image, and the estimate of its relative RMSE after the last ([`passes`]).
+    pub passes: usize,
+    pub rel_rmse_estimate: Option<f64>,
+    /// Why the render stopped sampling.
+    pub stop: Stop,
+    /// Camera samples the noise estimate's twins took (not in the image; see [`passes`]).
+    pub twin_samples: u64,
 }
 
 const TILE: usize = 16;
@@ -134,194 +143,14 @@ fn hash(a: u64, b: u64, c: u64, d: u64) -> u64 {
     h
 }
 
-/// One pixel's result: its index in the image, XYZ, and the spectral film's buckets (empty without one).
-type PixelResult = (usize, DVec3, Vec<f32>);
-
-/// Renders the scene with `spp` samples per pixel; `progress` is called with the tiles done.
+/// Renders the scene with its samples per pixel in passes (see [`passes`]), no threshold or time limit;
+/// `progress` is told of every tile finished.
 pub fn render(
     scene: &scene::Scene,
     seed: u64,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &(dyn Fn(Progress) + Sync),
 ) -> (Image, Stats) {
-    let start = std::time::Instant::now();
-    // The pixels rendered: the film's pixel bounds (all of it, unless cropped), in full-film coordinates.
-    let [x0, x1, y0, y1] = scene.bounds;
-    let (w, h) = (x1 - x0, y1 - y0);
-    let integ = integrator::Integrator {
-        scene,
-        mask: scene.bins.mask(),
-        fire_samples: Default::default(),
-        failures: Default::default(),
-    };
-    let rows: Vec<(usize, usize)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
-        .collect();
-    // Dealt out by stride: rayon splits the list into one contiguous run per thread, so with the tiles in row
-    // order the threads would march far-apart parts of the scene at once (and of a fire's grids, which do not
-    // fit the shared cache); dealt out, thread j takes tiles j, j + k, j + 2k, … and the threads stay side by
-    // side. (Pixels carry their index: the order changes no value.)
-    let k = rayon::current_num_threads().max(1);
-    let tiles: Vec<(usize, usize)> = (0..k)
-        .flat_map(|j| rows.iter().skip(j).step_by(k).copied())
-        .collect();
-    let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
-    let gspace = scene.gbuffer.map(|g| GSpace::new(scene, g.world));
-    // AOVs of the visible surface need the integrator to report it.
-    let aov_surface = scene
-        .aovs
-        .iter()
-        .any(|a| matches!(a, Aov::Depth | Aov::Albedo | Aov::Normal));
-    let done = AtomicUsize::new(0);
-    let results: Vec<Option<Vec<PixelResult>>> = tiles
-        .par_iter()
-        .map(|&(tx, ty)| {
-            if interrupted() {
-                return None;
-            }
-            let mut out = Vec::with_capacity(TILE * TILE);
-            for cy in ty * TILE..((ty + 1) * TILE).min(h) {
-                for cx in tx * TILE..((tx + 1) * TILE).min(w) {
-                    let (x, y) = (x0 + cx, y0 + cy);
-                    // Checked per pixel, not only per tile: Ctrl-C ends a render whose tiles take long within
-                    // a pixel's time (the unfinished tile is left out, the finished ones are written).
-                    if interrupted() {
-                        return None;
-                    }
-                    let (mut sum, mut weights) = (DVec3::ZERO, 0.0);
-                    // The spectral film's radiance per bin (only when the film is spectral).
-                    let mut spectrum = [0.0f64; spectrum::MAX_CHANNELS];
-                    let mut gpixel = film::GPixel::default();
-                    let mut apixel = accum::Pixel::default();
-                    // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
-                    let order = hash(seed, x as u64, y as u64, u64::MAX);
-                    for s in 0..scene.spp {
-                        let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
-                        let mut rng =
-                            sampler.samples(s, scene.spp, order, (x as u32, y as u32), rng);
-                        let mut u = [rng.next_f64(), rng.next_f64()];
-                        if !scene.pixel_jitter {
-                            u = [0.5, 0.5];
-                        }
-                        // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
-                        // the pixel is Σ w L / Σ w).
-                        let (off, w) = scene.filter.sample(u);
-                        let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
-                        // The sample's time in the shutter (pbrt-v4's camera sample: after the film position,
-                        // before the lens), drawn only when a medium blurs by its velocity.
-                        if let Some([open, close]) = scene.shutter {
-                            rng.time = open + (close - open) * rng.next_f64();
-                        }
-                        let (o, d) = camera_ray(scene, fx, fy, &mut rng);
-                        let mut visible = None;
-                        let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
-                        let mut split = aov::Split::default();
-                        let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
-                        let l = integ.li_visible(o, d, &mut rng, want, aovs);
-                        let raw = scene.response.sensor_xyz(&scene.bins, &l);
-                        let sensor = scene.response.clamp_sample(raw);
-                        sum += sensor * w;
-                        if !scene.aovs.is_empty() {
-                            // The beauty's clamp, as a factor every part shares.
-                            let clamp = if sensor == raw { 1.0 } else { sensor.y / raw.y };
-                            let clamp = if clamp.is_finite() { clamp } else { 0.0 };
-                            apixel.add(scene, w, l, &split, clamp, visible.as_ref());
-                        }
-                        if let (Some(g), Some(v)) = (&gspace, visible) {
-                            gpixel.add(w, &g.sample(scene, fx, fy, &v), sensor);
-                        }
-                        weights += w;
-                        if scene.spectral.is_some() {
-                            spectrum
-                                .iter_mut()
-                                .zip(l.0)
-                                .for_each(|(a, v)| *a += v as f64 * w);
-                        }
-                    }
-                    let sum = if weights != 0.0 {
-                        scene.response.finish(sum * (scene.spp as f64 / weights))
-                    } else {
-                        DVec3::ZERO
-                    };
-                    let buckets = match &scene.spectral {
-                        Some(b) if weights != 0.0 => {
-                            let k = scene.response.imaging_ratio / weights;
-                            b.resample(&scene.bins, &spectrum.map(|v| v * k))
-                        }
-                        Some(b) => vec![0.0; b.n],
-                        None if gspace.is_some() => gpixel.finish(weights).to_vec(),
-                        None => Vec::new(),
-                    };
-                    let mut buckets = buckets;
-                    if !scene.aovs.is_empty() {
-                        buckets.extend(apixel.finish(scene, &scene.aovs, weights));
-                    }
-                    out.push((cx + w * cy, sum / scene.spp as f64, buckets));
-                }
-            }
-            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(n, tiles.len());
-            Some(out)
-        })
-        .collect();
-    let mut xyz = vec![DVec3::ZERO; w * h];
-    let mut names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
-        (Some(b), _) => Some(
-            b.centres()
-                .iter()
-                .map(|&l| spectral_channel_name(l))
-                .collect(),
-        ),
-        (None, Some(_)) => Some(
-            film::GBUFFER_CHANNELS
-                .iter()
-                .map(|s| s.to_string())
-                .collect(),
-        ),
-        (None, None) => None,
-    };
-    if !scene.aovs.is_empty() {
-        names
-            .get_or_insert_with(Vec::new)
-            .extend(aov::channel_names(&scene.aovs));
-    }
-    let nb = names.as_ref().map_or(0, |n| n.len());
-    let mut buckets = vec![0f32; w * h * nb];
-    let mut complete = true;
-    for r in results {
-        match r {
-            Some(px) => px.into_iter().for_each(|(i, v, b)| {
-                xyz[i] = v;
-                if nb > 0 {
-                    buckets[i * nb..(i + 1) * nb].copy_from_slice(&b);
-                }
-            }),
-            None => complete = false,
-        }
-    }
-    let rgb = xyz
-        .iter()
-        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
-        .collect();
-    let stats = Stats {
-        seconds: start.elapsed().as_secs_f64(),
-        camera_rays: w * h * scene.spp,
-        fire_light_samples: integ.fire_samples.into_inner(),
-        plugin_failures: integ.failures.into_report(),
-    };
-    (
-        Image {
-            w,
-            h,
-            rgb,
-            xyz,
-            complete,
-            origin: (x0, y0),
-            full: scene.res,
-            extra: names.map(|n| (n, buckets)),
-            meta: Vec::new(),
-        },
-        stats,
-    )
+    render_progressive(scene, seed, &Progressive::default(), progress)
 }
 
 /// The name of the spectral film's channel at `nm`: OpenEXR's spectral layout as pbrt-v4 writes it

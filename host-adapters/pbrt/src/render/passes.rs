@@ -1,0 +1,669 @@
+//! Progressive rendering: the image in passes over all of its pixels, each pass a run of every pixel's next
+//! samples — the same samples, in the same order, as a render of all of them at once, so the image is the same
+//! bit for bit — with an estimate of its error after each pass, and, when asked, adaptive sampling to a noise
+//! threshold and a time limit.
+//!
+//! **The estimate.** Each pixel keeps its samples' luminance in two interleaved halves (even and odd sample
+//! indices); their difference is an unbiased estimate of the pixel mean's error: with n_A and n_B samples,
+//! E[(Y_A − Y_B)²] = σ²(1/n_A + 1/n_B), so e = (Y_A − Y_B)² n_A n_B / n² estimates Var(Y) = σ²/n. The image's
+//! relative RMSE estimate is √(Σ e / Σ Y²), the relative RMSE of `firemedium compare` against a reference
+//! (√mean((a − r)²) / √mean(r²)) with the reference's place taken by the render itself. That holds for
+//! independent samples; a low-discrepancy sampler's (pbrt-v4's default `zsobol`, stratified, Halton, Sobol)
+//! halves are not independent — each is a worse-spread set than the whole, and the whole's error falls faster
+//! than 1/√n: the halves overstate its error 1.6–4.7× on the campfire at 4–256 spp. So some pixels take a
+//! **twin**: the same number of samples again under an independent randomization of the sampler (another seed).
+//! A pixel and its twin are two independent estimates of its value with the same n, so d = (M − M')²/2
+//! estimates the pixel mean's error without bias, and the sampler's gain — by how much the halves overstate —
+//! is G = Σ d/π / Σ e/π over the twins, which scales every pixel's e. The gain differs from pixel to pixel (a
+//! flame's smooth light gains more from low discrepancy than a surface's) and the image's error is the bright
+//! pixels', so the twins are chosen after the first pass (two samples) with probability π ∝ ½ Y²/ΣY² + ½ 1/N —
+//! by the pixel's level, a defensive mix with uniform, about max(256, N/32) of them, Horvitz–Thompson weights
+//! 1/π; by their level and not by their halves' difference, which would pick the pixels whose first samples
+//! happened to differ most and so understate the gain 2–4×. A twin catches up with its pixel's samples in the
+//! pass after it is chosen. Twins cost about 3 % more camera samples (a small image's up to 2×); their samples
+//! never enter the image; with `independent` samples there are none (the halves are independent already).
+//!
+//! **Adaptive sampling.** The film is cut into blocks of 8 × 8 pixels (on the full film, so a tile of a farm's
+//! render cuts the same blocks as the whole frame's where it can); once every pixel of a block has at least 8
+//! samples, the block stops when √(Σ e / Σ (Y² + 0.01 Ȳ²)) < the threshold (Ȳ the image's mean luminance: the
+//! dark pixels' errors are weighed against the image's level, as relMSE weighs them) — a block, not a pixel,
+//! because one pixel's two halves are too few to say. The render stops when every block has, when `--spp`
+//! samples are reached, or after the pass that crosses the time limit.
+
+use super::*;
+
+/// How a render spends its samples and whom it tells after each pass.
+#[derive(Default, Clone, Copy)]
+pub struct Progressive<'a> {
+    /// Stop sampling a block of pixels once its estimated relative error is below this (`--noise-threshold`).
+    pub noise_threshold: Option<f64>,
+    /// Stop after the pass that ends past this many seconds of rendering (`--time-limit`).
+    pub time_limit: Option<f64>,
+    /// Called after each pass.
+    pub on_pass: Option<&'a (dyn Fn(&Pass) + Sync)>,
+}
+
+impl std::fmt::Debug for Progressive<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Progressive")
+            .field("noise_threshold", &self.noise_threshold)
+            .field("time_limit", &self.time_limit)
+            .field("on_pass", &self.on_pass.is_some())
+            .finish()
+    }
+}
+
+/// What a pass leaves: when, how many samples so far, and the image's estimated error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pass {
+    /// 1 for the first pass.
+    pub index: usize,
+    /// Seconds since the render began.
+    pub seconds: f64,
+    /// Camera samples taken so far (all pixels).
+    pub samples: u64,
+    /// Samples per pixel so far, the most any pixel has.
+    pub spp: usize,
+    /// The image's estimated relative RMSE (see the module); `None` before every pixel has two samples.
+    pub rel_rmse_estimate: Option<f64>,
+    /// Pixels still sampling.
+    pub active_pixels: usize,
+}
+
+/// Why the render stopped sampling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Stop {
+    /// Every pixel took the scene's samples per pixel.
+    #[default]
+    Spp,
+    /// Every block's estimated error is below the noise threshold.
+    NoiseThreshold,
+    /// The time limit passed.
+    TimeLimit,
+    /// A signal asked the render to stop.
+    Interrupted,
+}
+
+impl Stop {
+    /// What a user reads.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Stop::Spp => "the samples per pixel reached",
+            Stop::NoiseThreshold => "the noise threshold reached",
+            Stop::TimeLimit => "the time limit reached",
+            Stop::Interrupted => "interrupted",
+        }
+    }
+}
+
+/// How far the render is, for a progress bar: the pass, its tiles done of its tiles, and the share of the
+/// scene's samples taken (an adaptive render ends early, below 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    pub pass: usize,
+    pub tiles_done: usize,
+    pub tiles: usize,
+    pub fraction: f64,
+}
+
+/// The adaptive blocks' edge, pixels, and the samples a pixel takes before its block may stop.
+const BLOCK: usize = 8;
+const MIN_ADAPTIVE_SPP: u32 = 8;
+/// The first pass's samples per pixel, and the most a pass takes.
+const FIRST_PASS: usize = 2;
+const MAX_PASS: usize = 64;
+
+/// A pixel's running sums.
+#[derive(Debug, Clone, Copy, Default)]
+struct Px {
+    /// Σ w · sensor XYZ and Σ w (the pixel filter's weights).
+    sum: DVec3,
+    weights: f64,
+    /// Σ w · Y and Σ w over the even and the odd samples.
+    half_y: [f64; 2],
+    half_w: [f64; 2],
+    /// Samples taken.
+    n: u32,
+    /// Its block stopped (adaptive sampling).
+    done: bool,
+    /// A twinned pixel's twin: Σ w · Y and Σ w under the other randomization, and the probability it was
+    /// chosen with (0: no twin; see the module).
+    twin_y: f64,
+    twin_w: f64,
+    twin_p: f64,
+}
+
+impl Px {
+    /// A twinned pixel's (M − M')²/2, once it has samples.
+    fn twin_estimate(&self) -> Option<f64> {
+        (self.weights > 0.0 && self.twin_w > 0.0)
+            .then(|| (self.sum.y / self.weights - self.twin_y / self.twin_w).powi(2) / 2.0)
+    }
+
+    /// The pixel's luminance (sensor Y) and the estimate e of its mean's squared error, once it has two samples.
+    fn estimate(&self) -> Option<(f64, f64)> {
+        if self.n < 2 || self.half_w[0] == 0.0 || self.half_w[1] == 0.0 || self.weights == 0.0 {
+            return None;
+        }
+        let (a, b) = (
+            self.half_y[0] / self.half_w[0],
+            self.half_y[1] / self.half_w[1],
+        );
+        let n = self.n as f64;
+        let (na, nb) = ((self.n.div_ceil(2)) as f64, (self.n / 2) as f64);
+        Some((
+            self.sum.y / self.weights,
+            (a - b).powi(2) * na * nb / (n * n),
+        ))
+    }
+}
+
+/// What a pixel keeps beside its sums when the film asks for more than the beauty: the spectral film's bins, the
+/// gbuffer's and the AOVs' sums.
+#[derive(Debug, Clone)]
+struct Extra {
+    spectrum: Vec<f64>,
+    gpixel: film::GPixel,
+    apixel: accum::Pixel,
+}
+
+/// Renders the scene in passes (see the module) with `spp` samples per pixel at most; `progress` is told of
+/// every tile finished.
+pub fn render_progressive(
+    scene: &scene::Scene,
+    seed: u64,
+    opts: &Progressive<'_>,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> (Image, Stats) {
+    let start = std::time::Instant::now();
+    // The pixels rendered: the film's pixel bounds (all of it, unless cropped), in full-film coordinates.
+    let [x0, x1, y0, y1] = scene.bounds;
+    let (w, h) = (x1 - x0, y1 - y0);
+    let integ = integrator::Integrator {
+        scene,
+        mask: scene.bins.mask(),
+        fire_samples: Default::default(),
+        failures: Default::default(),
+    };
+    let (tw, th) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let ntiles = tw * th;
+    // Dealt out by stride: rayon splits the list into one contiguous run per thread, so with the tiles in row
+    // order the threads would march far-apart parts of the scene at once (and of a fire's grids, which do not
+    // fit the shared cache); dealt out, thread j takes tiles j, j + k, j + 2k, … and the threads stay side by
+    // side. (Pixels carry their index: the order changes no value.)
+    let k = rayon::current_num_threads().max(1);
+    let dealt: Vec<usize> = (0..k).flat_map(|j| (j..ntiles).step_by(k)).collect();
+    let sampler = scene.sampler.for_film(scene.res, scene.spp, seed);
+    // The twins' randomization (see the module); none for independent samples, whose halves are independent.
+    let twin_seed = hash(seed, 0x7417_u64, 0, 0);
+    let twin_sampler = scene.sampler.for_film(scene.res, scene.spp, twin_seed);
+    let twins_wanted = !matches!(scene.sampler, pixel::Sampler::Independent);
+    let gspace = scene.gbuffer.map(|g| GSpace::new(scene, g.world));
+    // AOVs of the visible surface need the integrator to report it.
+    let aov_surface = scene
+        .aovs
+        .iter()
+        .any(|a| matches!(a, Aov::Depth | Aov::Albedo | Aov::Normal));
+    let extra = scene.spectral.is_some() || gspace.is_some() || !scene.aovs.is_empty();
+    // Each tile's pixels in a run of TILE² slots (row by row inside the tile; the edge tiles' spare slots idle).
+    let slots = TILE * TILE;
+    let mut px = vec![Px::default(); ntiles * slots];
+    let mut ex: Vec<Extra> = if extra {
+        let e = Extra {
+            spectrum: vec![
+                0.0;
+                if scene.spectral.is_some() {
+                    scene.bins.n()
+                } else {
+                    0
+                }
+            ],
+            gpixel: film::GPixel::default(),
+            apixel: accum::Pixel::default(),
+        };
+        vec![e; ntiles * slots]
+    } else {
+        Vec::new()
+    };
+    let total_work = (w * h * scene.spp).max(1) as f64;
+    let work = AtomicUsize::new(0);
+    // The progress a pass's end can say beyond the samples' share: an adaptive render's way to its threshold
+    // ((T / estimate)²: the error falls as 1/√samples) or a time limit's share of the time (f64 bits).
+    let floor = std::sync::atomic::AtomicU64::new(0f64.to_bits());
+    let (mut s0, mut len) = (0usize, FIRST_PASS.min(scene.spp));
+    let mut pass = 0;
+    let mut stop = Stop::Spp;
+    let mut estimate;
+    let mut twin_samples = 0u64;
+    let mut complete = true;
+    loop {
+        pass += 1;
+        let s1 = (s0 + len).min(scene.spp);
+        let done = AtomicUsize::new(0);
+        // The tiles' slots, in the dealt order.
+        // The work: every row of every tile (dealt order) that has a pixel still sampling — rows, not tiles, so
+        // that a pass in which a few tiles are left keeps every thread busy.
+        let mut rows: Vec<(usize, usize, &mut [Px], &mut [Extra])> = {
+            let mut by_tile: Vec<Option<(&mut [Px], &mut [Extra])>> = {
+                let exs: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
+                    Box::new(ex.chunks_mut(slots))
+                } else {
+                    Box::new(std::iter::repeat_with(|| &mut [][..]))
+                };
+                px.chunks_mut(slots).zip(exs).map(Some).collect()
+            };
+            let mut v = Vec::new();
+            for &t in &dealt {
+                let Some((p, e)) = by_tile[t].take() else {
+                    continue;
+                };
+                let ex_rows: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
+                    Box::new(e.chunks_mut(TILE))
+                } else {
+                    Box::new(std::iter::repeat_with(|| &mut [][..]))
+                };
+                for (r, (pr, er)) in p.chunks_mut(TILE).zip(ex_rows).enumerate() {
+                    if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done) {
+                        v.push((t, r, pr, er));
+                    }
+                }
+            }
+            v
+        };
+        let items = rows.len().max(1);
+        let (stopped, twins) = rows
+            .par_iter_mut()
+            .map(|(t, r, pxs, exs)| {
+                let mut cut = false;
+                let (mut taken, mut twins) = (0usize, 0u64);
+                let (tx, ty) = (*t % tw, *t / tw);
+                let cy = ty * TILE + *r;
+                for (i, cx) in (tx * TILE..((tx + 1) * TILE).min(w)).enumerate() {
+                    let slot = i;
+                    let p = &mut pxs[slot];
+                    if p.done {
+                        continue;
+                    }
+                    let (x, y) = (x0 + cx, y0 + cy);
+                    let mut e = exs.get_mut(slot);
+                    // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
+                    let order = hash(seed, x as u64, y as u64, u64::MAX);
+                    for s in s0..s1 {
+                        // Checked per sample: Ctrl-C ends a render whose pixels take long within a sample's time
+                        // (each pixel keeps the samples it finished: the image is whole).
+                        if interrupted() {
+                            cut = true;
+                            break;
+                        }
+                        let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
+                        let mut rng =
+                            sampler.samples(s, scene.spp, order, (x as u32, y as u32), rng);
+                        let mut u = [rng.next_f64(), rng.next_f64()];
+                        if !scene.pixel_jitter {
+                            u = [0.5, 0.5];
+                        }
+                        // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
+                        // the pixel is Σ w L / Σ w).
+                        let (off, wt) = scene.filter.sample(u);
+                        let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
+                        // The sample's time in the shutter (pbrt-v4's camera sample: after the film position,
+                        // before the lens), drawn only when a medium blurs by its velocity.
+                        if let Some([open, close]) = scene.shutter {
+                            rng.time = open + (close - open) * rng.next_f64();
+                        }
+                        let (o, d) = camera_ray(scene, fx, fy, &mut rng);
+                        let mut visible = None;
+                        let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
+                        let mut split = aov::Split::default();
+                        let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
+                        let l = integ.li_visible(o, d, &mut rng, want, aovs);
+                        // (A signal during the path cut it short: the sample is not one; the pixel keeps those
+                        // before it.)
+                        if interrupted() {
+                            cut = true;
+                            break;
+                        }
+                        let raw = scene.response.sensor_xyz(&scene.bins, &l);
+                        let sensor = scene.response.clamp_sample(raw);
+                        p.sum += sensor * wt;
+                        p.weights += wt;
+                        p.half_y[s & 1] += sensor.y * wt;
+                        p.half_w[s & 1] += wt;
+                        p.n += 1;
+                        taken += 1;
+                        if let Some(e) = e.as_deref_mut() {
+                            if !scene.aovs.is_empty() {
+                                // The beauty's clamp, as a factor every part shares.
+                                let clamp = if sensor == raw { 1.0 } else { sensor.y / raw.y };
+                                let clamp = if clamp.is_finite() { clamp } else { 0.0 };
+                                e.apixel.add(scene, wt, l, &split, clamp, visible.as_ref());
+                            }
+                            if let (Some(g), Some(v)) = (&gspace, visible) {
+                                e.gpixel.add(wt, &g.sample(scene, fx, fy, &v), sensor);
+                            }
+                            if scene.spectral.is_some() {
+                                e.spectrum
+                                    .iter_mut()
+                                    .zip(l.0)
+                                    .for_each(|(a, v)| *a += v as f64 * wt);
+                            }
+                        }
+                    }
+                    if cut {
+                        break;
+                    }
+                    if p.twin_p > 0.0 {
+                        // (A twin chosen after the first pass catches up with its pixel's samples first.)
+                        let from = if p.twin_w == 0.0 { 0 } else { s0 };
+                        let order = hash(twin_seed, x as u64, y as u64, u64::MAX);
+                        for s in from..s1 {
+                            let rng = Rng::new(hash(twin_seed, x as u64, y as u64, s as u64));
+                            let mut rng = twin_sampler.samples(
+                                s,
+                                scene.spp,
+                                order,
+                                (x as u32, y as u32),
+                                rng,
+                            );
+                            let mut u = [rng.next_f64(), rng.next_f64()];
+                            if !scene.pixel_jitter {
+                                u = [0.5, 0.5];
+                            }
+                            let (off, wt) = scene.filter.sample(u);
+                            let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
+                            if let Some([open, close]) = scene.shutter {
+                                rng.time = open + (close - open) * rng.next_f64();
+                            }
+                            let (o, d) = camera_ray(scene, fx, fy, &mut rng);
+                            let l = integ.li_visible(o, d, &mut rng, None, None);
+                            let sensor = scene
+                                .response
+                                .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
+                            p.twin_y += sensor.y * wt;
+                            p.twin_w += wt;
+                            twins += 1;
+                        }
+                    }
+                }
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                let so_far = work.fetch_add(taken, Ordering::Relaxed) + taken;
+                progress(Progress {
+                    pass,
+                    tiles_done: n * ntiles / items,
+                    tiles: ntiles,
+                    fraction: (so_far as f64 / total_work)
+                        .max(f64::from_bits(floor.load(Ordering::Relaxed)))
+                        .min(1.0),
+                });
+                (cut, twins)
+            })
+            .reduce(|| (false, 0), |a, b| (a.0 || b.0, a.1 + b.1));
+        twin_samples += twins;
+        drop(rows);
+        s0 = s1;
+        // The estimate, and the blocks that may stop.
+        let (mut sum_e, mut sum_y2, mut sum_y, mut counted) = (0.0, 0.0, 0.0, 0usize);
+        let mut all = true;
+        for cy in 0..h {
+            for cx in 0..w {
+                match px[slot_of(cx, cy, tw)].estimate() {
+                    Some((y, e)) => {
+                        sum_e += e;
+                        sum_y2 += y * y;
+                        sum_y += y;
+                        counted += 1;
+                    }
+                    None => all = false,
+                }
+            }
+        }
+        if pass == 1 && twins_wanted && all && sum_y2 > 0.0 && s0 < scene.spp {
+            choose_twins(&mut px, (w, h), tw, seed, sum_y2);
+        }
+        let g = gain(&px);
+        estimate = (all && counted > 0 && sum_y2 > 0.0).then(|| (g * sum_e / sum_y2).sqrt());
+        if let Some(threshold) = opts.noise_threshold.filter(|_| all && counted > 0) {
+            adapt(
+                &mut px,
+                (w, h),
+                (x0, y0),
+                tw,
+                threshold / g.sqrt(),
+                sum_y / counted as f64,
+            );
+        }
+        let samples: u64 = px.iter().map(|p| p.n as u64).sum();
+        // (The edge tiles' spare slots are never sampled, never done: counted apart.)
+        let spare = ntiles * slots - w * h;
+        let active_pixels = px.iter().filter(|p| !p.done).count() - spare;
+        let seconds = start.elapsed().as_secs_f64();
+        let mut ahead = 0.0f64;
+        if let (Some(t), Some(e)) = (opts.noise_threshold, estimate) {
+            ahead = ahead.max((t / e).powi(2).min(1.0));
+        }
+        if let Some(limit) = opts.time_limit {
+            ahead = ahead.max((seconds / limit).min(1.0));
+        }
+        floor.fetch_max(ahead.to_bits(), Ordering::Relaxed);
+        if let Some(f) = opts.on_pass {
+            f(&Pass {
+                index: pass,
+                seconds,
+                samples,
+                spp: s0,
+                rel_rmse_estimate: estimate,
+                active_pixels,
+            });
+        }
+        if stopped || interrupted() {
+            stop = Stop::Interrupted;
+            complete = false;
+            break;
+        }
+        if s0 >= scene.spp {
+            break;
+        }
+        if active_pixels == 0 {
+            stop = Stop::NoiseThreshold;
+            break;
+        }
+        // The next pass: as many samples as so far (up to MAX_PASS), so the samples double from pass to pass (2,
+        // 4, 8, …: even steps on a log-log curve, whole powers of two for the Sobol' sampler); with a threshold a
+        // quarter of the samples so far, at least 4 (a block is checked after each pass: doubling would overshoot
+        // its need by up to 2×).
+        len = if opts.noise_threshold.is_some() {
+            (s0 / 4).clamp(4, MAX_PASS)
+        } else {
+            s0.clamp(1, MAX_PASS)
+        };
+        if let Some(limit) = opts.time_limit {
+            if seconds >= limit {
+                stop = Stop::TimeLimit;
+                break;
+            }
+            // The next pass no longer than the time left, at this render's pace per pixel sample.
+            let per = seconds / samples.max(1) as f64;
+            let fits = ((limit - seconds) / (per * active_pixels.max(1) as f64)).floor();
+            len = len.min((fits as usize).max(1));
+        }
+    }
+    // The pixels' values: Σ w L / Σ w, finished by the film's response.
+    let mut xyz = vec![DVec3::ZERO; w * h];
+    let mut names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
+        (Some(b), _) => Some(
+            b.centres()
+                .iter()
+                .map(|&l| spectral_channel_name(l))
+                .collect(),
+        ),
+        (None, Some(_)) => Some(
+            film::GBUFFER_CHANNELS
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+        ),
+        (None, None) => None,
+    };
+    if !scene.aovs.is_empty() {
+        names
+            .get_or_insert_with(Vec::new)
+            .extend(aov::channel_names(&scene.aovs));
+    }
+    let nb = names.as_ref().map_or(0, |n| n.len());
+    let mut buckets = vec![0f32; w * h * nb];
+    let mut camera_rays = 0usize;
+    for cy in 0..h {
+        for cx in 0..w {
+            let i = slot_of(cx, cy, tw);
+            let p = &px[i];
+            let n = p.n as f64;
+            camera_rays += p.n as usize;
+            let weights = p.weights;
+            // (n = spp for every pixel of a render that took them all: the value of a render in one pass.)
+            xyz[cx + w * cy] = if weights != 0.0 {
+                scene.response.finish(p.sum * (n / weights)) / n
+            } else {
+                DVec3::ZERO
+            };
+            if nb == 0 {
+                continue;
+            }
+            let e = &ex[i];
+            let mut b = match &scene.spectral {
+                Some(bk) if weights != 0.0 => {
+                    let k = scene.response.imaging_ratio / weights;
+                    let s: Vec<f64> = e.spectrum.iter().map(|v| v * k).collect();
+                    bk.resample(&scene.bins, &s)
+                }
+                Some(bk) => vec![0.0; bk.n],
+                None if gspace.is_some() => e.gpixel.finish(weights).to_vec(),
+                None => Vec::new(),
+            };
+            if !scene.aovs.is_empty() {
+                b.extend(e.apixel.finish(scene, &scene.aovs, weights, p.n));
+            }
+            let j = cx + w * cy;
+            buckets[j * nb..(j + 1) * nb].copy_from_slice(&b);
+        }
+    }
+    let rgb = xyz
+        .iter()
+        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
+        .collect();
+    let stats = Stats {
+        seconds: start.elapsed().as_secs_f64(),
+        camera_rays,
+        fire_light_samples: integ.fire_samples.into_inner(),
+        plugin_failures: integ.failures.into_report(),
+        passes: pass,
+        rel_rmse_estimate: estimate,
+        stop,
+        twin_samples,
+    };
+    (
+        Image {
+            w,
+            h,
+            rgb,
+            xyz,
+            complete,
+            origin: (x0, y0),
+            full: scene.res,
+            extra: names.map(|n| (n, buckets)),
+            meta: Vec::new(),
+        },
+        stats,
+    )
+}
+
+/// Chooses the twins (see the module): each pixel with probability π = min(1, K (½ Y²/ΣY² + ½/N)), K =
+/// max(256, N/32), by a uniform number of its own (the seed and the pixel's place in the render). (By its level,
+/// not by its halves' e: the pixels whose first samples happened to differ most would be chosen, and their e,
+/// which keeps those samples, would overstate them against their twins.)
+fn choose_twins(px: &mut [Px], (w, h): (usize, usize), tw: usize, seed: u64, sum_y2: f64) {
+    let n = (w * h) as f64;
+    let k = (n / 32.0).max(256.0).min(n);
+    for cy in 0..h {
+        for cx in 0..w {
+            let p = &mut px[slot_of(cx, cy, tw)];
+            let Some((y, _)) = p.estimate() else {
+                continue;
+            };
+            let pi = (k * (0.5 * y * y / sum_y2 + 0.5 / n)).min(1.0);
+            let u = (hash(seed, cx as u64, cy as u64, 0x7417) >> 11) as f64 / (1u64 << 53) as f64;
+            if u < pi {
+                p.twin_p = pi;
+            }
+        }
+    }
+}
+
+/// The sampler's gain G = Σ d/π / Σ e/π over the twins (see the module); 1 without twins or while they say
+/// nothing, and kept within [1/64, 4] (noisy twins must neither silence the estimate nor inflate it past what
+/// independent samples would give by much).
+fn gain(px: &[Px]) -> f64 {
+    let (mut twin, mut halves) = (0.0, 0.0);
+    for p in px.iter().filter(|p| p.twin_p > 0.0) {
+        if let (Some(d), Some((_, e))) = (p.twin_estimate(), p.estimate()) {
+            twin += d / p.twin_p;
+            halves += e / p.twin_p;
+        }
+    }
+    if halves > 0.0 && twin > 0.0 {
+        (twin / halves).clamp(1.0 / 64.0, 4.0)
+    } else {
+        1.0
+    }
+}
+
+/// The slot of rendered pixel (cx, cy) in the tiles' runs.
+fn slot_of(cx: usize, cy: usize, tw: usize) -> usize {
+    let t = (cy / TILE) * tw + cx / TILE;
+    t * TILE * TILE + (cy % TILE) * TILE + (cx % TILE)
+}
+
+/// Marks done every block of [`BLOCK`]² pixels (on the full film) whose pixels all have [`MIN_ADAPTIVE_SPP`]
+/// samples and whose estimated relative error is below `threshold`; `mean_y` the image's mean luminance.
+fn adapt(
+    px: &mut [Px],
+    (w, h): (usize, usize),
+    (x0, y0): (usize, usize),
+    tw: usize,
+    threshold: f64,
+    mean_y: f64,
+) {
+    let slot_of = |cx: usize, cy: usize| slot_of(cx, cy, tw);
+    // Blocks on the full film: those that overlap the rendered pixels.
+    let (bx0, bx1) = (x0 / BLOCK, (x0 + w).div_ceil(BLOCK));
+    let (by0, by1) = (y0 / BLOCK, (y0 + h).div_ceil(BLOCK));
+    let floor = 0.01 * mean_y * mean_y;
+    for by in by0..by1 {
+        for bx in bx0..bx1 {
+            let xs = (bx * BLOCK).max(x0) - x0..((bx + 1) * BLOCK).min(x0 + w) - x0;
+            let ys = (by * BLOCK).max(y0) - y0..((by + 1) * BLOCK).min(y0 + h) - y0;
+            let (mut e, mut y2, mut ready) = (0.0, 0.0, true);
+            for cy in ys.clone() {
+                for cx in xs.clone() {
+                    let p = &px[slot_of(cx, cy)];
+                    if p.done {
+                        continue;
+                    }
+                    match p.estimate() {
+                        Some((y, ep)) if p.n >= MIN_ADAPTIVE_SPP => {
+                            e += ep;
+                            y2 += y * y + floor;
+                        }
+                        _ => ready = false,
+                    }
+                }
+            }
+            if ready && y2 > 0.0 && (e / y2).sqrt() < threshold {
+                for cy in ys.clone() {
+                    for cx in xs.clone() {
+                        px[slot_of(cx, cy)].done = true;
+                    }
+                }
+            }
+        }
+    }
+}
