@@ -27,6 +27,12 @@ pub struct NoiseArgs {
     /// The adaptive renders' noise thresholds.
     #[arg(long, value_delimiter = ',', default_value = "0.04,0.02,0.01")]
     thresholds: Vec<f64>,
+    /// A scene to measure instead of the campfire and the fire-lit room (repeatable; e.g. each of scenes/).
+    #[arg(long)]
+    scene: Vec<std::path::PathBuf>,
+    /// The estimate against the true error only (no adaptive renders, no uniform ladder).
+    #[arg(long)]
+    estimate_only: bool,
 }
 
 /// The luminance (cd/m²) of every pixel.
@@ -70,6 +76,7 @@ pub fn run(
     spps: &[usize],
     reference_spp: usize,
     thresholds: &[f64],
+    adaptive: bool,
 ) -> Result<String, String> {
     let mut out = String::new();
     for (name, path) in scenes {
@@ -131,6 +138,10 @@ pub fn run(
                 )
                 .ok();
             }
+        }
+        if !adaptive {
+            out.push('\n');
+            continue;
         }
         // Adaptive against uniform, at equal relMSE: the uniform ladder's time interpolated (log–log) at each
         // adaptive render's relMSE.
@@ -196,8 +207,24 @@ fn interpolate(ladder: &[(usize, f64, f64, f64)], m: f64) -> Option<f64> {
     })
 }
 
-/// The report of `bench noise`: the campfire scene and a fire-lit room over a 128³ generated fire.
+/// The report of `bench noise`: the campfire scene and a fire-lit room over a 128³ generated fire, or the scenes
+/// `--scene` names.
 pub fn report(a: &NoiseArgs) -> Result<String, String> {
+    if !a.scene.is_empty() {
+        let scenes: Vec<_> = a
+            .scene
+            .iter()
+            .map(|p| (p.display().to_string(), p.clone()))
+            .collect();
+        return run(
+            &scenes,
+            a.image,
+            &a.spp,
+            a.reference_spp,
+            &a.thresholds,
+            !a.estimate_only,
+        );
+    }
     let dir = std::env::temp_dir();
     let dataset = crate::perf::dataset(&dir, 128)?;
     let room = dir.join(format!(
@@ -216,7 +243,14 @@ pub fn report(a: &NoiseArgs) -> Result<String, String> {
         ),
         ("the fire-lit room".to_string(), room.clone()),
     ];
-    let out = run(&scenes, a.image, &a.spp, a.reference_spp, &a.thresholds);
+    let out = run(
+        &scenes,
+        a.image,
+        &a.spp,
+        a.reference_spp,
+        &a.thresholds,
+        !a.estimate_only,
+    );
     let _ = std::fs::remove_file(&room);
     out
 }

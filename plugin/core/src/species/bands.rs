@@ -9,8 +9,11 @@
 //! - absorption σ_a(λ, T) = σ₀(λ) (1 − e^{−x}), x = h c₀ / (λ k T) (stimulated emission);
 //! - emission j(λ, T) = σ_a(λ, T) B_λ(T) — Kirchhoff's law, by construction;
 //! - σ₀(λ) = S · (e² / 4ε₀ m_e c₀) · g_ν, with g_ν = g_λ λ² / c₀ and g_λ = Σ_k w_k 𝒩(λ; λ_k, s), Σ w_k = 1: so
-//!   ∫ σ₀ dν = S · π e² / (4π ε₀ m_e c₀), and **S is the band system's oscillator strength per atom of the
-//!   element** (the share of the element bound in the molecule times the molecule's f).
+//!   ∫ σ₀ dν = S · π e² / (4π ε₀ m_e c₀), and **S is the band system's oscillator strength per free atom of the
+//!   element**: the species grid holds free atoms, so S is the molecules per free atom (a flame holds most
+//!   Sr, Ba as molecules: hence S of 9.4, 30, 46) times the molecule's f — not a share, which could not exceed 1.
+//!   It is fixed, so the molecule/atom ratio does not follow M–OH ⇌ M + OH with temperature: the model holds
+//!   near [`T_REF`].
 //!
 //! The shape σ₀ does not change with T: the bands absorb from the ground vibrational level's sequences (the
 //! Franck–Condon factors of these hydroxides are near diagonal), so a hotter flame shifts their emission only
@@ -38,6 +41,13 @@
 //!   energy, ≈ 0.9 / 1.1 ×). Barium's line (Ba I 553.5 nm) is clipped in that spectrum, so its S are upper bounds;
 //!   copper's (Cu I 510.6 nm) sits on its bands' slope and its resonance lines (324.8, 327.4 nm) do not show at
 //!   all, so copper's S are lower bounds — most of that flame's copper is molecules.
+//!
+//!   **S is uncertain by a factor of 2–3.** Beyond T (above), the calibration compares a band and a line at
+//!   different wavelengths on a spectrometer without a response correction (the source warns against it), takes
+//!   its counts — photons — as energy (for Sr and Ca, whose line lies at 0.68× the band's wavelength, S is then
+//!   1.48× high), and measures band heights above their own wings where the lines' heights are above a flat
+//!   continuum (the bands' peaks above zero are 1.6–1.8× higher, so S would be that much low). The last two nearly
+//!   cancel for Sr and Ca and are kept as stated uncertainty, not corrected one without the other.
 //!
 //! Not held: the monochlorides (SrCl, CaCl, BaCl, CuCl), which colour flames with a chlorine donor (pyrotechnic
 //! reds, greens and copper's blue) — no table of theirs was reachable; the render notes it for Ba and Cu, whose
