@@ -128,6 +128,14 @@ fn error_vs_time_writes_csv_svg_and_png() {
         "{surface}"
     );
     assert!(text.contains("equal-time winner"), "{text}");
+    // The reference is a quadrature no row computes; the finest march lands on it independently (1.2e-5 here).
+    let agree: f64 = text
+        .split("the march at 1/16 voxel differs from it by rel. RMSE ")
+        .nth(1)
+        .and_then(|t| t.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no march-to-quadrature figure in\n{text}"));
+    assert!(agree > 0.0 && agree < 2e-4, "{agree}");
     let csv = std::fs::read_to_string(dir.join("evt.csv")).unwrap();
     // Header, 5 march steps × 2 colour modes, 2 spp levels × 2 trackers.
     assert_eq!(csv.lines().count(), 1 + 10 + 4, "{csv}");

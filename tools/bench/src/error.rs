@@ -1,6 +1,7 @@
 //! `firemedium bench error-vs-time`: the error of each estimator of the fire seen directly against the time it
 //! takes — march at a ladder of steps (spectral and rgb), delta and ratio tracking at a ladder of samples per
-//! pixel — against a converged reference, as a CSV and a log–log plot (SVG and PNG).
+//! pixel — against a reference none of them computes (quadrature of the point coefficients), as a CSV and a log–log
+//! plot (SVG and PNG).
 
 use firemedium::metrics::errors;
 use firemedium_plugin::params::Param;
@@ -62,6 +63,101 @@ pub fn render(v: &FireVolume, size: usize, spp: usize, seed: u64) -> (Vec<f64>, 
     (rows.into_iter().flat_map(|r| r.0).collect(), seconds, evals)
 }
 
+/// Gauss–Legendre nodes and weights on [0, 1], 4 points (exact for polynomials of degree 7).
+const GL4: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+    (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+];
+
+/// The reference independent of every estimator on the ladder: the emission–absorption integral
+/// L = ∫ j(s) e^{−τ(s)} ds along each pixel's ray, by Gauss–Legendre quadrature of the volume's point coefficients
+/// ([`FireVolume::coefficients`], what every estimator samples) over each piece on which the trilinear fields
+/// are polynomial (the ray cut at every plane through voxel centres, where the interpolation kinks), the optical
+/// depth to each node by the same quadrature nested; (image, seconds). No step, no random number: what the
+/// march and the trackers estimate, to the quadrature's error.
+pub fn quadrature(v: &FireVolume, size: usize) -> (Vec<f64>, f64) {
+    let (eye, dir) = super::perf::pinhole(v, size);
+    let xyz = v.channel_xyz();
+    let ds = v.dataset();
+    let ([b0, b1], vs, dims) = (ds.bounds(), ds.voxel_size(), ds.dims());
+    // Beyond the lattice's outer centres the fields fall to the zero layer half a voxel further.
+    let (lo, hi) = (b0 - vs, b1 + vs);
+    let c = v.channels();
+    let start = Instant::now();
+    let img: Vec<f64> = (0..size * size)
+        .into_par_iter()
+        .map(|px| {
+            let d = dir(px % size, px / size);
+            let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+            for a in 0..3 {
+                let (n0, n1) = ((lo[a] - eye[a]) / d[a], (hi[a] - eye[a]) / d[a]);
+                t0 = t0.max(n0.min(n1));
+                t1 = t1.min(n0.max(n1));
+            }
+            if t0 >= t1 {
+                return 0.0;
+            }
+            let mut cuts = vec![t0, t1];
+            for a in 0..3 {
+                if d[a] == 0.0 {
+                    continue;
+                }
+                for i in -1..=dims[a] as i64 {
+                    let t = (b0[a] + (i as f64 + 0.5) * vs[a] - eye[a]) / d[a];
+                    if t > t0 && t < t1 {
+                        cuts.push(t);
+                    }
+                }
+            }
+            cuts.sort_by(f64::total_cmp);
+            let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            let mut sigma_t = |t: f64, out: &mut [f64], emit: Option<&mut [f64]>| {
+                v.coefficients(eye + d * t, &mut sa, &mut ss, &mut j);
+                for k in 0..c {
+                    out[k] = sa[k] + ss[k];
+                }
+                if let Some(e) = emit {
+                    e.copy_from_slice(&j);
+                }
+            };
+            let (mut tau, mut l) = (vec![0.0; c], vec![0.0; c]);
+            let (mut st, mut jt, mut inner) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+            for w in cuts.windows(2) {
+                let (a, b) = (w[0], w[1]);
+                let h = b - a;
+                if h <= 0.0 {
+                    continue;
+                }
+                for &(x, wx) in &GL4 {
+                    let s = a + h * x;
+                    sigma_t(s, &mut st, Some(&mut jt));
+                    // τ from a to s, nested.
+                    let mut part = vec![0.0; c];
+                    for &(y, wy) in &GL4 {
+                        sigma_t(a + (s - a) * y, &mut inner, None);
+                        for k in 0..c {
+                            part[k] += wy * (s - a) * inner[k];
+                        }
+                    }
+                    for k in 0..c {
+                        l[k] += wx * h * jt[k] * (-(tau[k] + part[k])).exp();
+                    }
+                }
+                for &(x, wx) in &GL4 {
+                    sigma_t(a + h * x, &mut st, None);
+                    for k in 0..c {
+                        tau[k] += wx * h * st[k];
+                    }
+                }
+            }
+            (0..c).map(|k| l[k] * xyz[k].y).sum::<f64>()
+        })
+        .collect();
+    (img, start.elapsed().as_secs_f64())
+}
+
 /// The whole ladder on `file`; returns the points and a description of the reference.
 pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, String), String> {
     let build = |extra: &[Param]| {
@@ -69,12 +165,11 @@ pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, S
         list.extend_from_slice(extra);
         FireVolume::new(&list).map_err(|e| e.to_string())
     };
-    // The reference: march at 1/16 voxel; its own error is bounded by its distance to 1/8 voxel.
+    // The reference: quadrature, no estimator of the ladder; the march at 1/16 voxel measured against it.
+    let (reference, ref_s) = quadrature(&build(&[])?, size);
     let fine = build(&[Param::float("stepsize", 1.0 / 16.0)])?;
-    let (reference, ref_s, _) = render(&fine, size, 1, 1);
-    let half = build(&[Param::float("stepsize", 1.0 / 8.0)])?;
-    let (coarser, _, _) = render(&half, size, 1, 2);
-    let (ref_err, _) = errors(&coarser, &reference);
+    let (finest, _, _) = render(&fine, size, 1, 1);
+    let (ref_err, _) = errors(&finest, &reference);
 
     let mut points = Vec::new();
     let mut push =
@@ -116,8 +211,7 @@ pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, S
             spp *= 2;
         }
     }
-    // The reference's own error: if the march's error falls by r per halving of the step (measured between the
-    // two finest ladder steps), the 1/16-voxel error is the 1/8–1/16 difference over (r − 1).
+    // How the march converges towards the reference: its error's fall per halving of the step.
     let err_at = |setting: &str| {
         points
             .iter()
@@ -129,14 +223,14 @@ pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, S
         _ => f64::NAN,
     };
     let about = format!(
-        "reference: march at 1/16 voxel, spectral, {size}×{size} pixels, {ref_s:.1} s; 1/8 voxel differs from it by rel. RMSE {ref_err:.2e}; the march's error falls {r:.2}× per halving between 1/4 and 1/8 voxel, so the reference's own error is about {:.1e}",
-        ref_err / (r - 1.0).max(1.0)
+        "reference: Gauss–Legendre quadrature of the point coefficients over every trilinear piece of each ray (4 nodes, the optical depth nested; no estimator of the ladder), spectral, {size}×{size} pixels, {ref_s:.1} s; the march at 1/16 voxel differs from it by rel. RMSE {ref_err:.2e}, its error falling {r:.2}× per halving of the step between 1/4 and 1/8 voxel. Each row: that estimator's error against the quadrature (bias and noise together; the trackers are unbiased, the march's error is its bias)"
     );
     Ok((points, about))
 }
 
 /// The fire lighting surfaces: `scene` rendered at `res` with the fire light on and off at 1, 2, 4, … `max_spp`
-/// samples per pixel, against the fire light at `ref_spp`; errors over the pixels that see a diffuse surface.
+/// samples per pixel, against the fire light sampled by luminance at `ref_spp` (another estimator than the rows');
+/// errors over the pixels that see a diffuse surface.
 pub fn surface_ladder(
     scene: &Path,
     res: (usize, usize),
@@ -144,14 +238,14 @@ pub fn surface_ladder(
     ref_spp: usize,
 ) -> Result<(Vec<Point>, String), String> {
     use firemedium::render::{self, scene as sc, surface_mask};
-    let load = |spp: usize, light: bool| {
+    let load_weighted = |spp: usize, light: bool, weighting: Option<&str>| {
         sc::load(
             scene,
             &sc::Overrides {
                 spp: Some(spp),
                 plugin: None,
                 no_fire_light: !light,
-                fire_light_weighting: None,
+                fire_light_weighting: weighting.map(str::to_string),
                 res: Some(res),
                 threads: None,
                 max_memory: None,
@@ -159,7 +253,11 @@ pub fn surface_ladder(
             },
         )
     };
-    let reference_scene = load(ref_spp, true).map_err(|e| e.to_string())?;
+    let load = |spp: usize, light: bool| load_weighted(spp, light, None);
+    // The reference samples the fire light by its voxels' luminance, not by their power as the rows do: another
+    // estimator (unbiased both), so the rows are not compared with a longer run of themselves.
+    let reference_scene =
+        load_weighted(ref_spp, true, Some("luminance")).map_err(|e| e.to_string())?;
     let mut rng = firemedium_core::rng::Rng::new(0);
     let mask = surface_mask(&reference_scene, &mut rng);
     let (reference, st) = render::render(&reference_scene, 99, &|_| {});
@@ -167,7 +265,7 @@ pub fn surface_ladder(
     let reference_all: Vec<f64> = reference.xyz.iter().map(|v| v.y).collect();
     // The reference's own error: half its samples against the other half, scaled to the full count.
     let about = format!(
-        "reference: fire light on, {ref_spp} spp, {}×{} pixels ({} see a diffuse surface), {:.1} s",
+        "reference: the fire light sampling voxels by luminance (the rows: by power, the default), {ref_spp} spp, {}×{} pixels ({} see a diffuse surface), {:.1} s; each row's error is against it, its own noise included",
         res.0,
         res.1,
         reference_m.len(),
