@@ -33,24 +33,29 @@ fn ok(o: &std::process::Output) -> String {
 
 const SCENE: &str = "LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40 \"float shutteropen\" 0 \"float shutterclose\" 0.5\nFilm \"rgb\" \"integer xresolution\" 20 \"integer yresolution\" 15 \"string filename\" \"torch.####.exr\"\nSampler \"zsobol\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"torch.####.vdb\" \"string fuel\" \"propane\" \"string velocitygrid\" \"vel\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n";
 
-#[test]
-fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
-    let dir = tmp("scripts");
+/// A 16³ torch over `frames` with its velocity, and the scene rendering it, in `dir`.
+fn torch(dir: &Path, frames: &str) {
     ok(&run_in(
-        &dir,
+        dir,
         &[
             "gen",
             "torch",
             "--resolution",
             "16",
             "--frames",
-            "30-31",
+            frames,
             "--velocity",
             "-o",
             "torch.####.vdb",
         ],
     ));
     std::fs::write(dir.join("torch.pbrt"), SCENE).unwrap();
+}
+
+#[test]
+fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
+    let dir = tmp("scripts");
+    torch(&dir, "30-31");
     let out = ok(&run_in(
         &dir,
         &[
@@ -144,21 +149,7 @@ fn farm_scripts_render_tiles_that_merge_into_the_local_frames() {
 #[test]
 fn adaptive_farm_tiles_carry_their_sampling_and_merge() {
     let dir = tmp("adaptive");
-    ok(&run_in(
-        &dir,
-        &[
-            "gen",
-            "torch",
-            "--resolution",
-            "16",
-            "--frames",
-            "30-30",
-            "--velocity",
-            "-o",
-            "torch.####.vdb",
-        ],
-    ));
-    std::fs::write(dir.join("torch.pbrt"), SCENE).unwrap();
+    torch(&dir, "30-30");
     ok(&run_in(
         &dir,
         &[

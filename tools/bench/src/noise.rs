@@ -210,20 +210,23 @@ fn interpolate(ladder: &[(usize, f64, f64, f64)], m: f64) -> Option<f64> {
 /// The report of `bench noise`: the campfire scene and a fire-lit room over a 128³ generated fire, or the scenes
 /// `--scene` names.
 pub fn report(a: &NoiseArgs) -> Result<String, String> {
+    let measure = |scenes: &[(String, std::path::PathBuf)]| {
+        run(
+            scenes,
+            a.image,
+            &a.spp,
+            a.reference_spp,
+            &a.thresholds,
+            !a.estimate_only,
+        )
+    };
     if !a.scene.is_empty() {
         let scenes: Vec<_> = a
             .scene
             .iter()
             .map(|p| (p.display().to_string(), p.clone()))
             .collect();
-        return run(
-            &scenes,
-            a.image,
-            &a.spp,
-            a.reference_spp,
-            &a.thresholds,
-            !a.estimate_only,
-        );
+        return measure(&scenes);
     }
     let dir = std::env::temp_dir();
     let dataset = crate::perf::dataset(&dir, 128)?;
@@ -236,21 +239,13 @@ pub fn report(a: &NoiseArgs) -> Result<String, String> {
         crate::fire_light::room_scene(&dataset, crate::fire_light::Fire::Fire, 5),
     )
     .map_err(|e| format!("{}: {e}", room.display()))?;
-    let scenes = vec![
+    let out = measure(&[
         (
             "the campfire scene".to_string(),
             crate::repository_file("scenes/campfire/scene.pbrt"),
         ),
         ("the fire-lit room".to_string(), room.clone()),
-    ];
-    let out = run(
-        &scenes,
-        a.image,
-        &a.spp,
-        a.reference_spp,
-        &a.thresholds,
-        !a.estimate_only,
-    );
+    ]);
     let _ = std::fs::remove_file(&room);
     out
 }

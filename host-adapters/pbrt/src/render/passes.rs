@@ -295,23 +295,8 @@ pub fn render_progressive(
                             cut = true;
                             break;
                         }
-                        let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
-                        let mut rng =
-                            sampler.samples(s, scene.spp, order, (x as u32, y as u32), rng);
-                        let mut u = [rng.next_f64(), rng.next_f64()];
-                        if !scene.pixel_jitter {
-                            u = [0.5, 0.5];
-                        }
-                        // The film position from the pixel filter, and the sample's weight (pbrt-v4's RGBFilm:
-                        // the pixel is Σ w L / Σ w).
-                        let (off, wt) = scene.filter.sample(u);
-                        let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
-                        // The sample's time in the shutter (pbrt-v4's camera sample: after the film position,
-                        // before the lens), drawn only when a medium blurs by its velocity.
-                        if let Some([open, close]) = scene.shutter {
-                            rng.time = open + (close - open) * rng.next_f64();
-                        }
-                        let (o, d) = camera_ray(scene, fx, fy, &mut rng);
+                        let (mut rng, wt, (fx, fy), (o, d)) =
+                            camera_sample(scene, &sampler, seed, order, (x, y), s);
                         let mut visible = None;
                         let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
                         let mut split = aov::Split::default();
@@ -357,24 +342,8 @@ pub fn render_progressive(
                         let from = if p.twin_w == 0.0 { 0 } else { s0 };
                         let order = hash(twin_seed, x as u64, y as u64, u64::MAX);
                         for s in from..s1 {
-                            let rng = Rng::new(hash(twin_seed, x as u64, y as u64, s as u64));
-                            let mut rng = twin_sampler.samples(
-                                s,
-                                scene.spp,
-                                order,
-                                (x as u32, y as u32),
-                                rng,
-                            );
-                            let mut u = [rng.next_f64(), rng.next_f64()];
-                            if !scene.pixel_jitter {
-                                u = [0.5, 0.5];
-                            }
-                            let (off, wt) = scene.filter.sample(u);
-                            let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
-                            if let Some([open, close]) = scene.shutter {
-                                rng.time = open + (close - open) * rng.next_f64();
-                            }
-                            let (o, d) = camera_ray(scene, fx, fy, &mut rng);
+                            let (mut rng, wt, _, (o, d)) =
+                                camera_sample(scene, &twin_sampler, twin_seed, order, (x, y), s);
                             let l = integ.li_visible(o, d, &mut rng, None, None);
                             let sensor = scene
                                 .response
@@ -596,6 +565,33 @@ fn choose_twins(px: &mut [Px], (w, h): (usize, usize), tw: usize, seed: u64, sum
             }
         }
     }
+}
+
+/// Sample `s` of pixel `(x, y)` (its strata `order`) under `sampler` randomized by `seed`: the path's sample
+/// stream, the pixel filter's weight (pbrt-v4's RGBFilm: the pixel is Σ w L / Σ w), the film position and the
+/// camera ray. The time in the shutter is drawn after the film position, before the lens (pbrt-v4's camera
+/// sample), and only when a medium blurs by its velocity.
+fn camera_sample(
+    scene: &super::scene::Scene,
+    sampler: &pixel::Sampler,
+    seed: u64,
+    order: u64,
+    (x, y): (usize, usize),
+    s: usize,
+) -> (pixel::Samples, f64, (f64, f64), (glam::Vec3A, glam::Vec3A)) {
+    let rng = Rng::new(hash(seed, x as u64, y as u64, s as u64));
+    let mut rng = sampler.samples(s, scene.spp, order, (x as u32, y as u32), rng);
+    let mut u = [rng.next_f64(), rng.next_f64()];
+    if !scene.pixel_jitter {
+        u = [0.5, 0.5];
+    }
+    let (off, wt) = scene.filter.sample(u);
+    let (fx, fy) = (x as f64 + 0.5 + off[0], y as f64 + 0.5 + off[1]);
+    if let Some([open, close]) = scene.shutter {
+        rng.time = open + (close - open) * rng.next_f64();
+    }
+    let ray = camera_ray(scene, fx, fy, &mut rng);
+    (rng, wt, (fx, fy), ray)
 }
 
 /// The sampler's gain G = Σ d/π / Σ e/π over the twins (see the module); 1 without twins or while they say
