@@ -29,6 +29,12 @@
 //!   The paper itself was not reachable from here; its SrOH table agrees with an independent flame spectrum to
 //!   0.001 in xy (below). The weights are w_k ∝ I_k / (B_λ(λ_k, [`T_REF`]) λ_k²), so that the emission at T_REF has
 //!   the published heights.
+//! - **CaOH's pseudo-continuum.** Between its peaks the orange system (A²Π–X²Σ⁺) is a continuum of unresolved
+//!   rotational lines, 607–628 nm, that M&K's table of peaks lacks: with their peaks alone calcium rendered at
+//!   (0.572, 0.415), sodium's colour, against the measured flame's (0.612, 0.387). It is held as five more Gaussians
+//!   at 3-nm spacing (607, 613, 616, 619, 622 nm; heights 2.6, 18.7, 4.6, 67.0, 34.2 where 625 nm is 100), fitted by
+//!   non-negative least squares, with M&K's peaks scaled together, to the measured calcium spectrum over 545–635
+//!   nm (`tests/data/flame-tests/Ca.csv`; the residual's RMS 11.8 counts with the peaks alone, 4.2 with them).
 //! - **S**, calibrated against a measured flame-test spectrum (TeoCaggia/Flame-test-simulator,
 //!   `files/spectral_sources/definitivo/`: salts in a gas flame, an Ocean Optics USB2000 at 1.3 nm FWHM, no
 //!   response correction): S makes the ratio of one of the molecule's bands to the element's line, as peak heights
@@ -110,8 +116,10 @@ pub const MOLECULES: [Molecule; 6] = [
         calibration: Calibration { band_nm: 682.0, band_height: 442.4, line_nm: 460.7331, line_height: 35.3 },
     },
     Molecule {
-        name: "CaOH", element: "Ca", strength: 1.818,
-        bands: &[(555.0, 45.0), (572.0, 1.0), (594.0, 7.0), (600.0, 11.0), (604.0, 14.0), (625.0, 100.0), (645.0, 10.0), (665.0, 1.0)],
+        name: "CaOH", element: "Ca", strength: 2.194,
+        // M&K's peaks, then (607–622 nm) the orange system's pseudo-continuum (see the module docs).
+        bands: &[(555.0, 45.0), (572.0, 1.0), (594.0, 7.0), (600.0, 11.0), (604.0, 14.0), (625.0, 100.0), (645.0, 10.0), (665.0, 1.0),
+                 (607.0, 2.6), (613.0, 18.7), (616.0, 4.6), (619.0, 67.0), (622.0, 34.2)],
         calibration: Calibration { band_nm: 625.0, band_height: 38.2, line_nm: 422.673, line_height: 6.5 },
     },
     Molecule {
