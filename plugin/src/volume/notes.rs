@@ -1,9 +1,10 @@
 //! What a volume's build found that a user should hear, whatever host renders it: species whose strong lines fall
-//! outside the channels, and species whose photographed colour the model does not hold (barium's and copper's
-//! chloride bands, potassium's lilac). Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints
+//! outside the channels, species whose photographed colour the model does not hold (barium's and copper's
+//! chloride bands, potassium's lilac), and band-forming metals in a fire hotter than the bands' strengths hold for. Read through the ABI's `volume_note_count`/`volume_note`; the renderer prints
 //! them as warnings at the medium's statement.
 
 use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
+use crate::species::bands::T_REF;
 use crate::species::{colour_note, Element, Line};
 
 /// The notes about a fire's `species` ((symbol, element, scale)), at its hottest temperature `t_hot` (K; 2000 K
@@ -21,8 +22,33 @@ pub(super) fn species(
         if let Some(note) = colour_note(sym) {
             out.push(format!("species {sym}: {note}"));
         }
+        if let Some(m) = dissociated(sym, t_hot) {
+            out.push(m);
+        }
     }
     out
+}
+
+/// The hottest a fire may be before [`dissociated`] warns, K: the band strengths hold for a gas flame near
+/// [`T_REF`].
+const HOT_FOR_BANDS: f64 = 2300.0;
+
+/// Ca–OH, Sr–OH, Ba–OH dissociation energies, eV: 4–4.5 (a review's range; 4.3 taken), which makes the molecules
+/// per free atom fall as exp(−D₀/kT) at a fixed OH share.
+const D0_HYDROXIDE_EV: f64 = 4.3;
+
+/// When species `sym` carries hydroxide bands and the fire is hotter than [`HOT_FOR_BANDS`]: the bands' strength
+/// per free atom is a 2 000 K flame's, where M–OH ⇌ M + OH leaves a hotter flame far fewer molecules per free atom
+/// (why flame photometry reads Ca, Sr and Ba on their lines in hot flames): how many fewer at `t` K.
+fn dissociated(sym: &str, t: f64) -> Option<String> {
+    if !["Ca", "Sr", "Ba"].contains(&sym) || t <= HOT_FOR_BANDS {
+        return None;
+    }
+    let ev = 1.602_176_634e-19;
+    let fewer = (D0_HYDROXIDE_EV * ev / BOLTZMANN * (1.0 / T_REF - 1.0 / t)).exp();
+    Some(format!(
+        "species {sym}: its bands are held at the molecules per free atom of a {T_REF:.0} K gas flame; at this fire's hottest, {t:.0} K, a flame in equilibrium (M–OH ⇌ M + OH, D₀ ≈ {D0_HYDROXIDE_EV} eV, its OH share the same) holds about {fewer:.0}× fewer, and its atomic lines outshine its bands: the band colour is overstated where the fire is hotter than {HOT_FOR_BANDS:.0} K"
+    ))
 }
 
 /// When species `sym`'s lines outside the channels `lo`–`hi` nm carry more than a tenth of its visible line

@@ -173,3 +173,28 @@ fn calcium_bands_follow_the_measured_spectrum() {
     eprintln!("CaOH against the calcium flame: RMS {rms:.2} of a {peak:.1} peak");
     assert!(rms / peak < 0.1, "RMS {rms:.2} of a {peak:.1} peak");
 }
+
+/// The bands' strength per free atom is a 2 000 K gas flame's: a strontium fire at 2 800 K is told that a flame in
+/// equilibrium there holds exp(D₀/k (1/2000 − 1/2800)) ≈ 1 250× fewer SrOH per free atom; at 2 000 K, and sodium
+/// (lines alone) at 2 800 K, nothing.
+#[test]
+fn band_metals_in_a_fire_hotter_than_their_bands_hold_for_are_warned_about() {
+    let hot = slab("Sr", 1e15, 2800.0, 32, "voigt").notes().to_vec();
+    let expected =
+        (4.3f64 * 1.602_176_634e-19 / 1.380_649e-23 * (1.0 / 2000.0 - 1.0 / 2800.0)).exp();
+    assert!((expected - 1247.0).abs() < 1.0, "{expected}");
+    assert!(
+        hot.iter()
+            .any(|n| n.starts_with("species Sr: its bands are held")
+                && n.contains(&format!("about {expected:.0}× fewer"))),
+        "{hot:?}"
+    );
+    let warned = |sym: &str, t: f64| {
+        slab(sym, 1e15, t, 32, "voigt")
+            .notes()
+            .iter()
+            .any(|n| n.contains("molecules per free atom"))
+    };
+    assert!(!warned("Sr", 2000.0));
+    assert!(!warned("Na", 2800.0));
+}
