@@ -20,6 +20,46 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
+/// `text` without its `#[cfg(test)]` items — a `mod tests { … }`, a gated function or impl (to its balanced closing
+/// brace), a gated field or statement (to its `,` or `;`) — and nothing else: code after a gated field is still
+/// read.
+fn without_test_items(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(i) = rest.find("#[cfg(test)]") {
+        out.push_str(&rest[..i]);
+        let item = &rest[i + "#[cfg(test)]".len()..];
+        // The item ends at its balanced `}` if a `{` opens before any `;` or `,`, else at that `;` or `,`.
+        let open = item.find('{');
+        let stop = item.find([';', ',']);
+        let end = match (open, stop) {
+            (Some(o), s) if s.is_none_or(|s| o < s) => {
+                let mut depth = 0usize;
+                let mut end = item.len();
+                for (k, c) in item[o..].char_indices() {
+                    match c {
+                        '{' => depth += 1,
+                        '}' => {
+                            depth -= 1;
+                            if depth == 0 {
+                                end = o + k + 1;
+                                break;
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                end
+            }
+            (_, Some(s)) => s + 1,
+            _ => item.len(),
+        };
+        rest = &item[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// The modules directly under `root` (a file's stem or a folder's name; not `mod.rs`/`lib.rs`/`main.rs`) and,
 /// per module, the sibling modules its files name: through `prefix::X` (`crate::render`, `crate`) or through
 /// as many `super::` as lead from the file back to `root`.
@@ -58,10 +98,7 @@ fn module_graph(root: &Path, prefix: &str) -> BTreeMap<String, BTreeSet<String>>
             let up = "super::".repeat(depth);
             let text = std::fs::read_to_string(&f).unwrap();
             // (Comments do not import, nor do tests, which may reach anywhere to set up a case.)
-            let code: String = text
-                .split("#[cfg(test)]")
-                .next()
-                .unwrap_or("")
+            let code: String = without_test_items(&text)
                 .lines()
                 .filter(|l| !l.trim_start().starts_with("//"))
                 .collect::<Vec<_>>()
@@ -172,6 +209,16 @@ fn imports_between_modules_run_one_way() {
             found.join("; ")
         );
     }
+    // Test items are left out, and only they: code after a gated field or function is still read.
+    let text = "struct A {\n    #[cfg(test)]\n    n: crate::x::N,\n}\n#[cfg(test)]\nfn f() { if a { crate::y::g() } }\nuse crate::z;\n#[cfg(test)]\nmod tests {\n    use crate::w;\n}\n";
+    let kept = without_test_items(text);
+    assert!(
+        kept.contains("crate::z")
+            && !["crate::x", "crate::y", "crate::w"]
+                .iter()
+                .any(|x| kept.contains(x)),
+        "{kept}"
+    );
     // The check sees a circle where there is one.
     let mut g = BTreeMap::new();
     g.insert("a".to_string(), BTreeSet::from(["b".to_string()]));
