@@ -12,6 +12,7 @@
 use super::aov::{Split, Visible};
 use super::bsdf::{Lobes, Mode};
 use super::lights;
+use super::lobes::henyey_greenstein as hg;
 use super::material;
 use super::media::Track;
 use super::paths::Spot;
@@ -65,12 +66,6 @@ fn seen(l: &mut S, split: &mut Option<&mut Split>, depth: usize, contribution: S
             sp.emission += contribution;
         }
     }
-}
-
-/// Henyey–Greenstein phase function value (eq. 4) for cosθ between wo-reversed and wi (pbrt's convention).
-fn hg(cos: f32, g: f32) -> f32 {
-    let d = 1.0 + g * g + 2.0 * g * cos;
-    (1.0 - g * g) / (4.0 * PI * d * d.max(1e-12).sqrt())
 }
 
 /// The balance-heuristic weight of a light sample whose solid-angle pdf is `pl` against the BSDF/phase pdf `pb`

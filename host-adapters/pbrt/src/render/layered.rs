@@ -18,7 +18,7 @@
 //! sum to one when the coat is rough, and f comes out 7 % above the sampler's own estimate (test
 //! `a_coated_diffuse_surface_sampled_and_integrated_agree`, coat roughness 0.3); with this one they agree.
 
-use super::lobes::{same_hemisphere, Flags, Lobes, Mode, Sample};
+use super::lobes::{henyey_greenstein as hg, same_hemisphere, Flags, Lobes, Mode, Sample};
 use super::spectrum::S;
 use firemedium_core::rng::Rng;
 use glam::Vec3A;
@@ -74,12 +74,6 @@ impl Walk {
     fn r2(&mut self) -> [f32; 2] {
         [self.r(), self.r()]
     }
-}
-
-/// Henyey–Greenstein's phase function for the cosine between wo (pointing away) and wi.
-fn hg(cos: f32, g: f32) -> f32 {
-    let d = 1.0 + g * g + 2.0 * g * cos;
-    (1.0 - g * g) / (4.0 * PI * d * d.max(0.0).sqrt().max(1e-12))
 }
 
 /// A direction from HG around wo (pointing away from the scattering point), and its density.

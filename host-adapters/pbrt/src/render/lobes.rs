@@ -1,5 +1,6 @@
 //! What every BxDF shares, below the BxDFs themselves (`bsdf`) and the layered BSDF built from them (`layered`):
-//! the quantity transported, the lobes a query may use, what a BxDF can do, a sampled direction.
+//! the quantity transported, the lobes a query may use, what a BxDF can do, a sampled direction; and the
+//! Henyey–Greenstein phase function (the layered BSDF's medium and the integrator's media evaluate the same).
 
 use super::spectrum::S;
 use glam::Vec3A;
@@ -78,4 +79,12 @@ pub struct Sample {
 /// Whether `a` and `b` lie on the same side of the shading plane.
 pub fn same_hemisphere(a: Vec3A, b: Vec3A) -> bool {
     a.z * b.z > 0.0
+}
+
+/// Henyey–Greenstein's phase function (P&P eq. 4) for the cosine `cos` between the two directions as pbrt-v4 takes
+/// them (the propagation direction reversed, and the scattered one), asymmetry `g`: what a medium's scattering and
+/// the layered BSDF's medium between its interfaces both evaluate.
+pub fn henyey_greenstein(cos: f32, g: f32) -> f32 {
+    let d = 1.0 + g * g + 2.0 * g * cos;
+    (1.0 - g * g) / (4.0 * std::f32::consts::PI * d * d.max(1e-12).sqrt())
 }
