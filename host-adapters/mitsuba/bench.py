@@ -69,6 +69,25 @@ def scene(medium: dict) -> "mi.Scene":
     })
 
 
+def campfire_floor(spp: int, extra: dict | None = None) -> "mi.Scene":
+    """tests/data/scenes/campfire-floor.pbrt in Mitsuba under `firepath`: the campfire at 15× its soot over a floor,
+    32², `spp` independent samples; `extra` parameters for the fire (a look)."""
+    return mi.load_dict({
+        "type": "scene", "integrator": {"type": "firepath", "max_depth": 2},
+        "sensor": {"type": "perspective", "fov": 40, "fov_axis": "smaller",
+                   "to_world": T().look_at(origin=[0, -4.2, 1.6], target=[0, 0, 0.55], up=[0, 0, 1])
+                   @ T().scale([-1, 1, 1]),
+                   "film": {"type": "hdrfilm", "width": 32, "height": 32, "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": spp}},
+        "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
+                  "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
+        "fire": {"type": "cube", "to_world": T().translate([0, 0, 0.8025]).scale([0.6, 0.6, 0.7975]),
+                 "bsdf": {"type": "null"},
+                 "interior": {"type": "firemedium", "filename": str(ROOT / "scenes" / "campfire" / "campfire.vdb"),
+                              "fuel": "propane", "firescale": 15, "smokescale": 15, **(extra or {})}},
+    })
+
+
 def timed(sc, seed) -> float:
     t = time.perf_counter()
     img = mi.render(sc, seed=seed)
@@ -111,20 +130,7 @@ with tempfile.TemporaryDirectory() as tmp:
 
     sys.path.insert(0, str(ROOT / "host-adapters" / "mitsuba" / "tests"))
     spp = 64
-    sc = mi.load_dict({
-        "type": "scene", "integrator": {"type": "firepath", "max_depth": 2},
-        "sensor": {"type": "perspective", "fov": 40, "fov_axis": "smaller",
-                   "to_world": T().look_at(origin=[0, -4.2, 1.6], target=[0, 0, 0.55], up=[0, 0, 1])
-                   @ T().scale([-1, 1, 1]),
-                   "film": {"type": "hdrfilm", "width": 32, "height": 32, "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": spp}},
-        "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
-                  "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
-        "fire": {"type": "cube", "to_world": T().translate([0, 0, 0.8025]).scale([0.6, 0.6, 0.7975]),
-                 "bsdf": {"type": "null"},
-                 "interior": {"type": "firemedium", "filename": str(ROOT / "scenes" / "campfire" / "campfire.vdb"),
-                              "fuel": "propane", "firescale": 15, "smokescale": 15}},
-    })
+    sc = campfire_floor(spp)
     timed(sc, 1)
     rows = []
     for r in range(a.rounds):
@@ -170,16 +176,7 @@ if a.accuracy:
                             "--quiet", "--spp", "16384"], check=True)
             lum = lambda a: np.asarray(a, dtype=np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
             ref = lum(mi.Bitmap(str(ref_exr)))
-            sc = mi.load_dict({
-                "type": "scene", "integrator": {"type": "firepath", "max_depth": 2},
-                "sensor": {"type": "perspective", "fov": 40, "fov_axis": "smaller",
-                           "to_world": T().look_at(origin=[0, -4.2, 1.6], target=[0, 0, 0.55], up=[0, 0, 1])
-                           @ T().scale([-1, 1, 1]),
-                           "film": {"type": "hdrfilm", "width": 32, "height": 32, "rfilter": {"type": "box"}},
-                           "sampler": {"type": "independent", "sample_count": 2048}},
-                "floor": {"type": "rectangle", "to_world": T().scale([10, 10, 1]),
-                          "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}},
-                "fire": {**box, "interior": {"type": "firemedium", "filename": campfire, **fire, **extra}}})
+            sc = campfire_floor(2048, extra)
             img = lum(mi.render(sc, seed=3)) * fmm.CD_M2_PER_UNIT
             flame = ref > 0.05 * ref.max()
             floor = np.zeros_like(flame)

@@ -290,12 +290,7 @@ class FireMedium(mi.Medium):
         self._bounds_m = mi.ScalarBoundingBox3f(mi.ScalarPoint3f(*lo), mi.ScalarPoint3f(*hi))
         if self.emits:
             # Each voxel's emitted luminance (its centre's), for the fire light's distribution.
-            if mi.is_spectral:
-                y = self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
-            elif mi.is_monochromatic:
-                y = np.ones(1)
-            else:
-                y = np.array([0.2126, 0.7152, 0.0722])
+            y = self._luminance_weights()
             y_of_row = j @ y
             d, t, les = (fields[1:-1, 1:-1, 1:-1, i].astype(np.float64) for i in range(3))
             e = np.maximum(les, 0.0) if self.emission_grid else np.maximum(d, 0.0) * np.maximum(les, 0.0)
@@ -303,6 +298,15 @@ class FireMedium(mi.Medium):
             self._voxel_luminance = np.maximum(lum, 0.0).astype(np.float32)  # (nz, ny, nx)
         else:
             self._voxel_luminance = None
+
+    def _luminance_weights(self) -> np.ndarray:
+        """Luminance per unit of each of the variant's channels: the bins' Y (spectral), 1 (monochromatic), Rec. 709's
+        weights (RGB)."""
+        if mi.is_spectral:
+            return self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
+        if mi.is_monochromatic:
+            return np.ones(1)
+        return np.array([0.2126, 0.7152, 0.0722])
 
     def _bake(self):
         """A fire not of the closed form: σ_t, σ_s and j at every voxel centre in the variant's channels, each a
@@ -326,12 +330,7 @@ class FireMedium(mi.Medium):
         self.emit_tex = tex(emit) if self.emits else None
         if self.emits:
             # Each voxel's emitted luminance (its centre's), for the fire light's distribution.
-            if mi.is_spectral:
-                y = self.volume.channel_xyz()[:, 1] / CD_M2_PER_UNIT
-            elif mi.is_monochromatic:
-                y = np.ones(1)
-            else:
-                y = np.array([0.2126, 0.7152, 0.0722])
+            y = self._luminance_weights()
             lum = np.tensordot(emit[1:-1, 1:-1, 1:-1], y, axes=([3], [0]))
             self._voxel_luminance = np.maximum(lum, 0.0).astype(np.float32)  # (nz, ny, nx)
         else:
