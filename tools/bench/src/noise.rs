@@ -3,8 +3,8 @@
 //!
 //! The true error is the whole image's, over luminance, against a reference rendered in two halves whose
 //! difference takes the reference's own noise out ([`firemedium::metrics::errors_debiased`]): relative RMSE for
-//! the estimate (what the estimate estimates), relMSE for adaptive sampling (what a threshold on each block's
-//! relative error equalises: the dark floor beside the fire counts as much as the flame).
+//! the estimate (what the estimate estimates), relMSE for adaptive sampling (what `--noise-threshold T` brings to
+//! T²: the dark floor beside the fire counts as much as the flame).
 
 use firemedium::metrics::errors_debiased;
 use firemedium::render::{self, pixel::Sampler, scene as sc};
@@ -78,7 +78,7 @@ pub fn run(
     thresholds: &[f64],
     adaptive: bool,
 ) -> Result<String, String> {
-    let mut out = String::new();
+    let mut out = format!("{}\n\n", crate::machine());
     for (name, path) in scenes {
         let w = Workload {
             name: name.clone(),

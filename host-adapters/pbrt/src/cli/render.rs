@@ -33,9 +33,9 @@ pub struct RenderArgs {
     /// any pixel takes.
     #[arg(long)]
     spp: Option<usize>,
-    /// Adaptive sampling: blocks of 8×8 pixels stop taking samples once their estimated relative error (the
-    /// two-halves estimate every render reports) is below this, e.g. 0.02; the render ends when every block has,
-    /// or at --spp.
+    /// Adaptive sampling to a relative error, e.g. 0.02: blocks of 8×8 pixels take samples where they lower the
+    /// image's error most for their time, none left above twice this, until the image's estimated relative error
+    /// (per pixel, as relMSE weighs it) is below it; the render ends there, or at --spp.
     #[arg(long, value_name = "T", value_parser = parse_noise_threshold)]
     noise_threshold: Option<f64>,
     /// Stop after the pass that ends past this many seconds of rendering (the image whole, each pixel with the

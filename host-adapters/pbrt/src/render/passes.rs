@@ -24,18 +24,26 @@
 //! never enter the image; with `independent` samples there are none (the halves are independent already).
 //!
 //! **Adaptive sampling.** The film is cut into blocks of 8 × 8 pixels (on the full film, so a tile of a farm's
-//! render cuts the same blocks as the whole frame's where it can); once every pixel of a block has at least 8
-//! samples, the block stops when √(Σ e / Σ (Y² + 0.01 Ȳ²)) < the threshold (Ȳ the image's mean luminance: the
-//! dark pixels' errors are weighed against the image's level, as relMSE weighs them) — a block, not a pixel,
-//! because one pixel's two halves are too few to say. The render stops when every block has, when `--spp`
-//! samples are reached, or after the pass that crosses the time limit.
+//! render cuts the same blocks as the whole frame's where it can); a block, not a pixel, because one pixel's two
+//! halves are too few to say. Once every pixel has 8 samples, each block's relative variance per sample r (its
+//! estimated relMSE, the mean of g e / (Y² + 0.01 Ȳ²) over its pixels, with Ȳ the image's mean luminance — the dark pixels' errors weighed
+//! against the image's level, as relMSE weighs them —, times its samples) and its cost per sample c (the seconds
+//! its pixels took) say how many samples it should have: the image's relMSE, the blocks' mean of r / n, reaches T²
+//! at the least time when n ∝ √(r / c) (a Lagrange multiplier: a cheap noisy block — the floor beside the fire —
+//! takes more, an expensive one — a thick flame — fewer), and no block is left above (2T)². After each pass the
+//! multiplier that meets T² with the samples the blocks already have is found, and a block that has its share
+//! stops. (A threshold on each block's own error, n ∝ r, spends the samples on the blocks whose error is largest,
+//! not where a sample lowers the image's error most for its time: it measured 0.8–1.2× uniform sampling at equal
+//! relMSE.) The render stops when every block has, when `--spp` samples are reached, or after the pass that
+//! crosses the time limit.
 
 use super::*;
 
 /// How a render spends its samples and whom it tells after each pass.
 #[derive(Default, Clone, Copy)]
 pub struct Progressive<'a> {
-    /// Stop sampling a block of pixels once its estimated relative error is below this (`--noise-threshold`).
+    /// Sample adaptively until the image's estimated relative error (relMSE's root) is below this, each block of
+    /// pixels taking its share (see the module; `--noise-threshold`).
     pub noise_threshold: Option<f64>,
     /// Stop after the pass that ends past this many seconds of rendering (`--time-limit`).
     pub time_limit: Option<f64>,
@@ -76,7 +84,7 @@ pub enum Stop {
     /// Every pixel took the scene's samples per pixel.
     #[default]
     Spp,
-    /// Every block's estimated error is below the noise threshold.
+    /// The image's estimated error is below the noise threshold: every block has its share of samples.
     NoiseThreshold,
     /// The time limit passed.
     TimeLimit,
@@ -122,8 +130,9 @@ struct Px {
     /// Σ w · Y and Σ w over the even and the odd samples.
     half_y: [f64; 2],
     half_w: [f64; 2],
-    /// Samples taken.
+    /// Samples taken, and the seconds they took.
     n: u32,
+    seconds: f64,
     /// Its block stopped (adaptive sampling).
     done: bool,
     /// A twinned pixel's twin: Σ w · Y and Σ w under the other randomization, and the probability it was
@@ -288,6 +297,7 @@ pub fn render_progressive(
                     let mut e = exs.get_mut(slot);
                     // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
                     let order = hash(seed, x as u64, y as u64, u64::MAX);
+                    let began = std::time::Instant::now();
                     for s in s0..s1 {
                         // Checked per sample: Ctrl-C ends a render whose pixels take long within a sample's time
                         // (each pixel keeps the samples it finished: the image is whole).
@@ -334,6 +344,7 @@ pub fn render_progressive(
                             }
                         }
                     }
+                    p.seconds += began.elapsed().as_secs_f64();
                     if cut {
                         break;
                     }
@@ -392,13 +403,15 @@ pub fn render_progressive(
         let g = gain(&px);
         estimate = (all && counted > 0 && sum_y2 > 0.0).then(|| (g * sum_e / sum_y2).sqrt());
         if let Some(threshold) = opts.noise_threshold.filter(|_| all && counted > 0) {
+            let mean_y = sum_y / counted as f64;
+            let g_rel = gain_relative(&px, 0.01 * mean_y * mean_y);
             adapt(
                 &mut px,
                 (w, h),
                 (x0, y0),
                 tw,
-                threshold / g.sqrt(),
-                sum_y / counted as f64,
+                (threshold, g_rel, scene.spp),
+                mean_y,
             );
         }
         let samples: u64 = px.iter().map(|p| p.n as u64).sum();
@@ -600,11 +613,24 @@ fn camera_sample(
 /// (the candle, emission alone: G ≈ 1/600 at 256 spp, the estimate 2.3× the true error); without it, twins among
 /// the flame's pixels understate the surfaces' error (the art and blue-core scenes: 0.6× at 64–256 spp).
 fn gain(px: &[Px]) -> f64 {
+    gain_weighted(px, |_| 1.0)
+}
+
+/// The sampler's gain for relMSE, each twin's errors weighed by 1 / (Y² + ε), ε = `floor` (see [`adapt`]): the
+/// gain of the pixels that relMSE counts (surfaces, dark ones too) rather than of the bright ones that the image's
+/// relative RMSE counts (a flame's, whose smooth light gains more from low discrepancy).
+fn gain_relative(px: &[Px], floor: f64) -> f64 {
+    gain_weighted(px, |y| 1.0 / (y * y + floor))
+}
+
+/// G with each twin's d and e weighed by `weight(Y)` beside its 1/π.
+fn gain_weighted(px: &[Px], weight: impl Fn(f64) -> f64) -> f64 {
     let (mut twin, mut halves) = (0.0, 0.0);
     for p in px.iter().filter(|p| p.twin_p > 0.0) {
-        if let (Some(d), Some((_, e))) = (p.twin_estimate(), p.estimate()) {
-            twin += d / p.twin_p;
-            halves += e / p.twin_p;
+        if let (Some(d), Some((y, e))) = (p.twin_estimate(), p.estimate()) {
+            let w = weight(y) / p.twin_p;
+            twin += d * w;
+            halves += e * w;
         }
     }
     if halves > 0.0 && twin > 0.0 {
@@ -620,14 +646,31 @@ fn slot_of(cx: usize, cy: usize, tw: usize) -> usize {
     t * TILE * TILE + (cy % TILE) * TILE + (cx % TILE)
 }
 
-/// Marks done every block of [`BLOCK`]² pixels (on the full film) whose pixels all have [`MIN_ADAPTIVE_SPP`]
-/// samples and whose estimated relative error is below `threshold`; `mean_y` the image's mean luminance.
+/// A block of [`BLOCK`]² pixels (on the full film) as the stopping rule sees it.
+struct Block {
+    /// Its pixels' ranges in the rendered pixels.
+    xs: std::ops::Range<usize>,
+    ys: std::ops::Range<usize>,
+    /// Its pixels, and their mean samples.
+    pixels: f64,
+    n: f64,
+    /// The relative variance of one sample, r = n · g mean(e / (Y² + ε)): its estimated relMSE is r / n.
+    r: f64,
+    /// Seconds per pixel sample.
+    cost: f64,
+    done: bool,
+}
+
+/// The stopping rule (see the module): marks done every block that has its share of the samples that bring the
+/// image's relMSE to `threshold`² at the least time, no block's above (2 · threshold)². `gain` the sampler's
+/// (see [`gain`]), `spp` the most a pixel takes, `mean_y` the image's mean luminance. No block stops before
+/// every pixel has [`MIN_ADAPTIVE_SPP`] samples.
 fn adapt(
     px: &mut [Px],
     (w, h): (usize, usize),
     (x0, y0): (usize, usize),
     tw: usize,
-    threshold: f64,
+    (threshold, gain, spp): (f64, f64, usize),
     mean_y: f64,
 ) {
     let slot_of = |cx: usize, cy: usize| slot_of(cx, cy, tw);
@@ -635,33 +678,161 @@ fn adapt(
     let (bx0, bx1) = (x0 / BLOCK, (x0 + w).div_ceil(BLOCK));
     let (by0, by1) = (y0 / BLOCK, (y0 + h).div_ceil(BLOCK));
     let floor = 0.01 * mean_y * mean_y;
+    let mut blocks = Vec::with_capacity((bx1 - bx0) * (by1 - by0));
     for by in by0..by1 {
         for bx in bx0..bx1 {
             let xs = (bx * BLOCK).max(x0) - x0..((bx + 1) * BLOCK).min(x0 + w) - x0;
             let ys = (by * BLOCK).max(y0) - y0..((by + 1) * BLOCK).min(y0 + h) - y0;
-            let (mut e, mut y2, mut ready) = (0.0, 0.0, true);
+            let (mut rel, mut n, mut secs, mut count) = (0.0, 0.0, 0.0, 0.0);
             for cy in ys.clone() {
                 for cx in xs.clone() {
                     let p = &px[slot_of(cx, cy)];
-                    if p.done {
-                        continue;
-                    }
                     match p.estimate() {
-                        Some((y, ep)) if p.n >= MIN_ADAPTIVE_SPP => {
-                            e += ep;
-                            y2 += y * y + floor;
+                        Some((y, e)) if p.n >= MIN_ADAPTIVE_SPP => {
+                            rel += e / (y * y + floor);
+                            n += p.n as f64;
+                            secs += p.seconds;
+                            count += 1.0;
                         }
-                        _ => ready = false,
+                        // (Every pixel samples until it has the least: no block stops before.)
+                        _ => return,
                     }
                 }
             }
-            if ready && y2 > 0.0 && (e / y2).sqrt() < threshold {
-                for cy in ys.clone() {
-                    for cx in xs.clone() {
-                        px[slot_of(cx, cy)].done = true;
-                    }
-                }
+            let n_mean = n / count;
+            blocks.push(Block {
+                pixels: count,
+                n: n_mean,
+                r: if floor > 0.0 {
+                    n_mean * gain * rel / count
+                } else {
+                    0.0
+                },
+                cost: (secs / n).max(1e-12),
+                done: px[slot_of(xs.start, ys.start)].done,
+                xs,
+                ys,
+            });
+        }
+    }
+    let t2 = threshold * threshold;
+    let pixels: f64 = blocks.iter().map(|b| b.pixels).sum();
+    // A block's samples at multiplier k: k √(r / c) (the least time to a given relMSE: Lagrange), at least what
+    // brings it to (2T)², never fewer than it has nor more than the most.
+    let want = |b: &Block, k: f64| {
+        if b.done {
+            b.n
+        } else {
+            (k * (b.r / b.cost).sqrt())
+                .max(b.r / (4.0 * t2))
+                .clamp(b.n, spp as f64)
+        }
+    };
+    let rel_mse = |k: f64| {
+        blocks
+            .iter()
+            .map(|b| b.pixels * b.r / want(b, k).max(1.0))
+            .sum::<f64>()
+            / pixels
+    };
+    // The multiplier that meets T² (bisection on ln k; relMSE falls as k grows); none if even the most samples
+    // everywhere would not.
+    let (mut lo, mut hi) = (-80f64, 80f64);
+    if rel_mse(hi.exp()) > t2 {
+        return;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if rel_mse(mid.exp()) > t2 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let k = hi.exp();
+    for b in blocks.iter().filter(|b| !b.done && want(b, k) <= b.n) {
+        for cy in b.ys.clone() {
+            for cx in b.xs.clone() {
+                px[slot_of(cx, cy)].done = true;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A render one block high, a block per entry of `blocks` across (δ, cost): every pixel of luminance 1 with
+    /// `n` samples whose halves differ by 2δ (so e = δ², and r = n δ² / 1.01 with the image's mean 1) and which
+    /// took `cost` seconds per sample. The pixels, the render's size and its tiles across.
+    fn film(n: u32, blocks: &[(f64, f64)]) -> (Vec<Px>, (usize, usize), usize) {
+        let (w, h) = (BLOCK * blocks.len(), BLOCK);
+        let tw = w.div_ceil(TILE);
+        let mut px = vec![Px::default(); tw * TILE * TILE];
+        for cy in 0..h {
+            for cx in 0..w {
+                let (delta, cost) = blocks[cx / BLOCK];
+                let half = n as f64 / 2.0;
+                px[slot_of(cx, cy, tw)] = Px {
+                    sum: DVec3::new(0.0, n as f64, 0.0),
+                    weights: n as f64,
+                    half_y: [(1.0 + delta) * half, (1.0 - delta) * half],
+                    half_w: [half, half],
+                    n,
+                    seconds: cost * n as f64,
+                    ..Default::default()
+                };
+            }
+        }
+        (px, (w, h), tw)
+    }
+
+    /// δ for a block's r at n samples.
+    fn delta(r: f64, n: u32) -> f64 {
+        (r * 1.01 / n as f64).sqrt()
+    }
+
+    /// Which blocks stop at threshold `t`, gain `gain`, after `n` samples of `blocks`.
+    fn stops(n: u32, blocks: &[(f64, f64)], t: f64, gain: f64) -> Vec<bool> {
+        let (mut px, (w, h), tw) = film(n, blocks);
+        adapt(&mut px, (w, h), (0, 0), tw, (t, gain, 1 << 20), 1.0);
+        (0..blocks.len())
+            .map(|b| px[slot_of(b * BLOCK, 0, tw)].done)
+            .collect()
+    }
+
+    #[test]
+    fn a_block_takes_samples_by_its_noise_over_the_root_of_its_cost() {
+        // Both blocks r = 0.08; B's samples cost 4× A's. The least time to relMSE T² = 0.008 gives n ∝ √(r / c):
+        // n_A = 2 n_B. With both at 8 samples, B's are its share (the optimum's 7.5) and A needs (0.08/8 +
+        // 0.08/n_A)/2 = 0.008: n_A = 13.3 — A goes on.
+        let t = 0.008f64.sqrt();
+        let d = delta(0.08, 8);
+        assert_eq!(stops(8, &[(d, 1.0), (d, 4.0)], t, 1.0), [false, true]);
+        // Equal costs: each needs 10 (0.08/n = 0.008); at 8 neither has its share, at 12 both have.
+        assert_eq!(stops(8, &[(d, 1.0), (d, 1.0)], t, 1.0), [false, false]);
+        let d = delta(0.08, 12);
+        assert_eq!(stops(12, &[(d, 1.0), (d, 1.0)], t, 1.0), [true, true]);
+        // The sampler's gain scales r: at gain 2 the 12 samples are not enough (each needs 20).
+        assert_eq!(stops(12, &[(d, 1.0), (d, 1.0)], t, 2.0), [false, false]);
+    }
+
+    #[test]
+    fn a_noisy_block_is_never_left_above_twice_the_threshold() {
+        // Seven quiet cheap blocks (r = 0.001) and one noisy block (r = 0.5) whose samples cost 10⁴× more: the
+        // optimum would give the noisy one almost nothing, but its error at 8 samples, 0.5/8, is above (2T)² =
+        // 0.032, so it goes on whatever it costs; the quiet ones stop.
+        let t = 0.008f64.sqrt();
+        let mut blocks = vec![(delta(0.001, 8), 1.0); 7];
+        blocks.push((delta(0.5, 8), 1e4));
+        let want: Vec<bool> = (0..8).map(|b| b < 7).collect();
+        assert_eq!(stops(8, &blocks, t, 1.0), want);
+        // A block without noise (the sky) stops at the least samples; before them nothing stops.
+        assert!(stops(8, &[(0.0, 1.0), (delta(0.08, 8), 1.0)], 0.1, 1.0)[0]);
+        assert_eq!(
+            stops(4, &[(0.0, 1.0), (0.0, 1.0)], 0.1, 1.0),
+            [false, false]
+        );
     }
 }
