@@ -11,7 +11,7 @@
 //! - σ₀(λ) = S · (e² / 4ε₀ m_e c₀) · g_ν, with g_ν = g_λ λ² / c₀ and g_λ = Σ_k w_k 𝒩(λ; λ_k, s), Σ w_k = 1: so
 //!   ∫ σ₀ dν = S · π e² / (4π ε₀ m_e c₀), and **S is the band system's oscillator strength per free atom of the
 //!   element**: the species grid holds free atoms, so S is the molecules per free atom (a flame holds most
-//!   Sr, Ba as molecules: hence S of 9.4, 30, 46) times the molecule's f — not a share, which could not exceed 1.
+//!   Sr, Ba as molecules: hence S of 9.9, 32, 42) times the molecule's f — not a share, which could not exceed 1.
 //!   It is fixed, so the molecule/atom ratio does not follow M–OH ⇌ M + OH with temperature: the model holds
 //!   near [`T_REF`].
 //!
@@ -38,22 +38,24 @@
 //! - **S**, calibrated against a measured flame-test spectrum (TeoCaggia/Flame-test-simulator,
 //!   `files/spectral_sources/definitivo/`: salts in a gas flame, an Ocean Optics USB2000 at 1.3 nm FWHM, no
 //!   response correction): S makes the ratio of one of the molecule's bands to the element's line, as peak heights
-//!   above the local continuum at the instrument's resolution, what that spectrum shows, at [`T_REF`]. Each
-//!   [`Molecule::calibration`] names the four numbers; `bands_are_calibrated_against_the_flame_spectrum` recomputes
-//!   S from them. The heights are the source's own (`scelte.csv`: SrOH 682, CaOH "622" — M&K's 625 —, BaOH 512,
-//!   BaO "604" — M&K's 608, the nearest —, and the lines), except copper's, read here from its spectrum above its
-//!   9-count continuum (CuOH 546, CuO 492; the source's fit missed its broad bands). The flame's temperature is not
-//!   known: strontium's S would be ≈ 0.8 / 1.5 × at 1900 / 2200 K (barium's, whose line and bands lie close in
-//!   energy, ≈ 0.9 / 1.1 ×). Barium's line (Ba I 553.5 nm) is clipped in that spectrum, so its S are upper bounds;
-//!   copper's (Cu I 510.6 nm) sits on its bands' slope and its resonance lines (324.8, 327.4 nm) do not show at
-//!   all, so copper's S are lower bounds — most of that flame's copper is molecules.
+//!   at the instrument's resolution, what that spectrum shows, at [`T_REF`]. The spectrometer counts photons, so
+//!   the counts' ratio is turned into the energies' by λ_line / λ_band (for Sr and Ca 0.68: read as energy, S
+//!   would be 1.48× high). Band and line are both measured above zero or above the flat continuum the spectrum
+//!   shows (not a band above its own wings, which reads the strontium and calcium bands 1.6× and 1.8× low): SrOH
+//!   682 nm 705.5 and Sr I 36.4 counts from the recorded spectrum (background removed by the source), CaOH 625 nm
+//!   67.7 above calcium's 5-count continuum (`tests/data/flame-tests/`, tested against the files), Ca I 6.5 (the
+//!   source's `scelte.csv`); barium's heights are the source's (BaOH 512 nm, BaO "604" — M&K's 608, the nearest
+//!   —, the line above the band forest it stands on), copper's read here above its 9-count continuum (CuOH 546, CuO
+//!   492; the source's fit missed its broad bands). Each [`Molecule::calibration`] names the four numbers;
+//!   `bands_are_calibrated_against_the_flame_spectrum` recomputes S from them. Barium's line (Ba I 553.5 nm) is
+//!   clipped in that spectrum, so its S are upper bounds; copper's (Cu I 510.6 nm) sits on its bands' slope and
+//!   its resonance lines (324.8, 327.4 nm) do not show at all, so copper's S are lower bounds — most of that
+//!   flame's copper is molecules.
 //!
-//!   **S is uncertain by a factor of 2–3.** Beyond T (above), the calibration compares a band and a line at
-//!   different wavelengths on a spectrometer without a response correction (the source warns against it), takes
-//!   its counts — photons — as energy (for Sr and Ca, whose line lies at 0.68× the band's wavelength, S is then
-//!   1.48× high), and measures band heights above their own wings where the lines' heights are above a flat
-//!   continuum (the bands' peaks above zero are 1.6–1.8× higher, so S would be that much low). The last two nearly
-//!   cancel for Sr and Ca and are kept as stated uncertainty, not corrected one without the other.
+//!   **S is uncertain by a factor of 2–3.** What is not corrected: the flame's temperature is not known (strontium's
+//!   S would be ≈ 0.8 / 1.5 × at 1900 / 2200 K; barium's, whose line and bands lie close in energy, ≈ 0.9 / 1.1 ×),
+//!   and the spectrometer's response differs between the band's and the line's wavelengths by an unknown factor
+//!   (the source warns against comparing them).
 //!
 //! Not held: the monochlorides (SrCl, CaCl, BaCl, CuCl), which colour flames with a chlorine donor (pyrotechnic
 //! reds, greens and copper's blue) — no table of theirs was reachable; the render notes it for Ba and Cu, whose
@@ -111,34 +113,34 @@ pub struct Calibration {
 #[rustfmt::skip]
 pub const MOLECULES: [Molecule; 6] = [
     Molecule {
-        name: "SrOH", element: "Sr", strength: 9.434,
+        name: "SrOH", element: "Sr", strength: 9.857,
         bands: &[(606.0, 59.0), (620.0, 2.0), (626.0, 2.0), (649.0, 13.0), (659.0, 33.0), (671.0, 70.0), (682.0, 100.0), (707.0, 9.0), (722.0, 1.0)],
-        calibration: Calibration { band_nm: 682.0, band_height: 442.4, line_nm: 460.7331, line_height: 35.3 },
+        calibration: Calibration { band_nm: 682.0, band_height: 705.5, line_nm: 460.7331, line_height: 36.4 },
     },
     Molecule {
-        name: "CaOH", element: "Ca", strength: 2.194,
+        name: "CaOH", element: "Ca", strength: 2.629,
         // M&K's peaks, then (607–622 nm) the orange system's pseudo-continuum (see the module docs).
         bands: &[(555.0, 45.0), (572.0, 1.0), (594.0, 7.0), (600.0, 11.0), (604.0, 14.0), (625.0, 100.0), (645.0, 10.0), (665.0, 1.0),
                  (607.0, 2.6), (613.0, 18.7), (616.0, 4.6), (619.0, 67.0), (622.0, 34.2)],
-        calibration: Calibration { band_nm: 625.0, band_height: 38.2, line_nm: 422.673, line_height: 6.5 },
+        calibration: Calibration { band_nm: 625.0, band_height: 67.7, line_nm: 422.673, line_height: 6.5 },
     },
     Molecule {
-        name: "BaOH", element: "Ba", strength: 29.98,
+        name: "BaOH", element: "Ba", strength: 32.34,
         bands: &[(488.0, 72.0), (502.0, 30.0), (513.0, 100.0), (524.0, 86.0), (745.0, 47.0)],
         calibration: Calibration { band_nm: 513.0, band_height: 86.8, line_nm: 553.5481, line_height: 161.0 },
     },
     Molecule {
-        name: "BaO", element: "Ba", strength: 45.83,
+        name: "BaO", element: "Ba", strength: 41.73,
         bands: &[(485.0, 72.0), (497.0, 100.0), (514.0, 87.0), (526.0, 97.0), (533.0, 100.0), (535.0, 90.0), (546.0, 16.0), (551.0, 68.0), (567.0, 51.0), (574.0, 36.0), (583.0, 32.0), (589.0, 93.0), (608.0, 88.0), (612.0, 59.0), (617.0, 34.0), (623.0, 32.0), (626.0, 29.0), (632.0, 79.0), (642.0, 26.0), (653.0, 71.0), (656.0, 57.0), (663.0, 39.0), (682.0, 56.0), (686.0, 33.0), (693.0, 26.0), (701.0, 10.0), (710.0, 50.0), (718.0, 46.0), (725.0, 14.0), (734.0, 32.0), (744.0, 16.0), (752.0, 26.0), (761.0, 41.0)],
         calibration: Calibration { band_nm: 608.0, band_height: 61.7, line_nm: 553.5481, line_height: 161.0 },
     },
     Molecule {
-        name: "CuOH", element: "Cu", strength: 1.574e-3,
+        name: "CuOH", element: "Cu", strength: 1.472e-3,
         bands: &[(505.0, 46.0), (512.0, 44.0), (524.0, 75.0), (533.0, 84.0), (546.0, 100.0), (605.0, 10.0)],
         calibration: Calibration { band_nm: 546.0, band_height: 89.0, line_nm: 510.5541, line_height: 3.3 },
     },
     Molecule {
-        name: "CuO", element: "Cu", strength: 1.603e-3,
+        name: "CuO", element: "Cu", strength: 1.664e-3,
         bands: &[(450.0, 25.0), (453.0, 27.0), (458.0, 33.0), (467.0, 52.0), (471.0, 53.0), (477.0, 57.0), (480.0, 66.0), (486.0, 69.0), (488.0, 83.0), (492.0, 100.0), (606.0, 42.0), (616.0, 59.0), (632.0, 47.0)],
         calibration: Calibration { band_nm: 492.0, band_height: 23.0, line_nm: 510.5541, line_height: 3.3 },
     },
@@ -453,7 +455,9 @@ mod tests {
             let band_peak =
                 b.sigma0_seen(l, s_inst) * stimulated(l, T_REF) * spectral_radiance(T_REF, l);
             let ratio = band_peak / line_peak;
-            let want = band_h / line_h;
+            // Counts are photons: energy per photon h c / λ, so the energies' ratio is the counts' times
+            // λ_line / λ_band.
+            let want = band_h / line_h * line_nm / band_nm;
             eprintln!("{}: S should be {:.4e}", m.name, m.strength * want / ratio);
             assert!(
                 (ratio / want - 1.0).abs() < 0.005,

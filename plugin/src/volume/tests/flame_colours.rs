@@ -115,6 +115,42 @@ fn flame_test_colours_are_those_of_measured_flame_spectra() {
     }
 }
 
+/// The heights S is calibrated from are those of the recorded spectra, read here from the files: strontium's
+/// band (682 nm) and line (460.7 nm) above zero (the source took the background out), calcium's band (625 nm)
+/// above its flat continuum, as the lines' are — not the bands' heights above their own wings (442.4 and 38.2,
+/// which made S 1.6× and 1.8× low). (Calcium's line, 422.7 nm, lies outside the file kept: its 6.5 counts are the
+/// source's.) The files hold every third sample, so a peak read here is the highest sample within 2 nm.
+#[test]
+fn the_calibration_heights_are_the_recorded_spectra_s() {
+    use crate::species::bands::MOLECULES;
+    let peak = |sym: &str, nm: f64| {
+        measured(sym)
+            .into_iter()
+            .filter(|(l, _)| (l - nm).abs() < 2.0)
+            .map(|(_, c)| c)
+            .fold(f64::MIN, f64::max)
+    };
+    let cal = |name: &str| {
+        MOLECULES
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap()
+            .calibration
+    };
+    let (sr, ca) = (cal("SrOH"), cal("CaOH"));
+    for (what, got, want) in [
+        ("SrOH 682 nm", sr.band_height, peak("Sr", 682.0)),
+        ("Sr I 460.7 nm", sr.line_height, peak("Sr", 460.7)),
+        ("CaOH 625 nm", ca.band_height, peak("Ca", 625.0)),
+    ] {
+        eprintln!("{what}: calibrated from {got}, the spectrum's {want:.2}");
+        assert!(
+            (got / want - 1.0).abs() < 0.01,
+            "{what}: {got} against {want}"
+        );
+    }
+}
+
 /// Where a metal's lines are thick they are integrated across their profiles and leave the bins, and a point query
 /// (`coefficients`: a host tracking the medium, the fire light's weights) adds them back as their bins' means; its
 /// bands stay in the bins once. A barium slab at 10¹⁸ m⁻³ (its 553.5 nm line thick, its bands carrying most of its
