@@ -20,6 +20,20 @@ pub struct Point {
     pub rel_mse: f64,
     /// Medium evaluations, where counted (the rlib's volume; renders through the plugin library are not).
     pub evaluations: Option<u64>,
+    /// The estimator's bias as the image shows it: its mean over the pixels against the reference's, less 1
+    /// (the pixels' noise averages out of it; a deterministic estimator's whole error is bias). `None` where not
+    /// measured (a CSV written before the column).
+    pub level: Option<f64>,
+}
+
+/// The image's mean against the reference's, less 1 (see [`Point::level`]).
+pub fn level(a: &[f64], r: &[f64]) -> f64 {
+    let (sa, sr) = (a.iter().sum::<f64>(), r.iter().sum::<f64>());
+    if sr > 0.0 {
+        sa / sr - 1.0
+    } else {
+        0.0
+    }
 }
 
 /// A luminance image (cd/m²) of the fire from a pinhole in front of it, `spp` rays per pixel; (image, seconds,
@@ -182,6 +196,7 @@ pub fn ladder(file: &Path, size: usize, max_spp: usize) -> Result<(Vec<Point>, S
                 rel_rmse,
                 rel_mse,
                 evaluations: Some(evaluations),
+                level: Some(level(img, &reference)),
             });
         };
     for (estimator, extra) in [
@@ -277,7 +292,8 @@ pub fn surface_ladder(
         while spp <= max_spp {
             let s = load(spp, light).map_err(|e| e.to_string())?;
             let (img, st) = render::render(&s, 7 + spp as u64, &|_| {});
-            let (rel_rmse, rel_mse) = errors(&surface_luminance(&img, &mask), &reference_m);
+            let surface = surface_luminance(&img, &mask);
+            let (rel_rmse, rel_mse) = errors(&surface, &reference_m);
             points.push(Point {
                 estimator: if light {
                     "fire light on"
@@ -291,14 +307,20 @@ pub fn surface_ladder(
                 rel_mse,
                 // (The renderer reaches the fire through the plugin library, whose counter is its own.)
                 evaluations: None,
+                level: Some(level(&surface, &reference_m)),
             });
             // Every render's own estimate of its error beside its true error, both over the whole image.
             if let (true, Some(estimate)) = (light, st.rel_rmse_estimate) {
                 let all: Vec<f64> = img.xyz.iter().map(|v| v.y).collect();
                 let (true_rmse, true_mse) = errors(&all, &reference_all);
-                for (estimator, rel_rmse, rel_mse) in [
-                    (TRUE_WHOLE, true_rmse, true_mse),
-                    (ESTIMATE_WHOLE, estimate, f64::NAN),
+                for (estimator, rel_rmse, rel_mse, lvl) in [
+                    (
+                        TRUE_WHOLE,
+                        true_rmse,
+                        true_mse,
+                        Some(level(&all, &reference_all)),
+                    ),
+                    (ESTIMATE_WHOLE, estimate, f64::NAN, None),
                 ] {
                     points.push(Point {
                         estimator: estimator.into(),
@@ -307,6 +329,7 @@ pub fn surface_ladder(
                         rel_rmse,
                         rel_mse,
                         evaluations: None,
+                        level: lvl,
                     });
                 }
             }
@@ -358,22 +381,26 @@ pub fn winner(points: &[Point]) -> Option<usize> {
 }
 
 /// The points of a CSV [`csv`] wrote: an error naming the line, the column and what it expected.
+/// The CSV's columns before `level`.
+const HEADER: &str = "estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations";
+
 pub fn parse_csv(text: &str) -> Result<Vec<Point>, String> {
     let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, h)) if h.trim() == "estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations" => {}
-        _ => {
-            return Err(
-                "line 1: expected the header estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations"
-                    .into(),
-            )
-        }
-    }
+    // (The level column came later: a CSV without it still reads.)
+    let fields = match lines.next() {
+        Some((_, h)) if h.trim() == HEADER => 6,
+        Some((_, h)) if h.trim() == format!("{HEADER},level") => 7,
+        _ => return Err(format!("line 1: expected the header {HEADER}[,level]")),
+    };
     let mut points = Vec::new();
     for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         let f = split_csv_line(line);
-        if f.len() != 6 {
-            return Err(format!("line {}: {} fields, expected 6", i + 1, f.len()));
+        if f.len() != fields {
+            return Err(format!(
+                "line {}: {} fields, expected {fields}",
+                i + 1,
+                f.len()
+            ));
         }
         let num = |k: usize, what: &str| -> Result<f64, String> {
             f[k].trim()
@@ -389,6 +416,10 @@ pub fn parse_csv(text: &str) -> Result<Vec<Point>, String> {
                 )
             })?),
         };
+        let level = match f.get(6).map(|v| v.trim()) {
+            None | Some("") => None,
+            Some(_) => Some(num(6, "level")?),
+        };
         points.push(Point {
             estimator: f[0].clone(),
             setting: f[1].clone(),
@@ -396,6 +427,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<Point>, String> {
             rel_rmse: num(3, "rel_rmse")?,
             rel_mse: num(4, "rel_mse")?,
             evaluations,
+            level,
         });
     }
     if points.is_empty() {
@@ -432,16 +464,17 @@ pub fn csv(points: &[Point]) -> String {
             t.to_string()
         }
     };
-    let mut s = String::from("estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations\n");
+    let mut s = format!("{HEADER},level\n");
     for p in points {
         s += &format!(
-            "{},{},{:.6},{:.6e},{:.6e},{}\n",
+            "{},{},{:.6},{:.6e},{:.6e},{},{}\n",
             field(&p.estimator),
             field(&p.setting),
             p.seconds,
             p.rel_rmse,
             p.rel_mse,
-            p.evaluations.map(|n| n.to_string()).unwrap_or_default()
+            p.evaluations.map(|n| n.to_string()).unwrap_or_default(),
+            p.level.map(|l| format!("{l:.6e}")).unwrap_or_default()
         );
     }
     s

@@ -256,6 +256,9 @@ pub struct Run {
     pub rel_rmse: f64,
     /// Against the reference as it is.
     pub raw: (f64, f64),
+    /// The surfaces' mean against the reference's, less 1: the estimator's bias as far as the reference's noise
+    /// lets it show ([`super::error::level`]).
+    pub level: f64,
     pub camera_rays: usize,
     pub light_samples: u64,
 }
@@ -368,6 +371,7 @@ pub fn ladder(
                     errors_debiased(&lum, &reference, [&halves[0], &halves[1]]);
                 let raw = errors(&lum, &reference);
                 let run = Run {
+                    level: super::error::level(&lum, &reference),
                     estimator: e.name,
                     spp: n,
                     seconds: st.seconds,
@@ -413,6 +417,7 @@ pub fn points(runs: &[Run]) -> Vec<Point> {
             rel_rmse: r.rel_rmse,
             rel_mse: r.rel_mse,
             evaluations: None,
+            level: Some(r.level),
         })
         .collect()
 }
@@ -427,6 +432,8 @@ pub struct Summary {
     /// The light off's over it.
     pub gain_rmse2: f64,
     pub gain_relmse: f64,
+    /// Its largest rung's [`Run::level`].
+    pub level: f64,
     /// What a light sample costs in camera paths without one: the time a render spends beyond the light off's
     /// at the same samples per pixel, per light sample, over the light off's time per camera ray.
     pub sample_cost: Option<f64>,
@@ -463,6 +470,7 @@ pub fn summary(runs: &[Run]) -> Vec<Summary> {
                 relmse_s,
                 gain_rmse2: base.rel_rmse * base.rel_rmse * base.seconds / rmse2_s,
                 gain_relmse: base.rel_mse * base.seconds / relmse_s,
+                level: r.level,
                 sample_cost,
             })
         })
@@ -508,6 +516,7 @@ mod tests {
             rel_mse: rel * rel,
             rel_rmse: rel,
             raw: (rel, rel * rel),
+            level: 0.0,
             camera_rays: 1000 * spp,
             light_samples,
         };

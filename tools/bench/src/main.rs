@@ -2,6 +2,7 @@
 //! can rerun. It links the plugin as a library to time its parts in process (the march kernel, the components'
 //! build costs, the stability cases), and renders the user's path with the `firemedium` program beside it.
 
+mod components;
 mod error;
 mod fire_light;
 mod noise;
@@ -194,7 +195,7 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
     match &a.what {
         What::Perf(p) => perf_report(p).map_err(|e| (1, e)),
         What::ErrorVsTime(e) => error_report(e).map_err(|m| (1, m)),
-        What::Components(c) => components_report(c).map_err(|m| (1, m)),
+        What::Components(c) => components::report(c).map_err(|m| (1, m)),
         What::FireLight(f) => fire_light_report(f).map_err(|m| (1, m)),
         What::Plot(p) => plot_report(p).map_err(|m| (1, m)),
         What::Noise(n) => noise::report(n).map_err(|m| (1, m)),
@@ -430,7 +431,8 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
         false => "the light off",
     };
     let mut out = format!(
-        "gains against {baseline}\n\n| fire | estimator | rel. RMSE² × s | baseline / it | relMSE × s | baseline / it | a light sample, in camera paths |\n|---|---|---|---|---|---|---|\n",
+        "{}\ngains against {baseline}; bias: the surfaces' mean against the reference's, less 1, at the largest rung (what does not average out; the reference's own noise, about its rel. RMSE over √pixels, bounds what shows)\n\n| fire | estimator | rel. RMSE² × s | baseline / it | relMSE × s | baseline / it | bias | a light sample, in camera paths |\n|---|---|---|---|---|---|---|---|\n",
+        machine()
     );
     // (label, scene, title, whether the bench wrote the scene)
     let mut cases = Vec::new();
@@ -510,12 +512,13 @@ fn fire_light_report(a: &FireLightArgs) -> Result<String, String> {
         )?;
         for l in fire_light::summary(&runs) {
             out += &format!(
-                "| {r} | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {} |\n",
+                "| {r} | {} | {:.3e} | {:.1}× | {:.3e} | {:.1}× | {:+.2e} | {} |\n",
                 l.estimator,
                 l.rmse2_s,
                 l.gain_rmse2,
                 l.relmse_s,
                 l.gain_relmse,
+                l.level,
                 l.sample_cost
                     .map_or_else(|| "—".to_string(), |c| format!("{c:.2}"))
             );
@@ -585,10 +588,10 @@ fn write_ladder(
     }
     firemedium::imageio::write_png_bytes(&png_path, w, h, &rgb, false)
         .map_err(|e| e.to_string())?;
-    let mut out = format!("{about}\n\n| estimator | setting | seconds | rel. RMSE | relMSE | medium evaluations |\n|---|---|---|---|---|---|\n");
+    let mut out = format!("{}\n{about}\n\nbias: the image's mean against the reference's, less 1 — the error that does not average out over the pixels (noise does), beside the rel. RMSE of bias and noise together\n\n| estimator | setting | seconds | rel. RMSE | relMSE | bias | medium evaluations |\n|---|---|---|---|---|---|---|\n", machine());
     for p in points {
         out += &format!(
-            "| {} | {} | {:.3} | {:.3e} | {} | {} |\n",
+            "| {} | {} | {:.3} | {:.3e} | {} | {} | {} |\n",
             p.estimator,
             p.setting,
             p.seconds,
@@ -597,6 +600,8 @@ fn write_ladder(
                 true => "—".to_string(),
                 false => format!("{:.3e}", p.rel_mse),
             },
+            p.level
+                .map_or_else(|| "—".to_string(), |l| format!("{l:+.2e}")),
             p.evaluations
                 .map(|n| n.to_string())
                 .unwrap_or_else(|| "—".into())
@@ -617,68 +622,6 @@ fn write_ladder(
     Ok(out)
 }
 
-/// Per configuration: (name, [(component, bytes, set-up seconds)], total bytes).
-type Components = Vec<(&'static str, Vec<(String, usize, f64)>, usize)>;
-
-fn components(file: &str) -> Result<Components, String> {
-    use firemedium_plugin::light::{FireLight, Weighting};
-    use firemedium_plugin::params::Param;
-    use firemedium_plugin::volume::FireVolume;
-    let mut out = Vec::new();
-    for (name, extra, light) in [
-        ("soot + blackbody", vec![], false),
-        (
-            "+ sodium lines",
-            vec![Param::string("species", "Na")],
-            false,
-        ),
-        (
-            "+ sodium, refraction",
-            vec![
-                Param::string("species", "Na"),
-                Param::bool("refraction", true),
-            ],
-            false,
-        ),
-        (
-            "+ sodium, refraction, fire light",
-            vec![
-                Param::string("species", "Na"),
-                Param::bool("refraction", true),
-            ],
-            true,
-        ),
-    ] {
-        let mut list = vec![Param::string("filename", file)];
-        list.extend(extra);
-        let v = FireVolume::new(&list).map_err(|e| e.to_string())?;
-        let tables: usize = v.tables().iter().map(|t| t.bytes).sum();
-        let mut rows = vec![(
-            "dataset grids (density, temperature, species)".to_string(),
-            v.bytes() - tables,
-            f64::NAN,
-        )];
-        rows.extend(
-            v.tables()
-                .iter()
-                .map(|t| (t.name.clone(), t.bytes, t.seconds)),
-        );
-        let mut total = v.bytes();
-        if light {
-            let l = FireLight::new(std::sync::Arc::new(v), Weighting::Power)
-                .map_err(|e| e.to_string())?;
-            rows.push((
-                "fire light (CDFs over emitting voxels)".into(),
-                l.bytes(),
-                l.build_seconds(),
-            ));
-            total += l.bytes();
-        }
-        out.push((name, rows, total));
-    }
-    Ok(out)
-}
-
 /// A file of the repository, `rel` from its root: from the working directory when it holds it (a clone's
 /// root), else from the source tree this binary was built from, else `rel` as it is (its absence is then the
 /// error the caller reports, naming it).
@@ -695,34 +638,6 @@ pub(crate) fn repository_file(rel: &str) -> std::path::PathBuf {
     } else {
         here
     }
-}
-
-fn components_report(a: &ComponentsArgs) -> Result<String, String> {
-    let file = a
-        .dataset
-        .clone()
-        .unwrap_or_else(|| repository_file("scenes/spectroscopy/torch.vdb"))
-        .to_string_lossy()
-        .into_owned();
-    let mut out = format!(
-        "dataset {file}\n\n| configuration | component | bytes | set-up s |\n|---|---|---|---|\n"
-    );
-    for (name, rows, total) in components(&file)? {
-        let seconds: f64 = rows.iter().map(|r| r.2).filter(|s| s.is_finite()).sum();
-        for (k, (c, bytes, s)) in rows.iter().enumerate() {
-            let s = if s.is_finite() {
-                format!("{s:.4}")
-            } else {
-                "—".into()
-            };
-            out += &format!(
-                "| {} | {c} | {bytes} | {s} |\n",
-                if k == 0 { name } else { "" }
-            );
-        }
-        out += &format!("| | **total** | **{total}** | **{seconds:.4}** |\n");
-    }
-    Ok(out)
 }
 
 fn main() -> ExitCode {
@@ -760,6 +675,29 @@ fn main() -> ExitCode {
     }
 }
 
+/// The machine a measurement ran on and its load, for every table's heading: the processor, the cores this
+/// process may use, the SIMD level the march was asked for, and the load average (1, 5, 15 minutes) when the
+/// measurement began — a benchmark beside another job reads slower, and says so.
+pub(crate) fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|t| t.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|| "unknown".into());
+    let simd =
+        std::env::var("FIREMEDIUM_SIMD").unwrap_or_else(|_| "the best the processor has".into());
+    format!("machine: {cpu}, {cores} cores, SIMD {simd}; load average {load} at the start")
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -773,6 +711,7 @@ mod tests {
             rel_rmse,
             rel_mse: rel_rmse * rel_rmse,
             evaluations: None,
+            level: None,
         };
         let points = [
             point("off", 0.5, 2.0),
@@ -821,11 +760,12 @@ mod tests {
             rel_rmse: 0.25,
             rel_mse: 0.5,
             evaluations: None,
+            level: None,
         };
         let text = super::error::csv(&[p]);
         assert_eq!(
             text.lines().nth(1),
-            Some("\"brick pdf, coarse \"\"march\"\"\",4 spp,1.500000,2.500000e-1,5.000000e-1,")
+            Some("\"brick pdf, coarse \"\"march\"\"\",4 spp,1.500000,2.500000e-1,5.000000e-1,,")
         );
     }
 
@@ -839,6 +779,7 @@ mod tests {
                 rel_rmse: 0.25,
                 rel_mse: 0.0625,
                 evaluations: None,
+                level: Some(-2.5e-3),
             },
             super::error::Point {
                 estimator: "march spectral".into(),
@@ -847,6 +788,7 @@ mod tests {
                 rel_rmse: 2.057536e-3,
                 rel_mse: 3.422771e-6,
                 evaluations: Some(503258),
+                level: None,
             },
         ];
         let back = super::error::parse_csv(&super::error::csv(&points)).unwrap();
@@ -863,6 +805,12 @@ mod tests {
             let e = super::error::parse_csv(&format!("{head}{body}")).unwrap_err();
             assert_eq!(e, says);
         }
+        // With the level column, a level that is not a number is named.
+        let e = super::error::parse_csv(
+            "estimator,setting,seconds,rel_rmse,rel_mse,medium_evaluations,level\nmarch,step 1,0.1,0.1,0.01,,high\n",
+        )
+        .unwrap_err();
+        assert_eq!(e, "line 2: level \"high\": expected a number");
         assert!(super::error::parse_csv("a,b\n")
             .unwrap_err()
             .starts_with("line 1:"));
@@ -881,6 +829,7 @@ mod tests {
             rel_mse: rel_rmse * rel_rmse,
             rel_rmse,
             raw: (rel_rmse, rel_rmse * rel_rmse),
+            level: 0.0,
             camera_rays: 1000,
             light_samples,
         };
@@ -903,7 +852,7 @@ mod tests {
     fn unused_components_cost_nothing_and_used_ones_are_counted_once() {
         let file = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../scenes/spectroscopy/torch.vdb");
-        let c = super::components(&file.to_string_lossy()).unwrap();
+        let c = super::components::components(&file.to_string_lossy()).unwrap();
         let get = |k: usize, name: &str| -> usize {
             c[k].1
                 .iter()

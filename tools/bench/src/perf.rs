@@ -31,13 +31,13 @@ pub struct Run {
 /// or tool left there under the plain name is never taken for it. Written atomically: a killed run leaves none.
 pub fn dataset(dir: &Path, res: usize) -> Result<PathBuf, String> {
     let key = [
-        include_str!("../../gen/src/lib.rs"),
-        include_str!("../../gen/src/kinds.rs"),
-        include_str!("../../gen/src/sim.rs"),
-        include_str!("../../gen/src/fuel.rs"),
-        include_str!("../../gen/src/radiation.rs"),
-        include_str!("../../gen/src/voxel.rs"),
-        include_str!("../../gen/src/write.rs"),
+        include_str!("../../../plugin/gen/src/lib.rs"),
+        include_str!("../../../plugin/gen/src/kinds.rs"),
+        include_str!("../../../plugin/gen/src/sim.rs"),
+        include_str!("../../../plugin/gen/src/fuel.rs"),
+        include_str!("../../../plugin/gen/src/radiation.rs"),
+        include_str!("../../../plugin/gen/src/voxel.rs"),
+        include_str!("../../../plugin/gen/src/write.rs"),
     ]
     .into_iter()
     .flat_map(str::bytes)
