@@ -228,8 +228,9 @@ fn imports_between_modules_run_one_way() {
 
 #[test]
 fn no_source_file_passes_about_800_lines_of_code() {
+    // Test files too: a test file of 2 000 lines mixes concerns as a module does.
     let mut over = Vec::new();
-    for dir in ["plugin", "host-adapters", "tools"] {
+    for dir in ["plugin", "host-adapters", "tools", "tests"] {
         for f in rust_files(&root().join(dir)) {
             if f.components().any(|c| c.as_os_str() == "target") {
                 continue;
@@ -310,4 +311,179 @@ fn architectures_code_map_names_code_that_exists() {
         missing.is_empty(),
         "ARCHITECTURE.md names what is not there: {missing:?}"
     );
+}
+
+/// Every function in `text` (a `fn` line, to the `}` at its own indentation): (name, its first line, lines).
+fn functions(text: &str) -> Vec<(String, usize, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let t = l.trim_start();
+        let indent = &l[..l.len() - t.len()];
+        // The qualifiers a `fn` may follow.
+        let mut rest = t;
+        for q in [
+            "pub(crate) ",
+            "pub(super) ",
+            "pub ",
+            "const ",
+            "async ",
+            "unsafe ",
+            "extern \"C\" ",
+        ] {
+            rest = rest.strip_prefix(q).unwrap_or(rest);
+        }
+        let Some(sig) = rest.strip_prefix("fn ") else {
+            continue;
+        };
+        let name: String = sig
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        // The signature's end: a body opens (`{` ending a line) or a declaration ends (`;`).
+        let Some(open) = (i..lines.len()).find(|&j| {
+            let e = lines[j].trim_end();
+            e.ends_with('{') || e.ends_with(';') || e.ends_with('}')
+        }) else {
+            continue;
+        };
+        let e = lines[open].trim_end();
+        if e.ends_with(';')
+            || (e.ends_with('}') && e.matches('{').count() == e.matches('}').count())
+        {
+            continue;
+        }
+        let close = format!("{indent}}}");
+        if let Some(end) = (open + 1..lines.len()).find(|&j| lines[j] == close) {
+            out.push((name, i + 1, end - i + 1));
+        }
+    }
+    out
+}
+
+#[test]
+fn functions_stay_short_and_the_long_ones_do_not_multiply() {
+    // A function over 200 lines does several things; the ones there are today are the ceiling, to be split,
+    // never added to, and none may pass 600 lines.
+    const LONG: usize = 200;
+    const CEILING: usize = 15;
+    const LONGEST: usize = 600;
+    let mut long = Vec::new();
+    for dir in ["plugin", "host-adapters", "tools", "tests"] {
+        for f in rust_files(&root().join(dir)) {
+            if f.components().any(|c| c.as_os_str() == "target") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&f).unwrap();
+            for (name, line, n) in functions(&text) {
+                if n > LONG {
+                    long.push((
+                        n,
+                        format!(
+                            "{}:{line} {name} ({n} lines)",
+                            f.strip_prefix(root()).unwrap().display()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    long.sort();
+    long.reverse();
+    let names: Vec<&str> = long.iter().map(|(_, s)| s.as_str()).collect();
+    assert!(
+        long.len() <= CEILING,
+        "{} functions over {LONG} lines (the ceiling is {CEILING}): {}",
+        long.len(),
+        names.join(", ")
+    );
+    assert!(
+        long.first().is_none_or(|(n, _)| *n <= LONGEST),
+        "a function over {LONGEST} lines: {}",
+        names[0]
+    );
+    // The count sees a function where there is one, nested or not, and not a declaration.
+    let text = "fn a() {\n    x;\n}\ntrait T {\n    fn d(&self);\n    fn b(&self) {\n        y;\n        z;\n    }\n}\n";
+    assert_eq!(
+        functions(text),
+        vec![("a".to_string(), 1, 3), ("b".to_string(), 6, 4)]
+    );
+}
+
+#[test]
+fn user_docs_link_inside_the_repository_and_cite_no_issues() {
+    // The pages users and contributors read: every relative link leads to a file of the repository (a clone has
+    // nothing beside it), no page points outside it by a relative path, and none cites the project's issue
+    // numbers (a reader has no tracker). ARCHITECTURE.md stays a map, not a notebook: at most 15 KB.
+    let root = root();
+    let mut pages = vec![
+        root.join("README.md"),
+        root.join("ARCHITECTURE.md"),
+        root.join("python/README.md"),
+        root.join("docs/results/README.md"),
+    ];
+    for dir in ["docs/guide", "docs/reference"] {
+        for e in std::fs::read_dir(root.join(dir)).unwrap() {
+            pages.push(e.unwrap().path());
+        }
+    }
+    for e in std::fs::read_dir(root.join("scenes")).unwrap() {
+        let d = e.unwrap().path();
+        for f in [d.join("README.md")].into_iter().chain(
+            std::fs::read_dir(&d)
+                .into_iter()
+                .flatten()
+                .map(|e| e.unwrap().path().join("README.md")),
+        ) {
+            if f.is_file() {
+                pages.push(f);
+            }
+        }
+    }
+    let mut bad = Vec::new();
+    for page in &pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        let name = page.strip_prefix(&root).unwrap().display().to_string();
+        for (i, _) in text.match_indices("](") {
+            let link: String = text[i + 2..]
+                .chars()
+                .take_while(|&c| c != ')' && c != '#' && c != ' ')
+                .collect();
+            if link.is_empty() || link.starts_with("http") || link.starts_with("mailto:") {
+                continue;
+            }
+            let target = page.parent().unwrap().join(&link);
+            let inside = target
+                .canonicalize()
+                .map(|t| t.starts_with(root.canonicalize().unwrap()))
+                .unwrap_or(false);
+            if !inside {
+                bad.push(format!(
+                    "{name}: a link to {link}, which is not a file of the repository"
+                ));
+            }
+        }
+        for needle in ["../shared", "shared/data", "shared/seeds"] {
+            if text.contains(needle) {
+                bad.push(format!("{name}: names {needle}, outside the repository"));
+            }
+        }
+        let lower = text.to_lowercase();
+        for (i, _) in lower.match_indices("issue") {
+            let after = lower[i + 5..].trim_start_matches('s').trim_start();
+            let after = after.trim_start_matches('#');
+            if after.starts_with(|c: char| c.is_ascii_digit()) {
+                let line = text[..i].lines().count();
+                bad.push(format!("{name}:{line}: cites an issue number"));
+            }
+        }
+    }
+    let arch = std::fs::metadata(root.join("ARCHITECTURE.md"))
+        .unwrap()
+        .len();
+    if arch > 15 * 1024 {
+        bad.push(format!("ARCHITECTURE.md is {arch} bytes, over 15 KB"));
+    }
+    assert!(pages.len() > 20, "only {} pages", pages.len());
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
