@@ -215,7 +215,6 @@ impl FireLight {
             (pw, plm, ext / (n * widths.iter().sum::<f64>()))
         };
         let workers = crate::par::threads(16).min(bricks.len().max(1));
-        let chunk = bricks.len().div_ceil(workers).max(1);
         let run = |part: &[[usize; 3]]| {
             let mut memo = std::collections::HashMap::new();
             let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
@@ -227,27 +226,32 @@ impl FireLight {
                 })
                 .collect::<Vec<_>>()
         };
-        let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
-            vec![run(&bricks)]
-        } else {
-            crate::par::scope(|sc| {
-                let handles: Vec<_> = bricks
-                    .chunks(chunk)
-                    .map(|part| sc.spawn(move || run(part)))
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect()
-            })
-        };
+        // In rounds of 512 bricks per worker, each round's weights written into `w` before the next: the
+        // emitting voxels' (index, weight) pairs of a whole fire would outweigh the weights themselves.
         let mut extinction = Vec::with_capacity(bricks.len());
-        for ((bpw, bplm, ext), out) in parts.into_iter().flatten() {
-            pw += bpw;
-            plm += bplm;
-            extinction.push(ext);
-            for (idx, v) in out {
-                w[idx] = v;
+        for round in bricks.chunks(workers * 512) {
+            let chunk = round.len().div_ceil(workers).max(1);
+            let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
+                vec![run(round)]
+            } else {
+                crate::par::scope(|sc| {
+                    let handles: Vec<_> = round
+                        .chunks(chunk)
+                        .map(|part| sc.spawn(move || run(part)))
+                        .collect();
+                    handles
+                        .into_iter()
+                        .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                        .collect()
+                })
+            };
+            for ((bpw, bplm, ext), out) in parts.into_iter().flatten() {
+                pw += bpw;
+                plm += bplm;
+                extinction.push(ext);
+                for (idx, v) in out {
+                    w[idx] = v;
+                }
             }
         }
         // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
@@ -432,34 +436,78 @@ fn dilate(
     let dims = topo.dims();
     let mut m = crate::alloc::filled(w.len(), 0f32)?;
     m.copy_from_slice(w);
-    let mut src = crate::alloc::filled(w.len(), 0f32)?;
+    // One axis at a time, in place: along each line of a brick a running value keeps the voxel before as it was;
+    // the voxels beyond the brick's ends are read from its neighbours' faces as they were before the pass (the
+    // two layers of every brick across the axis, a quarter of the weights, instead of a copy of them all).
+    let mut faces = crate::alloc::filled(w.len() / 4, 0f32)?;
     for axis in 0..3 {
-        src.copy_from_slice(&m);
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        // Sample n's local coordinates in its brick, and where its layer's copy lies (layer 0 or 7 across the axis).
+        let local = |n: usize| {
+            let l = n % 512;
+            [l % 8, (l / 8) % 8, l / 64]
+        };
+        let face = |n: usize, side: usize| {
+            let l = local(n);
+            (n / 512 * 2 + side) * 64 + l[u] + 8 * l[v]
+        };
         for b in bricks {
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             for k in span[2].0..span[2].1 {
                 for jy in span[1].0..span[1].1 {
                     for i in span[0].0..span[0].1 {
-                        let v = [i, jy, k];
-                        let idx = topo.index(i, jy, k);
-                        let mut out = m[idx];
-                        if v[axis] > 0 {
-                            let mut q = v;
-                            q[axis] -= 1;
-                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                        let n = topo.index(i, jy, k);
+                        match local(n)[axis] {
+                            0 => faces[face(n, 0)] = m[n],
+                            7 => faces[face(n, 1)] = m[n],
+                            _ => {}
                         }
-                        if v[axis] + 1 < dims[axis] {
-                            let mut q = v;
-                            q[axis] += 1;
-                            out = out.max(src[topo.index(q[0], q[1], q[2])]);
+                    }
+                }
+            }
+        }
+        for b in bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            for cv in span[v].0..span[v].1 {
+                for cu in span[u].0..span[u].1 {
+                    let at = |c: usize| {
+                        let mut q = [0; 3];
+                        (q[axis], q[u], q[v]) = (c, cu, cv);
+                        topo.index(q[0], q[1], q[2])
+                    };
+                    let (lo, hi) = span[axis];
+                    // The voxel before the line's first: its neighbour brick's last layer (7).
+                    let mut prev = (lo > 0).then(|| faces[face(at(lo - 1), 1)]);
+                    for c in lo..hi {
+                        let n = at(c);
+                        let cur = m[n];
+                        let next = if c + 1 < hi {
+                            Some(m[at(c + 1)])
+                        } else if c + 1 < dims[axis] {
+                            // Beyond the line's last: its neighbour brick's first layer (0).
+                            Some(faces[face(at(c + 1), 0)])
+                        } else {
+                            None
+                        };
+                        let mut out = cur;
+                        if let Some(p) = prev {
+                            out = out.max(p);
                         }
-                        m[idx] = out;
+                        if let Some(q) = next {
+                            out = out.max(q);
+                        }
+                        m[n] = out;
+                        prev = Some(cur);
                     }
                 }
             }
         }
     }
-    Some(w.iter().zip(&m).map(|(&a, &b)| a.max(f * b)).collect())
+    drop(faces);
+    for (d, &a) in m.iter_mut().zip(w) {
+        *d = a.max(f * *d);
+    }
+    Some(m)
 }
 
 /// Full line and band emission per unit number density, W·sr⁻¹ (all shipped lines of `e`, and its molecular bands,
@@ -482,4 +530,78 @@ fn line_power(e: &crate::species::Element, t: f64) -> f64 {
                     / z
             })
             .sum::<f64>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_dilation_in_place_is_the_27_neighbour_maximum() {
+        // A lattice whose bricks are offset from its origin and cut at its far faces, some bricks missing (their
+        // voxels count as 0), sparse weights — each where its 26 neighbours are covered, as the light's bricks
+        // around the data are —: every covered voxel's dilated weight is max(w, f · the largest of its 26
+        // neighbours and itself), computed here voxel by voxel.
+        let dims = [21, 14, 19];
+        let off = [3, 5, 1];
+        let missing = |b: [usize; 3]| b == [1, 1, 1] || b == [0, 2, 2];
+        let topo = crate::grid::Topology::build_offset(dims, off, |b| !missing(b)).unwrap();
+        let mut bricks = Vec::new();
+        topo.for_each_slot(|b, _| bricks.push(b));
+        let covered = |v: [usize; 3]| !missing(topo.brick_of(v));
+        let mut w = vec![0f32; topo.values_len()];
+        let mut rng = firemedium_core::rng::Rng::new(5);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let around = (0..27).all(|n| {
+                        let q = [i + n % 3, j + n / 3 % 3, k + n / 9];
+                        q.iter().any(|&x| x == 0)
+                            || (0..3).any(|a| q[a] > dims[a])
+                            || covered(q.map(|x| x - 1))
+                    });
+                    if around && rng.next_f64() < 0.05 {
+                        w[topo.index(i, j, k)] = (1.0 + 9.0 * rng.next_f64()) as f32;
+                    }
+                }
+            }
+        }
+        let d = dilate(&w, &topo, &bricks, 0.125).unwrap();
+        let at = |v: [i64; 3]| -> f32 {
+            if (0..3).any(|a| v[a] < 0 || v[a] >= dims[a] as i64) {
+                return 0.0;
+            }
+            let v = v.map(|x| x as usize);
+            if covered(v) {
+                w[topo.index(v[0], v[1], v[2])]
+            } else {
+                0.0
+            }
+        };
+        let (mut checked, mut raised) = (0, 0);
+        for k in 0..dims[2] as i64 {
+            for j in 0..dims[1] as i64 {
+                for i in 0..dims[0] as i64 {
+                    let v = [i, j, k].map(|x| x as usize);
+                    if !covered(v) {
+                        continue;
+                    }
+                    let mut m = 0f32;
+                    for dk in -1..=1 {
+                        for dj in -1..=1 {
+                            for di in -1..=1 {
+                                m = m.max(at([i + di, j + dj, k + dk]));
+                            }
+                        }
+                    }
+                    let own = at([i, j, k]);
+                    let want = own.max(0.125 * m);
+                    assert_eq!(d[topo.index(v[0], v[1], v[2])], want, "{v:?}");
+                    checked += 1;
+                    raised += usize::from(want > own);
+                }
+            }
+        }
+        assert!(checked > 4000 && raised > 1000, "{checked} {raised}");
+    }
 }

@@ -162,7 +162,7 @@ pub enum Fire {
 pub fn room_scene(dataset: &Path, fire: Fire, maxdepth: u32) -> String {
     let box_mesh = "\"point3 P\" [ -0.6 -0.6 0.002 0.6 -0.6 0.002 -0.6 0.6 0.002 0.6 0.6 0.002 -0.6 -0.6 1.6 0.6 -0.6 1.6 -0.6 0.6 1.6 0.6 0.6 1.6 ] \"integer indices\" [ 0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5 ]";
     format!(
-        r#"# issue 29's fire-lit room (written by `firemedium bench fire-light`)
+        r#"# the fire-lit room of `firemedium bench fire-light`
 LookAt 0 -4.6 1.5   0 0 0.7   0 0 1
 Camera "perspective" "float fov" 48
 Film "rgb" "integer xresolution" 320 "integer yresolution" 240 "string filename" "room.exr"
