@@ -257,34 +257,57 @@ impl FireLight {
         // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
         // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
         // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
-        if ds.interpolation() == crate::grid::Interpolation::Trilinear {
-            w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
-        }
-        if weighting == Weighting::Escaping {
-            let escape =
-                escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
-                    .ok_or_else(too_many)?;
-            for (b, f) in bricks.iter().zip(escape) {
-                let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-                let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
-                let keep = (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32;
-                w[slot * 512..(slot + 1) * 512]
-                    .iter_mut()
-                    .for_each(|v| *v *= keep);
-            }
-        }
-        let emitting = w.iter().filter(|&&v| v > 0.0).count();
-        // The cells' weights: the voxels' summed per cell (in f64), brick by brick.
+        let trilinear = ds.interpolation() == crate::grid::Interpolation::Trilinear;
+        let keep: Vec<f32> = if weighting == Weighting::Escaping {
+            escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
+                .ok_or_else(too_many)?
+                .into_iter()
+                .map(|f| (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let slot_of = |b: &[usize; 3]| {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            topo.index(span[0].0, span[1].0, span[2].0) / 512
+        };
         let side = 8 / cell;
         let per = side * side * side;
+        let mut emitting = 0;
         let w = if cell == 1 {
+            // The voxels' weights are the light's: dilated over the whole array.
+            if trilinear {
+                w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
+            }
+            for (i, b) in bricks.iter().enumerate() {
+                if let Some(&k) = keep.get(i) {
+                    let slot = slot_of(b);
+                    w[slot * 512..(slot + 1) * 512]
+                        .iter_mut()
+                        .for_each(|v| *v *= k);
+                }
+            }
+            emitting = w.iter().filter(|&&v| v > 0.0).count();
             w
         } else {
+            // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and
+            // summed per cell (in f64) — no second array of voxel weights.
             let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
-            for (slot, ws) in w.chunks_exact(512).enumerate() {
+            for (i, b) in bricks.iter().enumerate() {
+                let slot = slot_of(b);
+                let mut ws = [0f32; 512];
+                if trilinear {
+                    dilate_brick(&w, &topo, *b, 0.125, &mut ws);
+                } else {
+                    ws.copy_from_slice(&w[slot * 512..(slot + 1) * 512]);
+                }
+                if let Some(&k) = keep.get(i) {
+                    ws.iter_mut().for_each(|v| *v *= k);
+                }
                 let mut sums = [0f64; 512];
                 for (l, &v) in ws.iter().enumerate() {
                     if v > 0.0 {
+                        emitting += 1;
                         let c =
                             (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
                         sums[c] += v as f64;
@@ -510,6 +533,95 @@ fn dilate(
     Some(m)
 }
 
+/// [`dilate`] for one brick `b` of the topology, from the weights `w` of it and its neighbours, into `out` (its
+/// 512 samples in the storage's order): the same three passes over a 10³ neighbourhood (the brick and one voxel
+/// around it), with the same reads — a voxel outside the lattice is no neighbour, one in a brick the topology
+/// does not hold is 0 and never raised — so each value is [`dilate`]'s, bit for bit.
+fn dilate_brick(
+    w: &[f32],
+    topo: &crate::grid::Topology,
+    b: [usize; 3],
+    f: f32,
+    out: &mut [f32; 512],
+) {
+    const S: usize = 10;
+    let dims = topo.dims();
+    let off = topo.offset();
+    // Local coordinate L ∈ [−1, 8] per axis is sample b·8 − off + L; `cell` its place in the lattice, if any.
+    let sample = |l: [usize; 3]| -> Option<[usize; 3]> {
+        let mut v = [0; 3];
+        for a in 0..3 {
+            let x = (b[a] * 8 + l[a]).checked_sub(off[a] + 1)?;
+            if x >= dims[a] {
+                return None;
+            }
+            v[a] = x;
+        }
+        Some(v)
+    };
+    let at = |x: usize, y: usize, z: usize| x + S * (y + S * z);
+    let (mut m, mut held, mut inside) = ([0f32; S * S * S], [false; S * S * S], [[false; S]; 3]);
+    for (a, row) in inside.iter_mut().enumerate() {
+        for (l, cell) in row.iter_mut().enumerate() {
+            *cell = (b[a] * 8 + l)
+                .checked_sub(off[a] + 1)
+                .is_some_and(|x| x < dims[a]);
+        }
+    }
+    for z in 0..S {
+        for y in 0..S {
+            for x in 0..S {
+                if let Some(v) = sample([x, y, z]) {
+                    let n = topo.index(v[0], v[1], v[2]);
+                    if n >= 512 {
+                        m[at(x, y, z)] = w[n];
+                        held[at(x, y, z)] = true;
+                    }
+                }
+            }
+        }
+    }
+    let mut src = [0f32; S * S * S];
+    for axis in 0..3 {
+        src.copy_from_slice(&m);
+        for z in 0..S {
+            for y in 0..S {
+                for x in 0..S {
+                    let p = at(x, y, z);
+                    if !held[p] {
+                        continue;
+                    }
+                    let l = [x, y, z];
+                    let mut o = m[p];
+                    // (A neighbour beyond the neighbourhood is read only for values no later pass uses.)
+                    if l[axis] > 0 && inside[axis][l[axis] - 1] {
+                        let mut q = l;
+                        q[axis] -= 1;
+                        o = o.max(src[at(q[0], q[1], q[2])]);
+                    }
+                    if l[axis] + 1 < S && inside[axis][l[axis] + 1] {
+                        let mut q = l;
+                        q[axis] += 1;
+                        o = o.max(src[at(q[0], q[1], q[2])]);
+                    }
+                    m[p] = o;
+                }
+            }
+        }
+    }
+    *out = [0f32; 512];
+    for z in 1..9 {
+        for y in 1..9 {
+            for x in 1..9 {
+                if let Some(v) = sample([x, y, z]) {
+                    let n = topo.index(v[0], v[1], v[2]);
+                    out[n % 512] = w[n].max(f * m[at(x, y, z)]);
+                }
+            }
+        }
+    }
+}
+
 /// Full line and band emission per unit number density, W·sr⁻¹ (all shipped lines of `e`, and its molecular bands,
 /// at T).
 fn line_power(e: &crate::species::Element, t: f64) -> f64 {
@@ -603,5 +715,13 @@ mod tests {
             }
         }
         assert!(checked > 4000 && raised > 1000, "{checked} {raised}");
+        // Brick by brick, from the weights around each: the same values, bit for bit.
+        for b in &bricks {
+            let mut out = [0f32; 512];
+            dilate_brick(&w, &topo, *b, 0.125, &mut out);
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+            assert_eq!(out[..], d[slot * 512..(slot + 1) * 512], "{b:?}");
+        }
     }
 }
