@@ -668,7 +668,7 @@ mod tests {
                 for i in 0..dims[0] {
                     let around = (0..27).all(|n| {
                         let q = [i + n % 3, j + n / 3 % 3, k + n / 9];
-                        q.iter().any(|&x| x == 0)
+                        q.contains(&0)
                             || (0..3).any(|a| q[a] > dims[a])
                             || covered(q.map(|x| x - 1))
                     });
