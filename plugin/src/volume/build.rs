@@ -274,6 +274,7 @@ impl FireVolume {
         let lanes_wanted =
             set.f32_lanes && set.integrator == Integrator::March && set.diffusion.is_none();
         let mut lattice = None;
+        let mut deferred = None;
         let mut known = vec![None; ds.channels().len()];
         if lanes_wanted && ds.interpolation() == crate::grid::Interpolation::Trilinear {
             let t4 = Instant::now();
@@ -300,6 +301,34 @@ impl FireVolume {
                 params::Lattice::Auto => Some(dense_fits),
             };
             let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
+            // A fire that scatters is tracked by its host, which marches it only for the fire light's line or a
+            // shadow ray: its lattice waits for the first ray that marches.
+            let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
+            let dense = match dense {
+                Some(dense) if scatters && set.lattice == params::Lattice::Auto => {
+                    let fields = 2 + grids.len() as u64;
+                    let bytes = if dense {
+                        lattice::Lattice::padded(ds.dims())
+                            .map_or(u64::MAX, |p| p.iter().map(|&n| n as u64).product::<u64>())
+                            .saturating_mul(4 * fields)
+                    } else {
+                        (ds.topology().blocks_stored() as u64 + 1)
+                            .saturating_mul(lattice::PADDED_VOXELS as u64 * 4 * fields)
+                    };
+                    deferred = Some(lattice::Plan {
+                        bytes,
+                        dense,
+                        density,
+                        temperature,
+                        extra: extra.clone(),
+                        brick,
+                        budget: spare,
+                        threads: crate::par::threads(usize::MAX),
+                    });
+                    None
+                }
+                d => d,
+            };
             match dense {
                 Some(true) => {
                     if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare)
@@ -537,7 +566,7 @@ impl FireVolume {
                 step_tau: set.step_tau,
                 cutoff: set.cutoff,
                 lanes: None,
-                lattice: None,
+                lattice: Default::default(),
             },
             report: parts::Report {
                 tables,
@@ -575,7 +604,18 @@ impl FireVolume {
                         bytes: lat.bytes(),
                         seconds,
                     });
-                    vol.estimator.lattice = Some(lat);
+                    vol.estimator.lattice = lattice::Slot::ready(lat);
+                }
+                if let Some(plan) = deferred {
+                    vol.report.tables.push(TableReport {
+                        name: format!(
+                            "march lattice ({}, built when a ray first marches: the host tracks this scattering fire)",
+                            if plan.dense { "dense" } else { "a padded copy per brick" }
+                        ),
+                        bytes: 0,
+                        seconds: 0.0,
+                    });
+                    vol.estimator.lattice = lattice::Slot::deferred(plan);
                 }
             }
         }
@@ -613,8 +653,9 @@ impl FireVolume {
             });
             vol.layers.diffusion = Some(df);
         }
-        vol.report.spare =
-            spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+        vol.report.spare = spare
+            .saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum())
+            .saturating_sub(vol.estimator.lattice.reserved());
         vol.report.build_seconds = start.elapsed().as_secs_f64();
         Ok(vol)
     }

@@ -27,11 +27,95 @@
 //!   constant tile's interior (or the background's, along the box's faces) share one copy, as the dataset's
 //!   bricks share one block.
 //!
-//! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks
+//! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks; a
+//! fire that scatters builds it when a ray first marches ([`Slot`])
 //! (`lattice` parameter; docs/results/log.md has both measured on the same fires).
 
 use crate::grid::{Grid, Topology, BRICK};
 use crate::majorant::{BrickRanges, Ranges};
+
+/// The lattice a volume marches: built with the volume, or — for a fire that scatters, which its host tracks and
+/// may never march (a scattering room with the fire light off asks only for scattering events) — when a ray first
+/// marches, once, on the plugin's own threads (another query waits for it; a host's pool may be busy running the
+/// very queries that wait). The same lattice either way: the images do not depend on when it was built.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Slot {
+    built: std::sync::OnceLock<Option<Lattice>>,
+    plan: Option<Plan>,
+}
+
+/// What a deferred lattice is built from: the dataset's channels it interleaves, its layout, and the budget and
+/// threads the volume's build had.
+#[derive(Debug, Clone)]
+pub(crate) struct Plan {
+    pub(crate) dense: bool,
+    pub(crate) density: usize,
+    pub(crate) temperature: Option<usize>,
+    pub(crate) extra: Vec<usize>,
+    pub(crate) brick: usize,
+    pub(crate) budget: u64,
+    pub(crate) threads: usize,
+    /// What it will hold (for bricks, an estimate: a copy per stored brick), kept from the budget the volume
+    /// leaves to its fire light.
+    pub(crate) bytes: u64,
+}
+
+impl Slot {
+    /// A lattice built with the volume.
+    pub(crate) fn ready(lattice: Lattice) -> Slot {
+        Slot {
+            built: std::sync::OnceLock::from(Some(lattice)),
+            plan: None,
+        }
+    }
+
+    /// A lattice built when a ray first marches.
+    pub(crate) fn deferred(plan: Plan) -> Slot {
+        Slot {
+            built: std::sync::OnceLock::new(),
+            plan: Some(plan),
+        }
+    }
+
+    /// The lattice, built now if it was deferred (`None`: none, or the budget or the allocator refused it).
+    pub(crate) fn get(&self, ds: &crate::dataset::Dataset) -> Option<&Lattice> {
+        match &self.plan {
+            None => self.built.get()?.as_ref(),
+            Some(p) => self
+                .built
+                .get_or_init(|| {
+                    let ch = ds.channels();
+                    let extra: Vec<&Grid> = p.extra.iter().map(|&k| &ch[k].grid).collect();
+                    let (d, t) = (&ch[p.density].grid, p.temperature.map(|k| &ch[k].grid));
+                    crate::par::with_pool(None, || {
+                        crate::par::with_budget(p.threads, || {
+                            if p.dense {
+                                Lattice::build(d, t, &extra, p.brick, p.budget).map(|(l, _)| l)
+                            } else {
+                                Lattice::build_bricks(d, t, &extra, p.budget)
+                            }
+                        })
+                    })
+                })
+                .as_ref(),
+        }
+    }
+
+    /// Whether the volume marches on a lattice (built, or to be built).
+    pub(crate) fn is_some(&self) -> bool {
+        self.plan.is_some() || self.built().is_some()
+    }
+
+    /// The bytes a deferred lattice will hold (0 for one built with the volume, or none).
+    pub(crate) fn reserved(&self) -> u64 {
+        self.plan.as_ref().map_or(0, |p| p.bytes)
+    }
+
+    /// The lattice, if it has been built.
+    pub(crate) fn built(&self) -> Option<&Lattice> {
+        self.built.get()?.as_ref()
+    }
+}
 
 /// Samples per side of a padded brick.
 pub(crate) const PADDED: usize = BRICK + 1;

@@ -202,7 +202,7 @@ impl FireVolume {
                 step_tau: self.estimator.step_tau,
                 cutoff: self.estimator.cutoff,
                 lanes: None,
-                lattice: None,
+                lattice: Default::default(),
             },
             report: parts::Report {
                 tables: Vec::new(),
@@ -217,7 +217,7 @@ impl FireVolume {
             fault: self.fault.clone(),
         };
         v.estimator.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
-        v.estimator.lattice = Some(lat);
+        v.estimator.lattice = lattice::Slot::ready(lat);
         Some(v)
     }
 
@@ -241,7 +241,7 @@ impl FireVolume {
     /// Bytes the copy of [`mip`](Self::mip) holds: its grids, lattice and majorants.
     pub(crate) fn mip_bytes(&self) -> usize {
         self.grids.ds.bytes()
-            + self.estimator.lattice.as_ref().map_or(0, |l| l.bytes())
+            + self.estimator.lattice.built().map_or(0, |l| l.bytes())
             + self.bounds.majorant.bytes()
             + self.bounds.brick_sigma.len() * 9
     }

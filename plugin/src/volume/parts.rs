@@ -84,8 +84,9 @@ pub(super) struct Estimator {
     pub(super) cutoff: f64,
     /// The march's tables in f32 lanes (`precision "f32"`, the march, and every product inside f32's range).
     pub(super) lanes: Option<lanes::LaneTables>,
-    /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets).
-    pub(super) lattice: Option<lattice::Lattice>,
+    /// The grids laid out for the lane march's kernel (with the lanes, for trilinear datasets), built with the
+    /// volume or when a ray first marches ([`lattice::Slot`]).
+    pub(super) lattice: lattice::Slot,
 }
 
 /// What the build reports, and leaves for what is derived from the volume later.

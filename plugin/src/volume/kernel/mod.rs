@@ -379,7 +379,7 @@ pub(super) fn march<
     if CV > 4 || CV * V < c || S == v.grids.species.is_empty() || A != v.model.a_t.is_some() {
         return None; // (the lanes below are written out for up to four)
     }
-    let lat = v.estimator.lattice.as_ref()?;
+    let lat = v.estimator.lattice.get(&v.grids.ds)?;
     // σ per unit density in the kernel's lanes (channels past `c` are zero).
     let mut sigma = [[0f32; V]; CV];
     for (ch, &x) in tabs.sigma.as_flattened().iter().enumerate().take(c) {

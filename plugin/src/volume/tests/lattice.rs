@@ -46,10 +46,12 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
     let (auto, dense, off) = (build("auto"), build("dense"), build("off"));
     std::fs::remove_dir_all(&dir).unwrap();
     let (a, d) = (
-        auto.estimator.lattice.as_ref().unwrap(),
-        dense.estimator.lattice.as_ref().unwrap(),
+        auto.estimator.lattice.built().unwrap(),
+        dense.estimator.lattice.built().unwrap(),
     );
-    assert!(a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice.is_none());
+    assert!(
+        a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice.built().is_none()
+    );
     // 54 stored bricks: their copies and those below them, not the box.
     let copies = a.bricks().unwrap().active_bricks();
     assert!((54..=2 * 64).contains(&copies), "{copies} copies");
@@ -157,4 +159,68 @@ fn shared_tile_blocks_march_as_the_dense_lattice() {
     }
     assert!(lit > 150, "{lit} of 200 rays crossed the fog");
     assert!(worst < 1e-5, "lattice vs stencils: {worst:e}");
+}
+
+#[test]
+fn a_scattering_fire_builds_its_lattice_when_a_ray_first_marches() {
+    // A fire that scatters is tracked by its host, which may never march it: under `auto` its lattice waits
+    // for the first march (none held after the build, its bytes kept from the fire light's budget), then is
+    // the lattice `dense` builds with the volume — the same radiance to the bit.
+    let mut rng = crate::rng::Rng::new(3);
+    let (mut d, mut t) = (Vec::new(), Vec::new());
+    for l in 0..8 {
+        let origin = [8 * (l % 2), 8 * ((l / 2) % 2), 8 * (l / 4)];
+        d.push((
+            origin,
+            [u64::MAX; 8],
+            (0..512).map(|_| (rng.next_f64() * 3e-6) as f32).collect(),
+        ));
+        t.push((
+            origin,
+            [u64::MAX; 8],
+            (0..512)
+                .map(|_| (1200.0 + rng.next_f64() * 600.0) as f32)
+                .collect(),
+        ));
+    }
+    let bytes = crate::dataset::vdb::write_sparse(
+        &[("density", d), ("temperature", t)],
+        DVec3::ZERO,
+        DVec3::splat(0.01),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-deferred-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("fire.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let build = |lattice: &str, sigma_s: f64| {
+        FireVolume::new(&[
+            Param::string("filename", &file.display().to_string()),
+            Param::string("lattice", lattice),
+            Param::string("fuel", "propane"),
+            Param::floats("sigma_s", &[sigma_s]),
+        ])
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (lazy, eager, absorbing) = (build("auto", 2e6), build("dense", 2e6), build("auto", 0.0));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(lazy.estimator.lattice.built().is_none() && lazy.estimator.lattice.reserved() > 0);
+    assert!(
+        eager.estimator.lattice.built().is_some() && absorbing.estimator.lattice.built().is_some()
+    );
+    assert!(lazy.spare_bytes() < eager.spare_bytes() + 1);
+    let ray = Ray {
+        o: DVec3::new(-0.1, 0.07, 0.09),
+        d: DVec3::X,
+        t0: 0.0,
+        t1: 1.0,
+        seed: 1,
+        first: None,
+    };
+    let (a, b) = (run(&lazy, &ray), run(&eager, &ray));
+    assert!(a.0.iter().sum::<f64>() > 0.0);
+    assert_eq!(a, b);
+    assert_eq!(
+        lazy.estimator.lattice.built().map(|l| l.bytes()),
+        eager.estimator.lattice.built().map(|l| l.bytes())
+    );
 }
