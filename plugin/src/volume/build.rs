@@ -301,35 +301,13 @@ impl FireVolume {
                 params::Lattice::Auto => Some(dense_fits),
             };
             let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
-            // A fire that scatters is tracked by its host, which marches it only for the fire light's line or a
-            // shadow ray: its lattice waits for the first ray that marches.
+            // A fire that scatters is tracked by its host: its lattice waits for the first ray that marches.
             let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
-            let dense = match dense {
-                Some(dense) if scatters && set.lattice == params::Lattice::Auto => {
-                    let fields = 2 + grids.len() as u64;
-                    let bytes = if dense {
-                        lattice::Lattice::padded(ds.dims())
-                            .map_or(u64::MAX, |p| p.iter().map(|&n| n as u64).product::<u64>())
-                            .saturating_mul(4 * fields)
-                    } else {
-                        (ds.topology().blocks_stored() as u64 + 1)
-                            .saturating_mul(lattice::PADDED_VOXELS as u64 * 4 * fields)
-                    };
-                    deferred = Some(lattice::Plan {
-                        bytes,
-                        dense,
-                        density,
-                        temperature,
-                        extra: extra.clone(),
-                        brick,
-                        budget: spare,
-                        threads: crate::par::threads(usize::MAX),
-                    });
-                    None
-                }
-                d => d,
-            };
-            match dense {
+            let channels = (density, temperature, extra.clone());
+            deferred = dense
+                .filter(|_| scatters && set.lattice == params::Lattice::Auto)
+                .map(|d| lattice::Plan::new(d, channels, &ds, brick, spare));
+            match dense.filter(|_| deferred.is_none()) {
                 Some(true) => {
                     if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare)
                     {
@@ -608,10 +586,7 @@ impl FireVolume {
                 }
                 if let Some(plan) = deferred {
                     vol.report.tables.push(TableReport {
-                        name: format!(
-                            "march lattice ({}, built when a ray first marches: the host tracks this scattering fire)",
-                            if plan.dense { "dense" } else { "a padded copy per brick" }
-                        ),
+                        name: plan.describe(),
                         bytes: 0,
                         seconds: 0.0,
                     });

@@ -60,6 +60,47 @@ pub(crate) struct Plan {
     pub(crate) bytes: u64,
 }
 
+impl Plan {
+    /// The plan of a `dense` or bricked lattice of `ds`'s channels (density, temperature, the further grids),
+    /// majorant bricks of `brick` samples, within `budget` bytes, on the build's threads.
+    pub(crate) fn new(
+        dense: bool,
+        (density, temperature, extra): (usize, Option<usize>, Vec<usize>),
+        ds: &crate::dataset::Dataset,
+        brick: usize,
+        budget: u64,
+    ) -> Plan {
+        let fields = 4 * (2 + extra.len() as u64);
+        let bytes = if dense {
+            Lattice::padded(ds.dims())
+                .map_or(u64::MAX, |p| p.iter().map(|&n| n as u64).product::<u64>())
+                .saturating_mul(fields)
+        } else {
+            (ds.topology().blocks_stored() as u64 + 1).saturating_mul(PADDED_VOXELS as u64 * fields)
+        };
+        Plan {
+            dense,
+            density,
+            temperature,
+            extra,
+            brick,
+            budget,
+            threads: crate::par::threads(usize::MAX),
+            bytes,
+        }
+    }
+
+    /// What the build reports of it.
+    pub(crate) fn describe(&self) -> String {
+        let layout = if self.dense {
+            "dense"
+        } else {
+            "a padded copy per brick"
+        };
+        format!("march lattice ({layout}, built when a ray first marches: the host tracks this scattering fire)")
+    }
+}
+
 impl Slot {
     /// A lattice built with the volume.
     pub(crate) fn ready(lattice: Lattice) -> Slot {

@@ -51,6 +51,21 @@ pub struct Progressive<'a> {
     pub on_pass: Option<&'a (dyn Fn(&Pass) + Sync)>,
 }
 
+impl Progressive<'_> {
+    /// How far a render is beyond its samples' share, after a pass `seconds` in with `estimate`: an adaptive
+    /// render's way to its threshold ((T / estimate)²: the error falls as 1/√samples) or a time limit's share.
+    fn ahead(&self, estimate: Option<f64>, seconds: f64) -> f64 {
+        let mut ahead = 0.0f64;
+        if let (Some(t), Some(e)) = (self.noise_threshold, estimate) {
+            ahead = ahead.max((t / e).powi(2).min(1.0));
+        }
+        if let Some(limit) = self.time_limit {
+            ahead = ahead.max((seconds / limit).min(1.0));
+        }
+        ahead
+    }
+}
+
 impl std::fmt::Debug for Progressive<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Progressive")
@@ -176,6 +191,55 @@ struct Extra {
     apixel: accum::Pixel,
 }
 
+impl Extra {
+    /// A pixel's extras before its first sample.
+    fn new(scene: &scene::Scene) -> Extra {
+        let bins = if scene.spectral.is_some() {
+            scene.bins.n()
+        } else {
+            0
+        };
+        Extra {
+            spectrum: vec![0.0; bins],
+            gpixel: film::GPixel::default(),
+            apixel: accum::Pixel::default(),
+        }
+    }
+}
+
+/// The image's sums after a pass: Σ e, Σ Y², Σ Y over the pixels with an estimate, how many, and whether all have.
+struct Sums {
+    e: f64,
+    y2: f64,
+    y: f64,
+    counted: usize,
+    all: bool,
+}
+
+fn sums(px: &[Px], (w, h): (usize, usize), tw: usize) -> Sums {
+    let mut s = Sums {
+        e: 0.0,
+        y2: 0.0,
+        y: 0.0,
+        counted: 0,
+        all: true,
+    };
+    for cy in 0..h {
+        for cx in 0..w {
+            match px[slot_of(cx, cy, tw)].estimate() {
+                Some((y, e)) => {
+                    s.e += e;
+                    s.y2 += y * y;
+                    s.y += y;
+                    s.counted += 1;
+                }
+                None => s.all = false,
+            }
+        }
+    }
+    s
+}
+
 /// Renders the scene in passes (see the module) with `spp` samples per pixel at most; `progress` is told of
 /// every tile finished.
 pub fn render_progressive(
@@ -218,21 +282,22 @@ pub fn render_progressive(
     let slots = TILE * TILE;
     let mut px = vec![Px::default(); ntiles * slots];
     let mut ex: Vec<Extra> = if extra {
-        let e = Extra {
-            spectrum: vec![
-                0.0;
-                if scene.spectral.is_some() {
-                    scene.bins.n()
-                } else {
-                    0
-                }
-            ],
-            gpixel: film::GPixel::default(),
-            apixel: accum::Pixel::default(),
-        };
-        vec![e; ntiles * slots]
+        vec![Extra::new(scene); ntiles * slots]
     } else {
         Vec::new()
+    };
+    let sampling = Sampling {
+        scene,
+        integ: &integ,
+        sampler: &sampler,
+        twin_sampler: &twin_sampler,
+        seed,
+        twin_seed,
+        gspace: gspace.as_ref(),
+        aov_surface,
+        tw,
+        w,
+        origin: (x0, y0),
     };
     let total_work = (w * h * scene.spp).max(1) as f64;
     let work = AtomicUsize::new(0);
@@ -249,122 +314,12 @@ pub fn render_progressive(
         pass += 1;
         let s1 = (s0 + len).min(scene.spp);
         let done = AtomicUsize::new(0);
-        // The tiles' slots, in the dealt order.
-        // The work: every row of every tile (dealt order) that has a pixel still sampling — rows, not tiles, so
-        // that a pass in which a few tiles are left keeps every thread busy.
-        let mut rows: Vec<(usize, usize, &mut [Px], &mut [Extra])> = {
-            let mut by_tile: Vec<Option<(&mut [Px], &mut [Extra])>> = {
-                let exs: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
-                    Box::new(ex.chunks_mut(slots))
-                } else {
-                    Box::new(std::iter::repeat_with(|| &mut [][..]))
-                };
-                px.chunks_mut(slots).zip(exs).map(Some).collect()
-            };
-            let mut v = Vec::new();
-            for &t in &dealt {
-                let Some((p, e)) = by_tile[t].take() else {
-                    continue;
-                };
-                let ex_rows: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
-                    Box::new(e.chunks_mut(TILE))
-                } else {
-                    Box::new(std::iter::repeat_with(|| &mut [][..]))
-                };
-                for (r, (pr, er)) in p.chunks_mut(TILE).zip(ex_rows).enumerate() {
-                    if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done) {
-                        v.push((t, r, pr, er));
-                    }
-                }
-            }
-            v
-        };
+        let mut rows = rows_to_sample(&mut px, &mut ex, extra, &dealt, (tw, h));
         let items = rows.len().max(1);
         let (stopped, twins) = rows
             .par_iter_mut()
             .map(|(t, r, pxs, exs)| {
-                let mut cut = false;
-                let (mut taken, mut twins) = (0usize, 0u64);
-                let (tx, ty) = (*t % tw, *t / tw);
-                let cy = ty * TILE + *r;
-                for (i, cx) in (tx * TILE..((tx + 1) * TILE).min(w)).enumerate() {
-                    let slot = i;
-                    let p = &mut pxs[slot];
-                    if p.done {
-                        continue;
-                    }
-                    let (x, y) = (x0 + cx, y0 + cy);
-                    let mut e = exs.get_mut(slot);
-                    // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
-                    let order = hash(seed, x as u64, y as u64, u64::MAX);
-                    let began = std::time::Instant::now();
-                    for s in s0..s1 {
-                        // Checked per sample: Ctrl-C ends a render whose pixels take long within a sample's time
-                        // (each pixel keeps the samples it finished: the image is whole).
-                        if interrupted() {
-                            cut = true;
-                            break;
-                        }
-                        let (mut rng, wt, (fx, fy), (o, d)) =
-                            camera_sample(scene, &sampler, seed, order, (x, y), s);
-                        let mut visible = None;
-                        let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
-                        let mut split = aov::Split::default();
-                        let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
-                        let l = integ.li_visible(o, d, &mut rng, want, aovs);
-                        // (A signal during the path cut it short: the sample is not one; the pixel keeps those
-                        // before it.)
-                        if interrupted() {
-                            cut = true;
-                            break;
-                        }
-                        let raw = scene.response.sensor_xyz(&scene.bins, &l);
-                        let sensor = scene.response.clamp_sample(raw);
-                        p.sum += sensor * wt;
-                        p.weights += wt;
-                        p.half_y[s & 1] += sensor.y * wt;
-                        p.half_w[s & 1] += wt;
-                        p.n += 1;
-                        taken += 1;
-                        if let Some(e) = e.as_deref_mut() {
-                            if !scene.aovs.is_empty() {
-                                // The beauty's clamp, as a factor every part shares.
-                                let clamp = if sensor == raw { 1.0 } else { sensor.y / raw.y };
-                                let clamp = if clamp.is_finite() { clamp } else { 0.0 };
-                                e.apixel.add(scene, wt, l, &split, clamp, visible.as_ref());
-                            }
-                            if let (Some(g), Some(v)) = (&gspace, visible) {
-                                e.gpixel.add(wt, &g.sample(scene, fx, fy, &v), sensor);
-                            }
-                            if scene.spectral.is_some() {
-                                e.spectrum
-                                    .iter_mut()
-                                    .zip(l.0)
-                                    .for_each(|(a, v)| *a += v as f64 * wt);
-                            }
-                        }
-                    }
-                    p.seconds += began.elapsed().as_secs_f64();
-                    if cut {
-                        break;
-                    }
-                    if p.twin_p > 0.0 {
-                        // (A twin chosen after the first pass catches up with its pixel's samples first.)
-                        let from = if p.twin_w == 0.0 { 0 } else { s0 };
-                        let order = hash(twin_seed, x as u64, y as u64, u64::MAX);
-                        for s in from..s1 {
-                            let (mut rng, wt, _, (o, d)) =
-                                camera_sample(scene, &twin_sampler, twin_seed, order, (x, y), s);
-                            let l = integ.li_visible(o, d, &mut rng, None, None);
-                            let sensor = scene
-                                .response
-                                .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
-                            p.twin_y += sensor.y * wt;
-                            p.twin_w += wt;
-                            twins += 1;
-                        }
-                    }
-                }
+                let (cut, taken, twins) = sampling.row((*t, *r), pxs, exs, s0..s1);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 let so_far = work.fetch_add(taken, Ordering::Relaxed) + taken;
                 progress(Progress {
@@ -382,21 +337,13 @@ pub fn render_progressive(
         drop(rows);
         s0 = s1;
         // The estimate, and the blocks that may stop.
-        let (mut sum_e, mut sum_y2, mut sum_y, mut counted) = (0.0, 0.0, 0.0, 0usize);
-        let mut all = true;
-        for cy in 0..h {
-            for cx in 0..w {
-                match px[slot_of(cx, cy, tw)].estimate() {
-                    Some((y, e)) => {
-                        sum_e += e;
-                        sum_y2 += y * y;
-                        sum_y += y;
-                        counted += 1;
-                    }
-                    None => all = false,
-                }
-            }
-        }
+        let Sums {
+            e: sum_e,
+            y2: sum_y2,
+            y: sum_y,
+            counted,
+            all,
+        } = sums(&px, (w, h), tw);
         if pass == 1 && twins_wanted && all && sum_y2 > 0.0 && s0 < scene.spp {
             choose_twins(&mut px, (w, h), tw, seed, sum_y2);
         }
@@ -419,14 +366,7 @@ pub fn render_progressive(
         let spare = ntiles * slots - w * h;
         let active_pixels = px.iter().filter(|p| !p.done).count() - spare;
         let seconds = start.elapsed().as_secs_f64();
-        let mut ahead = 0.0f64;
-        if let (Some(t), Some(e)) = (opts.noise_threshold, estimate) {
-            ahead = ahead.max((t / e).powi(2).min(1.0));
-        }
-        if let Some(limit) = opts.time_limit {
-            ahead = ahead.max((seconds / limit).min(1.0));
-        }
-        floor.fetch_max(ahead.to_bits(), Ordering::Relaxed);
+        floor.fetch_max(opts.ahead(estimate, seconds).to_bits(), Ordering::Relaxed);
         if let Some(f) = opts.on_pass {
             f(&Pass {
                 index: pass,
@@ -469,7 +409,89 @@ pub fn render_progressive(
             len = len.min((fits as usize).max(1));
         }
     }
-    // The pixels' values: Σ w L / Σ w, finished by the film's response.
+    let (xyz, extra, camera_rays) = pixels(scene, &px, &ex, gspace.is_some(), (w, h), tw);
+    let rgb = xyz
+        .iter()
+        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
+        .collect();
+    let stats = Stats {
+        seconds: start.elapsed().as_secs_f64(),
+        camera_rays,
+        fire_light_samples: integ.fire_samples.into_inner(),
+        plugin_failures: integ.failures.into_report(),
+        passes: pass,
+        rel_rmse_estimate: estimate,
+        stop,
+        twin_samples,
+    };
+    (
+        Image {
+            w,
+            h,
+            rgb,
+            xyz,
+            complete,
+            origin: (x0, y0),
+            full: scene.res,
+            extra,
+            meta: Vec::new(),
+        },
+        stats,
+    )
+}
+
+/// A row of a tile: the tile, the row in it, its pixels and their extras.
+type Row<'p> = (usize, usize, &'p mut [Px], &'p mut [Extra]);
+
+/// A pass's work: every row of every tile (in the `dealt` order) that has a pixel still sampling — rows, not
+/// tiles, so that a pass in which a few tiles are left keeps every thread busy. `extra`: whether pixels keep
+/// extras; `tw` tiles across, `h` rows rendered.
+fn rows_to_sample<'p>(
+    px: &'p mut [Px],
+    ex: &'p mut [Extra],
+    extra: bool,
+    dealt: &[usize],
+    (tw, h): (usize, usize),
+) -> Vec<Row<'p>> {
+    let slots = TILE * TILE;
+    let mut by_tile: Vec<Option<(&mut [Px], &mut [Extra])>> = {
+        let exs: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
+            Box::new(ex.chunks_mut(slots))
+        } else {
+            Box::new(std::iter::repeat_with(|| &mut [][..]))
+        };
+        px.chunks_mut(slots).zip(exs).map(Some).collect()
+    };
+    let mut v = Vec::new();
+    for &t in dealt {
+        let Some((p, e)) = by_tile[t].take() else {
+            continue;
+        };
+        let ex_rows: Box<dyn Iterator<Item = &mut [Extra]>> = if extra {
+            Box::new(e.chunks_mut(TILE))
+        } else {
+            Box::new(std::iter::repeat_with(|| &mut [][..]))
+        };
+        for (r, (pr, er)) in p.chunks_mut(TILE).zip(ex_rows).enumerate() {
+            if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done) {
+                v.push((t, r, pr, er));
+            }
+        }
+    }
+    v
+}
+
+/// The rendered pixels' values from their sums — Σ w L / Σ w, finished by the film's response —, the channels
+/// beside the beauty (spectral buckets, the gbuffer's, the AOVs') with their names, and the camera rays taken.
+#[allow(clippy::type_complexity)]
+fn pixels(
+    scene: &scene::Scene,
+    px: &[Px],
+    ex: &[Extra],
+    gspace: bool,
+    (w, h): (usize, usize),
+    tw: usize,
+) -> (Vec<DVec3>, Option<(Vec<String>, Vec<f32>)>, usize) {
     let mut xyz = vec![DVec3::ZERO; w * h];
     let mut names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
         (Some(b), _) => Some(
@@ -518,7 +540,7 @@ pub fn render_progressive(
                     bk.resample(&scene.bins, &s)
                 }
                 Some(bk) => vec![0.0; bk.n],
-                None if gspace.is_some() => e.gpixel.finish(weights).to_vec(),
+                None if gspace => e.gpixel.finish(weights).to_vec(),
                 None => Vec::new(),
             };
             if !scene.aovs.is_empty() {
@@ -528,34 +550,134 @@ pub fn render_progressive(
             buckets[j * nb..(j + 1) * nb].copy_from_slice(&b);
         }
     }
-    let rgb = xyz
-        .iter()
-        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
-        .collect();
-    let stats = Stats {
-        seconds: start.elapsed().as_secs_f64(),
-        camera_rays,
-        fire_light_samples: integ.fire_samples.into_inner(),
-        plugin_failures: integ.failures.into_report(),
-        passes: pass,
-        rel_rmse_estimate: estimate,
-        stop,
-        twin_samples,
-    };
-    (
-        Image {
+    (xyz, names.map(|n| (n, buckets)), camera_rays)
+}
+
+/// What every row of a pass shares: the scene, its integrator, the samplers and their seeds, what the film keeps
+/// beside the beauty, and where the rendered pixels lie.
+struct Sampling<'a> {
+    scene: &'a scene::Scene,
+    integ: &'a integrator::Integrator<'a>,
+    sampler: &'a pixel::Sampler,
+    twin_sampler: &'a pixel::Sampler,
+    seed: u64,
+    twin_seed: u64,
+    gspace: Option<&'a GSpace>,
+    aov_surface: bool,
+    /// Tiles across, the rendered pixels' width and their origin on the full film.
+    tw: usize,
+    w: usize,
+    origin: (usize, usize),
+}
+
+impl Sampling<'_> {
+    /// Samples `range` of every pixel still sampling in row `r` of tile `t` (its pixels `pxs`, their extras
+    /// `exs`), and its twins' catching up: whether a signal cut it short, the samples taken, the twins' samples.
+    fn row(
+        &self,
+        (t, r): (usize, usize),
+        pxs: &mut [Px],
+        exs: &mut [Extra],
+        range: std::ops::Range<usize>,
+    ) -> (bool, usize, u64) {
+        let Sampling {
+            scene,
+            integ,
+            sampler,
+            twin_sampler,
+            seed,
+            twin_seed,
+            gspace,
+            aov_surface,
+            tw,
             w,
-            h,
-            rgb,
-            xyz,
-            complete,
             origin: (x0, y0),
-            full: scene.res,
-            extra: names.map(|n| (n, buckets)),
-            meta: Vec::new(),
-        },
-        stats,
-    )
+        } = *self;
+        let (s0, s1) = (range.start, range.end);
+        let mut cut = false;
+        let (mut taken, mut twins) = (0usize, 0u64);
+        let (tx, ty) = (t % tw, t / tw);
+        let cy = ty * TILE + r;
+        for (i, cx) in (tx * TILE..((tx + 1) * TILE).min(w)).enumerate() {
+            let slot = i;
+            let p = &mut pxs[slot];
+            if p.done {
+                continue;
+            }
+            let (x, y) = (x0 + cx, y0 + cy);
+            let mut e = exs.get_mut(slot);
+            // The pixel's strata order (stratified sampling), fixed by the seed and the pixel.
+            let order = hash(seed, x as u64, y as u64, u64::MAX);
+            let began = std::time::Instant::now();
+            for s in s0..s1 {
+                // Checked per sample: Ctrl-C ends a render whose pixels take long within a sample's time
+                // (each pixel keeps the samples it finished: the image is whole).
+                if interrupted() {
+                    cut = true;
+                    break;
+                }
+                let (mut rng, wt, (fx, fy), (o, d)) =
+                    camera_sample(scene, sampler, seed, order, (x, y), s);
+                let mut visible = None;
+                let want = (gspace.is_some() || aov_surface).then_some(&mut visible);
+                let mut split = aov::Split::default();
+                let aovs = (!scene.aovs.is_empty()).then_some(&mut split);
+                let l = integ.li_visible(o, d, &mut rng, want, aovs);
+                // (A signal during the path cut it short: the sample is not one; the pixel keeps those
+                // before it.)
+                if interrupted() {
+                    cut = true;
+                    break;
+                }
+                let raw = scene.response.sensor_xyz(&scene.bins, &l);
+                let sensor = scene.response.clamp_sample(raw);
+                p.sum += sensor * wt;
+                p.weights += wt;
+                p.half_y[s & 1] += sensor.y * wt;
+                p.half_w[s & 1] += wt;
+                p.n += 1;
+                taken += 1;
+                if let Some(e) = e.as_deref_mut() {
+                    if !scene.aovs.is_empty() {
+                        // The beauty's clamp, as a factor every part shares.
+                        let clamp = if sensor == raw { 1.0 } else { sensor.y / raw.y };
+                        let clamp = if clamp.is_finite() { clamp } else { 0.0 };
+                        e.apixel.add(scene, wt, l, &split, clamp, visible.as_ref());
+                    }
+                    if let (Some(g), Some(v)) = (&gspace, visible) {
+                        e.gpixel.add(wt, &g.sample(scene, fx, fy, &v), sensor);
+                    }
+                    if scene.spectral.is_some() {
+                        e.spectrum
+                            .iter_mut()
+                            .zip(l.0)
+                            .for_each(|(a, v)| *a += v as f64 * wt);
+                    }
+                }
+            }
+            p.seconds += began.elapsed().as_secs_f64();
+            if cut {
+                break;
+            }
+            if p.twin_p > 0.0 {
+                // (A twin chosen after the first pass catches up with its pixel's samples first.)
+                let from = if p.twin_w == 0.0 { 0 } else { s0 };
+                let order = hash(twin_seed, x as u64, y as u64, u64::MAX);
+                for s in from..s1 {
+                    let (mut rng, wt, _, (o, d)) =
+                        camera_sample(scene, twin_sampler, twin_seed, order, (x, y), s);
+                    let l = integ.li_visible(o, d, &mut rng, None, None);
+                    let sensor = scene
+                        .response
+                        .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
+                    p.twin_y += sensor.y * wt;
+                    p.twin_w += wt;
+                    twins += 1;
+                }
+            }
+        }
+        (cut, taken, twins)
+    }
 }
 
 /// Chooses the twins (see the module): each pixel with probability π = min(1, K (½ Y²/ΣY² + ½/N)), K =
