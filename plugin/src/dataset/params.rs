@@ -258,9 +258,37 @@ enum Grids {
     },
 }
 
-/// Reads the dataset's parameters (pbrt-v4's grid media when `pbrt`), touching no file.
-pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
-    let shutter = [r.float("shutteropen")?, r.float("shutterclose")?];
+/// What a host says of its render (the ABI's `FmCreateInfo`), typed end to end: each stands where the scene
+/// does not set the parameter of the same meaning itself (`threads`, `maxbytes`, `frame`, `shutteropen`,
+/// `shutterclose`), which wins.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HostContext {
+    /// The host's thread count (0 or none: the parameter's default, every core).
+    pub threads: Option<usize>,
+    /// The host's memory budget for the volume, bytes.
+    pub max_bytes: Option<u64>,
+    /// The frame being rendered (patterned file names take it).
+    pub frame: Option<i64>,
+    /// The camera's shutter, open and close, in frames from the grids' time.
+    pub shutter: Option<[f64; 2]>,
+}
+
+impl HostContext {
+    /// `name`'s value: the scene's if it sets it, else the host's (`host`), else the table's default.
+    pub(crate) fn float(r: &ParamReader, name: &str, host: Option<f64>) -> Result<f64, Error> {
+        match host {
+            Some(v) if !r.list_has(name) => Ok(v),
+            _ => r.float(name),
+        }
+    }
+}
+
+/// Reads the dataset's parameters (pbrt-v4's grid media when `pbrt`) beside the host's context, touching no file.
+pub(crate) fn read(r: &ParamReader, pbrt: bool, ctx: &HostContext) -> Result<Request, Error> {
+    let shutter = [
+        HostContext::float(r, "shutteropen", ctx.shutter.map(|s| s[0]))?,
+        HostContext::float(r, "shutterclose", ctx.shutter.map(|s| s[1]))?,
+    ];
     if shutter[1] < shutter[0] {
         return Err(Error::invalid(
             "dataset",
@@ -302,8 +330,11 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool) -> Result<Request, Error> {
         ],
         nonfinite: pol("nonfinite")?,
         negative: pol("negative")?,
-        max_bytes: r.float("maxbytes")? as u64,
-        frame: r.ints("frame")?.and_then(|v| v.first().copied()),
+        max_bytes: HostContext::float(r, "maxbytes", ctx.max_bytes.map(|b| b as f64))? as u64,
+        frame: match r.ints("frame")?.and_then(|v| v.first().copied()) {
+            None => ctx.frame,
+            f => f,
+        },
         bounds,
     };
     let offset = match (

@@ -5,8 +5,8 @@ use super::buffers::{in_f64, out_f32, out_f64, ray_of, rays, store, times};
 use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::par::Pool;
-use crate::params::Param;
-use crate::volume::{ColorMode, Event, FireVolume, Integrator, Ray, Want};
+
+use crate::volume::{ColorMode, Event, FireVolume, HostContext, Integrator, Ray, Want};
 use firemedium_abi::*;
 use glam::DVec3;
 use std::ffi::c_void;
@@ -44,34 +44,37 @@ pub(super) unsafe extern "C" fn volume_create(
             })?;
             super::params::resolve_paths(&mut list, std::path::Path::new(dir));
         }
-        // The host's context, where the scene does not set the same itself.
-        let mut context = Vec::new();
-        if ci.threads > 0 {
-            context.push(Param::int("threads", ci.threads as i64));
+        // The host's context, typed: it stands where the scene does not set the same itself.
+        if ci.threads > 4096 {
+            return Err(bad(format!(
+                "volume_create: threads {}: expected 0 (every core) to 4096",
+                ci.threads
+            )));
         }
-        if ci.max_bytes > 0 {
-            context.push(Param::float("maxbytes", ci.max_bytes as f64));
+        let frame = (ci.flags & FM_CREATE_FRAME != 0).then_some(ci.frame);
+        if frame.is_some_and(|f| f.unsigned_abs() > 1_000_000_000) {
+            return Err(bad(format!(
+                "volume_create: frame {}: expected −10⁹ to 10⁹",
+                ci.frame
+            )));
         }
-        if ci.flags & FM_CREATE_FRAME != 0 {
-            context.push(Param::int("frame", ci.frame));
-        }
-        if ci.flags & FM_CREATE_SHUTTER != 0 {
-            if !ci.shutter.iter().all(|s| s.is_finite()) || ci.shutter[0] > ci.shutter[1] {
+        let shutter = (ci.flags & FM_CREATE_SHUTTER != 0).then_some(ci.shutter);
+        if let Some(s) = shutter {
+            if !s.iter().all(|t| t.is_finite() && t.abs() <= 1e6) || s[0] > s[1] {
                 return Err(bad(format!(
-                    "volume_create: shutter {:?}: expected finite open ≤ close",
-                    ci.shutter
+                    "volume_create: shutter {s:?}: expected finite open ≤ close, within ±10⁶ frames"
                 )));
             }
-            context.push(Param::float("shutteropen", ci.shutter[0]));
-            context.push(Param::float("shutterclose", ci.shutter[1]));
         }
-        for p in context {
-            if !list.iter().any(|q| q.name == p.name) {
-                list.push(p);
-            }
-        }
+        let ctx = HostContext {
+            threads: (ci.threads > 0).then_some(ci.threads as usize),
+            max_bytes: (ci.max_bytes > 0).then_some(ci.max_bytes),
+            frame,
+            shutter,
+        };
         let pool = ci.parallel_for.map(|f| host_pool(f, ci.pool));
-        let v = crate::par::with_pool(pool.clone(), || FireVolume::new(&list)).map_err(fail)?;
+        let v = crate::par::with_pool(pool.clone(), || FireVolume::new_in(&list, &ctx))
+            .map_err(fail)?;
         let handle = VolumeHandle {
             volume: Arc::new(v),
             pool,

@@ -9,10 +9,16 @@ impl FireVolume {
     /// parameters are read and checked first ([`Settings`]), then the dataset is loaded, then the coefficient
     /// tables, the march lattice, the majorant bricks and (if asked for) the refraction field are built.
     pub fn new(list: &[Param]) -> Result<FireVolume, Error> {
-        Self::new_unlocated(list).map_err(|e| e.located(crate::params::location_in(list)))
+        Self::new_in(list, &HostContext::default())
     }
 
-    pub(super) fn new_unlocated(list: &[Param]) -> Result<FireVolume, Error> {
+    /// As [`new`](Self::new), in a host's context (its threads, memory budget, frame and shutter), which stands
+    /// where the scene does not set the same itself.
+    pub fn new_in(list: &[Param], ctx: &HostContext) -> Result<FireVolume, Error> {
+        Self::new_unlocated(list, ctx).map_err(|e| e.located(crate::params::location_in(list)))
+    }
+
+    pub(super) fn new_unlocated(list: &[Param], ctx: &HostContext) -> Result<FireVolume, Error> {
         let start = Instant::now();
         let list = &*looks::expand(list);
         let comps = settings::components();
@@ -22,11 +28,14 @@ impl FireVolume {
         // (The look was expanded into the list above; reading it checks its name.)
         r.string("look")?;
         let set = Settings::read(&r, list)?;
-        let threads = r.int("threads")? as usize;
-        let budget = r.float("maxbytes")? as u64;
+        let threads = match ctx.threads {
+            Some(n) if !r.list_has("threads") => n,
+            _ => r.int("threads")? as usize,
+        };
+        let budget = HostContext::float(&r, "maxbytes", ctx.max_bytes.map(|b| b as f64))? as u64;
         crate::par::with_budget(threads, || {
             // Every parameter read and checked before a file is opened.
-            let request = crate::dataset::params::read(&r, set.mode == Mode::Pbrt)?;
+            let request = crate::dataset::params::read(&r, set.mode == Mode::Pbrt, ctx)?;
             r.finish()?;
             let loaded = request.load()?;
             let mut v = Self::build(set, loaded, budget, start)?;

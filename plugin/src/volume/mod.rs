@@ -54,6 +54,7 @@ mod settings;
 mod subset;
 mod tables;
 
+pub use crate::dataset::params::HostContext;
 pub use closed_form::ClosedForm;
 pub use integrate::evaluations_on_this_thread;
 use integrate::EVALUATIONS;

@@ -437,8 +437,8 @@ fn an_art_directed_colour_is_seen_against_d65() {
 
 #[test]
 fn the_hosts_context_goes_beside_the_scenes_parameters() {
-    // ABI 0.13: threads, the memory budget, the frame and the shutter in the creation info, not made-up
-    // parameters; a parameter the scene sets itself wins.
+    // Threads, the memory budget, the frame and the shutter in the creation info, typed through the plugin to
+    // the reads that use them (never turned into made-up parameters); a parameter the scene sets itself wins.
     use firemedium_loader::{Context, FM_FEATURE_MOTION};
     let p = plugin();
     let tight = Context {
@@ -453,6 +453,33 @@ fn the_hosts_context_goes_beside_the_scenes_parameters() {
     );
     let own = [fire_params(), vec![Param::float("maxbytes", 1e9)]].concat();
     assert!(p.create_volume_with(&own, &tight).is_ok());
+    // A context out of range is refused naming its field and the range, as a parameter would be.
+    for (bad, says) in [
+        (
+            Context {
+                threads: Some(5000),
+                ..Default::default()
+            },
+            "threads 5000: expected 0 (every core) to 4096",
+        ),
+        (
+            Context {
+                frame: Some(i64::MIN),
+                ..Default::default()
+            },
+            "frame -9223372036854775808",
+        ),
+        (
+            Context {
+                shutter: Some([0.5, f64::NAN]),
+                ..Default::default()
+            },
+            "shutter [0.5, NaN]",
+        ),
+    ] {
+        let e = p.create_volume_with(&fire_params(), &bad).unwrap_err();
+        assert!(e.to_string().contains(says), "{e}");
+    }
     // The shutter: a velocity grid blurs over the context's shutter, and not without one.
     let moving = [
         fire_params(),
