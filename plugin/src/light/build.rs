@@ -273,52 +273,36 @@ impl FireLight {
         };
         let side = 8 / cell;
         let per = side * side * side;
+        // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and summed
+        // per cell (in f64; at `cell 1` a cell is a voxel, its weight the voxel's) — no second array of voxel
+        // weights.
         let mut emitting = 0;
-        let w = if cell == 1 {
-            // The voxels' weights are the light's: dilated over the whole array.
+        let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
+        for (i, b) in bricks.iter().enumerate() {
+            let slot = slot_of(b);
+            let mut ws = [0f32; 512];
             if trilinear {
-                w = dilate(&w, &topo, &bricks, 0.125).ok_or_else(too_many)?;
+                dilate_brick(&w, &topo, *b, 0.125, &mut ws);
+            } else {
+                ws.copy_from_slice(&w[slot * 512..(slot + 1) * 512]);
             }
-            for (i, b) in bricks.iter().enumerate() {
-                if let Some(&k) = keep.get(i) {
-                    let slot = slot_of(b);
-                    w[slot * 512..(slot + 1) * 512]
-                        .iter_mut()
-                        .for_each(|v| *v *= k);
-                }
+            if let Some(&k) = keep.get(i) {
+                ws.iter_mut().for_each(|v| *v *= k);
             }
-            emitting = w.iter().filter(|&&v| v > 0.0).count();
-            w
-        } else {
-            // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and
-            // summed per cell (in f64) — no second array of voxel weights.
-            let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
-            for (i, b) in bricks.iter().enumerate() {
-                let slot = slot_of(b);
-                let mut ws = [0f32; 512];
-                if trilinear {
-                    dilate_brick(&w, &topo, *b, 0.125, &mut ws);
-                } else {
-                    ws.copy_from_slice(&w[slot * 512..(slot + 1) * 512]);
-                }
-                if let Some(&k) = keep.get(i) {
-                    ws.iter_mut().for_each(|v| *v *= k);
-                }
-                let mut sums = [0f64; 512];
-                for (l, &v) in ws.iter().enumerate() {
-                    if v > 0.0 {
-                        emitting += 1;
-                        let c =
-                            (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
-                        sums[c] += v as f64;
-                    }
-                }
-                for (c, &v) in sums[..per].iter().enumerate() {
-                    cw[slot * per + c] = v as f32;
+            let mut sums = [0f64; 512];
+            for (l, &v) in ws.iter().enumerate() {
+                if v > 0.0 {
+                    emitting += 1;
+                    let c = (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                    sums[c] += v as f64;
                 }
             }
-            cw
-        };
+            for (c, &v) in sums[..per].iter().enumerate() {
+                cw[slot * per + c] = v as f32;
+            }
+        }
+        drop(w);
+        let w = cw;
         let vv = voxel.x * voxel.y * voxel.z;
         let power_w = 4.0 * std::f64::consts::PI * vv * pw;
         let power_lm = 4.0 * std::f64::consts::PI * vv * plm;
@@ -327,8 +311,7 @@ impl FireLight {
         let (mut brick_slots, mut cdf) = (Vec::new(), Vec::new());
         let mut total = 0.0;
         for b in &bricks {
-            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-            let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+            let slot = slot_of(b);
             let ws = &w[slot * per..(slot + 1) * per];
             let sum: f64 = ws.iter().map(|&v| v as f64).sum();
             if sum > 0.0 {
@@ -447,96 +430,11 @@ pub(super) fn escape_fractions(
     Some(bricks.iter().map(|b| sum[at(*b)] as f64 / 6.0).collect())
 }
 
-/// `max(w, f · max of the 26 neighbours)` per voxel of `bricks` (a separable 3×3×3 max filter over the
-/// topology's storage; voxels outside it count as 0, and every voxel a stored weight's dilation reaches is
-/// inside it, the bricks around the data being covered). `None` when the allocator refuses the copies.
-fn dilate(
-    w: &[f32],
-    topo: &crate::grid::Topology,
-    bricks: &[[usize; 3]],
-    f: f32,
-) -> Option<Vec<f32>> {
-    let dims = topo.dims();
-    let mut m = crate::alloc::filled(w.len(), 0f32)?;
-    m.copy_from_slice(w);
-    // One axis at a time, in place: along each line of a brick a running value keeps the voxel before as it was;
-    // the voxels beyond the brick's ends are read from its neighbours' faces as they were before the pass (the
-    // two layers of every brick across the axis, a quarter of the weights, instead of a copy of them all).
-    let mut faces = crate::alloc::filled(w.len() / 4, 0f32)?;
-    for axis in 0..3 {
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        // Sample n's local coordinates in its brick, and where its layer's copy lies (layer 0 or 7 across the axis).
-        let local = |n: usize| {
-            let l = n % 512;
-            [l % 8, (l / 8) % 8, l / 64]
-        };
-        let face = |n: usize, side: usize| {
-            let l = local(n);
-            (n / 512 * 2 + side) * 64 + l[u] + 8 * l[v]
-        };
-        for b in bricks {
-            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-            for k in span[2].0..span[2].1 {
-                for jy in span[1].0..span[1].1 {
-                    for i in span[0].0..span[0].1 {
-                        let n = topo.index(i, jy, k);
-                        match local(n)[axis] {
-                            0 => faces[face(n, 0)] = m[n],
-                            7 => faces[face(n, 1)] = m[n],
-                            _ => {}
-                        }
-                    }
-                }
-            }
-        }
-        for b in bricks {
-            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-            for cv in span[v].0..span[v].1 {
-                for cu in span[u].0..span[u].1 {
-                    let at = |c: usize| {
-                        let mut q = [0; 3];
-                        (q[axis], q[u], q[v]) = (c, cu, cv);
-                        topo.index(q[0], q[1], q[2])
-                    };
-                    let (lo, hi) = span[axis];
-                    // The voxel before the line's first: its neighbour brick's last layer (7).
-                    let mut prev = (lo > 0).then(|| faces[face(at(lo - 1), 1)]);
-                    for c in lo..hi {
-                        let n = at(c);
-                        let cur = m[n];
-                        let next = if c + 1 < hi {
-                            Some(m[at(c + 1)])
-                        } else if c + 1 < dims[axis] {
-                            // Beyond the line's last: its neighbour brick's first layer (0).
-                            Some(faces[face(at(c + 1), 0)])
-                        } else {
-                            None
-                        };
-                        let mut out = cur;
-                        if let Some(p) = prev {
-                            out = out.max(p);
-                        }
-                        if let Some(q) = next {
-                            out = out.max(q);
-                        }
-                        m[n] = out;
-                        prev = Some(cur);
-                    }
-                }
-            }
-        }
-    }
-    drop(faces);
-    for (d, &a) in m.iter_mut().zip(w) {
-        *d = a.max(f * *d);
-    }
-    Some(m)
-}
-
-/// [`dilate`] for one brick `b` of the topology, from the weights `w` of it and its neighbours, into `out` (its
-/// 512 samples in the storage's order): the same three passes over a 10³ neighbourhood (the brick and one voxel
-/// around it), with the same reads — a voxel outside the lattice is no neighbour, one in a brick the topology
-/// does not hold is 0 and never raised — so each value is [`dilate`]'s, bit for bit.
+/// `max(w, f · max of the 26 neighbours)` for each voxel of brick `b` of the topology, from the weights `w` of it
+/// and its neighbours, into `out` (its 512 samples in the storage's order): a separable 3×3×3 maximum, three
+/// passes over a 10³ neighbourhood (the brick and one voxel around it). A voxel outside the lattice is no
+/// neighbour; one in a brick the topology does not hold is 0 and never raised (every voxel a stored weight's
+/// dilation reaches is held: the light's topology covers the bricks around the data).
 fn dilate_brick(
     w: &[f32],
     topo: &crate::grid::Topology,
@@ -649,7 +547,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_dilation_in_place_is_the_27_neighbour_maximum() {
+    fn the_dilation_brick_by_brick_is_the_27_neighbour_maximum() {
         // A lattice whose bricks are offset from its origin and cut at its far faces, some bricks missing (their
         // voxels count as 0), sparse weights — each where its 26 neighbours are covered, as the light's bricks
         // around the data are —: every covered voxel's dilated weight is max(w, f · the largest of its 26
@@ -678,7 +576,15 @@ mod tests {
                 }
             }
         }
-        let d = dilate(&w, &topo, &bricks, 0.125).unwrap();
+        // Brick by brick, from the weights around each.
+        let mut d = vec![0f32; w.len()];
+        for b in &bricks {
+            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+            let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
+            let mut out = [0f32; 512];
+            dilate_brick(&w, &topo, *b, 0.125, &mut out);
+            d[slot * 512..(slot + 1) * 512].copy_from_slice(&out);
+        }
         let at = |v: [i64; 3]| -> f32 {
             if (0..3).any(|a| v[a] < 0 || v[a] >= dims[a] as i64) {
                 return 0.0;
@@ -715,13 +621,5 @@ mod tests {
             }
         }
         assert!(checked > 4000 && raised > 1000, "{checked} {raised}");
-        // Brick by brick, from the weights around each: the same values, bit for bit.
-        for b in &bricks {
-            let mut out = [0f32; 512];
-            dilate_brick(&w, &topo, *b, 0.125, &mut out);
-            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-            let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
-            assert_eq!(out[..], d[slot * 512..(slot + 1) * 512], "{b:?}");
-        }
     }
 }

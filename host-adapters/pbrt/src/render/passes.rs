@@ -825,11 +825,10 @@ fn adapt(
             blocks.push(Block {
                 pixels: count,
                 n: n_mean,
-                r: if floor > 0.0 {
-                    n_mean * gain * rel / count
-                } else {
-                    0.0
-                },
+                // (A block whose estimate is not a number does not steer the others: as one without noise.)
+                r: Some(n_mean * gain * rel / count)
+                    .filter(|r| floor > 0.0 && r.is_finite())
+                    .unwrap_or(0.0),
                 cost: (secs / n).max(1e-12),
                 done: px[slot_of(xs.start, ys.start)].done,
                 xs,
@@ -956,5 +955,11 @@ mod tests {
             stops(4, &[(0.0, 1.0), (0.0, 1.0)], 0.1, 1.0),
             [false, false]
         );
+        // A block whose estimate is not a number counts as one without noise and does not stop the others
+        // early: seven blocks of r = 0.08 at 8 samples need 8.75 each to bring the mean to 0.008.
+        let mut blocks = vec![(delta(0.08, 8), 1.0); 7];
+        blocks.push((f64::NAN, 1.0));
+        let want: Vec<bool> = (0..8).map(|b| b == 7).collect();
+        assert_eq!(stops(8, &blocks, t, 1.0), want);
     }
 }
