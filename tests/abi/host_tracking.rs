@@ -44,6 +44,7 @@ fn estimate(sc: &scene::Scene, pixel: (f64, f64), n: usize) -> (f64, f64) {
         mask: sc.bins.mask(),
         fire_samples: Default::default(),
         failures: Default::default(),
+        profile: None,
     };
     let mut rng = Samples::random(firemedium_core::rng::Rng::new(7));
     let (o, d) = firemedium::render::camera_ray(sc, pixel.0, pixel.1, &mut rng);

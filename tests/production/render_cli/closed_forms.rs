@@ -285,6 +285,49 @@ fn a_thick_scattering_emitting_medium_is_in_equilibrium() {
 }
 
 #[test]
+fn the_profile_splits_an_equilibrium_medium_s_light_as_its_albedo_does() {
+    // Inside the equilibrium medium at albedo a = ½ (above): the camera's segment adds σ_a/σ_t L_e = (1 − a) L_e in
+    // closed form; the paths' scattering vertices find the other a L_e. A
+    // homogeneous medium's scattering weighs the path by the albedo rather than ending it: every path scatters
+    // up to the maximum depth (400; fewer only where its weight fell to zero), each vertex followed by a segment.
+    let dir = tmp("profile-equilibrium");
+    let f = dir.join("s.pbrt");
+    std::fs::write(&f, "LookAt 0 0 0  0 1 0  0 0 1\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nSampler \"independent\" \"integer pixelsamples\" 128\nIntegrator \"volpath\" \"integer maxdepth\" 400\nMakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"spectrum sigma_a\" [1] \"spectrum sigma_s\" [1] \"spectrum Le\" [1]\nMediumInterface \"\" \"m\"\nCamera \"perspective\" \"float fov\" 30\nWorldBegin\nAttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 40\nAttributeEnd\n").unwrap();
+    let o = firemedium_in(&dir, &["render", "s.pbrt", "--quiet", "--profile"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // Independent samples take no twins: 8 × 8 × 128 paths.
+    assert!(text.contains("profile over 8192 paths"), "{text}");
+    let row = |name: &str| -> Vec<f64> {
+        let line = text.lines().find(|l| l.trim_start().starts_with(name));
+        let line = line.unwrap_or_else(|| panic!("no row {name}: {text}"));
+        let values = line.trim_start()[name.len()..].split_whitespace();
+        values
+            .map(|v| v.trim_end_matches('%').parse().unwrap())
+            .collect()
+    };
+    assert_eq!(row("camera segment in a medium")[0], 1.0, "{text}");
+    let vertices = row("scattering vertex (phase, choice)")[0];
+    assert!(vertices > 399.0 && vertices <= 400.0, "{vertices}: {text}");
+    assert!(
+        (row("later segment in a medium")[0] - vertices).abs() < 1e-3,
+        "{text}"
+    );
+    let camera = row("emission on the camera segment");
+    let scattered = row("emission found from a scattering vertex");
+    assert!((camera[0] - 50.0).abs() < 3.0, "{text}");
+    assert!((camera[0] + scattered[0] - 100.0).abs() < 0.2, "{text}");
+    // Every segment's emission is in closed form and every vertex's weight is the albedo: the estimator has no
+    // variance at all, and the profile says so (a second moment would have split 50 / 50).
+    assert_eq!(&camera[1..], [0.0, 0.0], "{text}");
+    assert_eq!(&scattered[1..], [0.0, 0.0], "{text}");
+}
+
+#[test]
 fn the_fire_light_and_paths_that_find_the_fire_agree() {
     // A floor lit only by a fire outside the camera's view, direct light only (maxdepth 2: pbrt-v4 counts a
     // medium's emission on the segments before the maxdepth-th bounce, and the floor's is the first). Without the fire light, paths

@@ -102,6 +102,11 @@ pub struct RenderArgs {
     /// Print time, rays/s, and what the plugin built.
     #[arg(long)]
     stats: bool,
+    /// Print where the paths' time and light go, by vertex kind: traversals, segments in media, scattering and
+    /// surface vertices, light samples (a fire's and the others'), with each kind's share of the image's mean and
+    /// second moment. Reads the clock at every step: a profiled render runs a little slower.
+    #[arg(long)]
+    profile: bool,
     /// No warnings or progress.
     #[arg(long, short)]
     quiet: bool,
@@ -481,6 +486,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         noise_threshold: a.noise_threshold,
         time_limit: a.time_limit,
         on_pass: Some(&on_pass),
+        profile: a.profile,
     };
     let (img, st) = pool.install(|| {
         render::render_progressive(&sc, seed, &opts, &|p: render::Progress| {
@@ -740,6 +746,9 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         if let Some(bytes) = firemedium::budget::peak_rss() {
             out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
         }
+    }
+    if let Some(table) = &st.profile {
+        out += table;
     }
     if !img.complete {
         // The shell's convention, as a farm's scheduler reads it: 128 + the signal (130 Ctrl-C, 143 SIGTERM).

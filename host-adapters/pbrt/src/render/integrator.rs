@@ -18,9 +18,12 @@ use super::media::Track;
 use super::paths::Spot;
 pub use super::paths::{Failures, Integrator};
 use super::pixel::Samples;
+use super::profile::{Gain, Step, Tally};
+use super::scene::Light;
 use super::spectrum::S;
 use glam::Vec3A;
 use std::f32::consts::PI;
+use std::time::Instant;
 
 fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
     let s = if n.z < 0.0 { -1.0 } else { 1.0 };
@@ -78,6 +81,27 @@ fn light_mis_weight(pl: f32, pb: f32) -> f32 {
     }
 }
 
+/// The clock's reading when the render is profiled (`tally` kept), else none: an unprofiled path reads no clock.
+fn clock(tally: &Option<Tally>) -> Option<Instant> {
+    tally.as_ref().map(|_| Instant::now())
+}
+
+/// Counts `step`, begun at `t0`, in a profiled path.
+fn took(tally: &mut Option<Tally>, step: Step, t0: Option<Instant>) {
+    if let (Some(t), Some(t0)) = (tally.as_mut(), t0) {
+        t.step(step, t0);
+    }
+}
+
+/// Adds what the radiance gained from `before` to `after` (its mean over the first `n` bins) to `gain` in a
+/// profiled path.
+fn gained(tally: &mut Option<Tally>, gain: Gain, before: S, after: S, n: usize) {
+    if let Some(t) = tally.as_mut() {
+        let d: f64 = (0..n).map(|c| f64::from(after.0[c] - before.0[c])).sum();
+        t.gain(gain, d / n.max(1) as f64);
+    }
+}
+
 /// Samples HG around the propagation direction `d`.
 fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     let cos = if g.abs() < 1e-3 {
@@ -107,15 +131,26 @@ impl Integrator<'_> {
         beta: S,
         l: &mut S,
         rng: &mut Samples,
+        tally: &mut Option<Tally>,
     ) -> (Vec3A, f32) {
         let lights = &self.scene.lights;
         if !lights.is_empty() {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
             let spot = Spot::Medium { p, medium };
             if self.light_counts(li, depth + 1) && !self.skips_inside(li, medium) {
-                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false) {
+                let (t0, before) = (clock(tally), *l);
+                if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false, tally) {
                     let ph = hg((-d).dot(wi), g);
                     *l += beta * le * (ph * light_mis_weight(pl, ph));
+                }
+                if tally.is_some() {
+                    let fire = matches!(lights[li], Light::Fire { .. });
+                    let (step, gain) = match fire {
+                        true => (Step::MediumFireSample, Gain::MediumFire),
+                        false => (Step::MediumLightSample, Gain::MediumLight),
+                    };
+                    took(tally, step, t0);
+                    gained(tally, gain, before, *l, self.scene.bins.n());
                 }
             }
         }
@@ -141,6 +176,10 @@ impl Integrator<'_> {
         mut split: Option<&mut Split>,
     ) -> S {
         let sc = self.scene;
+        let n_bins = sc.bins.n();
+        // A profiled render's tally of this path (`--profile`).
+        let start = self.profile.as_ref().map(|_| Instant::now());
+        let mut tally = start.map(|_| Tally::new(rng.pixel_key()));
         let mut l = S::ZERO;
         let mut beta = self.mask;
         let mut medium = sc.camera.medium;
@@ -160,22 +199,34 @@ impl Integrator<'_> {
             if super::interrupted() {
                 break;
             }
+            let t0 = clock(&tally);
             let hit = sc.bvh.intersect(o, d, sc.eps, f32::INFINITY);
+            took(&mut tally, Step::Traverse, t0);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
             if let Some(m) = medium {
+                let t0 = clock(&tally);
                 let (emitted, track) = self.track(m, o, d, t_end, rng);
+                let (step, gain) = match (depth, skipped) {
+                    (0, _) => (Step::CameraSegment, Gain::CameraEmission),
+                    (_, None) => (Step::LaterSegment, Gain::FoundEmission),
+                    (_, Some(_)) => (Step::LaterSegment, Gain::ScatteredEmission),
+                };
+                took(&mut tally, step, t0);
+                let before = l;
                 if depth < sc.maxdepth {
                     match emitted.fire_units {
                         // (MIS's density only for light that is there: a dark segment needs no walk.)
                         Some(units) if !emitted.l.is_black() => {
-                            l += beta
-                                * emitted.l
-                                * (units * self.emission_weight(m, mis, skipped, d, rng.time));
+                            let t0 = clock(&tally);
+                            let w = self.emission_weight(m, mis, skipped, d, rng.time);
+                            took(&mut tally, Step::EmissionMis, t0);
+                            l += beta * emitted.l * (units * w);
                         }
                         Some(_) => {}
                         None => l += beta * emitted.l,
                     }
                 }
+                gained(&mut tally, gain, before, l, n_bins);
                 match track {
                     Track::Scattered { t, weight, g } => {
                         beta *= weight;
@@ -184,8 +235,10 @@ impl Integrator<'_> {
                         }
                         let p = o + d * t;
                         Split::mark(&mut split, depth, l);
-                        let (wi, pdf) =
-                            self.scatter_vertex(p, d, g, medium, depth, beta, &mut l, rng);
+                        let t0 = clock(&tally);
+                        let (wi, pdf) = self
+                            .scatter_vertex(p, d, g, medium, depth, beta, &mut l, rng, &mut tally);
+                        took(&mut tally, Step::MediumVertex, t0);
                         (o, d, mis, skipped) = (p, wi, Some((p, pdf)), medium);
                         depth += 1;
                         continue;
@@ -211,6 +264,7 @@ impl Integrator<'_> {
             let Some(h) = hit else {
                 // Escaped: the infinite lights, weighted against their next-event estimation when the
                 // direction was sampled by a BSDF or phase function.
+                let before = l;
                 for light in &sc.lights {
                     let le = lights::env(light, d);
                     if !le.is_black() {
@@ -220,6 +274,7 @@ impl Integrator<'_> {
                         seen(&mut l, &mut split, depth, beta * le * w);
                     }
                 }
+                gained(&mut tally, Gain::FoundLight, before, l, n_bins);
                 // The camera ray escaped: its coverage is what the media it crossed took.
                 if depth == 0 {
                     if let Some(sp) = split.as_deref_mut() {
@@ -236,7 +291,9 @@ impl Integrator<'_> {
                 .and_then(|li| Some((li, self.area_le(li, &h, d)?)))
             {
                 let w = found_weight(mis, |origin| self.area_pdf(li, origin, &h));
+                let before = l;
                 seen(&mut l, &mut split, depth, beta * le * w);
+                gained(&mut tally, Gain::FoundLight, before, l, n_bins);
             }
             let wo = -d;
             let side_medium = |w: Vec3A| match prim.media {
@@ -261,6 +318,9 @@ impl Integrator<'_> {
             let record = depth == 0 && visible.is_some();
             if depth >= sc.maxdepth && !record {
                 break;
+            }
+            if let Some(t) = tally.as_mut() {
+                t.count(Step::SurfaceVertex);
             }
             let mat = &sc.materials[mi];
             let n = sc.bins.n();
@@ -321,8 +381,9 @@ impl Integrator<'_> {
                     seen.set(Some((wi, f)));
                     f.is_black()
                 };
+                let (t0, before) = (clock(&tally), l);
                 let found = match self.light_counts(li, depth + 1) {
-                    true => self.sample_light(li, &spot, rng, &dark),
+                    true => self.sample_light(li, &spot, rng, &dark, &mut tally),
                     false => None,
                 };
                 if let Some((le, wi, pl)) = found {
@@ -339,6 +400,14 @@ impl Integrator<'_> {
                         };
                         l += beta * f * le * light_mis_weight(pl, pb);
                     }
+                }
+                if tally.is_some() {
+                    let (step, gain) = match sc.lights[li] {
+                        Light::Fire { .. } => (Step::SurfaceFireSample, Gain::SurfaceFire),
+                        _ => (Step::SurfaceLightSample, Gain::SurfaceLight),
+                    };
+                    took(&mut tally, step, t0);
+                    gained(&mut tally, gain, before, l, n_bins);
                 }
             }
             // Sample the BSDF.
@@ -380,6 +449,10 @@ impl Integrator<'_> {
                 }
                 beta = beta / q;
             }
+        }
+        if let (Some(mut t), Some(p), Some(s)) = (tally, self.profile.as_ref(), start) {
+            t.finish(s);
+            p.add(&t);
         }
         l.finite_or_zero()
     }

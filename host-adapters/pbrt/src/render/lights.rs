@@ -8,11 +8,20 @@ use super::area::sample_area;
 use super::media::to_space;
 use super::paths::{Integrator, Spot};
 use super::pixel::Samples;
+use super::profile::{Step, Tally};
 use super::scene::{Light, Medium};
 use super::shapes::Hit;
 use super::spectrum::S;
 use glam::{DAffine3, DVec3, Vec3A};
 use std::f32::consts::PI;
+use std::time::Instant;
+
+/// Counts `s`, begun at `t0`, in a profiled path, and starts the next step's clock.
+fn step(tally: &mut Option<Tally>, s: Step, t0: Option<Instant>) -> Option<Instant> {
+    let (t, t0) = (tally.as_mut()?, t0?);
+    t.step(s, t0);
+    Some(Instant::now())
+}
 
 fn uniform_sphere(u: [f32; 2]) -> Vec3A {
     let z = 1.0 - 2.0 * u[0];
@@ -103,6 +112,7 @@ impl Integrator<'_> {
         spot: &Spot,
         rng: &mut Samples,
         dark: &dyn Fn(Vec3A) -> bool,
+        tally: &mut Option<Tally>,
     ) -> Option<(S, Vec3A, f32)> {
         let sc = self.scene;
         let u = Self::rng2(rng);
@@ -121,6 +131,7 @@ impl Integrator<'_> {
                 // The sampled point only chooses the direction (density pdf_direction); the estimate is the
                 // fire's whole emission along it, Σ T·L_e up to the first opaque surface, divided by that
                 // density. Unlike a point estimate j T G / pdf(x), it has no 1/r² singularity next to the fire.
+                let t0 = tally.as_ref().map(|_| Instant::now());
                 let uu = [(); 6].map(|_| rng.next_f64());
                 let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
                 self.failures.note(light.sample_at(
@@ -141,10 +152,12 @@ impl Integrator<'_> {
                     return None;
                 }
                 let (o, medium) = spot.leave(wi);
+                let t0 = step(tally, Step::FirePoint, t0);
                 // The fire's emission along wi, up to the first opaque surface.
                 let le = self
                     .walk_media(o, wi, f32::INFINITY, medium, Some((*fm, light)), rng)
                     .1;
+                let t0 = step(tally, Step::FireLine, t0);
                 // (A line that brings no light — the fire hidden behind a surface — needs no density: the walk
                 // over the pdf's bricks comes after it.)
                 if le.is_black() {
@@ -156,6 +169,7 @@ impl Integrator<'_> {
                     .note(fire_pdf_direction(light, to_medium, p, wi, rng.time))?
                     as f32
                     / nl;
+                step(tally, Step::FireDensity, t0);
                 if !(pdf_dir > 0.0) {
                     return None;
                 }

@@ -24,6 +24,7 @@ mod paths;
 pub mod pbrt_v4;
 pub mod pixel;
 pub mod ply;
+pub mod profile;
 pub mod rgbgrid;
 pub mod scene;
 pub mod sensors;
@@ -128,6 +129,8 @@ pub struct Stats {
     pub stop: Stop,
     /// Camera samples the noise estimate's twins took (not in the image; see [`passes`]).
     pub twin_samples: u64,
+    /// Where the paths' time and light went, when profiled (`--profile`): the printed table.
+    pub profile: Option<String>,
 }
 
 const TILE: usize = 16;

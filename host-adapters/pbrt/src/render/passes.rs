@@ -49,6 +49,8 @@ pub struct Progressive<'a> {
     pub time_limit: Option<f64>,
     /// Called after each pass.
     pub on_pass: Option<&'a (dyn Fn(&Pass) + Sync)>,
+    /// Tally where the paths' time and light go ([`super::profile`]; `--profile`).
+    pub profile: bool,
 }
 
 impl Progressive<'_> {
@@ -72,6 +74,7 @@ impl std::fmt::Debug for Progressive<'_> {
             .field("noise_threshold", &self.noise_threshold)
             .field("time_limit", &self.time_limit)
             .field("on_pass", &self.on_pass.is_some())
+            .field("profile", &self.profile)
             .finish()
     }
 }
@@ -257,6 +260,7 @@ pub fn render_progressive(
         mask: scene.bins.mask(),
         fire_samples: Default::default(),
         failures: Default::default(),
+        profile: opts.profile.then(Default::default),
     };
     let (tw, th) = (w.div_ceil(TILE), h.div_ceil(TILE));
     let ntiles = tw * th;
@@ -423,6 +427,7 @@ pub fn render_progressive(
         rel_rmse_estimate: estimate,
         stop,
         twin_samples,
+        profile: integ.profile.as_ref().map(|p| p.report()),
     };
     (
         Image {

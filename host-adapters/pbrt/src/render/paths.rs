@@ -97,6 +97,8 @@ pub struct Integrator<'a> {
     pub fire_samples: std::sync::atomic::AtomicU64,
     /// Plugin calls that failed inside the render.
     pub failures: Failures,
+    /// Where the paths' time and light go, when the render is profiled ([`super::profile`]).
+    pub profile: Option<super::profile::Profile>,
 }
 
 impl Integrator<'_> {

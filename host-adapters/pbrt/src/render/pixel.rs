@@ -66,6 +66,13 @@ pub struct Samples {
     pub time: f64,
 }
 
+impl Samples {
+    /// A key unique to the sample's pixel (its Morton code).
+    pub fn pixel_key(&self) -> u64 {
+        self.morton
+    }
+}
+
 impl Sampler {
     /// The stream of sample `s` of `spp` in the pixel hashed `pixel` at film position `xy`, its random part from
     /// `rng`.
