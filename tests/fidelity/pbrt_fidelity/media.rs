@@ -148,7 +148,12 @@ fn a_homogeneous_preset_is_pbrt_v4s_measured_medium() {
     let f = dir.join("p.pbrt");
     std::fs::write(&f, "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nMakeNamedMedium \"k\" \"string type\" \"homogeneous\" \"string preset\" \"Ketchup\" \"float scale\" 2\n").unwrap();
     let sc = firemedium::render::scene::load(&f, &Default::default()).unwrap();
-    let firemedium::render::scene::Medium::Homogeneous { sa, ss, .. } = &sc.media[0] else {
+    let firemedium::render::scene::Medium::Homogeneous(firemedium::render::scene::Homogeneous {
+        sa,
+        ss,
+        ..
+    }) = &sc.media[0]
+    else {
         panic!("not a homogeneous medium")
     };
     let n = sc.bins.n();

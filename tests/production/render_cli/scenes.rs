@@ -637,3 +637,36 @@ fn a_fire_clipped_swapped_or_behind_the_camera_is_warned_about() {
         }
     }
 }
+
+#[test]
+fn a_smoky_fire_keeps_its_light_and_a_white_one_leaves_it_out() {
+    // `--fire-light auto` weighs a scattering fire's albedo where its light meets it (Σ σ_s / Σ σ_t over its box):
+    // soot's (here σ_a ≈ 9.9 per unit density) keeps the light; a fire that scatters 40 per unit density (albedo
+    // 0.80) leaves it to the paths, saying so with the albedo.
+    let dir = tmp("light-albedo");
+    for (name, sigma_s, kept) in [("smoky", "0.3", true), ("white", "40", false)] {
+        let scene = small_fire_scene(1).replace(
+            "\"float sootscale\" 1e-6",
+            &format!("\"float sootscale\" 1e-6 \"spectrum sigma_s\" [400 {sigma_s} 800 {sigma_s}]"),
+        );
+        std::fs::write(dir.join(format!("{name}.pbrt")), scene).unwrap();
+        let o = firemedium_in(
+            &dir,
+            &["render", &format!("{name}.pbrt"), "--quiet", "--stats"],
+        );
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let built = text.contains("emitting voxels");
+        assert_eq!(built, kept, "{name}: {text}");
+        if !kept {
+            assert!(
+                text.contains("the fire scatters, albedo 0.80 (above 0.25)"),
+                "{text}"
+            );
+        }
+    }
+}

@@ -39,6 +39,7 @@ struct Cli {
 }
 
 #[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once per process
 enum Command {
     /// Print blackbody radiance, soot absorption, the index of air and the blackbody's colour.
     Physics(physics::PhysicsArgs),

@@ -54,8 +54,8 @@ pub struct RenderArgs {
     plugin: Option<PathBuf>,
     /// How emitting media light the scene: a fire light sampling voxels by emitted `power`, `luminance`, or
     /// `escaping` (power times the share that leaves the fire); `off` leaves the fire's emission to paths that
-    /// pass through it; `auto` (default): `power`, except for a fire that scatters, whose light costs more than
-    /// it saves (measured; `--stats` says so).
+    /// pass through it; `auto` (default): `power`, except for a fire that scatters much (albedo above 0.25),
+    /// whose light costs more than it saves (measured; `--stats` says so).
     #[arg(long = "fire-light", value_name = "auto|power|luminance|escaping|off", default_value = "auto",
           value_parser = ["auto", "power", "luminance", "escaping", "off"])]
     fire_light: String,
@@ -69,6 +69,13 @@ pub struct RenderArgs {
     /// a light sample's line through the fire costs more than it saves there).
     #[arg(long = "fire-light-inside")]
     fire_light_inside: bool,
+    /// How the camera's rays (and their mirror images) gather a scattering fire's emission: `march` (the whole
+    /// segment, deterministic, as for a fire that does not scatter; delta tracking then only picks where the path
+    /// scatters), `track` (at delta tracking's tentative collisions, pbrt-v4's estimator: no march lattice), or
+    /// `auto` (default): the march for a `fire`, pbrt-v4's tracking for pbrt-v4's grid media.
+    #[arg(long = "camera-emission", value_name = "auto|march|track", default_value = "auto",
+          value_parser = ["auto", "march", "track"])]
+    camera_emission: String,
     /// Who tracks the fire's media: `plugin` (its whole-ray queries: the fast path) or `host` (the renderer,
     /// through the plugin's medium level — majorant grid and coefficients at points —, as pbrt-v4 or Mitsuba 3
     /// would; refused, naming the layer, for a fire with refraction, embers, lines, art direction, diffusion or
@@ -352,6 +359,11 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         fire_light_params: a.fire_light_param.clone(),
         fire_light_inside: a.fire_light_inside,
         host_tracking: a.tracking == "host",
+        camera_march: match a.camera_emission.as_str() {
+            "march" => Some(true),
+            "track" => Some(false),
+            _ => None,
+        },
         res: a.resolution,
         crop: four(&a.cropwindow),
         pixel_bounds: four(&a.pixelbounds),
@@ -503,7 +515,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     bar.finish_and_clear();
     // Tracking that stopped at the plugin's per-ray collision cap biases towards dark: say so, per medium.
     for m in &sc.media {
-        if let scene::Medium::Plugin { vol, name, .. } = m {
+        if let scene::Medium::Plugin(scene::Plugin { vol, name, .. }) = m {
             match vol.capped_rays() {
                 Ok(0) => {}
                 Ok(n) if !a.quiet => eprintln!("firemedium: warning: medium \"{name}\": {n} rays stopped at the per-ray collision cap (2^20 tentative collisions) and were cut short as if absorbed; the medium's majorant is far above its data (an outlier voxel?) or it is optically very thick: the image is darker there than it should be"),
@@ -611,7 +623,7 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
             sc.media
                 .iter()
                 .find_map(|m| match m {
-                    scene::Medium::Plugin { vol, .. } => {
+                    scene::Medium::Plugin(scene::Plugin { vol, .. }) => {
                         let (major, minor) = vol.abi_version();
                         Some(format!("{major}.{minor}"))
                     }

@@ -144,7 +144,7 @@ impl Integrator<'_> {
                     *l += beta * le * (ph * light_mis_weight(pl, ph));
                 }
                 if tally.is_some() {
-                    let fire = matches!(lights[li], Light::Fire { .. });
+                    let fire = matches!(lights[li], Light::Fire(_));
                     let (step, gain) = match fire {
                         true => (Step::MediumFireSample, Gain::MediumFire),
                         false => (Step::MediumLightSample, Gain::MediumLight),
@@ -205,7 +205,7 @@ impl Integrator<'_> {
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
             if let Some(m) = medium {
                 let t0 = clock(&tally);
-                let (emitted, track) = self.track(m, o, d, t_end, rng);
+                let (emitted, track) = self.track(m, o, d, t_end, rng, mis.is_none());
                 let (step, gain) = match (depth, skipped) {
                     (0, _) => (Step::CameraSegment, Gain::CameraEmission),
                     (_, None) => (Step::LaterSegment, Gain::FoundEmission),
@@ -403,7 +403,7 @@ impl Integrator<'_> {
                 }
                 if tally.is_some() {
                     let (step, gain) = match sc.lights[li] {
-                        Light::Fire { .. } => (Step::SurfaceFireSample, Gain::SurfaceFire),
+                        Light::Fire(_) => (Step::SurfaceFireSample, Gain::SurfaceFire),
                         _ => (Step::SurfaceLightSample, Gain::SurfaceLight),
                     };
                     took(&mut tally, step, t0);

@@ -30,8 +30,8 @@ fn no_light_sampling(b: &Builder) -> Option<String> {
         ));
     }
     let scatters = b.media.iter().any(|m| match m {
-        Medium::Plugin { scatters, .. } => *scatters,
-        Medium::Homogeneous { ss, .. } => ss.max() > 0.0,
+        Medium::Plugin(p) => p.scatters,
+        Medium::Homogeneous(h) => h.ss.max() > 0.0,
         Medium::RgbGrid(g) => g.scatters(),
     });
     let surfaces = b.prims.iter().any(|p| {
@@ -43,6 +43,32 @@ fn no_light_sampling(b: &Builder) -> Option<String> {
         "no surface with a non-specular lobe and no scattering medium: no path samples a light"
             .into()
     })
+}
+
+/// The albedo above which a scattering fire's light is left out by default: its light estimates the emission
+/// that leaves the fire unscattered, and past this the paths' own tracking finds the scattered rest for less
+/// (measured: the fire-lit room at albedo 0.8 0.4× as efficient with the light, at 0.3 0.9×; the smoky looks at
+/// 0.16-0.17, their grounds lit by the fire, far smoother with it: docs/results/log.md).
+const LIGHT_ALBEDO: f64 = 0.25;
+
+/// A fire's single-scattering albedo where its light interacts: Σ σ_s / Σ σ_t over every channel at the centres
+/// of a 24³ lattice over its box (its extinction-weighted albedo; 0 where nothing is there).
+fn extinction_albedo(vol: &firemedium_loader::Volume) -> Result<f64, firemedium_loader::Error> {
+    const N: usize = 24;
+    let info = vol.info();
+    let (lo, hi) = (info.bounds_min, info.bounds_max);
+    let points: Vec<[f64; 3]> = (0..N * N * N)
+        .map(|i| {
+            let c = [i % N, (i / N) % N, i / (N * N)];
+            [0, 1, 2].map(|a| lo[a] + (hi[a] - lo[a]) * (c[a] as f64 + 0.5) / N as f64)
+        })
+        .collect();
+    let k = points.len() * info.channels as usize;
+    let (mut sa, mut ss, mut j) = (vec![0f32; k], vec![0f32; k], vec![0f32; k]);
+    vol.coefficients(&points, &mut sa, &mut ss, &mut j)?;
+    let s: f64 = ss.iter().map(|&v| f64::from(v)).sum();
+    let t: f64 = s + sa.iter().map(|&v| f64::from(v)).sum::<f64>();
+    Ok(if t > 0.0 { s / t } else { 0.0 })
 }
 
 /// The film's pixel bounds (pbrt-v4's `FilmBaseParameters`): a crop window (the command line's, else the scene's)
@@ -267,6 +293,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         threads: ov.threads,
         frame: ov.frame,
         host_tracking: ov.host_tracking,
+        camera_march: ov.camera_march,
         max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     };
     // pbrt's default material: diffuse 0.5.
@@ -474,22 +501,23 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
     } else {
         let mut report = 0;
         for (mi, m) in b.media.iter().enumerate() {
-            if let Medium::Plugin { vol, scatters, .. } = m {
+            if let Medium::Plugin(crate::render::scene::Plugin { vol, scatters, .. }) = m {
                 let r = report;
                 report += 1;
-                // A fire that scatters: its light is left out unless asked for by name (measured: the light's
-                // line estimates the emission that leaves the fire unscattered, while the paths' delta tracking
-                // is cheap and finds the scattered rest — on a fire-lit room at albedo 0.8 the light made the
-                // render 0.4× as efficient, at albedo 0.3 0.9×: docs/results/log.md).
+                // A fire that scatters much: its light is left out unless asked for by name ([`LIGHT_ALBEDO`]).
                 if *scatters && !ov.fire_light_forced {
-                    if let Some(rep) = b.media_reports.get_mut(r) {
-                        rep.light_left_out = Some(
-                            "the fire scatters: its light costs more than it saves there (measured; \
-                             `--fire-light power` builds it)"
-                                .into(),
-                        );
+                    let albedo = extinction_albedo(vol).map_err(|e| {
+                        Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
+                    })?;
+                    if albedo > LIGHT_ALBEDO {
+                        if let Some(rep) = b.media_reports.get_mut(r) {
+                            rep.light_left_out = Some(format!(
+                                "the fire scatters, albedo {albedo:.2} (above {LIGHT_ALBEDO}): its light \
+                                 costs more than it saves there (measured; `--fire-light power` builds it)"
+                            ));
+                        }
+                        continue;
                     }
-                    continue;
                 }
                 let mut lp = Vec::new();
                 if let Some(w) = &ov.fire_light_weighting {
@@ -506,10 +534,10 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
                                 line_channels: light.line_channels()?,
                             });
                         }
-                        b.lights.push(Light::Fire {
+                        b.lights.push(Light::Fire(crate::render::scene::Fire {
                             light: std::sync::Arc::new(light),
                             medium: mi,
-                        });
+                        }));
                     }
                     // A medium that does not emit is no light.
                     Err(firemedium_loader::Error::Status { message, .. })

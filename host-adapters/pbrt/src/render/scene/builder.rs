@@ -95,6 +95,8 @@ pub(super) struct Builder {
     pub(super) frame: Option<i64>,
     /// Plugin media tracked by the renderer through the medium level (`Overrides::host_tracking`).
     pub(super) host_tracking: bool,
+    /// How the camera gathers a scattering plugin medium's emission (`Overrides::camera_march`).
+    pub(super) camera_march: Option<bool>,
     /// The camera's shutter (frames) once a medium blurs by its velocity: each camera sample then draws a
     /// time in it.
     pub(super) shutter: Option<[f64; 2]>,
@@ -262,11 +264,11 @@ impl Builder {
                 }
             }
             prim.area_light = Some(self.lights.len());
-            self.lights.push(Light::Area {
+            self.lights.push(Light::Area(super::Area {
                 prim: self.prims.len(),
                 l,
                 twosided,
-            });
+            }));
         }
         self.prims.push(prim);
     }

@@ -309,7 +309,7 @@ impl Builder {
                 // pbrt-v4: I in nits-equivalent ("scale /= SpectrumToPhotometric(I)"), `power` in W over 4π.
                 let power = num(p, "power", -1.0);
                 let k = if power > 0.0 { power / (4.0 * std::f64::consts::PI) } else { 1.0 };
-                Light::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.emitted(p, "I", true, scale * k)? }
+                Light::Point(super::Point { p: pt(nums(p, "from"), [0.0; 3]), i: self.emitted(p, "I", true, scale * k)? })
             }
             "spot" => {
                 let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
@@ -319,19 +319,19 @@ impl Builder {
                 let power = num(p, "power", -1.0);
                 let k_e = 2.0 * std::f64::consts::PI * ((1.0 - cos_falloff) + (cos_falloff - cos_total) / 2.0);
                 let k = if power > 0.0 && k_e > 0.0 { power / k_e } else { 1.0 };
-                Light::Spot {
+                Light::Spot(super::Spot {
                     p: from,
                     dir: (to - from).normalize_or_zero(),
                     cos_total: cos_total as f32,
                     cos_falloff: cos_falloff as f32,
                     i: self.emitted(p, "I", true, scale * k)?,
-                }
+                })
             }
             "distant" => {
                 let (from, to) = (pt(nums(p, "from"), [0.0; 3]), pt(nums(p, "to"), [0.0, 0.0, 1.0]));
                 // `illuminance` in lux on a surface facing the light.
                 let e = num(p, "illuminance", -1.0);
-                Light::Distant { to_light: (from - to).normalize_or_zero(), l: self.emitted(p, "L", true, scale * if e > 0.0 { e } else { 1.0 })? }
+                Light::Distant(super::Distant { to_light: (from - to).normalize_or_zero(), l: self.emitted(p, "L", true, scale * if e > 0.0 { e } else { 1.0 })? })
             }
             "infinite" => {
                 // pbrt-v4's portal: four corners in the light's space, to the world by the light's transform.
@@ -375,12 +375,14 @@ impl Builder {
                         } else {
                             1.0
                         };
-                        Light::InfiniteMap { img: std::sync::Arc::new(img), to_light, scale: (scale * k) as f32, basis, dist, portal }
+                        let sky = super::Sky::Map { img: std::sync::Arc::new(img), to_light, scale: (scale * k) as f32, basis, dist };
+                        Light::Infinite(super::Infinite { sky, portal })
                     }
                     None => {
                         // `illuminance` in lux on an upward-facing patch under the uniform sky: π L.
                         let e = num(p, "illuminance", -1.0);
-                        Light::Infinite { l: self.emitted(p, "L", true, scale * if e > 0.0 { e / std::f64::consts::PI } else { 1.0 })?, portal }
+                        let l = self.emitted(p, "L", true, scale * if e > 0.0 { e / std::f64::consts::PI } else { 1.0 })?;
+                        Light::Infinite(super::Infinite { sky: super::Sky::Constant(l), portal })
                     }
                 }
             }

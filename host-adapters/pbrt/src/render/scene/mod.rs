@@ -8,16 +8,16 @@ mod build;
 mod builder;
 mod create;
 mod description;
+mod kinds;
 mod materials;
 mod media;
 pub use media::{load_plugin, typed_params};
 
 use super::shapes::Bvh;
-use super::spectrum::{Bins, S};
+use super::spectrum::Bins;
 use description::{Description, Reader};
-use firemedium_loader::Volume;
 use firemedium_pbrt_parser::{parse_file, Loc, ParamDict};
-use glam::{DAffine3, Mat3A, Vec3A};
+use glam::{DAffine3, Vec3A};
 use std::path::{Path, PathBuf};
 
 use crate::Error;
@@ -29,82 +29,42 @@ fn err(loc: &Loc, m: impl std::fmt::Display) -> Error {
 
 pub use crate::render::material::{Material, Tex};
 
-/// Lights (area lights live on primitives).
+/// Lights (area lights live on primitives): each kind in its own file under `render/lights`, its answers to the
+/// integrator there; the scene holds which kind each light is.
 #[derive(Debug, Clone)]
 #[allow(clippy::large_enum_variant)] // a handful per scene
 pub enum Light {
-    Point {
-        p: Vec3A,
-        i: S,
-    },
-    Spot {
-        p: Vec3A,
-        dir: Vec3A,
-        cos_total: f32,
-        cos_falloff: f32,
-        i: S,
-    },
-    Distant {
-        to_light: Vec3A,
-        l: S,
-    },
-    Infinite {
-        l: S,
-        portal: Option<Portal>,
-    },
-    /// An environment map: world → light-space rotation, linear RGB × scale, equal-area square (pbrt-v4) or
-    /// lat-long (2:1) parameterisation.
-    InfiniteMap {
-        img: std::sync::Arc<crate::imageio::RgbImage>,
-        to_light: Mat3A,
-        scale: f32,
-        basis: [S; 3],
-        /// Directions drawn by the map's luminance (pbrt-v4 importance-samples its image lights).
-        dist: std::sync::Arc<crate::render::envmap::EnvSampler>,
-        portal: Option<Portal>,
-    },
-    /// The fire light of plugin medium `medium` (importance-samples its emission).
-    Fire {
-        light: std::sync::Arc<firemedium_loader::Light>,
-        medium: usize,
-    },
-    Area {
-        prim: usize,
-        l: S,
-        twosided: bool,
-    },
+    Point(Point),
+    Spot(Spot),
+    Distant(Distant),
+    /// A constant or mapped sky, behind a portal or not.
+    Infinite(Infinite),
+    /// The fire light of a plugin medium (importance-samples its emission).
+    Fire(Fire),
+    Area(Area),
 }
 
-/// Participating media.
+pub use kinds::{Area, Distant, Fire, Infinite, Point, Sky, Spot};
+
+/// Participating media: each kind in its own file under `render/media` (`rgbgrid` beside it), its answers to the
+/// integrator there; the scene holds which kind each medium is.
 #[allow(clippy::large_enum_variant)] // a handful per scene
 pub enum Medium {
-    /// A fire (or pbrt grid medium) living in the plugin; `to_medium` maps world to medium space.
-    Plugin {
-        vol: Volume,
-        to_medium: DAffine3,
-        /// The inverse of `to_medium`.
-        to_world: DAffine3,
-        scatters: bool,
-        g: f64,
-        name: String,
-        /// The medium's majorant grid when the renderer tracks it itself (`--tracking host`; None: the
-        /// plugin's whole-ray queries).
-        host: Option<crate::render::tracker::Majorants>,
-        /// The factor that takes the medium's radiance to the film's units: 1, or 1/683 for a pbrt grid (its
-        /// radiance in pbrt-v4's units, Y = ∫ L ȳ) in a scene whose film is absolute (a fire's, Y = 683 ∫ L ȳ).
-        units: f32,
-    },
+    /// A fire (or pbrt grid medium) living in the plugin.
+    Plugin(Plugin),
     /// pbrt's homogeneous medium.
-    Homogeneous { sa: S, ss: S, le: S, g: f64 },
+    Homogeneous(Homogeneous),
     /// pbrt-v4's rgbgrid medium, rendered by the host.
     RgbGrid(std::sync::Arc<crate::render::rgbgrid::RgbGrid>),
 }
 
+pub use kinds::{Homogeneous, Plugin};
+
 impl std::fmt::Debug for Medium {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Medium::Plugin { name, .. } => write!(f, "Plugin({name})"),
-            Medium::Homogeneous { .. } => write!(f, "Homogeneous"),
+            Medium::Plugin(p) => write!(f, "Plugin({})", p.name),
+            Medium::Homogeneous(_) => write!(f, "Homogeneous"),
             Medium::RgbGrid(g) => write!(f, "RgbGrid({:?})", g.n),
         }
     }
@@ -265,7 +225,7 @@ impl Scene {
         self.media
             .iter()
             .filter_map(|m| match m {
-                Medium::Plugin { vol, .. } => vol.white_temperature().ok().flatten(),
+                Medium::Plugin(p) => p.vol.white_temperature().ok().flatten(),
                 _ => None,
             })
             .filter(|t| *t > 0.0)
@@ -307,6 +267,9 @@ pub struct Overrides {
     /// Plugin media tracked by the renderer through the ABI's medium level (majorant grid and point
     /// coefficients), as pbrt-v4 or Mitsuba 3 would, instead of the plugin's whole-ray queries (`--tracking host`).
     pub host_tracking: bool,
+    /// How the camera gathers a scattering plugin medium's emission (`--camera-emission`; `None`: auto, the
+    /// march for a `fire`, pbrt-v4's tracking for pbrt-v4's grids).
+    pub camera_march: Option<bool>,
 }
 
 /// The film's resolution the scene at `path` asks for (pbrt-v4's 1280 × 720 when its Film does not say), read by

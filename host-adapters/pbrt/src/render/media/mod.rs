@@ -1,15 +1,20 @@
-//! The media as the integrator sees them. Each kind — pbrt-v4's `homogeneous` in closed form, its `rgbgrid`
-//! tracked in the host ([`super::rgbgrid`]), a plugin medium through the ABI's whole-ray queries — answers the
-//! same two questions here: what one segment of a path does ([`Integrator::track`]: scattered where, with what
-//! weight and phase function; passed, with what transmittance, perhaps bent; absorbed — and the emission it
-//! added), and what a segment transmits and emits ([`Integrator::medium_segment`], for shadow rays and light
-//! walks). The integrator asks these and never which kind it holds; a new kind is one arm in each.
+//! The media as the integrator sees them. Each kind, in its own file — pbrt-v4's `homogeneous` in closed form
+//! ([`homogeneous`]), its `rgbgrid` tracked in the host (`rgbgrid`), a plugin medium through the ABI's
+//! whole-ray queries ([`plugin`]); what each holds is the scene's — answers the same two questions ([`MediumKind`]): what one segment of a path
+//! does (`track`: scattered where, with what weight and phase function; passed, with what transmittance,
+//! perhaps bent; absorbed — and the emission it added), and what a segment transmits and emits (`segment`, for
+//! shadow rays and light walks). The integrator asks these through [`Integrator::track`] and
+//! [`Integrator::medium_segment`] and never which kind it holds; a new kind is a file and one arm in each.
+
+pub mod homogeneous;
+pub mod plugin;
+mod rgbgrid;
 
 use super::paths::Integrator;
 use super::pixel::Samples;
 use super::scene::Medium;
 use super::spectrum::S;
-use super::tracker::{self, PluginMedium, Tracked};
+use super::tracker::{self, Tracked};
 use firemedium_loader::Ray as FRay;
 use glam::{DAffine3, DVec3, Vec3A};
 
@@ -35,6 +40,36 @@ pub(super) struct Emitted {
     /// A fire medium's emission, which its fire light also samples: weighted by MIS, scaled by these units
     /// (None: nothing else samples it, added as it is).
     pub fire_units: Option<f32>,
+}
+
+/// What a kind of medium answers the integrator (pbrt-v4's `Medium` interface, answered per segment).
+pub(super) trait MediumKind {
+    /// Transmittance of the medium along o + t·d, t ∈ [0, t_end], the emission it adds (with `emission`), and —
+    /// with `want_exit` — where the ray leaves if the medium bent it (world point, unit direction; None when it
+    /// went straight).
+    #[allow(clippy::too_many_arguments)]
+    fn segment(
+        &self,
+        it: &Integrator<'_>,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        emission: bool,
+        want_exit: bool,
+    ) -> (S, S, Option<(Vec3A, Vec3A)>);
+
+    /// What the medium does to a path along o + t·d, t ∈ [0, t_end]: the emission it adds and how the segment
+    /// ends; `seen`: the segment is the camera's or a mirror image of it (no light sample could take it).
+    fn track(
+        &self,
+        it: &Integrator<'_>,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        seen: bool,
+    ) -> (Emitted, Track);
 }
 
 /// World point `o` and direction `d` in the space `xf` maps to.
@@ -85,14 +120,11 @@ impl Integrator<'_> {
         t_end: f32,
         rng: &mut Samples,
     ) -> (S, S) {
-        let Medium::Plugin {
-            to_medium, units, ..
-        } = &self.scene.media[m]
-        else {
+        let Medium::Plugin(p) = &self.scene.media[m] else {
             return self.medium_segment(m, o, d, t_end, rng, true);
         };
         let n = self.scene.bins.n();
-        let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
+        let ray = plugin_ray(&p.to_medium, o, d, t_end, rng.next_u64());
         let (mut l, mut t) = (
             [0f32; super::spectrum::MAX_CHANNELS],
             [0f32; super::spectrum::MAX_CHANNELS],
@@ -106,7 +138,7 @@ impl Integrator<'_> {
         if self.failures.note(estimated).is_none() {
             return (S::ZERO, S::ZERO);
         }
-        (S(l) * *units, S(t))
+        (S(l) * p.units, S(t))
     }
 
     /// As [`medium_segment`](Self::medium_segment), and — when `want_exit` — where the ray leaves if a
@@ -123,97 +155,38 @@ impl Integrator<'_> {
         emission: bool,
         want_exit: bool,
     ) -> (S, S, Option<(Vec3A, Vec3A)>) {
-        let n = self.scene.bins.n();
-        if let Some(pm) = self.host_medium(m) {
-            return self.host_segment(&pm, o, d, t_end, rng, emission);
-        }
+        let (e, x) = (emission, want_exit);
         match &self.scene.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                to_world,
-                units,
-                ..
-            } => {
-                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
-                let time = [rng.time];
-                let (mut l, mut t) = (
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                );
-                let mut exit = [firemedium_loader::Exit::default()];
-                let done = if emission {
-                    vol.integrate_at(
-                        std::slice::from_ref(&ray),
-                        Some(&time),
-                        &mut l[..n],
-                        Some(&mut t[..n]),
-                        want_exit.then_some(&mut exit[..]),
-                    )
-                } else {
-                    vol.transmittance_at(std::slice::from_ref(&ray), Some(&time), &mut t[..n])
-                };
-                if self.failures.note(done).is_none() {
-                    return (S::ZERO, S::ZERO, None);
-                }
-                let bent = (emission && want_exit).then(|| {
-                    let de = DVec3::from(exit[0].direction);
-                    let dn = DVec3::from(ray.direction).normalize_or_zero();
-                    (de.is_finite() && de.dot(dn) < 1.0 - 1e-12).then(|| {
-                        let p = to_world.transform_point3(DVec3::from(exit[0].point));
-                        let w = to_world.transform_vector3(de).normalize_or_zero();
-                        (Vec3A::from(p.as_vec3()), Vec3A::from(w.as_vec3()))
-                    })
-                });
-                (S(l) * *units, S(t), bent.flatten())
-            }
-            Medium::Homogeneous { sa, ss, le, .. } => {
-                let len = if t_end.is_finite() {
-                    t_end * d.length()
-                } else {
-                    f32::INFINITY
-                };
-                let st = *sa + *ss;
-                let mut tr = S::ZERO;
-                let mut l = S::ZERO;
-                for i in 0..n {
-                    let tau = st.0[i] * len;
-                    tr.0[i] = (-tau).exp();
-                    if emission && st.0[i] > 0.0 {
-                        l.0[i] = sa.0[i] * le.0[i] * -(-tau).exp_m1() / st.0[i];
-                    }
-                }
-                (l, tr, None)
-            }
-            Medium::RgbGrid(grid) => self.host_segment(&**grid, o, d, t_end, rng, emission),
+            Medium::Plugin(p) => p.segment(self, o, d, t_end, rng, e, x),
+            Medium::Homogeneous(h) => h.segment(self, o, d, t_end, rng, e, x),
+            Medium::RgbGrid(g) => g.segment(self, o, d, t_end, rng, e, x),
         }
     }
 
-    /// Plugin medium `m` as the host tracks it (`--tracking host`), if it is one.
-    fn host_medium(&self, m: usize) -> Option<PluginMedium<'_>> {
+    /// What medium `m` does to the path along o + t·d, t ∈ [0, t_end]: the emission it adds (at delta tracking's
+    /// tentative collisions for a scattering plugin medium, as pbrt-v4's volpath, unless the segment is `seen` —
+    /// the camera's or a mirror image of it — and the medium marches what the camera sees; along the whole
+    /// segment otherwise) and how the segment ends.
+    #[inline]
+    pub(super) fn track(
+        &self,
+        m: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_end: f32,
+        rng: &mut Samples,
+        seen: bool,
+    ) -> (Emitted, Track) {
         match &self.scene.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                units,
-                g,
-                host: Some(grid),
-                ..
-            } => Some(PluginMedium {
-                vol,
-                grid,
-                to_medium,
-                units: *units,
-                bins: self.scene.bins.n(),
-                g: *g,
-            }),
-            _ => None,
+            Medium::Plugin(p) => p.track(self, o, d, t_end, rng, seen),
+            Medium::Homogeneous(h) => h.track(self, o, d, t_end, rng, seen),
+            Medium::RgbGrid(g) => g.track(self, o, d, t_end, rng, seen),
         }
     }
 
     /// Transmittance and emission of a medium the host tracks, by ratio tracking (a failed query is counted and
     /// blocks the segment).
-    fn host_segment(
+    pub(super) fn host_segment(
         &self,
         medium: &impl Tracked,
         o: Vec3A,
@@ -242,7 +215,7 @@ impl Integrator<'_> {
 
     /// Delta tracking through a medium the host tracks, as [`Self::track`] answers it; `fire_units`: the
     /// emission's MIS with a fire light (Some(1): a plugin medium's, already in the film's units).
-    fn host_track(
+    pub(super) fn host_track(
         &self,
         medium: &impl Tracked,
         o: Vec3A,
@@ -275,132 +248,6 @@ impl Integrator<'_> {
                 (emitted(l), Track::Passed { weight, bent: None })
             }
             tracker::Track::Absorbed { emitted: l } => (emitted(l), Track::Absorbed),
-        }
-    }
-
-    /// What medium `m` does to the path along o + t·d, t ∈ [0, t_end]: the emission it adds (at delta tracking's
-    /// tentative collisions for a scattering plugin medium, as pbrt-v4's volpath; along the whole segment
-    /// otherwise) and how the segment ends.
-    #[inline]
-    pub(super) fn track(
-        &self,
-        m: usize,
-        o: Vec3A,
-        d: Vec3A,
-        t_end: f32,
-        rng: &mut Samples,
-    ) -> (Emitted, Track) {
-        let sc = self.scene;
-        let n = sc.bins.n();
-        let plain = |l: S| Emitted {
-            l,
-            fire_units: None,
-        };
-        if let Some(pm) = self.host_medium(m) {
-            return self.host_track(&pm, o, d, t_end, rng, Some(1.0));
-        }
-        match &sc.media[m] {
-            Medium::Plugin {
-                vol,
-                to_medium,
-                g,
-                units,
-                scatters: true,
-                ..
-            } => {
-                let ray = plugin_ray(to_medium, o, d, t_end, rng.next_u64());
-                let mut ev = [firemedium_loader::Scatter::default()];
-                let (mut w, mut e) = (
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                    [0f32; super::spectrum::MAX_CHANNELS],
-                );
-                // (Emission at the tentative collisions: marching it along every segment instead cost 7× the
-                // time for no less error on a scattering fire — docs/results/log.md.)
-                let tracked = vol.sample_scatter_at(
-                    std::slice::from_ref(&ray),
-                    Some(&[rng.time]),
-                    &mut ev,
-                    &mut w[..n],
-                    Some(&mut e[..n]),
-                );
-                if self.failures.note(tracked).is_none() {
-                    return (plain(S::ZERO), Track::Absorbed);
-                }
-                let emitted = Emitted {
-                    l: S(e),
-                    fire_units: Some(*units),
-                };
-                let track = match ev[0].event {
-                    firemedium_abi::FM_EVENT_SCATTERED => Track::Scattered {
-                        t: ev[0].t as f32,
-                        weight: S(w),
-                        g: *g as f32,
-                    },
-                    firemedium_abi::FM_EVENT_ABSORBED => Track::Absorbed,
-                    _ => Track::Passed {
-                        weight: S(w),
-                        bent: None,
-                    },
-                };
-                (emitted, track)
-            }
-            Medium::Plugin { .. } => {
-                let (le, tr, bent) = self.medium_segment_exit(m, o, d, t_end, rng, true, true);
-                let emitted = Emitted {
-                    l: le,
-                    fire_units: Some(1.0),
-                };
-                (emitted, Track::Passed { weight: tr, bent })
-            }
-            Medium::Homogeneous { sa, ss, g, .. } => {
-                // Emission over the whole segment in closed form; in-scattering by sampling a distance from the
-                // channel-mean extinction σ̄ with spectral weights T_c(s) σ_s,c / p(s).
-                let (le, tr) = self.medium_segment(m, o, d, t_end, rng, true);
-                if ss.is_black() {
-                    return (
-                        plain(le),
-                        Track::Passed {
-                            weight: tr,
-                            bent: None,
-                        },
-                    );
-                }
-                let st = *sa + *ss;
-                let sbar = st.0[..n].iter().sum::<f32>() / n as f32;
-                let speed = d.length();
-                let s_hit = -(1.0 - rng.next_f64() as f32).ln() / sbar;
-                let s_end = t_end * speed;
-                let mut w = S::ZERO;
-                if s_hit < s_end {
-                    for c in 0..n {
-                        w.0[c] = (-(st.0[c] - sbar) * s_hit).exp() * ss.0[c] / sbar;
-                    }
-                    let t = s_hit / speed;
-                    return (
-                        plain(le),
-                        Track::Scattered {
-                            t,
-                            weight: w,
-                            g: *g as f32,
-                        },
-                    );
-                }
-                for c in 0..n {
-                    w.0[c] = if s_end.is_finite() {
-                        (-(st.0[c] - sbar) * s_end).exp()
-                    } else {
-                        0.0
-                    };
-                }
-                (
-                    plain(le),
-                    Track::Passed {
-                        weight: w,
-                        bent: None,
-                    },
-                )
-            }
-            Medium::RgbGrid(grid) => self.host_track(&**grid, o, d, t_end, rng, None),
         }
     }
 
