@@ -3,7 +3,7 @@
 //! order (film and sampler, media, textures, materials, objects, then the world's shapes, instances and lights in
 //! file order), the camera once the film is known, and a fire light per emitting medium that a path can sample.
 
-use super::builder::{affine, num, nums, string, Builder, Placement};
+use super::builder::{affine, num, nums, string, Builder, Context, Placement, Reports};
 use super::description::{self, Description, MaterialRef, World};
 use super::media::{boundary_warnings, light_params, load_plugin};
 use super::{err, Camera, Error, Light, LightReport, Material, Medium, Overrides, Scene, Tex};
@@ -238,7 +238,15 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         }
     }
     let mut b = Builder {
-        dir,
+        ctx: Context {
+            dir,
+            threads: ov.threads,
+            frame: ov.frame,
+            host_tracking: ov.host_tracking,
+            camera_march: ov.camera_march,
+            max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
+        },
+        reports: Reports::default(),
         bins: bins.clone(),
         plugin,
         order: 0,
@@ -250,7 +258,6 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         lights: Vec::new(),
         media: Vec::new(),
         media_locs: Vec::new(),
-        media_reports: Vec::new(),
         camera_shutter: desc.camera.as_ref().map_or([0.0, 1.0], |c| {
             let cp = ParamDict::new(&c.entity.params);
             [num(&cp, "shutteropen", 0.0), num(&cp, "shutterclose", 1.0)]
@@ -283,18 +290,12 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         .unwrap_or(crate::render::pixel::Filter::Box { radius: [0.5, 0.5] }),
         maxdepth: 5,
         film_name: None,
-        warnings: Vec::new(),
         objects: Vec::new(),
         object_prims: 0,
         current_object: None,
         bins_params,
         has_fire: fire,
         film_xyz: None,
-        threads: ov.threads,
-        frame: ov.frame,
-        host_tracking: ov.host_tracking,
-        camera_march: ov.camera_march,
-        max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
     };
     // pbrt's default material: diffuse 0.5.
     b.materials
@@ -495,7 +496,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         no_light_sampling(&b)
     };
     if let Some(why) = &left_out {
-        for rep in &mut b.media_reports {
+        for rep in &mut b.reports.media {
             rep.light_left_out = Some(why.clone());
         }
     } else {
@@ -510,7 +511,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
                         Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
                     })?;
                     if albedo > LIGHT_ALBEDO {
-                        if let Some(rep) = b.media_reports.get_mut(r) {
+                        if let Some(rep) = b.reports.media.get_mut(r) {
                             rep.light_left_out = Some(format!(
                                 "the fire scatters, albedo {albedo:.2} (above {LIGHT_ALBEDO}): its light \
                                  costs more than it saves there (measured; `--fire-light power` builds it)"
@@ -528,7 +529,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
                 }
                 match vol.create_light_with(&lp) {
                     Ok(light) => {
-                        if let Some(rep) = b.media_reports.get_mut(r) {
+                        if let Some(rep) = b.reports.media.get_mut(r) {
                             rep.light = Some(LightReport {
                                 info: light.info(),
                                 line_channels: light.line_channels()?,
@@ -565,7 +566,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
     // pbrt-v4's zsobol takes a power of two samples per pixel, rounding up with a warning.
     let mut spp = desc.command_line.spp.unwrap_or(b.spp);
     if matches!(b.sampler, crate::render::pixel::Sampler::ZSobol { .. }) && !spp.is_power_of_two() {
-        b.warnings.push((usize::MAX, format!(
+        b.reports.warnings.push((usize::MAX, format!(
             "sampler \"zsobol\": {spp} samples per pixel rounded up to {} (a power of two, as pbrt-v4)",
             spp.next_power_of_two()
         )));
@@ -573,7 +574,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
     }
     // What reading and building found, in the scene's order (what is found of the whole scene last).
     let mut warnings = desc.warnings.clone();
-    warnings.append(&mut b.warnings);
+    warnings.append(&mut b.reports.warnings);
     warnings.sort_by_key(|(order, _)| *order);
     let mut warnings: Vec<String> = warnings.into_iter().map(|(_, w)| w).collect();
     let bvh = Bvh::new(b.prims);
@@ -608,6 +609,6 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
         warnings,
-        media_reports: b.media_reports,
+        media_reports: b.reports.media,
     })
 }

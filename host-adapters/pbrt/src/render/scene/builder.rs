@@ -51,8 +51,34 @@ impl Default for FilmParams {
     }
 }
 
-pub(super) struct Builder {
+/// What a scene is built within, read by every statement and changed by none: the command line's settings.
+pub(super) struct Context {
+    /// The scene file's folder (relative names in it are read from there).
     pub(super) dir: PathBuf,
+    /// Threads the plugin may use to build a medium (`Overrides::threads`).
+    pub(super) threads: Option<usize>,
+    /// The frame for every plugin medium (`--frames`), unless the scene sets one.
+    pub(super) frame: Option<i64>,
+    /// Plugin media tracked by the renderer through the medium level (`Overrides::host_tracking`).
+    pub(super) host_tracking: bool,
+    /// How the camera gathers a scattering plugin medium's emission (`Overrides::camera_march`).
+    pub(super) camera_march: Option<bool>,
+    /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
+    pub(super) max_memory: u64,
+}
+
+/// What building reports beside the scene: warnings, with the place in the scene's order of the statement each
+/// is about, and what the plugin built for each medium.
+#[derive(Default)]
+pub(super) struct Reports {
+    pub(super) warnings: Vec<(usize, String)>,
+    pub(super) media: Vec<MediumReport>,
+}
+
+/// The scene being built, statement by statement, within its [`Context`], with its [`Reports`].
+pub(super) struct Builder {
+    pub(super) ctx: Context,
+    pub(super) reports: Reports,
     pub(super) bins: Bins,
     pub(super) plugin: Option<Plugin>,
     /// The place in the scene's order of the statement being built (its warnings are reported in that order).
@@ -66,7 +92,6 @@ pub(super) struct Builder {
     pub(super) media: Vec<Medium>,
     /// Where each medium was defined (for what is found about it once the scene is built).
     pub(super) media_locs: Vec<Loc>,
-    pub(super) media_reports: Vec<MediumReport>,
     /// The camera's `shutteropen` and `shutterclose` (pbrt-v4's 0 and 1 when not given).
     pub(super) camera_shutter: [f64; 2],
     pub(super) res: (usize, usize),
@@ -81,29 +106,17 @@ pub(super) struct Builder {
     pub(super) pixel_bounds: Option<([f64; 4], Loc)>,
     pub(super) maxdepth: usize,
     pub(super) film_name: Option<String>,
-    /// Warnings, with the place in the scene's order of the statement each is about.
-    pub(super) warnings: Vec<(usize, String)>,
     /// The objects' BVHs, in the description's order.
     pub(super) objects: Vec<Arc<Bvh>>,
     /// Primitives held by the objects defined so far (each once, however often it is instanced).
     pub(super) object_prims: usize,
     pub(super) current_object: Option<(String, Vec<Prim>)>,
     pub(super) bins_params: Vec<LParam>,
-    /// Threads the plugin may use to build a medium (`Overrides::threads`).
-    pub(super) threads: Option<usize>,
-    /// The frame for every plugin medium (`--frames`), unless the scene sets one.
-    pub(super) frame: Option<i64>,
-    /// Plugin media tracked by the renderer through the medium level (`Overrides::host_tracking`).
-    pub(super) host_tracking: bool,
-    /// How the camera gathers a scattering plugin medium's emission (`Overrides::camera_march`).
-    pub(super) camera_march: Option<bool>,
     /// The camera's shutter (frames) once a medium blurs by its velocity: each camera sample then draws a
     /// time in it.
     pub(super) shutter: Option<[f64; 2]>,
     /// Bytes the plugin media built so far hold (each new medium's `maxbytes` is what the budget has left).
     pub(super) media_bytes: u64,
-    /// The memory budget, bytes: each plugin grid's `maxbytes` unless the scene sets it.
-    pub(super) max_memory: u64,
     /// Whether the scene has a physical `fire` medium (its absolute units then set the film's).
     pub(super) has_fire: bool,
     /// The film's XYZ weights per bin, from the plugin that renders the media (`volume_channel_xyz` of the
@@ -220,7 +233,8 @@ impl Builder {
     }
 
     pub(super) fn warn(&mut self, loc: &Loc, m: impl std::fmt::Display) {
-        self.warnings
+        self.reports
+            .warnings
             .push((self.order, format!("{loc}: warning: {m}")));
     }
 
@@ -340,7 +354,7 @@ impl Builder {
             &format!("{what}: {total} primitives"),
             total,
             each,
-            self.max_memory,
+            self.ctx.max_memory,
         )
         .map_err(|e| err(loc, e))
     }
@@ -421,7 +435,7 @@ impl Builder {
             "trianglemesh" | "bilinearmesh" | "plymesh" | "loopsubdiv" => {
                 let (pos, idx, normals, uvs) = if ty == "plymesh" {
                     let f = string(p, "filename").ok_or_else(|| err(loc, "plymesh: missing \"string filename\""))?;
-                    crate::render::ply::read(&self.dir.join(f), self.max_memory).map_err(|e| err(loc, e))?
+                    crate::render::ply::read(&self.ctx.dir.join(f), self.ctx.max_memory).map_err(|e| err(loc, e))?
                 } else {
                     let pos = nums(p, "P").ok_or_else(|| err(loc, format!("{ty}: missing \"point3 P\"")))?.to_vec();
                     let idx: Vec<usize> = match nums(p, "indices") {

@@ -353,8 +353,8 @@ impl Builder {
                             return Err(err(loc, "infinite light: give \"L\" or \"filename\", not both (as pbrt-v4)"));
                         }
                         // (Within what the scene's budget — `--max-memory` — leaves, not half the machine.)
-                        let left = self.max_memory.saturating_sub(self.media_bytes);
-                        let img = crate::imageio::read_within(&self.dir.join(f), false, left).map_err(|e| err(loc, format!("infinite light: {e}")))?;
+                        let left = self.ctx.max_memory.saturating_sub(self.media_bytes);
+                        let img = crate::imageio::read_within(&self.ctx.dir.join(f), false, left).map_err(|e| err(loc, format!("infinite light: {e}")))?;
                         if !(img.w == img.h || img.w == 2 * img.h) {
                             return Err(err(loc, format!("infinite light: a {}×{} map; expected a square equal-area map (pbrt-v4) or a 2:1 lat-long one", img.w, img.h)));
                         }
@@ -439,8 +439,8 @@ impl Builder {
                         ))
                     }
                 };
-                let left = self.max_memory.saturating_sub(self.media_bytes);
-                let img = crate::imageio::read_within(&self.dir.join(f), srgb, left)
+                let left = self.ctx.max_memory.saturating_sub(self.media_bytes);
+                let img = crate::imageio::read_within(&self.ctx.dir.join(f), srgb, left)
                     .map_err(|e| err(loc, format!("imagemap: {e}")))?;
                 let invert = p.bool("invert", false);
                 Tex::Image {

@@ -120,7 +120,7 @@ impl Builder {
             &format!("{what}: {count} voxels"),
             count as u64,
             3 * std::mem::size_of::<S>() as u64,
-            self.max_memory.saturating_sub(self.media_bytes),
+            self.ctx.max_memory.saturating_sub(self.media_bytes),
         )
         .map_err(|e| err(loc, e))?;
         let rgbs = |key: &str| -> Result<Option<&[f64]>, Error> {
@@ -339,7 +339,7 @@ impl Builder {
                         &format!("cloud medium \"{name}\": its {n}³ baked grid"),
                         (n * n * n) as u64,
                         12,
-                        self.max_memory.saturating_sub(self.media_bytes),
+                        self.ctx.max_memory.saturating_sub(self.media_bytes),
                     )
                     .map_err(|e| err(loc, e))?;
                     for axis in ["nx", "ny", "nz"] {
@@ -358,9 +358,9 @@ impl Builder {
                 // The renderer's context goes beside the scene's parameters, not among them (a parameter the scene
                 // sets itself wins in the plugin).
                 let mut context = firemedium_loader::Context {
-                    threads: self.threads.map(|n| n as u32),
-                    frame: self.frame,
-                    directory: Some(self.dir.clone()),
+                    threads: self.ctx.threads.map(|n| n as u32),
+                    frame: self.ctx.frame,
+                    directory: Some(self.ctx.dir.clone()),
                     ..Default::default()
                 };
                 // Motion blur: every plugin medium gets the camera's shutter (one that does not move ignores it);
@@ -370,7 +370,7 @@ impl Builder {
                 let camera = self.camera_shutter;
                 context.shutter = Some(camera);
                 // The budget is shared: each medium may use what the media built before it left.
-                context.max_bytes = Some(self.max_memory.saturating_sub(self.media_bytes).max(1));
+                context.max_bytes = Some(self.ctx.max_memory.saturating_sub(self.media_bytes).max(1));
                 let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
                     // An error about one parameter carries where it was given (the plugin's error detail, not its
                     // text): report it there, the message without that prefix.
@@ -410,12 +410,12 @@ impl Builder {
                     self.shutter = Some(camera);
                 }
                 self.media_bytes = self.media_bytes.saturating_add(info.bytes);
-                self.media_reports.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
-                let host = if self.host_tracking { Some(host_majorants(&vol, name, loc)?) } else { None };
+                self.reports.media.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
+                let host = if self.ctx.host_tracking { Some(host_majorants(&vol, name, loc)?) } else { None };
                 // The camera's view of a scattering fire by the march: its pixels' variance falls 10-30-fold for
                 // 2-6× their time (docs/results); for pbrt-v4's grids pbrt-v4's own estimator and memory unless asked
                 // (the march builds the lattice a scattering fire otherwise never needs).
-                let camera_march = info.scatters != 0 && self.camera_march.unwrap_or(ty == "fire");
+                let camera_march = info.scatters != 0 && self.ctx.camera_march.unwrap_or(ty == "fire");
                 Medium::Plugin(super::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host, camera_march })
             }
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
