@@ -10,7 +10,7 @@
 //! dispersive dielectric keeps one bin from there on ([`super::material::Eta`]).
 
 use super::aov::{Split, Visible};
-use super::bsdf::{Lobes, Mode};
+use super::bsdf::{Bxdf, Lobes, Mode};
 use super::lights;
 use super::lobes::henyey_greenstein as hg;
 use super::material;
@@ -20,6 +20,7 @@ pub use super::paths::{Failures, Integrator};
 use super::pixel::Samples;
 use super::profile::{Gain, Step, Tally};
 use super::scene::Light;
+use super::shapes::Hit;
 use super::spectrum::S;
 use glam::Vec3A;
 use std::f32::consts::PI;
@@ -102,6 +103,34 @@ fn gained(tally: &mut Option<Tally>, gain: Gain, before: S, after: S, n: usize) 
     }
 }
 
+/// The surface a camera ray sees first at `h` (pbrt-v4's `VisibleSurface`), its albedo ρ(wo) = ∫ f |cos| dωi
+/// estimated by one sample of `bxdf` per camera sample (the pixel's mean over its samples is pbrt-v4's `rho` by
+/// Monte Carlo).
+fn visible_surface(h: &Hit, bxdf: &Bxdf, wo_l: Vec3A, seed: u64, rng: &mut Samples) -> Visible {
+    let (uc, u) = (rng.next_f64() as f32, Integrator::rng2(rng));
+    let albedo = bxdf
+        .sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed)
+        .filter(|bs| bs.pdf > 0.0)
+        .map_or(S::ZERO, |bs| {
+            (bs.f * (bs.wi.z.abs() / bs.pdf)).finite_or_zero()
+        });
+    Visible {
+        p: h.p,
+        ng: h.ng,
+        ns: h.ns,
+        albedo,
+    }
+}
+
+/// Keeps one of `n` bins of the path's gain `beta`, uniformly chosen, weighted by `n`; which.
+fn keep_one_bin(beta: &mut S, n: usize, rng: &mut Samples) -> usize {
+    let c = ((rng.next_f64() * n as f64) as usize).min(n.max(1) - 1);
+    let mut keep = S::ZERO;
+    keep.0[c] = n as f32;
+    *beta *= keep;
+    c
+}
+
 /// Samples HG around the propagation direction `d`.
 fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
     let cos = if g.abs() < 1e-3 {
@@ -158,6 +187,122 @@ impl Integrator<'_> {
         (wi, hg((-d).dot(wi), g))
     }
 
+    /// Light `li`'s sample from surface point `spot` through the BSDF `at` = (BxDF, wo in its frame, the shading
+    /// normal, its seed), weighted against BSDF sampling for lights paths can hit: the path's gain `beta` × f ×
+    /// L × w, or None.
+    #[allow(clippy::too_many_arguments)]
+    fn surface_light(
+        &self,
+        li: usize,
+        spot: &Spot,
+        at: (&Bxdf, Vec3A, Vec3A, u64),
+        depth: usize,
+        beta: S,
+        rng: &mut Samples,
+        tally: &mut Option<Tally>,
+    ) -> Option<S> {
+        let (bxdf, wo_l, ns, seed) = at;
+        // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
+        // fire-light sample evaluates it once.)
+        let seen = std::cell::Cell::new(None);
+        let dark = |wi: Vec3A| {
+            let f = bxdf.f(wo_l, to_local(ns, wi), Mode::Radiance, seed);
+            seen.set(Some((wi, f)));
+            f.is_black()
+        };
+        let (le, wi, pl) = match self.light_counts(li, depth + 1) {
+            true => self.sample_light(li, spot, rng, &dark, tally)?,
+            false => return None,
+        };
+        let wi_l = to_local(ns, wi);
+        let f = match seen.get() {
+            Some((w, f)) if w == wi => f,
+            _ => bxdf.f(wo_l, wi_l, Mode::Radiance, seed),
+        } * wi_l.z.abs();
+        if f.is_black() {
+            return None;
+        }
+        let pb = if pl > 0.0 {
+            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
+        } else {
+            0.0
+        };
+        Some(beta * f * le * light_mis_weight(pl, pb))
+    }
+
+    /// A path that escaped along `d` with gain `beta` after `depth` bounces: the infinite lights, weighted
+    /// against their next-event estimation when the direction was sampled by a BSDF or phase function (`mis`);
+    /// an escaping camera ray's coverage (what the media it crossed took) into the AOVs.
+    fn escaped(
+        &self,
+        d: Vec3A,
+        beta: S,
+        mis: Option<(Vec3A, f32)>,
+        depth: usize,
+        l: &mut S,
+        split: &mut Option<&mut Split>,
+    ) {
+        let sc = self.scene;
+        for light in &sc.lights {
+            let le = lights::env(light, d);
+            if !le.is_black() {
+                let w = found_weight(mis, |origin| {
+                    lights::env_pdf(light, origin, d) / sc.lights.len() as f32
+                });
+                seen(l, split, depth, beta * le * w);
+            }
+        }
+        if depth == 0 {
+            if let Some(sp) = split.as_deref_mut() {
+                let n = sc.bins.n().max(1) as f32;
+                let t = beta.0[..sc.bins.n()].iter().sum::<f32>() / n;
+                sp.alpha = Some((1.0 - t).clamp(0.0, 1.0));
+            }
+        }
+    }
+
+    /// The segment `at` = (o, d, t_end, bounces so far) of a path through medium `m`: the emission it adds to
+    /// `l` (below the maximum depth; a fire's weighted by MIS against its light when the direction was sampled,
+    /// `mis`, unless the last vertex `skipped` that light) and how the segment ends.
+    #[allow(clippy::too_many_arguments)]
+    fn segment(
+        &self,
+        m: usize,
+        at: (Vec3A, Vec3A, f32, usize),
+        mis: Option<(Vec3A, f32)>,
+        skipped: Option<usize>,
+        beta: S,
+        l: &mut S,
+        rng: &mut Samples,
+        tally: &mut Option<Tally>,
+    ) -> Track {
+        let (o, d, t_end, depth) = at;
+        let t0 = clock(tally);
+        let (emitted, track) = self.track(m, o, d, t_end, rng, mis.is_none());
+        let (step, gain) = match (depth, skipped) {
+            (0, _) => (Step::CameraSegment, Gain::CameraEmission),
+            (_, None) => (Step::LaterSegment, Gain::FoundEmission),
+            (_, Some(_)) => (Step::LaterSegment, Gain::ScatteredEmission),
+        };
+        took(tally, step, t0);
+        let before = *l;
+        if depth < self.scene.maxdepth {
+            match emitted.fire_units {
+                // (MIS's density only for light that is there: a dark segment needs no walk.)
+                Some(units) if !emitted.l.is_black() => {
+                    let t0 = clock(tally);
+                    let w = self.emission_weight(m, mis, skipped, d, rng.time);
+                    took(tally, Step::EmissionMis, t0);
+                    *l += beta * emitted.l * (units * w);
+                }
+                Some(_) => {}
+                None => *l += beta * emitted.l,
+            }
+        }
+        gained(tally, gain, before, *l, self.scene.bins.n());
+        track
+    }
+
     /// Radiance along a camera ray.
     pub fn li(&self, o: Vec3A, d: Vec3A, rng: &mut Samples) -> S {
         self.li_visible(o, d, rng, None, None)
@@ -204,29 +349,8 @@ impl Integrator<'_> {
             took(&mut tally, Step::Traverse, t0);
             let t_end = hit.map(|h| h.t).unwrap_or(f32::INFINITY);
             if let Some(m) = medium {
-                let t0 = clock(&tally);
-                let (emitted, track) = self.track(m, o, d, t_end, rng, mis.is_none());
-                let (step, gain) = match (depth, skipped) {
-                    (0, _) => (Step::CameraSegment, Gain::CameraEmission),
-                    (_, None) => (Step::LaterSegment, Gain::FoundEmission),
-                    (_, Some(_)) => (Step::LaterSegment, Gain::ScatteredEmission),
-                };
-                took(&mut tally, step, t0);
-                let before = l;
-                if depth < sc.maxdepth {
-                    match emitted.fire_units {
-                        // (MIS's density only for light that is there: a dark segment needs no walk.)
-                        Some(units) if !emitted.l.is_black() => {
-                            let t0 = clock(&tally);
-                            let w = self.emission_weight(m, mis, skipped, d, rng.time);
-                            took(&mut tally, Step::EmissionMis, t0);
-                            l += beta * emitted.l * (units * w);
-                        }
-                        Some(_) => {}
-                        None => l += beta * emitted.l,
-                    }
-                }
-                gained(&mut tally, gain, before, l, n_bins);
+                let at = (o, d, t_end, depth);
+                let track = self.segment(m, at, mis, skipped, beta, &mut l, rng, &mut tally);
                 match track {
                     Track::Scattered { t, weight, g } => {
                         beta *= weight;
@@ -262,27 +386,9 @@ impl Integrator<'_> {
                 }
             }
             let Some(h) = hit else {
-                // Escaped: the infinite lights, weighted against their next-event estimation when the
-                // direction was sampled by a BSDF or phase function.
                 let before = l;
-                for light in &sc.lights {
-                    let le = lights::env(light, d);
-                    if !le.is_black() {
-                        let w = found_weight(mis, |origin| {
-                            lights::env_pdf(light, origin, d) / sc.lights.len() as f32
-                        });
-                        seen(&mut l, &mut split, depth, beta * le * w);
-                    }
-                }
+                self.escaped(d, beta, mis, depth, &mut l, &mut split);
                 gained(&mut tally, Gain::FoundLight, before, l, n_bins);
-                // The camera ray escaped: its coverage is what the media it crossed took.
-                if depth == 0 {
-                    if let Some(sp) = split.as_deref_mut() {
-                        let n = sc.bins.n().max(1) as f32;
-                        let t = beta.0[..sc.bins.n()].iter().sum::<f32>() / n;
-                        sp.alpha = Some((1.0 - t).clamp(0.0, 1.0));
-                    }
-                }
                 break;
             };
             let prim = sc.bvh.prim(&h);
@@ -296,15 +402,14 @@ impl Integrator<'_> {
                 gained(&mut tally, Gain::FoundLight, before, l, n_bins);
             }
             let wo = -d;
-            let side_medium = |w: Vec3A| match prim.media {
-                Some((inside, outside)) => {
-                    if w.dot(h.ng) > 0.0 {
-                        outside
-                    } else {
-                        inside
-                    }
-                }
-                None => medium,
+            // Where the path leaves the surface from (the side a direction leaves by picks the offset and the
+            // medium), for next-event estimation and the path's next segment alike.
+            let spot = Spot::Surface {
+                p: h.p,
+                ng: h.ng,
+                eps: sc.eps,
+                media: prim.media,
+                medium,
             };
             let Some(mi) = material::resolve(&sc.materials, prim.material, h.p, wo, h.uv) else {
                 // Only a medium boundary (or a `mix` that chose `interface`): pass through.
@@ -326,11 +431,7 @@ impl Integrator<'_> {
             let n = sc.bins.n();
             // A dispersive index: the path keeps one bin (uniformly chosen; its weight × the bin count).
             if channel.is_none() && mat.eta().is_some_and(|e| e.dispersive(n)) {
-                let c = ((rng.next_f64() * n as f64) as usize).min(n.max(1) - 1);
-                let mut keep = S::ZERO;
-                keep.0[c] = n as f32;
-                beta *= keep;
-                channel = Some(c);
+                channel = Some(keep_one_bin(&mut beta, n, rng));
             }
             let Some(bxdf) = mat.bxdf(h.uv, channel, n) else {
                 break;
@@ -342,21 +443,7 @@ impl Integrator<'_> {
             }
             if depth == 0 {
                 if let Some(v) = visible.take() {
-                    // The albedo ρ(wo) = ∫ f |cos| dωi, estimated by one BSDF sample per camera sample (the
-                    // pixel's mean over its samples is pbrt-v4's `rho` by Monte Carlo).
-                    let (uc, u) = (rng.next_f64() as f32, Self::rng2(rng));
-                    let albedo = bxdf
-                        .sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed)
-                        .filter(|bs| bs.pdf > 0.0)
-                        .map_or(S::ZERO, |bs| {
-                            (bs.f * (bs.wi.z.abs() / bs.pdf)).finite_or_zero()
-                        });
-                    *v = Some(Visible {
-                        p: h.p,
-                        ng: h.ng,
-                        ns: h.ns,
-                        albedo,
-                    });
+                    *v = Some(visible_surface(&h, &bxdf, wo_l, seed, rng));
                 }
             }
             if depth >= sc.maxdepth {
@@ -366,40 +453,10 @@ impl Integrator<'_> {
             // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.
             if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
-                let spot = Spot::Surface {
-                    p: h.p,
-                    ng: h.ng,
-                    eps: sc.eps,
-                    media: prim.media,
-                    medium,
-                };
-                // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
-                // fire-light sample evaluates it once.)
-                let seen = std::cell::Cell::new(None);
-                let dark = |wi: Vec3A| {
-                    let f = bxdf.f(wo_l, to_local(h.ns, wi), Mode::Radiance, seed);
-                    seen.set(Some((wi, f)));
-                    f.is_black()
-                };
                 let (t0, before) = (clock(&tally), l);
-                let found = match self.light_counts(li, depth + 1) {
-                    true => self.sample_light(li, &spot, rng, &dark, &mut tally),
-                    false => None,
-                };
-                if let Some((le, wi, pl)) = found {
-                    let wi_l = to_local(h.ns, wi);
-                    let f = match seen.get() {
-                        Some((w, f)) if w == wi => f,
-                        _ => bxdf.f(wo_l, wi_l, Mode::Radiance, seed),
-                    } * wi_l.z.abs();
-                    if !f.is_black() {
-                        let pb = if pl > 0.0 {
-                            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
-                        } else {
-                            0.0
-                        };
-                        l += beta * f * le * light_mis_weight(pl, pb);
-                    }
+                let at = (&bxdf, wo_l, h.ns, seed);
+                if let Some(c) = self.surface_light(li, &spot, at, depth, beta, rng, &mut tally) {
+                    l += c;
                 }
                 if tally.is_some() {
                     let (step, gain) = match sc.lights[li] {
@@ -435,9 +492,8 @@ impl Integrator<'_> {
             if !bs.reflection {
                 eta_scale *= bs.etap * bs.etap;
             }
-            medium = side_medium(wi);
+            (o, medium) = spot.leave(wi);
             skipped = None;
-            o = h.p + if wi.dot(h.ng) > 0.0 { h.ng } else { -h.ng } * sc.eps;
             d = wi;
             depth += 1;
             // Russian roulette after three bounces, on the throughput without the radiance scaling that

@@ -33,7 +33,13 @@ const MAPPING: &[&str] = &[
 
 /// The parameters pbrt-v4 reads for directive `kind` of type `ty`, or `None` for a type pbrt-v4 does not have.
 pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
-    let common: &[&str] = match kind {
+    let own = own_parameters(kind, ty)?;
+    Some(common_parameters(kind).iter().chain(own).copied().collect())
+}
+
+/// The parameters pbrt-v4 reads for every type of directive `kind`.
+fn common_parameters(kind: Kind) -> &'static [&'static str] {
+    match kind {
         Kind::Camera => &[
             "shutteropen",
             "shutterclose",
@@ -63,7 +69,11 @@ pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
         Kind::Texture => MAPPING,
         Kind::Medium => &["type"],
         Kind::Shape => &["alpha", "emissionfilename"],
-    };
+    }
+}
+
+/// The parameters pbrt-v4 reads for type `ty` of directive `kind` alone (`None`: no such type).
+fn own_parameters(kind: Kind, ty: &str) -> Option<&'static [&'static str]> {
     let own: &[&str] = match (kind, ty) {
         (Kind::Camera, "perspective") => &["fov", "lensradius", "focaldistance"],
         (Kind::Camera, "orthographic") => &["lensradius", "focaldistance"],
@@ -231,7 +241,7 @@ pub fn parameters(kind: Kind, ty: &str) -> Option<Vec<&'static str>> {
         ],
         _ => return None,
     };
-    Some(common.iter().chain(own).copied().collect())
+    Some(own)
 }
 
 #[cfg(test)]

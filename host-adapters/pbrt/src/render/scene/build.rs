@@ -135,6 +135,76 @@ fn pixel_bounds(
     Ok(bounds)
 }
 
+/// Fire lights: every plugin medium that emits gets one, unless switched off, no path can sample it, or it
+/// scatters much ([`LIGHT_ALBEDO`]); each medium's report says what its light built or why it was left out.
+fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error> {
+    // Fire lights: every plugin medium that emits gets one, unless switched off or no path can sample it.
+    let left_out = if ov.no_fire_light {
+        Some("--fire-light off".to_string())
+    } else {
+        no_light_sampling(b)
+    };
+    if let Some(why) = &left_out {
+        for rep in &mut b.reports.media {
+            rep.light_left_out = Some(why.clone());
+        }
+    } else {
+        let mut report = 0;
+        for (mi, m) in b.media.iter().enumerate() {
+            if let Medium::Plugin(crate::render::scene::Plugin { vol, scatters, .. }) = m {
+                let r = report;
+                report += 1;
+                // A fire that scatters much: its light is left out unless asked for by name ([`LIGHT_ALBEDO`]).
+                if *scatters && !ov.fire_light_forced {
+                    let albedo = extinction_albedo(vol).map_err(|e| {
+                        Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
+                    })?;
+                    if albedo > LIGHT_ALBEDO {
+                        if let Some(rep) = b.reports.media.get_mut(r) {
+                            rep.light_left_out = Some(format!(
+                            "the fire scatters, albedo {albedo:.2} (above {LIGHT_ALBEDO}): its light \
+                             costs more than it saves there (measured; `--fire-light power` builds it)"
+                        ));
+                        }
+                        continue;
+                    }
+                }
+                let mut lp = Vec::new();
+                if let Some(w) = &ov.fire_light_weighting {
+                    lp.push(firemedium_loader::Param::string("weighting", w));
+                }
+                if let Some(plugin) = &b.plugin {
+                    lp.extend(light_params(plugin, &ov.fire_light_params)?);
+                }
+                match vol.create_light_with(&lp) {
+                    Ok(light) => {
+                        if let Some(rep) = b.reports.media.get_mut(r) {
+                            rep.light = Some(LightReport {
+                                info: light.info(),
+                                line_channels: light.line_channels()?,
+                            });
+                        }
+                        b.lights.push(Light::Fire(crate::render::scene::Fire {
+                            light: std::sync::Arc::new(light),
+                            medium: mi,
+                        }));
+                    }
+                    // A medium that does not emit is no light.
+                    Err(firemedium_loader::Error::Status { message, .. })
+                        if message.contains("no emitting voxel") => {}
+                    Err(e) => {
+                        return Err(Error::file(
+                            path.display(),
+                            format!("fire light of medium {mi}: {e}"),
+                        ))
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Builds the scene described: the plugin and the spectral bins first (from the media), then the film, sampler,
 /// filter and integrator, the media, textures, area lights and materials, the objects, the world's shapes,
 /// instances and lights in file order, the camera, and the fire lights.
@@ -489,70 +559,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         &format!("{camera_type} camera"),
         cp,
     )?;
-    // Fire lights: every plugin medium that emits gets one, unless switched off or no path can sample it.
-    let left_out = if ov.no_fire_light {
-        Some("--fire-light off".to_string())
-    } else {
-        no_light_sampling(&b)
-    };
-    if let Some(why) = &left_out {
-        for rep in &mut b.reports.media {
-            rep.light_left_out = Some(why.clone());
-        }
-    } else {
-        let mut report = 0;
-        for (mi, m) in b.media.iter().enumerate() {
-            if let Medium::Plugin(crate::render::scene::Plugin { vol, scatters, .. }) = m {
-                let r = report;
-                report += 1;
-                // A fire that scatters much: its light is left out unless asked for by name ([`LIGHT_ALBEDO`]).
-                if *scatters && !ov.fire_light_forced {
-                    let albedo = extinction_albedo(vol).map_err(|e| {
-                        Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
-                    })?;
-                    if albedo > LIGHT_ALBEDO {
-                        if let Some(rep) = b.reports.media.get_mut(r) {
-                            rep.light_left_out = Some(format!(
-                                "the fire scatters, albedo {albedo:.2} (above {LIGHT_ALBEDO}): its light \
-                                 costs more than it saves there (measured; `--fire-light power` builds it)"
-                            ));
-                        }
-                        continue;
-                    }
-                }
-                let mut lp = Vec::new();
-                if let Some(w) = &ov.fire_light_weighting {
-                    lp.push(firemedium_loader::Param::string("weighting", w));
-                }
-                if let Some(plugin) = &b.plugin {
-                    lp.extend(light_params(plugin, &ov.fire_light_params)?);
-                }
-                match vol.create_light_with(&lp) {
-                    Ok(light) => {
-                        if let Some(rep) = b.reports.media.get_mut(r) {
-                            rep.light = Some(LightReport {
-                                info: light.info(),
-                                line_channels: light.line_channels()?,
-                            });
-                        }
-                        b.lights.push(Light::Fire(crate::render::scene::Fire {
-                            light: std::sync::Arc::new(light),
-                            medium: mi,
-                        }));
-                    }
-                    // A medium that does not emit is no light.
-                    Err(firemedium_loader::Error::Status { message, .. })
-                        if message.contains("no emitting voxel") => {}
-                    Err(e) => {
-                        return Err(Error::file(
-                            path.display(),
-                            format!("fire light of medium {mi}: {e}"),
-                        ))
-                    }
-                }
-            }
-        }
-    }
+    fire_lights(&mut b, ov, path)?;
     let scale = b.prims.iter().map(|p| {
         let bb = obvhs::Boundable::aabb(p);
         (bb.max - bb.min).max_element().abs()
