@@ -122,6 +122,65 @@ fn visible_surface(h: &Hit, bxdf: &Bxdf, wo_l: Vec3A, seed: u64, rng: &mut Sampl
     }
 }
 
+/// A direction from `bxdf` at a surface (shading normal `ns`, `wo_l` in its frame): the world direction and the
+/// sample, or None when the sample failed.
+#[inline]
+fn sample_bsdf(
+    bxdf: &Bxdf,
+    wo_l: Vec3A,
+    ns: Vec3A,
+    seed: u64,
+    rng: &mut Samples,
+) -> Option<(Vec3A, super::bsdf::Sample)> {
+    let uc = rng.next_f64() as f32;
+    let u = Integrator::rng2(rng);
+    let bs = bxdf.sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed)?;
+    let wi = from_local(ns, bs.wi);
+    (wi.is_finite() && wi != Vec3A::ZERO).then_some((wi, bs))
+}
+
+/// A non-specular BSDF sample's solid-angle pdf for MIS (the BSDF's own when the sample's is only proportional).
+#[inline]
+fn mis_pdf(bxdf: &Bxdf, wo_l: Vec3A, bs: &super::bsdf::Sample, seed: u64) -> f32 {
+    if bs.proportional {
+        bxdf.pdf(wo_l, bs.wi, Mode::Radiance, Lobes::ALL, seed)
+    } else {
+        bs.pdf
+    }
+}
+
+/// Russian roulette (after three bounces), on the throughput without the radiance scaling refraction applies
+/// (pbrt-v4's etaScale): whether the path goes on, its gain `beta` then divided by the odds it had.
+#[inline]
+fn survives(beta: &mut S, eta_scale: f32, rng: &mut Samples) -> bool {
+    let q = (*beta * eta_scale).max().min(0.95);
+    if (rng.next_f64() as f32) > q {
+        return false;
+    }
+    *beta = *beta / q;
+    true
+}
+
+/// Counts a light sample from a surface vertex (`surface`) or a scattering one, begun at `t0`, and what it added
+/// to the radiance (`radiance`: before, after), by whether `light` is a fire's, in a profiled path.
+fn light_sampled(
+    tally: &mut Option<Tally>,
+    surface: bool,
+    light: &Light,
+    t0: Option<Instant>,
+    radiance: (&S, &S),
+    n: usize,
+) {
+    let (step, gain) = match (surface, matches!(light, Light::Fire(_))) {
+        (true, true) => (Step::SurfaceFireSample, Gain::SurfaceFire),
+        (true, false) => (Step::SurfaceLightSample, Gain::SurfaceLight),
+        (false, true) => (Step::MediumFireSample, Gain::MediumFire),
+        (false, false) => (Step::MediumLightSample, Gain::MediumLight),
+    };
+    took(tally, step, t0);
+    gained(tally, gain, *radiance.0, *radiance.1, n);
+}
+
 /// Keeps one of `n` bins of the path's gain `beta`, uniformly chosen, weighted by `n`; which.
 fn keep_one_bin(beta: &mut S, n: usize, rng: &mut Samples) -> usize {
     let c = ((rng.next_f64() * n as f64) as usize).min(n.max(1) - 1);
@@ -173,61 +232,13 @@ impl Integrator<'_> {
                     *l += beta * le * (ph * light_mis_weight(pl, ph));
                 }
                 if tally.is_some() {
-                    let fire = matches!(lights[li], Light::Fire(_));
-                    let (step, gain) = match fire {
-                        true => (Step::MediumFireSample, Gain::MediumFire),
-                        false => (Step::MediumLightSample, Gain::MediumLight),
-                    };
-                    took(tally, step, t0);
-                    gained(tally, gain, before, *l, self.scene.bins.n());
+                    let n = self.scene.bins.n();
+                    light_sampled(tally, false, &lights[li], t0, (&before, l), n);
                 }
             }
         }
         let wi = sample_hg(d, g, Self::rng2(rng));
         (wi, hg((-d).dot(wi), g))
-    }
-
-    /// Light `li`'s sample from surface point `spot` through the BSDF `at` = (BxDF, wo in its frame, the shading
-    /// normal, its seed), weighted against BSDF sampling for lights paths can hit: the path's gain `beta` × f ×
-    /// L × w, or None.
-    #[allow(clippy::too_many_arguments)]
-    fn surface_light(
-        &self,
-        li: usize,
-        spot: &Spot,
-        at: (&Bxdf, Vec3A, Vec3A, u64),
-        depth: usize,
-        beta: S,
-        rng: &mut Samples,
-        tally: &mut Option<Tally>,
-    ) -> Option<S> {
-        let (bxdf, wo_l, ns, seed) = at;
-        // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
-        // fire-light sample evaluates it once.)
-        let seen = std::cell::Cell::new(None);
-        let dark = |wi: Vec3A| {
-            let f = bxdf.f(wo_l, to_local(ns, wi), Mode::Radiance, seed);
-            seen.set(Some((wi, f)));
-            f.is_black()
-        };
-        let (le, wi, pl) = match self.light_counts(li, depth + 1) {
-            true => self.sample_light(li, spot, rng, &dark, tally)?,
-            false => return None,
-        };
-        let wi_l = to_local(ns, wi);
-        let f = match seen.get() {
-            Some((w, f)) if w == wi => f,
-            _ => bxdf.f(wo_l, wi_l, Mode::Radiance, seed),
-        } * wi_l.z.abs();
-        if f.is_black() {
-            return None;
-        }
-        let pb = if pl > 0.0 {
-            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
-        } else {
-            0.0
-        };
-        Some(beta * f * le * light_mis_weight(pl, pb))
     }
 
     /// A path that escaped along `d` with gain `beta` after `depth` bounces: the infinite lights, weighted
@@ -454,41 +465,46 @@ impl Integrator<'_> {
             if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
                 let (t0, before) = (clock(&tally), l);
-                let at = (&bxdf, wo_l, h.ns, seed);
-                if let Some(c) = self.surface_light(li, &spot, at, depth, beta, rng, &mut tally) {
-                    l += c;
+                // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
+                // fire-light sample evaluates it once.)
+                let seen = std::cell::Cell::new(None);
+                let dark = |wi: Vec3A| {
+                    let f = bxdf.f(wo_l, to_local(h.ns, wi), Mode::Radiance, seed);
+                    seen.set(Some((wi, f)));
+                    f.is_black()
+                };
+                let found = match self.light_counts(li, depth + 1) {
+                    true => self.sample_light(li, &spot, rng, &dark, &mut tally),
+                    false => None,
+                };
+                if let Some((le, wi, pl)) = found {
+                    let wi_l = to_local(h.ns, wi);
+                    let f = match seen.get() {
+                        Some((w, f)) if w == wi => f,
+                        _ => bxdf.f(wo_l, wi_l, Mode::Radiance, seed),
+                    } * wi_l.z.abs();
+                    if !f.is_black() {
+                        let pb = if pl > 0.0 {
+                            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
+                        } else {
+                            0.0
+                        };
+                        l += beta * f * le * light_mis_weight(pl, pb);
+                    }
                 }
                 if tally.is_some() {
-                    let (step, gain) = match sc.lights[li] {
-                        Light::Fire(_) => (Step::SurfaceFireSample, Gain::SurfaceFire),
-                        _ => (Step::SurfaceLightSample, Gain::SurfaceLight),
-                    };
-                    took(&mut tally, step, t0);
-                    gained(&mut tally, gain, before, l, n_bins);
+                    light_sampled(&mut tally, true, &sc.lights[li], t0, (&before, &l), n_bins);
                 }
             }
             // Sample the BSDF.
-            let uc = rng.next_f64() as f32;
-            let u = Self::rng2(rng);
-            let Some(bs) = bxdf.sample_f(wo_l, uc, u, Mode::Radiance, Lobes::ALL, seed) else {
+            let Some((wi, bs)) = sample_bsdf(&bxdf, wo_l, h.ns, seed, rng) else {
                 break;
             };
-            let wi = from_local(h.ns, bs.wi);
-            if !wi.is_finite() || wi == Vec3A::ZERO {
-                break;
-            }
             beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
             if !beta.max().is_finite() {
                 break;
             }
-            mis = (!bs.specular).then(|| {
-                let pdf = if bs.proportional {
-                    bxdf.pdf(wo_l, bs.wi, Mode::Radiance, Lobes::ALL, seed)
-                } else {
-                    bs.pdf
-                };
-                (h.p, pdf)
-            });
+            mis = (!bs.specular).then(|| (h.p, mis_pdf(&bxdf, wo_l, &bs, seed)));
             if !bs.reflection {
                 eta_scale *= bs.etap * bs.etap;
             }
@@ -496,14 +512,8 @@ impl Integrator<'_> {
             skipped = None;
             d = wi;
             depth += 1;
-            // Russian roulette after three bounces, on the throughput without the radiance scaling that
-            // refraction applies (pbrt-v4's etaScale).
-            if depth > 3 {
-                let q = (beta * eta_scale).max().min(0.95);
-                if (rng.next_f64() as f32) > q {
-                    break;
-                }
-                beta = beta / q;
+            if depth > 3 && !survives(&mut beta, eta_scale, rng) {
+                break;
             }
         }
         if let (Some(mut t), Some(p), Some(s)) = (tally, self.profile.as_ref(), start) {
