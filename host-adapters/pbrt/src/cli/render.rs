@@ -110,8 +110,9 @@ pub struct RenderArgs {
     #[arg(long)]
     stats: bool,
     /// Print where the paths' time and light go, by vertex kind: traversals, segments in media, scattering and
-    /// surface vertices, light samples (a fire's and the others'), with each kind's share of the image's mean and
-    /// second moment. Reads the clock at every step: a profiled render runs a little slower.
+    /// surface vertices, light samples (a fire's and the others'), with each kind of light's share of the image's
+    /// mean and of the pixels' variance. Reads the clock at every step: a profiled render runs a little slower
+    /// (the same image).
     #[arg(long)]
     profile: bool,
     /// No warnings or progress.

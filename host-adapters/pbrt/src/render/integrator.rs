@@ -18,7 +18,7 @@ use super::media::Track;
 use super::paths::Spot;
 pub use super::paths::{Failures, Integrator};
 use super::pixel::Samples;
-use super::profile::{Gain, Step, Tally};
+use super::profile::{clock, credit, took, Gain, Step, Tally};
 use super::scene::Light;
 use super::shapes::Hit;
 use super::spectrum::S;
@@ -82,27 +82,6 @@ fn light_mis_weight(pl: f32, pb: f32) -> f32 {
     }
 }
 
-/// The clock's reading when the render is profiled (`tally` kept), else none: an unprofiled path reads no clock.
-fn clock(tally: &Option<Tally>) -> Option<Instant> {
-    tally.as_ref().map(|_| Instant::now())
-}
-
-/// Counts `step`, begun at `t0`, in a profiled path.
-fn took(tally: &mut Option<Tally>, step: Step, t0: Option<Instant>) {
-    if let (Some(t), Some(t0)) = (tally.as_mut(), t0) {
-        t.step(step, t0);
-    }
-}
-
-/// Adds what the radiance gained from `before` to `after` (its mean over the first `n` bins) to `gain` in a
-/// profiled path.
-fn gained(tally: &mut Option<Tally>, gain: Gain, before: S, after: S, n: usize) {
-    if let Some(t) = tally.as_mut() {
-        let d: f64 = (0..n).map(|c| f64::from(after.0[c] - before.0[c])).sum();
-        t.gain(gain, d / n.max(1) as f64);
-    }
-}
-
 /// The surface a camera ray sees first at `h` (pbrt-v4's `VisibleSurface`), its albedo ρ(wo) = ∫ f |cos| dωi
 /// estimated by one sample of `bxdf` per camera sample (the pixel's mean over its samples is pbrt-v4's `rho` by
 /// Monte Carlo).
@@ -161,14 +140,14 @@ fn survives(beta: &mut S, eta_scale: f32, rng: &mut Samples) -> bool {
     true
 }
 
-/// Counts a light sample from a surface vertex (`surface`) or a scattering one, begun at `t0`, and what it added
-/// to the radiance (`radiance`: before, after), by whether `light` is a fire's, in a profiled path.
+/// Counts a light sample from a surface vertex (`surface`) or a scattering one, begun at `t0`, and credits what
+/// it added to the radiance `l`, by whether `light` is a fire's, in a profiled path.
 fn light_sampled(
     tally: &mut Option<Tally>,
     surface: bool,
     light: &Light,
     t0: Option<Instant>,
-    radiance: (&S, &S),
+    l: &S,
     n: usize,
 ) {
     let (step, gain) = match (surface, matches!(light, Light::Fire(_))) {
@@ -178,7 +157,7 @@ fn light_sampled(
         (false, false) => (Step::MediumLightSample, Gain::MediumLight),
     };
     took(tally, step, t0);
-    gained(tally, gain, *radiance.0, *radiance.1, n);
+    credit(tally, gain, l, n);
 }
 
 /// Keeps one of `n` bins of the path's gain `beta`, uniformly chosen, weighted by `n`; which.
@@ -226,14 +205,14 @@ impl Integrator<'_> {
             let li = (rng.next_f64() * lights.len() as f64) as usize % lights.len();
             let spot = Spot::Medium { p, medium };
             if self.light_counts(li, depth + 1) && !self.skips_inside(li, medium) {
-                let (t0, before) = (clock(tally), *l);
+                let t0 = clock(tally);
                 if let Some((le, wi, pl)) = self.sample_light(li, &spot, rng, &|_| false, tally) {
                     let ph = hg((-d).dot(wi), g);
                     *l += beta * le * (ph * light_mis_weight(pl, ph));
                 }
                 if tally.is_some() {
                     let n = self.scene.bins.n();
-                    light_sampled(tally, false, &lights[li], t0, (&before, l), n);
+                    light_sampled(tally, false, &lights[li], t0, l, n);
                 }
             }
         }
@@ -296,7 +275,6 @@ impl Integrator<'_> {
             (_, Some(_)) => (Step::LaterSegment, Gain::ScatteredEmission),
         };
         took(tally, step, t0);
-        let before = *l;
         if depth < self.scene.maxdepth {
             match emitted.fire_units {
                 // (MIS's density only for light that is there: a dark segment needs no walk.)
@@ -310,7 +288,7 @@ impl Integrator<'_> {
                 None => *l += beta * emitted.l,
             }
         }
-        gained(tally, gain, before, *l, self.scene.bins.n());
+        credit(tally, gain, l, self.scene.bins.n());
         track
     }
 
@@ -397,9 +375,8 @@ impl Integrator<'_> {
                 }
             }
             let Some(h) = hit else {
-                let before = l;
                 self.escaped(d, beta, mis, depth, &mut l, &mut split);
-                gained(&mut tally, Gain::FoundLight, before, l, n_bins);
+                credit(&mut tally, Gain::FoundLight, &l, n_bins);
                 break;
             };
             let prim = sc.bvh.prim(&h);
@@ -408,9 +385,8 @@ impl Integrator<'_> {
                 .and_then(|li| Some((li, self.area_le(li, &h, d)?)))
             {
                 let w = found_weight(mis, |origin| self.area_pdf(li, origin, &h));
-                let before = l;
                 seen(&mut l, &mut split, depth, beta * le * w);
-                gained(&mut tally, Gain::FoundLight, before, l, n_bins);
+                credit(&mut tally, Gain::FoundLight, &l, n_bins);
             }
             let wo = -d;
             // Where the path leaves the surface from (the side a direction leaves by picks the offset and the
@@ -464,7 +440,7 @@ impl Integrator<'_> {
             // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.
             if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
-                let (t0, before) = (clock(&tally), l);
+                let t0 = clock(&tally);
                 // (A direction the BSDF does not reflect: no march along it. The BSDF's value there is kept, so a
                 // fire-light sample evaluates it once.)
                 let seen = std::cell::Cell::new(None);
@@ -493,7 +469,7 @@ impl Integrator<'_> {
                     }
                 }
                 if tally.is_some() {
-                    light_sampled(&mut tally, true, &sc.lights[li], t0, (&before, &l), n_bins);
+                    light_sampled(&mut tally, true, &sc.lights[li], t0, &l, n_bins);
                 }
             }
             // Sample the BSDF.

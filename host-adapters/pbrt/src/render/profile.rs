@@ -11,9 +11,10 @@
 //! Off unless asked: the integrator then reads no clock. On, each event costs two clock reads (tens of ns) and
 //! each path one lock: a profiled render is a little slower than a plain one, its shares are what they measure.
 
+use super::spectrum::S;
 use std::time::Instant;
 
-/// The kinds of step a path's time goes to.
+/// The kinds of step a path's time goes to (in [`STEPS`]'s order: a step's discriminant is its row).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Step {
     /// A traversal of the scene's shapes from a path vertex (the light samples' own are in theirs).
@@ -60,7 +61,7 @@ const STEPS: [(Step, &str); 13] = [
     (Step::FireDensity, "  a fire-light sample's density"),
 ];
 
-/// The kinds of contribution a path adds to its radiance.
+/// The kinds of contribution a path adds to its radiance (in [`GAINS`]'s order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Gain {
     /// Emission along the camera ray's own segment.
@@ -102,14 +103,44 @@ pub(super) struct Tally {
     ns: [u64; STEPS.len()],
     count: [u64; STEPS.len()],
     gain: [f64; GAINS.len()],
+    /// The path's radiance (its mean over the bins) when a contribution was last credited.
+    level: f64,
 }
 
 fn step_index(s: Step) -> usize {
-    STEPS.iter().position(|(k, _)| *k == s).unwrap_or(0)
+    s as usize
 }
 
 fn gain_index(g: Gain) -> usize {
-    GAINS.iter().position(|(k, _)| *k == g).unwrap_or(0)
+    g as usize
+}
+
+/// The clock's reading when the path is profiled (`tally` kept), else none: an unprofiled path reads no clock.
+pub(super) fn clock(tally: &Option<Tally>) -> Option<Instant> {
+    tally.as_ref().map(|_| Instant::now())
+}
+
+/// Counts `step`, begun at `t0`, in a profiled path.
+pub(super) fn took(tally: &mut Option<Tally>, step: Step, t0: Option<Instant>) {
+    if let (Some(t), Some(t0)) = (tally.as_mut(), t0) {
+        t.step(step, t0);
+    }
+}
+
+/// [`took`], and the clock's reading for the step that follows.
+pub(super) fn lap(tally: &mut Option<Tally>, step: Step, t0: Option<Instant>) -> Option<Instant> {
+    took(tally, step, t0);
+    clock(tally)
+}
+
+/// Credits what the path's radiance `l` (its first `n` bins) gained since the last credit to `gain`, in a
+/// profiled path (every addition to the radiance is credited as it is made).
+pub(super) fn credit(tally: &mut Option<Tally>, gain: Gain, l: &S, n: usize) {
+    if let Some(t) = tally.as_mut() {
+        let level = l.0[..n].iter().map(|&v| f64::from(v)).sum::<f64>() / n.max(1) as f64;
+        t.gain(gain, level - t.level);
+        t.level = level;
+    }
 }
 
 impl Tally {
@@ -272,6 +303,29 @@ impl Profile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_tables_rows_follow_the_kinds_order() {
+        for (i, (k, _)) in STEPS.iter().enumerate() {
+            assert_eq!(*k as usize, i, "{k:?}");
+        }
+        for (i, (k, _)) in GAINS.iter().enumerate() {
+            assert_eq!(*k as usize, i, "{k:?}");
+        }
+    }
+
+    #[test]
+    fn credits_follow_the_radiance() {
+        let mut t = Some(Tally::new(0));
+        let mut l = S::ZERO;
+        l.0[..2].copy_from_slice(&[1.0, 3.0]);
+        credit(&mut t, Gain::CameraEmission, &l, 2);
+        l.0[0] += 4.0;
+        credit(&mut t, Gain::SurfaceFire, &l, 2);
+        let t = t.unwrap();
+        assert_eq!(t.gain[gain_index(Gain::CameraEmission)], 2.0);
+        assert_eq!(t.gain[gain_index(Gain::SurfaceFire)], 2.0);
+    }
 
     #[test]
     fn a_path_s_tally_adds_its_steps_and_each_kind_s_variance_per_pixel() {

@@ -6,18 +6,10 @@
 use crate::render::media::to_space;
 use crate::render::paths::{Integrator, Spot};
 use crate::render::pixel::Samples;
-use crate::render::profile::{Step, Tally};
+use crate::render::profile::{clock, lap, Step, Tally};
 use crate::render::scene::{Fire, Medium};
 use crate::render::spectrum::S;
 use glam::{DAffine3, DVec3, Vec3A};
-use std::time::Instant;
-
-/// Counts `s`, begun at `t0`, in a profiled path, and starts the next step's clock.
-fn step(tally: &mut Option<Tally>, s: Step, t0: Option<Instant>) -> Option<Instant> {
-    let (t, t0) = (tally.as_mut()?, t0?);
-    t.step(s, t0);
-    Some(Instant::now())
-}
 
 /// The solid-angle density with which `light` (of a medium placed by `to_medium`) picks world direction `d`
 /// from `o` at `time` (frames: the embers move).
@@ -50,7 +42,7 @@ impl Integrator<'_> {
             return None;
         };
         let (light, p) = (&*f.light, spot.p());
-        let t0 = tally.as_ref().map(|_| Instant::now());
+        let t0 = clock(tally);
         let uu = [(); 6].map(|_| rng.next_f64());
         let (mut pt, mut pdf) = ([[0.0f64; 3]], [0.0f64]);
         let sampled = light.sample_at(&[uu], Some(&[rng.time]), &mut pt, &mut pdf, None);
@@ -66,11 +58,11 @@ impl Integrator<'_> {
             return None;
         }
         let (o, medium) = spot.leave(wi);
-        let t0 = step(tally, Step::FirePoint, t0);
+        let t0 = lap(tally, Step::FirePoint, t0);
         // The fire's emission along wi, up to the first opaque surface.
         let fire = Some((f.medium, light));
         let le = self.walk_media(o, wi, f32::INFINITY, medium, fire, rng).1;
-        let t0 = step(tally, Step::FireLine, t0);
+        let t0 = lap(tally, Step::FireLine, t0);
         // (A line that brings no light — the fire hidden behind a surface — needs no density: the walk over the
         // pdf's bricks comes after it.)
         if le.is_black() {
@@ -79,7 +71,7 @@ impl Integrator<'_> {
         // Solid angle in medium space equals world solid angle for a similarity transform.
         let pd = pdf_direction(light, &m.to_medium, p, wi, rng.time);
         let pdf_dir = self.failures.note(pd)? as f32 / nl;
-        step(tally, Step::FireDensity, t0);
+        lap(tally, Step::FireDensity, t0);
         if !(pdf_dir > 0.0) {
             return None;
         }
