@@ -96,27 +96,38 @@ fn the_same_render_gives_the_same_pixels_and_cleans_up_after_killed_writers() {
     assert!(!stale.exists(), "the stale temporary is still there");
 }
 
+/// The generator's torch, `gen` = (voxels, frames A-B, stem), written into `dir` as `stem.####.vdb`, and a scene
+/// over the sequence, `scene` = (its file name, the Film's parameters, samples per pixel): the fire in a sphere,
+/// `####` in its dataset's name.
+fn torch_sequence(dir: &Path, gen: (&str, &str, &str), scene: (&str, &str, usize)) {
+    let ((res, frames, stem), (name, film, spp)) = (gen, scene);
+    let vdb = format!("{stem}.####.vdb");
+    let args = [
+        "gen",
+        "torch",
+        "--resolution",
+        res,
+        "--frames",
+        frames,
+        "-o",
+        &vdb,
+    ];
+    let o = firemedium_in(dir, &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(
+        dir.join(name),
+        format!("LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" {film}\nSampler \"independent\" \"integer pixelsamples\" {spp}\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"{vdb}\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n"),
+    )
+    .unwrap();
+}
+
 #[test]
 fn frames_render_a_sequence_one_seed_per_frame() {
     // Three frames of the generator's torch; `####` in the dataset and output names takes each frame.
     let dir = tmp("frames");
     let run = |args: &[&str]| firemedium_in(&dir, args);
-    let o = run(&[
-        "gen",
-        "torch",
-        "--resolution",
-        "16",
-        "--frames",
-        "30-32",
-        "-o",
-        "torch.####.vdb",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    std::fs::write(
-        dir.join("seq.pbrt"),
-        "LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24 \"string filename\" \"seq.####.exr\"\nSampler \"independent\" \"integer pixelsamples\" 2\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"torch.####.vdb\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n",
-    )
-    .unwrap();
+    let film = "\"integer xresolution\" 24 \"integer yresolution\" 24 \"string filename\" \"seq.####.exr\"";
+    torch_sequence(&dir, ("16", "30-32", "torch"), ("seq.pbrt", film, 2));
     let o = run(&["render", "seq.pbrt", "--frames", "30-32"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // Off a terminal: progress and each finished frame as plain lines.
@@ -469,22 +480,8 @@ fn log_json_records_each_event_as_a_line() {
     // render (here frame 33, whose dataset does not exist), one JSON object per line, appended.
     let dir = tmp("logjson");
     let run = |args: &[&str]| firemedium_in(&dir, args);
-    let o = run(&[
-        "gen",
-        "torch",
-        "--resolution",
-        "12",
-        "--frames",
-        "31-32",
-        "-o",
-        "t.####.vdb",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    std::fs::write(
-        dir.join("s.pbrt"),
-        "LookAt 0 -3 0.6  0 0 0.5  0 0 1\nCamera \"perspective\" \"float fov\" 40\nFilm \"rgb\" \"integer xresolution\" 40 \"integer yresolution\" 40\nSampler \"independent\" \"integer pixelsamples\" 1\nIntegrator \"volpath\" \"integer maxdepth\" 1\nWorldBegin\nMakeNamedMedium \"fire\" \"string type\" \"fire\" \"string dataset\" \"t.####.vdb\" \"string fuel\" \"propane\"\nAttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n",
-    )
-    .unwrap();
+    let film = "\"integer xresolution\" 40 \"integer yresolution\" 40";
+    torch_sequence(&dir, ("12", "31-32", "t"), ("s.pbrt", film, 1));
     let o = run(&[
         "render",
         "s.pbrt",
