@@ -294,7 +294,7 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
         let k = |s: u32| (((key >> s) & mask21) as u32).wrapping_shl(12) as i32;
         let origin = [k(42), k(21), k(0)];
         if child == 0 {
-            t.tiles.push(Tile {
+            t.add_tile(Tile {
                 origin,
                 size: 4096,
                 value,
@@ -339,7 +339,7 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
                 out.push((o, node(level - 1, start as i128 + entry as i128)?));
             } else {
                 let value = f32::from_le_bytes((entry as u64 as u32).to_le_bytes());
-                t.tiles.push(Tile {
+                t.add_tile(Tile {
                     origin: o,
                     size: 1 << child_total,
                     value,

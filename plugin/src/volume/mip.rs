@@ -55,64 +55,48 @@ impl FireVolume {
         let dims = self.grids.ds.dims();
         let cd = dims.map(|n| n.div_ceil(f));
         let n = cd[0] * cd[1] * cd[2];
-        // (Each worker sums into a copy-sized array of its own, 24 bytes a block: at most four workers, so that
-        // the transient stays a few times the copy.)
-        let threads = crate::par::threads(4);
-        // Three f64 sums per block per worker, the two f32 grids, and the lattice (two padded floats per block).
-        let need = (n as u64) * (24 * threads as u64 + 8 + 16);
+        // Two f32 grids per block, the lattice's two padded floats, and no more: each worker fills its own rows.
+        let need = (n as u64) * (8 + 16);
         if n > MAX_VOXELS || need > budget {
             return None;
         }
 
-        // Per block: Σ d, Σ d·J(T) and Σ T over its voxels, from the stored bricks (empty ones read 0).
-        let (jt, inv_dt) = (&jsum, self.model.j.inv_dt);
+        // Per block, from the stored bricks (empty ones read 0): Σ d, Σ d·J(T) and Σ T over its voxels, in
+        // place, then its density (the mean) and temperature.
+        let (jt, inv_dt, dt) = (&jsum, self.model.j.inv_dt, self.model.j.dt);
         let emission = |t: f32| -> f64 {
             let x = (t as f64 * inv_dt).clamp(0.0, (jt.len() - 1) as f64);
             let i = (x as usize).min(jt.len() - 2);
             jt[i] + (x - i as f64) * (jt[i + 1] - jt[i])
         };
         let topo = self.grids.ds.topology();
-        let mut bricks = Vec::with_capacity(topo.active_bricks());
-        topo.for_each_slot(|b, _| bricks.push(b));
         let grids = self.grids.ds.channels();
         let (dg, tg) = (&grids[self.grids.density].grid, &grids[tch].grid);
-        let per = bricks.len().div_ceil(threads).max(1);
-        let parts = par_map(bricks.chunks(per).collect(), |chunk: &[[usize; 3]]| {
-            let mut s = vec![[0f64; 3]; n];
-            for b in chunk {
-                let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-                for k in span[2].0..span[2].1 {
-                    for j in span[1].0..span[1].1 {
-                        let row = cd[0] * (j / f + cd[1] * (k / f));
-                        for i in span[0].0..span[0].1 {
-                            let (ii, jj, kk) = (i as i64, j as i64, k as i64);
-                            let d = dg.at(ii, jj, kk).max(0.0);
-                            let t = tg.at(ii, jj, kk);
-                            let e = &mut s[row + i / f];
-                            e[0] += d as f64;
-                            e[1] += d as f64 * emission(t);
-                            e[2] += t as f64;
-                        }
+        let volume = (f * f * f) as f64;
+        let block = |q: [usize; 3]| -> (f32, f32) {
+            let lo = q.map(|v| v * f);
+            let hi = [0, 1, 2].map(|a| (lo[a] + f).min(dims[a]));
+            let (b0, b1) = (topo.brick_of(lo), topo.brick_of(hi.map(|v| v - 1)));
+            let stored = (b0[2]..=b1[2]).any(|z| {
+                (b0[1]..=b1[1]).any(|y| (b0[0]..=b1[0]).any(|x| topo.slot([x, y, z]) != 0))
+            });
+            if !stored {
+                return (0.0, 0.0);
+            }
+            let mut s = [0f64; 3];
+            for k in lo[2]..hi[2] {
+                for j in lo[1]..hi[1] {
+                    for i in lo[0]..hi[0] {
+                        let (ii, jj, kk) = (i as i64, j as i64, k as i64);
+                        let d = dg.at(ii, jj, kk).max(0.0);
+                        let t = tg.at(ii, jj, kk);
+                        s[0] += d as f64;
+                        s[1] += d as f64 * emission(t);
+                        s[2] += t as f64;
                     }
                 }
             }
-            s
-        });
-        let mut sums = vec![[0f64; 3]; n];
-        for p in parts {
-            for (a, b) in sums.iter_mut().zip(p) {
-                a[0] += b[0];
-                a[1] += b[1];
-                a[2] += b[2];
-            }
-        }
-        let volume = (f * f * f) as f64;
-        let dt = self.model.j.dt;
-        let mut density = vec![0f32; n];
-        let mut temperature = vec![0f32; n];
-        for (q, s) in sums.iter().enumerate() {
-            density[q] = (s[0] / volume) as f32;
-            temperature[q] = if s[0] > 0.0 {
+            let temperature = if s[0] > 0.0 {
                 // The temperature whose emission per unit density is the block's mean: between the table's
                 // rows r − 1 and r where the sum first reaches it.
                 let y = s[1] / s[0];
@@ -134,7 +118,24 @@ impl FireVolume {
                 // No soot: the gas's mean temperature (what interpolation toward a neighbour blends with).
                 (s[2] / volume) as f32
             };
-        }
+            ((s[0] / volume) as f32, temperature)
+        };
+        let mut density = vec![0f32; n];
+        let mut temperature = vec![0f32; n];
+        // Rows of blocks, a few parts per worker (a fire fills its box unevenly).
+        let plane = cd[0] * cd[1];
+        let part = plane * cd[2].div_ceil(4 * crate::par::threads(4)).max(1);
+        let parts: Vec<_> = density
+            .chunks_mut(part)
+            .zip(temperature.chunks_mut(part))
+            .enumerate()
+            .collect();
+        par_map(parts, |(p, (ds, ts))| {
+            for (o, (d, t)) in ds.iter_mut().zip(ts.iter_mut()).enumerate() {
+                let q = p * part + o;
+                (*d, *t) = block([q % cd[0], (q / cd[0]) % cd[1], q / plane]);
+            }
+        });
         let [p0, _] = self.grids.ds.bounds();
         let voxel = self.grids.ds.voxel_size() * f as f64;
         let p1 = p0 + DVec3::new(cd[0] as f64, cd[1] as f64, cd[2] as f64) * voxel;
@@ -146,7 +147,7 @@ impl FireVolume {
             &LoadOptions::default(),
         )
         .ok()?;
-        drop((density, temperature, sums));
+        drop((density, temperature));
 
         let ch = ds.channels();
         let (lat, ranges) =

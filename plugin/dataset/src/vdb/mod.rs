@@ -442,13 +442,14 @@ fn read_internal(
         ]
     };
     for (i, &v) in values.iter().enumerate() {
-        if !bit(&child_mask, i) {
-            tiles.push(Tile {
-                origin: coord(i),
-                size: 1 << child_total,
-                value: v,
-                active: bit(&value_mask, i),
-            });
+        let tile = Tile {
+            origin: coord(i),
+            size: 1 << child_total,
+            value: v,
+            active: bit(&value_mask, i),
+        };
+        if !bit(&child_mask, i) && tile.counts(ctx.background) {
+            tiles.push(tile);
         }
     }
     for i in 0..n {
@@ -542,12 +543,15 @@ fn read_tree<'a>(
         ];
         let value = value(&mut c, &ctx, "a tile value")?;
         let active = c.u8("a tile's active flag")? != 0;
-        tiles.push(Tile {
+        let tile = Tile {
             origin,
             size: 4096,
             value,
             active,
-        });
+        };
+        if tile.counts(background) {
+            tiles.push(tile);
+        }
     }
     let mut leaves = Vec::new();
     for _ in 0..nchildren {
