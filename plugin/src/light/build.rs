@@ -136,9 +136,12 @@ impl FireLight {
                 "a fire whose per-voxel weights (8 bytes each) the allocator can hold",
             )
         };
-        let mut w = crate::alloc::filled(n, 0f32).ok_or_else(too_many)?;
+        // The weights, a block per brick holding any (indexed by the brick's slot), kept only while a
+        // neighbouring brick's dilation may read them.
+        let mut w: Vec<Option<Box<[f32; 512]>>> = Vec::new();
+        w.try_reserve_exact(n / 512).map_err(|_| too_many())?;
+        w.resize_with(n / 512, || None);
         let (mut pw, mut plm) = (0.0, 0.0);
-        // (Soot power depends on T only: each worker memoises it per 0.5 K.)
         let dch = vol.density_channel();
         let tch = vol.temperature_channel();
         let mut bricks: Vec<[usize; 3]> = Vec::with_capacity(topo.active_bricks());
@@ -154,12 +157,18 @@ impl FireLight {
         // Per brick (independent: each writes its own slot of the weights), in parallel chunks of bricks under the
         // build's thread budget; the power sums are added brick by brick in the bricks' order, so the light is the
         // same on any number of threads.
+        // The soot's power depends on T only (an integral over the spectrum): found once per 0.5 K for the
+        // whole build, in a table to 10 000 K that the workers fill as they meet a temperature (a race computes
+        // the same value twice), each worker's own map beyond it.
+        use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+        const EMPTY: u64 = u64::MAX;
+        let known: Vec<AtomicU64> = (0..=20_000).map(|_| AtomicU64::new(EMPTY)).collect();
         let brick_weights = |b: &[usize; 3],
                              memo: &mut std::collections::HashMap<i64, f64>,
                              sa: &mut [f64],
                              ss: &mut [f64],
                              j: &mut [f64],
-                             out: &mut Vec<(usize, f32)>|
+                             out: &mut Option<Box<[f32; 512]>>|
          -> (f64, f64, f64) {
             let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
@@ -176,13 +185,11 @@ impl FireLight {
                         if !(lum > 0.0 || band > 0.0) {
                             continue;
                         }
-                        out.push((
-                            topo.index(i, jy, k),
-                            match weighting {
-                                Weighting::Luminance => lum,
-                                Weighting::Power | Weighting::Escaping => band,
-                            } as f32,
-                        ));
+                        out.get_or_insert_with(|| Box::new([0.0; 512]))
+                            [topo.index(i, jy, k) % 512] = match weighting {
+                            Weighting::Luminance => lum,
+                            Weighting::Power | Weighting::Escaping => band,
+                        } as f32;
                         plm += lum;
                         pw += match &src {
                             None => band,
@@ -192,9 +199,20 @@ impl FireLight {
                                 let d = at(dch).max(0.0) as f64;
                                 let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
                                 let key = (t * 2.0).round() as i64;
-                                let soot = *memo
-                                    .entry(key)
-                                    .or_insert_with(|| soot_power(key as f64 / 2.0));
+                                let soot =
+                                    match usize::try_from(key).ok().and_then(|k| known.get(k)) {
+                                        Some(slot) => match slot.load(Relaxed) {
+                                            EMPTY => {
+                                                let p = soot_power(key as f64 / 2.0);
+                                                slot.store(p.to_bits(), Relaxed);
+                                                p
+                                            }
+                                            bits => f64::from_bits(bits),
+                                        },
+                                        None => *memo
+                                            .entry(key)
+                                            .or_insert_with(|| soot_power(key as f64 / 2.0)),
+                                    };
                                 let mut v = d * s.soot_scale * soot;
                                 for (e, ch, scale) in &s.species {
                                     let nn = at(*ch).max(0.0) as f64 * scale;
@@ -215,93 +233,128 @@ impl FireLight {
             (pw, plm, ext / (n * widths.iter().sum::<f64>()))
         };
         let workers = crate::par::threads(16).min(bricks.len().max(1));
-        let run = |part: &[[usize; 3]]| {
-            let mut memo = std::collections::HashMap::new();
+        // (Each worker's map of the soot's power above 10 000 K, kept across the layers.)
+        let memos: Vec<std::sync::Mutex<std::collections::HashMap<i64, f64>>> =
+            (0..workers).map(|_| Default::default()).collect();
+        let run = |part: &[usize], k: usize| {
+            let mut memo = memos[k].lock().unwrap_or_else(|e| e.into_inner());
             let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
             part.iter()
-                .map(|b| {
-                    let mut out = Vec::new();
-                    let sums = brick_weights(b, &mut memo, &mut sa, &mut ss, &mut j, &mut out);
+                .map(|&i| {
+                    let mut out = None;
+                    let sums =
+                        brick_weights(&bricks[i], &mut memo, &mut sa, &mut ss, &mut j, &mut out);
                     (sums, out)
                 })
                 .collect::<Vec<_>>()
         };
-        // In rounds of 512 bricks per worker, each round's weights written into `w` before the next: the
-        // emitting voxels' (index, weight) pairs of a whole fire would outweigh the weights themselves.
-        let mut extinction = Vec::with_capacity(bricks.len());
-        for round in bricks.chunks(workers * 512) {
-            let chunk = round.len().div_ceil(workers).max(1);
-            let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
-                vec![run(round)]
-            } else {
-                crate::par::scope(|sc| {
-                    let handles: Vec<_> = round
-                        .chunks(chunk)
-                        .map(|part| sc.spawn(move || run(part)))
-                        .collect();
-                    handles
-                        .into_iter()
-                        .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                        .collect()
-                })
-            };
-            for ((bpw, bplm, ext), out) in parts.into_iter().flatten() {
-                pw += bpw;
-                plm += bplm;
-                extinction.push(ext);
-                for (idx, v) in out {
-                    w[idx] = v;
-                }
-            }
-        }
         // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
         // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
         // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
         let trilinear = ds.interpolation() == crate::grid::Interpolation::Trilinear;
-        let keep: Vec<f32> = if weighting == Weighting::Escaping {
-            escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
-                .ok_or_else(too_many)?
-                .into_iter()
-                .map(|f| (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32)
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let escaping = weighting == Weighting::Escaping;
         let slot_of = |b: &[usize; 3]| {
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             topo.index(span[0].0, span[1].0, span[2].0) / 512
         };
         let side = 8 / cell;
         let per = side * side * side;
+        // The bricks by z layer, each layer in the bricks' order. A layer's weights are found before the layer
+        // below it is dilated and dropped once the layer above it has been: three layers of weights held at a
+        // time, not the fire's (all of them for `escaping`, whose factors need every brick's extinction first).
+        let mut layers = vec![Vec::new(); topo.bricks()[2]];
+        for (i, b) in bricks.iter().enumerate() {
+            layers[b[2]].push(i);
+        }
+        let mut found = vec![(0.0, 0.0, 0.0); bricks.len()];
+        let mut keep: Vec<f32> = Vec::new();
         // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and summed
         // per cell (in f64; at `cell 1` a cell is a voxel, its weight the voxel's) — no second array of voxel
         // weights.
         let mut emitting = 0;
         let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
-        for (i, b) in bricks.iter().enumerate() {
-            let slot = slot_of(b);
-            let mut ws = [0f32; 512];
-            if trilinear {
-                dilate_brick(&w, &topo, *b, 0.125, &mut ws);
-            } else {
-                ws.copy_from_slice(&w[slot * 512..(slot + 1) * 512]);
+        let mut next = 0;
+        for z in 0..layers.len() {
+            // A batch of layers: up to the one above this, and enough bricks to keep every worker busy.
+            let mut batch: Vec<usize> = Vec::new();
+            let needed = next < z + 2;
+            while next < layers.len()
+                && needed
+                && (escaping || next < z + 2 || batch.len() < workers * 256)
+            {
+                batch.extend(&layers[next]);
+                next += 1;
             }
-            if let Some(&k) = keep.get(i) {
-                ws.iter_mut().for_each(|v| *v *= k);
-            }
-            let mut sums = [0f64; 512];
-            for (l, &v) in ws.iter().enumerate() {
-                if v > 0.0 {
-                    emitting += 1;
-                    let c = (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
-                    sums[c] += v as f64;
+            // In rounds of 512 bricks per worker (a worker's blocks held until its round is placed).
+            for round in batch.chunks(workers * 512) {
+                let chunk = round.len().div_ceil(workers).max(1);
+                let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
+                    vec![run(round, 0)]
+                } else {
+                    crate::par::scope(|sc| {
+                        let handles: Vec<_> = round
+                            .chunks(chunk)
+                            .enumerate()
+                            .map(|(k, part)| sc.spawn(move || run(part, k)))
+                            .collect();
+                        handles
+                            .into_iter()
+                            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                            .collect()
+                    })
+                };
+                for (&i, (sums, block)) in round.iter().zip(parts.into_iter().flatten()) {
+                    found[i] = sums;
+                    w[slot_of(&bricks[i])] = block;
                 }
             }
-            for (c, &v) in sums[..per].iter().enumerate() {
-                cw[slot * per + c] = v as f32;
+            if escaping && z == 0 {
+                let extinction: Vec<f64> = found.iter().map(|f| f.2).collect();
+                keep =
+                    escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
+                        .ok_or_else(too_many)?
+                        .into_iter()
+                        .map(|f| (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32)
+                        .collect();
+            }
+            let weight = |n: usize| w[n / 512].as_ref().map_or(0.0, |b| b[n % 512]);
+            for &i in &layers[z] {
+                let b = &bricks[i];
+                let slot = slot_of(b);
+                let mut ws = [0f32; 512];
+                if trilinear {
+                    dilate_brick(weight, &topo, *b, 0.125, &mut ws);
+                } else if let Some(block) = &w[slot] {
+                    ws = **block;
+                }
+                if let Some(&k) = keep.get(i) {
+                    ws.iter_mut().for_each(|v| *v *= k);
+                }
+                let mut sums = [0f64; 512];
+                for (l, &v) in ws.iter().enumerate() {
+                    if v > 0.0 {
+                        emitting += 1;
+                        let c =
+                            (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                        sums[c] += v as f64;
+                    }
+                }
+                for (c, &v) in sums[..per].iter().enumerate() {
+                    cw[slot * per + c] = v as f32;
+                }
+            }
+            if !escaping && z > 0 {
+                for &i in &layers[z - 1] {
+                    w[slot_of(&bricks[i])] = None;
+                }
             }
         }
         drop(w);
+        // The power sums brick by brick in the bricks' order: the light is the same on any number of threads.
+        for &(bpw, bplm, _) in &found {
+            pw += bpw;
+            plm += bplm;
+        }
         let w = cw;
         let vv = voxel.x * voxel.y * voxel.z;
         let power_w = 4.0 * std::f64::consts::PI * vv * pw;
@@ -436,7 +489,7 @@ pub(super) fn escape_fractions(
 /// neighbour; one in a brick the topology does not hold is 0 and never raised (every voxel a stored weight's
 /// dilation reaches is held: the light's topology covers the bricks around the data).
 fn dilate_brick(
-    w: &[f32],
+    w: impl Fn(usize) -> f32,
     topo: &crate::grid::Topology,
     b: [usize; 3],
     f: f32,
@@ -472,7 +525,7 @@ fn dilate_brick(
                 if let Some(v) = sample([x, y, z]) {
                     let n = topo.index(v[0], v[1], v[2]);
                     if n >= 512 {
-                        m[at(x, y, z)] = w[n];
+                        m[at(x, y, z)] = w(n);
                         held[at(x, y, z)] = true;
                     }
                 }
@@ -513,7 +566,7 @@ fn dilate_brick(
             for x in 1..9 {
                 if let Some(v) = sample([x, y, z]) {
                     let n = topo.index(v[0], v[1], v[2]);
-                    out[n % 512] = w[n].max(f * m[at(x, y, z)]);
+                    out[n % 512] = w(n).max(f * m[at(x, y, z)]);
                 }
             }
         }
@@ -582,7 +635,7 @@ mod tests {
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             let slot = topo.index(span[0].0, span[1].0, span[2].0) / 512;
             let mut out = [0f32; 512];
-            dilate_brick(&w, &topo, *b, 0.125, &mut out);
+            dilate_brick(|n| w[n], &topo, *b, 0.125, &mut out);
             d[slot * 512..(slot + 1) * 512].copy_from_slice(&out);
         }
         let at = |v: [i64; 3]| -> f32 {

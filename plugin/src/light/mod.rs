@@ -87,8 +87,8 @@ impl Default for LineEstimate {
     }
 }
 
-/// One brick's part of the light's build: its (W, lm, mean extinction) and its emitting voxels' (index, weight).
-type BrickWeights = ((f64, f64, f64), Vec<(usize, f32)>);
+/// One brick's part of the light's build: its (W, lm, mean extinction) and its voxels' weights, if any emits.
+type BrickWeights = ((f64, f64, f64), Option<Box<[f32; 512]>>);
 
 /// The share of a voxel's weight the `escaping` weighting keeps however deep it lies (the pdf's support stays
 /// the emission's: a voxel the coarse estimate calls opaque is still sampled, rarely).
