@@ -113,8 +113,9 @@ impl FireLight {
         }
         .ok_or_else(no_emission)?;
         let topo = Arc::new(topo);
-        // Two weights per covered voxel while building (the weights and their dilation), within what the
-        // volume's budget (`maxbytes`) leaves after its grids and tables.
+        // At most two floats per covered voxel while building (the cells' weights, at `cell 1` one a voxel, and
+        // the voxels' weights: a few layers of them, all for `escaping`), within what the volume's budget
+        // (`maxbytes`) leaves after its grids and tables.
         let n = topo.values_len();
         let need = (n as u64).saturating_mul(8);
         if need > vol.spare_bytes() {
@@ -159,12 +160,12 @@ impl FireLight {
         // same on any number of threads.
         // The soot's power depends on T only (an integral over the spectrum): found once per 0.5 K for the
         // whole build, in a table to 10 000 K that the workers fill as they meet a temperature (a race computes
-        // the same value twice), each worker's own map beyond it.
+        // the same value twice), in a shared map beyond it.
         use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
         const EMPTY: u64 = u64::MAX;
         let known: Vec<AtomicU64> = (0..=20_000).map(|_| AtomicU64::new(EMPTY)).collect();
+        let beyond = std::sync::Mutex::new(std::collections::HashMap::new());
         let brick_weights = |b: &[usize; 3],
-                             memo: &mut std::collections::HashMap<i64, f64>,
                              sa: &mut [f64],
                              ss: &mut [f64],
                              j: &mut [f64],
@@ -209,7 +210,9 @@ impl FireLight {
                                             }
                                             bits => f64::from_bits(bits),
                                         },
-                                        None => *memo
+                                        None => *beyond
+                                            .lock()
+                                            .unwrap_or_else(|e| e.into_inner())
                                             .entry(key)
                                             .or_insert_with(|| soot_power(key as f64 / 2.0)),
                                     };
@@ -233,17 +236,12 @@ impl FireLight {
             (pw, plm, ext / (n * widths.iter().sum::<f64>()))
         };
         let workers = crate::par::threads(16).min(bricks.len().max(1));
-        // (Each worker's map of the soot's power above 10 000 K, kept across the layers.)
-        let memos: Vec<std::sync::Mutex<std::collections::HashMap<i64, f64>>> =
-            (0..workers).map(|_| Default::default()).collect();
-        let run = |part: &[usize], k: usize| {
-            let mut memo = memos[k].lock().unwrap_or_else(|e| e.into_inner());
+        let run = |part: &[usize]| {
             let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
             part.iter()
                 .map(|&i| {
                     let mut out = None;
-                    let sums =
-                        brick_weights(&bricks[i], &mut memo, &mut sa, &mut ss, &mut j, &mut out);
+                    let sums = brick_weights(&bricks[i], &mut sa, &mut ss, &mut j, &mut out);
                     (sums, out)
                 })
                 .collect::<Vec<_>>()
@@ -275,27 +273,27 @@ impl FireLight {
         let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
         let mut next = 0;
         for z in 0..layers.len() {
-            // A batch of layers: up to the one above this, and enough bricks to keep every worker busy.
+            // When the layer above this is not yet weighed, a batch of layers: up to it, and enough bricks to
+            // keep every worker busy (every layer for `escaping`).
             let mut batch: Vec<usize> = Vec::new();
-            let needed = next < z + 2;
-            while next < layers.len()
-                && needed
-                && (escaping || next < z + 2 || batch.len() < workers * 256)
-            {
-                batch.extend(&layers[next]);
-                next += 1;
+            if next < z + 2 {
+                while next < layers.len()
+                    && (escaping || next < z + 2 || batch.len() < workers * 256)
+                {
+                    batch.extend(&layers[next]);
+                    next += 1;
+                }
             }
             // In rounds of 512 bricks per worker (a worker's blocks held until its round is placed).
             for round in batch.chunks(workers * 512) {
                 let chunk = round.len().div_ceil(workers).max(1);
                 let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
-                    vec![run(round, 0)]
+                    vec![run(round)]
                 } else {
                     crate::par::scope(|sc| {
                         let handles: Vec<_> = round
                             .chunks(chunk)
-                            .enumerate()
-                            .map(|(k, part)| sc.spawn(move || run(part, k)))
+                            .map(|part| sc.spawn(move || run(part)))
                             .collect();
                         handles
                             .into_iter()
