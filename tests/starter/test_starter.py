@@ -170,6 +170,28 @@ class Starter(unittest.TestCase):
                 self.assertIn('"string source" "blender"', text)
                 self.assert_fire(f, seen)
 
+    def test_a_look_on_a_simulators_plume_still_reads_as_a_fire(self):
+        # The looks' scattering is per unit of soot: on Houdini's or EmberGen's density (a soot scale near 1e-7) the
+        # smoke keeps the look's albedo (a σ_s per unit density made it 10⁷ times too thick: every ray at the
+        # collision cap, a render of hours).
+        for name, look in (("houdini-y", "campfire"), ("embergen-y", "explosion")):
+            with self.subTest(name=name, look=look):
+                r = subprocess.run([self.exe, "scene", f"{name}.vdb", "-o", f"{name}-{look}.pbrt"], cwd=self.dir,
+                                   capture_output=True, text=True)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                scene = self.dir / f"{name}-{look}.pbrt"
+                text = re.sub(r'^(  "string source" "\w+")$', rf'\1 "string look" "{look}"',
+                              scene.read_text(), count=1, flags=re.M)
+                self.assertIn(f'"string look" "{look}"', text)
+                scene.write_text(text)
+                r = subprocess.run([self.exe, "render", scene.name, "--resolution", "160x90", "--spp", "8",
+                                    "--quiet"], cwd=self.dir, capture_output=True, text=True, timeout=300)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                self.assertNotIn("warning", r.stderr)
+                seen = reads_as_fire(scene.with_suffix(".png"))
+                print(f"{name} + {look}: {seen}", file=sys.stderr)
+                self.assert_fire(f"{name} + {look}", seen)
+
     def test_a_sequence_gets_one_scene_covering_every_frame(self):
         for f, n in (("mantaflow_fire_f030.vdb", 1), ("mantaflow_fire_f060.vdb", 2)):
             shutil.copy(self.dir / f, self.dir / f"seq_{n:04d}.vdb")

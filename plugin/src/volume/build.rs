@@ -69,18 +69,13 @@ impl FireVolume {
         let temperature = channel("temperature");
         // ---- what the dataset's conventions chose, and the soot scale a simulator's density needs
         let mut said = chosen;
-        if set.soot_auto {
-            let kappa = match &set.emission {
-                Emission::Physical { optics, alpha, .. } => optics.kappa(550.0, 1.0, *alpha),
-                Emission::Pbrt { .. } => 0.0,
-            };
-            if let Some(s) = auto_soot(&ds, density, temperature, tool, kappa, spare)? {
-                said.push(format!("sootscale: {}", s.why));
-                if let Emission::Physical { sootscale, .. } = &mut set.emission {
-                    *sootscale = s.value;
-                }
-            }
-        }
+        said.extend(settle_soot(
+            &mut set,
+            &ds,
+            (density, temperature),
+            tool,
+            spare,
+        )?);
         if let Some(t) = temperature {
             let st = ds.channels()[t].stats;
             if st.max as f64 > crate::dataset::convention::HOTTEST_FLAME {
@@ -648,6 +643,35 @@ impl FireVolume {
 /// The hottest temperature a volume takes, K: far past any flame (the notes warn above 5000 K), and where the
 /// tables and the march's f32 sums stay finite.
 const MAX_TEMPERATURE: f64 = 1e9;
+
+/// The soot per unit density when the scene left `sootscale` unset and the density is a simulator's (what was
+/// found, to be said), then the soot's scattering per unit density from `sootscatter`, per unit soot.
+fn settle_soot(
+    set: &mut Settings,
+    ds: &Dataset,
+    (density, temperature): (usize, Option<usize>),
+    tool: crate::dataset::convention::Tool,
+    spare: u64,
+) -> Result<Option<String>, Error> {
+    let mut said = None;
+    if set.soot_auto {
+        let kappa = match &set.emission {
+            Emission::Physical { optics, alpha, .. } => optics.kappa(550.0, 1.0, *alpha),
+            Emission::Pbrt { .. } => 0.0,
+        };
+        if let Some(s) = auto_soot(ds, density, temperature, tool, kappa, spare)? {
+            said = Some(format!("sootscale: {}", s.why));
+            if let Emission::Physical { sootscale, .. } = &mut set.emission {
+                *sootscale = s.value;
+            }
+        }
+    }
+    if let (Some(k), Emission::Physical { sootscale, .. }) = (set.sootscatter, &set.emission) {
+        let per_density = sootscale * k;
+        set.sigma_s = Some(std::sync::Arc::new(move |_: f64| per_density));
+    }
+    Ok(said)
+}
 
 /// The soot scale for a file's density whose `sootscale` the scene left unset (`convention::soot_scale`, up from
 /// the data with `tool`'s convention breaking a tie, the soot absorbing `kappa` m⁻¹ per unit volume fraction at

@@ -5,9 +5,10 @@
 //! - `candle`: propane-like soot (paraffin's optical constants are close to propane's; Dalzell & Sarofim
 //!   give both as hydrocarbon soot) and a thin plume: `smokescale` 0.3 — a steady candle releases little
 //!   visible smoke.
-//! - `campfire`: propane-like soot whose aggregates scatter: `sigma_s` 2e6 m⁻¹ per unit density (an albedo of
-//!   about 0.2 at 550 nm against the soot's ≈ 9e6 m⁻¹ absorption per unit volume fraction — soot aggregates'
-//!   single-scattering albedo is 0.1–0.3, Sorensen 2001), forward-peaked, `g` 0.6.
+//! - `campfire`: propane-like soot whose aggregates scatter: `sootscatter` 2e6 m⁻¹ per unit volume fraction (an
+//!   albedo of about 0.2 at 550 nm against the soot's ≈ 9e6 m⁻¹ absorption per unit volume fraction — soot
+//!   aggregates' single-scattering albedo is 0.1–0.3, Sorensen 2001), forward-peaked, `g` 0.6. Per unit of
+//!   soot, not of density: on a simulator's density (Houdini's, EmberGen's) it keeps that albedo.
 //! - `gasburner`: a premixed, nearly soot-free flame: `sootscale` 0.02 and `smokescale` 0, its colour the
 //!   reaction zone's blue (CH* at 431 nm, C₂* Swan bands at 473–563 nm) as a colour ramp of the blackbody's
 //!   luminance — art direction (`physical` 0) standing in for the chemiluminescence the physics does not
@@ -30,7 +31,7 @@ fn params(name: &str) -> Vec<Param> {
         ],
         "campfire" => vec![
             Param::string("fuel", "propane"),
-            Param::floats("sigma_s", &[2e6]),
+            Param::float("sootscatter", 2e6),
             Param::float("g", 0.6),
         ],
         "gasburner" => vec![
@@ -49,7 +50,7 @@ fn params(name: &str) -> Vec<Param> {
         "explosion" => vec![
             Param::string("fuel", "acetylene"),
             Param::float("smokescale", 3.0),
-            Param::floats("sigma_s", &[2e6]),
+            Param::float("sootscatter", 2e6),
             Param::float("g", 0.6),
         ],
         _ => Vec::new(),
@@ -66,9 +67,14 @@ pub(crate) fn expand(list: &[Param]) -> Cow<'_, [Param]> {
         crate::params::Values::Strings(v) if v.len() == 1 => v[0].clone(),
         _ => return Cow::Borrowed(list),
     };
+    // (A look's `sootscatter` gives way to the scene's `sigma_s`: one of the two says how the smoke scatters.)
+    let given = |name: &str| {
+        list.iter()
+            .any(|q| q.name == name || (name == "sootscatter" && q.name == "sigma_s"))
+    };
     let mut out = list.to_vec();
     for mut p in params(&name) {
-        if !list.iter().any(|q| q.name == p.name) {
+        if !given(&p.name) {
             p.at = look.at.clone();
             out.push(p);
         }
@@ -90,7 +96,14 @@ mod tests {
         let get = |n: &str| out.iter().filter(|p| p.name == n).count();
         assert_eq!(get("smokescale"), 1, "the scene's own value stays");
         assert_eq!(get("fuel"), 1);
-        assert_eq!(get("sigma_s"), 1);
+        assert_eq!(get("sootscatter"), 1);
+        // The scene's own scattering, per unit density, replaces the look's per unit soot.
+        let own = [
+            Param::string("look", "campfire"),
+            Param::floats("sigma_s", &[3.0]),
+        ];
+        let out = expand(&own);
+        assert!(out.iter().all(|p| p.name != "sootscatter"));
         assert!(matches!(expand(&list[1..]), Cow::Borrowed(_)));
         for n in &CHOICES[1..] {
             assert!(!params(n).is_empty(), "{n}");

@@ -36,6 +36,8 @@ pub(super) struct Settings {
     pub emission: Emission,
     /// σ_s per unit density (pbrt mode: before `scale`), if given.
     pub sigma_s: Option<SpectrumFn>,
+    /// σ_s per unit soot volume fraction (`sootscatter`): σ_s per unit density once the soot scale is known.
+    pub sootscatter: Option<f64>,
     /// Majorant brick edge, voxels.
     pub brick: usize,
     /// `precision "f32"`: the march in f32 lanes where every product fits.
@@ -129,6 +131,15 @@ impl Settings {
             (None, Mode::Pbrt) => Some(std::sync::Arc::new(|_: f64| 1.0) as SpectrumFn),
             (s, _) => s,
         };
+        let sootscatter = r.opt_float("sootscatter")?;
+        if sootscatter.is_some() && list.iter().any(|p| p.name == "sigma_s") {
+            return Err(Error::invalid(
+                "volume",
+                "sootscatter",
+                "given with sigma_s",
+                "one of the two (sootscatter per unit soot, sigma_s per unit density)",
+            ));
+        }
         let emission = match mode {
             Mode::Physical => read_physical(r, list)?,
             Mode::Pbrt => read_pbrt(r, list)?,
@@ -185,6 +196,7 @@ impl Settings {
             basis,
             emission,
             sigma_s,
+            sootscatter,
             brick,
             f32_lanes,
             lattice,
@@ -389,6 +401,7 @@ fn read_pbrt(r: &ParamReader, list: &[Param]) -> Result<Emission, Error> {
         "fuelnk",
         "alpha",
         "sootscale",
+        "sootscatter",
         "species",
         "smokescale",
         "firescale",

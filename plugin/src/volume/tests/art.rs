@@ -460,3 +460,65 @@ fn a_reaction_shell_glows_blue_brightest_at_grazing() {
     }
     assert!(path(0.24) / path(0.0) > 2.0);
 }
+
+/// A look's scattering is per unit of soot: on a simulator's density (a soot scale far from 1) the smoke keeps
+/// the look's albedo, where a σ_s per unit density made it millions of times too thick (a Houdini plume with the
+/// campfire look hit the collision cap on every ray).
+#[test]
+fn a_looks_scattering_follows_the_soot_whatever_the_densitys_unit() {
+    let p = DVec3::splat(0.5);
+    let coef = |d: f64, extra: Vec<Param>| {
+        let v = slab_volume(d, 1600.0, extra);
+        let c = v.channels();
+        let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
+        v.coefficients(p, &mut sa, &mut ss, &mut j);
+        (sa, ss)
+    };
+    let look = || Param::string("look", "campfire");
+    // A volume fraction of 2e-6, as it is and as a simulator's density of 20 with sootscale 1e-7.
+    let (sa, ss) = coef(2e-6, vec![look()]);
+    let (sa_sim, ss_sim) = coef(20.0, vec![look(), Param::float("sootscale", 1e-7)]);
+    for c in 0..sa.len() {
+        assert!(
+            (sa_sim[c] / sa[c] - 1.0).abs() < 1e-6,
+            "absorption, bin {c}: {} against {}",
+            sa_sim[c],
+            sa[c]
+        );
+        assert!(
+            (ss_sim[c] / ss[c] - 1.0).abs() < 1e-6,
+            "scattering, bin {c}: {} against {}",
+            ss_sim[c],
+            ss[c]
+        );
+        // The look's albedo: σ_s = 2e6 · f_v against the soot's absorption.
+        assert!(
+            (ss[c] / (2e6 * 2e-6) - 1.0).abs() < 1e-6,
+            "bin {c}: {}",
+            ss[c]
+        );
+        let albedo = ss[c] / (sa[c] + ss[c]);
+        assert!((0.05..0.4).contains(&albedo), "bin {c}: albedo {albedo}");
+    }
+    // The scene's own sigma_s (per unit density) replaces the look's; both given by the scene: refused.
+    let (_, own) = coef(
+        20.0,
+        vec![
+            look(),
+            Param::float("sootscale", 1e-7),
+            Param::floats("sigma_s", &[0.1]),
+        ],
+    );
+    assert!(own.iter().all(|&v| (v - 2.0).abs() < 1e-12), "{own:?}");
+    let both = FireVolume::new(&thesis_bins(vec![
+        Param::floats("density", &[1e-6]),
+        Param::floats("temperature", &[1500.0]),
+        Param::float("sootscatter", 2e6),
+        Param::floats("sigma_s", &[1.0]),
+    ]));
+    let Err(e) = both else {
+        panic!("sootscatter with sigma_s is refused")
+    };
+    let e = e.to_string();
+    assert!(e.contains("sootscatter") && e.contains("sigma_s"), "{e}");
+}
