@@ -82,193 +82,23 @@ impl FireVolume {
                 said.push(format!("the temperature reaches {:.0} K (its grid mapped to {:.0}–{:.0} K), beyond any flame (above {:.0} K): is the grid already in kelvin and scaled again (temperaturescale), or in another unit (temperatureremap [a b ka kb])?", st.max, st.min, st.max, crate::dataset::convention::HOTTEST_FLAME));
             }
         }
+        // ---- coefficients
+        let Optics {
+            co,
+            mut tables,
+            thick,
+            spare,
+        } = optics(
+            &set,
+            &ds,
+            temperature,
+            (emission_grid, reaction),
+            spare,
+            &mut said,
+        )?;
+        let notes = said;
         let basis = set.basis;
         let c = basis.channels();
-
-        // ---- coefficients
-        let t_max = temperature
-            .map(|i| ds.channels()[i].stats.max as f64)
-            .unwrap_or(0.0)
-            .max(0.0);
-        // Temperatures past any the model holds (Planck's and the soot's tables, f32 sums) are refused, not left to
-        // overflow into NaN far down the line.
-        if t_max > MAX_TEMPERATURE {
-            return Err(Error::invalid(
-                "dataset",
-                "temperature",
-                format!("{t_max:e} K (its grid's hottest voxel, after any mapping)"),
-                format!("temperatures from 0 to {MAX_TEMPERATURE:e} K (check temperaturescale and the grid's unit)"),
-            ));
-        }
-        // ---- what a user should hear about its species (at its hottest; 2000 K without a temperature grid)
-        let notes = match &set.emission {
-            Emission::Physical { species, .. } => {
-                let range = match basis.mode {
-                    ColorMode::Spectral(g) => (g.min_nm(), g.max_nm()),
-                    ColorMode::Rgb => (380.0, 780.0),
-                };
-                let hot = if temperature.is_some() {
-                    t_max.max(1000.0)
-                } else {
-                    2000.0
-                };
-                said.extend(notes::species(species, hot, range));
-                said
-            }
-            Emission::Pbrt { .. } => said,
-        };
-        // The temperature tables' bytes, counted against what the grids leave of the budget before any is built.
-        let n_species = match &set.emission {
-            Emission::Physical { species, .. } => species.len(),
-            Emission::Pbrt { .. } => 0,
-        };
-        let rgb = matches!(basis.mode, ColorMode::Rgb);
-        let need = tables::bytes_for(t_max, c, n_species, rgb);
-        if need > spare {
-            return Err(Error::TooLarge {
-                file: ds
-                    .channels()
-                    .first()
-                    .map_or_else(String::new, |ch| ch.report.file.clone()),
-                what: format!(
-                    "the temperature tables ({c} channels up to {t_max:.0} K: the soot's, {n_species} species' σ and j, and their range maxima)"
-                ),
-                bytes: need,
-                cap: spare,
-            });
-        }
-        // (What the rest of the build may take: the grids' and the tables' share of the budget set aside.)
-        let spare = spare - need;
-        let mut tables = Vec::new();
-        let mut thick = None;
-        let mut co = match &set.emission {
-            Emission::Physical {
-                optics,
-                alpha,
-                sootscale,
-                intensity,
-                smokescale,
-                tint,
-                ramp,
-                species,
-            } => {
-                // Lines that can be thick leave the tables for the line model (`lines`).
-                let mut thin = species.clone();
-                if set.voigt && !species.is_empty() {
-                    let t0 = Instant::now();
-                    let sigma_s = set.sigma_s.as_ref();
-                    let continuum = |l: f64| {
-                        let k = optics.kappa(l, 1.0, *alpha) * sootscale;
-                        [
-                            smokescale * k,
-                            smokescale * sigma_s.map_or(0.0, |f| f(l)),
-                            intensity * k * tint.as_ref().map_or(1.0, |f| f(l)),
-                        ]
-                    };
-                    let t_range = temperature
-                        .map(|i| {
-                            let st = &ds.channels()[i].stats;
-                            [st.min as f64, st.max as f64]
-                        })
-                        .unwrap_or([0.0, 0.0]);
-                    let inp = lines::Input {
-                        species,
-                        ds: &ds,
-                        basis: &basis,
-                        broadening: set.linebroadening,
-                        intensity: *intensity,
-                        continuum: &continuum,
-                        t_range,
-                        budget: spare,
-                    };
-                    let marks = lines::select(&inp);
-                    thick = lines::ThickLines::new(&inp, &marks, t_max)?;
-                    for ((_, e, _), m) in thin.iter_mut().zip(&marks) {
-                        let keep: Vec<bool> = m.iter().map(|x| !x).collect();
-                        let lines = e.lines().to_vec();
-                        *e = e.with_lines(&|l| {
-                            lines
-                                .iter()
-                                .zip(&keep)
-                                .any(|(x, &k)| k && x.lambda_nm == l.lambda_nm)
-                        });
-                    }
-                    if let Some(tl) = &thick {
-                        tables.push(TableReport {
-                            name: format!("thick lines ({} wavelengths across them)", tl.nodes()),
-                            bytes: tl.bytes(),
-                            seconds: t0.elapsed().as_secs_f64(),
-                        });
-                    }
-                }
-                let mut co = coefficients::physical(
-                    &basis,
-                    optics,
-                    (*alpha, *sootscale, *intensity),
-                    (*smokescale, tint.as_ref(), ramp.as_ref()),
-                    &thin,
-                    set.sigma_s.as_ref(),
-                    &ds,
-                    t_max,
-                    &mut tables,
-                );
-                // (The light's power counts every line.)
-                if let Some(src) = &mut co.source {
-                    for ((e, _, _), (_, full, _)) in src.species.iter_mut().zip(species) {
-                        *e = full.clone();
-                    }
-                }
-                co
-            }
-            Emission::Pbrt {
-                scale,
-                sigma_a,
-                le_scale,
-                le,
-            } => coefficients::pbrt(
-                &basis,
-                *scale,
-                sigma_a,
-                *le_scale,
-                le.as_ref(),
-                set.sigma_s.as_ref(),
-                temperature.is_some(),
-                t_max,
-                &mut tables,
-            )?,
-        };
-        // (The fire light's full-spectrum power assumes emission follows the soot: with an emission grid it reports
-        // its power over the bins.)
-        if emission_grid {
-            co.source = None;
-        }
-        // The blue core: the reaction zone's chemiluminescence, a channel that emits (yield · heat release / 4π
-        // times the CH*/C₂* band spectrum, per channel) and absorbs nothing — the species' machinery, with
-        // tables that do not depend on temperature.
-        if let Some(ch) = reaction {
-            let shape = basis.emit(&firemedium_core::chemiluminescence::spectrum);
-            let zeros = vec![0.0; c];
-            co.species.push(SpeciesChannel {
-                ch,
-                scale: set.chemiluminescence / (4.0 * std::f64::consts::PI),
-                sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
-                j: tables::TTable::build(0.0, c, &|_| shape.clone()),
-            });
-            // (The light's full-spectrum power: the soot's and atoms' over the spectrum, the blue core's over the
-            // bins, which hold its bands whole.)
-            if let Some(src) = co.source.as_mut() {
-                // (Its spectrum integrates to 1: one unit emits the channel's scale, W m⁻³ sr⁻¹.)
-                src.reaction = Some((ch, set.chemiluminescence / (4.0 * std::f64::consts::PI)));
-            }
-        }
-        if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {
-            return Err(Error::invalid(
-                "volume",
-                "sigma_a/sigma_s",
-                format!("{:?} {:?}", co.a, co.s),
-                "finite, non-negative coefficients",
-            ));
-        }
 
         // ---- the march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below
         // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
@@ -643,6 +473,214 @@ impl FireVolume {
 /// The hottest temperature a volume takes, K: far past any flame (the notes warn above 5000 K), and where the
 /// tables and the march's f32 sums stay finite.
 const MAX_TEMPERATURE: f64 = 1e9;
+
+/// What the build makes of the fire's optics: its coefficients (the soot's, the species', the blue core's), their
+/// tables' reports, the thick lines' model, and the budget left after the tables.
+struct Optics {
+    co: coefficients::Coefficients,
+    tables: Vec<TableReport>,
+    thick: Option<lines::ThickLines>,
+    spare: u64,
+}
+
+/// The fire's optics from its settings and dataset (`temperature`'s channel, an emission grid, the reaction's
+/// channel) within `spare` bytes; what a user should hear about its species added to `said`.
+fn optics(
+    set: &Settings,
+    ds: &Dataset,
+    temperature: Option<usize>,
+    (emission_grid, reaction): (bool, Option<usize>),
+    spare: u64,
+    said: &mut Vec<String>,
+) -> Result<Optics, Error> {
+    let basis = &set.basis;
+    let c = basis.channels();
+    let t_max = temperature
+        .map(|i| ds.channels()[i].stats.max as f64)
+        .unwrap_or(0.0)
+        .max(0.0);
+    // Temperatures past any the model holds (Planck's and the soot's tables, f32 sums) are refused, not left to
+    // overflow into NaN far down the line.
+    if t_max > MAX_TEMPERATURE {
+        return Err(Error::invalid(
+            "dataset",
+            "temperature",
+            format!("{t_max:e} K (its grid's hottest voxel, after any mapping)"),
+            format!("temperatures from 0 to {MAX_TEMPERATURE:e} K (check temperaturescale and the grid's unit)"),
+        ));
+    }
+    // ---- what a user should hear about its species (at its hottest; 2000 K without a temperature grid)
+    if let Emission::Physical { species, .. } = &set.emission {
+        let range = match basis.mode {
+            ColorMode::Spectral(g) => (g.min_nm(), g.max_nm()),
+            ColorMode::Rgb => (380.0, 780.0),
+        };
+        let hot = if temperature.is_some() {
+            t_max.max(1000.0)
+        } else {
+            2000.0
+        };
+        said.extend(notes::species(species, hot, range));
+    }
+    // The temperature tables' bytes, counted against what the grids leave of the budget before any is built.
+    let n_species = match &set.emission {
+        Emission::Physical { species, .. } => species.len(),
+        Emission::Pbrt { .. } => 0,
+    };
+    let rgb = matches!(basis.mode, ColorMode::Rgb);
+    let need = tables::bytes_for(t_max, c, n_species, rgb);
+    if need > spare {
+        return Err(Error::TooLarge {
+            file: ds
+                .channels()
+                .first()
+                .map_or_else(String::new, |ch| ch.report.file.clone()),
+            what: format!(
+                "the temperature tables ({c} channels up to {t_max:.0} K: the soot's, {n_species} species' σ and j, and their range maxima)"
+            ),
+            bytes: need,
+            cap: spare,
+        });
+    }
+    // (What the rest of the build may take: the grids' and the tables' share of the budget set aside.)
+    let spare = spare - need;
+    let mut tables = Vec::new();
+    let mut thick = None;
+    let mut co = match &set.emission {
+        Emission::Physical {
+            optics,
+            alpha,
+            sootscale,
+            intensity,
+            smokescale,
+            tint,
+            ramp,
+            species,
+        } => {
+            // Lines that can be thick leave the tables for the line model (`lines`).
+            let mut thin = species.clone();
+            if set.voigt && !species.is_empty() {
+                let t0 = Instant::now();
+                let sigma_s = set.sigma_s.as_ref();
+                let continuum = |l: f64| {
+                    let k = optics.kappa(l, 1.0, *alpha) * sootscale;
+                    [
+                        smokescale * k,
+                        smokescale * sigma_s.map_or(0.0, |f| f(l)),
+                        intensity * k * tint.as_ref().map_or(1.0, |f| f(l)),
+                    ]
+                };
+                let t_range = temperature
+                    .map(|i| {
+                        let st = &ds.channels()[i].stats;
+                        [st.min as f64, st.max as f64]
+                    })
+                    .unwrap_or([0.0, 0.0]);
+                let inp = lines::Input {
+                    species,
+                    ds,
+                    basis,
+                    broadening: set.linebroadening,
+                    intensity: *intensity,
+                    continuum: &continuum,
+                    t_range,
+                    budget: spare,
+                };
+                let marks = lines::select(&inp);
+                thick = lines::ThickLines::new(&inp, &marks, t_max)?;
+                for ((_, e, _), m) in thin.iter_mut().zip(&marks) {
+                    let keep: Vec<bool> = m.iter().map(|x| !x).collect();
+                    let lines = e.lines().to_vec();
+                    *e = e.with_lines(&|l| {
+                        lines
+                            .iter()
+                            .zip(&keep)
+                            .any(|(x, &k)| k && x.lambda_nm == l.lambda_nm)
+                    });
+                }
+                if let Some(tl) = &thick {
+                    tables.push(TableReport {
+                        name: format!("thick lines ({} wavelengths across them)", tl.nodes()),
+                        bytes: tl.bytes(),
+                        seconds: t0.elapsed().as_secs_f64(),
+                    });
+                }
+            }
+            let mut co = coefficients::physical(
+                basis,
+                optics,
+                (*alpha, *sootscale, *intensity),
+                (*smokescale, tint.as_ref(), ramp.as_ref()),
+                &thin,
+                set.sigma_s.as_ref(),
+                ds,
+                t_max,
+                &mut tables,
+            );
+            // (The light's power counts every line.)
+            if let Some(src) = &mut co.source {
+                for ((e, _, _), (_, full, _)) in src.species.iter_mut().zip(species) {
+                    *e = full.clone();
+                }
+            }
+            co
+        }
+        Emission::Pbrt {
+            scale,
+            sigma_a,
+            le_scale,
+            le,
+        } => coefficients::pbrt(
+            basis,
+            *scale,
+            sigma_a,
+            *le_scale,
+            le.as_ref(),
+            set.sigma_s.as_ref(),
+            temperature.is_some(),
+            t_max,
+            &mut tables,
+        )?,
+    };
+    // (The fire light's full-spectrum power assumes emission follows the soot: with an emission grid it reports
+    // its power over the bins.)
+    if emission_grid {
+        co.source = None;
+    }
+    // The blue core: the reaction zone's chemiluminescence, a channel that emits (yield · heat release / 4π
+    // times the CH*/C₂* band spectrum, per channel) and absorbs nothing — the species' machinery, with
+    // tables that do not depend on temperature.
+    if let Some(ch) = reaction {
+        let shape = basis.emit(&firemedium_core::chemiluminescence::spectrum);
+        let zeros = vec![0.0; c];
+        co.species.push(SpeciesChannel {
+            ch,
+            scale: set.chemiluminescence / (4.0 * std::f64::consts::PI),
+            sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
+            j: tables::TTable::build(0.0, c, &|_| shape.clone()),
+        });
+        // (The light's full-spectrum power: the soot's and atoms' over the spectrum, the blue core's over the
+        // bins, which hold its bands whole.)
+        if let Some(src) = co.source.as_mut() {
+            // (Its spectrum integrates to 1: one unit emits the channel's scale, W m⁻³ sr⁻¹.)
+            src.reaction = Some((ch, set.chemiluminescence / (4.0 * std::f64::consts::PI)));
+        }
+    }
+    if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {
+        return Err(Error::invalid(
+            "volume",
+            "sigma_a/sigma_s",
+            format!("{:?} {:?}", co.a, co.s),
+            "finite, non-negative coefficients",
+        ));
+    }
+    Ok(Optics {
+        co,
+        tables,
+        thick,
+        spare,
+    })
+}
 
 /// The soot per unit density when the scene left `sootscale` unset and the density is a simulator's (what was
 /// found, to be said), then the soot's scattering per unit density from `sootscatter`, per unit soot.
