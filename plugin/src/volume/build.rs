@@ -97,70 +97,26 @@ impl FireVolume {
             &mut said,
         )?;
         let notes = said;
-        let basis = set.basis;
-        let c = basis.channels();
 
         // ---- the march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below
         // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
         // as it copies them.
         let brick = majorant_brick(set.brick, ds.topology());
-        // (With diffusion the emission reads the coarse fluence grid: the f64 march.)
-        let lanes_wanted =
-            set.f32_lanes && set.integrator == Integrator::March && set.diffusion.is_none();
-        let mut lattice = None;
-        let mut deferred = None;
-        let mut known = vec![None; ds.channels().len()];
-        if lanes_wanted && ds.interpolation() == crate::grid::Interpolation::Trilinear {
-            let t4 = Instant::now();
-            let ch = ds.channels();
-            let extra: Vec<usize> = lescale
-                .iter()
-                .copied()
-                .chain(co.species.iter().map(|sp| sp.ch))
-                .collect();
-            let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
-            // Dense over the box while it costs at most four times what its grids store (512 values per block:
-            // constant tiles share blocks, as the brick layout's copies of their interiors do), else a copy per
-            // brick holding data (a fire far from its copy in a big box, a file of constant tiles).
-            let per_grid = (ds.topology().blocks_stored() as u64 + 1) * 4 * 512;
-            let copied = per_grid * (2 + grids.len() as u64 - temperature.is_none() as u64);
-            let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
-                let voxels = p.iter().map(|&n| n as u64).product::<u64>();
-                voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
-            });
-            let dense = match set.lattice {
-                params::Lattice::Dense => Some(true),
-                params::Lattice::Bricks => Some(false),
-                params::Lattice::Off => None,
-                params::Lattice::Auto => Some(dense_fits),
-            };
-            let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
-            // A fire that scatters is tracked by its host: its lattice waits for the first ray that marches.
-            let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
-            let channels = (density, temperature, extra.clone());
-            deferred = dense
-                .filter(|_| scatters && set.lattice == params::Lattice::Auto)
-                .map(|d| lattice::Plan::new(d, channels, &ds, brick, spare));
-            match dense.filter(|_| deferred.is_none()) {
-                Some(true) => {
-                    if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare)
-                    {
-                        let order = std::iter::once(density).chain(temperature).chain(extra);
-                        for (k, r) in order.zip(ranges) {
-                            if known[k].is_none() {
-                                known[k] = Some(r);
-                            }
-                        }
-                        lattice = Some((lat, t4.elapsed().as_secs_f64()));
-                    }
-                }
-                Some(false) => {
-                    lattice = lattice::Lattice::build_bricks(d, t, &grids, spare)
-                        .map(|lat| (lat, t4.elapsed().as_secs_f64()));
-                }
-                None => {}
-            }
-        }
+        let Marched {
+            lattice,
+            deferred,
+            known,
+        } = march_lattice(
+            &set,
+            &ds,
+            &co,
+            (density, temperature, lescale),
+            brick,
+            spare,
+        );
+        let lanes_wanted = set.lanes_wanted();
+        let basis = set.basis;
+        let c = basis.channels();
 
         // ---- majorants
         let t1 = Instant::now();
@@ -473,6 +429,84 @@ impl FireVolume {
 /// The hottest temperature a volume takes, K: far past any flame (the notes warn above 5000 K), and where the
 /// tables and the march's f32 sums stay finite.
 const MAX_TEMPERATURE: f64 = 1e9;
+
+/// The march's lattice and what its copying found: built now, planned for the first ray that marches (a fire
+/// that scatters), or neither; the grids' brick ranges it gathered (the majorants' start).
+struct Marched {
+    lattice: Option<(lattice::Lattice, f64)>,
+    deferred: Option<lattice::Plan>,
+    known: Vec<Option<crate::majorant::Ranges>>,
+}
+
+/// The lattice the f32 lanes march over a trilinear dataset (its `density`, `temperature` and the further grids
+/// the march reads: `lescale`, the species'), dense or bricked by `set.lattice`, within `spare` bytes.
+fn march_lattice(
+    set: &Settings,
+    ds: &Dataset,
+    co: &coefficients::Coefficients,
+    (density, temperature, lescale): (usize, Option<usize>, Option<usize>),
+    brick: usize,
+    spare: u64,
+) -> Marched {
+    let mut lattice = None;
+    let mut deferred = None;
+    let mut known = vec![None; ds.channels().len()];
+    if set.lanes_wanted() && ds.interpolation() == crate::grid::Interpolation::Trilinear {
+        let t4 = Instant::now();
+        let ch = ds.channels();
+        let extra: Vec<usize> = lescale
+            .iter()
+            .copied()
+            .chain(co.species.iter().map(|sp| sp.ch))
+            .collect();
+        let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
+        // Dense over the box while it costs at most four times what its grids store (512 values per block:
+        // constant tiles share blocks, as the brick layout's copies of their interiors do), else a copy per
+        // brick holding data (a fire far from its copy in a big box, a file of constant tiles).
+        let per_grid = (ds.topology().blocks_stored() as u64 + 1) * 4 * 512;
+        let copied = per_grid * (2 + grids.len() as u64 - temperature.is_none() as u64);
+        let dense_fits = lattice::Lattice::padded(ds.dims()).is_some_and(|p| {
+            let voxels = p.iter().map(|&n| n as u64).product::<u64>();
+            voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
+        });
+        let dense = match set.lattice {
+            params::Lattice::Dense => Some(true),
+            params::Lattice::Bricks => Some(false),
+            params::Lattice::Off => None,
+            params::Lattice::Auto => Some(dense_fits),
+        };
+        let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));
+        // A fire that scatters is tracked by its host: its lattice waits for the first ray that marches.
+        let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
+        let channels = (density, temperature, extra.clone());
+        deferred = dense
+            .filter(|_| scatters && set.lattice == params::Lattice::Auto)
+            .map(|d| lattice::Plan::new(d, channels, ds, brick, spare));
+        match dense.filter(|_| deferred.is_none()) {
+            Some(true) => {
+                if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare) {
+                    let order = std::iter::once(density).chain(temperature).chain(extra);
+                    for (k, r) in order.zip(ranges) {
+                        if known[k].is_none() {
+                            known[k] = Some(r);
+                        }
+                    }
+                    lattice = Some((lat, t4.elapsed().as_secs_f64()));
+                }
+            }
+            Some(false) => {
+                lattice = lattice::Lattice::build_bricks(d, t, &grids, spare)
+                    .map(|lat| (lat, t4.elapsed().as_secs_f64()));
+            }
+            None => {}
+        }
+    }
+    Marched {
+        lattice,
+        deferred,
+        known,
+    }
+}
 
 /// What the build makes of the fire's optics: its coefficients (the soot's, the species', the blue core's), their
 /// tables' reports, the thick lines' model, and the budget left after the tables.

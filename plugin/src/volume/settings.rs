@@ -69,6 +69,14 @@ pub(super) struct Settings {
     pub fault: String,
 }
 
+impl Settings {
+    /// Whether the volume marches in f32 lanes (with diffusion the emission reads the coarse fluence grid: the
+    /// f64 march).
+    pub fn lanes_wanted(&self) -> bool {
+        self.f32_lanes && self.integrator == Integrator::March && self.diffusion.is_none()
+    }
+}
+
 /// The coefficients' source, by mode.
 pub(super) enum Emission {
     /// Pegoraro & Parker: soot (eq. 5) and atomic lines (eq. 7–12).
