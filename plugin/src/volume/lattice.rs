@@ -29,7 +29,9 @@
 //!
 //! The volume builds the dense layout while it costs at most four times what its grids store, else the bricks; a
 //! fire that scatters builds it when a ray first marches ([`Slot`])
-//! (`lattice` parameter; docs/results/log.md has both measured on the same fires).
+//! (`lattice` parameter; docs/results/log.md has both measured on the same fires). Without a lattice (`off`, or
+//! one the budget refuses) the kernel reads the dataset's bricks in place: the same values, lerped alike, so the
+//! same image to the bit — the copy buys speed only.
 
 use crate::grid::{Grid, Topology, BRICK};
 use crate::majorant::{BrickRanges, Ranges};

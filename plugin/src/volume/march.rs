@@ -1,5 +1,5 @@
 //! The straight march's one entry point, [`integrate`]: the lane kernel ([`super::kernel`]) where the volume has
-//! f32 lanes and a lattice and at most 32 channels, else the lane march over the dataset ([`march_lanes`]), else
+//! f32 lanes, trilinear grids (its lattice, or the grids read in place) and at most 32 channels, else the lane march over the dataset ([`march_lanes`]), else
 //! the f64 estimators of [`super::integrate`] (march, ratio, delta). All three take the same steps at the same
 //! points and stop by the same rule (tested), so the choice changes only rounding.
 //!

@@ -226,7 +226,8 @@ impl FireVolume {
     /// `Lescale` grid, T-dependent absorption, motion blur, refraction, diffusion, thick lines or embers.
     pub(super) fn soot_only(&self) -> bool {
         self.estimator.lanes.is_some()
-            && self.estimator.lattice.is_some()
+            && (self.estimator.lattice.is_some()
+                || self.grids.ds.interpolation() == crate::grid::Interpolation::Trilinear)
             && self.estimator.integrator == Integrator::March
             && self.grids.species.is_empty()
             && self.grids.lescale.is_none()

@@ -28,7 +28,7 @@ pub static DATASET: Component = Component {
         p("rawdims", T::Integer, "256 256 256", "voxels", Range::Between(1.0, 1048576.0), "Dims of a headerless raw file."),
         p("nonfinite", T::String, "error", "", Range::Choices(<crate::dataset::Policy as Choice>::NAMES), "NaN or infinite values: refuse the file, or replace by 0 (counted)."),
         p("negative", T::String, "error", "", Range::Choices(<crate::dataset::Policy as Choice>::NAMES), "Negative density, temperature or species values: refuse, or replace by 0."),
-        p("maxbytes", T::Float, "8589934592", "bytes", Range::Above(0.0), "The volume's memory budget, checked before allocating: a file's grids share it (refused beyond it), the march lattice is built only within what they leave (else the volume marches without it), and the fire light must fit in what remains."),
+        p("maxbytes", T::Float, "8589934592", "bytes", Range::Above(0.0), "The volume's memory budget, checked before allocating: a file's grids share it (refused beyond it), the march lattice is built only within what they leave (else the march reads the grids in place: the same image, slower), and the fire light must fit in what remains."),
         p("frame", T::Integer, "", "", Range::Between(-1e9, 1e9), "Frame number substituted into a patterned file name."),
         p("interpolation", T::String, "trilinear", "", Range::Choices(<crate::grid::Interpolation as Choice>::NAMES), "Lookup between voxel centres."),
         p("p0", T::Point3, "", "medium units", Range::Any, "Lower corner of the grid's box (inline grids, formats without a transform; default 0,0,0)."),
@@ -94,7 +94,7 @@ pub static VOLUME: Component = Component {
         p("integrator", T::String, "", "", Range::Choices(<Option<Integrator> as Choice>::NAMES), "march: fixed steps, eq. 3 (a step thicker than steptau split in sub-steps); ratio/delta: unbiased tracking over the majorant bricks (ratio: pbrt-v4's own estimator). Unset: march."),
         p("steptau", T::Float, "", "", Range::Between(1e-6, 1e30), "march: the largest optical depth of one step, at its midpoint; a thicker step is split into sub-steps of at most this depth (at most 4096). Unset: 0.1 in pbrt mode; 1 with multiplescattering diffusion (whose scattered light rises over a diffusion length from the smoke's surface); otherwise never."),
         p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
-        p("lattice", T::String, "auto", "", Range::Choices(<Lattice as Choice>::NAMES), "The copy of the grids the f32 march reads: dense over the box, or a padded copy per brick holding data (memory follows the data); auto: dense while it costs at most 4× the grids' storage, else bricks, and for a fire that scatters (its host tracks it) built when a ray first marches; off: the march reads the grids (slower, least memory)."),
+        p("lattice", T::String, "auto", "", Range::Choices(<Lattice as Choice>::NAMES), "The copy of the grids the f32 march reads: dense over the box, or a padded copy per brick holding data (memory follows the data); auto: dense while it costs at most 4× the grids' storage, else bricks, and for a fire that scatters (its host tracks it) built when a ray first marches; off: no copy, the march reads the grids' stored bricks in place (the same image to the bit, a slower march, least memory; also what a volume does when the budget leaves no room for the copy)."),
         p("precision", T::String, "f32", "", Range::Choices(<Precision as Choice>::NAMES), "Per-sample arithmetic of the march: f32 in vector lanes (about 2× faster; within 1e-6 of f64 on the campfire), falling back to f64 when a product could leave f32's range; f64: always f64."),
         p("threads", T::Integer, "0", "", Range::Between(0.0, 4096.0), "Threads the build may use (tables, lattice, reading and densifying grids); 0: every core. A host passes its own thread count."),
         p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
@@ -144,7 +144,7 @@ pub(crate) enum Lattice {
     Auto,
     Dense,
     Bricks,
-    /// No copy: the march reads the grids.
+    /// No copy: the march reads the grids' stored bricks in place.
     Off,
 }
 choice!(Lattice { Lattice::Auto => "auto", Lattice::Dense => "dense", Lattice::Bricks => "bricks", Lattice::Off => "off" });

@@ -7,7 +7,8 @@
 //!   midpoints; all at once when they are whole and before the next empty stretch), their cells and fractions (at once,
 //!   in vector registers), then their grid values, read together from the [`Lattice`] (density and temperature interleaved and padded: a
 //!   cell is four 16-byte reads under one range check, and the padding gives pbrt-v4's fade at the faces, so no
-//!   sample inside the bounds needs the general stencil), then their table rows (located once for emission and
+//!   sample inside the bounds needs the general stencil) — or, for a volume that keeps no lattice, from the
+//!   dataset's own bricks in place ([`Stored`]: the same values in the same lerps, bit for bit) — then their table rows (located once for emission and
 //!   T-dependent absorption), then the steps in order — independent reads first, which the CPU overlaps;
 //! - **the channels as `C` lanes** (a const generic: 1 for rgb, 4 for 30 spectral bins), so radiance,
 //!   transmittance and σ per unit density stay in registers for the whole ray;
@@ -25,6 +26,9 @@ use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
 use super::lattice::Lattice;
 use super::tables::TTable;
 use super::{FireVolume, Ray};
+use stored::{Memo, Stored};
+
+mod stored;
 
 /// a·b + c, fused when `F` (inlined into the FMA clone, a single instruction; without FMA `mul_add` would be a
 /// library call, so the plain product and sum).
@@ -243,6 +247,51 @@ fn cell_in_bricks<const F: bool>(
     (topo.slot(b) * PADDED_VOXELS + l, f)
 }
 
+/// The cells and fractions of a batch's `m` samples at arc lengths `mids` along the ray g0 + s·gd (lattice
+/// coordinates) into `ci` and `fx`: for the dense layout all `BATCH` at once, a loop without exits that
+/// vectorises (those past `m` are not read).
+#[inline(always)]
+fn march_cells<const F: bool>(
+    lay: &Layout,
+    g0: [f64; 3],
+    gd: [f64; 3],
+    mids: &[f64; BATCH],
+    m: usize,
+    ci: &mut [usize; BATCH],
+    fx: &mut [[f32; BATCH]; 3],
+) {
+    match lay.bricks {
+        None => {
+            for b in 0..BATCH {
+                let g = [
+                    g0[0] + mids[b] * gd[0],
+                    g0[1] + mids[b] * gd[1],
+                    g0[2] + mids[b] * gd[2],
+                ];
+                let (i, f) = cell::<F>(lay, g);
+                ci[b] = i;
+                fx[0][b] = f[0];
+                fx[1][b] = f[1];
+                fx[2][b] = f[2];
+            }
+        }
+        Some((topo, off, n)) => {
+            for b in 0..m {
+                let g = [
+                    g0[0] + mids[b] * gd[0],
+                    g0[1] + mids[b] * gd[1],
+                    g0[2] + mids[b] * gd[2],
+                ];
+                let (i, f) = cell_in_bricks::<F>(topo, off, n, g);
+                ci[b] = i;
+                fx[0][b] = f[0];
+                fx[1][b] = f[1];
+                fx[2][b] = f[2];
+            }
+        }
+    }
+}
+
 /// Sample `b` of a batch in cell `i` at fractions `f` (from [`cell`]) into `d`, `t` and `x`, trilinearly from
 /// the padded lattice; false when the cell is not in the lattice (the general stencil takes it). Species values
 /// are scaled by `scales`.
@@ -379,7 +428,12 @@ pub(super) fn march<
     if CV > 4 || CV * V < c || S == v.grids.species.is_empty() || A != v.model.a_t.is_some() {
         return None; // (the lanes below are written out for up to four)
     }
-    let lat = v.estimator.lattice.get(&v.grids.ds)?;
+    // The lattice, else the dataset's grids themselves (the same values, read in place).
+    let lat = v.estimator.lattice.get(&v.grids.ds);
+    let stored = match lat {
+        Some(_) => None,
+        None => Some(Stored::new(v)?),
+    };
     // σ per unit density in the kernel's lanes (channels past `c` are zero).
     let mut sigma = [[0f32; V]; CV];
     for (ch, &x) in tabs.sigma.as_flattened().iter().enumerate().take(c) {
@@ -435,7 +489,7 @@ pub(super) fn march<
     }
     let all = v.grids.temperature.is_none();
     let t_emit = v.model.t_emit as f32;
-    let lay = Layout::new(lat, v.grids.lescale.is_some(), v.grids.ds.dims());
+    let lay = lat.map(|lat| Layout::new(lat, v.grids.lescale.is_some(), v.grids.ds.dims()));
     let jt = Rows::<CV, V>::new(tabs.j)?;
     // σ_a(T) rows where they exist (else the emission rows, never read); located with the emission rows when
     // both tables share their temperatures (as every volume builds them).
@@ -517,45 +571,51 @@ pub(super) fn march<
         // 2. Their grid values, read before any is stepped through (independent reads, which the CPU
         // overlaps). A sample outside the medium gets d = −1 (skipped below, not counted).
         let mut dt = [[0f32; 2]; BATCH];
-        // (The cells and fractions of all BATCH at once, a loop without exits that vectorises; those past `m`
-        // are not read.)
+        // (From the lattice: the cells and fractions first, then the reads; from the grids, each in turn.)
         let mut ci = [0usize; BATCH];
         let mut fx = [[0f32; BATCH]; 3];
-        match lay.bricks {
-            None => {
+        match (&lay, &stored) {
+            (None, Some(st)) => {
+                // The cells' lower corners and fractions at once (a loop that vectorises), then the reads.
+                let mut cf = [[0f64; BATCH]; 3];
                 for b in 0..BATCH {
-                    let g = [
-                        g0[0] + mids[b] * gd[0],
-                        g0[1] + mids[b] * gd[1],
-                        g0[2] + mids[b] * gd[2],
-                    ];
-                    let (i, f) = cell::<F>(&lay, g);
-                    ci[b] = i;
-                    fx[0][b] = f[0];
-                    fx[1][b] = f[1];
-                    fx[2][b] = f[2];
+                    for a in 0..3 {
+                        let g = g0[a] + mids[b] * gd[a];
+                        cf[a][b] = floor::<F>(g);
+                        fx[a][b] = (g - cf[a][b]) as f32;
+                    }
                 }
-            }
-            Some((topo, off, n)) => {
+                let mut memo = Memo::new();
                 for b in 0..m {
-                    let g = [
-                        g0[0] + mids[b] * gd[0],
-                        g0[1] + mids[b] * gd[1],
-                        g0[2] + mids[b] * gd[2],
-                    ];
-                    let (i, f) = cell_in_bricks::<F>(topo, off, n, g);
-                    ci[b] = i;
-                    fx[0][b] = f[0];
-                    fx[1][b] = f[1];
-                    fx[2][b] = f[2];
+                    let (c, f) = (
+                        [cf[0][b], cf[1][b], cf[2][b]],
+                        [fx[0][b], fx[1][b], fx[2][b]],
+                    );
+                    if !stored::read_stored::<F>(
+                        st,
+                        &mut memo,
+                        c,
+                        f,
+                        &scales[..ns],
+                        b,
+                        &mut dt,
+                        &mut x,
+                    ) {
+                        let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                        general(v, p, b, &mut dt, &mut x);
+                    }
                 }
             }
+            (Some(lay), _) => march_cells::<F>(lay, g0, gd, &mids, m, &mut ci, &mut fx),
+            (None, None) => return None,
         }
-        for b in 0..m {
-            let f = [fx[0][b], fx[1][b], fx[2][b]];
-            if !read::<F>(&lay, ci[b], f, &scales[..ns], b, &mut dt, &mut x) {
-                let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
-                general(v, p, b, &mut dt, &mut x);
+        if let Some(lay) = &lay {
+            for b in 0..m {
+                let f = [fx[0][b], fx[1][b], fx[2][b]];
+                if !read::<F>(lay, ci[b], f, &scales[..ns], b, &mut dt, &mut x) {
+                    let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                    general(v, p, b, &mut dt, &mut x);
+                }
             }
         }
         // Densities clamped at 0 (an interpolation of non-negative data may round below it) and the samples
