@@ -149,11 +149,16 @@ impl FireVolume {
         .ok()?;
         drop((density, temperature));
 
+        // Its own march lattice when the volume has one (else its march too reads its grids in place).
         let ch = ds.channels();
-        let (lat, ranges) =
-            lattice::Lattice::build(&ch[0].grid, Some(&ch[1].grid), &[], BRICK, budget)?;
-        let majorant =
-            MajorantGrid::with_ranges(&ds, BRICK, ranges.into_iter().map(Some).collect());
+        let (lat, ranges) = if self.estimator.lattice.is_some() {
+            let (lat, ranges) =
+                lattice::Lattice::build(&ch[0].grid, Some(&ch[1].grid), &[], BRICK, budget)?;
+            (Some(lat), ranges.into_iter().map(Some).collect())
+        } else {
+            (None, vec![None; 2])
+        };
+        let majorant = MajorantGrid::with_ranges(&ds, BRICK, ranges);
         let nb = majorant.counts().iter().product::<usize>();
         let sigma = self
             .model
@@ -218,7 +223,9 @@ impl FireVolume {
             fault: self.fault.clone(),
         };
         v.estimator.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
-        v.estimator.lattice = lattice::Slot::ready(lat);
+        if let Some(lat) = lat {
+            v.estimator.lattice = lattice::Slot::ready(lat);
+        }
         Some(v)
     }
 
