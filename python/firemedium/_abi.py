@@ -1,4 +1,4 @@
-"""The plugin's C ABI 1.2 (plugin/abi/include/firemedium.h) as ctypes declarations.
+"""The plugin's C ABI 1.3 (plugin/abi/include/firemedium.h) as ctypes declarations.
 
 Kept to the header line by line: every struct begins with ``struct_size`` (set here to the size ctypes computes,
 which the plugin checks), arrays of FmParam/FmRay/FmExit/FmScatter have the major version's layout.
@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes as C
 
 ABI_MAJOR = 1
-ABI_MINOR = 2
+ABI_MINOR = 3
 ENTRY_SYMBOL = "firemedium_plugin_entry"
 
 OK, INVALID_ARGUMENT, INVALID_PARAMETER, DATASET, UNSUPPORTED, PANIC = range(6)
@@ -262,4 +262,5 @@ class FmApi(C.Structure):
         ("volume_note", C.CFUNCTYPE(_S, _V, C.c_size_t, C.c_char_p, C.c_size_t, C.POINTER(C.c_size_t))),
         ("volume_tables", C.CFUNCTYPE(_S, _V, C.POINTER(FmTables))),
         ("volume_fields", C.CFUNCTYPE(_S, _V, c_double_p, C.c_size_t, c_float_p)),
+        ("volume_bricks", C.CFUNCTYPE(_S, _V, C.POINTER(C.c_int64), C.c_size_t, C.POINTER(C.c_size_t))),
     ]

@@ -156,6 +156,19 @@ int main(int argc, char **argv) {
     expect_failure("volume_fields(NaN point)", api->volume_fields(vol, x, 1, f));
     expect_failure("volume_fields(null volume)", api->volume_fields(NULL, x, 1, f));
     {
+        /* (1.3) The bricks: no count pointer, no volume, a buffer too small, and a NULL buffer claiming room. */
+        size_t n = 0;
+        int64_t one[3];
+        expect_failure("volume_bricks(null count)", api->volume_bricks(vol, one, 1, NULL));
+        expect_failure("volume_bricks(null volume)", api->volume_bricks(NULL, one, 1, &n));
+        if (api->volume_bricks(vol, NULL, 0, &n) != FM_OK || n == 0) {
+            fprintf(stderr, "volume_bricks(count only): status or count wrong (%zu)\n", n);
+            return 1;
+        }
+        expect_failure("volume_bricks(cap below the count)", api->volume_bricks(vol, one, n - 1, &n));
+        expect_failure("volume_bricks(null out with room)", api->volume_bricks(vol, NULL, n, &n));
+    }
+    {
         FmTables small_tables = {.struct_size = 8};
         expect_failure("volume_tables(null out)", api->volume_tables(vol, NULL));
         expect_failure("volume_tables(unsized)", api->volume_tables(vol, &small_tables));

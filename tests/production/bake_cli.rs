@@ -251,6 +251,48 @@ fn a_datasets_velocity_is_passed_through_for_motion_blur() {
 }
 
 #[test]
+fn a_small_file_standing_for_many_voxels_is_refused_within_the_budget() {
+    // One active tile of 128³ voxels of constant soot and temperature: a fire of one shared block of values,
+    // whose bake would write 4 096 leaves per grid (75 MB). Within 0.05 GB the bake refuses it by name — the
+    // bricks, the bytes, the budget — before allocating them, and writes nothing.
+    let dir = Scratch::new("bake", "tiles");
+    let bytes = firemedium_dataset::vdb::write_tiled(
+        &[
+            ("density", vec![], vec![([0, 0, 0], 128, 1e-6)]),
+            ("temperature", vec![], vec![([0, 0, 0], 128, 1600.0)]),
+        ],
+        DVec3::ZERO,
+        DVec3::splat(0.01),
+    );
+    let input = dir.join("tile.vdb");
+    std::fs::write(&input, &bytes).unwrap();
+    let out = dir.join("baked.vdb");
+    let o = Command::new(exe("firemedium"))
+        .arg("bake")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--max-memory", "0.05", "--param", "fuel=propane"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(
+        err.contains("tile.vdb")
+            && err.contains("4096 bricks")
+            && err.contains("75497472 bytes")
+            && err.contains("50000000")
+            && err.contains("--max-memory"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
 fn a_sparse_dataset_bakes_sparse() {
     // Two 8³ blobs of hot soot 8 000 voxels apart on each axis: a box of 5·10¹¹ voxels, two bricks of data. The bake
     // visits the two bricks only (within a 0.1 GB budget) and writes two leaves per grid, far apart as they were.

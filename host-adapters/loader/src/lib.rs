@@ -362,7 +362,7 @@ impl Param {
 }
 
 /// The names of `FmApi`'s function pointers, in order (for messages; a test checks the count).
-const ENTRIES: [&str; 28] = [
+const ENTRIES: [&str; 29] = [
     "last_error",
     "last_error_detail",
     "param_count",
@@ -391,6 +391,7 @@ const ENTRIES: [&str; 28] = [
     "volume_note",
     "volume_tables",
     "volume_fields",
+    "volume_bricks",
 ];
 
 /// `FmApi` as raw words: its four u32 fields, then the function pointers, which may be read as null.

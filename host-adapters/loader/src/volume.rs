@@ -560,6 +560,32 @@ impl Volume {
         };
         self.inner.check(s)
     }
+
+    /// The bricks of 8³ samples the volume's grids store: the lattice index of each one's first sample (below 0
+    /// where the lattice starts inside a brick), in no set order — what the dataset holds, not its box.
+    pub fn bricks(&self) -> Result<Vec<[i64; 3]>, Error> {
+        let mut n = 0usize;
+        // SAFETY: null `out` with `cap` 0 asks for the count alone; `n` is writable.
+        let s = unsafe {
+            (self.inner.api().volume_bricks)(self.handle, std::ptr::null_mut(), 0, &mut n)
+        };
+        self.inner.check(s)?;
+        let mut out: Vec<[i64; 3]> = Vec::new();
+        out.try_reserve_exact(n).map_err(|_| {
+            Error::Buffer(format!(
+                "bricks: {n} bricks: the allocator refused their list"
+            ))
+        })?;
+        out.resize(n, [0; 3]);
+        let mut got = 0usize;
+        // SAFETY: `out` holds `n` × 3 int64 (`[i64; 3]` has no padding); `got` is writable.
+        let s = unsafe {
+            (self.inner.api().volume_bricks)(self.handle, out.as_mut_ptr() as *mut i64, n, &mut got)
+        };
+        self.inner.check(s)?;
+        out.truncate(got);
+        Ok(out)
+    }
 }
 
 /// A volume's coefficients in closed form ([`Volume::tables`]): with d, T and les the fields

@@ -31,7 +31,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 1u
-#define FM_ABI_MINOR 2u
+#define FM_ABI_MINOR 3u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -376,6 +376,14 @@ typedef struct FmApi {
      * interpolates them; zeros outside. At the lattice's voxel centres, the voxels' own values: what a host
      * textures. */
     FmStatus (*volume_fields)(const FmVolume *volume, const double *points, size_t n, float *out);
+    /* (1.3) The bricks of 8^3 samples the volume's grids store -- what its dataset holds, not its box: two fires far
+     * apart are bricks of their own -- in the lattice's sample indices (FmVolumeInfo.dims): per brick the index
+     * (i, j, k) of its first sample, 3 int64_t each, in no set order. An index may be below 0 (a sparse
+     * file's leaves stay whole where the lattice starts inside one); samples outside 0..dims are not the fire's.
+     * Their count into *count (required); out may be NULL with cap 0 to ask for it alone; a cap below the count is
+     * FM_INVALID_ARGUMENT, nothing written. What a host that bakes or textures the fire sparsely asks for, rather
+     * than reading the dataset again. */
+    FmStatus (*volume_bricks)(const FmVolume *volume, int64_t *out, size_t cap, size_t *count);
 } FmApi;
 
 typedef const FmApi *(*FmEntry)(void);

@@ -32,7 +32,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 1;
 /// Minor version of the C ABI. Grows when entries are appended to the table or fields to the end of a struct.
-pub const ABI_MINOR: u32 = 2;
+pub const ABI_MINOR: u32 = 3;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -782,6 +782,19 @@ pub struct FmApi {
         n: usize,
         out: *mut f32,
     ) -> FmStatus,
+    /// (1.3) The bricks of 8³ samples the volume's grids store — what its dataset holds, not its box: two fires
+    /// far apart are bricks of their own — in the lattice's sample indices ([`FmVolumeInfo::dims`]): per brick
+    /// the index (i, j, k) of its first sample, 3 `int64_t` each, in no set order. An index may be
+    /// below 0 (a sparse file's leaves stay whole where the lattice starts inside one); samples outside 0..dims
+    /// are not the fire's. Their count into `*count` (required); `out` may be null with `cap` 0 to ask for it
+    /// alone; a `cap` below the count is `FM_INVALID_ARGUMENT`, nothing written. What a host that bakes or
+    /// textures the fire sparsely asks for, rather than reading the dataset again.
+    pub volume_bricks: unsafe extern "C" fn(
+        volume: *const FmVolume,
+        out: *mut i64,
+        cap: usize,
+        count: *mut usize,
+    ) -> FmStatus,
 }
 
 /// The entry point's type.
@@ -819,8 +832,9 @@ mod tests {
         assert_eq!(core::mem::size_of::<FmParam>(), 24);
         assert_eq!(core::mem::size_of::<FmParamInfo>(), 64);
         assert_eq!(core::mem::size_of::<FmLightInfo>(), 56);
-        // Four u32 fields, then one pointer per entry (26 through 1.1; 1.2 appended volume_tables, volume_fields).
-        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 28 * 8);
+        // Four u32 fields, then one pointer per entry (26 through 1.1; 1.2 appended volume_tables, volume_fields;
+        // 1.3 volume_bricks).
+        assert_eq!(core::mem::size_of::<FmApi>(), 16 + 29 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
         assert_eq!(core::mem::size_of::<FmCreateInfo>(), 96);
         assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);

@@ -39,14 +39,16 @@ pub(super) unsafe fn in_f64<'a>(
     Ok(v)
 }
 
+/// `n × k` writable values at `p` (null refused unless `n` is 0).
+///
 /// # Safety
-/// `p` is null or points to `n × k` writable doubles.
-pub(super) unsafe fn out_f64<'a>(
-    p: *mut f64,
+/// `p` is null or points to `n × k` writable values.
+pub(super) unsafe fn out_values<'a, T>(
+    p: *mut T,
     n: usize,
     k: usize,
     what: &str,
-) -> Result<&'a mut [f64], (FmStatus, String)> {
+) -> Result<&'a mut [T], (FmStatus, String)> {
     if n == 0 {
         return Ok(&mut []);
     }
@@ -56,8 +58,8 @@ pub(super) unsafe fn out_f64<'a>(
     let len = n
         .checked_mul(k)
         .ok_or_else(|| bad(format!("{what}: {n} × {k} overflows")))?;
-    super::span::<f64>(len, what)?;
-    // SAFETY: caller provides n × k writable doubles (contract).
+    super::span::<T>(len, what)?;
+    // SAFETY: caller provides n × k writable values (contract).
     Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
 }
 

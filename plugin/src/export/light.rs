@@ -1,6 +1,6 @@
 //! The fire light's entries: create, destroy, describe, sample, and the pdfs per volume and per solid angle.
 
-use super::buffers::{in_f64, out_f32, out_f64, ray_of, rays, store, times};
+use super::buffers::{in_f64, out_f32, out_values, ray_of, rays, store, times};
 use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::light::{FireLight, Weighting};
@@ -111,9 +111,9 @@ pub(super) unsafe extern "C" fn light_sample(
         // SAFETY: `times` is null or holds `n` doubles (caller contract).
         let ts = unsafe { times(times_ptr, n, "light_sample") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
-        let pts = unsafe { out_f64(points, n, 3, "light_sample: points") }?;
+        let pts = unsafe { out_values(points, n, 3, "light_sample: points") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
-        let pd = unsafe { out_f64(pdf, n, 1, "light_sample: pdf") }?;
+        let pd = unsafe { out_values(pdf, n, 1, "light_sample: pdf") }?;
         let c = lt.volume().channels();
         // SAFETY: the buffer holds `n × channels` floats or is null (caller contract).
         let mut em = unsafe { out_f32(emission, n, c) }?;
@@ -157,7 +157,7 @@ pub(super) unsafe extern "C" fn light_pdf(
         // SAFETY: `times` is null or holds `n` doubles (caller contract).
         let ts = unsafe { times(times_ptr, n, "light_pdf") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
-        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf: pdf") }?;
+        let pd = unsafe { out_values(pdf, n, 1, "light_pdf: pdf") }?;
         for i in 0..n {
             let p = DVec3::new(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]);
             pd[i] = lt.pdf_at(p, ts[i]);
@@ -184,7 +184,7 @@ pub(super) unsafe extern "C" fn light_pdf_direction(
         // SAFETY: `times` is null or holds `n` doubles (caller contract).
         let ts = unsafe { times(times_ptr, n, "light_pdf_direction") }?;
         // SAFETY: the buffer holds `n` rows of the documented width or is null (caller contract).
-        let pd = unsafe { out_f64(pdf, n, 1, "light_pdf_direction: pdf") }?;
+        let pd = unsafe { out_values(pdf, n, 1, "light_pdf_direction: pdf") }?;
         for i in 0..n {
             let di = [d[3 * i], d[3 * i + 1], d[3 * i + 2]];
             super::buffers::direction(di)

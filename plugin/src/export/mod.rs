@@ -346,6 +346,7 @@ static API: FmApi = FmApi {
     volume_note,
     volume_tables,
     volume_fields,
+    volume_bricks,
 };
 
 /// The plugin's entry point: the static function table.

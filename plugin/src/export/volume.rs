@@ -1,7 +1,7 @@
 //! The fire volume's entries: create (from the host's creation info), destroy, describe, the fast whole-ray query
 //! (integrate, transmittance, scattering events), point coefficients in the channels, temperature range.
 
-use super::buffers::{in_f64, out_f32, out_f64, ray_of, rays, store, times};
+use super::buffers::{in_f64, out_f32, out_values, ray_of, rays, store, times};
 use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::par::Pool;
@@ -525,6 +525,42 @@ pub(super) unsafe extern "C" fn volume_fields(
     })
 }
 
+pub(super) unsafe extern "C" fn volume_bricks(
+    volume: *const FmVolume,
+    out: *mut i64,
+    cap: usize,
+    count: *mut usize,
+) -> FmStatus {
+    guard(|| {
+        // SAFETY: `volume` is null (refused) or a live handle from volume_create (caller contract).
+        let v = unsafe { vol(volume, "volume_bricks") }?;
+        if count.is_null() {
+            return Err(bad("volume_bricks: count is null"));
+        }
+        let mut n = 0usize;
+        v.for_each_stored_brick(|_| n += 1);
+        // SAFETY: `count` is non-null (checked) and writable (caller contract).
+        unsafe { *count = n };
+        if out.is_null() && cap == 0 {
+            return Ok(());
+        }
+        if cap < n {
+            return Err(bad(format!(
+                "volume_bricks: room for {cap} bricks: expected at least the volume's {n}"
+            )));
+        }
+        // SAFETY: `out` is null (refused) or holds 3 × `cap` writable int64 (caller contract); only the first
+        // 3 × n are written.
+        let o = unsafe { out_values(out, n, 3, "volume_bricks: out") }?;
+        let mut k = 0;
+        v.for_each_stored_brick(|first| {
+            o[3 * k..3 * k + 3].copy_from_slice(&first);
+            k += 1;
+        });
+        Ok(())
+    })
+}
+
 pub(super) unsafe extern "C" fn volume_temperature_range(
     volume: *const FmVolume,
     out: *mut f64,
@@ -533,7 +569,7 @@ pub(super) unsafe extern "C" fn volume_temperature_range(
         // SAFETY: contract of the handle.
         let v = unsafe { vol(volume, "volume_temperature_range") }?;
         // SAFETY: room for two doubles (contract).
-        let o = unsafe { out_f64(out, 2, 1, "volume_temperature_range: out") }?;
+        let o = unsafe { out_values(out, 2, 1, "volume_temperature_range: out") }?;
         let [lo, hi] = v.temperature_range().unwrap_or([0.0, 0.0]);
         o[0] = lo;
         o[1] = hi;
@@ -549,7 +585,7 @@ pub(super) unsafe extern "C" fn volume_white_temperature(
         // SAFETY: contract of the handle.
         let v = unsafe { vol(volume, "volume_white_temperature") }?;
         // SAFETY: room for one double (contract).
-        let o = unsafe { out_f64(out, 1, 1, "volume_white_temperature: out") }?;
+        let o = unsafe { out_values(out, 1, 1, "volume_white_temperature: out") }?;
         o[0] = v.white_temperature().unwrap_or(0.0);
         Ok(())
     })
@@ -728,7 +764,7 @@ pub(super) unsafe extern "C" fn volume_point(
                 None
             } else {
                 // SAFETY: n × k writable doubles (contract).
-                Some(unsafe { out_f64(p, n, k, what) }?)
+                Some(unsafe { out_values(p, n, k, what) }?)
             });
         }
         if n == 0 || k == 0 {

@@ -194,6 +194,15 @@ impl FireVolume {
     pub fn dataset(&self) -> &Dataset {
         &self.grids.ds
     }
+    /// Calls `f` with the first sample (lattice indices, below 0 where the lattice starts inside the brick) of
+    /// each 8³ brick the dataset's grids store, in the table's order.
+    pub fn for_each_stored_brick(&self, mut f: impl FnMut([i64; 3])) {
+        let topo = self.grids.ds.topology();
+        let off = topo.offset();
+        topo.for_each_slot(|b, _| {
+            f([0, 1, 2].map(|a| (crate::grid::BRICK * b[a]) as i64 - off[a] as i64))
+        });
+    }
     /// Medium-space bounds rays are clipped to (the dataset's, or pbrt-v4 nanovdb's world box in pbrt mode).
     pub fn bounds(&self) -> [DVec3; 2] {
         self.bounds.clip_box

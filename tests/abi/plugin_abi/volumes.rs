@@ -6,7 +6,7 @@ use super::*;
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (1, 2));
+    assert_eq!(p.version(), (1, 3));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -189,6 +189,52 @@ fn the_closed_form_crosses_the_abi_and_is_the_volumes_coefficients() {
         e.contains("atomic lines") && e.contains("volume_coefficients"),
         "{e}"
     );
+}
+
+#[test]
+fn the_bricks_a_volume_stores_cross_the_abi() {
+    // ABI 1.3: a sparse file's leaves, two active from x = 3 on (so the lattice starts inside its brick),
+    // and one far away, come back as the bricks the volume stores, each by its first sample's lattice index — not
+    // the box between them. (The raw calls' refusals: tests/c/abi_abuse.c.)
+    // (Values in writer's order, z fastest: voxel i at x = i / 64; the inactive ones hold the background, 0.)
+    let leaf = |o: [i32; 3], mask: [u64; 8], v: f32| -> firemedium_dataset::vdb::VdbLeaf {
+        let on = |i: usize| mask[i / 64] >> (i % 64) & 1 == 1;
+        (
+            o,
+            mask,
+            (0..512).map(|i| if on(i) { v } else { 0.0 }).collect(),
+        )
+    };
+    let from_x3 = [0, 0, 0, u64::MAX, u64::MAX, u64::MAX, u64::MAX, u64::MAX];
+    let all = [u64::MAX; 8];
+    let leaves = |v: f32| {
+        vec![
+            leaf([8, 16, 0], from_x3, v),
+            leaf([8, 16, 8], from_x3, v),
+            leaf([200, 8, 64], all, v),
+        ]
+    };
+    let bytes = firemedium_dataset::vdb::write_sparse(
+        &[("density", leaves(2e-6)), ("temperature", leaves(1600.0))],
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(0.01),
+    );
+    let dir = std::env::temp_dir().join(format!("firemedium-abi-bricks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("sparse.vdb");
+    std::fs::write(&file, bytes).unwrap();
+    let v = plugin()
+        .create_volume(&[
+            Param::string("filename", file.to_str().unwrap()),
+            Param::string("fuel", "propane"),
+        ])
+        .unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    // The lattice starts at the first active sample (11, 8, 0) of index space.
+    assert_eq!(v.info().dims, [200 + 8 - 11, 16 + 8 - 8, 64 + 8]);
+    let mut got = v.bricks().unwrap();
+    got.sort();
+    assert_eq!(got, vec![[-3, 8, 0], [-3, 8, 8], [189, 0, 64]]);
 }
 
 #[test]

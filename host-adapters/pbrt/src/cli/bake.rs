@@ -1,10 +1,11 @@
 //! `firemedium bake DATASET -o OUT.vdb`: the fire's coefficients as RGB grids, for a renderer that cannot load the
 //! plugin (Blender's Cycles reads them through its Volume Coefficients node).
 //!
-//! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters, docs/reference/params.md), and
-//! asked through the C ABI for σ_a, σ_s and the emission coefficient j in its channels at every voxel centre of
-//! the dataset's lattice that its grids hold (its 8³ bricks: sparse in, sparse out — two blobs far apart bake as
-//! two leaves, not the box between them). They become three vector grids in the renderer's linear working space (Rec.709/sRGB
+//! The fire is built by the plugin from the dataset and `--param NAME=VALUE` (its parameters,
+//! docs/reference/params.md) — the one read of its grids, within the memory budget — and asked through the C ABI
+//! for the bricks its grids store and for σ_a, σ_s and the emission coefficient j in its channels at their voxel
+//! centres (sparse in, sparse out — two blobs far apart bake as two leaves, not the box between them). They become
+//! three vector grids in the renderer's linear working space (Rec.709/sRGB
 //! primaries, D65), written as OpenVDB on the dataset's transform:
 //!
 //! - `emission` = the sRGB of j's XYZ (Σ_c j_c · XYZ_c, the plugin's own colour weights): per metre of path, in
@@ -197,7 +198,6 @@ fn bake(
 ) -> firemedium::Result<String> {
     let start = Instant::now();
     let budget = crate::args::budget(a.max_memory);
-    // The lattice: the dataset's (its first float grid, as `info` reads it).
     let opts = LoadOptions {
         max_bytes: budget,
         frame,
@@ -205,42 +205,8 @@ fn bake(
     };
     let entries = firemedium_dataset::list_grids(&a.dataset, &opts)
         .map_err(|e| Error::input(e.to_string()))?;
-    // The lattice: the dataset's, over the bricks any of its float grids holds (what the fire can be built from).
-    let lattice = firemedium_dataset::load_float_grids(&a.dataset, &entries, &opts)
-        .map_err(|e| Error::input(e.to_string()))?
-        .ok_or_else(|| {
-            Error::input(format!(
-                "{}: no float grid: nothing to bake",
-                a.dataset.display()
-            ))
-        })?;
-    let dims = lattice.dims();
-    // The baked grids' bytes, refused before the fire is built or the velocity read: a small file of constant
-    // tiles can stand for billions of voxels.
-    let has = |n: &str| {
-        entries
-            .iter()
-            .any(|g| g.name == n || g.name == format!("{n}.x"))
-    };
-    let velocity_named = match a.velocity.as_str() {
-        "none" => false,
-        "auto" => firemedium_dataset::vdb::VELOCITY_NAMES
-            .iter()
-            .any(|n| has(n)),
-        _ => true,
-    };
-    let grid_count: u64 = if velocity_named { 4 } else { 3 };
-    let bytes =
-        (lattice.topology().active_bricks() as u64).saturating_mul(grid_count * 3 * 512 * 4);
-    if bytes > budget {
-        return Err(Error::input(format!(
-            "{}: the baked grids' {} bricks of 8³ voxels need {bytes} bytes, above the memory budget of {budget} (raise --max-memory)",
-            a.dataset.display(),
-            lattice.topology().active_bricks()
-        )));
-    }
-    let velocity = velocity_of(a, &entries, &opts)?;
-    // The fire, through the plugin.
+    // The fire, through the plugin: it reads the dataset once, within the budget, and says which bricks its grids
+    // hold.
     let mut params = vec![Param::string("filename", &a.dataset.to_string_lossy())];
     params.extend(
         typed_params(
@@ -275,6 +241,40 @@ fn bake(
         ));
     }
     let info = volume.info();
+    let dims = info.dims.map(|n| n as usize);
+    // Only the bricks the fire's grids hold are baked (sparse in, sparse out): per brick, a leaf of each grid.
+    let firsts = volume.bricks().map_err(|e| Error::input(e.to_string()))?;
+    // The baked grids' bytes, refused before they are allocated or the velocity read (a small file of constant
+    // tiles can stand for billions of voxels), within what the fire left of the budget.
+    let has = |n: &str| {
+        entries
+            .iter()
+            .any(|g| g.name == n || g.name == format!("{n}.x"))
+    };
+    let velocity_named = match a.velocity.as_str() {
+        "none" => false,
+        "auto" => firemedium_dataset::vdb::VELOCITY_NAMES
+            .iter()
+            .any(|n| has(n)),
+        _ => true,
+    };
+    let grid_count: u64 = if velocity_named { 4 } else { 3 };
+    let left = budget.saturating_sub(info.bytes);
+    let bytes = (firsts.len() as u64).saturating_mul(grid_count * 3 * 512 * 4);
+    if bytes > left {
+        return Err(Error::input(format!(
+            "{}: the baked grids' {} bricks of 8³ voxels need {bytes} bytes, above the memory budget of {budget} less the fire's {} (raise --max-memory)",
+            a.dataset.display(),
+            firsts.len(),
+            info.bytes
+        )));
+    }
+    let velocity_opts = LoadOptions {
+        max_bytes: left - bytes,
+        frame,
+        ..LoadOptions::default()
+    };
+    let velocity = velocity_of(a, &entries, &velocity_opts)?;
     let channels = info.channels as usize;
     let xyz = volume
         .channel_xyz()
@@ -290,16 +290,20 @@ fn bake(
             .sum::<f64>()
             .max(f64::MIN_POSITIVE)
     });
-    // Only the bricks the dataset holds are baked (sparse in, sparse out): per brick, a leaf of each grid.
-    let topo = lattice.topology().clone();
-    let off = topo.offset();
-    let mut bricks: Vec<[usize; 3]> = Vec::new();
-    topo.for_each_slot(|b, _| bricks.push(b));
+    // The output's index space keeps the bricks whole: lattice sample i at i + off, each brick's first sample at
+    // a multiple of 8 (where the lattice starts inside a brick, its first sample's index is below 0).
+    let off = firsts
+        .first()
+        .map_or([0; 3], |f| f.map(|v| (-v).rem_euclid(8) as usize));
+    let mut bricks: Vec<[usize; 3]> = firsts
+        .iter()
+        .map(|f| [0, 1, 2].map(|a| ((f[a] + off[a] as i64) / 8) as usize))
+        .collect();
     bricks.sort_by_key(|b| (b[2], b[1], b[0]));
     let grid_count: u64 = if velocity.is_some() { 4 } else { 3 };
     // The lattice's voxel centres, in the dataset's space — the medium space the plugin builds the fire in.
-    let (l0, step) = (lattice.bounds()[0], lattice.voxel_size());
-    let (b0, voxel) = (l0.to_array(), step.to_array());
+    let b0 = info.lattice_min;
+    let voxel = [0, 1, 2].map(|a| (info.lattice_max[a] - info.lattice_min[a]) / dims[a] as f64);
     let (mut luminance, mut clipped) = (0.0f64, 0.0f64);
     // Per grid, its leaves: origin (output index space, sample i at i + off), active mask, 3 × 512 values.
     let mut leaves: Vec<Vec<firemedium_dataset::vdb::VdbLeaf>> =
