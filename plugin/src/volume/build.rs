@@ -96,7 +96,7 @@ impl FireVolume {
             spare,
             &mut said,
         )?;
-        let notes = said;
+        let mut notes = said;
 
         // ---- the march lattice, for a volume that marches in f32 lanes over a trilinear dataset (kept below
         // only if the lanes are built): made before the majorants, because it gathers its grids' brick ranges
@@ -106,6 +106,7 @@ impl FireVolume {
             lattice,
             deferred,
             known,
+            refused,
         } = march_lattice(
             &set,
             &ds,
@@ -114,6 +115,13 @@ impl FireVolume {
             brick,
             spare,
         );
+        if let Some(bytes) = refused {
+            notes.push(format!(
+                "the march's copy of the grids ({:.1} MB) does not fit the memory budget's {:.1} MB left after them: the march reads the grids in place (the same image, a slower march; raise the budget, maxbytes or --max-memory, to keep the copy)",
+                bytes as f64 / 1e6,
+                spare as f64 / 1e6
+            ));
+        }
         let lanes_wanted = set.lanes_wanted();
         let basis = set.basis;
         let c = basis.channels();
@@ -436,6 +444,8 @@ struct Marched {
     lattice: Option<(lattice::Lattice, f64)>,
     deferred: Option<lattice::Plan>,
     known: Vec<Option<crate::majorant::Ranges>>,
+    /// The bytes of a lattice the budget (or the allocator) refused: the march reads the grids in place.
+    refused: Option<u64>,
 }
 
 /// The lattice the f32 lanes march over a trilinear dataset (its `density`, `temperature` and the further grids
@@ -450,6 +460,7 @@ fn march_lattice(
 ) -> Marched {
     let mut lattice = None;
     let mut deferred = None;
+    let mut refused = None;
     let mut known = vec![None; ds.channels().len()];
     if set.lanes_wanted() && ds.interpolation() == crate::grid::Interpolation::Trilinear {
         let t4 = Instant::now();
@@ -469,7 +480,7 @@ fn march_lattice(
             let voxels = p.iter().map(|&n| n as u64).product::<u64>();
             voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
         });
-        let dense = match set.lattice {
+        let mut dense = match set.lattice {
             params::Lattice::Dense => Some(true),
             params::Lattice::Bricks => Some(false),
             params::Lattice::Off => None,
@@ -479,6 +490,12 @@ fn march_lattice(
         // A fire that scatters is tracked by its host: its lattice waits for the first ray that marches.
         let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
         let channels = (density, temperature, extra.clone());
+        // A copy beyond the budget is not tried (nor planned): the march reads the grids in place, and says so.
+        let wanted = dense.map(|d| lattice::Plan::new(d, channels.clone(), ds, brick, spare).bytes);
+        if let Some(bytes) = wanted.filter(|&b| b > spare && b < u64::MAX) {
+            refused = Some(bytes);
+            dense = None;
+        }
         deferred = dense
             .filter(|_| scatters && set.lattice == params::Lattice::Auto)
             .map(|d| lattice::Plan::new(d, channels, ds, brick, spare));
@@ -505,6 +522,7 @@ fn march_lattice(
         lattice,
         deferred,
         known,
+        refused,
     }
 }
 

@@ -166,7 +166,7 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
     // (one brick, or up to eight where the cell straddles them; zero beyond the faces, where the lattice has its
     // padding) and lerps them as it lerps the lattice's. The same radiance and transmittance to the bit, on a
     // 40 × 36 × 44 box (no side whole bricks) with a Lescale grid (pbrt mode) or a species grid, for rays from
-    // every side, some grazing the faces.
+    // every side, some grazing the faces; a budget with no room for the copy marches the same way, and says so.
     for (extra, species) in [(vec![Param::string("mode", "pbrt")], false), (vec![], true)] {
         let build = |lattice: &str| {
             let mut e = extra.clone();
@@ -175,6 +175,29 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
         };
         let (dense, off) = (build("dense"), build("off"));
         assert!(dense.estimator.lattice.built().is_some() && !off.estimator.lattice.is_some());
+        // A budget that holds the grids and tables and a kilobyte more (with a Lescale grid; the species' tables
+        // follow the budget): no copy, the march on the grids, and a note saying so.
+        let tight = (!species).then(|| {
+            let mut e = extra.clone();
+            e.push(Param::float(
+                "maxbytes",
+                (8_589_935_592 - off.spare_bytes()) as f64,
+            ));
+            blob_volume(e, species)
+        });
+        if let Some(tight) = &tight {
+            assert!(!tight.estimator.lattice.is_some());
+            assert!(
+                tight
+                    .notes()
+                    .iter()
+                    .any(|n| n.contains("the march's copy of the grids")
+                        && n.contains("the march reads the grids in place")),
+                "{:?}",
+                tight.notes()
+            );
+        }
+        assert!(off.notes().iter().all(|n| !n.contains("copy of the grids")));
         let mut rng = crate::rng::Rng::new(21);
         let (mut lit, mut crossed) = (0, 0);
         let size = DVec3::new(2.0, 1.8, 2.2);
@@ -198,6 +221,13 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
             let (ld, td) = run(&dense, &ray);
             let (lo, to_) = run(&off, &ray);
             assert_eq!((&lo, &to_), (&ld, &td), "ray {seed} (species {species})");
+            if let Some(tight) = &tight {
+                assert_eq!(
+                    run(tight, &ray),
+                    (ld.clone(), td.clone()),
+                    "ray {seed}, budget"
+                );
+            }
             lit += (ld.iter().sum::<f64>() > 0.0) as usize;
             crossed += td.iter().any(|&t| t < 0.999) as usize;
         }
