@@ -2,6 +2,18 @@
 
 use super::*;
 
+/// The ray from `from` toward `to`, out to parameter `t1` (unit direction: metres), numbered `seed`.
+fn between(from: DVec3, to: DVec3, t1: f64, seed: u64) -> Ray {
+    Ray {
+        o: from,
+        d: (to - from).normalize(),
+        t0: 0.0,
+        t1,
+        seed,
+        first: None,
+    }
+}
+
 #[test]
 fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
     // Two fires of 3³ leaves with random soot and temperature, the second 120 voxels from the first on every
@@ -68,14 +80,7 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
         let mut u = || DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
         let to = DVec3::splat(0.02) + u() * 0.2;
         let from = DVec3::splat(0.12) + (u() - DVec3::splat(0.5)).normalize_or(DVec3::X) * 0.5;
-        let ray = Ray {
-            o: from,
-            d: (to - from).normalize(),
-            t0: 0.0,
-            t1: 5.0,
-            seed,
-            first: None,
-        };
+        let ray = between(from, to, 5.0, seed);
         let (la, ta) = run(&auto, &ray);
         let (ld, td) = run(&dense, &ray);
         let (lo, to) = run(&off, &ray);
@@ -138,14 +143,7 @@ fn shared_tile_blocks_march_as_the_dense_lattice() {
         let to = u() * DVec3::new(1.36, 1.28, 1.28);
         let from =
             DVec3::new(0.68, 0.64, 0.64) + (u() - DVec3::splat(0.5)).normalize_or(DVec3::X) * 3.0;
-        let ray = Ray {
-            o: from,
-            d: (to - from).normalize(),
-            t0: 0.0,
-            t1: 10.0,
-            seed,
-            first: None,
-        };
+        let ray = between(from, to, 10.0, seed);
         let (lb, tb) = run(&bricks, &ray);
         let (ld, td) = run(&dense, &ray);
         let (lo, to) = run(&off, &ray);
@@ -210,14 +208,7 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
                 to[a] = if seed % 8 == 0 { 0.0 } else { size[a] } + (jitter.x - 0.5) * 1e-3;
             }
             let from = size * 0.5 + (side - DVec3::splat(0.5)).normalize_or(DVec3::X) * 4.0;
-            let ray = Ray {
-                o: from,
-                d: (to - from).normalize(),
-                t0: 0.0,
-                t1: 10.0,
-                seed,
-                first: None,
-            };
+            let ray = between(from, to, 10.0, seed);
             let (ld, td) = run(&dense, &ray);
             let (lo, to_) = run(&off, &ray);
             assert_eq!((&lo, &to_), (&ld, &td), "ray {seed} (species {species})");
