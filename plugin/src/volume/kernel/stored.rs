@@ -7,9 +7,9 @@ use crate::volume::lanes::MAX_SPECIES;
 use crate::volume::FireVolume;
 
 /// The dataset's own grids as the kernel reads them when the volume keeps no [`Lattice`] (`lattice off`, or one
-/// refused by the budget): each cell's eight samples from the stored 8³ bricks — one brick's slot looked up for
-/// a cell inside a brick, each corner's for one that straddles bricks — and zero beyond the bounds, where the
-/// lattice has its padding. The same eight values per grid as the lattice holds, in the same lerps: the same
+/// refused by the budget): each cell's eight samples from the stored 8³ bricks — the slots of a brick and of its
+/// seven neighbours beyond it looked up once, when the march enters the brick, for the cells that straddle them —
+/// and zero beyond the bounds, where the lattice has its padding. The same eight values per grid as the lattice holds, in the same lerps: the same
 /// result, bit for bit, without the copy.
 pub(super) struct Stored<'a> {
     topo: &'a crate::grid::Topology,
