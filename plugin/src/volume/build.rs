@@ -491,14 +491,17 @@ fn march_lattice(
         let scatters = set.diffusion.is_none() && co.s.iter().any(|&v| v > 0.0);
         let channels = (density, temperature, extra.clone());
         // A copy beyond the budget is not tried (nor planned): the march reads the grids in place, and says so.
-        let wanted = dense.map(|d| lattice::Plan::new(d, channels.clone(), ds, brick, spare).bytes);
-        if let Some(bytes) = wanted.filter(|&b| b > spare && b < u64::MAX) {
+        let plan = dense.map(|d| lattice::Plan::new(d, channels, ds, brick, spare));
+        if let Some(bytes) = plan
+            .as_ref()
+            .map(|p| p.bytes)
+            .filter(|&b| b > spare && b < u64::MAX)
+        {
             refused = Some(bytes);
             dense = None;
         }
-        deferred = dense
-            .filter(|_| scatters && set.lattice == params::Lattice::Auto)
-            .map(|d| lattice::Plan::new(d, channels, ds, brick, spare));
+        deferred =
+            plan.filter(|_| dense.is_some() && scatters && set.lattice == params::Lattice::Auto);
         match dense.filter(|_| deferred.is_none()) {
             Some(true) => {
                 if let Some((lat, ranges)) = lattice::Lattice::build(d, t, &grids, brick, spare) {
