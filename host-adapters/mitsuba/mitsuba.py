@@ -114,13 +114,14 @@ def _fire_params(props: mi.Properties) -> dict[str, Any]:
         else:
             # Mitsuba's vectors, points and colours: their components.
             params[name] = [float(x) for x in value]
-    if mi.is_spectral:
-        # The bins span the wavelengths Mitsuba samples, 1 nm each: the closed form's tables, read between bin
-        # centres at Mitsuba's wavelengths, are the spectrum itself (a fire baked as coefficients takes 24 bins).
-        params.setdefault("lambdamin", 360.0)
-        params.setdefault("lambdamax", 830.0)
-        params.setdefault("bins", _TABLE_BINS)
     return params
+
+
+def _bins(count: int) -> tuple[int, float, float] | None:
+    """The spectral variants' bins, beside the scene's parameters (its own ``bins``, ``lambdamin`` and
+    ``lambdamax`` win): the wavelengths Mitsuba samples, 1 nm each for the closed form's tables, read between bin
+    centres at Mitsuba's wavelengths (the spectrum itself; a fire baked as coefficients takes 24 bins)."""
+    return (count, 360.0, 830.0) if mi.is_spectral else None
 
 
 def _phase_g(phase) -> float | None:
@@ -140,7 +141,7 @@ class FireMedium(mi.Medium):
     def __init__(self, props: mi.Properties):
         params = _fire_params(props)
         self.to_world = mi.ScalarTransform4f(props["to_world"]) if "to_world" in props else mi.ScalarTransform4f()
-        volume = fm.Volume(params)
+        volume = fm.Volume(params, bins=_bins(_TABLE_BINS))
         try:
             tables = volume.tables()
         except fm.FiremediumError as e:
@@ -148,7 +149,7 @@ class FireMedium(mi.Medium):
                 raise
             tables = None
             if mi.is_spectral and "bins" not in props:
-                volume = fm.Volume({**params, "bins": _BAKED_BINS})
+                volume = fm.Volume(params, bins=_bins(_BAKED_BINS))
         refused = [f for f in _REFUSED if f in volume.features]
         if refused:
             raise fm.FiremediumError(

@@ -95,14 +95,20 @@ pub struct Param {
     pub values: Values,
     /// Where it came from (`file:line:col` of a scene), if the host said; errors about it begin with it.
     pub at: Option<String>,
+    /// Its place in the host's list (`FmCreateInfo::params`), when a host passed it: errors about it carry it,
+    /// so a host finds the parameter without reading the message.
+    pub index: Option<usize>,
 }
 
-/// Where `list` says the parameter `name` came from, for [`crate::Error::located`].
-pub fn location_in<'a>(list: &'a [Param]) -> impl Fn(&str) -> Option<&'a str> + 'a {
+/// Where `list` says the parameter `name` came from — its location and its index in the host's list — for
+/// [`crate::Error::located`].
+pub fn location_in<'a>(
+    list: &'a [Param],
+) -> impl Fn(&str) -> Option<(Option<&'a str>, Option<usize>)> + 'a {
     move |name| {
         list.iter()
             .find(|p| p.name == name)
-            .and_then(|p| p.at.as_deref())
+            .map(|p| (p.at.as_deref(), p.index))
     }
 }
 
@@ -114,6 +120,7 @@ impl Param {
             ty: ParamType::Float,
             values: Values::Numbers(vec![v]),
             at: None,
+            index: None,
         }
     }
     /// A `float` array parameter.
@@ -123,6 +130,7 @@ impl Param {
             ty: ParamType::Float,
             values: Values::Numbers(v.to_vec()),
             at: None,
+            index: None,
         }
     }
     /// An `rgb` parameter.
@@ -132,6 +140,7 @@ impl Param {
             ty: ParamType::Rgb,
             values: Values::Numbers(v.to_vec()),
             at: None,
+            index: None,
         }
     }
     /// An `integer` parameter.
@@ -141,6 +150,7 @@ impl Param {
             ty: ParamType::Integer,
             values: Values::Integers(vec![v]),
             at: None,
+            index: None,
         }
     }
     /// An `integer` array parameter.
@@ -150,6 +160,7 @@ impl Param {
             ty: ParamType::Integer,
             values: Values::Integers(v.to_vec()),
             at: None,
+            index: None,
         }
     }
     /// A `string` parameter.
@@ -159,6 +170,7 @@ impl Param {
             ty: ParamType::String,
             values: Values::Strings(vec![v.into()]),
             at: None,
+            index: None,
         }
     }
     /// A `string` array parameter.
@@ -168,6 +180,7 @@ impl Param {
             ty: ParamType::String,
             values: Values::Strings(v.iter().map(|s| s.to_string()).collect()),
             at: None,
+            index: None,
         }
     }
     /// A `bool` parameter.
@@ -177,6 +190,7 @@ impl Param {
             ty: ParamType::Bool,
             values: Values::Bools(vec![v]),
             at: None,
+            index: None,
         }
     }
     /// A `point3` parameter.
@@ -186,6 +200,7 @@ impl Param {
             ty: ParamType::Point3,
             values: Values::Numbers(v.to_vec()),
             at: None,
+            index: None,
         }
     }
     /// A `spectrum` parameter: (λ nm, value) pairs flattened, or one constant.
@@ -195,6 +210,7 @@ impl Param {
             ty: ParamType::Spectrum,
             values: Values::Numbers(v.to_vec()),
             at: None,
+            index: None,
         }
     }
 }

@@ -54,8 +54,9 @@ class FiremediumError(Exception):
 
     ``str(error)`` is the plugin's message (it names the component, the parameter or file, the value and the
     expectation). The structure beside it, for a program: ``status`` (``"invalid parameter"``, ``"dataset"``,
-    ``"unsupported"``, ...), ``parameter``, ``location`` (``file:line:col`` where the caller said the parameter
-    came from), ``file`` and ``position`` (``"byte 1234"``) — each ``None`` when the error has no such part.
+    ``"unsupported"``, ...), ``parameter``, ``index`` (its place in the ``params`` the call was given, in their
+    order), ``location`` (``file:line:col`` where the caller said the parameter came from), ``file`` and
+    ``position`` (``"byte 1234"``) — each ``None`` when the error has no such part.
     """
 
     def __init__(
@@ -66,6 +67,7 @@ class FiremediumError(Exception):
         location: str | None = None,
         file: str | None = None,
         position: str | None = None,
+        index: int | None = None,
     ):
         super().__init__(message)
         self.message = message
@@ -74,6 +76,7 @@ class FiremediumError(Exception):
         self.location = location
         self.file = file
         self.position = position
+        self.index = index
 
 
 def _library_name() -> str:
@@ -200,11 +203,12 @@ class Plugin:
         n = self.api.last_error(None, 0)
         buf = C.create_string_buffer(n + 1)
         self.api.last_error(buf, n + 1)
-        d = abi.FmErrorDetail(struct_size=C.sizeof(abi.FmErrorDetail))
+        d = abi.FmErrorDetail(struct_size=C.sizeof(abi.FmErrorDetail), index=-1)
         parts: dict[str, Any] = {}
         if self.api.last_error_detail(C.byref(d)) == abi.OK:
             parts = {
                 "status": abi.STATUS_NAMES.get(d.status, str(d.status)),
+                "index": d.index if d.index >= 0 else None,
                 **{k: (getattr(d, k).decode("utf-8", "replace") if getattr(d, k) else None)
                    for k in ("parameter", "location", "file", "position")},
             }
@@ -295,6 +299,9 @@ class Volume:
     resolved against ``directory`` (default: the working directory). ``threads`` bounds the build's threads
     (0: every core), ``max_bytes`` the memory a grid may take (0: the plugin's default), ``frame`` fills a
     ``####`` in a file name, ``shutter`` = (open, close) in frames enables motion blur where the data moves.
+    ``kind`` says what the host's medium type means (``"fire"``, the paper's; ``"pbrt"``, pbrt-v4's grid media)
+    and ``bins`` = (count, shortest nm, longest nm) the host's spectral bins; a parameter the scene gives itself
+    (``mode``, ``bins``, ``lambdamin``, ``lambdamax``, ``threads``, ...) wins over these.
     """
 
     def __init__(
@@ -306,6 +313,8 @@ class Volume:
         max_bytes: int = 0,
         frame: int | None = None,
         shutter: tuple[float, float] | None = None,
+        kind: str | None = None,
+        bins: tuple[int, float, float] | None = None,
         plugin: Plugin | None = None,
     ):
         self.plugin = plugin or globals()["plugin"]()
@@ -324,6 +333,13 @@ class Volume:
             info.shutter[0], info.shutter[1] = shutter
         d = os.fsencode(directory) if directory is not None else None
         info.directory = d
+        kinds = {None: abi.KIND_SCENE, "fire": abi.KIND_FIRE, "pbrt": abi.KIND_PBRT}
+        if kind not in kinds:
+            raise FiremediumError(f"kind {kind!r}: expected 'fire', 'pbrt' or None (the scene's mode)")
+        info.kind = kinds[kind]
+        if bins is not None:
+            info.bins = bins[0]
+            info.wavelengths[0], info.wavelengths[1] = bins[1], bins[2]
         handle = C.c_void_p()
         p._check(p.api.volume_create(C.byref(info), C.byref(handle)))
         del keep

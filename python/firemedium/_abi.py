@@ -9,7 +9,7 @@ from __future__ import annotations
 import ctypes as C
 
 ABI_MAJOR = 1
-ABI_MINOR = 3
+ABI_MINOR = 4
 ENTRY_SYMBOL = "firemedium_plugin_entry"
 
 OK, INVALID_ARGUMENT, INVALID_PARAMETER, DATASET, UNSUPPORTED, PANIC = range(6)
@@ -53,6 +53,7 @@ TABLES_EMISSION_GRID = 1 << 0
 
 CREATE_FRAME = 1 << 0
 CREATE_SHUTTER = 1 << 1
+KIND_SCENE, KIND_FIRE, KIND_PBRT = 0, 1, 2
 
 WEIGHTINGS = {"luminance": 0, "power": 1, "escaping": 2}
 
@@ -155,6 +156,7 @@ class FmErrorDetail(C.Structure):
         ("location", C.c_char_p),
         ("file", C.c_char_p),
         ("position", C.c_char_p),
+        ("index", C.c_int64),
     ]
 
 
@@ -176,6 +178,9 @@ class FmCreateInfo(C.Structure):
         ("parallel_for", C.c_void_p),
         ("pool", C.c_void_p),
         ("directory", C.c_char_p),
+        ("kind", C.c_uint32),
+        ("bins", C.c_uint32),
+        ("wavelengths", C.c_double * 2),
     ]
 
 

@@ -139,14 +139,32 @@ class Package(unittest.TestCase):
             fm.Volume({"filename": CAMPFIRE, "fule": "propane"})
         self.assertEqual(e.exception.status, "invalid parameter")
         self.assertEqual(e.exception.parameter, "fule")
+        # Its place among the parameters given, in their order.
+        self.assertEqual(e.exception.index, 1)
         self.assertIn("unknown parameter 'fule'", str(e.exception))
         with self.assertRaises(fm.FiremediumError) as e:
             fm.Volume({"filename": "no-such-fire.vdb"})
         self.assertEqual(e.exception.file, "no-such-fire.vdb")
+        self.assertIsNone(e.exception.index)
         self.assertIn("no-such-fire.vdb", str(e.exception))
         # A relative file name is the directory's.
         v = fm.Volume({"filename": "campfire.vdb"}, directory=str(ROOT / "scenes" / "campfire"))
         self.assertEqual(v.bounds, self.fire.bounds)
+
+    def test_the_host_says_its_medium_kind_and_bins_beside_the_parameters(self):
+        # pbrt-v4's grid semantics and the bins, as the host's context: the volume the same parameters name.
+        told = fm.Volume({"filename": CAMPFIRE}, kind="pbrt", bins=(10, 420.0, 700.0))
+        named = fm.Volume({"filename": CAMPFIRE, "mode": "pbrt", "bins": 10, "lambdamin": 420.0, "lambdamax": 700.0})
+        self.assertEqual((told.channels, told.wavelength_range), (10, (420.0, 700.0)))
+        o, d = np.array([[0.0, -2.0, 0.3]]), np.array([[0.0, 1.0, 0.0]])
+        a, b = told.integrate(o, d)[0], named.integrate(o, d)[0]
+        self.assertGreater(a.sum(), 0.0)
+        np.testing.assert_array_equal(a, b)
+        # The scene's own bins win; a kind the ABI does not have is refused by name.
+        self.assertEqual(fm.Volume({"filename": CAMPFIRE, "bins": 6}, bins=(10, 420.0, 700.0)).channels, 6)
+        with self.assertRaises(fm.FiremediumError) as e:
+            fm.Volume({"filename": CAMPFIRE}, kind="mantaflow")
+        self.assertIn("'mantaflow'", str(e.exception))
 
     def test_what_the_closed_form_cannot_express_is_refused_by_name(self):
         torch = str(ROOT / "scenes" / "spectroscopy" / "torch.vdb")

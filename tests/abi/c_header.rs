@@ -230,6 +230,10 @@ fn a_c_host_loads_the_plugin_through_the_header() {
     // The same error's parts as fields.
     assert_eq!(get("detail_status"), "0 2");
     assert_eq!(get("detail_parameter"), "stepsise");
+    // The parameter's index in the list the call was given (its only one), and a 1.0-1.3 host's smaller struct
+    // written as far as it goes, not a byte past it.
+    assert_eq!(get("detail_index"), "0");
+    assert_eq!(get("detail_1_0"), "0 1");
     assert!(get("bad_message").contains("did you mean 'stepsize'"));
     done(&exe);
 }

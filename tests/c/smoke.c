@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* A host's thread pool, serial: runs every task on the calling thread and counts them. */
 static size_t pool_tasks;
@@ -122,7 +123,18 @@ int main(int argc, char **argv) {
     FmErrorDetail detail;
     detail.struct_size = sizeof detail;
     FmStatus ds = api->last_error_detail(&detail);
-    printf("detail_status %d %d\ndetail_parameter %s\n", ds, detail.status, detail.parameter ? detail.parameter : "(null)");
+    printf("detail_status %d %d\ndetail_parameter %s\ndetail_index %lld\n", ds, detail.status,
+           detail.parameter ? detail.parameter : "(null)", (long long)detail.index);
+    /* A host built against 1.0-1.3 passes the struct as it was then: the plugin writes that much. */
+    uint64_t raw[8];
+    unsigned char *old = (unsigned char *)raw;
+    memset(old, 0xAB, sizeof raw);
+    size_t old_size = FM_ERROR_DETAIL_SIZE_1_0;
+    memcpy(old, &old_size, sizeof old_size);
+    FmStatus os = api->last_error_detail((FmErrorDetail *)(void *)raw);
+    int untouched = 1;
+    for (size_t i = FM_ERROR_DETAIL_SIZE_1_0; i < sizeof raw; i++) untouched &= old[i] == 0xAB;
+    printf("detail_1_0 %d %d\n", os, untouched);
     api->volume_destroy(vol);
     free(radiance);
     free(transmittance);

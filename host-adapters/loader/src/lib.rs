@@ -170,6 +170,7 @@ impl Inner {
             location: owned(d.location),
             file: owned(d.file),
             position: owned(d.position),
+            index: usize::try_from(d.index).ok(),
         }
     }
     fn check(&self, status: i32) -> Result<(), Error> {
@@ -207,6 +208,28 @@ pub struct Context {
     /// The folder the scene's relative file names are in (`None`: the working directory): the plugin resolves
     /// its own file parameters against it.
     pub directory: Option<PathBuf>,
+    /// What the medium type the scene named means (`None`: the scene's `mode`, else the paper's fire).
+    pub kind: Option<Kind>,
+    /// The render's spectral bins (`None`: the scene's `bins`, `lambdamin`, `lambdamax`, else the plugin's).
+    pub bins: Option<Bins>,
+}
+
+/// What a medium type a host's scene names means ([`Context::kind`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// The paper's fire (`mode` `physical`).
+    Fire,
+    /// pbrt-v4's grid media, `uniformgrid` and `nanovdb` (`mode` `pbrt`).
+    Pbrt,
+}
+
+/// A render's spectral bins ([`Context::bins`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bins {
+    /// How many (1 to 4096).
+    pub count: u32,
+    /// Their span, nm: shortest, longest (200 to 2000).
+    pub nm: [f64; 2],
 }
 
 impl std::fmt::Debug for Context {
@@ -218,6 +241,8 @@ impl std::fmt::Debug for Context {
             .field("shutter", &self.shutter)
             .field("pool", &self.pool.as_ref().map(|_| "the host's"))
             .field("directory", &self.directory)
+            .field("kind", &self.kind)
+            .field("bins", &self.bins)
             .finish()
     }
 }
@@ -255,6 +280,9 @@ pub struct ErrorDetail {
     pub file: Option<String>,
     /// Where in that file: `byte 1234`, `line 3, column 5`, `grid 'density'`.
     pub position: Option<String>,
+    /// The parameter at fault as its index in the list the failing call was given (a look's parameter: the
+    /// look's): where a host that keeps its parameters' places finds it.
+    pub index: Option<usize>,
 }
 
 /// A loaded plugin.
@@ -616,6 +644,13 @@ impl Plugin {
                     p as *const ThreadPool as *mut c_void
                 }),
                 directory: directory.as_ref().map_or(std::ptr::null(), |d| d.as_ptr()),
+                kind: match context.kind {
+                    None => abi::FM_KIND_SCENE,
+                    Some(Kind::Fire) => abi::FM_KIND_FIRE,
+                    Some(Kind::Pbrt) => abi::FM_KIND_PBRT,
+                },
+                bins: context.bins.map_or(0, |b| b.count),
+                wavelengths: context.bins.map_or([0.0; 2], |b| b.nm),
             };
             // SAFETY: `info`, `list`, `at_ptrs` (one entry per parameter) and everything they point to live until
             // after the call; `handle` is writable.

@@ -31,7 +31,7 @@ extern "C" {
 #endif
 
 #define FM_ABI_MAJOR 1u
-#define FM_ABI_MINOR 3u
+#define FM_ABI_MINOR 4u
 #define FIREMEDIUM_ENTRY_SYMBOL "firemedium_plugin_entry"
 
 typedef int32_t FmStatus;
@@ -188,11 +188,19 @@ typedef struct FmErrorDetail {
     const char *location;  /* where the host said it was given (FmCreateInfo.locations): file:line:col */
     const char *file;      /* the file whose reading or content failed */
     const char *position;  /* where in it: "byte 1234", "line 3, column 5", "grid 'density'" */
+    int64_t index;         /* 1.4: the parameter at fault as its index in the failing call's list (FmCreateInfo.params
+                            * or light_create's params; a look's parameter: the look's), or -1 when none the host
+                            * passed. A host that keeps its own places for its parameters finds the place here and
+                            * may pass no locations: the message then begins with no place of the plugin's making. */
 } FmErrorDetail;
+/* The size FmErrorDetail had in ABI 1.0 to 1.3, before index: the least a host may pass (the plugin writes as much
+ * as struct_size covers). */
+#define FM_ERROR_DETAIL_SIZE_1_0 48u
 
 /* A volume's creation (volume_create): the scene's parameters with their locations, and the host's
- * context beside them instead of as made-up parameters. A parameter the scene gives itself (threads, maxbytes, frame,
- * shutteropen, shutterclose) wins over the context. */
+ * context beside them (threads, memory budget, frame, shutter, the kind of medium the scene named, the render's
+ * spectral bins) instead of as made-up parameters. A parameter the scene gives itself (threads, maxbytes, frame,
+ * shutteropen, shutterclose, mode, bins, lambdamin, lambdamax) wins over the context. */
 /* A part of the plugin's build work: task(data, index); it never unwinds into the host. */
 typedef void (*FmTask)(void *data, size_t index);
 /* A host's thread pool: runs task(data, i) for every i in 0..count -- on its threads as it likes, in any order, the
@@ -200,6 +208,9 @@ typedef void (*FmTask)(void *data, size_t index);
 typedef void (*FmParallelFor)(void *pool, size_t count, FmTask task, void *data);
 #define FM_CREATE_FRAME (1u << 0)   /* frame is set */
 #define FM_CREATE_SHUTTER (1u << 1) /* shutter is set */
+#define FM_KIND_SCENE 0u /* kind: the scene's "mode" parameter, else the paper's fire */
+#define FM_KIND_FIRE 1u  /* kind: the paper's fire (mode "physical") */
+#define FM_KIND_PBRT 2u  /* kind: pbrt-v4's uniformgrid and nanovdb (mode "pbrt") */
 typedef struct FmCreateInfo {
     size_t struct_size;            /* sizeof(FmCreateInfo) */
     const FmParam *params;         /* may be NULL when count is 0 */
@@ -217,6 +228,10 @@ typedef struct FmCreateInfo {
     void *pool;                    /* handed back to parallel_for */
     const char *directory;         /* the folder relative file names are in (a scene's), or NULL: the working
                                     * directory; the plugin resolves its own file parameters against it */
+    uint32_t kind;                 /* 1.4: FM_KIND_* (0: the scene's "mode", else the paper's fire) */
+    uint32_t bins;                 /* 1.4: the render's spectral bins (0: the scene's "bins", else the default) */
+    double wavelengths[2];         /* 1.4: the bins' span, nm (both 0: the scene's lambdamin/lambdamax, else the
+                                    * defaults) */
 } FmCreateInfo;
 
 typedef struct FmParamInfo {

@@ -32,7 +32,7 @@ use core::ffi::{c_char, c_void};
 /// Major version of the C ABI. Changes on any incompatible change of the table or its types.
 pub const ABI_MAJOR: u32 = 1;
 /// Minor version of the C ABI. Grows when entries are appended to the table or fields to the end of a struct.
-pub const ABI_MINOR: u32 = 3;
+pub const ABI_MINOR: u32 = 4;
 /// Name of the exported entry symbol, NUL-terminated for `dlsym`/`GetProcAddress`.
 pub const ENTRY_SYMBOL: &[u8] = b"firemedium_plugin_entry\0";
 
@@ -453,7 +453,16 @@ pub struct FmErrorDetail {
     pub file: *const c_char,
     /// Where in that file: `byte 1234`, `line 3, column 5`, `grid 'density'`.
     pub position: *const c_char,
+    /// The parameter at fault as its index in the failing call's list ([`FmCreateInfo::params`], or
+    /// `light_create`'s `params`), or −1 when the error names none the host passed (1.4). A parameter a `look`
+    /// supplied is the look's index. A host that keeps its own places for its parameters finds the place here,
+    /// and may pass no `locations`: the message then begins with no place of the plugin's making.
+    pub index: i64,
 }
+
+/// The size [`FmErrorDetail`] had in ABI 1.0 to 1.3, before `index` was appended: the least a host may pass. The
+/// plugin writes as much as a host's `struct_size` covers.
+pub const FM_ERROR_DETAIL_SIZE_1_0: usize = core::mem::offset_of!(FmErrorDetail, index);
 
 impl Default for FmErrorDetail {
     fn default() -> Self {
@@ -465,6 +474,7 @@ impl Default for FmErrorDetail {
             location: core::ptr::null(),
             file: core::ptr::null(),
             position: core::ptr::null(),
+            index: -1,
         }
     }
 }
@@ -474,10 +484,19 @@ pub const FM_CREATE_FRAME: u32 = 1 << 0;
 /// [`FmCreateInfo::flags`]: `shutter` is set.
 pub const FM_CREATE_SHUTTER: u32 = 1 << 1;
 
+/// [`FmCreateInfo::kind`]: the scene's `mode` parameter says, else the paper's fire.
+pub const FM_KIND_SCENE: u32 = 0;
+/// [`FmCreateInfo::kind`]: the paper's fire (`mode` `physical`).
+pub const FM_KIND_FIRE: u32 = 1;
+/// [`FmCreateInfo::kind`]: pbrt-v4's grid media, `uniformgrid` and `nanovdb` (`mode` `pbrt`: σ spectra × density,
+/// a peak-normalised blackbody × `Lescale`).
+pub const FM_KIND_PBRT: u32 = 2;
+
 /// A volume's creation ([`FmApi::volume_create`]): the scene's parameters with their locations, and
-/// the host's context beside them — threads, memory budget, frame, shutter — instead of as parameters the host must
-/// make up. A parameter the scene gives itself (`threads`, `maxbytes`, `frame`, `shutteropen`, `shutterclose`)
-/// wins over the context.
+/// the host's context beside them — threads, memory budget, frame, shutter, the kind of medium the scene named,
+/// the render's spectral bins — instead of as parameters the host must make up. A parameter the scene gives
+/// itself (`threads`, `maxbytes`, `frame`, `shutteropen`, `shutterclose`, `mode`, `bins`, `lambdamin`,
+/// `lambdamax`) wins over the context.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct FmCreateInfo {
@@ -509,6 +528,13 @@ pub struct FmCreateInfo {
     /// directory. The plugin resolves its own file parameters (the `Range::Path` rows of its tables, docs/reference/params.md)
     /// against it, so a host need not know which of the fire's parameters name files.
     pub directory: *const c_char,
+    /// What the scene's medium type means, `FM_KIND_*` (1.4; 0: the scene's `mode`, else the paper's fire).
+    pub kind: u32,
+    /// The render's spectral bins (1.4; 0: the scene's `bins`, else the plugin's default).
+    pub bins: u32,
+    /// The bins' span, nm, shortest and longest (1.4; both 0: the scene's `lambdamin` and `lambdamax`, else the
+    /// plugin's defaults).
+    pub wavelengths: [f64; 2],
 }
 
 /// The wavelengths a host may ask the medium level about, nm: from the far ultraviolet to the far infrared (a
@@ -614,6 +640,9 @@ impl Default for FmCreateInfo {
             parallel_for: None,
             pool: core::ptr::null_mut(),
             directory: core::ptr::null(),
+            kind: FM_KIND_SCENE,
+            bins: 0,
+            wavelengths: [0.0; 2],
         }
     }
 }
@@ -836,8 +865,11 @@ mod tests {
         // 1.3 volume_bricks).
         assert_eq!(core::mem::size_of::<FmApi>(), 16 + 29 * 8);
         assert_eq!(core::mem::size_of::<FmRayQuery>(), 96);
-        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 96);
-        assert_eq!(core::mem::size_of::<FmErrorDetail>(), 48);
+        // 1.4 appended the kind and the bins.
+        assert_eq!(core::mem::size_of::<FmCreateInfo>(), 120);
+        // 1.0 to 1.3 ended at 48 bytes; 1.4 appended the parameter's index.
+        assert_eq!(FM_ERROR_DETAIL_SIZE_1_0, 48);
+        assert_eq!(core::mem::size_of::<FmErrorDetail>(), 56);
         assert_eq!(core::mem::size_of::<FmPointQuery>(), 80);
         assert_eq!(core::mem::size_of::<FmMajorantGrid>(), 104);
     }

@@ -10,6 +10,8 @@ pub enum Error {
     InvalidParameter {
         /// Where the parameter was given (`file:line:col` of a scene), when the host said.
         at: Option<String>,
+        /// The parameter's index in the host's list, when the host passed it (a look's: the look's).
+        index: Option<usize>,
         /// Component that owns the parameter (`soot`, `species`, `spectrum`, …).
         component: &'static str,
         /// Parameter name as the user wrote it.
@@ -69,6 +71,7 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             at: None,
+            index: None,
             component,
             name: name.into(),
             value: value.to_string(),
@@ -83,6 +86,7 @@ impl fmt::Display for Error {
             Error::InvalidParameter {
                 at,
                 component,
+                index: _,
                 name,
                 value,
                 expected,
@@ -153,6 +157,7 @@ impl From<firemedium_core::Error> for Error {
                 expected,
             } => Error::InvalidParameter {
                 at: None,
+                index: None,
                 component,
                 name,
                 value,
@@ -163,23 +168,32 @@ impl From<firemedium_core::Error> for Error {
 }
 
 impl Error {
-    /// The error with the location of the parameter it names, when `at(name)` gives one (hosts pass where each
-    /// parameter came from; see `FmCreateInfo::locations` and `params::location_in`).
-    pub fn located<'a>(self, at: impl Fn(&str) -> Option<&'a str>) -> Error {
+    /// The error with the origin of the parameter it names — where it was given and its index in the host's list
+    /// — when `origin(name)` gives one (hosts pass their parameters in a list, with where each came from; see
+    /// `FmCreateInfo::locations` and `params::location_in`).
+    pub fn located<'a>(
+        self,
+        origin: impl Fn(&str) -> Option<(Option<&'a str>, Option<usize>)>,
+    ) -> Error {
         match self {
             Error::InvalidParameter {
                 at: None,
+                index: None,
                 component,
                 name,
                 value,
                 expected,
-            } => Error::InvalidParameter {
-                at: at(&name).map(str::to_string),
-                component,
-                name,
-                value,
-                expected,
-            },
+            } => {
+                let (at, index) = origin(&name).unwrap_or_default();
+                Error::InvalidParameter {
+                    at: at.map(str::to_string),
+                    index,
+                    component,
+                    name,
+                    value,
+                    expected,
+                }
+            }
             e => e,
         }
     }

@@ -258,9 +258,19 @@ enum Grids {
     },
 }
 
+/// How the coefficients are defined: the `mode` parameter, or the kind of medium a host's scene named.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Pegoraro & Parker's fire.
+    Physical,
+    /// pbrt-v4's grid media.
+    Pbrt,
+}
+choice!(Mode { Mode::Physical => "physical", Mode::Pbrt => "pbrt" });
+
 /// What a host says of its render (the ABI's `FmCreateInfo`), typed end to end: each stands where the scene
 /// does not set the parameter of the same meaning itself (`threads`, `maxbytes`, `frame`, `shutteropen`,
-/// `shutterclose`), which wins.
+/// `shutterclose`, `mode`, `bins`, `lambdamin`, `lambdamax`), which wins.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct HostContext {
     /// The host's thread count (0 or none: the parameter's default, every core).
@@ -271,6 +281,12 @@ pub struct HostContext {
     pub frame: Option<i64>,
     /// The camera's shutter, open and close, in frames from the grids' time.
     pub shutter: Option<[f64; 2]>,
+    /// What the medium type the scene named means (pbrt-v4's `nanovdb` and `uniformgrid`: [`Mode::Pbrt`]).
+    pub mode: Option<Mode>,
+    /// The render's spectral bins.
+    pub bins: Option<usize>,
+    /// The bins' span, nm.
+    pub wavelengths: Option<[f64; 2]>,
 }
 
 impl HostContext {
@@ -279,6 +295,14 @@ impl HostContext {
         match host {
             Some(v) if !r.list_has(name) => Ok(v),
             _ => r.float(name),
+        }
+    }
+
+    /// The medium's mode: the scene's `mode` if it sets it, else the host's, else the paper's fire.
+    pub(crate) fn mode(&self, r: &ParamReader) -> Result<Mode, Error> {
+        match self.mode {
+            Some(m) if !r.list_has("mode") => Ok(m),
+            _ => r.choice("mode"),
         }
     }
 }

@@ -35,17 +35,19 @@ pub(super) unsafe extern "C" fn light_create(
         }
         // SAFETY: the caller's contract for `params`/`count`.
         let list = unsafe { read_params(params, std::ptr::null(), count) }?;
+        // (Errors about a parameter carry its index in the host's list.)
+        let located = |e: crate::Error| fail(e.located(crate::params::location_in(&list)));
         let r = crate::params::ParamReader::new("light", &list, &[&crate::light::params::LIGHT]);
-        r.check_names().map_err(fail)?;
-        let weighting: Weighting = r.choice("weighting").map_err(fail)?;
-        let cell = r.int("cell").map_err(fail)?;
+        r.check_names().map_err(located)?;
+        let weighting: Weighting = r.choice("weighting").map_err(located)?;
+        let cell = r.int("cell").map_err(located)?;
         let line = crate::light::LineEstimate {
-            step_voxels: r.float("linestep").map_err(fail)?,
-            correction: r.float("linecorrection").map_err(fail)?,
-            block: r.int("lineblock").map_err(fail)?.max(0) as usize,
-            channels: r.int("linechannels").map_err(fail)?.max(0) as usize,
+            step_voxels: r.float("linestep").map_err(located)?,
+            correction: r.float("linecorrection").map_err(located)?,
+            block: r.int("lineblock").map_err(located)?.max(0) as usize,
+            channels: r.int("linechannels").map_err(located)?.max(0) as usize,
         };
-        r.finish().map_err(fail)?;
+        r.finish().map_err(located)?;
         // SAFETY: a live handle from volume_create (contract).
         let handle = unsafe { &*(volume as *const super::volume::VolumeHandle) };
         let vol = handle.volume.clone();

@@ -18,10 +18,11 @@ use volume::*;
 
 thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
-    /// The last error's status and parts (parameter, location, file, position), for `last_error_detail`.
-    static LAST_DETAIL: RefCell<(FmStatus, [Option<CString>; 4])> = const { RefCell::new((FM_OK, [None, None, None, None])) };
+    /// The last error's status and parts (parameter, location, file, position) and its parameter's index, for
+    /// `last_error_detail`.
+    static LAST_DETAIL: RefCell<(FmStatus, [Option<CString>; 4], Option<usize>)> = const { RefCell::new((FM_OK, [None, None, None, None], None)) };
     /// The parts of an error [`fail`] converted, until [`guard`] reports it (or the call succeeds after all).
-    static PENDING_PARTS: RefCell<Option<[Option<String>; 4]>> = const { RefCell::new(None) };
+    static PENDING_PARTS: RefCell<Option<Parts>> = const { RefCell::new(None) };
     /// Set while an entry runs under [`guard`]: a panic there is caught and reported, so the hook stays quiet.
     static IN_GUARD: Cell<bool> = const { Cell::new(false) };
     /// Where the last caught panic happened (`file:line`), for its message.
@@ -54,11 +55,19 @@ fn set_error(msg: String) {
     LAST_ERROR.with(|e| *e.borrow_mut() = msg);
 }
 
+/// An error's parts for `last_error_detail`: (parameter, location, file, position), and the parameter's index in
+/// the host's list.
+#[derive(Default)]
+struct Parts {
+    text: [Option<String>; 4],
+    index: Option<usize>,
+}
+
 /// Records the last error's status and parts for `last_error_detail`.
-fn set_detail(status: FmStatus, parts: [Option<String>; 4]) {
+fn set_detail(status: FmStatus, parts: Parts) {
     let c = |s: Option<String>| s.map(|s| CString::new(s.replace('\0', "?")).unwrap_or_default());
-    let [a, b, f, p] = parts;
-    LAST_DETAIL.with(|d| *d.borrow_mut() = (status, [c(a), c(b), c(f), c(p)]));
+    let [a, b, f, p] = parts.text;
+    LAST_DETAIL.with(|d| *d.borrow_mut() = (status, [c(a), c(b), c(f), c(p)], parts.index));
 }
 
 /// Runs `f`, mapping its error and any panic to a status and the last-error message (and its detail).
@@ -97,12 +106,23 @@ fn status_of(e: &Error) -> FmStatus {
 }
 
 fn fail(e: Error) -> (FmStatus, String) {
-    // The error's parts, for `last_error_detail`: (parameter, location, file, position).
+    // The error's parts, for `last_error_detail`: (parameter, location, file, position), and the index.
     let parts = match &e {
-        Error::InvalidParameter { at, name, .. } => [Some(name.clone()), at.clone(), None, None],
-        Error::Format { file, at, .. } => [None, None, Some(file.clone()), Some(at.clone())],
+        Error::InvalidParameter {
+            at, name, index, ..
+        } => Parts {
+            text: [Some(name.clone()), at.clone(), None, None],
+            index: *index,
+        },
+        Error::Format { file, at, .. } => Parts {
+            text: [None, None, Some(file.clone()), Some(at.clone())],
+            index: None,
+        },
         Error::Io { file, .. } | Error::Unsupported { file, .. } | Error::TooLarge { file, .. } => {
-            [None, None, Some(file.clone()), None]
+            Parts {
+                text: [None, None, Some(file.clone()), None],
+                index: None,
+            }
         }
     };
     PENDING_PARTS.with(|p| *p.borrow_mut() = Some(parts));
@@ -197,14 +217,11 @@ unsafe fn write_sized<T>(
 
 unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
     // (A misuse is itself the last error then: its message, and a detail of its status alone.)
-    // SAFETY: null or the host's FmErrorDetail (contract).
-    if let Err(e) = unsafe { sized(out, "last_error_detail: out", "FmErrorDetail") } {
-        return guard(|| Err(e));
-    }
-    LAST_DETAIL.with(|d| {
+    let detail = LAST_DETAIL.with(|d| {
         let d = d.borrow();
         let ptr = |s: &Option<CString>| s.as_ref().map_or(std::ptr::null(), |s| s.as_ptr());
-        let detail = FmErrorDetail {
+        // (The strings live in this thread's slot until the next failing call on it.)
+        FmErrorDetail {
             struct_size: std::mem::size_of::<FmErrorDetail>(),
             status: d.0,
             reserved: 0,
@@ -212,12 +229,22 @@ unsafe extern "C" fn last_error_detail(out: *mut FmErrorDetail) -> FmStatus {
             location: ptr(&d.1[1]),
             file: ptr(&d.1[2]),
             position: ptr(&d.1[3]),
-        };
-        // SAFETY: non-null and at least size_of::<FmErrorDetail>() writable bytes (checked above); the strings
-        // live in this thread's slot until the next failing call on it.
-        unsafe { out.write_unaligned(detail) };
+            index: d.2.map_or(-1, |i| i as i64),
+        }
     });
-    FM_OK
+    // SAFETY: null or the host's FmErrorDetail of its struct_size (contract); a 1.0–1.3 host's ends before `index`.
+    match unsafe {
+        write_sized(
+            out,
+            detail,
+            FM_ERROR_DETAIL_SIZE_1_0,
+            "last_error_detail: out",
+            "FmErrorDetail",
+        )
+    } {
+        Ok(()) => FM_OK,
+        Err(e) => guard(|| Err(e)),
+    }
 }
 
 fn bad(msg: impl Into<String>) -> (FmStatus, String) {

@@ -133,6 +133,7 @@ pub(super) unsafe fn read_params(
             ty,
             values,
             at,
+            index: Some(i),
         });
     }
     Ok(out)

@@ -6,7 +6,7 @@ use super::params::read_params;
 use super::{bad, fail, guard};
 use crate::par::Pool;
 
-use crate::volume::{ColorMode, Event, FireVolume, HostContext, Integrator, Ray, Want};
+use crate::volume::{ColorMode, Event, FireVolume, HostContext, Integrator, Mode, Ray, Want};
 use firemedium_abi::*;
 use glam::DVec3;
 use std::ffi::c_void;
@@ -66,11 +66,37 @@ pub(super) unsafe extern "C" fn volume_create(
                 )));
             }
         }
+        let mode = match ci.kind {
+            FM_KIND_SCENE => None,
+            FM_KIND_FIRE => Some(Mode::Physical),
+            FM_KIND_PBRT => Some(Mode::Pbrt),
+            k => {
+                return Err(bad(format!(
+                    "volume_create: kind {k}: expected FM_KIND_SCENE (0), FM_KIND_FIRE (1) or FM_KIND_PBRT (2)"
+                )))
+            }
+        };
+        if ci.bins > 4096 {
+            return Err(bad(format!(
+                "volume_create: bins {}: expected 0 (the scene's) to 4096",
+                ci.bins
+            )));
+        }
+        let w = ci.wavelengths;
+        let wavelengths = (w != [0.0; 2]).then_some(w);
+        if wavelengths.is_some() && !(200.0 <= w[0] && w[0] < w[1] && w[1] <= 2000.0) {
+            return Err(bad(format!(
+                "volume_create: wavelengths {w:?} nm: expected shortest < longest, within 200 to 2000 nm (or both 0: the scene's)"
+            )));
+        }
         let ctx = HostContext {
             threads: (ci.threads > 0).then_some(ci.threads as usize),
             max_bytes: (ci.max_bytes > 0).then_some(ci.max_bytes),
             frame,
             shutter,
+            mode,
+            bins: (ci.bins > 0).then_some(ci.bins as usize),
+            wavelengths,
         };
         let pool = ci.parallel_for.map(|f| host_pool(f, ci.pool));
         let v = crate::par::with_pool(pool.clone(), || FireVolume::new_in(&list, &ctx))

@@ -27,7 +27,7 @@ impl FireVolume {
         march::check_simd()?;
         // (The look was expanded into the list above; reading it checks its name.)
         r.string("look")?;
-        let set = Settings::read(&r, list)?;
+        let set = Settings::read(&r, list, ctx)?;
         let threads = match ctx.threads {
             Some(n) if !r.list_has("threads") => n,
             _ => r.int("threads")? as usize,

@@ -76,6 +76,7 @@ pub(crate) fn expand(list: &[Param]) -> Cow<'_, [Param]> {
     for mut p in params(&name) {
         if !given(&p.name) {
             p.at = look.at.clone();
+            p.index = look.index;
             out.push(p);
         }
     }

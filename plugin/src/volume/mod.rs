@@ -54,7 +54,7 @@ mod settings;
 mod subset;
 mod tables;
 
-pub use crate::dataset::params::HostContext;
+pub use crate::dataset::params::{HostContext, Mode};
 pub use closed_form::ClosedForm;
 pub use integrate::evaluations_on_this_thread;
 use integrate::EVALUATIONS;
@@ -90,15 +90,6 @@ pub enum ColorMode {
     Spectral(SpectralGrid),
     /// CIE XYZ bands.
     Rgb,
-}
-
-/// How the coefficients are defined.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    /// Pegoraro & Parker's fire.
-    Physical,
-    /// pbrt-v4's grid media.
-    Pbrt,
 }
 
 /// One table the build made.

@@ -199,7 +199,6 @@ pub(crate) enum Fuel {
 }
 choice!(Fuel { Fuel::Propane => "propane", Fuel::Acetylene => "acetylene", Fuel::Custom => "custom" });
 
-choice!(Mode { Mode::Physical => "physical", Mode::Pbrt => "pbrt" });
 choice!(Option<Integrator> {
     None => "",
     Some(Integrator::March) => "march",

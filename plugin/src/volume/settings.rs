@@ -7,9 +7,10 @@ use super::params::{
     self, ColourSpace, Fuel, Lattice, LineColour, LineShape, Precision, RefractionIntegrator,
     Scattering,
 };
-use super::{ColorMode, Integrator, Mode};
+use super::{ColorMode, Integrator};
 use crate::ciddor::Air;
 use crate::cie::cmf_table::{CMF, CMF_START_NM};
+use crate::dataset::params::{HostContext, Mode};
 use crate::params::{Component, Param, ParamReader, ParamType, Values};
 use crate::rgb_spectrum::{RgbSpectrum, RgbUse};
 use crate::soot::SootOptics;
@@ -125,15 +126,19 @@ pub(super) fn components() -> Vec<&'static Component> {
 
 impl Settings {
     /// Reads and validates the volume's parameters (`list` for the raw spectrum values).
-    pub(super) fn read(r: &ParamReader, list: &[Param]) -> Result<Settings, Error> {
+    pub(super) fn read(
+        r: &ParamReader,
+        list: &[Param],
+        ctx: &HostContext,
+    ) -> Result<Settings, Error> {
         #[cfg(test)]
         let fault = r.string("faultinjection")?;
         #[cfg(test)]
         if fault == "create" {
             panic!("fault injection: panic during creation");
         }
-        let mode: Mode = r.choice("mode")?;
-        let basis = read_basis(r, mode)?;
+        let mode = ctx.mode(r)?;
+        let basis = read_basis(r, mode, ctx)?;
         // pbrt-v4's grid media scatter unless told otherwise (σ_s defaults to 1, as σ_a); the paper's fire does not.
         let sigma_s = match (spectrum_param(r, "sigma_s", list, RgbUse::Unbounded)?, mode) {
             (None, Mode::Pbrt) => Some(std::sync::Arc::new(|_: f64| 1.0) as SpectrumFn),
@@ -228,12 +233,17 @@ impl Settings {
 
 /// The channels: spectral bins over [lambdamin, lambdamax], or XYZ bands; K = 683 lm/W (physical: Y in cd/m²)
 /// or 1 (pbrt-v4's film records ∫ L ȳ dλ as it is, with an imaging ratio of 1).
-fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
+fn read_basis(r: &ParamReader, mode: Mode, ctx: &HostContext) -> Result<Basis, Error> {
     let colormode: ColourSpace = r.choice("colormode")?;
+    let [lo, hi] = ctx.wavelengths.map_or([None; 2], |w| w.map(Some));
+    let bins = match ctx.bins {
+        Some(n) if !r.list_has("bins") => n,
+        _ => r.int("bins")? as usize,
+    };
     let grid = SpectralGrid::new(
-        r.float("lambdamin")?,
-        r.float("lambdamax")?,
-        r.int("bins")? as usize,
+        HostContext::float(r, "lambdamin", lo)?,
+        HostContext::float(r, "lambdamax", hi)?,
+        bins,
     )
     .map_err(|e| match e {
         firemedium_core::Error::InvalidParameter {
@@ -243,6 +253,7 @@ fn read_basis(r: &ParamReader, mode: Mode) -> Result<Basis, Error> {
             ..
         } => Error::InvalidParameter {
             at: None,
+            index: None,
             component: "volume",
             name,
             value,

@@ -1,7 +1,7 @@
 //! End-to-end through the C ABI: load the **built** plugin library (not the rlib) with the loader, create fire
 //! volumes, integrate from four threads at once, and check errors and lifetimes (that a panic inside the plugin
 //! comes back as a status is the plugin's own test, `export::tests`: test-only code never enters the shipped build).
-//! A file per concern: volumes, the fire light, the medium level.
+//! A file per concern: volumes, the host's context, the fire light, the medium level.
 //!
 //! The end-to-end crate's dev-dependency on the plugin makes Cargo build the plugin's cdylib (the shipped build)
 //! into the same target directory.
@@ -9,6 +9,7 @@
 use firemedium_loader::{library_file_name, Error, Param, Plugin, Ray, Value};
 use std::path::PathBuf;
 
+mod context;
 mod light;
 mod medium_level;
 mod volumes;

@@ -1,12 +1,12 @@
 //! Volumes through the built library: creation, descriptions, notes, the closed form, threads, typed errors, lifetimes,
-//! ray times, art direction against D65, the host's context, its first numbers and step, its pool and its folder.
+//! ray times, art direction against D65, the host's first numbers and step (its context: `context.rs`).
 
 use super::*;
 
 #[test]
 fn loads_describes_and_integrates() {
     let p = plugin();
-    assert_eq!(p.version(), (1, 3));
+    assert_eq!(p.version(), (1, 4));
     let params = p.parameters();
     let names: Vec<&str> = params.iter().map(|r| r.name.as_str()).collect();
     for n in [
@@ -280,8 +280,9 @@ fn errors_come_back_typed() {
         }) => {
             assert_eq!(code, firemedium_abi::FM_INVALID_PARAMETER);
             assert!(message.contains("did you mean 'stepsize'"), "{message}");
-            // ABI 0.12: the parameter at fault as a field, not only in the text.
+            // ABI 0.12: the parameter at fault as a field, not only in the text; 1.4: its index in the list.
             assert_eq!(detail.parameter.as_deref(), Some("stepsise"));
+            assert_eq!(detail.index, Some(fire_params().len()));
         }
         other => panic!("expected a parameter error, got {other:?}"),
     }
@@ -293,6 +294,7 @@ fn errors_come_back_typed() {
         }) => {
             assert_eq!(code, firemedium_abi::FM_DATASET);
             assert_eq!(detail.file.as_deref(), Some("/no/such/fire.vdb"));
+            assert_eq!(detail.index, None, "a file's error names no parameter");
             assert!(
                 message.contains("/no/such/fire.vdb: cannot read"),
                 "{message}"
@@ -319,9 +321,30 @@ fn errors_come_back_typed() {
         panic!("{err:?}")
     };
     assert_eq!(
-        (detail.parameter.as_deref(), detail.location.as_deref()),
-        (Some("stepsize"), Some("scene.pbrt:12:5"))
+        (
+            detail.parameter.as_deref(),
+            detail.location.as_deref(),
+            detail.index
+        ),
+        (
+            Some("stepsize"),
+            Some("scene.pbrt:12:5"),
+            Some(fire_params().len())
+        )
     );
+    // A host that keeps its parameters' places passes none: the message begins with the plugin's component,
+    // and the index says which parameter.
+    let typo = [
+        Param::float("sootscale", 1e-6),
+        Param::string("filename", &fire_file()),
+        Param::float("temperaturscale", 1000.0),
+    ];
+    let err = p.create_volume(&typo).unwrap_err();
+    let Error::Status { detail, .. } = &err else {
+        panic!("{err:?}")
+    };
+    assert!(err.to_string().starts_with("volume: "), "{err}");
+    assert_eq!((detail.index, detail.location.as_deref()), (Some(2), None));
     // A file's content at fault: the file and the position in it.
     let dir = std::env::temp_dir().join(format!("firemedium-abi-detail-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -482,92 +505,6 @@ fn an_art_directed_colour_is_seen_against_d65() {
 }
 
 #[test]
-fn the_hosts_context_goes_beside_the_scenes_parameters() {
-    // Threads, the memory budget, the frame and the shutter in the creation info, typed through the plugin to
-    // the reads that use them (never turned into made-up parameters); a parameter the scene sets itself wins.
-    use firemedium_loader::{Context, FM_FEATURE_MOTION};
-    let p = plugin();
-    let tight = Context {
-        max_bytes: Some(1000),
-        threads: Some(1),
-        ..Default::default()
-    };
-    let e = p.create_volume_with(&fire_params(), &tight).unwrap_err();
-    assert!(
-        e.to_string().contains("above the memory cap of 1000 bytes"),
-        "{e}"
-    );
-    let own = [fire_params(), vec![Param::float("maxbytes", 1e9)]].concat();
-    assert!(p.create_volume_with(&own, &tight).is_ok());
-    // A context out of range is refused naming its field and the range, as a parameter would be.
-    for (bad, says) in [
-        (
-            Context {
-                threads: Some(5000),
-                ..Default::default()
-            },
-            "threads 5000: expected 0 (every core) to 4096",
-        ),
-        (
-            Context {
-                frame: Some(i64::MIN),
-                ..Default::default()
-            },
-            "frame -9223372036854775808",
-        ),
-        (
-            Context {
-                shutter: Some([0.5, f64::NAN]),
-                ..Default::default()
-            },
-            "shutter [0.5, NaN]",
-        ),
-    ] {
-        let e = p.create_volume_with(&fire_params(), &bad).unwrap_err();
-        assert!(e.to_string().contains(says), "{e}");
-    }
-    // The shutter: a velocity grid blurs over the context's shutter, and not without one.
-    let moving = [
-        fire_params(),
-        vec![Param::string("velocitygrid", "velocity")],
-    ]
-    .concat();
-    let open = Context {
-        shutter: Some([0.0, 0.5]),
-        ..Default::default()
-    };
-    let blurred = p.create_volume_with(&moving, &open).unwrap();
-    assert_eq!(
-        blurred.features().unwrap() & FM_FEATURE_MOTION,
-        FM_FEATURE_MOTION
-    );
-    let still = p.create_volume_with(&moving, &Context::default()).unwrap();
-    assert_eq!(still.features().unwrap() & FM_FEATURE_MOTION, 0);
-    // The same volume either way: the context as parameters gives the same numbers.
-    let as_params = [
-        moving.clone(),
-        vec![
-            Param::float("shutteropen", 0.0),
-            Param::float("shutterclose", 0.5),
-        ],
-    ]
-    .concat();
-    let by_params = p.create_volume(&as_params).unwrap();
-    let rs = rays(16);
-    let c = blurred.info().channels as usize;
-    let (mut a, mut b) = (vec![0f32; rs.len() * c], vec![0f32; rs.len() * c]);
-    let times = vec![0.3; rs.len()];
-    blurred
-        .integrate_at(&rs, Some(&times), &mut a, None, None)
-        .unwrap();
-    by_params
-        .integrate_at(&rs, Some(&times), &mut b, None, None)
-        .unwrap();
-    assert_eq!(a, b);
-    assert!(a.iter().any(|&v| v > 0.0));
-}
-
-#[test]
 fn the_whole_ray_query_takes_the_hosts_first_number_and_step() {
     // ABI 1.0's one whole-ray query: a host's own first uniform number per ray (its sampler's, stratified)
     // replaces the first number of the ray's stream — the march's offset, tracking's first free flight — and a
@@ -713,114 +650,4 @@ fn the_whole_ray_query_takes_the_hosts_first_number_and_step() {
         "{} vs {want}",
         ev[1].t - ev[0].t
     );
-}
-
-#[test]
-fn the_hosts_thread_pool_runs_the_builds_parallel_parts() {
-    // A host lending its pool (FmCreateInfo::parallel_for): the volume's and its light's build run their
-    // parallel parts (table rows, lattice slabs, the light's bricks) as the pool's tasks, on the pool's threads,
-    // and build the same fire as the plugin's own threads do.
-    use firemedium_loader::{Context, ThreadPool};
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::{Arc, Mutex};
-    let p = plugin();
-    let tasks = Arc::new(AtomicUsize::new(0));
-    let names = Arc::new(Mutex::new(std::collections::BTreeSet::new()));
-    let (count, seen) = (tasks.clone(), names.clone());
-    let pool: ThreadPool = Arc::new(move |n, task| {
-        // Three workers of the host's, each taking every third task.
-        std::thread::scope(|s| {
-            for w in 0..3 {
-                let (count, seen) = (&count, &seen);
-                std::thread::Builder::new()
-                    .name(format!("host-pool-{w}"))
-                    .spawn_scoped(s, move || {
-                        for i in (w..n).step_by(3) {
-                            count.fetch_add(1, Ordering::Relaxed);
-                            let me = std::thread::current().name().unwrap_or("").to_string();
-                            seen.lock().unwrap().insert(me);
-                            task(i);
-                        }
-                    })
-                    .unwrap();
-            }
-        })
-    });
-    let context = Context {
-        threads: Some(4),
-        pool: Some(pool),
-        ..Context::default()
-    };
-    let pooled = p.create_volume_with(&fire_params(), &context).unwrap();
-    let after_volume = tasks.load(Ordering::Relaxed);
-    assert!(after_volume >= 4, "{after_volume} tasks");
-    let light = pooled.create_light(None).unwrap();
-    assert!(
-        tasks.load(Ordering::Relaxed) > after_volume,
-        "the light's build used the pool too"
-    );
-    let names = names.lock().unwrap().clone();
-    assert!(
-        !names.is_empty() && names.iter().all(|n| n.starts_with("host-pool-")),
-        "{names:?}"
-    );
-    // The same fire as with the plugin's own threads.
-    let own = p
-        .create_volume_with(
-            &fire_params(),
-            &Context {
-                threads: Some(4),
-                ..Context::default()
-            },
-        )
-        .unwrap();
-    let c = own.info().channels as usize;
-    let rs = rays(32);
-    let (mut a, mut b) = (vec![0f32; 32 * c], vec![0f32; 32 * c]);
-    own.integrate(&rs, &mut a, None, None).unwrap();
-    pooled.integrate(&rs, &mut b, None, None).unwrap();
-    assert_eq!(a, b);
-    let own_light = own.create_light(None).unwrap();
-    assert_eq!(light.info().power_w, own_light.info().power_w);
-    // A pool that runs no task at all: the plugin runs its parts itself.
-    let idle: ThreadPool = Arc::new(|_, _| {});
-    let lazy = p
-        .create_volume_with(
-            &fire_params(),
-            &Context {
-                pool: Some(idle),
-                ..Context::default()
-            },
-        )
-        .unwrap();
-    lazy.integrate(&rs, &mut b, None, None).unwrap();
-    assert_eq!(a, b);
-}
-
-#[test]
-fn the_plugin_resolves_its_own_file_names_against_the_hosts_folder() {
-    // FmCreateInfo::directory: a relative `filename` is the scene's folder's, so a host passes the fire's
-    // parameters as the scene wrote them, knowing none of their names; without the folder it is the working
-    // directory's, and a file not there is an error naming it.
-    use firemedium_loader::Context;
-    let p = plugin();
-    let file = PathBuf::from(fire_file());
-    let (dir, name) = (
-        file.parent().unwrap().to_path_buf(),
-        file.file_name().unwrap().to_str().unwrap().to_string(),
-    );
-    let mut list = fire_params();
-    list[0] = Param::string("filename", &name);
-    let there = Context {
-        directory: Some(dir.clone()),
-        ..Context::default()
-    };
-    let v = p.create_volume_with(&list, &there).unwrap();
-    let absolute = p.create_volume(&fire_params()).unwrap();
-    assert_eq!(v.info().bounds_min, absolute.info().bounds_min);
-    let e = p.create_volume(&list).unwrap_err().to_string();
-    assert!(e.contains(&name), "{e}");
-    // An absolute name stays as it is.
-    let v = p.create_volume_with(&fire_params(), &there).unwrap();
-    assert_eq!(v.info().bounds_max, absolute.info().bounds_max);
 }

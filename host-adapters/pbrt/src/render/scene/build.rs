@@ -11,7 +11,6 @@ use crate::render::pbrt_v4::Kind;
 use crate::render::shapes::Bvh;
 use crate::render::spectrum::Bins;
 use firemedium_core::spectrum::SpectralGrid;
-use firemedium_loader::{Param as LParam, Value};
 use firemedium_pbrt_parser::{Loc, ParamDict};
 use std::collections::HashMap;
 use std::path::Path;
@@ -258,27 +257,27 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
             }
         }
     }
-    let mut bins_params: Vec<LParam> = Vec::new();
+    // The media's own bins: every plugin medium shares the scene's (a second that disagrees is an error).
+    let mut given: Vec<(&str, f64)> = Vec::new();
     for m in &desc.media {
         let loc = &m.entity.loc;
-        {
-            let p = &ParamDict::new(&m.entity.params);
-            for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
-                if let Some(x) = nums(p, k).and_then(|v| v.first()) {
-                    if bins_params
-                        .iter()
-                        .any(|b| b.name == k && b.value != Value::Float(vec![*x]))
-                    {
-                        return Err(err(loc, format!("media disagree on \"{k}\": all media share the scene's spectral bins")));
-                    }
-                    *v = *x;
-                    bins_params.push(LParam::float(k, *x));
+        let p = &ParamDict::new(&m.entity.params);
+        for (k, v) in [("lambdamin", &mut lo), ("lambdamax", &mut hi)] {
+            if let Some(x) = nums(p, k).and_then(|v| v.first()) {
+                if given.iter().any(|&(g, y)| g == k && y != *x) {
+                    return Err(err(
+                        loc,
+                        format!(
+                            "media disagree on \"{k}\": all media share the scene's spectral bins"
+                        ),
+                    ));
                 }
+                *v = *x;
+                given.push((k, *x));
             }
-            if let Some(x) = nums(p, "bins").and_then(|v| v.first()) {
-                n = *x as usize;
-                bins_params.push(LParam::int("bins", *x as i64));
-            }
+        }
+        if let Some(x) = nums(p, "bins").and_then(|v| v.first()) {
+            n = *x as usize;
         }
     }
     if n > crate::render::spectrum::MAX_CHANNELS {
@@ -297,16 +296,11 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
     // brought to the film's units by its weights' ratio (`Builder::check_colour`).
     let k = if fire { 683.0 } else { 1.0 };
     let bins = Bins::new(grid, k);
-    bins_params.dedup_by(|a, b| a.name == b.name);
-    for (name, v) in [("bins", n as f64), ("lambdamin", lo), ("lambdamax", hi)] {
-        if !bins_params.iter().any(|p| p.name == name) {
-            bins_params.push(if name == "bins" {
-                LParam::int(name, v as i64)
-            } else {
-                LParam::float(name, v)
-            });
-        }
-    }
+    // The plugin's media take the scene's bins beside their parameters (the context), not among them.
+    let plugin_bins = firemedium_loader::Bins {
+        count: n as u32,
+        nm: [lo, hi],
+    };
     let mut b = Builder {
         ctx: Context {
             dir,
@@ -363,7 +357,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         objects: Vec::new(),
         object_prims: 0,
         current_object: None,
-        bins_params,
+        plugin_bins,
         has_fire: fire,
         film_xyz: None,
     };

@@ -9,7 +9,7 @@ use crate::render::pbrt_v4::{self, Kind};
 use crate::render::shapes::{Bvh, Geom, Prim};
 use crate::render::spectrum::{Bins, S};
 use firemedium_core::rgb_spectrum::RgbUse;
-use firemedium_loader::{Param as LParam, Plugin};
+use firemedium_loader::Plugin;
 use firemedium_pbrt_parser::{Loc, ParamDict};
 use glam::{Affine3A, DAffine3, DMat3, DMat4, DVec3, Mat3A, Vec2, Vec3A};
 use std::collections::HashMap;
@@ -111,7 +111,8 @@ pub(super) struct Builder {
     /// Primitives held by the objects defined so far (each once, however often it is instanced).
     pub(super) object_prims: usize,
     pub(super) current_object: Option<(String, Vec<Prim>)>,
-    pub(super) bins_params: Vec<LParam>,
+    /// The scene's spectral bins, as the plugin's media are told them.
+    pub(super) plugin_bins: firemedium_loader::Bins,
     /// The camera's shutter (frames) once a medium blurs by its velocity: each camera sample then draws a
     /// time in it.
     pub(super) shutter: Option<[f64; 2]>,

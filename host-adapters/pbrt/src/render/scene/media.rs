@@ -253,171 +253,16 @@ impl Builder {
         })
     }
 
-    /// A named medium under its transform (`MakeNamedMedium`).
+    /// A named medium under its transform (`MakeNamedMedium`): each kind built by its own function.
     pub(super) fn medium(&mut self, m: &super::description::Medium) -> Result<(), Error> {
         let (name, loc) = (m.name.as_str(), &m.entity.loc);
         let params = &ParamDict::new(&m.entity.params);
         let ty = m.entity.ty.clone();
         let to_medium = affine(&m.ctm.inverse());
         let built = match ty.as_str() {
-            "homogeneous" => {
-                let scale = num(params, "scale", 1.0) as f32;
-                // pbrt-v4: a named preset (measured, mm⁻¹) replaces sigma_a and sigma_s; an unknown one warns.
-                let preset = string(params, "preset").filter(|n| !n.is_empty());
-                let found = preset.and_then(crate::render::media_presets::preset);
-                if let (Some(n), None) = (preset, found) {
-                    self.warn(loc, format!("homogeneous medium \"{name}\": preset \"{n}\" not found (pbrt-v4's named media: Apple, Skin1, Wholemilk, Ketchup, …); sigma_a and sigma_s are used"));
-                }
-                let (sa, ss) = match found {
-                    Some((s, a)) => (self.bins.uplift(a, RgbUse::Unbounded), self.bins.uplift(s, RgbUse::Unbounded)),
-                    None => (
-                        self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)?,
-                        self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)?,
-                    ),
-                };
-                let (sa, ss) = (sa * scale, ss * scale);
-                let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
-                Medium::Homogeneous(super::Homogeneous { sa, ss, le, g: num(params, "g", 0.0).clamp(-0.99, 0.99) })
-            }
+            "homogeneous" => self.homogeneous(name, params, loc)?,
             "rgbgrid" => Medium::RgbGrid(std::sync::Arc::new(self.rgbgrid(name, params, to_medium, loc)?)),
-            "fire" | "uniformgrid" | "nanovdb" | "cloud" => {
-                // Parameters pass to the plugin unchanged, but for the type, the plugin file (read by `load`'s
-                // pre-scan, which loaded the plugin), and relative paths.
-                let plugin = self.plugin(loc)?;
-                // The plugin reads and checks every parameter itself, reporting any it does not use.
-                params.mark_all_used();
-                let mut list: Vec<LParam> = Vec::new();
-                for p in params.params() {
-                    if p.name == "type" || p.name == "plugin" {
-                        continue;
-                    }
-                    let value = match (&p.values, p.ty.as_str()) {
-                        // (File names as the scene wrote them: the plugin resolves its own against the scene's
-                        // folder, `Context::directory`.)
-                        (firemedium_pbrt_parser::Values::Strings(v), _) => Value::String(v.clone()),
-                        (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
-                        (firemedium_pbrt_parser::Values::Numbers(v), "integer") => Value::Integer(v.iter().map(|&x| x as i64).collect()),
-                        (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
-                        (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
-                        (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
-                        (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
-                        // pbrt-v4's `BlackbodySpectrum(T)`, peak-normalised, as 1 nm (λ, value) pairs over 360–830.
-                        (firemedium_pbrt_parser::Values::Numbers(v), "blackbody") => {
-                            let t = v.first().copied().unwrap_or(0.0);
-                            let peak = firemedium_core::blackbody::spectral_radiance(t, firemedium_core::blackbody::WIEN / t * 1e9);
-                            Value::Spectrum((360..=830).flat_map(|l| [l as f64, if t > 0.0 && peak > 0.0 { firemedium_core::blackbody::spectral_radiance(t, l as f64) / peak } else { 0.0 }]).collect())
-                        }
-                        (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
-                    };
-                    list.push(LParam { name: p.name.clone(), value, at: Some(p.loc.to_string()) });
-                }
-                if ty == "cloud" {
-                    // pbrt-v4's procedural cloud, baked into a grid the plugin renders as a pbrt grid medium.
-                    let take = |list: &mut Vec<LParam>, name: &str, def: f64| -> f64 {
-                        match list.iter().position(|p| p.name == name) {
-                            Some(i) => match list.remove(i).value {
-                                Value::Float(v) => v.first().copied().unwrap_or(def),
-                                _ => def,
-                            },
-                            None => def,
-                        }
-                    };
-                    let (dens, wisp, freq) = (take(&mut list, "density", 1.0), take(&mut list, "wispiness", 1.0), take(&mut list, "frequency", 5.0));
-                    if ![dens, wisp, freq].iter().all(|v| v.is_finite() && *v >= 0.0 && *v <= 1e6) {
-                        return Err(err(loc, format!("cloud medium \"{name}\": density {dens}, wispiness {wisp}, frequency {freq}: expected values from 0 to 1e6")));
-                    }
-                    let corner = |name: &str, def: f64| {
-                        list.iter()
-                            .find(|p| p.name == name)
-                            .and_then(|p| match &p.value { Value::Point3(v) if v.len() == 3 => Some(DVec3::new(v[0], v[1], v[2])), _ => None })
-                            .unwrap_or(DVec3::splat(def))
-                    };
-                    let (p0, p1) = (corner("p0", 0.0), corner("p1", 1.0));
-                    let n = crate::render::cloud::BAKE as i64;
-                    // The bake (f64 here, f32 in the plugin) must fit in what the media built so far left.
-                    crate::budget::check(
-                        &format!("cloud medium \"{name}\": its {n}³ baked grid"),
-                        (n * n * n) as u64,
-                        12,
-                        self.ctx.max_memory.saturating_sub(self.media_bytes),
-                    )
-                    .map_err(|e| err(loc, e))?;
-                    for axis in ["nx", "ny", "nz"] {
-                        list.push(LParam::int(axis, n));
-                    }
-                    list.push(LParam { name: "density".into(), value: Value::Float(crate::render::cloud::bake(p0, p1, dens, wisp, freq)), at: Some(loc.to_string()) });
-                }
-                if ty != "fire" {
-                    list.push(LParam::string("mode", "pbrt"));
-                }
-                for b in &self.bins_params {
-                    if !list.iter().any(|p| p.name == b.name) {
-                        list.push(b.clone());
-                    }
-                }
-                // The renderer's context goes beside the scene's parameters, not among them (a parameter the scene
-                // sets itself wins in the plugin).
-                let mut context = firemedium_loader::Context {
-                    threads: self.ctx.threads.map(|n| n as u32),
-                    frame: self.ctx.frame,
-                    directory: Some(self.ctx.dir.clone()),
-                    ..Default::default()
-                };
-                // Motion blur: every plugin medium gets the camera's shutter (one that does not move ignores it);
-                // once the built volume says it moves — by its velocity, or by its embers' own — the camera draws a
-                // time per sample, the plugin holding each in the medium's own shutter. (The host reads none of the
-                // fire's parameter names for this: the volume's features say it.)
-                let camera = self.camera_shutter;
-                context.shutter = Some(camera);
-                // The budget is shared: each medium may use what the media built before it left.
-                context.max_bytes = Some(self.ctx.max_memory.saturating_sub(self.media_bytes).max(1));
-                let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
-                    // An error about one parameter carries where it was given (the plugin's error detail, not its
-                    // text): report it there, the message without that prefix.
-                    let text = e.to_string();
-                    let given = match &e {
-                        firemedium_loader::Error::Status { detail, .. } => detail.location.clone(),
-                        _ => None,
-                    };
-                    let at = given.and_then(|g| params.params().iter().find(|p| p.loc.to_string() == g)).map(|p| {
-                        let prefix = format!("{}: ", p.loc);
-                        (&p.loc, text.strip_prefix(&prefix).unwrap_or(&text))
-                    });
-                    match at {
-                        Some((ploc, rest)) => err(ploc, format!("medium \"{name}\" ({ty}): {rest}")),
-                        None => err(loc, format!("medium \"{name}\" ({ty}): {text}")),
-                    }
-                })?;
-                let info = vol.info();
-                if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL || info.channels as usize != self.bins.n() {
-                    return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
-                }
-                let units = self.check_colour(name, ty == "fire", &vol, loc)?;
-                // What the plugin's build found a user should hear (species' lines outside the bins, flame colours
-                // the model cannot give).
-                for m in vol.notes().map_err(|e| err(loc, format!("medium \"{name}\": {e}")))? {
-                    self.warn(loc, format!("medium \"{name}\": {m}"));
-                }
-                // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
-                // fire black: say so, with the presets that read each tool's units.
-                if let (true, Ok(Some([_, hi]))) = (ty == "fire", vol.temperature_range()) {
-                    if hi > 0.0 && hi < 500.0 {
-                        self.warn(loc, format!("medium \"{name}\": its temperature peaks at {hi:.3} K, too cool to glow visibly (below 500 K): if the grid is not in kelvin, set \"string source\" (\"houdini\": × 5000 K; \"blender\": a Mantaflow flame grid) or \"float temperatureremap\" [a b ka kb]"));
-                    }
-                }
-                let moves = firemedium_abi::FM_FEATURE_MOTION | firemedium_abi::FM_FEATURE_EMBERS;
-                if camera[1] > camera[0] && vol.features().map_err(|e| err(loc, format!("medium \"{name}\": {e}")))? & moves != 0 {
-                    self.shutter = Some(camera);
-                }
-                self.media_bytes = self.media_bytes.saturating_add(info.bytes);
-                self.reports.media.push(MediumReport { name: name.to_string(), bytes: info.bytes, seconds: info.build_seconds, channels: info.channels, light: None, light_left_out: None });
-                let host = if self.ctx.host_tracking { Some(host_majorants(&vol, name, loc)?) } else { None };
-                // The camera's view of a scattering fire by the march: its pixels' variance falls 10-30-fold for
-                // 2-6× their time (docs/results); for pbrt-v4's grids pbrt-v4's own estimator and memory unless asked
-                // (the march builds the lattice a scattering fire otherwise never needs).
-                let camera_march = info.scatters != 0 && self.ctx.camera_march.unwrap_or(ty == "fire");
-                Medium::Plugin(super::Plugin { vol, to_medium, to_world: to_medium.inverse(), scatters: info.scatters != 0, g: info.g, name: name.to_string(), units, host, camera_march })
-            }
+            "fire" | "uniformgrid" | "nanovdb" | "cloud" => self.plugin_medium(name, &ty, params, to_medium, loc)?,
             "" => return Err(err(loc, format!("MakeNamedMedium \"{name}\": missing \"string type\""))),
             other => return Err(err(loc, format!("MakeNamedMedium \"{name}\": medium type \"{other}\" is not supported (fire, uniformgrid, nanovdb, homogeneous, rgbgrid, cloud){}", firemedium_pbrt_parser::v3::type_hint("medium", other)))),
         };
@@ -427,6 +272,269 @@ impl Builder {
         let ty = string(params, "type").unwrap_or("");
         self.finish(Kind::Medium, ty, &format!("{ty} medium \"{name}\""), params)
     }
+
+    /// pbrt-v4's `homogeneous` medium, in the host.
+    fn homogeneous(&mut self, name: &str, params: &ParamDict, loc: &Loc) -> Result<Medium, Error> {
+        let scale = num(params, "scale", 1.0) as f32;
+        // pbrt-v4: a named preset (measured, mm⁻¹) replaces sigma_a and sigma_s; an unknown one warns.
+        let preset = string(params, "preset").filter(|n| !n.is_empty());
+        let found = preset.and_then(crate::render::media_presets::preset);
+        if let (Some(n), None) = (preset, found) {
+            self.warn(loc, format!("homogeneous medium \"{name}\": preset \"{n}\" not found (pbrt-v4's named media: Apple, Skin1, Wholemilk, Ketchup, …); sigma_a and sigma_s are used"));
+        }
+        let (sa, ss) = match found {
+            Some((s, a)) => (
+                self.bins.uplift(a, RgbUse::Unbounded),
+                self.bins.uplift(s, RgbUse::Unbounded),
+            ),
+            None => (
+                self.constant(params, "sigma_a", self.bins.mask(), RgbUse::Unbounded)?,
+                self.constant(params, "sigma_s", self.bins.mask(), RgbUse::Unbounded)?,
+            ),
+        };
+        let (sa, ss) = (sa * scale, ss * scale);
+        let le = self.emitted(params, "Le", false, num(params, "Lescale", 1.0))?;
+        Ok(Medium::Homogeneous(super::Homogeneous {
+            sa,
+            ss,
+            le,
+            g: num(params, "g", 0.0).clamp(-0.99, 0.99),
+        }))
+    }
+
+    /// A medium the plugin builds: a fire, pbrt-v4's `uniformgrid` and `nanovdb`, or pbrt-v4's procedural cloud
+    /// baked into a grid. Its parameters pass to the plugin unchanged, but for the type, the plugin file (read by
+    /// `load`'s pre-scan, which loaded the plugin), and relative paths; the renderer's context beside them.
+    fn plugin_medium(
+        &mut self,
+        name: &str,
+        ty: &str,
+        params: &ParamDict,
+        to_medium: glam::DAffine3,
+        loc: &Loc,
+    ) -> Result<Medium, Error> {
+        let plugin = self.plugin(loc)?;
+        // The plugin reads and checks every parameter itself, reporting any it does not use.
+        params.mark_all_used();
+        // The parameters in the plugin's list, and beside them where each was given: an error about one comes
+        // back with its index in the list (not with a location to match as text).
+        let (mut list, mut origins) = plugin_params(params);
+        if ty == "cloud" {
+            self.bake_cloud(name, &mut list, &mut origins, loc)?;
+        }
+        // The renderer's context goes beside the scene's parameters, not among them (a parameter the scene
+        // sets itself wins in the plugin): what the medium's type means, the scene's bins, threads, frame.
+        let mut context = firemedium_loader::Context {
+            threads: self.ctx.threads.map(|n| n as u32),
+            frame: self.ctx.frame,
+            directory: Some(self.ctx.dir.clone()),
+            kind: Some(if ty == "fire" {
+                firemedium_loader::Kind::Fire
+            } else {
+                firemedium_loader::Kind::Pbrt
+            }),
+            bins: Some(self.plugin_bins),
+            ..Default::default()
+        };
+        // Motion blur: every plugin medium gets the camera's shutter (one that does not move ignores it);
+        // once the built volume says it moves — by its velocity, or by its embers' own — the camera draws a
+        // time per sample, the plugin holding each in the medium's own shutter. (The host reads none of the
+        // fire's parameter names for this: the volume's features say it.)
+        let camera = self.camera_shutter;
+        context.shutter = Some(camera);
+        // The budget is shared: each medium may use what the media built before it left.
+        context.max_bytes = Some(self.ctx.max_memory.saturating_sub(self.media_bytes).max(1));
+        let vol = plugin.create_volume_with(&list, &context).map_err(|e| {
+            // An error about one parameter carries its index in the list (the plugin's error detail):
+            // report it where that parameter was given, else at the medium.
+            let at = match &e {
+                firemedium_loader::Error::Status { detail, .. } => {
+                    detail.index.and_then(|i| origins.get(i).copied())
+                }
+                _ => None,
+            };
+            err(at.unwrap_or(loc), format!("medium \"{name}\" ({ty}): {e}"))
+        })?;
+        let info = vol.info();
+        if info.channel_space != firemedium_abi::FM_SPACE_SPECTRAL
+            || info.channels as usize != self.bins.n()
+        {
+            return Err(err(loc, format!("medium \"{name}\": {} channels in space {}, but the renderer uses {} spectral bins (all media share the scene's bins; colormode rgb is for other hosts)", info.channels, info.channel_space, self.bins.n())));
+        }
+        let units = self.check_colour(name, ty == "fire", &vol, loc)?;
+        // What the plugin's build found a user should hear (species' lines outside the bins, flame colours
+        // the model cannot give).
+        for m in vol
+            .notes()
+            .map_err(|e| err(loc, format!("medium \"{name}\": {e}")))?
+        {
+            self.warn(loc, format!("medium \"{name}\": {m}"));
+        }
+        // A temperature grid that is not in kelvin (a tool's relative units read as kelvin) leaves the
+        // fire black: say so, with the presets that read each tool's units.
+        if let (true, Ok(Some([_, hi]))) = (ty == "fire", vol.temperature_range()) {
+            if hi > 0.0 && hi < 500.0 {
+                self.warn(loc, format!("medium \"{name}\": its temperature peaks at {hi:.3} K, too cool to glow visibly (below 500 K): if the grid is not in kelvin, set \"string source\" (\"houdini\": × 5000 K; \"blender\": a Mantaflow flame grid) or \"float temperatureremap\" [a b ka kb]"));
+            }
+        }
+        let moves = firemedium_abi::FM_FEATURE_MOTION | firemedium_abi::FM_FEATURE_EMBERS;
+        if camera[1] > camera[0]
+            && vol
+                .features()
+                .map_err(|e| err(loc, format!("medium \"{name}\": {e}")))?
+                & moves
+                != 0
+        {
+            self.shutter = Some(camera);
+        }
+        self.media_bytes = self.media_bytes.saturating_add(info.bytes);
+        self.reports.media.push(MediumReport {
+            name: name.to_string(),
+            bytes: info.bytes,
+            seconds: info.build_seconds,
+            channels: info.channels,
+            light: None,
+            light_left_out: None,
+        });
+        let host = if self.ctx.host_tracking {
+            Some(host_majorants(&vol, name, loc)?)
+        } else {
+            None
+        };
+        // The camera's view of a scattering fire by the march: its pixels' variance falls 10-30-fold for
+        // 2-6× their time (docs/results); for pbrt-v4's grids pbrt-v4's own estimator and memory unless asked
+        // (the march builds the lattice a scattering fire otherwise never needs).
+        let camera_march = info.scatters != 0 && self.ctx.camera_march.unwrap_or(ty == "fire");
+        Ok(Medium::Plugin(super::Plugin {
+            vol,
+            to_medium,
+            to_world: to_medium.inverse(),
+            scatters: info.scatters != 0,
+            g: info.g,
+            name: name.to_string(),
+            units,
+            host,
+            camera_march,
+        }))
+    }
+
+    /// pbrt-v4's procedural cloud, baked into a grid the plugin renders as a pbrt grid medium: its own parameters
+    /// taken from the list, the grid put in their place (located at the medium).
+    fn bake_cloud<'a>(
+        &self,
+        name: &str,
+        list: &mut Vec<LParam>,
+        origins: &mut Vec<&'a Loc>,
+        loc: &'a Loc,
+    ) -> Result<(), Error> {
+        let mut take = |param: &str, def: f64| -> f64 {
+            let Some(i) = list.iter().position(|p| p.name == param) else {
+                return def;
+            };
+            origins.remove(i);
+            match list.remove(i).value {
+                Value::Float(v) => v.first().copied().unwrap_or(def),
+                _ => def,
+            }
+        };
+        let (dens, wisp, freq) = (
+            take("density", 1.0),
+            take("wispiness", 1.0),
+            take("frequency", 5.0),
+        );
+        if ![dens, wisp, freq]
+            .iter()
+            .all(|v| v.is_finite() && *v >= 0.0 && *v <= 1e6)
+        {
+            return Err(err(loc, format!("cloud medium \"{name}\": density {dens}, wispiness {wisp}, frequency {freq}: expected values from 0 to 1e6")));
+        }
+        let corner = |param: &str, def: f64| {
+            list.iter()
+                .find(|p| p.name == param)
+                .and_then(|p| match &p.value {
+                    Value::Point3(v) if v.len() == 3 => Some(DVec3::new(v[0], v[1], v[2])),
+                    _ => None,
+                })
+                .unwrap_or(DVec3::splat(def))
+        };
+        let (p0, p1) = (corner("p0", 0.0), corner("p1", 1.0));
+        let n = crate::render::cloud::BAKE as i64;
+        // The bake (f64 here, f32 in the plugin) must fit in what the media built so far left.
+        crate::budget::check(
+            &format!("cloud medium \"{name}\": its {n}³ baked grid"),
+            (n * n * n) as u64,
+            12,
+            self.ctx.max_memory.saturating_sub(self.media_bytes),
+        )
+        .map_err(|e| err(loc, e))?;
+        for axis in ["nx", "ny", "nz"] {
+            list.push(LParam::int(axis, n));
+            origins.push(loc);
+        }
+        list.push(LParam {
+            name: "density".into(),
+            value: Value::Float(crate::render::cloud::bake(p0, p1, dens, wisp, freq)),
+            at: None,
+        });
+        origins.push(loc);
+        Ok(())
+    }
+}
+
+/// The scene's parameters of a plugin medium as the plugin's list (but `type` and `plugin`), typed as the scene
+/// wrote them, and where each was given.
+fn plugin_params<'a>(params: &'a ParamDict) -> (Vec<LParam>, Vec<&'a Loc>) {
+    let mut list: Vec<LParam> = Vec::new();
+    let mut origins: Vec<&Loc> = Vec::new();
+    for p in params.params() {
+        if p.name == "type" || p.name == "plugin" {
+            continue;
+        }
+        let value = match (&p.values, p.ty.as_str()) {
+            // (File names as the scene wrote them: the plugin resolves its own against the scene's
+            // folder, `Context::directory`.)
+            (firemedium_pbrt_parser::Values::Strings(v), _) => Value::String(v.clone()),
+            (firemedium_pbrt_parser::Values::Bools(v), _) => Value::Bool(v.clone()),
+            (firemedium_pbrt_parser::Values::Numbers(v), "integer") => {
+                Value::Integer(v.iter().map(|&x| x as i64).collect())
+            }
+            (firemedium_pbrt_parser::Values::Numbers(v), "point3") => Value::Point3(v.clone()),
+            (firemedium_pbrt_parser::Values::Numbers(v), "vector3") => Value::Vector3(v.clone()),
+            (firemedium_pbrt_parser::Values::Numbers(v), "rgb") => Value::Rgb(v.clone()),
+            (firemedium_pbrt_parser::Values::Numbers(v), "spectrum") => Value::Spectrum(v.clone()),
+            // pbrt-v4's `BlackbodySpectrum(T)`, peak-normalised, as 1 nm (λ, value) pairs over 360–830.
+            (firemedium_pbrt_parser::Values::Numbers(v), "blackbody") => {
+                let t = v.first().copied().unwrap_or(0.0);
+                let peak = firemedium_core::blackbody::spectral_radiance(
+                    t,
+                    firemedium_core::blackbody::WIEN / t * 1e9,
+                );
+                Value::Spectrum(
+                    (360..=830)
+                        .flat_map(|l| {
+                            [
+                                l as f64,
+                                if t > 0.0 && peak > 0.0 {
+                                    firemedium_core::blackbody::spectral_radiance(t, l as f64)
+                                        / peak
+                                } else {
+                                    0.0
+                                },
+                            ]
+                        })
+                        .collect(),
+                )
+            }
+            (firemedium_pbrt_parser::Values::Numbers(v), _) => Value::Float(v.clone()),
+        };
+        list.push(LParam {
+            name: p.name.clone(),
+            value,
+            at: None,
+        });
+        origins.push(&p.loc);
+    }
+    (list, origins)
 }
 
 /// The command line's `NAME=VALUE` light parameters typed as the plugin's table declares them (the light's own
