@@ -12,7 +12,7 @@
 use super::aov::{Split, Visible};
 use super::bsdf::{Bxdf, Lobes, Mode};
 use super::lights;
-use super::lobes::henyey_greenstein as hg;
+use super::lobes::{around, frame, henyey_greenstein as hg, sample_henyey_greenstein_cos};
 use super::material;
 use super::media::Track;
 use super::paths::Spot;
@@ -23,18 +23,7 @@ use super::scene::Light;
 use super::shapes::Hit;
 use super::spectrum::S;
 use glam::Vec3A;
-use std::f32::consts::PI;
 use std::time::Instant;
-
-fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
-    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3A::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
-        Vec3A::new(b, s + n.y * n.y * a, -n.y),
-    )
-}
 
 /// `w` in the frame whose z is `n` (the microfacet models' local space)...
 fn to_local(n: Vec3A, w: Vec3A) -> Vec3A {
@@ -171,16 +160,7 @@ fn keep_one_bin(beta: &mut S, n: usize, rng: &mut Samples) -> usize {
 
 /// Samples HG around the propagation direction `d`.
 fn sample_hg(d: Vec3A, g: f32, u: [f32; 2]) -> Vec3A {
-    let cos = if g.abs() < 1e-3 {
-        1.0 - 2.0 * u[0]
-    } else {
-        let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u[0]);
-        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
-    };
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    let (t, b) = frame(d);
-    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + d * cos).normalize_or_zero()
+    around(d, sample_henyey_greenstein_cos(g, u[0]), u[1])
 }
 
 impl Integrator<'_> {

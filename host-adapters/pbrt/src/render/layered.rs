@@ -18,7 +18,10 @@
 //! sum to one when the coat is rough, and f comes out 7 % above the sampler's own estimate (test
 //! `a_coated_diffuse_surface_sampled_and_integrated_agree`, coat roughness 0.3); with this one they agree.
 
-use super::lobes::{henyey_greenstein as hg, same_hemisphere, Flags, Lobes, Mode, Sample};
+use super::lobes::{
+    around, henyey_greenstein as hg, same_hemisphere, sample_henyey_greenstein_cos, Flags, Lobes,
+    Mode, Sample,
+};
 use super::spectrum::S;
 use firemedium_core::rng::Rng;
 use glam::Vec3A;
@@ -76,23 +79,11 @@ impl Walk {
     }
 }
 
-/// A direction from HG around wo (pointing away from the scattering point), and its density.
+/// A direction from HG around wo (pointing away from the scattering point), and its density: the cosine to the
+/// propagation direction (−wo) drawn, and taken about wo.
 fn sample_hg(wo: Vec3A, g: f32, u: [f32; 2]) -> (Vec3A, f32) {
-    let cos = if g.abs() < 1e-3 {
-        1.0 - 2.0 * u[0]
-    } else {
-        -1.0 / (2.0 * g) * (1.0 + g * g - ((1.0 - g * g) / (1.0 + g - 2.0 * g * u[0])).powi(2))
-    }
-    .clamp(-1.0, 1.0);
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    let s = if wo.z < 0.0 { -1.0 } else { 1.0 };
-    let a = -1.0 / (s + wo.z);
-    let b = wo.x * wo.y * a;
-    let t = Vec3A::new(1.0 + s * wo.x * wo.x * a, s * b, -s * wo.x);
-    let bt = Vec3A::new(b, s + wo.y * wo.y * a, -wo.y);
-    let wi = (t * (sin * phi.cos()) + bt * (sin * phi.sin()) + wo * cos).normalize_or_zero();
-    (wi, hg(cos, g))
+    let cos = -sample_henyey_greenstein_cos(g, u[0]);
+    (around(wo, cos, u[1]), hg(cos, g))
 }
 
 /// The power heuristic (β = 2) of a strategy of density `f` against one of density `g`.

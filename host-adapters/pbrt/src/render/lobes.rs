@@ -1,6 +1,7 @@
 //! What every BxDF shares, below the BxDFs themselves (`bsdf`) and the layered BSDF built from them (`layered`):
 //! the quantity transported, the lobes a query may use, what a BxDF can do, a sampled direction; and the
-//! Henyey–Greenstein phase function (the layered BSDF's medium and the integrator's media evaluate the same).
+//! Henyey–Greenstein phase function, evaluated and sampled (the layered BSDF's medium and the integrator's media
+//! use the same), and the orthonormal frame around a direction.
 
 use super::spectrum::S;
 use glam::Vec3A;
@@ -87,4 +88,36 @@ pub fn same_hemisphere(a: Vec3A, b: Vec3A) -> bool {
 pub fn henyey_greenstein(cos: f32, g: f32) -> f32 {
     let d = 1.0 + g * g + 2.0 * g * cos;
     (1.0 - g * g) / (4.0 * std::f32::consts::PI * d * d.max(1e-12).sqrt())
+}
+
+/// The cosine between the propagation direction and the scattered one, drawn from Henyey–Greenstein with asymmetry
+/// `g` by inverting its cdf at `u` (pbrt-v4's `SampleHenyeyGreenstein`; uniform below |g| = 10⁻³, where the
+/// inversion loses its digits).
+pub fn sample_henyey_greenstein_cos(g: f32, u: f32) -> f32 {
+    if g.abs() < 1e-3 {
+        1.0 - 2.0 * u
+    } else {
+        let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u);
+        ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+    }
+}
+
+/// Two unit tangents completing `n` (unit) to an orthonormal frame, continuous but at n.z = 0's sign change (Duff
+/// et al. 2017, *Building an Orthonormal Basis, Revisited*).
+pub fn frame(n: Vec3A) -> (Vec3A, Vec3A) {
+    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3A::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        Vec3A::new(b, s + n.y * n.y * a, -n.y),
+    )
+}
+
+/// The unit direction at cosine `cos` to `axis` (unit), at azimuth 2π·`u` in [`frame`]`(axis)`.
+pub fn around(axis: Vec3A, cos: f32, u: f32) -> Vec3A {
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u;
+    let (t, b) = frame(axis);
+    (t * (sin * phi.cos()) + b * (sin * phi.sin()) + axis * cos).normalize_or_zero()
 }
