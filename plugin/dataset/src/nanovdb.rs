@@ -153,9 +153,8 @@ fn buffer(file: &str, src: &Bytes, g: &GridEntry, max_bytes: u64) -> Result<Vec<
     }
 }
 
-/// Parses one float grid's buffer into a tree.
-fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
-    let mut c = Cursor::new(file, buf);
+/// A grid's map (its voxel size and translation), read at the grid's header: axis-aligned, finite, positive.
+fn map(c: &mut Cursor, file: &str, name: &str) -> Result<Transform, Error> {
     let at_grid = |what: &str| format!("grid '{name}' {what}");
     c.seek(384, &at_grid("map"))?;
     let mut m = [0f64; 9];
@@ -193,6 +192,14 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
             format!("{transform:?}"),
         ));
     }
+    Ok(transform)
+}
+
+/// Parses one float grid's buffer into a tree.
+fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
+    let mut c = Cursor::new(file, buf);
+    let at_grid = |what: &str| format!("grid '{name}' {what}");
+    let transform = map(&mut c, file, name)?;
     let tree = GRID_BYTES;
     c.seek(tree as u64, &at_grid("tree"))?;
     let mut off = [0u64; 4];

@@ -189,6 +189,135 @@ fn velocity_of(
     Ok(Some((name.to_string(), v)))
 }
 
+/// The fire's features, refused when it holds one grids cannot carry.
+fn bakeable(
+    volume: &firemedium_loader::Volume,
+    dataset: &std::path::Path,
+) -> firemedium::Result<u64> {
+    let features = volume.features().map_err(|e| Error::input(e.to_string()))?;
+    let refused: Vec<&str> = REFUSED
+        .iter()
+        .filter(|(bit, _)| features & bit != 0)
+        .map(|(_, name)| *name)
+        .collect();
+    if !refused.is_empty() {
+        return Err(Error::input(format!(
+                "{}: the fire holds {}, which grids cannot carry; render it with `firemedium render`, or leave those parameters out",
+                dataset.display(),
+                refused.join(", ")
+            ),
+        ));
+    }
+    Ok(features)
+}
+
+/// What a bake wrote and found, for its report.
+struct Baked<'a> {
+    out: &'a std::path::Path,
+    frame: Option<i64>,
+    dims: [usize; 3],
+    bytes: usize,
+    seconds: f64,
+    /// The fire's luminance seen from its side (99th percentile), when it emits.
+    seen: Option<f64>,
+    /// Σ Y of the emission, and what clipping its negative components would change of it.
+    luminance: f64,
+    clipped: f64,
+    /// It holds thick atomic lines.
+    lines: bool,
+    /// The velocity grid passed on, by name.
+    velocity: Option<&'a str>,
+    g: f64,
+}
+
+impl Baked<'_> {
+    /// The report: a line of JSON, or the text a user reads.
+    fn report(&self, json: bool) -> String {
+        let Baked {
+            out,
+            frame,
+            dims,
+            bytes,
+            seconds,
+            seen,
+            luminance,
+            clipped,
+            lines,
+            velocity,
+            g,
+        } = *self;
+        // (Clamping a negative component raises the luminance: the change is signed.)
+        let change = if luminance > 0.0 {
+            -100.0 * clipped / luminance
+        } else {
+            0.0
+        };
+        let passed = velocity.map_or(String::new(), |name| {
+            format!("; velocity: the dataset's {name}, as it is (its units), for motion blur")
+        });
+        let exposure = seen.map(|l| (2.0 / l).log2());
+        if json {
+            return serde_json::json!({
+                "output": out.display().to_string(),
+                "frame": frame,
+                "dims": dims,
+                "bytes": bytes,
+                "seconds": seconds,
+                "luminance_p99": seen,
+                "exposure": exposure,
+                "out_of_gamut_change_percent": change,
+            })
+            .to_string()
+                + "\n";
+        }
+        let seen_line = match (seen, exposure) {
+            (Some(l), Some(e)) => format!("the fire seen from its side: {l:.4} cd/m² at its brightest (99th percentile of its lines of sight); a view exposure of {e:+.2} stops shows it (in AgX, that luminance at 2, a stop above diffuse white), as firemedium's own preview does\n"),
+            _ => "the fire emits nothing visible from its side\n".to_string(),
+        };
+        format!(
+            "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre{passed}), {:.1} MB in {:.2} s\n\
+             kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n{seen_line}",
+            out.display(),
+            dims[0],
+            dims[1],
+            dims[2],
+            bytes as f64 / 1e6,
+            seconds,
+            if lines { "atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption); " } else { "" },
+            g,
+        )
+    }
+}
+
+/// Marks a voxel active where a component is non-zero, and leaves out a leaf with none.
+fn activate(leaves: &mut [Vec<firemedium_dataset::vdb::VdbLeaf>]) {
+    for lv in leaves.iter_mut() {
+        for (_, mask, vals) in lv.iter_mut() {
+            for i in 0..512 {
+                if vals[3 * i..3 * i + 3].iter().any(|&v| v != 0.0) {
+                    mask[i / 64] |= 1 << (i % 64);
+                }
+            }
+        }
+        lv.retain(|(_, mask, _)| mask.iter().any(|&w| w != 0));
+    }
+}
+
+/// Each channel's linear sRGB per unit radiance (from its XYZ), and the sums of their positive parts: the weight
+/// of a channel's light in each RGB component.
+fn channel_weights(xyz: &[[f64; 3]]) -> (Vec<[f64; 3]>, [f64; 3]) {
+    let rgb_of = |x: &[f64; 3]| XYZ_TO_SRGB_ROWS.map(|r| r[0] * x[0] + r[1] * x[1] + r[2] * x[2]);
+    let channel_rgb: Vec<[f64; 3]> = xyz.iter().map(rgb_of).collect();
+    let weight_sum: [f64; 3] = [0, 1, 2].map(|k| {
+        channel_rgb
+            .iter()
+            .map(|c| c[k].max(0.0))
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE)
+    });
+    (channel_rgb, weight_sum)
+}
+
 /// One frame (`None`: the dataset as named) baked into `out`.
 fn bake(
     a: &BakeArgs,
@@ -226,20 +355,7 @@ fn bake(
     let volume = plugin
         .create_volume_with(&params, &context)
         .map_err(|e| Error::input(e.to_string()))?;
-    let features = volume.features().map_err(|e| Error::input(e.to_string()))?;
-    let refused: Vec<&str> = REFUSED
-        .iter()
-        .filter(|(bit, _)| features & bit != 0)
-        .map(|(_, name)| *name)
-        .collect();
-    if !refused.is_empty() {
-        return Err(Error::input(format!(
-                "{}: the fire holds {}, which grids cannot carry; render it with `firemedium render`, or leave those parameters out",
-                a.dataset.display(),
-                refused.join(", ")
-            ),
-        ));
-    }
+    let features = bakeable(&volume, &a.dataset)?;
     let info = volume.info();
     let dims = info.dims.map(|n| n as usize);
     // Only the bricks the fire's grids hold are baked (sparse in, sparse out): per brick, a leaf of each grid.
@@ -279,17 +395,7 @@ fn bake(
     let xyz = volume
         .channel_xyz()
         .map_err(|e| Error::input(e.to_string()))?;
-    // Each channel's linear sRGB per unit radiance, and its positive part as the weight of the channel's light in
-    // each RGB component.
-    let rgb_of = |x: &[f64; 3]| XYZ_TO_SRGB_ROWS.map(|r| r[0] * x[0] + r[1] * x[1] + r[2] * x[2]);
-    let channel_rgb: Vec<[f64; 3]> = xyz.iter().map(rgb_of).collect();
-    let weight_sum: [f64; 3] = [0, 1, 2].map(|k| {
-        channel_rgb
-            .iter()
-            .map(|c| c[k].max(0.0))
-            .sum::<f64>()
-            .max(f64::MIN_POSITIVE)
-    });
+    let (channel_rgb, weight_sum) = channel_weights(&xyz);
     // The output's index space keeps the bricks whole: lattice sample i at i + off, each brick's first sample at
     // a multiple of 8 (where the lattice starts inside a brick, its first sample's index is below 0).
     let off = firsts
@@ -383,17 +489,7 @@ fn bake(
     }
     // The fire seen from its side (before empty leaves are dropped: `leaves` line up with `bricks`).
     let seen = side_luminance(&bricks, &leaves, voxel, side_axes(a, &opts));
-    // A voxel is active where a component is non-zero; a leaf with none is left out.
-    for lv in leaves.iter_mut() {
-        for (_, mask, vals) in lv.iter_mut() {
-            for i in 0..512 {
-                if vals[3 * i..3 * i + 3].iter().any(|&v| v != 0.0) {
-                    mask[i / 64] |= 1 << (i % 64);
-                }
-            }
-        }
-        lv.retain(|(_, mask, _)| mask.iter().any(|&w| w != 0));
-    }
+    activate(&mut leaves);
     let names = ["sigma_a", "sigma_s", "emission", "velocity"];
     let grids: Vec<(&str, Vec<firemedium_dataset::vdb::VdbLeaf>)> =
         names.iter().copied().zip(leaves).collect();
@@ -408,47 +504,20 @@ fn bake(
         std::fs::write(tmp, &bytes)
             .map_err(|e| Error::file(out.display(), format!("cannot write: {e}")))
     })?;
-    // (Clamping a negative component raises the luminance: the change is signed.)
-    let change = if luminance > 0.0 {
-        -100.0 * clipped / luminance
-    } else {
-        0.0
-    };
-    let lines = features & firemedium_abi::FM_FEATURE_THICK_LINES != 0;
-    let passed = velocity.as_ref().map_or(String::new(), |(name, _)| {
-        format!("; velocity: the dataset's {name}, as it is (its units), for motion blur")
-    });
-    let exposure = seen.map(|l| (2.0 / l).log2());
-    if a.json {
-        return Ok(serde_json::json!({
-            "output": out.display().to_string(),
-            "frame": frame,
-            "dims": dims,
-            "bytes": bytes.len(),
-            "seconds": start.elapsed().as_secs_f64(),
-            "luminance_p99": seen,
-            "exposure": exposure,
-            "out_of_gamut_change_percent": change,
-        })
-        .to_string()
-            + "\n");
+    Ok(Baked {
+        out,
+        frame,
+        dims,
+        bytes: bytes.len(),
+        seconds: start.elapsed().as_secs_f64(),
+        seen,
+        luminance,
+        clipped,
+        lines: features & firemedium_abi::FM_FEATURE_THICK_LINES != 0,
+        velocity: velocity.as_ref().map(|(name, _)| name.as_str()),
+        g: info.g,
     }
-    let seen_line = match (seen, exposure) {
-        (Some(l), Some(e)) => format!("the fire seen from its side: {l:.4} cd/m² at its brightest (99th percentile of its lines of sight); a view exposure of {e:+.2} stops shows it (in AgX, that luminance at 2, a stop above diffuse white), as firemedium's own preview does\n"),
-        _ => "the fire emits nothing visible from its side\n".to_string(),
-    };
-    Ok(format!(
-        "wrote {} ({}×{}×{} voxels, grids sigma_a, sigma_s, emission: linear Rec.709/sRGB, per metre; emission in cd/m² per metre{passed}), {:.1} MB in {:.2} s\n\
-         kept out of gamut: the emission's negative (out-of-Rec.709) components, which a compositor clipping them would change its luminance by {change:+.2} %; lost in baking: {}the fire light becomes the renderer's own volume sampling; the phase function's g = {} is the medium's\n{seen_line}",
-        out.display(),
-        dims[0],
-        dims[1],
-        dims[2],
-        bytes.len() as f64 / 1e6,
-        start.elapsed().as_secs_f64(),
-        if lines { "atomic lines become their RGB (thick across their profiles: the grids keep their colour, not their self-absorption); " } else { "" },
-        info.g,
-    ))
+    .report(a.json))
 }
 
 /// The axes the fire is seen along from its side: the two other than its up axis (`firemedium_dataset::convention`

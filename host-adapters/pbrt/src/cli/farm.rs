@@ -107,6 +107,30 @@ fn absolute(p: &Path) -> firemedium::Result<PathBuf> {
     std::path::absolute(p).map_err(|e| Error::file(p.display(), e.to_string()))
 }
 
+/// The options every render task passes on to `firemedium render`.
+fn passed_on(a: &SlurmArgs) -> String {
+    let mut pass = format!("--threads {}", a.cpus);
+    if let Some(n) = a.spp {
+        write!(pass, " --spp {n}").ok();
+    }
+    if let Some(t) = a.noise_threshold {
+        write!(pass, " --noise-threshold {t}").ok();
+    }
+    if let Some(t) = a.time_limit {
+        write!(pass, " --time-limit {t}").ok();
+    }
+    if let Some(s) = a.seed {
+        write!(pass, " --seed {s}").ok();
+    }
+    if let Some((w, h)) = a.resolution {
+        write!(pass, " --resolution {w}x{h}").ok();
+    }
+    if let Some(l) = &a.aov {
+        write!(pass, " --aov {}", quote(l)).ok();
+    }
+    pass
+}
+
 fn slurm(a: &SlurmArgs) -> firemedium::Result<String> {
     if !a.scene.is_file() {
         return Err(Error::value(format!(
@@ -187,26 +211,7 @@ fn slurm(a: &SlurmArgs) -> firemedium::Result<String> {
         })?;
     }
     let q = |p: &Path| quote(&p.display().to_string());
-    // What every render task passes on.
-    let mut pass = format!("--threads {}", a.cpus);
-    if let Some(n) = a.spp {
-        write!(pass, " --spp {n}").ok();
-    }
-    if let Some(t) = a.noise_threshold {
-        write!(pass, " --noise-threshold {t}").ok();
-    }
-    if let Some(t) = a.time_limit {
-        write!(pass, " --time-limit {t}").ok();
-    }
-    if let Some(s) = a.seed {
-        write!(pass, " --seed {s}").ok();
-    }
-    if let Some((w, h)) = a.resolution {
-        write!(pass, " --resolution {w}x{h}").ok();
-    }
-    if let Some(l) = &a.aov {
-        write!(pass, " --aov {}", quote(l)).ok();
-    }
+    let pass = passed_on(a);
     let list = |v: &[String]| v.join(" ");
     let frame_list = list(&frames.iter().map(|f| f.to_string()).collect::<Vec<_>>());
     // Band k of the film: rows ⌊k·H/T⌋ to ⌊(k+1)·H/T⌋ (pixel bounds: whole numbers, so neighbours meet exactly

@@ -110,10 +110,10 @@ struct SampleInfo {
 }
 
 /// Runs `info`: `Ok(text)`, or `Err((exit status, message))`.
-pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
+/// How `args` asks the dataset to be read.
+fn load_options(args: &InfoArgs) -> firemedium::Result<LoadOptions> {
     let bad_arg = Error::value;
-    let bad_file = Error::input;
-    let opts = LoadOptions {
+    Ok(LoadOptions {
         format: args
             .format
             .as_deref()
@@ -142,7 +142,13 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
         frame: args.frame,
         max_bytes: crate::args::budget(args.max_memory),
         ..LoadOptions::default()
-    };
+    })
+}
+
+pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
+    let bad_arg = Error::value;
+    let bad_file = Error::input;
+    let opts = load_options(args)?;
     if let Some(s) = &args.sample {
         if s.len() != 3 || s.iter().any(|v| !v.is_finite()) {
             return Err(bad_arg(format!(
@@ -255,6 +261,14 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
             .map(|s| s + "\n")
             .map_err(|e| Error::input(format!("JSON output failed: {e}")));
     }
+    Ok(text(&report))
+}
+
+/// The report as the command prints it.
+fn text(report: &Report) -> String {
+    let [p0, p1] = report.bounds.map(DVec3::from);
+    let dims = report.dims;
+    let voxel = DVec3::from(report.voxel_size);
     let mut s = format!("{} ({})\n", report.file, report.format);
     s += &format!("dims      {} × {} × {}\n", dims[0], dims[1], dims[2]);
     s += &format!(
@@ -329,7 +343,7 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
         }
         s += "\n";
     }
-    Ok(s)
+    s
 }
 
 /// The `source` convention the grids follow and why (`firemedium_dataset::convention`: the names, and the

@@ -290,42 +290,8 @@ impl Reader {
                 None => return Err(err(loc, "AttributeEnd without AttributeBegin")),
             },
             Directive::Attribute(..) => self.warn(loc, "Attribute defaults are ignored"),
-            Directive::ObjectBegin(n) => {
-                if let Some(open) = &self.open_object {
-                    return Err(err(loc, format!("ObjectBegin \"{n}\" inside object \"{}\": objects do not nest (as pbrt-v4)", open.name)));
-                }
-                self.stack.push((self.st.clone(), loc.clone()));
-                self.open_object = Some(Object {
-                    name: n,
-                    shapes: Vec::new(),
-                });
-            }
-            Directive::ObjectEnd => {
-                let Some(object) = self.open_object.take() else {
-                    return Err(err(loc, "ObjectEnd without ObjectBegin"));
-                };
-                self.objects
-                    .insert(object.name.clone(), self.desc.objects.len());
-                self.desc.objects.push(object);
-                if let Some((s, _)) = self.stack.pop() {
-                    self.st = s;
-                }
-            }
-            Directive::ObjectInstance(n) => {
-                if let Some(open) = &self.open_object {
-                    return Err(err(loc, format!("ObjectInstance \"{n}\" inside object \"{}\": an instance cannot be part of an object's definition (as pbrt-v4)", open.name)));
-                }
-                let object = *self
-                    .objects
-                    .get(&n)
-                    .ok_or_else(|| err(loc, format!("ObjectInstance \"{n}\": no such object")))?;
-                self.desc.world.push(World::Instance {
-                    object,
-                    name: n,
-                    ctm: self.st.ctm,
-                    loc: loc.clone(),
-                    order: self.order,
-                });
+            Directive::ObjectBegin(_) | Directive::ObjectEnd | Directive::ObjectInstance(_) => {
+                return self.object(d, loc)
             }
             Directive::Option(p) => match (p.name.as_str(), p.numbers(), p.bools()) {
                 // pbrt-v4's options that change the image: the sampler's seed, and pixel samples at the pixels'
@@ -415,27 +381,7 @@ impl Reader {
                 let entity = self.entity(class, p, loc);
                 self.desc.textures.push(Texture { name, entity });
             }
-            Directive::Shape(ty, p) => {
-                let mut area = self.st.area;
-                if let (Some(_), Some(object)) = (area, &self.open_object) {
-                    let m = format!("{ty} in object \"{}\": area lights are not supported with object instancing (as pbrt-v4): the shape is kept, its emission left out", object.name);
-                    self.warn(loc, m);
-                    area = None;
-                }
-                let shape = Shape {
-                    entity: self.entity(ty, p, loc),
-                    ctm: self.st.ctm,
-                    reverse: self.st.reverse,
-                    material: self.st.material,
-                    area,
-                    inside: self.st.inside.clone(),
-                    outside: self.st.outside.clone(),
-                };
-                match &mut self.open_object {
-                    Some(object) => object.shapes.push(shape),
-                    None => self.desc.world.push(World::Shape(shape)),
-                }
-            }
+            Directive::Shape(ty, p) => self.shape(ty, p, loc),
             Directive::MakeNamedMedium(name, p) => {
                 // (pbrt-v4 refuses a redefinition too: the second would silently replace the first.)
                 if self.desc.media.iter().any(|m| m.name == name) {
@@ -463,6 +409,75 @@ impl Reader {
             }
         }
         Ok(())
+    }
+
+    /// `ObjectBegin`, `ObjectEnd` and `ObjectInstance`: objects defined once and instanced.
+    fn object(&mut self, d: Directive, loc: &Loc) -> Result<(), Error> {
+        match d {
+            Directive::ObjectBegin(n) => {
+                if let Some(open) = &self.open_object {
+                    return Err(err(loc, format!("ObjectBegin \"{n}\" inside object \"{}\": objects do not nest (as pbrt-v4)", open.name)));
+                }
+                self.stack.push((self.st.clone(), loc.clone()));
+                self.open_object = Some(Object {
+                    name: n,
+                    shapes: Vec::new(),
+                });
+            }
+            Directive::ObjectEnd => {
+                let Some(object) = self.open_object.take() else {
+                    return Err(err(loc, "ObjectEnd without ObjectBegin"));
+                };
+                self.objects
+                    .insert(object.name.clone(), self.desc.objects.len());
+                self.desc.objects.push(object);
+                if let Some((s, _)) = self.stack.pop() {
+                    self.st = s;
+                }
+            }
+            Directive::ObjectInstance(n) => {
+                if let Some(open) = &self.open_object {
+                    return Err(err(loc, format!("ObjectInstance \"{n}\" inside object \"{}\": an instance cannot be part of an object's definition (as pbrt-v4)", open.name)));
+                }
+                let object = *self
+                    .objects
+                    .get(&n)
+                    .ok_or_else(|| err(loc, format!("ObjectInstance \"{n}\": no such object")))?;
+                self.desc.world.push(World::Instance {
+                    object,
+                    name: n,
+                    ctm: self.st.ctm,
+                    loc: loc.clone(),
+                    order: self.order,
+                });
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// A `Shape`, with the graphics state's transform, material, area light and media, in the world or in the
+    /// object being defined.
+    fn shape(&mut self, ty: String, p: Vec<Param>, loc: &Loc) {
+        let mut area = self.st.area;
+        if let (Some(_), Some(object)) = (area, &self.open_object) {
+            let m = format!("{ty} in object \"{}\": area lights are not supported with object instancing (as pbrt-v4): the shape is kept, its emission left out", object.name);
+            self.warn(loc, m);
+            area = None;
+        }
+        let shape = Shape {
+            entity: self.entity(ty, p, loc),
+            ctm: self.st.ctm,
+            reverse: self.st.reverse,
+            material: self.st.material,
+            area,
+            inside: self.st.inside.clone(),
+            outside: self.st.outside.clone(),
+        };
+        match &mut self.open_object {
+            Some(object) => object.shapes.push(shape),
+            None => self.desc.world.push(World::Shape(shape)),
+        }
     }
 }
 
