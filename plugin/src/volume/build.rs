@@ -115,156 +115,38 @@ impl FireVolume {
             brick,
             spare,
         );
-        if let Some(bytes) = refused {
-            notes.push(format!(
-                "the march's copy of the grids ({:.1} MB) does not fit the memory budget's {:.1} MB left after them: the march reads the grids in place (the same image, a slower march; raise the budget, maxbytes or --max-memory, to keep the copy)",
-                bytes as f64 / 1e6,
-                spare as f64 / 1e6
-            ));
-        }
+        notes.extend(refused);
         let lanes_wanted = set.lanes_wanted();
         let basis = set.basis;
         let c = basis.channels();
 
         // ---- majorants
-        let t1 = Instant::now();
-        let majorant = MajorantGrid::with_ranges(&ds, brick, known);
-        let mut brick_sigma =
-            coefficients::brick_majorants(&majorant, &co, density, temperature, c);
-        // An emission grid emits where there may be no smoke: tracking's estimators add j/σ̄ at tentative
-        // collisions, so σ̄ must not be 0 where j is not — a floor of one collision per voxel there.
-        if let Some(e) = lescale.filter(|_| emission_grid) {
-            let floor = 1.0 / ds.voxel_size().min_element();
-            for (b, s) in brick_sigma.iter_mut().enumerate() {
-                if majorant.max(b, e) > 0.0 {
-                    *s = s.max(floor);
-                }
-            }
-        }
+        let (majorant, brick_sigma, brick_empty) = majorants(
+            &ds,
+            &co,
+            (density, temperature, lescale, emission_grid),
+            (brick, c),
+            known,
+            &mut tables,
+        )?;
         let nb = brick_sigma.len();
-        // An optical depth above 1e12 per voxel is no fire: a voxel value far outside the data's range, or a
-        // scale far too large. Tracking through it would take ~1e12 collisions per voxel.
-        let voxel = ds.voxel_size().max_element();
-        if let Some((b, &sigma)) = brick_sigma
-            .iter()
-            .enumerate()
-            .max_by(|x, y| x.1.total_cmp(y.1))
-            .filter(|(_, &s)| !(s * voxel <= MAX_OPTICAL_DEPTH_PER_VOXEL))
-        {
-            let [cx, cy, _] = majorant.counts();
-            let (i, j, k) = (b % cx, (b / cx) % cy, b / (cx * cy));
-            return Err(Error::invalid(
-                "volume",
-                "extinction",
-                format!("{sigma:.3e} m⁻¹ in brick ({i}, {j}, {k}) of {brick}³ voxels, an optical depth of {:.3e} per voxel", sigma * voxel),
-                format!("at most {MAX_OPTICAL_DEPTH_PER_VOXEL:e} per voxel (a voxel value far outside the data's range, or sootscale, scale, sigma_a or sigma_s far too large?)"),
-            ));
-        }
-        let emitter = lescale.filter(|_| emission_grid);
-        let brick_empty: Vec<bool> = (0..nb)
-            .map(|b| {
-                majorant.max(b, density) <= 0.0
-                    && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
-                    && emitter.is_none_or(|e| majorant.max(b, e) <= 0.0)
-            })
-            .collect();
-        tables.push(TableReport {
-            name: format!("majorant bricks ({brick}³ voxels)"),
-            bytes: majorant.bytes() + brick_sigma.len() * 8,
-            seconds: t1.elapsed().as_secs_f64(),
-        });
-        let blur = motion.map(|m| {
-            let t5 = Instant::now();
-            let b = motion::Blur::new(m, &ds, &majorant, &brick_sigma, &brick_empty);
-            tables.push(TableReport {
-                name: format!(
-                    "motion blur (majorants widened by {:.4} medium units)",
-                    b.reach()
-                ),
-                bytes: b.bytes(),
-                seconds: t5.elapsed().as_secs_f64(),
-            });
-            b
-        });
+        let bounds = (&majorant, &brick_sigma[..], &brick_empty[..]);
+        let blur = motion.map(|m| blur_layer(m, &ds, bounds, &mut tables));
 
         // ---- embers
-        let embers = match embers {
-            None => None,
-            Some(ef) => {
-                let Emission::Physical { intensity, .. } = &set.emission else {
-                    return Err(Error::invalid(
-                        "dataset",
-                        "embers",
-                        format!("\"{}\" for a pbrt-v4 medium", ef.file),
-                        "a fire (\"string type\" \"fire\"): embers glow by their temperature",
-                    ));
-                };
-                let t6 = Instant::now();
-                let nodes = basis.nodes();
-                let g = vec![set.ember.emissivity * intensity; nodes.lambda.len()];
-                let left = spare.saturating_sub(tables.iter().map(|t| t.bytes as u64).sum());
-                let em = crate::embers::Embers::new(
-                    &ef.file,
-                    &ef.particles,
-                    set.ember,
-                    ef.shutter,
-                    ef.fps,
-                    &|t| basis.emit_planck(&nodes, &g, t),
-                    left,
-                )?;
-                tables.push(TableReport {
-                    name: format!("embers ({} particles and their grid)", em.len()),
-                    bytes: em.bytes(),
-                    seconds: t6.elapsed().as_secs_f64(),
-                });
-                Some(em)
-            }
-        };
+        let embers = embers
+            .map(|ef| ember_layer((&set.emission, set.ember), &basis, &ef, spare, &mut tables))
+            .transpose()?;
 
         // ---- refraction
         let step = set.stepsize * ds.voxel_size().min_element();
-        let refraction = match &set.refraction {
-            None => None,
-            Some(rs) => {
-                let t_ch = temperature.ok_or_else(|| {
-                    Error::invalid(
-                        "volume",
-                        "refraction",
-                        "true without a temperature grid",
-                        "a temperature grid (the index of air follows from it)",
-                    )
-                })?;
-                let t2 = Instant::now();
-                // What the budget leaves after the grids, the tables and the lattice.
-                let left = spare
-                    .saturating_sub(tables.iter().map(|t| t.bytes as u64).sum())
-                    .saturating_sub(lattice.as_ref().map_or(0, |(l, _)| l.bytes() as u64));
-                let rf = super::bent::Refraction::build(
-                    &ds.channels()[t_ch].grid,
-                    ds.bounds(),
-                    &rs.air,
-                    (rs.wavelength, rs.scale),
-                    rs.rk4,
-                    step,
-                    ds.voxel_size().min_element(),
-                    left,
-                )
-                .map_err(|bytes| Error::TooLarge {
-                    file: "refraction".into(),
-                    what:
-                        "the index field (16 bytes per voxel around the voxels hotter than ambient)"
-                            .into(),
-                    bytes,
-                    cap: left,
-                })?;
-                tables.push(TableReport {
-                    name: "refraction index field".into(),
-                    bytes: rf.field.bytes(),
-                    seconds: t2.elapsed().as_secs_f64(),
-                });
-                Some(rf)
-            }
-        };
+        // (What the budget leaves after the grids and the lattice; the layer takes its tables' bytes off.)
+        let left = spare.saturating_sub(lattice.as_ref().map_or(0, |(l, _)| l.bytes() as u64));
+        let refraction = set
+            .refraction
+            .as_ref()
+            .map(|rs| refraction_layer(rs, &ds, temperature, step, left, &mut tables))
+            .transpose()?;
 
         // The largest value a lookup can return, from the bricks' ranges (for the lane march's range check).
         let max = |ch: usize| (0..nb).map(|b| majorant.max(b, ch)).fold(0f32, f32::max) as f64;
@@ -272,34 +154,19 @@ impl FireVolume {
         // The largest emitting density: d · Lescale, or the emission grid itself.
         let dlmax = if emission_grid { lesmax } else { dmax * lesmax };
         let nmax: Vec<f64> = co.species.iter().map(|sp| max(sp.ch)).collect();
-        let [b0, b1] = ds.bounds();
-        let (clip_box, margin) = if set.mode == Mode::Pbrt && ds.format() == Format::NanoVdb {
-            let half = ds.voxel_size() * 0.5;
-            ([b0 + half, b1 + half], 0.5)
-        } else {
-            ([b0, b1], 0.0)
-        };
+        let (clip_box, margin) = clip_box(set.mode, &ds);
         let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
-        let physical_colour = match &set.emission {
-            Emission::Physical { tint, ramp, .. } => {
-                tint.is_none() && ramp.as_ref().is_none_or(|r| r.physical >= 1.0)
-            }
-            _ => true,
-        };
-        // What the point query's closed forms cannot express (the first such layer names the refusal).
-        let refused = [
-            (!co.species.is_empty(), "atomic lines or the blue core"),
-            (thick.is_some(), "optically thick atomic lines"),
-            (scatter_color.is_some(), "a scatter colour grid"),
-            (set.diffusion.is_some(), "diffusion"),
-            (refraction.is_some(), "refraction"),
-            (embers.is_some(), "embers"),
-            (!physical_colour, "art direction (a tint or a colour ramp)"),
-        ]
-        .iter()
-        .find(|(on, _)| *on)
-        .map(|(_, why)| why.to_string());
-        let point_model = point::PointModel::new(&set.emission, set.sigma_s.as_ref(), refused);
+        let (physical_colour, point_model) = point_model(
+            (&set.emission, set.sigma_s.as_ref()),
+            [
+                !co.species.is_empty(),
+                thick.is_some(),
+                scatter_color.is_some(),
+                set.diffusion.is_some(),
+                refraction.is_some(),
+                embers.is_some(),
+            ],
+        );
         let mut vol = FireVolume {
             grids: parts::Grids {
                 ds,
@@ -357,80 +224,100 @@ impl FireVolume {
             fault: set.fault,
         };
         if lanes_wanted {
-            let t3 = Instant::now();
-            vol.estimator.lanes = lanes::LaneTables::build(&vol, dmax, dlmax, &nmax, step);
-            if let Some(lt) = &vol.estimator.lanes {
-                vol.report.tables.push(TableReport {
-                    name: "march lanes (σ per unit density; the tables are shared)".into(),
-                    bytes: lt.bytes(),
-                    seconds: t3.elapsed().as_secs_f64(),
-                });
-                if let Some((lat, seconds)) = lattice {
-                    vol.report.tables.push(TableReport {
-                        name: match lat.bricks() {
-                            None => {
-                                "march lattice (grids interleaved and padded; their brick ranges)"
-                                    .into()
-                            }
-                            Some(t) => format!(
-                                "march lattice (grids interleaved, a padded copy per brick: {} copies)",
-                                t.active_bricks()
-                            ),
-                        },
-                        bytes: lat.bytes(),
-                        seconds,
-                    });
-                    vol.estimator.lattice = lattice::Slot::ready(lat);
-                }
-                if let Some(plan) = deferred {
-                    vol.report.tables.push(TableReport {
-                        name: plan.describe(),
-                        bytes: 0,
-                        seconds: 0.0,
-                    });
-                    vol.estimator.lattice = lattice::Slot::deferred(plan);
-                }
-            }
+            vol.attach_lanes((dmax, dlmax, &nmax), step, lattice, deferred);
         }
         if let Some(res) = set
             .diffusion
             .filter(|_| vol.model.s.iter().any(|&v| v > 0.0))
         {
-            let t5 = Instant::now();
-            // The solve's peak: three cell arrays per channel, five per solving thread.
-            let cells = {
-                let size = vol.bounds.clip_box[1] - vol.bounds.clip_box[0];
-                let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
-                [0, 1, 2]
-                    .map(|k| ((size[k] / h).ceil() as u64).max(1))
-                    .iter()
-                    .product::<u64>()
-            };
-            let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
-            let left = spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
-            if need > left {
-                return Err(Error::invalid(
-                    "volume",
-                    "diffusionresolution",
-                    format!("{res} ({cells} cells, {need} bytes to solve)"),
-                    format!("a grid within the memory budget's {left} bytes left"),
-                ));
-            }
-            let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
-            // The march samples the scattered light at least twice per diffusion cell.
-            vol.estimator.step = vol.estimator.step.min(0.5 * df.cell());
-            vol.report.tables.push(TableReport {
-                name: format!("diffusion ({} iterations)", df.iterations),
-                bytes: df.bytes(),
-                seconds: t5.elapsed().as_secs_f64(),
-            });
-            vol.layers.diffusion = Some(df);
+            vol.attach_diffusion(res, spare)?;
         }
         vol.report.spare = spare
             .saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum())
             .saturating_sub(vol.estimator.lattice.reserved());
         vol.report.build_seconds = start.elapsed().as_secs_f64();
         Ok(vol)
+    }
+
+    /// The march's lanes (σ per unit density in f32 lanes; the largest density, emitting density and species'
+    /// values a lookup can return, for their range check) and, with them, the lattice they march (built, or
+    /// deferred to the first ray) — neither without the other.
+    fn attach_lanes(
+        &mut self,
+        (dmax, dlmax, nmax): (f64, f64, &[f64]),
+        step: f64,
+        lattice: Option<(lattice::Lattice, f64)>,
+        deferred: Option<lattice::Plan>,
+    ) {
+        let vol = self;
+        let t3 = Instant::now();
+        vol.estimator.lanes = lanes::LaneTables::build(vol, dmax, dlmax, nmax, step);
+        if let Some(lt) = &vol.estimator.lanes {
+            vol.report.tables.push(TableReport {
+                name: "march lanes (σ per unit density; the tables are shared)".into(),
+                bytes: lt.bytes(),
+                seconds: t3.elapsed().as_secs_f64(),
+            });
+            if let Some((lat, seconds)) = lattice {
+                vol.report.tables.push(TableReport {
+                    name: match lat.bricks() {
+                        None => "march lattice (grids interleaved and padded; their brick ranges)"
+                            .into(),
+                        Some(t) => format!(
+                            "march lattice (grids interleaved, a padded copy per brick: {} copies)",
+                            t.active_bricks()
+                        ),
+                    },
+                    bytes: lat.bytes(),
+                    seconds,
+                });
+                vol.estimator.lattice = lattice::Slot::ready(lat);
+            }
+            if let Some(plan) = deferred {
+                vol.report.tables.push(TableReport {
+                    name: plan.describe(),
+                    bytes: 0,
+                    seconds: 0.0,
+                });
+                vol.estimator.lattice = lattice::Slot::deferred(plan);
+            }
+        }
+    }
+
+    /// Diffusion's scattered light, solved on a grid of `res` cells along the box's longest side, within what
+    /// `spare` leaves after the tables.
+    fn attach_diffusion(&mut self, res: usize, spare: u64) -> Result<(), Error> {
+        let vol = self;
+        let t5 = Instant::now();
+        // The solve's peak: three cell arrays per channel, five per solving thread.
+        let cells = {
+            let size = vol.bounds.clip_box[1] - vol.bounds.clip_box[0];
+            let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
+            [0, 1, 2]
+                .map(|k| ((size[k] / h).ceil() as u64).max(1))
+                .iter()
+                .product::<u64>()
+        };
+        let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
+        let left = spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+        if need > left {
+            return Err(Error::invalid(
+                "volume",
+                "diffusionresolution",
+                format!("{res} ({cells} cells, {need} bytes to solve)"),
+                format!("a grid within the memory budget's {left} bytes left"),
+            ));
+        }
+        let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
+        // The march samples the scattered light at least twice per diffusion cell.
+        vol.estimator.step = vol.estimator.step.min(0.5 * df.cell());
+        vol.report.tables.push(TableReport {
+            name: format!("diffusion ({} iterations)", df.iterations),
+            bytes: df.bytes(),
+            seconds: t5.elapsed().as_secs_f64(),
+        });
+        vol.layers.diffusion = Some(df);
+        Ok(())
     }
 }
 
@@ -444,8 +331,8 @@ struct Marched {
     lattice: Option<(lattice::Lattice, f64)>,
     deferred: Option<lattice::Plan>,
     known: Vec<Option<crate::majorant::Ranges>>,
-    /// The bytes of a lattice the budget (or the allocator) refused: the march reads the grids in place.
-    refused: Option<u64>,
+    /// A lattice the budget refused, as the note that says so: the march reads the grids in place.
+    refused: Option<String>,
 }
 
 /// The lattice the f32 lanes march over a trilinear dataset (its `density`, `temperature` and the further grids
@@ -497,7 +384,11 @@ fn march_lattice(
             .map(|p| p.bytes)
             .filter(|&b| b > spare && b < u64::MAX)
         {
-            refused = Some(bytes);
+            refused = Some(format!(
+                "the march's copy of the grids ({:.1} MB) does not fit the memory budget's {:.1} MB left after them: the march reads the grids in place (the same image, a slower march; raise the budget, maxbytes or --max-memory, to keep the copy)",
+                bytes as f64 / 1e6,
+                spare as f64 / 1e6
+            ));
             dense = None;
         }
         deferred =
@@ -813,4 +704,211 @@ fn auto_soot(
         convention::thickest_across(cols, up),
         kappa,
     )))
+}
+
+/// The majorant bricks: each brick's grid ranges, its σ_t bound per channel (floored where an emission grid emits
+/// without smoke, refused past an optical depth no fire has), and whether it is empty.
+#[allow(clippy::type_complexity)]
+fn majorants(
+    ds: &Dataset,
+    co: &coefficients::Coefficients,
+    (density, temperature, lescale, emission_grid): (usize, Option<usize>, Option<usize>, bool),
+    (brick, c): (usize, usize),
+    known: Vec<Option<crate::majorant::Ranges>>,
+    tables: &mut Vec<TableReport>,
+) -> Result<(MajorantGrid, Vec<f64>, Vec<bool>), Error> {
+    let t1 = Instant::now();
+    let majorant = MajorantGrid::with_ranges(&ds, brick, known);
+    let mut brick_sigma = coefficients::brick_majorants(&majorant, &co, density, temperature, c);
+    // An emission grid emits where there may be no smoke: tracking's estimators add j/σ̄ at tentative
+    // collisions, so σ̄ must not be 0 where j is not — a floor of one collision per voxel there.
+    if let Some(e) = lescale.filter(|_| emission_grid) {
+        let floor = 1.0 / ds.voxel_size().min_element();
+        for (b, s) in brick_sigma.iter_mut().enumerate() {
+            if majorant.max(b, e) > 0.0 {
+                *s = s.max(floor);
+            }
+        }
+    }
+    let nb = brick_sigma.len();
+    // An optical depth above 1e12 per voxel is no fire: a voxel value far outside the data's range, or a
+    // scale far too large. Tracking through it would take ~1e12 collisions per voxel.
+    let voxel = ds.voxel_size().max_element();
+    if let Some((b, &sigma)) = brick_sigma
+        .iter()
+        .enumerate()
+        .max_by(|x, y| x.1.total_cmp(y.1))
+        .filter(|(_, &s)| !(s * voxel <= MAX_OPTICAL_DEPTH_PER_VOXEL))
+    {
+        let [cx, cy, _] = majorant.counts();
+        let (i, j, k) = (b % cx, (b / cx) % cy, b / (cx * cy));
+        return Err(Error::invalid(
+            "volume",
+            "extinction",
+            format!("{sigma:.3e} m⁻¹ in brick ({i}, {j}, {k}) of {brick}³ voxels, an optical depth of {:.3e} per voxel", sigma * voxel),
+            format!("at most {MAX_OPTICAL_DEPTH_PER_VOXEL:e} per voxel (a voxel value far outside the data's range, or sootscale, scale, sigma_a or sigma_s far too large?)"),
+        ));
+    }
+    let emitter = lescale.filter(|_| emission_grid);
+    let brick_empty: Vec<bool> = (0..nb)
+        .map(|b| {
+            majorant.max(b, density) <= 0.0
+                && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
+                && emitter.is_none_or(|e| majorant.max(b, e) <= 0.0)
+        })
+        .collect();
+    tables.push(TableReport {
+        name: format!("majorant bricks ({brick}³ voxels)"),
+        bytes: majorant.bytes() + brick_sigma.len() * 8,
+        seconds: t1.elapsed().as_secs_f64(),
+    });
+    Ok((majorant, brick_sigma, brick_empty))
+}
+
+/// The embers: the particles of `ef`, glowing by their temperature at the fire's `intensity` (a pbrt-v4 medium
+/// has none), within what `spare` leaves after `tables`.
+fn ember_layer(
+    (emission, ember): (&Emission, crate::embers::Material),
+    basis: &Basis,
+    ef: &crate::dataset::params::EmberFile,
+    spare: u64,
+    tables: &mut Vec<TableReport>,
+) -> Result<crate::embers::Embers, Error> {
+    let Emission::Physical { intensity, .. } = emission else {
+        return Err(Error::invalid(
+            "dataset",
+            "embers",
+            format!("\"{}\" for a pbrt-v4 medium", ef.file),
+            "a fire (\"string type\" \"fire\"): embers glow by their temperature",
+        ));
+    };
+    let t6 = Instant::now();
+    let nodes = basis.nodes();
+    let g = vec![ember.emissivity * intensity; nodes.lambda.len()];
+    let left = spare.saturating_sub(tables.iter().map(|t| t.bytes as u64).sum());
+    let em = crate::embers::Embers::new(
+        &ef.file,
+        &ef.particles,
+        ember,
+        ef.shutter,
+        ef.fps,
+        &|t| basis.emit_planck(&nodes, &g, t),
+        left,
+    )?;
+    tables.push(TableReport {
+        name: format!("embers ({} particles and their grid)", em.len()),
+        bytes: em.bytes(),
+        seconds: t6.elapsed().as_secs_f64(),
+    });
+    Ok(em)
+}
+
+/// Refraction's index field, from the temperature grid (the index of air follows from it), within `left` bytes.
+fn refraction_layer(
+    rs: &super::settings::RefractionSettings,
+    ds: &Dataset,
+    temperature: Option<usize>,
+    step: f64,
+    spare: u64,
+    tables: &mut Vec<TableReport>,
+) -> Result<super::bent::Refraction, Error> {
+    let left = spare.saturating_sub(tables.iter().map(|t| t.bytes as u64).sum());
+    let t_ch = temperature.ok_or_else(|| {
+        Error::invalid(
+            "volume",
+            "refraction",
+            "true without a temperature grid",
+            "a temperature grid (the index of air follows from it)",
+        )
+    })?;
+    let t2 = Instant::now();
+    let rf = super::bent::Refraction::build(
+        &ds.channels()[t_ch].grid,
+        ds.bounds(),
+        &rs.air,
+        (rs.wavelength, rs.scale),
+        rs.rk4,
+        step,
+        ds.voxel_size().min_element(),
+        left,
+    )
+    .map_err(|bytes| Error::TooLarge {
+        file: "refraction".into(),
+        what: "the index field (16 bytes per voxel around the voxels hotter than ambient)".into(),
+        bytes,
+        cap: left,
+    })?;
+    tables.push(TableReport {
+        name: "refraction index field".into(),
+        bytes: rf.field.bytes(),
+        seconds: t2.elapsed().as_secs_f64(),
+    });
+    Ok(rf)
+}
+
+/// Whether the fire's colour is the physics' (no tint, no colour ramp short of `physical` 1), and the point
+/// query's model: the closed forms, or what they cannot express — `layers` says which of the fire's layers are
+/// on (species, thick lines, a scatter colour grid, diffusion, refraction, embers); the first such layer, or art
+/// direction, names the refusal.
+fn point_model(
+    (emission, sigma_s): (&Emission, Option<&super::settings::SpectrumFn>),
+    layers: [bool; 6],
+) -> (bool, point::PointModel) {
+    let physical_colour = match emission {
+        Emission::Physical { tint, ramp, .. } => {
+            tint.is_none() && ramp.as_ref().is_none_or(|r| r.physical >= 1.0)
+        }
+        _ => true,
+    };
+    let names = [
+        "atomic lines or the blue core",
+        "optically thick atomic lines",
+        "a scatter colour grid",
+        "diffusion",
+        "refraction",
+        "embers",
+    ];
+    let refused = layers
+        .iter()
+        .zip(names)
+        .find(|(on, _)| **on)
+        .map(|(_, why)| why)
+        .or((!physical_colour).then_some("art direction (a tint or a colour ramp)"))
+        .map(str::to_string);
+    (
+        physical_colour,
+        point::PointModel::new(emission, sigma_s, refused),
+    )
+}
+
+/// The box a ray is clipped to, and its margin in voxels: pbrt-v4's nanovdb medium shifts its grid's box by half a
+/// voxel (its samples at the voxels' corners).
+fn clip_box(mode: Mode, ds: &Dataset) -> ([DVec3; 2], f64) {
+    let [b0, b1] = ds.bounds();
+    if mode == Mode::Pbrt && ds.format() == Format::NanoVdb {
+        let half = ds.voxel_size() * 0.5;
+        ([b0 + half, b1 + half], 0.5)
+    } else {
+        ([b0, b1], 0.0)
+    }
+}
+
+/// Motion blur's majorants, widened by how far the velocity carries the fire in the shutter.
+fn blur_layer(
+    m: crate::dataset::params::Motion,
+    ds: &Dataset,
+    (majorant, brick_sigma, brick_empty): (&MajorantGrid, &[f64], &[bool]),
+    tables: &mut Vec<TableReport>,
+) -> motion::Blur {
+    let t5 = Instant::now();
+    let b = motion::Blur::new(m, ds, majorant, brick_sigma, brick_empty);
+    tables.push(TableReport {
+        name: format!(
+            "motion blur (majorants widened by {:.4} medium units)",
+            b.reach()
+        ),
+        bytes: b.bytes(),
+        seconds: t5.elapsed().as_secs_f64(),
+    });
+    b
 }
