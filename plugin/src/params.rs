@@ -97,14 +97,14 @@ pub struct Param {
     pub at: Option<String>,
     /// Its place in the host's list (`FmCreateInfo::params`), when a host passed it: errors about it carry it,
     /// so a host finds the parameter without reading the message.
-    pub index: Option<usize>,
+    pub index: Option<u32>,
 }
 
 /// Where `list` says the parameter `name` came from — its location and its index in the host's list — for
 /// [`crate::Error::located`].
 pub fn location_in<'a>(
     list: &'a [Param],
-) -> impl Fn(&str) -> Option<(Option<&'a str>, Option<usize>)> + 'a {
+) -> impl Fn(&str) -> Option<(Option<&'a str>, Option<u32>)> + 'a {
     move |name| {
         list.iter()
             .find(|p| p.name == name)

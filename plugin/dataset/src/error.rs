@@ -11,7 +11,7 @@ pub enum Error {
         /// Where the parameter was given (`file:line:col` of a scene), when the host said.
         at: Option<String>,
         /// The parameter's index in the host's list, when the host passed it (a look's: the look's).
-        index: Option<usize>,
+        index: Option<u32>,
         /// Component that owns the parameter (`soot`, `species`, `spectrum`, …).
         component: &'static str,
         /// Parameter name as the user wrote it.
@@ -173,7 +173,7 @@ impl Error {
     /// `FmCreateInfo::locations` and `params::location_in`).
     pub fn located<'a>(
         self,
-        origin: impl Fn(&str) -> Option<(Option<&'a str>, Option<usize>)>,
+        origin: impl Fn(&str) -> Option<(Option<&'a str>, Option<u32>)>,
     ) -> Error {
         match self {
             Error::InvalidParameter {

@@ -20,7 +20,7 @@ thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
     /// The last error's status and parts (parameter, location, file, position) and its parameter's index, for
     /// `last_error_detail`.
-    static LAST_DETAIL: RefCell<(FmStatus, [Option<CString>; 4], Option<usize>)> = const { RefCell::new((FM_OK, [None, None, None, None], None)) };
+    static LAST_DETAIL: RefCell<(FmStatus, [Option<CString>; 4], Option<u32>)> = const { RefCell::new((FM_OK, [None, None, None, None], None)) };
     /// The parts of an error [`fail`] converted, until [`guard`] reports it (or the call succeeds after all).
     static PENDING_PARTS: RefCell<Option<Parts>> = const { RefCell::new(None) };
     /// Set while an entry runs under [`guard`]: a panic there is caught and reported, so the hook stays quiet.
@@ -60,7 +60,7 @@ fn set_error(msg: String) {
 #[derive(Default)]
 struct Parts {
     text: [Option<String>; 4],
-    index: Option<usize>,
+    index: Option<u32>,
 }
 
 /// Records the last error's status and parts for `last_error_detail`.

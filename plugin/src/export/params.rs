@@ -133,7 +133,7 @@ pub(super) unsafe fn read_params(
             ty,
             values,
             at,
-            index: Some(i),
+            index: Some(i as u32),
         });
     }
     Ok(out)

@@ -308,7 +308,7 @@ impl FireVolume {
                 format!("a grid within the memory budget's {left} bytes left"),
             ));
         }
-        let df = diffusion::Diffusion::build(&vol, res, vol.model.g)?;
+        let df = diffusion::Diffusion::build(vol, res, vol.model.g)?;
         // The march samples the scattered light at least twice per diffusion cell.
         vol.estimator.step = vol.estimator.step.min(0.5 * df.cell());
         vol.report.tables.push(TableReport {
@@ -718,8 +718,8 @@ fn majorants(
     tables: &mut Vec<TableReport>,
 ) -> Result<(MajorantGrid, Vec<f64>, Vec<bool>), Error> {
     let t1 = Instant::now();
-    let majorant = MajorantGrid::with_ranges(&ds, brick, known);
-    let mut brick_sigma = coefficients::brick_majorants(&majorant, &co, density, temperature, c);
+    let majorant = MajorantGrid::with_ranges(ds, brick, known);
+    let mut brick_sigma = coefficients::brick_majorants(&majorant, co, density, temperature, c);
     // An emission grid emits where there may be no smoke: tracking's estimators add j/σ̄ at tentative
     // collisions, so σ̄ must not be 0 where j is not — a floor of one collision per voxel there.
     if let Some(e) = lescale.filter(|_| emission_grid) {
