@@ -344,12 +344,9 @@ impl Frame {
     }
 }
 
-/// Renders one frame (`None`: the scene as written) and writes its EXR and PNG, or leaves it out
-/// (`--skip-existing`).
-fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium::Result<Frame> {
-    log.event(serde_json::json!({"event": "start", "frame": frame, "scene": a.scene.display().to_string()}));
-    let frame_start = std::time::Instant::now();
-    let ov = scene::Overrides {
+/// What the command line changes of the scene, for `frame`.
+fn overrides(a: &RenderArgs, frame: Option<i64>) -> scene::Overrides {
+    scene::Overrides {
         frame,
         spp: a.spp,
         plugin: a.plugin.clone(),
@@ -371,7 +368,15 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         threads: a.threads.map(usize::from),
         max_memory: a.max_memory.map(|gb| (gb * 1e9) as u64),
         aovs: a.aov.clone().map(|l| l.0).unwrap_or_default(),
-    };
+    }
+}
+
+/// Renders one frame (`None`: the scene as written) and writes its EXR and PNG, or leaves it out
+/// (`--skip-existing`).
+fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium::Result<Frame> {
+    log.event(serde_json::json!({"event": "start", "frame": frame, "scene": a.scene.display().to_string()}));
+    let frame_start = std::time::Instant::now();
+    let ov = overrides(a, frame);
     // The output name: `-o` or the film's, with the frame's number in its pattern.
     let named = |film: Option<&str>| -> firemedium::Result<(PathBuf, PathBuf)> {
         let (exr, _) = outputs(&a.scene, film, a.output.as_deref());

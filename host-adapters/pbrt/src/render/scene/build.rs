@@ -204,47 +204,17 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error
     Ok(())
 }
 
-/// Builds the scene described: the plugin and the spectral bins first (from the media), then the film, sampler,
-/// filter and integrator, the media, textures, area lights and materials, the objects, the world's shapes,
-/// instances and lights in file order, the camera, and the fire lights.
-pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<Scene, Error> {
-    // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
-    // photometric scale.
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut fire = false;
-    let mut plugin_path = ov.plugin.clone();
-    let mut first_medium: Option<&Loc> = None;
-    for m in &desc.media {
-        let loc = &m.entity.loc;
-        {
-            let p = &ParamDict::new(&m.entity.params);
-            match string(p, "type") {
-                Some("fire") => fire = true,
-                Some("uniformgrid" | "nanovdb" | "cloud") => {}
-                _ => continue,
-            }
-            first_medium.get_or_insert(loc);
-            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
-                plugin_path = Some(dir.join(file));
-            }
-        }
-    }
-    let plugin = match first_medium {
-        Some(loc) => Some(
-            match &plugin_path {
-                Some(file) => load_plugin(Some(file)),
-                None => load_plugin(None),
-            }
-            .map_err(|e| err(loc, e))?,
-        ),
-        None => None,
-    };
-    // The bins: with a plugin medium (a fire, or pbrt-v4's grids), the plugin's measured default, which its march
-    // kernel holds in vector lanes; without one, the whole CIE table (380–780 nm, 10 nm bins), as pbrt-v4 samples
-    // wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's luminance; 380–400
-    // nm holds 0.004 % of ∫ȳ).
+/// The scene's spectral bins: with a plugin medium (a fire, or pbrt-v4's grids), the plugin's measured default,
+/// which its march kernel holds in vector lanes; without one, the whole CIE table (380–780 nm, 10 nm bins), as
+/// pbrt-v4 samples wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's
+/// luminance; 380–400 nm holds 0.004 % of ∫ȳ). A medium's own `bins`, `lambdamin`, `lambdamax` set them for all.
+fn scene_bins(
+    path: &Path,
+    desc: &Description,
+    plugin: Option<&firemedium_loader::Plugin>,
+) -> Result<(f64, f64, usize), Error> {
     let (mut lo, mut hi, mut n) = (380.0, 780.0, 40);
-    if let Some(p) = &plugin {
+    if let Some(p) = plugin {
         let default = SpectralGrid::default();
         (lo, hi, n) = (default.min_nm(), default.max_nm(), default.count());
         for row in p.parameters() {
@@ -289,6 +259,45 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
             ),
         ));
     }
+    Ok((lo, hi, n))
+}
+
+/// Builds the scene described: the plugin and the spectral bins first (from the media), then the film, sampler,
+/// filter and integrator, the media, textures, area lights and materials, the objects, the world's shapes,
+/// instances and lights in file order, the camera, and the fire lights.
+pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<Scene, Error> {
+    // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
+    // photometric scale.
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut fire = false;
+    let mut plugin_path = ov.plugin.clone();
+    let mut first_medium: Option<&Loc> = None;
+    for m in &desc.media {
+        let loc = &m.entity.loc;
+        {
+            let p = &ParamDict::new(&m.entity.params);
+            match string(p, "type") {
+                Some("fire") => fire = true,
+                Some("uniformgrid" | "nanovdb" | "cloud") => {}
+                _ => continue,
+            }
+            first_medium.get_or_insert(loc);
+            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
+                plugin_path = Some(dir.join(file));
+            }
+        }
+    }
+    let plugin = match first_medium {
+        Some(loc) => Some(
+            match &plugin_path {
+                Some(file) => load_plugin(Some(file)),
+                None => load_plugin(None),
+            }
+            .map_err(|e| err(loc, e))?,
+        ),
+        None => None,
+    };
+    let (lo, hi, n) = scene_bins(path, desc, plugin.as_ref())?;
     let grid = SpectralGrid::new(lo, hi, n).map_err(|e| Error::file(path.display(), e))?;
     // The film records Y in cd/m² (nits) either way. With a fire, radiance is absolute (683 lm/W); without one it
     // is in pbrt-v4's units, whose film records ∫ L ȳ dλ as it is (K = 1): a pbrt scene's numbers are pbrt-v4's.
