@@ -9,7 +9,8 @@
   - python: a call of the Python package's public functions with arrays of random shapes, dtypes, counts and
     extreme values, and parameters past what C types hold: a Python exception, or finite numbers — never a crash
     of the interpreter, never NaN returned as an answer;
-  - abi: the C ABI through ctypes with FmCreateInfo, FmRayQuery, FmPointQuery and FmTables of every struct_size from 0 to
+  - abi: the C ABI through ctypes with FmCreateInfo, FmRayQuery, FmPointQuery, FmTables and FmErrorDetail (a write
+    past the host's struct_size counts as an abort) of every struct_size from 0 to
     past this build's, their tails random bytes (as an older or newer minor version's host passes them): a status,
     never a crash.
 
@@ -161,13 +162,15 @@ def batch_outcomes(h, script, labels, d):
     """Runs `script`, which prints one line per case (OK, REFUSED …, NAN), and returns each case's outcome: a
     process that dies charges its death to the case it was in and leaves the rest unrun (not counted)."""
     kind, _ = h.run([sys.executable, "-c", script], d, env=h.env)
-    lines = [l for l in h.last_stdout.splitlines() if l.split(" ")[0] in ("OK", "REFUSED", "NAN")]
+    words = {"OK": "ok", "REFUSED": "refused", "NAN": "nan", "OVERRUN": "abort"}
+    lines = [l for l in h.last_stdout.splitlines() if l.split(" ")[0] in words]
     out = []
     for label, line in zip(labels, lines):
-        word = line.split(" ")[0]
-        out.append(({"OK": "ok", "REFUSED": "refused", "NAN": "nan"}[word], f"{label}: {line}"[:300]))
-    if kind not in ("ok", "refused") and len(lines) < len(labels):
-        out.append((kind, labels[len(lines)]))
+        out.append((words[line.split(" ")[0]], f"{label}: {line}"[:300]))
+    # (A process that stopped short without dying — the script itself failing — has lost the cases it did not
+    # report: counted, never passed over.)
+    if len(lines) < len(labels):
+        out.append((kind if kind not in ("ok", "refused") else "lost", labels[len(lines)]))
     return out
 
 
@@ -194,8 +197,9 @@ def case_python(h, rng, d):
 
 
 def case_abi(h, rng, d):
-    cases = [(rng.choice(["create", "query", "point", "tables"]),
-              rng.choice([0, 1, 8, 87, 88, 95, 96, 97, 104, 128, 4096, rng.randint(0, 300)]))
+    cases = [(rng.choice(["create", "query", "point", "tables", "detail"]),
+              rng.choice([0, 1, 8, 47, 48, 55, 56, 87, 88, 95, 96, 97, 104, 112, 120, 128, 4096,
+                          rng.randint(0, 300)]))
              for _ in range(BATCH)]
     script = (
         "import ctypes as C, os, random, warnings\n"
@@ -241,6 +245,15 @@ def case_abi(h, rng, d):
         "                         scattering=C.cast(sc, abi.c_float_p), emission=C.cast(j, abi.c_float_p))\n"
         "        s = api.volume_tables(h, C.cast(buf(abi.FmTables, t, size), C.POINTER(abi.FmTables)))\n"
         "        vals = list(j)[-64:] + list(a)[-64:]\n"
+        "    elif which == 'detail':\n"
+        "        api.volume_create(None, None)\n"
+        "        raw = buf(abi.FmErrorDetail, abi.FmErrorDetail(), size)\n"
+        "        before = bytes(raw)\n"
+        "        s = api.last_error_detail(C.cast(raw, C.POINTER(abi.FmErrorDetail)))\n"
+        "        vals = []\n"
+        "        if bytes(raw)[max(size, 8):] != before[max(size, 8):]:\n"
+        "            print('OVERRUN', which, size, s, flush=True)\n"
+        "            continue\n"
         "    else:\n"
         "        pts = (C.c_double * 3)(0.0, 0.0, 0.5); lam = (C.c_double * 2)(450.0, 650.0)\n"
         "        o = [(C.c_double * 2)() for _ in range(4)]\n"
