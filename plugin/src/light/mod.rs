@@ -292,7 +292,7 @@ impl FireLight {
                             .filter_map(|c| c.1.as_ref())
                             .map(|m| m.mip_bytes() as u64)
                             .sum();
-                        copies.push((f, v.mip(f, budget.saturating_sub(held))));
+                        copies.push((f, coarse::coarse(v, f, budget.saturating_sub(held))));
                         copies.len() - 1
                     }
                 };
@@ -357,6 +357,7 @@ impl FireLight {
 }
 
 mod build;
+mod coarse;
 mod line;
 pub mod params;
 mod pdf;
