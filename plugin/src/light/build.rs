@@ -3,6 +3,7 @@
 //! each checked against the volume's march.
 
 use super::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 impl FireLight {
     /// The bins the coarse line marches (`linechannels`; `None`: all of them).
@@ -87,19 +88,6 @@ impl FireLight {
         };
         // Full-spectrum power per unit density over T (soot), and per unit N (lines), physical mode only.
         let src = vol.source().cloned();
-        let soot_power = |t: f64| -> f64 {
-            let Some(s) = &src else { return 0.0 };
-            let (lo, hi) = (10e-9f64.ln(), 1e-3f64.ln());
-            crate::quadrature::gauss_legendre(
-                |u| {
-                    let l = u.exp();
-                    s.soot.kappa(l * 1e9, 1.0, s.alpha) * spectral_radiance_si(t, l) * l
-                },
-                lo,
-                hi,
-                60,
-            )
-        };
         // The bricks to weigh: the stored ones and their neighbours; all of them if a background emits (a
         // grid whose empty bricks read a non-zero value).
         let stored = ds.topology();
@@ -143,8 +131,6 @@ impl FireLight {
         w.try_reserve_exact(n / 512).map_err(|_| too_many())?;
         w.resize_with(n / 512, || None);
         let (mut pw, mut plm) = (0.0, 0.0);
-        let dch = vol.density_channel();
-        let tch = vol.temperature_channel();
         let mut bricks: Vec<[usize; 3]> = Vec::with_capacity(topo.active_bricks());
         let mut slot_bricks = vec![[0u32; 3]; topo.active_bricks() + 1];
         topo.for_each_slot(|b, slot| {
@@ -158,196 +144,45 @@ impl FireLight {
         // Per brick (independent: each writes its own slot of the weights), in parallel chunks of bricks under the
         // build's thread budget; the power sums are added brick by brick in the bricks' order, so the light is the
         // same on any number of threads.
-        // The soot's power depends on T only (an integral over the spectrum): found once per 0.5 K for the
-        // whole build, in a table to 10 000 K that the workers fill as they meet a temperature (a race computes
-        // the same value twice), in a shared map beyond it.
-        use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-        const EMPTY: u64 = u64::MAX;
-        let known: Vec<AtomicU64> = (0..=20_000).map(|_| AtomicU64::new(EMPTY)).collect();
-        let beyond = std::sync::Mutex::new(std::collections::HashMap::new());
-        let brick_weights = |b: &[usize; 3],
-                             sa: &mut [f64],
-                             ss: &mut [f64],
-                             j: &mut [f64],
-                             out: &mut Option<Box<[f32; 512]>>|
-         -> (f64, f64, f64) {
-            let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
-            let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
-            for k in span[2].0..span[2].1 {
-                for jy in span[1].0..span[1].1 {
-                    for i in span[0].0..span[0].1 {
-                        let p = p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * voxel;
-                        vol.coefficients(p, sa, ss, j);
-                        if weighting == Weighting::Escaping {
-                            ext += (0..c).map(|q| (sa[q] + ss[q]) * widths[q]).sum::<f64>();
-                        }
-                        let lum: f64 = (0..c).map(|q| j[q] * xyz[q].y).sum();
-                        let band: f64 = (0..c).map(|q| j[q] * widths[q]).sum();
-                        if !(lum > 0.0 || band > 0.0) {
-                            continue;
-                        }
-                        out.get_or_insert_with(|| Box::new([0.0; 512]))
-                            [topo.index(i, jy, k) % 512] = match weighting {
-                            Weighting::Luminance => lum,
-                            Weighting::Power | Weighting::Escaping => band,
-                        } as f32;
-                        plm += lum;
-                        pw += match &src {
-                            None => band,
-                            Some(s) => {
-                                let chs = ds.channels();
-                                let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
-                                let d = at(dch).max(0.0) as f64;
-                                let t = tch.map(|q| at(q) as f64).unwrap_or(0.0);
-                                let key = (t * 2.0).round() as i64;
-                                let soot =
-                                    match usize::try_from(key).ok().and_then(|k| known.get(k)) {
-                                        Some(slot) => match slot.load(Relaxed) {
-                                            EMPTY => {
-                                                let p = soot_power(key as f64 / 2.0);
-                                                slot.store(p.to_bits(), Relaxed);
-                                                p
-                                            }
-                                            bits => f64::from_bits(bits),
-                                        },
-                                        None => *beyond
-                                            .lock()
-                                            .unwrap_or_else(|e| e.into_inner())
-                                            .entry(key)
-                                            .or_insert_with(|| soot_power(key as f64 / 2.0)),
-                                    };
-                                let mut v = d * s.soot_scale * soot;
-                                for (e, ch, scale) in &s.species {
-                                    let nn = at(*ch).max(0.0) as f64 * scale;
-                                    if nn > 0.0 {
-                                        v += nn * s.intensity * line_power(e, t);
-                                    }
-                                }
-                                if let Some((ch, per_unit)) = s.reaction {
-                                    v += at(ch).max(0.0) as f64 * per_unit;
-                                }
-                                v
-                            }
-                        };
-                    }
-                }
-            }
-            let n = span.iter().map(|s| s.1 - s.0).product::<usize>().max(1) as f64;
-            (pw, plm, ext / (n * widths.iter().sum::<f64>()))
+        let weigher = Weigher {
+            vol: &vol,
+            topo: &topo,
+            weighting,
+            p0,
+            voxel,
+            xyz: &xyz,
+            widths: &widths,
+            src: src.as_ref(),
+            density: vol.density_channel(),
+            temperature: vol.temperature_channel(),
+            known: (0..=20_000).map(|_| AtomicU64::new(EMPTY)).collect(),
+            beyond: std::sync::Mutex::new(std::collections::HashMap::new()),
         };
-        let workers = crate::par::threads(16).min(bricks.len().max(1));
         let run = |part: &[usize]| {
             let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
             part.iter()
                 .map(|&i| {
                     let mut out = None;
-                    let sums = brick_weights(&bricks[i], &mut sa, &mut ss, &mut j, &mut out);
+                    let sums = weigher.brick(&bricks[i], &mut sa, &mut ss, &mut j, &mut out);
                     (sums, out)
                 })
                 .collect::<Vec<_>>()
         };
-        // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
-        // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
-        // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
-        let trilinear = ds.interpolation() == crate::grid::Interpolation::Trilinear;
-        let escaping = weighting == Weighting::Escaping;
+        let (cw, found, emitting) = cell_weights(
+            &vol,
+            &topo,
+            &bricks,
+            w,
+            &run,
+            (cell, weighting == Weighting::Escaping),
+            voxel,
+            &too_many,
+        )?;
         let slot_of = |b: &[usize; 3]| {
             let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
             topo.index(span[0].0, span[1].0, span[2].0) / 512
         };
-        let side = 8 / cell;
-        let per = side * side * side;
-        // The bricks by z layer, each layer in the bricks' order. A layer's weights are found before the layer
-        // below it is dilated and dropped once the layer above it has been: three layers of weights held at a
-        // time, not the fire's (all of them for `escaping`, whose factors need every brick's extinction first).
-        let mut layers = vec![Vec::new(); topo.bricks()[2]];
-        for (i, b) in bricks.iter().enumerate() {
-            layers[b[2]].push(i);
-        }
-        let mut found = vec![(0.0, 0.0, 0.0); bricks.len()];
-        let mut keep: Vec<f32> = Vec::new();
-        // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and summed
-        // per cell (in f64; at `cell 1` a cell is a voxel, its weight the voxel's) — no second array of voxel
-        // weights.
-        let mut emitting = 0;
-        let mut cw = crate::alloc::filled(n / 512 * per, 0f32).ok_or_else(too_many)?;
-        let mut next = 0;
-        for z in 0..layers.len() {
-            // When the layer above this is not yet weighed, a batch of layers: up to it, and enough bricks to
-            // keep every worker busy (every layer for `escaping`).
-            let mut batch: Vec<usize> = Vec::new();
-            if next < z + 2 {
-                while next < layers.len()
-                    && (escaping || next < z + 2 || batch.len() < workers * 256)
-                {
-                    batch.extend(&layers[next]);
-                    next += 1;
-                }
-            }
-            // In rounds of 512 bricks per worker (a worker's blocks held until its round is placed).
-            for round in batch.chunks(workers * 512) {
-                let chunk = round.len().div_ceil(workers).max(1);
-                let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
-                    vec![run(round)]
-                } else {
-                    crate::par::scope(|sc| {
-                        let handles: Vec<_> = round
-                            .chunks(chunk)
-                            .map(|part| sc.spawn(move || run(part)))
-                            .collect();
-                        handles
-                            .into_iter()
-                            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                            .collect()
-                    })
-                };
-                for (&i, (sums, block)) in round.iter().zip(parts.into_iter().flatten()) {
-                    found[i] = sums;
-                    w[slot_of(&bricks[i])] = block;
-                }
-            }
-            if escaping && z == 0 {
-                let extinction: Vec<f64> = found.iter().map(|f| f.2).collect();
-                keep =
-                    escape_fractions(&topo, &bricks, &extinction, voxel * 8.0, vol.spare_bytes())
-                        .ok_or_else(too_many)?
-                        .into_iter()
-                        .map(|f| (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32)
-                        .collect();
-            }
-            let weight = |n: usize| w[n / 512].as_ref().map_or(0.0, |b| b[n % 512]);
-            for &i in &layers[z] {
-                let b = &bricks[i];
-                let slot = slot_of(b);
-                let mut ws = [0f32; 512];
-                if trilinear {
-                    dilate_brick(weight, &topo, *b, 0.125, &mut ws);
-                } else if let Some(block) = &w[slot] {
-                    ws = **block;
-                }
-                if let Some(&k) = keep.get(i) {
-                    ws.iter_mut().for_each(|v| *v *= k);
-                }
-                let mut sums = [0f64; 512];
-                for (l, &v) in ws.iter().enumerate() {
-                    if v > 0.0 {
-                        emitting += 1;
-                        let c =
-                            (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
-                        sums[c] += v as f64;
-                    }
-                }
-                for (c, &v) in sums[..per].iter().enumerate() {
-                    cw[slot * per + c] = v as f32;
-                }
-            }
-            if !escaping && z > 0 {
-                for &i in &layers[z - 1] {
-                    w[slot_of(&bricks[i])] = None;
-                }
-            }
-        }
-        drop(w);
+        let per = (8 / cell).pow(3);
         // The power sums brick by brick in the bricks' order: the light is the same on any number of threads.
         for &(bpw, bplm, _) in &found {
             pw += bpw;
@@ -359,47 +194,22 @@ impl FireLight {
         let power_lm = 4.0 * std::f64::consts::PI * vv * plm;
         // The bricks holding weight and their CDF (a cell's weights lie in its brick's slot, those outside the
         // grid's dims 0).
-        let (mut brick_slots, mut cdf) = (Vec::new(), Vec::new());
-        let mut total = 0.0;
-        for b in &bricks {
-            let slot = slot_of(b);
-            let ws = &w[slot * per..(slot + 1) * per];
-            let sum: f64 = ws.iter().map(|&v| v as f64).sum();
-            if sum > 0.0 {
-                total += sum;
-                brick_slots.push(slot as u32);
-                cdf.push(total);
-            }
-        }
-        // The embers, by the same measure: an ember is a Lambertian sphere, π r² L per steradian on average, the
-        // power j V of a voxel — in the voxels' units, divided by a voxel's volume.
+        let (brick_slots, cdf, mut total) = brick_cdf(bricks.iter().map(slot_of), &w, per);
+        // The embers, by the same measure (their share of the pdf after the fire's).
         let fire_total = total;
         let (mut power_w, mut power_lm) = (power_w, power_lm);
         let (mut ember_w, mut ember_cdf) = (Vec::new(), Vec::new());
         if let Some(em) = vol.embers() {
-            let n = em.len();
-            ember_w = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
-            ember_cdf = crate::alloc::filled(n, 0.0).ok_or_else(too_many)?;
             let intensity = src.as_ref().map_or(1.0, |s| s.intensity);
-            let eps = em.emissivity();
-            let mut l = vec![0.0; c];
-            for i in 0..n {
-                em.radiance(i, 0.0, &mut l);
-                let r = em.radius(i);
-                let area = std::f64::consts::PI * r * r;
-                let lum: f64 = (0..c).map(|q| l[q] * xyz[q].y).sum();
-                let band: f64 = (0..c).map(|q| l[q] * widths[q]).sum();
-                ember_w[i] =
-                    area * match weighting {
-                        Weighting::Luminance => lum,
-                        Weighting::Power | Weighting::Escaping => band,
-                    } / vv;
-                total += ember_w[i];
-                ember_cdf[i] = total;
-                power_lm += 4.0 * std::f64::consts::PI * area * lum;
-                power_w += intensity
-                    * firemedium_core::ember::radiated_power(eps, r, em.temperature(i, 0.0));
-            }
+            (ember_w, ember_cdf) = ember_weights(
+                em,
+                intensity,
+                weighting,
+                (&xyz, &widths),
+                vv,
+                (&mut total, &mut power_w, &mut power_lm),
+            )
+            .ok_or_else(too_many)?;
         }
         if !(total > 0.0) {
             return Err(no_emission());
@@ -591,6 +401,304 @@ fn line_power(e: &crate::species::Element, t: f64) -> f64 {
                     / z
             })
             .sum::<f64>()
+}
+
+/// The bricks (by their slots, in the bricks' order) whose cells (`per` weights each, at the slot's place in `w`)
+/// hold weight, and the CDF over them, with its total.
+fn brick_cdf(
+    slots: impl Iterator<Item = usize>,
+    w: &[f32],
+    per: usize,
+) -> (Vec<u32>, Vec<f64>, f64) {
+    let (mut brick_slots, mut cdf) = (Vec::new(), Vec::new());
+    let mut total = 0.0;
+    for slot in slots {
+        let ws = &w[slot * per..(slot + 1) * per];
+        let sum: f64 = ws.iter().map(|&v| v as f64).sum();
+        if sum > 0.0 {
+            total += sum;
+            brick_slots.push(slot as u32);
+            cdf.push(total);
+        }
+    }
+    (brick_slots, cdf, total)
+}
+
+/// The embers' weights, by the same measure as the fire's voxels: an ember is a Lambertian sphere, π r² L per
+/// steradian on average, the power j V of a voxel — in the voxels' units, divided by a voxel's volume `vv`. Their
+/// CDF continues the fire's from `total`, and their power (W) and luminous flux (lm) add to the fire's, each
+/// advanced ember by ember. `None` when the allocator refuses their weights.
+fn ember_weights(
+    em: &crate::embers::Embers,
+    intensity: f64,
+    weighting: Weighting,
+    (xyz, widths): (&[DVec3], &[f64]),
+    vv: f64,
+    (total, power_w, power_lm): (&mut f64, &mut f64, &mut f64),
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let c = widths.len();
+    let n = em.len();
+    let mut ember_w = crate::alloc::filled(n, 0.0)?;
+    let mut ember_cdf = crate::alloc::filled(n, 0.0)?;
+    let eps = em.emissivity();
+    let mut l = vec![0.0; c];
+    for i in 0..n {
+        em.radiance(i, 0.0, &mut l);
+        let r = em.radius(i);
+        let area = std::f64::consts::PI * r * r;
+        let lum: f64 = (0..c).map(|q| l[q] * xyz[q].y).sum();
+        let band: f64 = (0..c).map(|q| l[q] * widths[q]).sum();
+        ember_w[i] =
+            area * match weighting {
+                Weighting::Luminance => lum,
+                Weighting::Power | Weighting::Escaping => band,
+            } / vv;
+        *total += ember_w[i];
+        ember_cdf[i] = *total;
+        *power_lm += 4.0 * std::f64::consts::PI * area * lum;
+        *power_w +=
+            intensity * firemedium_core::ember::radiated_power(eps, r, em.temperature(i, 0.0));
+    }
+    Some((ember_w, ember_cdf))
+}
+
+/// What weighs a brick's voxels for the light: each voxel's luminance or power in the bins, and the sums the
+/// light's power (W: the soot's over the whole spectrum, the lines', the reaction's), luminous flux and, for
+/// `escaping`, mean extinction take from them.
+struct Weigher<'a> {
+    vol: &'a FireVolume,
+    topo: &'a crate::grid::Topology,
+    weighting: Weighting,
+    /// The lattice's corner and voxel size.
+    p0: DVec3,
+    voxel: DVec3,
+    /// Per channel its XYZ per unit radiance and its width (nm, or 1 per band).
+    xyz: &'a [DVec3],
+    widths: &'a [f64],
+    /// The physical fire's emitters (none in pbrt-v4's mode: the power is the bins').
+    src: Option<&'a crate::volume::Source>,
+    density: usize,
+    temperature: Option<usize>,
+    /// The soot's power depends on T only (an integral over the spectrum): found once per 0.5 K for the whole
+    /// build, in a table to 10 000 K that the workers fill as they meet a temperature (a race computes the same
+    /// value twice; [`EMPTY`] until then), in a shared map beyond it.
+    known: Vec<AtomicU64>,
+    beyond: std::sync::Mutex<std::collections::HashMap<i64, f64>>,
+}
+
+/// A [`Weigher::known`] entry not found yet.
+const EMPTY: u64 = u64::MAX;
+
+impl Weigher<'_> {
+    /// The soot's full-spectrum power per unit density at `t`.
+    fn soot_power(&self, t: f64) -> f64 {
+        let Some(s) = self.src else { return 0.0 };
+        let (lo, hi) = (10e-9f64.ln(), 1e-3f64.ln());
+        crate::quadrature::gauss_legendre(
+            |u| {
+                let l = u.exp();
+                s.soot.kappa(l * 1e9, 1.0, s.alpha) * spectral_radiance_si(t, l) * l
+            },
+            lo,
+            hi,
+            60,
+        )
+    }
+
+    /// Brick `b`'s voxel weights into `out` (allocated when one emits; `sa`, `ss`, `j` a channel's scratch), and
+    /// its sums: power, luminance, mean extinction over the bins' widths.
+    fn brick(
+        &self,
+        b: &[usize; 3],
+        sa: &mut [f64],
+        ss: &mut [f64],
+        j: &mut [f64],
+        out: &mut Option<Box<[f32; 512]>>,
+    ) -> (f64, f64, f64) {
+        let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
+        let span = [0, 1, 2].map(|a| self.topo.brick_span(b[a], a));
+        for k in span[2].0..span[2].1 {
+            for jy in span[1].0..span[1].1 {
+                for i in span[0].0..span[0].1 {
+                    let p =
+                        self.p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * self.voxel;
+                    self.vol.coefficients(p, sa, ss, j);
+                    if self.weighting == Weighting::Escaping {
+                        ext += (0..self.widths.len())
+                            .map(|q| (sa[q] + ss[q]) * self.widths[q])
+                            .sum::<f64>();
+                    }
+                    let lum: f64 = (0..self.widths.len()).map(|q| j[q] * self.xyz[q].y).sum();
+                    let band: f64 = (0..self.widths.len()).map(|q| j[q] * self.widths[q]).sum();
+                    if !(lum > 0.0 || band > 0.0) {
+                        continue;
+                    }
+                    out.get_or_insert_with(|| Box::new([0.0; 512]))
+                        [self.topo.index(i, jy, k) % 512] = match self.weighting {
+                        Weighting::Luminance => lum,
+                        Weighting::Power | Weighting::Escaping => band,
+                    } as f32;
+                    plm += lum;
+                    pw += match self.src {
+                        None => band,
+                        Some(s) => {
+                            let chs = self.vol.dataset().channels();
+                            let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
+                            let d = at(self.density).max(0.0) as f64;
+                            let t = self.temperature.map(|q| at(q) as f64).unwrap_or(0.0);
+                            let key = (t * 2.0).round() as i64;
+                            let soot =
+                                match usize::try_from(key).ok().and_then(|k| self.known.get(k)) {
+                                    Some(slot) => match slot.load(Relaxed) {
+                                        EMPTY => {
+                                            let p = self.soot_power(key as f64 / 2.0);
+                                            slot.store(p.to_bits(), Relaxed);
+                                            p
+                                        }
+                                        bits => f64::from_bits(bits),
+                                    },
+                                    None => *self
+                                        .beyond
+                                        .lock()
+                                        .unwrap_or_else(|e| e.into_inner())
+                                        .entry(key)
+                                        .or_insert_with(|| self.soot_power(key as f64 / 2.0)),
+                                };
+                            let mut v = d * s.soot_scale * soot;
+                            for (e, ch, scale) in &s.species {
+                                let nn = at(*ch).max(0.0) as f64 * scale;
+                                if nn > 0.0 {
+                                    v += nn * s.intensity * line_power(e, t);
+                                }
+                            }
+                            if let Some((ch, per_unit)) = s.reaction {
+                                v += at(ch).max(0.0) as f64 * per_unit;
+                            }
+                            v
+                        }
+                    };
+                }
+            }
+        }
+        let n = span.iter().map(|s| s.1 - s.0).product::<usize>().max(1) as f64;
+        (pw, plm, ext / (n * self.widths.iter().sum::<f64>()))
+    }
+}
+
+/// The cells' weights (`cell`³ voxels each, a brick's in its slot), from the voxels' weights `w` (a block per
+/// brick, filled by `run` over parts of the bricks, in parallel under the build's thread budget): each brick's
+/// voxels dilated on their own for trilinear emission and, for `escaping`, scaled by their escape fractions.
+/// With the bricks' sums (power, luminance, extinction) in their order and the emitting voxels' count.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn cell_weights(
+    vol: &FireVolume,
+    topo: &crate::grid::Topology,
+    bricks: &[[usize; 3]],
+    mut w: Vec<Option<Box<[f32; 512]>>>,
+    run: &(dyn Fn(&[usize]) -> Vec<BrickWeights> + Sync),
+    (cell, escaping): (usize, bool),
+    voxel: DVec3,
+    too_many: &dyn Fn() -> Error,
+) -> Result<(Vec<f32>, Vec<(f64, f64, f64)>, usize), Error> {
+    let workers = crate::par::threads(16).min(bricks.len().max(1));
+    let ds = vol.dataset();
+    // With trilinear interpolation a voxel whose centre is dark still emits where it borders a bright one
+    // (up to half the neighbour's value at the shared face, about 1/8 of it averaged over the voxel): the
+    // pdf's support must cover that, or MIS would drop it. Such voxels get 1/8 of their brightest neighbour.
+    let trilinear = ds.interpolation() == crate::grid::Interpolation::Trilinear;
+    let slot_of = |b: &[usize; 3]| {
+        let span = [0, 1, 2].map(|a| topo.brick_span(b[a], a));
+        topo.index(span[0].0, span[1].0, span[2].0) / 512
+    };
+    let side = 8 / cell;
+    let per = side * side * side;
+    // The bricks by z layer, each layer in the bricks' order. A layer's weights are found before the layer
+    // below it is dilated and dropped once the layer above it has been: three layers of weights held at a
+    // time, not the fire's (all of them for `escaping`, whose factors need every brick's extinction first).
+    let mut layers = vec![Vec::new(); topo.bricks()[2]];
+    for (i, b) in bricks.iter().enumerate() {
+        layers[b[2]].push(i);
+    }
+    let mut found = vec![(0.0, 0.0, 0.0); bricks.len()];
+    let mut keep: Vec<f32> = Vec::new();
+    // The cells' weights: each brick's voxels dilated on their own (from the weights around it) and summed
+    // per cell (in f64; at `cell 1` a cell is a voxel, its weight the voxel's) — no second array of voxel
+    // weights.
+    let mut emitting = 0;
+    let mut cw = crate::alloc::filled(topo.values_len() / 512 * per, 0f32).ok_or_else(too_many)?;
+    let mut next = 0;
+    for z in 0..layers.len() {
+        // When the layer above this is not yet weighed, a batch of layers: up to it, and enough bricks to
+        // keep every worker busy (every layer for `escaping`).
+        let mut batch: Vec<usize> = Vec::new();
+        if next < z + 2 {
+            while next < layers.len() && (escaping || next < z + 2 || batch.len() < workers * 256) {
+                batch.extend(&layers[next]);
+                next += 1;
+            }
+        }
+        // In rounds of 512 bricks per worker (a worker's blocks held until its round is placed).
+        for round in batch.chunks(workers * 512) {
+            let chunk = round.len().div_ceil(workers).max(1);
+            let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
+                vec![run(round)]
+            } else {
+                crate::par::scope(|sc| {
+                    let handles: Vec<_> = round
+                        .chunks(chunk)
+                        .map(|part| sc.spawn(move || run(part)))
+                        .collect();
+                    handles
+                        .into_iter()
+                        .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                        .collect()
+                })
+            };
+            for (&i, (sums, block)) in round.iter().zip(parts.into_iter().flatten()) {
+                found[i] = sums;
+                w[slot_of(&bricks[i])] = block;
+            }
+        }
+        if escaping && z == 0 {
+            let extinction: Vec<f64> = found.iter().map(|f| f.2).collect();
+            keep = escape_fractions(topo, bricks, &extinction, voxel * 8.0, vol.spare_bytes())
+                .ok_or_else(too_many)?
+                .into_iter()
+                .map(|f| (ESCAPE_FLOOR + (1.0 - ESCAPE_FLOOR) * f) as f32)
+                .collect();
+        }
+        let weight = |n: usize| w[n / 512].as_ref().map_or(0.0, |b| b[n % 512]);
+        for &i in &layers[z] {
+            let b = &bricks[i];
+            let slot = slot_of(b);
+            let mut ws = [0f32; 512];
+            if trilinear {
+                dilate_brick(weight, topo, *b, 0.125, &mut ws);
+            } else if let Some(block) = &w[slot] {
+                ws = **block;
+            }
+            if let Some(&k) = keep.get(i) {
+                ws.iter_mut().for_each(|v| *v *= k);
+            }
+            let mut sums = [0f64; 512];
+            for (l, &v) in ws.iter().enumerate() {
+                if v > 0.0 {
+                    emitting += 1;
+                    let c = (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                    sums[c] += v as f64;
+                }
+            }
+            for (c, &v) in sums[..per].iter().enumerate() {
+                cw[slot * per + c] = v as f32;
+            }
+        }
+        if !escaping && z > 0 {
+            for &i in &layers[z - 1] {
+                w[slot_of(&bricks[i])] = None;
+            }
+        }
+    }
+    Ok((cw, found, emitting))
 }
 
 #[cfg(test)]
