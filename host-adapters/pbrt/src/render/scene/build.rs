@@ -204,6 +204,218 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error
     Ok(())
 }
 
+/// The plugin the scene's plugin media need (from `--plugin`, the first such medium's `"string plugin"` — relative
+/// to the scene's folder `dir` — or the environment), loaded; none without such a medium. With whether the scene
+/// holds a `fire` (its film then records absolute radiance).
+fn scene_plugin(
+    dir: &Path,
+    desc: &Description,
+    ov: &Overrides,
+) -> Result<(Option<firemedium_loader::Plugin>, bool), Error> {
+    let mut fire = false;
+    let mut plugin_path = ov.plugin.clone();
+    let mut first_medium: Option<&Loc> = None;
+    for m in &desc.media {
+        let loc = &m.entity.loc;
+        {
+            let p = &ParamDict::new(&m.entity.params);
+            match string(p, "type") {
+                Some("fire") => fire = true,
+                Some("uniformgrid" | "nanovdb" | "cloud") => {}
+                _ => continue,
+            }
+            first_medium.get_or_insert(loc);
+            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
+                plugin_path = Some(dir.join(file));
+            }
+        }
+    }
+    let plugin = match first_medium {
+        Some(loc) => Some(
+            match &plugin_path {
+                Some(file) => load_plugin(Some(file)),
+                None => load_plugin(None),
+            }
+            .map_err(|e| err(loc, e))?,
+        ),
+        None => None,
+    };
+    Ok((plugin, fire))
+}
+
+/// The builder before the scene's statements: the renderer's context, pbrt-v4's defaults.
+fn new_builder(
+    ov: &Overrides,
+    desc: &Description,
+    (dir, plugin, fire): (std::path::PathBuf, Option<firemedium_loader::Plugin>, bool),
+    (bins, plugin_bins): (Bins, firemedium_loader::Bins),
+) -> Builder {
+    Builder {
+        ctx: Context {
+            dir,
+            threads: ov.threads,
+            frame: ov.frame,
+            host_tracking: ov.host_tracking,
+            camera_march: ov.camera_march,
+            max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
+        },
+        reports: Reports::default(),
+        bins,
+        plugin,
+        order: 0,
+        named_materials: HashMap::new(),
+        textures: HashMap::new(),
+        named_media: HashMap::new(),
+        materials: Vec::new(),
+        prims: Vec::new(),
+        lights: Vec::new(),
+        media: Vec::new(),
+        media_locs: Vec::new(),
+        camera_shutter: desc.camera.as_ref().map_or([0.0, 1.0], |c| {
+            let cp = ParamDict::new(&c.entity.params);
+            [num(&cp, "shutteropen", 0.0), num(&cp, "shutterclose", 1.0)]
+        }),
+        res: (1280, 720),
+        spp: 16,
+        // pbrt-v4's defaults: zsobol and a Gaussian of radius 1.5, σ 0.5.
+        sampler: crate::render::pixel::Sampler::ZSobol {
+            log2_spp: 0,
+            digits: 0,
+            seed: 0,
+        },
+        film_response: Default::default(),
+        spectral: None,
+        gbuffer: None,
+        media_bytes: 0,
+        shutter: None,
+        crop: None,
+        pixel_bounds: None,
+        filter: crate::render::pixel::Filter::new(
+            "gaussian",
+            crate::render::pixel::Params {
+                radius: [1.5, 1.5],
+                sigma: 0.5,
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+                tau: 3.0,
+            },
+        )
+        .unwrap_or(crate::render::pixel::Filter::Box { radius: [0.5, 0.5] }),
+        maxdepth: 5,
+        film_name: None,
+        objects: Vec::new(),
+        object_prims: 0,
+        current_object: None,
+        plugin_bins,
+        has_fire: fire,
+        film_xyz: None,
+    }
+}
+
+/// The scene's camera (with the command line's resolution), its pixel bounds, checked against the memory budget
+/// with the film they need, and its shutter's interval (s: pbrt-v4's imaging ratio takes it).
+fn camera(
+    b: &mut Builder,
+    (desc, camera_desc): (&Description, &description::Camera),
+    ov: &Overrides,
+    path: &Path,
+) -> Result<(Camera, [usize; 4], f64), Error> {
+    let (camera_type, camera_from_world) = (&camera_desc.entity.ty, camera_desc.camera_from_world);
+    let medium = b.named_media.get(&camera_desc.medium).copied();
+    b.order = camera_desc.entity.order;
+    let cp = &ParamDict::new(&camera_desc.entity.params);
+    if let Some(r) = desc.command_line.res {
+        b.res = r;
+    }
+    let bounds = pixel_bounds(b, &desc.command_line, path)?;
+    // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room), and a spectral
+    // film's buckets (twice: the tiles' and the image's).
+    let bucket_bytes = b.spectral.as_ref().map_or(0, |s| 8 * s.n as u64)
+        + b.gbuffer.map_or(0, |_| {
+            (8 + 4) * crate::render::film::GBUFFER_CHANNELS.len() as u64
+        });
+    crate::budget::check(
+        &format!(
+            "{}: the film of {}×{} pixels",
+            path.display(),
+            b.res.0,
+            b.res.1
+        ),
+        (b.res.0 as u64) * (b.res.1 as u64),
+        64 + bucket_bytes,
+        ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
+    )?;
+    let (w, h) = (b.res.0 as f64, b.res.1 as f64);
+    let aspect = num(cp, "frameaspectratio", w / h);
+    let screen = match nums(cp, "screenwindow") {
+        Some(s) if s.len() == 4 => [s[0], s[1], s[2], s[3]],
+        _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
+        _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
+    };
+    let orthographic = camera_type == "orthographic";
+    let camera = Camera {
+        to_world: affine(&camera_from_world.inverse()),
+        tan_half: if orthographic {
+            1.0
+        } else {
+            (num(cp, "fov", 90.0).to_radians() / 2.0).tan()
+        },
+        screen,
+        lens_radius: num(cp, "lensradius", 0.0),
+        focal_distance: num(cp, "focaldistance", 1e6),
+        medium,
+        orthographic,
+    };
+    // pbrt-v4's imaging ratio: the shutter interval × ISO / 100 (1 by default).
+    let exposure = num(cp, "shutterclose", 1.0) - num(cp, "shutteropen", 0.0);
+    if !(exposure > 0.0 && exposure <= 1e6) {
+        return Err(Error::file(
+            path.display(),
+            format!(
+                "camera: the shutter is open from {} to {}: expected an interval of up to 1e6 s",
+                num(cp, "shutteropen", 0.0),
+                num(cp, "shutterclose", 1.0)
+            ),
+        ));
+    }
+    Ok((camera, bounds, exposure))
+}
+
+/// The film's response: its ISO, white balance and format, over the shutter's `exposure`; a named camera's sensor
+/// curves in place of the CMFs.
+fn film_response(
+    b: &Builder,
+    exposure: f64,
+    bins: &Bins,
+    path: &Path,
+) -> Result<crate::render::film::Response, Error> {
+    let f = b.film_response;
+    let mut response =
+        crate::render::film::Response::new(f.iso, exposure, f.white_k, f.max_component, f.fp16);
+    if let Some(name) = f.camera {
+        // A named camera: its curves through pbrt-v4's calibration matrix, per bin and in the film's units (K:
+        // the film's ȳ weights over the CIE ones), replace the CMFs; the calibration white-balances.
+        let m = crate::render::sensors::xyz_from_sensor(name, f.white_k).ok_or_else(|| {
+            Error::file(
+                path.display(),
+                format!("film: sensor \"{name}\": its calibration failed"),
+            )
+        })?;
+        let curves = crate::render::sensors::curves(name).ok_or_else(|| {
+            Error::file(path.display(), format!("film: sensor \"{name}\" unknown"))
+        })?;
+        let cie = firemedium_core::cie::bin_weights_of(&bins.grid, firemedium_core::cie::cmf, 1.0);
+        let k = bins.xyz.iter().map(|w| w.y).sum::<f64>() / cie.iter().map(|w| w.y).sum::<f64>();
+        response.white_balance = None;
+        response.camera = Some(firemedium_core::cie::bin_weights_of(
+            &bins.grid,
+            |l| m * curves(l),
+            k,
+        ));
+    }
+    Ok(response)
+}
+
 /// The scene's spectral bins: with a plugin medium (a fire, or pbrt-v4's grids), the plugin's measured default,
 /// which its march kernel holds in vector lanes; without one, the whole CIE table (380–780 nm, 10 nm bins), as
 /// pbrt-v4 samples wavelengths over the visible range (400–700 nm would leave out 0.5 % of a 2000 K grid's
@@ -266,37 +478,10 @@ fn scene_bins(
 /// filter and integrator, the media, textures, area lights and materials, the objects, the world's shapes,
 /// instances and lights in file order, the camera, and the fire lights.
 pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<Scene, Error> {
-    // Pre-scan: the render bins (from the media, or the defaults of the plugin that renders them) and the
-    // photometric scale.
+    // Pre-scan: the plugin and the render bins (from the media, or the defaults of the plugin that renders them)
+    // and the photometric scale.
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut fire = false;
-    let mut plugin_path = ov.plugin.clone();
-    let mut first_medium: Option<&Loc> = None;
-    for m in &desc.media {
-        let loc = &m.entity.loc;
-        {
-            let p = &ParamDict::new(&m.entity.params);
-            match string(p, "type") {
-                Some("fire") => fire = true,
-                Some("uniformgrid" | "nanovdb" | "cloud") => {}
-                _ => continue,
-            }
-            first_medium.get_or_insert(loc);
-            if let (None, Some(file)) = (&plugin_path, string(p, "plugin")) {
-                plugin_path = Some(dir.join(file));
-            }
-        }
-    }
-    let plugin = match first_medium {
-        Some(loc) => Some(
-            match &plugin_path {
-                Some(file) => load_plugin(Some(file)),
-                None => load_plugin(None),
-            }
-            .map_err(|e| err(loc, e))?,
-        ),
-        None => None,
-    };
+    let (plugin, fire) = scene_plugin(&dir, desc, ov)?;
     let (lo, hi, n) = scene_bins(path, desc, plugin.as_ref())?;
     let grid = SpectralGrid::new(lo, hi, n).map_err(|e| Error::file(path.display(), e))?;
     // The film records Y in cd/m² (nits) either way. With a fire, radiance is absolute (683 lm/W); without one it
@@ -310,66 +495,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         count: n as u32,
         nm: [lo, hi],
     };
-    let mut b = Builder {
-        ctx: Context {
-            dir,
-            threads: ov.threads,
-            frame: ov.frame,
-            host_tracking: ov.host_tracking,
-            camera_march: ov.camera_march,
-            max_memory: ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
-        },
-        reports: Reports::default(),
-        bins: bins.clone(),
-        plugin,
-        order: 0,
-        named_materials: HashMap::new(),
-        textures: HashMap::new(),
-        named_media: HashMap::new(),
-        materials: Vec::new(),
-        prims: Vec::new(),
-        lights: Vec::new(),
-        media: Vec::new(),
-        media_locs: Vec::new(),
-        camera_shutter: desc.camera.as_ref().map_or([0.0, 1.0], |c| {
-            let cp = ParamDict::new(&c.entity.params);
-            [num(&cp, "shutteropen", 0.0), num(&cp, "shutterclose", 1.0)]
-        }),
-        res: (1280, 720),
-        spp: 16,
-        // pbrt-v4's defaults: zsobol and a Gaussian of radius 1.5, σ 0.5.
-        sampler: crate::render::pixel::Sampler::ZSobol {
-            log2_spp: 0,
-            digits: 0,
-            seed: 0,
-        },
-        film_response: Default::default(),
-        spectral: None,
-        gbuffer: None,
-        media_bytes: 0,
-        shutter: None,
-        crop: None,
-        pixel_bounds: None,
-        filter: crate::render::pixel::Filter::new(
-            "gaussian",
-            crate::render::pixel::Params {
-                radius: [1.5, 1.5],
-                sigma: 0.5,
-                b: 1.0 / 3.0,
-                c: 1.0 / 3.0,
-                tau: 3.0,
-            },
-        )
-        .unwrap_or(crate::render::pixel::Filter::Box { radius: [0.5, 0.5] }),
-        maxdepth: 5,
-        film_name: None,
-        objects: Vec::new(),
-        object_prims: 0,
-        current_object: None,
-        plugin_bins,
-        has_fire: fire,
-        film_xyz: None,
-    };
+    let mut b = new_builder(ov, desc, (dir, plugin, fire), (bins.clone(), plugin_bins));
     // pbrt's default material: diffuse 0.5.
     b.materials
         .push(Material::Diffuse(Tex::Const(bins.mask() * 0.5)));
@@ -474,88 +600,12 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         .camera
         .as_ref()
         .ok_or_else(|| Error::file(path.display(), "no Camera directive"))?;
-    let (camera_type, camera_from_world) = (&camera_desc.entity.ty, camera_desc.camera_from_world);
-    let medium = b.named_media.get(&camera_desc.medium).copied();
-    b.order = camera_desc.entity.order;
-    let cp = &ParamDict::new(&camera_desc.entity.params);
-    if let Some(r) = desc.command_line.res {
-        b.res = r;
-    }
-    let bounds = pixel_bounds(&b, &desc.command_line, path)?;
-    // The film: per pixel its XYZ and RGB and the tile's result on the way (64 bytes, with room), and a spectral
-    // film's buckets (twice: the tiles' and the image's).
-    let bucket_bytes = b.spectral.as_ref().map_or(0, |s| 8 * s.n as u64)
-        + b.gbuffer.map_or(0, |_| {
-            (8 + 4) * crate::render::film::GBUFFER_CHANNELS.len() as u64
-        });
-    crate::budget::check(
-        &format!(
-            "{}: the film of {}×{} pixels",
-            path.display(),
-            b.res.0,
-            b.res.1
-        ),
-        (b.res.0 as u64) * (b.res.1 as u64),
-        64 + bucket_bytes,
-        ov.max_memory.unwrap_or_else(crate::budget::default_bytes),
-    )?;
-    let (w, h) = (b.res.0 as f64, b.res.1 as f64);
-    let aspect = num(cp, "frameaspectratio", w / h);
-    let screen = match nums(cp, "screenwindow") {
-        Some(s) if s.len() == 4 => [s[0], s[1], s[2], s[3]],
-        _ if aspect > 1.0 => [-aspect, aspect, -1.0, 1.0],
-        _ => [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect],
-    };
-    let orthographic = camera_type == "orthographic";
-    let camera = Camera {
-        to_world: affine(&camera_from_world.inverse()),
-        tan_half: if orthographic {
-            1.0
-        } else {
-            (num(cp, "fov", 90.0).to_radians() / 2.0).tan()
-        },
-        screen,
-        lens_radius: num(cp, "lensradius", 0.0),
-        focal_distance: num(cp, "focaldistance", 1e6),
-        medium,
-        orthographic,
-    };
-    // pbrt-v4's imaging ratio: the shutter interval × ISO / 100 (1 by default).
-    let exposure = num(cp, "shutterclose", 1.0) - num(cp, "shutteropen", 0.0);
-    if !(exposure > 0.0 && exposure <= 1e6) {
-        return Err(Error::file(
-            path.display(),
-            format!(
-                "camera: the shutter is open from {} to {}: expected an interval of up to 1e6 s",
-                num(cp, "shutteropen", 0.0),
-                num(cp, "shutterclose", 1.0)
-            ),
-        ));
-    }
-    let f = b.film_response;
-    let mut response =
-        crate::render::film::Response::new(f.iso, exposure, f.white_k, f.max_component, f.fp16);
-    if let Some(name) = f.camera {
-        // A named camera: its curves through pbrt-v4's calibration matrix, per bin and in the film's units (K:
-        // the film's ȳ weights over the CIE ones), replace the CMFs; the calibration white-balances.
-        let m = crate::render::sensors::xyz_from_sensor(name, f.white_k).ok_or_else(|| {
-            Error::file(
-                path.display(),
-                format!("film: sensor \"{name}\": its calibration failed"),
-            )
-        })?;
-        let curves = crate::render::sensors::curves(name).ok_or_else(|| {
-            Error::file(path.display(), format!("film: sensor \"{name}\" unknown"))
-        })?;
-        let cie = firemedium_core::cie::bin_weights_of(&bins.grid, firemedium_core::cie::cmf, 1.0);
-        let k = bins.xyz.iter().map(|w| w.y).sum::<f64>() / cie.iter().map(|w| w.y).sum::<f64>();
-        response.white_balance = None;
-        response.camera = Some(firemedium_core::cie::bin_weights_of(
-            &bins.grid,
-            |l| m * curves(l),
-            k,
-        ));
-    }
+    let (camera, bounds, exposure) = camera(&mut b, (desc, camera_desc), ov, path)?;
+    let response = film_response(&b, exposure, &bins, path)?;
+    let (camera_type, cp) = (
+        &camera_desc.entity.ty,
+        &ParamDict::new(&camera_desc.entity.params),
+    );
     b.finish(
         Kind::Camera,
         camera_type,
