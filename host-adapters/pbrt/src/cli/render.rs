@@ -371,56 +371,243 @@ fn overrides(a: &RenderArgs, frame: Option<i64>) -> scene::Overrides {
     }
 }
 
+/// The image's record: the scene, seed, samples and how they were spent, the camera (its matrix and
+/// projection), frame, shutter, AOVs, the fire light, the plugin's ABI, and the render's seconds.
+fn metadata(
+    a: &RenderArgs,
+    sc: &scene::Scene,
+    (seed, frame): (u64, Option<i64>),
+    seconds: f64,
+) -> Vec<(String, String)> {
+    vec![
+        (
+            "scene".to_string(),
+            std::fs::canonicalize(&a.scene)
+                .unwrap_or_else(|_| a.scene.clone())
+                .display()
+                .to_string(),
+        ),
+        ("seed".to_string(), seed.to_string()),
+        ("spp".to_string(), sc.spp.to_string()),
+        (
+            // How the samples were spent (adaptive sampling, a time limit): what `merge` checks tiles against.
+            "sampling".to_string(),
+            format!(
+                "noise_threshold {} time_limit {}",
+                a.noise_threshold
+                    .map_or("none".to_string(), |t| t.to_string()),
+                a.time_limit.map_or("none".to_string(), |t| t.to_string())
+            ),
+        ),
+        (
+            // pbrt's camera-to-world matrix, row by row (3 × 4), for a compositor matching the render.
+            "camera_to_world".to_string(),
+            {
+                let m = sc.camera.to_world;
+                let (c, t) = (m.matrix3, m.translation);
+                (0..3)
+                    .map(|r| format!("{} {} {} {}", c.x_axis[r], c.y_axis[r], c.z_axis[r], t[r]))
+                    .collect::<Vec<_>>()
+                    .join("  ")
+            },
+        ),
+        (
+            // The projection: with camera_to_world, what a compositor needs to place 3D elements in the render.
+            "camera".to_string(),
+            {
+                let c = &sc.camera;
+                let [x0, x1, y0, y1] = c.screen;
+                if c.orthographic {
+                    format!("orthographic screenwindow {x0} {x1} {y0} {y1}")
+                } else {
+                    format!(
+                    "perspective fov {} screenwindow {x0} {x1} {y0} {y1} lensradius {} focaldistance {}",
+                    2.0 * c.tan_half.atan().to_degrees(),
+                    c.lens_radius,
+                    c.focal_distance
+                )
+                }
+            },
+        ),
+        (
+            "frame".to_string(),
+            frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
+        ),
+        (
+            "shutter".to_string(),
+            match sc.shutter {
+                Some([o, c]) => format!("{o} {c}"),
+                None => "closed".to_string(),
+            },
+        ),
+        (
+            "aovs".to_string(),
+            sc.aovs
+                .iter()
+                .map(|a| a.name())
+                .collect::<Vec<_>>()
+                .join(","),
+        ),
+        (
+            // How the fire lit the scene: `off`, or the weighting and the light parameters given.
+            "fire_light".to_string(),
+            std::iter::once(a.fire_light.clone())
+                .chain(a.fire_light_param.iter().map(|(n, v)| format!("{n}={v}")))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+        (
+            // The C ABI of the plugin that rendered the media (none without plugin media).
+            "plugin_abi".to_string(),
+            sc.media
+                .iter()
+                .find_map(|m| match m {
+                    scene::Medium::Plugin(scene::Plugin { vol, .. }) => {
+                        let (major, minor) = vol.abi_version();
+                        Some(format!("{major}.{minor}"))
+                    }
+                    _ => None,
+                })
+                .unwrap_or_else(|| "none".to_string()),
+        ),
+        (
+            imageio::RENDER_SECONDS.to_string(),
+            format!("{:.6}", seconds),
+        ),
+    ]
+}
+
+/// Tracking that stopped at the plugin's per-ray collision cap biases towards dark: says so, per medium (unless
+/// `quiet`).
+fn capped_rays(sc: &scene::Scene, quiet: bool) -> firemedium::Result<()> {
+    for m in &sc.media {
+        if let scene::Medium::Plugin(scene::Plugin { vol, name, .. }) = m {
+            match vol.capped_rays() {
+                Ok(0) => {}
+                Ok(n) if !quiet => eprintln!("firemedium: warning: medium \"{name}\": {n} rays stopped at the per-ray collision cap (2^20 tentative collisions) and were cut short as if absorbed; the medium's majorant is far above its data (an outlier voxel?) or it is optically very thick: the image is darker there than it should be"),
+                Ok(_) => {}
+                Err(e) => return Err(Error::input(format!("medium \"{name}\": {e}"))),
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `--skip-existing`: a frame is done when its EXR reads whole and its record says it is complete; a truncated,
+/// unreadable or interrupted one is rendered again, saying why.
+fn skip_existing(a: &RenderArgs, frame: Option<i64>, log: &JsonLog, exr: &Path) -> Option<Frame> {
+    if !(a.skip_existing && exr.is_file()) {
+        return None;
+    }
+    let why = match finished(exr) {
+        Ok(()) => {
+            log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
+            return Some(Frame::Skipped(format!(
+                "frame {}: {} exists, left out\n",
+                frame.unwrap_or(0),
+                exr.display()
+            )));
+        }
+        Err(why) => why,
+    };
+    if !a.quiet {
+        eprintln!(
+            "firemedium: frame {}: {} is not a finished frame ({}): rendering it again",
+            frame.unwrap_or(0),
+            exr.display(),
+            firemedium::term::printable(&why.to_string(), firemedium::term::MAX_MESSAGE_CHARS)
+        );
+    }
+    None
+}
+
+/// The preview's tone mapping: the tonemap command's defaults (Naka–Rushton adapted to the image, a D65 white, or
+/// the fire's hottest blackbody with `--white fire`) unless asked.
+fn preview_tone(a: &RenderArgs, fire_t: Option<f64>) -> tonemap::Options {
+    tonemap::Options {
+        white: match a.white {
+            tonemap::WhiteArg::Fire => {
+                fire_t.map_or(tonemap::White::D65, tonemap::White::Blackbody)
+            }
+            tonemap::WhiteArg::Given(w) => w,
+        },
+        adapt: a.adapt,
+        operator: a.operator.operator(),
+        stops: 0.0,
+    }
+}
+
+/// The line a render ends with: what it wrote, the samples taken (the scene's per pixel, or their mean and why
+/// sampling stopped early), the estimated noise, and the share of pixels outside sRGB (`outside` of them).
+fn wrote(
+    a: &RenderArgs,
+    (img, outside): (&render::Image, usize),
+    (sc, st): (&scene::Scene, &render::Stats),
+    (exr, png): (&Path, &Path),
+) -> String {
+    let gamut = if outside > 0 && a.colorspace == "srgb" {
+        format!(
+            "; {:.1} % of its pixels hold colour outside sRGB as negative components (kept, linear; --colorspace acescg holds a flame's colour positive)",
+            100.0 * outside as f64 / img.rgb.len().max(1) as f64
+        )
+    } else {
+        String::new()
+    };
+    // The samples taken: the scene's per pixel, or, where sampling stopped early, their mean and why.
+    let pixels = (img.w * img.h).max(1);
+    let spp = if st.camera_rays == pixels * sc.spp {
+        format!("{} spp", sc.spp)
+    } else {
+        format!(
+            "{:.1} spp on average of at most {}, {}",
+            st.camera_rays as f64 / pixels as f64,
+            sc.spp,
+            st.stop.describe()
+        )
+    };
+    let noise = st.rel_rmse_estimate.map_or(String::new(), |e| {
+        format!(", rel. RMSE ≈ {:.2} % (estimated)", 100.0 * e)
+    });
+    format!(
+        "wrote {} and {} ({}×{}, {spp}{noise}{gamut})\n",
+        exr.display(),
+        png.display(),
+        img.w,
+        img.h,
+    )
+}
+
+/// The output's names (EXR, PNG): `-o` or the film's, with the frame's number in its pattern (refused without
+/// one when several frames render).
+fn output_names(
+    a: &RenderArgs,
+    frame: Option<i64>,
+    film: Option<&str>,
+) -> firemedium::Result<(PathBuf, PathBuf)> {
+    let (exr, _) = outputs(&a.scene, film, a.output.as_deref());
+    let Some(f) = frame else {
+        return Ok(outputs(&a.scene, film, Some(&exr)));
+    };
+    let patterned =
+        firemedium_dataset::frame_path(&exr, Some(f)).map_err(|e| Error::value(e.to_string()))?;
+    if patterned == exr && a.frames.as_ref().is_some_and(|v| v.0.len() > 1) {
+        return Err(Error::value(format!(
+                "--frames: the output name {} holds no #### or %04d for the frame number: every frame would overwrite it (-o fire.####.exr)",
+                exr.display()
+            ),
+        ));
+    }
+    Ok(outputs(&a.scene, None, Some(&patterned)))
+}
+
 /// Renders one frame (`None`: the scene as written) and writes its EXR and PNG, or leaves it out
 /// (`--skip-existing`).
 fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium::Result<Frame> {
     log.event(serde_json::json!({"event": "start", "frame": frame, "scene": a.scene.display().to_string()}));
     let frame_start = std::time::Instant::now();
     let ov = overrides(a, frame);
-    // The output name: `-o` or the film's, with the frame's number in its pattern.
-    let named = |film: Option<&str>| -> firemedium::Result<(PathBuf, PathBuf)> {
-        let (exr, _) = outputs(&a.scene, film, a.output.as_deref());
-        let Some(f) = frame else {
-            return Ok(outputs(&a.scene, film, Some(&exr)));
-        };
-        let patterned = firemedium_dataset::frame_path(&exr, Some(f))
-            .map_err(|e| Error::value(e.to_string()))?;
-        if patterned == exr && a.frames.as_ref().is_some_and(|v| v.0.len() > 1) {
-            return Err(Error::value(format!(
-                    "--frames: the output name {} holds no #### or %04d for the frame number: every frame would overwrite it (-o fire.####.exr)",
-                    exr.display()
-                ),
-            ));
-        }
-        Ok(outputs(&a.scene, None, Some(&patterned)))
-    };
-    // `--skip-existing`: a frame is done when its EXR reads whole and its record says it is complete; a truncated,
-    // unreadable or interrupted one is rendered again, saying why.
-    let exists = |exr: &Path| {
-        if !(a.skip_existing && exr.is_file()) {
-            return None;
-        }
-        let why = match finished(exr) {
-            Ok(()) => {
-                log.event(serde_json::json!({"event": "skipped", "frame": frame, "exr": exr.display().to_string()}));
-                return Some(Frame::Skipped(format!(
-                    "frame {}: {} exists, left out\n",
-                    frame.unwrap_or(0),
-                    exr.display()
-                )));
-            }
-            Err(why) => why,
-        };
-        if !a.quiet {
-            eprintln!(
-                "firemedium: frame {}: {} is not a finished frame ({}): rendering it again",
-                frame.unwrap_or(0),
-                exr.display(),
-                firemedium::term::printable(&why.to_string(), firemedium::term::MAX_MESSAGE_CHARS)
-            );
-        }
-        None
-    };
+    let named = |film: Option<&str>| output_names(a, frame, film);
+    let exists = |exr: &Path| skip_existing(a, frame, log, exr);
     // (With `-o`, a frame left out is not even loaded, and an output that cannot be written is said before the
     // scene is.)
     if let Some(o) = a.output.as_deref().filter(|o| o.is_dir()) {
@@ -519,129 +706,14 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
         })
     });
     bar.finish_and_clear();
-    // Tracking that stopped at the plugin's per-ray collision cap biases towards dark: say so, per medium.
-    for m in &sc.media {
-        if let scene::Medium::Plugin(scene::Plugin { vol, name, .. }) = m {
-            match vol.capped_rays() {
-                Ok(0) => {}
-                Ok(n) if !a.quiet => eprintln!("firemedium: warning: medium \"{name}\": {n} rays stopped at the per-ray collision cap (2^20 tentative collisions) and were cut short as if absorbed; the medium's majorant is far above its data (an outlier voxel?) or it is optically very thick: the image is darker there than it should be"),
-                Ok(_) => {}
-                Err(e) => return Err(Error::input(format!("medium \"{name}\": {e}"))),
-            }
-        }
-    }
+    capped_rays(&sc, a.quiet)?;
     // The preview: the tonemap command's defaults (Naka–Rushton adapted to the image, a D65 white) unless asked.
     let fire_t = sc.fire_temperature();
-    let tone = tonemap::Options {
-        white: match a.white {
-            tonemap::WhiteArg::Fire => {
-                fire_t.map_or(tonemap::White::D65, tonemap::White::Blackbody)
-            }
-            tonemap::WhiteArg::Given(w) => w,
-        },
-        adapt: a.adapt,
-        operator: a.operator.operator(),
-        stops: 0.0,
-    };
+    let tone = preview_tone(a, fire_t);
     // What the image is a render of (for `firemedium merge` and compositors), and how long it took (the one
     // line two renders of the same scene differ in).
     let mut img = img;
-    img.meta = vec![
-        (
-            "scene".to_string(),
-            std::fs::canonicalize(&a.scene)
-                .unwrap_or_else(|_| a.scene.clone())
-                .display()
-                .to_string(),
-        ),
-        ("seed".to_string(), seed.to_string()),
-        ("spp".to_string(), sc.spp.to_string()),
-        (
-            // How the samples were spent (adaptive sampling, a time limit): what `merge` checks tiles against.
-            "sampling".to_string(),
-            format!(
-                "noise_threshold {} time_limit {}",
-                a.noise_threshold
-                    .map_or("none".to_string(), |t| t.to_string()),
-                a.time_limit.map_or("none".to_string(), |t| t.to_string())
-            ),
-        ),
-        (
-            // pbrt's camera-to-world matrix, row by row (3 × 4), for a compositor matching the render.
-            "camera_to_world".to_string(),
-            {
-                let m = sc.camera.to_world;
-                let (c, t) = (m.matrix3, m.translation);
-                (0..3)
-                    .map(|r| format!("{} {} {} {}", c.x_axis[r], c.y_axis[r], c.z_axis[r], t[r]))
-                    .collect::<Vec<_>>()
-                    .join("  ")
-            },
-        ),
-        (
-            // The projection: with camera_to_world, what a compositor needs to place 3D elements in the render.
-            "camera".to_string(),
-            {
-                let c = &sc.camera;
-                let [x0, x1, y0, y1] = c.screen;
-                if c.orthographic {
-                    format!("orthographic screenwindow {x0} {x1} {y0} {y1}")
-                } else {
-                    format!(
-                        "perspective fov {} screenwindow {x0} {x1} {y0} {y1} lensradius {} focaldistance {}",
-                        2.0 * c.tan_half.atan().to_degrees(),
-                        c.lens_radius,
-                        c.focal_distance
-                    )
-                }
-            },
-        ),
-        (
-            "frame".to_string(),
-            frame.map_or_else(|| "none".to_string(), |f| f.to_string()),
-        ),
-        (
-            "shutter".to_string(),
-            match sc.shutter {
-                Some([o, c]) => format!("{o} {c}"),
-                None => "closed".to_string(),
-            },
-        ),
-        (
-            "aovs".to_string(),
-            sc.aovs
-                .iter()
-                .map(|a| a.name())
-                .collect::<Vec<_>>()
-                .join(","),
-        ),
-        (
-            // How the fire lit the scene: `off`, or the weighting and the light parameters given.
-            "fire_light".to_string(),
-            std::iter::once(a.fire_light.clone())
-                .chain(a.fire_light_param.iter().map(|(n, v)| format!("{n}={v}")))
-                .collect::<Vec<_>>()
-                .join(" "),
-        ),
-        (
-            // The C ABI of the plugin that rendered the media (none without plugin media).
-            "plugin_abi".to_string(),
-            sc.media
-                .iter()
-                .find_map(|m| match m {
-                    scene::Medium::Plugin(scene::Plugin { vol, .. }) => {
-                        let (major, minor) = vol.abi_version();
-                        Some(format!("{major}.{minor}"))
-                    }
-                    _ => None,
-                })
-                .unwrap_or_else(|| "none".to_string()),
-        ),
-        (
-            imageio::RENDER_SECONDS.to_string(),
-            format!("{:.6}", st.seconds),
-        ),
-    ];
+    img.meta = metadata(a, &sc, (seed, frame), st.seconds);
     // An interrupted render writes its finished tiles beside the output, never over it (a complete frame from
     // an earlier run stays), and its record says it is not complete; so does a render in which plugin calls
     // failed (its paths lost light there: `--skip-existing` renders it again).
@@ -671,36 +743,8 @@ fn render_frame(a: &RenderArgs, frame: Option<i64>, log: &JsonLog) -> firemedium
     }
     img.write_exr(&exr, fire_t, sc.response.fp16)?;
     write_preview(&img, &png, &tone)?;
-    let gamut = if outside > 0 && a.colorspace == "srgb" {
-        format!(
-            "; {:.1} % of its pixels hold colour outside sRGB as negative components (kept, linear; --colorspace acescg holds a flame's colour positive)",
-            100.0 * outside as f64 / img.rgb.len().max(1) as f64
-        )
-    } else {
-        String::new()
-    };
-    // The samples taken: the scene's per pixel, or, where sampling stopped early, their mean and why.
     let pixels = (img.w * img.h).max(1);
-    let spp = if st.camera_rays == pixels * sc.spp {
-        format!("{} spp", sc.spp)
-    } else {
-        format!(
-            "{:.1} spp on average of at most {}, {}",
-            st.camera_rays as f64 / pixels as f64,
-            sc.spp,
-            st.stop.describe()
-        )
-    };
-    let noise = st.rel_rmse_estimate.map_or(String::new(), |e| {
-        format!(", rel. RMSE ≈ {:.2} % (estimated)", 100.0 * e)
-    });
-    let mut out = format!(
-        "wrote {} and {} ({}×{}, {spp}{noise}{gamut})\n",
-        exr.display(),
-        png.display(),
-        img.w,
-        img.h,
-    );
+    let mut out = wrote(a, (&img, outside), (&sc, &st), (&exr, &png));
     if a.stats {
         out += &stats(&sc, &st, load_seconds, pool.current_num_threads());
     }
