@@ -316,14 +316,13 @@ fn new_builder(
 /// with the film they need, and its shutter's interval (s: pbrt-v4's imaging ratio takes it).
 fn camera(
     b: &mut Builder,
-    (desc, camera_desc): (&Description, &description::Camera),
+    (desc, camera_desc, cp): (&Description, &description::Camera, &ParamDict),
     ov: &Overrides,
     path: &Path,
 ) -> Result<(Camera, [usize; 4], f64), Error> {
     let (camera_type, camera_from_world) = (&camera_desc.entity.ty, camera_desc.camera_from_world);
     let medium = b.named_media.get(&camera_desc.medium).copied();
     b.order = camera_desc.entity.order;
-    let cp = &ParamDict::new(&camera_desc.entity.params);
     if let Some(r) = desc.command_line.res {
         b.res = r;
     }
@@ -600,12 +599,11 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         .camera
         .as_ref()
         .ok_or_else(|| Error::file(path.display(), "no Camera directive"))?;
-    let (camera, bounds, exposure) = camera(&mut b, (desc, camera_desc), ov, path)?;
+    // (One dictionary: the camera's build marks what it read, and `finish` warns of the rest.)
+    let cp = &ParamDict::new(&camera_desc.entity.params);
+    let (camera, bounds, exposure) = camera(&mut b, (desc, camera_desc, cp), ov, path)?;
     let response = film_response(&b, exposure, &bins, path)?;
-    let (camera_type, cp) = (
-        &camera_desc.entity.ty,
-        &ParamDict::new(&camera_desc.entity.params),
-    );
+    let camera_type = &camera_desc.entity.ty;
     b.finish(
         Kind::Camera,
         camera_type,
