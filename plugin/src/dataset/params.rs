@@ -308,21 +308,12 @@ impl HostContext {
 }
 
 /// Reads the dataset's parameters (pbrt-v4's grid media when `pbrt`) beside the host's context, touching no file.
-pub(crate) fn read(r: &ParamReader, pbrt: bool, ctx: &HostContext) -> Result<Request, Error> {
-    let shutter = [
-        HostContext::float(r, "shutteropen", ctx.shutter.map(|s| s[0]))?,
-        HostContext::float(r, "shutterclose", ctx.shutter.map(|s| s[1]))?,
-    ];
-    if shutter[1] < shutter[0] {
-        return Err(Error::invalid(
-            "dataset",
-            "shutterclose",
-            format!("{} (shutteropen {})", shutter[1], shutter[0]),
-            "a time at or after shutteropen",
-        ));
-    }
-    let velocity = velocity_grids(r)?.filter(|_| shutter[1] > shutter[0]);
-    let per_frame = r.float("velocityscale")? / r.float("fps")?;
+/// How the dataset's files are read (format, a raw file's layout, what replaces non-finite and negative values, the
+/// memory budget, the frame — the scene's, else the host's), and the box the scene gives it, if any.
+fn load_options(
+    r: &ParamReader,
+    ctx: &HostContext,
+) -> Result<(LoadOptions, Option<[DVec3; 2]>), Error> {
     let pol = |name: &str| -> Result<Policy, Error> { r.choice(name) };
     let format: Option<Format> = r.choice("format")?;
     let rawdims = r.ints("rawdims")?.unwrap_or(vec![256, 256, 256]);
@@ -361,6 +352,271 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool, ctx: &HostContext) -> Result<Req
         },
         bounds,
     };
+    Ok((opts, bounds))
+}
+
+/// The grids given inline (`float density` with `nx ny nz`; a temperature mapped by `tmap`, an `Lescale` array),
+/// over `bounds` or the unit box. Refused with a velocity or a grid only a file holds.
+fn inline_grids(
+    r: &ParamReader,
+    dens: &[f64],
+    tmap: Mapping,
+    lescale_values: Option<Vec<f64>>,
+    velocity: bool,
+    bounds: Option<[DVec3; 2]>,
+) -> Result<Grids, Error> {
+    let dims = [
+        r.int("nx")? as usize,
+        r.int("ny")? as usize,
+        r.int("nz")? as usize,
+    ];
+    let to32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    let dens = to32(dens);
+    let mut temp = r.numbers("temperature")?.map(|v| to32(&v));
+    if let Some(t) = temp.as_mut() {
+        for v in t.iter_mut() {
+            *v = ((*v as f64 - tmap.pbrt_offset) * tmap.scale) as f32;
+        }
+    }
+    let les = lescale_values
+        .filter(|v| v.len() > 1 || dims == [1, 1, 1])
+        .map(|v| to32(&v));
+    let lescale = les.is_some();
+    let mut arrays = vec![("density", dens)];
+    if let Some(t) = temp {
+        arrays.push(("temperature", t));
+    }
+    if let Some(l) = les {
+        arrays.push(("Lescale", l));
+    }
+    if velocity {
+        return Err(Error::invalid(
+            "dataset",
+            "velocitygrid",
+            "given for an inline grid",
+            "a dataset file holding the velocity grid",
+        ));
+    }
+    for name in ["emissiongrid", "scattercolorgrid", "reactiongrid"] {
+        if r.list_has(name) {
+            return Err(Error::invalid(
+                "dataset",
+                name,
+                "given for an inline grid",
+                "a dataset file holding the grid",
+            ));
+        }
+    }
+    Ok(Grids::Inline {
+        dims,
+        bounds: bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]),
+        arrays,
+        lescale,
+    })
+}
+
+/// The grids the dataset's files hold: density and temperature (named by the scene, by pbrt-v4's names, or by
+/// the `source` tool's preset, found when the files are read), the species', an emission, reaction, scatter colour
+/// or velocity grid. With which of density and temperature the scene named.
+fn file_grids(
+    r: &ParamReader,
+    (tool, pbrt, tmap): (Tool, bool, Mapping),
+    species: &[String],
+    format: Option<Format>,
+    lescale_values: Option<Vec<f64>>,
+    velocity: Option<&[String; 3]>,
+) -> Result<(Grids, [bool; 2]), Error> {
+    let blender = tool == Tool::Blender;
+    let filename = match (r.string("filename")?, r.string("dataset")?) {
+        (f, d) if !f.is_empty() && !d.is_empty() => {
+            return Err(Error::invalid(
+                "dataset",
+                "dataset",
+                format!("\"{d}\" with filename \"{f}\""),
+                "one of filename or dataset",
+            ))
+        }
+        (f, d) => {
+            if f.is_empty() {
+                d
+            } else {
+                f
+            }
+        }
+    };
+    let densityfile = r.string("densityfile")?;
+    let temperaturefile = r.string("temperaturefile")?;
+    let dfile = if !densityfile.is_empty() {
+        densityfile
+    } else {
+        filename.clone()
+    };
+    if dfile.is_empty() {
+        return Err(Error::invalid(
+            "dataset",
+            "filename",
+            "unset",
+            "a dataset file (filename or densityfile), or inline \"float density\" with nx ny nz",
+        ));
+    }
+    let tfile = if !temperaturefile.is_empty() {
+        temperaturefile
+    } else {
+        filename.clone()
+    };
+    // The grids the scene names, by our names or pbrt-v4's nanovdb ones.
+    let dg = grid_name(r, "densitygrid", "gridname")?;
+    let tg = grid_name(r, "temperaturegrid", "temperaturename")?;
+    let named = [dg.is_some(), tg.is_some()];
+    // A preset's grid is found in its file when the files are read (`presets`); its name here stands for it.
+    let mut presets = Vec::new();
+    let (dgrid, tgrid) = match preset_names(tool) {
+        Some((d, t)) => {
+            let mut named = |given: Option<String>, names: &'static [&'static str], at: usize| {
+                given.unwrap_or_else(|| {
+                    presets.push((at, names));
+                    names[0].to_string()
+                })
+            };
+            (named(dg, d, 0), named(tg, t, 1))
+        }
+        None => (
+            dg.map_or_else(|| r.string("densitygrid"), Ok)?,
+            match tg {
+                Some(t) => t,
+                None if blender => "flame".to_string(),
+                None => r.string("temperaturegrid")?,
+            },
+        ),
+    };
+    let mut sources = vec![ChannelSource {
+        name: "density".into(),
+        file: dfile.clone().into(),
+        grid: Some(dgrid),
+        mapping: Mapping::default(),
+    }];
+    let single = matches!(
+        format.or_else(|| Format::from_extension(std::path::Path::new(&tfile))),
+        Some(Format::AsciiDense | Format::AsciiSparse | Format::Raw | Format::Raw2)
+    );
+    // A single-grid file cannot hold temperature too: without a temperature file there is none.
+    let no_temperature = tgrid.is_empty() || (single && tfile == dfile);
+    if no_temperature {
+        presets.retain(|&(at, _)| at != 1);
+    } else {
+        sources.push(ChannelSource {
+            name: "temperature".into(),
+            file: tfile.into(),
+            grid: Some(tgrid),
+            mapping: tmap,
+        });
+    }
+    let sfiles = r.strings("speciesfiles")?.unwrap_or_default();
+    for (i, sym) in species.iter().enumerate() {
+        let file = sfiles.get(i).cloned().unwrap_or_else(|| filename.clone());
+        sources.push(ChannelSource {
+            name: sym.clone(),
+            file: file.into(),
+            grid: Some(sym.clone()),
+            mapping: Mapping::default(),
+        });
+    }
+    if lescale_values.as_ref().is_some_and(|v| v.len() > 1) {
+        return Err(Error::invalid(
+            "volume",
+            "Lescale",
+            "an array",
+            "one value for file datasets (arrays are for inline grids)",
+        ));
+    }
+    let vfile = if filename.is_empty() {
+        &dfile
+    } else {
+        &filename
+    };
+    // An emission grid (Houdini's or Blender's `flame`, `heat`, `burn`): the fire's emission follows it.
+    let egrid = r.string("emissiongrid")?;
+    if !egrid.is_empty() {
+        if pbrt {
+            return Err(Error::invalid(
+                "volume",
+                "emissiongrid",
+                "given",
+                "mode \"physical\" (pbrt mode takes Lescale)",
+            ));
+        }
+        sources.push(ChannelSource {
+            name: "emission".into(),
+            file: vfile.into(),
+            grid: Some(egrid.clone()),
+            mapping: Mapping::default(),
+        });
+    }
+    // The heat release rate of the reaction zone (the blue core).
+    let rgrid = r.string("reactiongrid")?;
+    if !rgrid.is_empty() {
+        if pbrt {
+            return Err(Error::invalid(
+                "volume",
+                "reactiongrid",
+                "given",
+                "mode \"physical\" (the blue core is the physical model's)",
+            ));
+        }
+        sources.push(ChannelSource {
+            name: "reaction".into(),
+            file: vfile.into(),
+            grid: Some(rgrid.clone()),
+            mapping: Mapping::default(),
+        });
+    }
+    // The scatter colour (Houdini's `Cd`, a vector grid, or its components as float grids).
+    let cd = r.string("scattercolorgrid")?;
+    if !cd.is_empty() {
+        for (name, axis) in SCATTER_COLOR.iter().zip(["x", "y", "z"]) {
+            sources.push(ChannelSource {
+                name: name.to_string(),
+                file: vfile.into(),
+                grid: Some(format!("{cd}.{axis}")),
+                mapping: Mapping::default(),
+            });
+        }
+    }
+    for (name, grid) in VELOCITY.iter().zip(velocity.into_iter().flatten()) {
+        sources.push(ChannelSource {
+            name: name.to_string(),
+            file: vfile.into(),
+            grid: Some(grid.clone()),
+            mapping: Mapping::default(),
+        });
+    }
+    Ok((
+        Grids::Files {
+            sources,
+            presets,
+            emission: !egrid.is_empty(),
+            reaction: !rgrid.is_empty(),
+        },
+        named,
+    ))
+}
+
+pub(crate) fn read(r: &ParamReader, pbrt: bool, ctx: &HostContext) -> Result<Request, Error> {
+    let shutter = [
+        HostContext::float(r, "shutteropen", ctx.shutter.map(|s| s[0]))?,
+        HostContext::float(r, "shutterclose", ctx.shutter.map(|s| s[1]))?,
+    ];
+    if shutter[1] < shutter[0] {
+        return Err(Error::invalid(
+            "dataset",
+            "shutterclose",
+            format!("{} (shutteropen {})", shutter[1], shutter[0]),
+            "a time at or after shutteropen",
+        ));
+    }
+    let velocity = velocity_grids(r)?.filter(|_| shutter[1] > shutter[0]);
+    let per_frame = r.float("velocityscale")? / r.float("fps")?;
+    let (opts, bounds) = load_options(r, ctx)?;
     let offset = match (
         r.opt_float("temperatureoffset")?,
         r.opt_float("temperaturecutoff")?,
@@ -487,221 +743,19 @@ pub(crate) fn read(r: &ParamReader, pbrt: bool, ctx: &HostContext) -> Result<Req
     let inline_density = r.numbers("density")?;
     let mut named = [true, true];
     let lescale_values = r.numbers("Lescale")?;
-    let grids = if let Some(dens) = inline_density {
-        let dims = [
-            r.int("nx")? as usize,
-            r.int("ny")? as usize,
-            r.int("nz")? as usize,
-        ];
-        let to32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
-        let dens = to32(&dens);
-        let mut temp = r.numbers("temperature")?.map(|v| to32(&v));
-        if let Some(t) = temp.as_mut() {
-            for v in t.iter_mut() {
-                *v = ((*v as f64 - tmap.pbrt_offset) * tmap.scale) as f32;
-            }
-        }
-        let les = lescale_values
-            .filter(|v| v.len() > 1 || dims == [1, 1, 1])
-            .map(|v| to32(&v));
-        let lescale = les.is_some();
-        let mut arrays = vec![("density", dens)];
-        if let Some(t) = temp {
-            arrays.push(("temperature", t));
-        }
-        if let Some(l) = les {
-            arrays.push(("Lescale", l));
-        }
-        if velocity.is_some() {
-            return Err(Error::invalid(
-                "dataset",
-                "velocitygrid",
-                "given for an inline grid",
-                "a dataset file holding the velocity grid",
-            ));
-        }
-        for name in ["emissiongrid", "scattercolorgrid", "reactiongrid"] {
-            if r.list_has(name) {
-                return Err(Error::invalid(
-                    "dataset",
-                    name,
-                    "given for an inline grid",
-                    "a dataset file holding the grid",
-                ));
-            }
-        }
-        Grids::Inline {
-            dims,
-            bounds: bounds.unwrap_or([DVec3::ZERO, DVec3::ONE]),
-            arrays,
-            lescale,
-        }
-    } else {
-        let filename = match (r.string("filename")?, r.string("dataset")?) {
-            (f, d) if !f.is_empty() && !d.is_empty() => {
-                return Err(Error::invalid(
-                    "dataset",
-                    "dataset",
-                    format!("\"{d}\" with filename \"{f}\""),
-                    "one of filename or dataset",
-                ))
-            }
-            (f, d) => {
-                if f.is_empty() {
-                    d
-                } else {
-                    f
-                }
-            }
-        };
-        let densityfile = r.string("densityfile")?;
-        let temperaturefile = r.string("temperaturefile")?;
-        let dfile = if !densityfile.is_empty() {
-            densityfile
-        } else {
-            filename.clone()
-        };
-        if dfile.is_empty() {
-            return Err(Error::invalid("dataset", "filename", "unset", "a dataset file (filename or densityfile), or inline \"float density\" with nx ny nz"));
-        }
-        let tfile = if !temperaturefile.is_empty() {
-            temperaturefile
-        } else {
-            filename.clone()
-        };
-        // The grids the scene names, by our names or pbrt-v4's nanovdb ones.
-        let dg = grid_name(r, "densitygrid", "gridname")?;
-        let tg = grid_name(r, "temperaturegrid", "temperaturename")?;
-        named = [dg.is_some(), tg.is_some()];
-        // A preset's grid is found in its file when the files are read (`presets`); its name here stands for it.
-        let mut presets = Vec::new();
-        let (dgrid, tgrid) = match preset_names(tool) {
-            Some((d, t)) => {
-                let mut named =
-                    |given: Option<String>, names: &'static [&'static str], at: usize| {
-                        given.unwrap_or_else(|| {
-                            presets.push((at, names));
-                            names[0].to_string()
-                        })
-                    };
-                (named(dg, d, 0), named(tg, t, 1))
-            }
-            None => (
-                dg.map_or_else(|| r.string("densitygrid"), Ok)?,
-                match tg {
-                    Some(t) => t,
-                    None if blender => "flame".to_string(),
-                    None => r.string("temperaturegrid")?,
-                },
-            ),
-        };
-        let mut sources = vec![ChannelSource {
-            name: "density".into(),
-            file: dfile.clone().into(),
-            grid: Some(dgrid),
-            mapping: Mapping::default(),
-        }];
-        let single = matches!(
-            opts.format
-                .or_else(|| Format::from_extension(std::path::Path::new(&tfile))),
-            Some(Format::AsciiDense | Format::AsciiSparse | Format::Raw | Format::Raw2)
-        );
-        // A single-grid file cannot hold temperature too: without a temperature file there is none.
-        let no_temperature = tgrid.is_empty() || (single && tfile == dfile);
-        if no_temperature {
-            presets.retain(|&(at, _)| at != 1);
-        } else {
-            sources.push(ChannelSource {
-                name: "temperature".into(),
-                file: tfile.into(),
-                grid: Some(tgrid),
-                mapping: tmap,
-            });
-        }
-        let sfiles = r.strings("speciesfiles")?.unwrap_or_default();
-        for (i, sym) in species.iter().enumerate() {
-            let file = sfiles.get(i).cloned().unwrap_or_else(|| filename.clone());
-            sources.push(ChannelSource {
-                name: sym.clone(),
-                file: file.into(),
-                grid: Some(sym.clone()),
-                mapping: Mapping::default(),
-            });
-        }
-        if lescale_values.as_ref().is_some_and(|v| v.len() > 1) {
-            return Err(Error::invalid(
-                "volume",
-                "Lescale",
-                "an array",
-                "one value for file datasets (arrays are for inline grids)",
-            ));
-        }
-        let vfile = if filename.is_empty() {
-            &dfile
-        } else {
-            &filename
-        };
-        // An emission grid (Houdini's or Blender's `flame`, `heat`, `burn`): the fire's emission follows it.
-        let egrid = r.string("emissiongrid")?;
-        if !egrid.is_empty() {
-            if pbrt {
-                return Err(Error::invalid(
-                    "volume",
-                    "emissiongrid",
-                    "given",
-                    "mode \"physical\" (pbrt mode takes Lescale)",
-                ));
-            }
-            sources.push(ChannelSource {
-                name: "emission".into(),
-                file: vfile.into(),
-                grid: Some(egrid.clone()),
-                mapping: Mapping::default(),
-            });
-        }
-        // The heat release rate of the reaction zone (the blue core).
-        let rgrid = r.string("reactiongrid")?;
-        if !rgrid.is_empty() {
-            if pbrt {
-                return Err(Error::invalid(
-                    "volume",
-                    "reactiongrid",
-                    "given",
-                    "mode \"physical\" (the blue core is the physical model's)",
-                ));
-            }
-            sources.push(ChannelSource {
-                name: "reaction".into(),
-                file: vfile.into(),
-                grid: Some(rgrid.clone()),
-                mapping: Mapping::default(),
-            });
-        }
-        // The scatter colour (Houdini's `Cd`, a vector grid, or its components as float grids).
-        let cd = r.string("scattercolorgrid")?;
-        if !cd.is_empty() {
-            for (name, axis) in SCATTER_COLOR.iter().zip(["x", "y", "z"]) {
-                sources.push(ChannelSource {
-                    name: name.to_string(),
-                    file: vfile.into(),
-                    grid: Some(format!("{cd}.{axis}")),
-                    mapping: Mapping::default(),
-                });
-            }
-        }
-        for (name, grid) in VELOCITY.iter().zip(velocity.iter().flatten()) {
-            sources.push(ChannelSource {
-                name: name.to_string(),
-                file: vfile.into(),
-                grid: Some(grid.clone()),
-                mapping: Mapping::default(),
-            });
-        }
-        Grids::Files {
-            sources,
-            presets,
-            emission: !egrid.is_empty(),
-            reaction: !rgrid.is_empty(),
+    let grids = match inline_density {
+        Some(dens) => inline_grids(r, &dens, tmap, lescale_values, velocity.is_some(), bounds)?,
+        None => {
+            let (grids, given) = file_grids(
+                r,
+                (tool, pbrt, tmap),
+                &species,
+                opts.format,
+                lescale_values,
+                velocity.as_ref(),
+            )?;
+            named = given;
+            grids
         }
     };
     let embers = r.string("embers")?;
