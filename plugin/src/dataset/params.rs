@@ -534,42 +534,36 @@ fn file_grids(
     } else {
         &filename
     };
+    // A grid the physical model alone reads, named by `param`, as the channel `channel` (refused in pbrt mode,
+    // saying what it takes there).
+    let mut physical_grid = |param: &str, channel: &str, instead: &str| -> Result<bool, Error> {
+        let grid = r.string(param)?;
+        if grid.is_empty() {
+            return Ok(false);
+        }
+        if pbrt {
+            return Err(Error::invalid("volume", param, "given", instead));
+        }
+        sources.push(ChannelSource {
+            name: channel.into(),
+            file: vfile.into(),
+            grid: Some(grid),
+            mapping: Mapping::default(),
+        });
+        Ok(true)
+    };
     // An emission grid (Houdini's or Blender's `flame`, `heat`, `burn`): the fire's emission follows it.
-    let egrid = r.string("emissiongrid")?;
-    if !egrid.is_empty() {
-        if pbrt {
-            return Err(Error::invalid(
-                "volume",
-                "emissiongrid",
-                "given",
-                "mode \"physical\" (pbrt mode takes Lescale)",
-            ));
-        }
-        sources.push(ChannelSource {
-            name: "emission".into(),
-            file: vfile.into(),
-            grid: Some(egrid.clone()),
-            mapping: Mapping::default(),
-        });
-    }
+    let emission = physical_grid(
+        "emissiongrid",
+        "emission",
+        "mode \"physical\" (pbrt mode takes Lescale)",
+    )?;
     // The heat release rate of the reaction zone (the blue core).
-    let rgrid = r.string("reactiongrid")?;
-    if !rgrid.is_empty() {
-        if pbrt {
-            return Err(Error::invalid(
-                "volume",
-                "reactiongrid",
-                "given",
-                "mode \"physical\" (the blue core is the physical model's)",
-            ));
-        }
-        sources.push(ChannelSource {
-            name: "reaction".into(),
-            file: vfile.into(),
-            grid: Some(rgrid.clone()),
-            mapping: Mapping::default(),
-        });
-    }
+    let reaction = physical_grid(
+        "reactiongrid",
+        "reaction",
+        "mode \"physical\" (the blue core is the physical model's)",
+    )?;
     // The scatter colour (Houdini's `Cd`, a vector grid, or its components as float grids).
     let cd = r.string("scattercolorgrid")?;
     if !cd.is_empty() {
@@ -594,8 +588,8 @@ fn file_grids(
         Grids::Files {
             sources,
             presets,
-            emission: !egrid.is_empty(),
-            reaction: !rgrid.is_empty(),
+            emission,
+            reaction,
         },
         named,
     ))
