@@ -366,7 +366,7 @@ fn functions_stay_short_and_the_long_ones_do_not_multiply() {
     // A function over 200 lines does several things; the ones there are today are the ceiling, to be split,
     // never added to, and none may pass 600 lines.
     const LONG: usize = 200;
-    const CEILING: usize = 2;
+    const CEILING: usize = 1;
     const LONGEST: usize = 600;
     let mut long = Vec::new();
     for dir in ["plugin", "host-adapters", "tools", "tests"] {

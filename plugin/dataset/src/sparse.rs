@@ -131,16 +131,44 @@ pub fn missing_grid<'a>(file: &str, name: &str, have: impl Iterator<Item = &'a s
     )
 }
 
-/// Stores `trees` as 8³ bricks over the union of their active boxes, one topology for all: a brick is stored
-/// where some tree has a leaf or a tile other than its background; every voxel holds the tree's value there (leaf
-/// values, active or not, over tile values, over the background), as a dense grid over the box would — but
-/// memory follows the leaves, not the box (a fire and a far-away second copy cost two fires and a brick table).
-pub fn densify<S: LeafValues>(
-    file: &str,
-    trees: Vec<(&str, Tree, S)>,
-    max_bytes: u64,
-) -> Result<Vec<Loaded>, Error> {
-    use crate::grid::{Grid, Topology, BRICK};
+use crate::grid::BRICK;
+
+/// The union box of a dataset's trees (index space, inclusive) and the offset of its first sample in its 8³ brick:
+/// bricks aligned as the file's leaves are (multiples of 8 in its index space).
+struct BrickBox {
+    lo: [i64; 3],
+    hi: [i64; 3],
+    off: [usize; 3],
+}
+
+impl BrickBox {
+    /// The bricks of a voxel range [a, b] (index space), clipped to the box: per axis, the first and last.
+    fn bricks_of(&self, a: [i64; 3], b: [i64; 3]) -> Option<([usize; 3], [usize; 3])> {
+        let (lo, hi, off) = (self.lo, self.hi, self.off);
+        let a = [0, 1, 2].map(|k| a[k].max(lo[k]));
+        let b = [0, 1, 2].map(|k| b[k].min(hi[k]));
+        if (0..3).any(|k| a[k] > b[k]) {
+            return None;
+        }
+        Some((
+            [0, 1, 2].map(|k| ((a[k] - lo[k]) as usize + off[k]) / BRICK),
+            [0, 1, 2].map(|k| ((b[k] - lo[k]) as usize + off[k]) / BRICK),
+        ))
+    }
+
+    /// The voxels [a, b] of brick `c` inside the box.
+    fn voxels(&self, c: [usize; 3]) -> ([i64; 3], [i64; 3]) {
+        let (lo, hi, off) = (self.lo, self.hi, self.off);
+        let a = [0, 1, 2].map(|k| (lo[k] + (BRICK * c[k]) as i64 - off[k] as i64).max(lo[k]));
+        let b = [0, 1, 2]
+            .map(|k| (lo[k] + (BRICK * c[k] + BRICK - 1) as i64 - off[k] as i64).min(hi[k]));
+        (a, b)
+    }
+}
+
+/// The union of `trees`' active boxes (index space, inclusive), refused when their transforms differ (channels
+/// share one lattice) or none holds an active voxel.
+fn shared_box<S>(file: &str, trees: &[(&str, Tree, S)]) -> Result<([i64; 3], [i64; 3]), Error> {
     let (first_name, first) = (&trees[0].0, &trees[0].1);
     for (name, t, _) in &trees[1..] {
         if t.transform != first.transform {
@@ -156,7 +184,7 @@ pub fn densify<S: LeafValues>(
         }
     }
     let mut bbox: Option<([i64; 3], [i64; 3])> = None;
-    for (_, t, _) in &trees {
+    for (_, t, _) in trees {
         if let Some((a, b)) = active_bbox(t) {
             bbox = Some(match bbox {
                 None => (a, b),
@@ -176,6 +204,97 @@ pub fn densify<S: LeafValues>(
             "an empty grid",
         ));
     };
+    Ok((lo, hi))
+}
+
+/// Which bricks vary and which hold constants, and the constants' classes: a brick a leaf touches varies; one
+/// under tiles alone is constant in every grid (its values a class, shared by every brick of the same values).
+#[allow(clippy::type_complexity)]
+fn constant_bricks<S>(
+    trees: &[(&str, Tree, S)],
+    bx: &BrickBox,
+) -> (
+    std::collections::HashSet<[usize; 3]>,
+    Vec<Vec<f32>>,
+    std::collections::HashMap<[usize; 3], u32>,
+) {
+    // Bricks a leaf touches hold varying values. Bricks under tiles alone are constant in every grid — each
+    // grid's tile value there (the smallest tile covering it: tiles are written largest first), or its
+    // background — and bricks with the same values share one block of storage (`Topology::share`). A tile
+    // that covers a brick only in part (not OpenVDB's alignment) makes it vary.
+    let mut varied: std::collections::HashSet<[usize; 3]> = Default::default();
+    for (_, t, _) in trees {
+        for leaf in &t.leaves {
+            let o = leaf.origin.map(|v| v as i64);
+            if let Some((ba, bb)) = bx.bricks_of(o, o.map(|v| v + 7)) {
+                for z in ba[2]..=bb[2] {
+                    for y in ba[1]..=bb[1] {
+                        for x in ba[0]..=bb[0] {
+                            varied.insert([x, y, z]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let backgrounds: Vec<f32> = trees.iter().map(|t| t.1.background).collect();
+    let mut constant: std::collections::HashMap<[usize; 3], Vec<f32>> = Default::default();
+    for (n, (_, t, _)) in trees.iter().enumerate() {
+        for tile in written_tiles(t) {
+            let o = tile.origin.map(|v| v as i64);
+            let e = o.map(|v| v + tile.size as i64 - 1);
+            let Some((ba, bb)) = bx.bricks_of(o, e) else {
+                continue;
+            };
+            for z in ba[2]..=bb[2] {
+                for y in ba[1]..=bb[1] {
+                    for x in ba[0]..=bb[0] {
+                        let c = [x, y, z];
+                        if varied.contains(&c) {
+                            continue;
+                        }
+                        let (va, vb) = bx.voxels(c);
+                        if (0..3).all(|k| o[k] <= va[k] && vb[k] <= e[k]) {
+                            constant.entry(c).or_insert_with(|| backgrounds.clone())[n] =
+                                tile.value;
+                        } else {
+                            constant.remove(&c);
+                            varied.insert(c);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // One class per distinct tuple of values (by their bits).
+    let mut classes: std::collections::HashMap<Vec<u32>, u32> = Default::default();
+    let mut class_values: Vec<Vec<f32>> = Vec::new();
+    let class_of: std::collections::HashMap<[usize; 3], u32> = constant
+        .iter()
+        .map(|(c, v)| {
+            let key: Vec<u32> = v.iter().map(|x| x.to_bits()).collect();
+            let id = *classes.entry(key).or_insert_with(|| {
+                class_values.push(v.clone());
+                class_values.len() as u32 - 1
+            });
+            (*c, id)
+        })
+        .collect();
+    (varied, class_values, class_of)
+}
+
+/// Stores `trees` as 8³ bricks over the union of their active boxes, one topology for all: a brick is stored
+/// where some tree has a leaf or a tile other than its background; every voxel holds the tree's value there (leaf
+/// values, active or not, over tile values, over the background), as a dense grid over the box would — but
+/// memory follows the leaves, not the box (a fire and a far-away second copy cost two fires and a brick table).
+pub fn densify<S: LeafValues>(
+    file: &str,
+    trees: Vec<(&str, Tree, S)>,
+    max_bytes: u64,
+) -> Result<Vec<Loaded>, Error> {
+    use crate::grid::{Grid, Topology};
+    let (lo, hi) = shared_box(file, &trees)?;
+    let first = &trees[0].1;
     let extent = [0, 1, 2].map(|k| (hi[k] - lo[k] + 1) as u64);
     let dims = extent.map(|e| usize::try_from(e).unwrap_or(usize::MAX));
     let tr = first.transform;
@@ -189,21 +308,13 @@ pub fn densify<S: LeafValues>(
         cap: max_bytes,
     };
     let table = table_within(file, dims, max_bytes)?;
-    // The bricks that a voxel range [a, b] (index space) covers, on bricks aligned as the file's leaves are
-    // (multiples of 8 in its index space): sample 0 of the box sits at lo mod 8 in its brick.
-    let off = lo.map(|v| v.rem_euclid(BRICK as i64) as usize);
-    // The bricks of a voxel range [a, b] (index space), clipped to the box: per axis, the first and last.
-    let bricks_of = |a: [i64; 3], b: [i64; 3]| {
-        let a = [0, 1, 2].map(|k| a[k].max(lo[k]));
-        let b = [0, 1, 2].map(|k| b[k].min(hi[k]));
-        if (0..3).any(|k| a[k] > b[k]) {
-            return None;
-        }
-        Some((
-            [0, 1, 2].map(|k| ((a[k] - lo[k]) as usize + off[k]) / BRICK),
-            [0, 1, 2].map(|k| ((b[k] - lo[k]) as usize + off[k]) / BRICK),
-        ))
+    // The bricks on the file's leaves' alignment (sample 0 of the box at lo mod 8 in its brick).
+    let bx = BrickBox {
+        lo,
+        hi,
+        off: lo.map(|v| v.rem_euclid(BRICK as i64) as usize),
     };
+    let (off, bricks_of, brick_voxels) = (bx.off, |a, b| bx.bricks_of(a, b), |c| bx.voxels(c));
     // Every tile's and leaf's range, as the trees hold them.
     let ranges = || {
         trees.iter().flat_map(|(_, t, _)| {
@@ -235,76 +346,7 @@ pub fn densify<S: LeafValues>(
             listed.saturating_mul(per_listed),
         ));
     }
-    // Bricks a leaf touches hold varying values. Bricks under tiles alone are constant in every grid — each
-    // grid's tile value there (the smallest tile covering it: tiles are written largest first), or its
-    // background — and bricks with the same values share one block of storage (`Topology::share`). A tile
-    // that covers a brick only in part (not OpenVDB's alignment) makes it vary.
-    let mut varied: std::collections::HashSet<[usize; 3]> = Default::default();
-    for (_, t, _) in &trees {
-        for leaf in &t.leaves {
-            let o = leaf.origin.map(|v| v as i64);
-            if let Some((ba, bb)) = bricks_of(o, o.map(|v| v + 7)) {
-                for z in ba[2]..=bb[2] {
-                    for y in ba[1]..=bb[1] {
-                        for x in ba[0]..=bb[0] {
-                            varied.insert([x, y, z]);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    let backgrounds: Vec<f32> = trees.iter().map(|t| t.1.background).collect();
-    let mut constant: std::collections::HashMap<[usize; 3], Vec<f32>> = Default::default();
-    // The voxels [a, b] of brick `c` inside the box.
-    let brick_voxels = |c: [usize; 3]| {
-        let a = [0, 1, 2].map(|k| (lo[k] + (BRICK * c[k]) as i64 - off[k] as i64).max(lo[k]));
-        let b = [0, 1, 2]
-            .map(|k| (lo[k] + (BRICK * c[k] + BRICK - 1) as i64 - off[k] as i64).min(hi[k]));
-        (a, b)
-    };
-    for (n, (_, t, _)) in trees.iter().enumerate() {
-        for tile in written_tiles(t) {
-            let o = tile.origin.map(|v| v as i64);
-            let e = o.map(|v| v + tile.size as i64 - 1);
-            let Some((ba, bb)) = bricks_of(o, e) else {
-                continue;
-            };
-            for z in ba[2]..=bb[2] {
-                for y in ba[1]..=bb[1] {
-                    for x in ba[0]..=bb[0] {
-                        let c = [x, y, z];
-                        if varied.contains(&c) {
-                            continue;
-                        }
-                        let (va, vb) = brick_voxels(c);
-                        if (0..3).all(|k| o[k] <= va[k] && vb[k] <= e[k]) {
-                            constant.entry(c).or_insert_with(|| backgrounds.clone())[n] =
-                                tile.value;
-                        } else {
-                            constant.remove(&c);
-                            varied.insert(c);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    // One class per distinct tuple of values (by their bits).
-    let mut classes: std::collections::HashMap<Vec<u32>, u32> = Default::default();
-    let mut class_values: Vec<Vec<f32>> = Vec::new();
-    let class_of: std::collections::HashMap<[usize; 3], u32> = constant
-        .iter()
-        .map(|(c, v)| {
-            let key: Vec<u32> = v.iter().map(|x| x.to_bits()).collect();
-            let id = *classes.entry(key).or_insert_with(|| {
-                class_values.push(v.clone());
-                class_values.len() as u32 - 1
-            });
-            (*c, id)
-        })
-        .collect();
-    drop(constant);
+    let (varied, class_values, class_of) = constant_bricks(&trees, &bx);
     let mut list: Vec<[usize; 3]> = crate::alloc::with_capacity(listed as usize)
         .ok_or_else(|| too_large("the brick list".to_string(), listed.saturating_mul(24)))?;
     for (ba, bb) in ranges().filter_map(|(a, b)| bricks_of(a, b)) {
@@ -505,7 +547,7 @@ pub fn brick_as_read(
     max_bytes: u64,
     visit: &VoxelWrites,
 ) -> Result<Loaded, Error> {
-    use crate::grid::{Grid, Topology, BRICK};
+    use crate::grid::{Grid, Topology};
     let too_large = |what: String, bytes: u64| Error::TooLarge {
         file: file.to_string(),
         what,
