@@ -133,6 +133,16 @@ pub fn missing_grid<'a>(file: &str, name: &str, have: impl Iterator<Item = &'a s
 
 use crate::grid::BRICK;
 
+/// The error of a part of `file`'s grids (`what`, `bytes` of it) past the memory budget `max_bytes`.
+fn over_budget(file: &str, max_bytes: u64) -> impl Fn(String, u64) -> Error + '_ {
+    move |what, bytes| Error::TooLarge {
+        file: file.to_string(),
+        what,
+        bytes,
+        cap: max_bytes,
+    }
+}
+
 /// The union box of a dataset's trees (index space, inclusive) and the offset of its first sample in its 8³ brick:
 /// bricks aligned as the file's leaves are (multiples of 8 in its index space).
 struct BrickBox {
@@ -301,12 +311,7 @@ pub fn densify<S: LeafValues>(
     let to_medium = |v: [f64; 3]| DVec3::from_array(v) * tr.scale + tr.translation;
     let p0 = to_medium([0, 1, 2].map(|k| lo[k] as f64 - 0.5));
     let p1 = to_medium([0, 1, 2].map(|k| hi[k] as f64 + 0.5));
-    let too_large = |what: String, bytes: u64| Error::TooLarge {
-        file: file.to_string(),
-        what,
-        bytes,
-        cap: max_bytes,
-    };
+    let too_large = over_budget(file, max_bytes);
     let table = table_within(file, dims, max_bytes)?;
     // The bricks on the file's leaves' alignment (sample 0 of the box at lo mod 8 in its brick).
     let bx = BrickBox {
@@ -548,12 +553,7 @@ pub fn brick_as_read(
     visit: &VoxelWrites,
 ) -> Result<Loaded, Error> {
     use crate::grid::{Grid, Topology};
-    let too_large = |what: String, bytes: u64| Error::TooLarge {
-        file: file.to_string(),
-        what,
-        bytes,
-        cap: max_bytes,
-    };
+    let too_large = over_budget(file, max_bytes);
     let table = table_within(file, dims, max_bytes)?;
     // The bricks a voxel other than the background is written to (every empty brick reads the background):
     // a 1000³ grid of background 1 and no voxels is its background, not 4 GB of ones.
