@@ -359,6 +359,54 @@ impl Dataset {
         Self::assemble(&sources, loaded, opts)
     }
 
+    /// A dataset from grids already in bricks (`grids`: each channel's name and grid, every grid on one
+    /// topology), over the box `p0`–`p1`: the samples are checked as a file's are, and nothing is copied.
+    pub fn from_grids(
+        p0: DVec3,
+        p1: DVec3,
+        grids: Vec<(&str, Grid)>,
+        opts: &LoadOptions,
+    ) -> Result<Dataset, Error> {
+        let mut loaded = Vec::new();
+        let mut sources = Vec::new();
+        let first = grids.first().map(|(_, g)| g.topology().clone());
+        for (i, (name, grid)) in grids.into_iter().enumerate() {
+            if !first
+                .as_ref()
+                .is_some_and(|t| std::sync::Arc::ptr_eq(t, grid.topology()))
+            {
+                return Err(Error::invalid(
+                    "dataset",
+                    name,
+                    "a grid on a topology of its own",
+                    "the first channel's topology (all channels share one)",
+                ));
+            }
+            loaded.push((
+                i,
+                Loaded {
+                    dims: grid.dims(),
+                    data: Vec::new(),
+                    bricks: Some(grid),
+                    bounds: Some([p0, p1]),
+                },
+                "inline".to_string(),
+                0.0,
+                Format::Inline,
+            ));
+            sources.push(ChannelSource::new(name, "inline"));
+        }
+        if loaded.is_empty() {
+            return Err(Error::invalid(
+                "dataset",
+                "channels",
+                "none",
+                "at least one grid",
+            ));
+        }
+        Self::assemble(&sources, loaded, opts)
+    }
+
     fn assemble(
         sources: &[ChannelSource],
         loaded: Vec<(usize, Loaded, String, f64, Format)>,

@@ -14,6 +14,7 @@
 //! ([`FireVolume::over`]).
 
 use crate::dataset::{par_map, Dataset, LoadOptions};
+use crate::grid::{Grid, Topology, BRICK};
 use crate::volume::FireVolume;
 use glam::DVec3;
 
@@ -103,35 +104,70 @@ pub(super) fn coarse(vol: &FireVolume, f: usize, budget: u64) -> Option<FireVolu
         };
         ((s[0] / volume) as f32, temperature)
     };
-    let mut density = vec![0f32; n];
-    let mut temperature = vec![0f32; n];
-    // Rows of blocks, a few parts per worker (a fire fills its box unevenly).
-    let plane = cd[0] * cd[1];
-    let part = plane * cd[2].div_ceil(4 * crate::par::threads(4)).max(1);
-    let parts: Vec<_> = density
-        .chunks_mut(part)
-        .zip(temperature.chunks_mut(part))
-        .enumerate()
-        .collect();
-    par_map(parts, |(p, (ds, ts))| {
-        for (o, (d, t)) in ds.iter_mut().zip(ts.iter_mut()).enumerate() {
-            let q = p * part + o;
-            (*d, *t) = block([q % cd[0], (q / cd[0]) % cd[1], q / plane]);
-        }
-    });
     let [p0, _] = ds.bounds();
     let voxel = ds.voxel_size() * f as f64;
     let p1 = p0 + DVec3::new(cd[0] as f64, cd[1] as f64, cd[2] as f64) * voxel;
-    let coarse = Dataset::from_inline(
-        cd,
-        p0,
-        p1,
-        &[("density", &density), ("temperature", &temperature)],
-        &LoadOptions::default(),
-    )
-    .ok()?;
-    drop((density, temperature));
+    let coarse = Dataset::from_grids(p0, p1, bricked(cd, block)?, &LoadOptions::default()).ok()?;
     vol.over(coarse, f as f64, budget)
+}
+
+/// The blocks of a `cd` copy as two grids (density, temperature) in 8³ bricks, `block` giving each block's
+/// values: a brick is stored where a value in it is not zero — the bricks an inline grid of the same samples
+/// would store — and the blocks are written into their bricks, with no dense copy beside them. `None` when the
+/// allocator refuses.
+fn bricked(
+    cd: [usize; 3],
+    block: impl Fn([usize; 3]) -> (f32, f32) + Sync,
+) -> Option<Vec<(&'static str, Grid)>> {
+    const BV: usize = BRICK * BRICK * BRICK;
+    let nb = cd.map(|n| n.div_ceil(BRICK));
+    // A slab of bricks per task (a fire fills its box unevenly); each keeps its bricks that hold data.
+    let slabs: Vec<usize> = (0..nb[2]).collect();
+    let kept = par_map(slabs, |z| {
+        let mut kept: Vec<([usize; 3], Vec<f32>)> = Vec::new();
+        for y in 0..nb[1] {
+            for x in 0..nb[0] {
+                let b = [x, y, z];
+                let lo = b.map(|v| v * BRICK);
+                let hi = [0, 1, 2].map(|a| (lo[a] + BRICK).min(cd[a]));
+                let mut values = Vec::new();
+                values.try_reserve_exact(2 * BV).ok()?;
+                values.resize(2 * BV, 0f32);
+                let mut any = false;
+                for k in lo[2]..hi[2] {
+                    for j in lo[1]..hi[1] {
+                        for i in lo[0]..hi[0] {
+                            let (d, t) = block([i, j, k]);
+                            let at = (i - lo[0]) + BRICK * ((j - lo[1]) + BRICK * (k - lo[2]));
+                            (values[at], values[BV + at]) = (d, t);
+                            any |= d != 0.0 || t != 0.0;
+                        }
+                    }
+                }
+                if any {
+                    kept.try_reserve(1).ok()?;
+                    kept.push((b, values));
+                }
+            }
+        }
+        Some(kept)
+    });
+    let kept: Vec<_> = kept
+        .into_iter()
+        .collect::<Option<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    let list = kept.iter().map(|(b, _)| *b).collect();
+    let topo = std::sync::Arc::new(Topology::from_bricks(cd, [0; 3], list)?);
+    let mut density = Grid::filled(topo.clone(), 0.0)?;
+    let mut temperature = Grid::filled(topo, 0.0)?;
+    for (b, values) in kept {
+        let first = b.map(|v| v * BRICK);
+        density.brick_mut(first)?.copy_from_slice(&values[..BV]);
+        temperature.brick_mut(first)?.copy_from_slice(&values[BV..]);
+    }
+    Some(vec![("density", density), ("temperature", temperature)])
 }
 
 #[cfg(test)]
@@ -178,6 +214,66 @@ mod tests {
             Param::int("nz", nz as i64),
         ])
         .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn the_bricked_copy_holds_what_an_inline_grid_of_its_blocks_holds() {
+        // Blocks over 19 × 9 × 17 (bricks cut by every edge), zero outside a ball and on one plane of it (−0.0
+        // there: zero as the inline grid's rule reads it), temperature alone in the far corner's brick: the same
+        // samples everywhere and the same bricks stored as `Dataset::from_inline` of the dense arrays.
+        let cd = [19usize, 9, 17];
+        let block = |[i, j, k]: [usize; 3]| -> (f32, f32) {
+            let r2 = (i as f32 - 9.0).powi(2) + (j as f32 - 4.0).powi(2) + (k as f32 - 8.0).powi(2);
+            if [i, j, k] == [18, 8, 16] {
+                return (0.0, 300.0);
+            }
+            if r2 > 36.0 || k == 8 {
+                return (-0.0, 0.0);
+            }
+            (1e-9 * (37.0 - r2), 1200.0 + r2)
+        };
+        let grids = bricked(cd, block).expect("bricked");
+        let (p0, p1) = (DVec3::ZERO, DVec3::new(1.9, 0.9, 1.7));
+        let ours = Dataset::from_grids(p0, p1, grids, &LoadOptions::default()).expect("a dataset");
+        let mut dense = [Vec::new(), Vec::new()];
+        for k in 0..cd[2] {
+            for j in 0..cd[1] {
+                for i in 0..cd[0] {
+                    let (d, t) = block([i, j, k]);
+                    dense[0].push(d);
+                    dense[1].push(t);
+                }
+            }
+        }
+        let inline = Dataset::from_inline(
+            cd,
+            p0,
+            p1,
+            &[("density", &dense[0]), ("temperature", &dense[1])],
+            &LoadOptions::default(),
+        )
+        .expect("a dataset");
+        assert_eq!(ours.dims(), inline.dims());
+        assert_eq!(ours.bounds(), inline.bounds());
+        let (a, b) = (ours.topology(), inline.topology());
+        assert_eq!(a.active_bricks(), b.active_bricks());
+        assert_eq!(a.active_bricks(), 9, "the ball's 8 bricks and the corner's");
+        for (ca, cb) in ours.channels().iter().zip(inline.channels()) {
+            assert_eq!(ca.name, cb.name);
+            for k in -1..=cd[2] as i64 {
+                for j in -1..=cd[1] as i64 {
+                    for i in -1..=cd[0] as i64 {
+                        let (x, y) = (ca.grid.at(i, j, k), cb.grid.at(i, j, k));
+                        assert_eq!(x.to_bits(), y.to_bits(), "{} at ({i}, {j}, {k})", ca.name);
+                    }
+                }
+            }
+        }
+        // Grids on two topologies are refused, naming the channel.
+        let mut two = bricked(cd, block).expect("bricked");
+        two[1].1 = bricked(cd, |_| (1.0, 1.0)).expect("bricked").remove(1).1;
+        let e = Dataset::from_grids(p0, p1, two, &LoadOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("temperature"), "{e}");
     }
 
     #[test]
