@@ -153,20 +153,27 @@ struct Px {
     seconds: f64,
     /// Its block stopped (adaptive sampling).
     done: bool,
-    /// A twinned pixel's twin: Σ w · Y and Σ w under the other randomization, and the probability it was
-    /// chosen with (0: no twin; see the module).
-    twin_y: f64,
-    twin_w: f64,
-    twin_p: f64,
+}
+
+/// A twinned pixel's twin (see the module), kept apart from the pixels (about 3 % of them have one): the pixel's
+/// slot, Σ w · Y and Σ w under the other randomization, and the probability it was chosen with.
+#[derive(Debug, Clone, Copy)]
+struct Twin {
+    slot: usize,
+    y: f64,
+    w: f64,
+    p: f64,
+}
+
+impl Twin {
+    /// (M − M')²/2 of the twin and its pixel `px`, once both have samples.
+    fn estimate(&self, px: &Px) -> Option<f64> {
+        (px.weights > 0.0 && self.w > 0.0)
+            .then(|| (px.sum.y / px.weights - self.y / self.w).powi(2) / 2.0)
+    }
 }
 
 impl Px {
-    /// A twinned pixel's (M − M')²/2, once it has samples.
-    fn twin_estimate(&self) -> Option<f64> {
-        (self.weights > 0.0 && self.twin_w > 0.0)
-            .then(|| (self.sum.y / self.weights - self.twin_y / self.twin_w).powi(2) / 2.0)
-    }
-
     /// The pixel's luminance (sensor Y) and the estimate e of its mean's squared error, once it has two samples.
     fn estimate(&self) -> Option<(f64, f64)> {
         if self.n < 2 || self.half_w[0] == 0.0 || self.half_w[1] == 0.0 || self.weights == 0.0 {
@@ -285,6 +292,8 @@ pub fn render_progressive(
     // Each tile's pixels in a run of TILE² slots (row by row inside the tile; the edge tiles' spare slots idle).
     let slots = TILE * TILE;
     let mut px = vec![Px::default(); ntiles * slots];
+    // The twins, by slot (chosen after the first pass).
+    let mut twins: Vec<Twin> = Vec::new();
     let mut ex: Vec<Extra> = if extra {
         vec![Extra::new(scene); ntiles * slots]
     } else {
@@ -318,12 +327,12 @@ pub fn render_progressive(
         pass += 1;
         let s1 = (s0 + len).min(scene.spp);
         let done = AtomicUsize::new(0);
-        let mut rows = rows_to_sample(&mut px, &mut ex, extra, &dealt, (tw, h));
+        let mut rows = rows_to_sample(&mut px, &mut ex, &mut twins, extra, &dealt, (tw, h));
         let items = rows.len().max(1);
-        let (stopped, twins) = rows
+        let (stopped, taken_by_twins) = rows
             .par_iter_mut()
-            .map(|(t, r, pxs, exs)| {
-                let (cut, taken, twins) = sampling.row((*t, *r), pxs, exs, s0..s1);
+            .map(|(t, r, pxs, exs, tws)| {
+                let (cut, taken, twins) = sampling.row((*t, *r), pxs, exs, tws, s0..s1);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 let so_far = work.fetch_add(taken, Ordering::Relaxed) + taken;
                 progress(Progress {
@@ -337,7 +346,7 @@ pub fn render_progressive(
                 (cut, twins)
             })
             .reduce(|| (false, 0), |a, b| (a.0 || b.0, a.1 + b.1));
-        twin_samples += twins;
+        twin_samples += taken_by_twins;
         drop(rows);
         s0 = s1;
         // The estimate, and the blocks that may stop.
@@ -349,13 +358,13 @@ pub fn render_progressive(
             all,
         } = sums(&px, (w, h), tw);
         if pass == 1 && twins_wanted && all && sum_y2 > 0.0 && s0 < scene.spp {
-            choose_twins(&mut px, (w, h), tw, seed, sum_y2);
+            twins = choose_twins(&px, (w, h), tw, seed, sum_y2);
         }
-        let g = gain(&px);
+        let g = gain(&px, &twins);
         estimate = (all && counted > 0 && sum_y2 > 0.0).then(|| (g * sum_e / sum_y2).sqrt());
         if let Some(threshold) = opts.noise_threshold.filter(|_| all && counted > 0) {
             let mean_y = sum_y / counted as f64;
-            let g_rel = gain_relative(&px, 0.01 * mean_y * mean_y);
+            let g_rel = gain_relative(&px, &twins, 0.01 * mean_y * mean_y);
             adapt(
                 &mut px,
                 (w, h),
@@ -414,6 +423,8 @@ pub fn render_progressive(
         }
     }
     let (xyz, extra, camera_rays) = pixels(scene, &px, &ex, gspace.is_some(), (w, h), tw);
+    // (The sums are done with: gone before the image's second copy.)
+    drop((px, ex, twins));
     let rgb = xyz
         .iter()
         .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
@@ -445,15 +456,16 @@ pub fn render_progressive(
     )
 }
 
-/// A row of a tile: the tile, the row in it, its pixels and their extras.
-type Row<'p> = (usize, usize, &'p mut [Px], &'p mut [Extra]);
+/// A row of a tile: the tile, the row in it, its pixels, their extras and their twins.
+type Row<'p> = (usize, usize, &'p mut [Px], &'p mut [Extra], &'p mut [Twin]);
 
 /// A pass's work: every row of every tile (in the `dealt` order) that has a pixel still sampling — rows, not
 /// tiles, so that a pass in which a few tiles are left keeps every thread busy. `extra`: whether pixels keep
-/// extras; `tw` tiles across, `h` rows rendered.
+/// extras; `twins` by slot; `tw` tiles across, `h` rows rendered.
 fn rows_to_sample<'p>(
     px: &'p mut [Px],
     ex: &'p mut [Extra],
+    twins: &'p mut [Twin],
     extra: bool,
     dealt: &[usize],
     (tw, h): (usize, usize),
@@ -467,6 +479,15 @@ fn rows_to_sample<'p>(
         };
         px.chunks_mut(slots).zip(exs).map(Some).collect()
     };
+    // Each row's twins (a row is TILE consecutive slots).
+    let mut twin_rows: Vec<&mut [Twin]> = Vec::with_capacity(by_tile.len() * TILE);
+    let mut rest = twins;
+    for row in 0..by_tile.len() * TILE {
+        let end = rest.partition_point(|t| t.slot < (row + 1) * TILE);
+        let (these, after) = rest.split_at_mut(end);
+        twin_rows.push(these);
+        rest = after;
+    }
     let mut v = Vec::new();
     for &t in dealt {
         let Some((p, e)) = by_tile[t].take() else {
@@ -479,7 +500,7 @@ fn rows_to_sample<'p>(
         };
         for (r, (pr, er)) in p.chunks_mut(TILE).zip(ex_rows).enumerate() {
             if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done) {
-                v.push((t, r, pr, er));
+                v.push((t, r, pr, er, std::mem::take(&mut twin_rows[t * TILE + r])));
             }
         }
     }
@@ -577,12 +598,14 @@ struct Sampling<'a> {
 
 impl Sampling<'_> {
     /// Samples `range` of every pixel still sampling in row `r` of tile `t` (its pixels `pxs`, their extras
-    /// `exs`), and its twins' catching up: whether a signal cut it short, the samples taken, the twins' samples.
+    /// `exs`), and its twins' (`tws`) catching up: whether a signal cut it short, the samples taken, the twins'
+    /// samples.
     fn row(
         &self,
         (t, r): (usize, usize),
         pxs: &mut [Px],
         exs: &mut [Extra],
+        tws: &mut [Twin],
         range: std::ops::Range<usize>,
     ) -> (bool, usize, u64) {
         let Sampling {
@@ -664,9 +687,10 @@ impl Sampling<'_> {
             if cut {
                 break;
             }
-            if p.twin_p > 0.0 {
+            let first = t * TILE * TILE + r * TILE;
+            if let Some(twin) = tws.iter_mut().find(|tw| tw.slot == first + slot) {
                 // (A twin chosen after the first pass catches up with its pixel's samples first.)
-                let from = if p.twin_w == 0.0 { 0 } else { s0 };
+                let from = if twin.w == 0.0 { 0 } else { s0 };
                 let order = hash(twin_seed, x as u64, y as u64, u64::MAX);
                 for s in from..s1 {
                     let (mut rng, wt, _, (o, d)) =
@@ -675,8 +699,8 @@ impl Sampling<'_> {
                     let sensor = scene
                         .response
                         .clamp_sample(scene.response.sensor_xyz(&scene.bins, &l));
-                    p.twin_y += sensor.y * wt;
-                    p.twin_w += wt;
+                    twin.y += sensor.y * wt;
+                    twin.w += wt;
                     twins += 1;
                 }
             }
@@ -689,22 +713,30 @@ impl Sampling<'_> {
 /// max(256, N/32), by a uniform number of its own (the seed and the pixel's place in the render). (By its level,
 /// not by its halves' e: the pixels whose first samples happened to differ most would be chosen, and their e,
 /// which keeps those samples, would overstate them against their twins.)
-fn choose_twins(px: &mut [Px], (w, h): (usize, usize), tw: usize, seed: u64, sum_y2: f64) {
+fn choose_twins(px: &[Px], (w, h): (usize, usize), tw: usize, seed: u64, sum_y2: f64) -> Vec<Twin> {
     let n = (w * h) as f64;
     let k = (n / 32.0).max(256.0).min(n);
+    let mut twins = Vec::new();
     for cy in 0..h {
         for cx in 0..w {
-            let p = &mut px[slot_of(cx, cy, tw)];
-            let Some((y, _)) = p.estimate() else {
+            let slot = slot_of(cx, cy, tw);
+            let Some((y, _)) = px[slot].estimate() else {
                 continue;
             };
             let pi = (k * (0.5 * y * y / sum_y2 + 0.5 / n)).min(1.0);
             let u = (hash(seed, cx as u64, cy as u64, 0x7417) >> 11) as f64 / (1u64 << 53) as f64;
             if u < pi {
-                p.twin_p = pi;
+                twins.push(Twin {
+                    slot,
+                    y: 0.0,
+                    w: 0.0,
+                    p: pi,
+                });
             }
         }
     }
+    twins.sort_unstable_by_key(|t| t.slot);
+    twins
 }
 
 /// Sample `s` of pixel `(x, y)` (its strata `order`) under `sampler` randomized by `seed`: the path's sample
@@ -739,23 +771,25 @@ fn camera_sample(
 /// independent samples would give by much). The floor errs high where a Sobol' sampler beats its halves by more
 /// (the candle, emission alone: G ≈ 1/600 at 256 spp, the estimate 2.3× the true error); without it, twins among
 /// the flame's pixels understate the surfaces' error (the art and blue-core scenes: 0.6× at 64–256 spp).
-fn gain(px: &[Px]) -> f64 {
-    gain_weighted(px, |_| 1.0)
+fn gain(px: &[Px], twins: &[Twin]) -> f64 {
+    gain_weighted(px, twins, |_| 1.0)
 }
 
 /// The sampler's gain for relMSE, each twin's errors weighed by 1 / (Y² + ε), ε = `floor` (see [`adapt`]): the
 /// gain of the pixels that relMSE counts (surfaces, dark ones too) rather than of the bright ones that the image's
 /// relative RMSE counts (a flame's, whose smooth light gains more from low discrepancy).
-fn gain_relative(px: &[Px], floor: f64) -> f64 {
-    gain_weighted(px, |y| 1.0 / (y * y + floor))
+fn gain_relative(px: &[Px], twins: &[Twin], floor: f64) -> f64 {
+    gain_weighted(px, twins, |y| 1.0 / (y * y + floor))
 }
 
-/// G with each twin's d and e weighed by `weight(Y)` beside its 1/π.
-fn gain_weighted(px: &[Px], weight: impl Fn(f64) -> f64) -> f64 {
+/// G with each twin's d and e weighed by `weight(Y)` beside its 1/π (`twins` by slot: the sums' order is the
+/// pixels').
+fn gain_weighted(px: &[Px], twins: &[Twin], weight: impl Fn(f64) -> f64) -> f64 {
     let (mut twin, mut halves) = (0.0, 0.0);
-    for p in px.iter().filter(|p| p.twin_p > 0.0) {
-        if let (Some(d), Some((y, e))) = (p.twin_estimate(), p.estimate()) {
-            let w = weight(y) / p.twin_p;
+    for t in twins {
+        let p = &px[t.slot];
+        if let (Some(d), Some((y, e))) = (t.estimate(p), p.estimate()) {
+            let w = weight(y) / t.p;
             twin += d * w;
             halves += e * w;
         }
@@ -888,6 +922,49 @@ fn adapt(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_row_samples_with_its_own_twins_and_only_those() {
+        // 40 × 37 pixels (3 × 3 tiles, the edge ones cut), every pixel luminance 1 with two samples: the twins
+        // come out by slot, and a pass's rows — dealt out of order, the stopped ones left out — each hold the
+        // twins of their own pixels, every twin of a sampled row once.
+        let (w, h) = (40usize, 37usize);
+        let tw = w.div_ceil(TILE);
+        let ntiles = tw * h.div_ceil(TILE);
+        let mut px = vec![Px::default(); ntiles * TILE * TILE];
+        for cy in 0..h {
+            for cx in 0..w {
+                let p = &mut px[slot_of(cx, cy, tw)];
+                (p.sum, p.weights, p.n) = (DVec3::ONE * 2.0, 2.0, 2);
+                (p.half_y, p.half_w) = ([1.0; 2], [1.0; 2]);
+            }
+        }
+        let mut twins = choose_twins(&px, (w, h), tw, 7, (w * h) as f64);
+        // K = 256 of 1 480 pixels, each with π = K/N: about 256 twins.
+        assert!((200..320).contains(&twins.len()), "{}", twins.len());
+        assert!(twins.windows(2).all(|t| t[0].slot < t[1].slot));
+        assert!(twins.iter().all(|t| (t.p - 256.0 / 1480.0).abs() < 1e-12));
+        // Tile 4's rows stop.
+        px[4 * TILE * TILE..5 * TILE * TILE]
+            .iter_mut()
+            .for_each(|p| p.done = true);
+        let chosen: Vec<usize> = twins.iter().map(|t| t.slot).collect();
+        let dealt: Vec<usize> = (0..ntiles).rev().collect();
+        let mut ex = Vec::new();
+        let rows = rows_to_sample(&mut px, &mut ex, &mut twins, false, &dealt, (tw, h));
+        let mut seen = Vec::new();
+        for (t, r, pxs, _, tws) in &rows {
+            assert_eq!(pxs.len(), TILE);
+            let first = t * TILE * TILE + r * TILE;
+            assert!(tws.iter().all(|x| (first..first + TILE).contains(&x.slot)));
+            seen.extend(tws.iter().map(|x| x.slot));
+        }
+        seen.sort_unstable();
+        let tile4 = 4 * TILE * TILE..5 * TILE * TILE;
+        let want: Vec<usize> = chosen.into_iter().filter(|s| !tile4.contains(s)).collect();
+        assert_eq!(seen, want);
+        assert_eq!(rows.len(), 37 * 3 - TILE, "every rendered row but tile 4's");
+    }
 
     /// A render one block high, a block per entry of `blocks` across (δ, cost): every pixel of luminance 1 with
     /// `n` samples whose halves differ by 2δ (so e = δ², and r = n δ² / 1.01 with the image's mean 1) and which
