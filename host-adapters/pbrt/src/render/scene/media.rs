@@ -592,7 +592,8 @@ pub fn typed_params(
         .collect()
 }
 
-/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. The host's one `unsafe`: loading a
+/// Loads the fire plugin from `path`, or as [`Plugin::from_env`] finds it. One of the host's two `unsafe` calls (the
+/// other gives the build's freed memory back, `scene::load`): loading a
 /// library runs its initialisers, so the renderer loads only the file the user named (`--plugin`, a medium's
 /// `"string plugin"`, `FIREMEDIUM_PLUGIN`, `FIREMEDIUM_PLUGIN_PATH`) or the one built beside it.
 #[allow(unsafe_code)]
