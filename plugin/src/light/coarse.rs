@@ -185,6 +185,11 @@ mod tests {
 
     /// A 22 × 20 × 26 fire (dims no block size divides), soot at 1500–1600 K.
     fn fire() -> FireVolume {
+        fire_with(&[])
+    }
+
+    /// [`fire`] with further parameters.
+    fn fire_with(more: &[Param]) -> FireVolume {
         let [nx, ny, nz] = [22usize, 20, 26];
         let (mut d, mut t) = (vec![], vec![]);
         for k in 0..nz {
@@ -204,7 +209,7 @@ mod tests {
                 }
             }
         }
-        FireVolume::new(&[
+        let mut list = vec![
             Param::point3("p0", [0.0, 0.0, 0.0]),
             Param::point3("p1", [2.2, 2.0, 2.6]),
             Param::floats("density", &d),
@@ -212,8 +217,28 @@ mod tests {
             Param::int("nx", nx as i64),
             Param::int("ny", ny as i64),
             Param::int("nz", nz as i64),
-        ])
-        .unwrap_or_else(|e| panic!("{e}"))
+        ];
+        list.extend_from_slice(more);
+        FireVolume::new(&list).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn the_copy_marches_a_lattice_of_its_own_whatever_the_fire_reads() {
+        // A fire that reads its grids in place (`lattice off`) and one with its dense copy: their light's copies
+        // are the same, a dense lattice included — the 10 × 11 × 13 blocks padded by one, 8 bytes each.
+        let lattice = |v: &str| coarse(&fire_with(&[Param::string("lattice", v)]), 2, u64::MAX);
+        let (off, dense) = (
+            lattice("off").expect("a copy"),
+            lattice("dense").expect("a copy"),
+        );
+        let padded = 13 * 12 * 15 * 8;
+        let grids = off.dataset().bytes();
+        assert_eq!(off.mip_bytes(), dense.mip_bytes());
+        assert!(
+            off.mip_bytes() >= grids + padded,
+            "{} < {grids} + {padded}",
+            off.mip_bytes()
+        );
     }
 
     #[test]
