@@ -140,20 +140,23 @@ const FIRST_PASS: usize = 2;
 const MAX_PASS: usize = 64;
 
 /// A pixel's running sums.
+/// (56 bytes, as pbrt-v4's RGBFilm pixel: a film is most of a render's memory beside the fire's grids.)
 #[derive(Debug, Clone, Copy, Default)]
 struct Px {
     /// Σ w · sensor XYZ and Σ w (the pixel filter's weights).
     sum: DVec3,
     weights: f64,
-    /// Σ w · Y and Σ w over the even and the odd samples.
-    half_y: [f64; 2],
-    half_w: [f64; 2],
-    /// Samples taken, and the seconds they took.
-    n: u32,
-    seconds: f64,
-    /// Its block stopped (adaptive sampling).
-    done: bool,
+    /// Σ w · Y and Σ w over the even samples (the odd ones': the totals less these).
+    even_y: f64,
+    even_w: f64,
+    /// Samples taken, with [`DONE`] set once its block stopped (adaptive sampling).
+    n_done: u32,
+    /// The seconds its samples took.
+    seconds: f32,
 }
+
+/// [`Px::n_done`]'s bit saying the pixel's block stopped.
+const DONE: u32 = 1 << 31;
 
 /// A twinned pixel's twin (see the module), kept apart from the pixels (about 3 % of them have one): the pixel's
 /// slot, Σ w · Y and Σ w under the other randomization, and the probability it was chosen with.
@@ -174,17 +177,26 @@ impl Twin {
 }
 
 impl Px {
+    /// Samples taken.
+    fn n(&self) -> u32 {
+        self.n_done & !DONE
+    }
+
+    /// Whether its block stopped.
+    fn done(&self) -> bool {
+        self.n_done & DONE != 0
+    }
+
     /// The pixel's luminance (sensor Y) and the estimate e of its mean's squared error, once it has two samples.
     fn estimate(&self) -> Option<(f64, f64)> {
-        if self.n < 2 || self.half_w[0] == 0.0 || self.half_w[1] == 0.0 || self.weights == 0.0 {
+        let (odd_y, odd_w) = (self.sum.y - self.even_y, self.weights - self.even_w);
+        let count = self.n();
+        if count < 2 || self.even_w == 0.0 || odd_w == 0.0 || self.weights == 0.0 {
             return None;
         }
-        let (a, b) = (
-            self.half_y[0] / self.half_w[0],
-            self.half_y[1] / self.half_w[1],
-        );
-        let n = self.n as f64;
-        let (na, nb) = ((self.n.div_ceil(2)) as f64, (self.n / 2) as f64);
+        let (a, b) = (self.even_y / self.even_w, odd_y / odd_w);
+        let n = count as f64;
+        let (na, nb) = ((count.div_ceil(2)) as f64, (count / 2) as f64);
         Some((
             self.sum.y / self.weights,
             (a - b).powi(2) * na * nb / (n * n),
@@ -374,10 +386,10 @@ pub fn render_progressive(
                 mean_y,
             );
         }
-        let samples: u64 = px.iter().map(|p| p.n as u64).sum();
+        let samples: u64 = px.iter().map(|p| p.n() as u64).sum();
         // (The edge tiles' spare slots are never sampled, never done: counted apart.)
         let spare = ntiles * slots - w * h;
-        let active_pixels = px.iter().filter(|p| !p.done).count() - spare;
+        let active_pixels = px.iter().filter(|p| !p.done()).count() - spare;
         let seconds = start.elapsed().as_secs_f64();
         floor.fetch_max(opts.ahead(estimate, seconds).to_bits(), Ordering::Relaxed);
         if let Some(f) = opts.on_pass {
@@ -499,7 +511,7 @@ fn rows_to_sample<'p>(
             Box::new(std::iter::repeat_with(|| &mut [][..]))
         };
         for (r, (pr, er)) in p.chunks_mut(TILE).zip(ex_rows).enumerate() {
-            if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done) {
+            if (t / tw) * TILE + r < h && pr.iter().any(|q| !q.done()) {
                 v.push((t, r, pr, er, std::mem::take(&mut twin_rows[t * TILE + r])));
             }
         }
@@ -546,8 +558,8 @@ fn pixels(
         for cx in 0..w {
             let i = slot_of(cx, cy, tw);
             let p = &px[i];
-            let n = p.n as f64;
-            camera_rays += p.n as usize;
+            let n = p.n() as f64;
+            camera_rays += p.n() as usize;
             let weights = p.weights;
             // (n = spp for every pixel of a render that took them all: the value of a render in one pass.)
             xyz[cx + w * cy] = if weights != 0.0 {
@@ -570,7 +582,7 @@ fn pixels(
                 None => Vec::new(),
             };
             if !scene.aovs.is_empty() {
-                b.extend(e.apixel.finish(scene, &scene.aovs, weights, p.n));
+                b.extend(e.apixel.finish(scene, &scene.aovs, weights, p.n()));
             }
             let j = cx + w * cy;
             buckets[j * nb..(j + 1) * nb].copy_from_slice(&b);
@@ -629,7 +641,7 @@ impl Sampling<'_> {
         for (i, cx) in (tx * TILE..((tx + 1) * TILE).min(w)).enumerate() {
             let slot = i;
             let p = &mut pxs[slot];
-            if p.done {
+            if p.done() {
                 continue;
             }
             let (x, y) = (x0 + cx, y0 + cy);
@@ -661,9 +673,11 @@ impl Sampling<'_> {
                 let sensor = scene.response.clamp_sample(raw);
                 p.sum += sensor * wt;
                 p.weights += wt;
-                p.half_y[s & 1] += sensor.y * wt;
-                p.half_w[s & 1] += wt;
-                p.n += 1;
+                if s & 1 == 0 {
+                    p.even_y += sensor.y * wt;
+                    p.even_w += wt;
+                }
+                p.n_done += 1;
                 taken += 1;
                 if let Some(e) = e.as_deref_mut() {
                     if !scene.aovs.is_empty() {
@@ -683,7 +697,7 @@ impl Sampling<'_> {
                     }
                 }
             }
-            p.seconds += began.elapsed().as_secs_f64();
+            p.seconds += began.elapsed().as_secs_f32();
             if cut {
                 break;
             }
@@ -849,10 +863,10 @@ fn adapt(
                 for cx in xs.clone() {
                     let p = &px[slot_of(cx, cy)];
                     match p.estimate() {
-                        Some((y, e)) if p.n >= MIN_ADAPTIVE_SPP => {
+                        Some((y, e)) if p.n() >= MIN_ADAPTIVE_SPP => {
                             rel += e / (y * y + floor);
-                            n += p.n as f64;
-                            secs += p.seconds;
+                            n += p.n() as f64;
+                            secs += p.seconds as f64;
                             count += 1.0;
                         }
                         // (Every pixel samples until it has the least: no block stops before.)
@@ -869,7 +883,7 @@ fn adapt(
                     .filter(|r| floor > 0.0 && r.is_finite())
                     .unwrap_or(0.0),
                 cost: (secs / n).max(1e-12),
-                done: px[slot_of(xs.start, ys.start)].done,
+                done: px[slot_of(xs.start, ys.start)].done(),
                 xs,
                 ys,
             });
@@ -913,7 +927,7 @@ fn adapt(
     for b in blocks.iter().filter(|b| !b.done && want(b, k) <= b.n) {
         for cy in b.ys.clone() {
             for cx in b.xs.clone() {
-                px[slot_of(cx, cy)].done = true;
+                px[slot_of(cx, cy)].n_done |= DONE;
             }
         }
     }
@@ -922,6 +936,32 @@ fn adapt(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_pixels_sums_are_pbrt_v4s_size_and_its_halves_the_totals_split() {
+        assert_eq!(std::mem::size_of::<Px>(), 56);
+        // Samples 1, 3 (even indices 0, 2) and 2, 5 (odd), weights 1 and ½: the halves' means 2 and 4 ⅓.
+        let mut p = Px::default();
+        for (s, (y, w)) in [(1.0, 1.0), (2.0, 1.0), (3.0, 0.5), (5.0, 0.5)]
+            .into_iter()
+            .enumerate()
+        {
+            p.sum.y += y * w;
+            p.weights += w;
+            if s % 2 == 0 {
+                p.even_y += y * w;
+                p.even_w += w;
+            }
+            p.n_done += 1;
+        }
+        let (y, e) = p.estimate().expect("two samples");
+        let (a, b) = ((1.0 + 1.5) / 1.5, (2.0 + 2.5) / 1.5);
+        assert!((y - 7.0 / 3.0).abs() < 1e-15, "{y}");
+        assert!((e - (a - b) * (a - b) * 4.0 / 16.0).abs() < 1e-15, "{e}");
+        assert!(!p.done() && p.n() == 4);
+        p.n_done |= DONE;
+        assert!(p.done() && p.n() == 4);
+    }
 
     #[test]
     fn each_row_samples_with_its_own_twins_and_only_those() {
@@ -935,8 +975,8 @@ mod tests {
         for cy in 0..h {
             for cx in 0..w {
                 let p = &mut px[slot_of(cx, cy, tw)];
-                (p.sum, p.weights, p.n) = (DVec3::ONE * 2.0, 2.0, 2);
-                (p.half_y, p.half_w) = ([1.0; 2], [1.0; 2]);
+                (p.sum, p.weights, p.n_done) = (DVec3::ONE * 2.0, 2.0, 2);
+                (p.even_y, p.even_w) = (1.0, 1.0);
             }
         }
         let mut twins = choose_twins(&px, (w, h), tw, 7, (w * h) as f64);
@@ -947,7 +987,7 @@ mod tests {
         // Tile 4's rows stop.
         px[4 * TILE * TILE..5 * TILE * TILE]
             .iter_mut()
-            .for_each(|p| p.done = true);
+            .for_each(|p| p.n_done |= DONE);
         let chosen: Vec<usize> = twins.iter().map(|t| t.slot).collect();
         let dealt: Vec<usize> = (0..ntiles).rev().collect();
         let mut ex = Vec::new();
@@ -980,11 +1020,10 @@ mod tests {
                 px[slot_of(cx, cy, tw)] = Px {
                     sum: DVec3::new(0.0, n as f64, 0.0),
                     weights: n as f64,
-                    half_y: [(1.0 + delta) * half, (1.0 - delta) * half],
-                    half_w: [half, half],
-                    n,
-                    seconds: cost * n as f64,
-                    ..Default::default()
+                    even_y: (1.0 + delta) * half,
+                    even_w: half,
+                    n_done: n,
+                    seconds: (cost * n as f64) as f32,
                 };
             }
         }
@@ -1001,7 +1040,7 @@ mod tests {
         let (mut px, (w, h), tw) = film(n, blocks);
         adapt(&mut px, (w, h), (0, 0), tw, (t, gain, 1 << 20), 1.0);
         (0..blocks.len())
-            .map(|b| px[slot_of(b * BLOCK, 0, tw)].done)
+            .map(|b| px[slot_of(b * BLOCK, 0, tw)].done())
             .collect()
     }
 
