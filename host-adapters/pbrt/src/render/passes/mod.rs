@@ -38,6 +38,11 @@
 //! crosses the time limit.
 
 use super::*;
+use adapt::adapt;
+use sums::{choose_twins, gain, gain_relative, slot_of, sums, Px, Sums, Twin};
+
+mod adapt;
+mod sums;
 
 /// How a render spends its samples and whom it tells after each pass.
 #[derive(Default, Clone, Copy)]
@@ -132,77 +137,9 @@ pub struct Progress {
     pub fraction: f64,
 }
 
-/// The adaptive blocks' edge, pixels, and the samples a pixel takes before its block may stop.
-const BLOCK: usize = 8;
-const MIN_ADAPTIVE_SPP: u32 = 8;
 /// The first pass's samples per pixel, and the most a pass takes.
 const FIRST_PASS: usize = 2;
 const MAX_PASS: usize = 64;
-
-/// A pixel's running sums.
-/// (56 bytes, as pbrt-v4's RGBFilm pixel: a film is most of a render's memory beside the fire's grids.)
-#[derive(Debug, Clone, Copy, Default)]
-struct Px {
-    /// Σ w · sensor XYZ and Σ w (the pixel filter's weights).
-    sum: DVec3,
-    weights: f64,
-    /// Σ w · Y and Σ w over the even samples (the odd ones': the totals less these).
-    even_y: f64,
-    even_w: f64,
-    /// Samples taken, with [`DONE`] set once its block stopped (adaptive sampling).
-    n_done: u32,
-    /// The seconds its samples took.
-    seconds: f32,
-}
-
-/// [`Px::n_done`]'s bit saying the pixel's block stopped.
-const DONE: u32 = 1 << 31;
-
-/// A twinned pixel's twin (see the module), kept apart from the pixels (about 3 % of them have one): the pixel's
-/// slot, Σ w · Y and Σ w under the other randomization, and the probability it was chosen with.
-#[derive(Debug, Clone, Copy)]
-struct Twin {
-    slot: usize,
-    y: f64,
-    w: f64,
-    p: f64,
-}
-
-impl Twin {
-    /// (M − M')²/2 of the twin and its pixel `px`, once both have samples.
-    fn estimate(&self, px: &Px) -> Option<f64> {
-        (px.weights > 0.0 && self.w > 0.0)
-            .then(|| (px.sum.y / px.weights - self.y / self.w).powi(2) / 2.0)
-    }
-}
-
-impl Px {
-    /// Samples taken.
-    fn n(&self) -> u32 {
-        self.n_done & !DONE
-    }
-
-    /// Whether its block stopped.
-    fn done(&self) -> bool {
-        self.n_done & DONE != 0
-    }
-
-    /// The pixel's luminance (sensor Y) and the estimate e of its mean's squared error, once it has two samples.
-    fn estimate(&self) -> Option<(f64, f64)> {
-        let (odd_y, odd_w) = (self.sum.y - self.even_y, self.weights - self.even_w);
-        let count = self.n();
-        if count < 2 || self.even_w == 0.0 || odd_w == 0.0 || self.weights == 0.0 {
-            return None;
-        }
-        let (a, b) = (self.even_y / self.even_w, odd_y / odd_w);
-        let n = count as f64;
-        let (na, nb) = ((count.div_ceil(2)) as f64, (count / 2) as f64);
-        Some((
-            self.sum.y / self.weights,
-            (a - b).powi(2) * na * nb / (n * n),
-        ))
-    }
-}
 
 /// What a pixel keeps beside its sums when the film asks for more than the beauty: the spectral film's bins, the
 /// gbuffer's and the AOVs' sums.
@@ -227,39 +164,6 @@ impl Extra {
             apixel: accum::Pixel::default(),
         }
     }
-}
-
-/// The image's sums after a pass: Σ e, Σ Y², Σ Y over the pixels with an estimate, how many, and whether all have.
-struct Sums {
-    e: f64,
-    y2: f64,
-    y: f64,
-    counted: usize,
-    all: bool,
-}
-
-fn sums(px: &[Px], (w, h): (usize, usize), tw: usize) -> Sums {
-    let mut s = Sums {
-        e: 0.0,
-        y2: 0.0,
-        y: 0.0,
-        counted: 0,
-        all: true,
-    };
-    for cy in 0..h {
-        for cx in 0..w {
-            match px[slot_of(cx, cy, tw)].estimate() {
-                Some((y, e)) => {
-                    s.e += e;
-                    s.y2 += y * y;
-                    s.y += y;
-                    s.counted += 1;
-                }
-                None => s.all = false,
-            }
-        }
-    }
-    s
 }
 
 /// Renders the scene in passes (see the module) with `spp` samples per pixel at most; `progress` is told of
@@ -437,10 +341,7 @@ pub fn render_progressive(
     let (xyz, extra, camera_rays) = pixels(scene, &px, &ex, gspace.is_some(), (w, h), tw);
     // (The sums are done with: gone before the image's second copy.)
     drop((px, ex, twins));
-    let rgb = xyz
-        .iter()
-        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
-        .collect();
+    let rgb = linear_srgb(&xyz);
     let stats = Stats {
         seconds: start.elapsed().as_secs_f64(),
         camera_rays,
@@ -466,6 +367,13 @@ pub fn render_progressive(
         },
         stats,
     )
+}
+
+/// The pixels' linear sRGB from their XYZ.
+fn linear_srgb(xyz: &[DVec3]) -> Vec<[f32; 3]> {
+    xyz.iter()
+        .map(|v| cie::xyz_to_linear_srgb(*v).as_vec3().to_array())
+        .collect()
 }
 
 /// A row of a tile: the tile, the row in it, its pixels, their extras and their twins.
@@ -723,36 +631,6 @@ impl Sampling<'_> {
     }
 }
 
-/// Chooses the twins (see the module): each pixel with probability π = min(1, K (½ Y²/ΣY² + ½/N)), K =
-/// max(256, N/32), by a uniform number of its own (the seed and the pixel's place in the render). (By its level,
-/// not by its halves' e: the pixels whose first samples happened to differ most would be chosen, and their e,
-/// which keeps those samples, would overstate them against their twins.)
-fn choose_twins(px: &[Px], (w, h): (usize, usize), tw: usize, seed: u64, sum_y2: f64) -> Vec<Twin> {
-    let n = (w * h) as f64;
-    let k = (n / 32.0).max(256.0).min(n);
-    let mut twins = Vec::new();
-    for cy in 0..h {
-        for cx in 0..w {
-            let slot = slot_of(cx, cy, tw);
-            let Some((y, _)) = px[slot].estimate() else {
-                continue;
-            };
-            let pi = (k * (0.5 * y * y / sum_y2 + 0.5 / n)).min(1.0);
-            let u = (hash(seed, cx as u64, cy as u64, 0x7417) >> 11) as f64 / (1u64 << 53) as f64;
-            if u < pi {
-                twins.push(Twin {
-                    slot,
-                    y: 0.0,
-                    w: 0.0,
-                    p: pi,
-                });
-            }
-        }
-    }
-    twins.sort_unstable_by_key(|t| t.slot);
-    twins
-}
-
 /// Sample `s` of pixel `(x, y)` (its strata `order`) under `sampler` randomized by `seed`: the path's sample
 /// stream, the pixel filter's weight (pbrt-v4's RGBFilm: the pixel is Σ w L / Σ w), the film position and the
 /// camera ray. The time in the shutter is drawn after the film position, before the lens (pbrt-v4's camera
@@ -780,161 +658,9 @@ fn camera_sample(
     (rng, wt, (fx, fy), ray)
 }
 
-/// The sampler's gain G = Σ d/π / Σ e/π over the twins (see the module); 1 without twins or while they say
-/// nothing, and kept within [1/64, 4] (noisy twins must neither silence the estimate nor inflate it past what
-/// independent samples would give by much). The floor errs high where a Sobol' sampler beats its halves by more
-/// (the candle, emission alone: G ≈ 1/600 at 256 spp, the estimate 2.3× the true error); without it, twins among
-/// the flame's pixels understate the surfaces' error (the art and blue-core scenes: 0.6× at 64–256 spp).
-fn gain(px: &[Px], twins: &[Twin]) -> f64 {
-    gain_weighted(px, twins, |_| 1.0)
-}
-
-/// The sampler's gain for relMSE, each twin's errors weighed by 1 / (Y² + ε), ε = `floor` (see [`adapt`]): the
-/// gain of the pixels that relMSE counts (surfaces, dark ones too) rather than of the bright ones that the image's
-/// relative RMSE counts (a flame's, whose smooth light gains more from low discrepancy).
-fn gain_relative(px: &[Px], twins: &[Twin], floor: f64) -> f64 {
-    gain_weighted(px, twins, |y| 1.0 / (y * y + floor))
-}
-
-/// G with each twin's d and e weighed by `weight(Y)` beside its 1/π (`twins` by slot: the sums' order is the
-/// pixels').
-fn gain_weighted(px: &[Px], twins: &[Twin], weight: impl Fn(f64) -> f64) -> f64 {
-    let (mut twin, mut halves) = (0.0, 0.0);
-    for t in twins {
-        let p = &px[t.slot];
-        if let (Some(d), Some((y, e))) = (t.estimate(p), p.estimate()) {
-            let w = weight(y) / t.p;
-            twin += d * w;
-            halves += e * w;
-        }
-    }
-    if halves > 0.0 && twin > 0.0 {
-        (twin / halves).clamp(1.0 / 64.0, 4.0)
-    } else {
-        1.0
-    }
-}
-
-/// The slot of rendered pixel (cx, cy) in the tiles' runs.
-fn slot_of(cx: usize, cy: usize, tw: usize) -> usize {
-    let t = (cy / TILE) * tw + cx / TILE;
-    t * TILE * TILE + (cy % TILE) * TILE + (cx % TILE)
-}
-
-/// A block of [`BLOCK`]² pixels (on the full film) as the stopping rule sees it.
-struct Block {
-    /// Its pixels' ranges in the rendered pixels.
-    xs: std::ops::Range<usize>,
-    ys: std::ops::Range<usize>,
-    /// Its pixels, and their mean samples.
-    pixels: f64,
-    n: f64,
-    /// The relative variance of one sample, r = n · g mean(e / (Y² + ε)): its estimated relMSE is r / n.
-    r: f64,
-    /// Seconds per pixel sample.
-    cost: f64,
-    done: bool,
-}
-
-/// The stopping rule (see the module): marks done every block that has its share of the samples that bring the
-/// image's relMSE to `threshold`² at the least time, no block's above (2 · threshold)². `gain` the sampler's
-/// (see [`gain`]), `spp` the most a pixel takes, `mean_y` the image's mean luminance. No block stops before
-/// every pixel has [`MIN_ADAPTIVE_SPP`] samples.
-fn adapt(
-    px: &mut [Px],
-    (w, h): (usize, usize),
-    (x0, y0): (usize, usize),
-    tw: usize,
-    (threshold, gain, spp): (f64, f64, usize),
-    mean_y: f64,
-) {
-    let slot_of = |cx: usize, cy: usize| slot_of(cx, cy, tw);
-    // Blocks on the full film: those that overlap the rendered pixels.
-    let (bx0, bx1) = (x0 / BLOCK, (x0 + w).div_ceil(BLOCK));
-    let (by0, by1) = (y0 / BLOCK, (y0 + h).div_ceil(BLOCK));
-    let floor = 0.01 * mean_y * mean_y;
-    let mut blocks = Vec::with_capacity((bx1 - bx0) * (by1 - by0));
-    for by in by0..by1 {
-        for bx in bx0..bx1 {
-            let xs = (bx * BLOCK).max(x0) - x0..((bx + 1) * BLOCK).min(x0 + w) - x0;
-            let ys = (by * BLOCK).max(y0) - y0..((by + 1) * BLOCK).min(y0 + h) - y0;
-            let (mut rel, mut n, mut secs, mut count) = (0.0, 0.0, 0.0, 0.0);
-            for cy in ys.clone() {
-                for cx in xs.clone() {
-                    let p = &px[slot_of(cx, cy)];
-                    match p.estimate() {
-                        Some((y, e)) if p.n() >= MIN_ADAPTIVE_SPP => {
-                            rel += e / (y * y + floor);
-                            n += p.n() as f64;
-                            secs += p.seconds as f64;
-                            count += 1.0;
-                        }
-                        // (Every pixel samples until it has the least: no block stops before.)
-                        _ => return,
-                    }
-                }
-            }
-            let n_mean = n / count;
-            blocks.push(Block {
-                pixels: count,
-                n: n_mean,
-                // (A block whose estimate is not a number does not steer the others: as one without noise.)
-                r: Some(n_mean * gain * rel / count)
-                    .filter(|r| floor > 0.0 && r.is_finite())
-                    .unwrap_or(0.0),
-                cost: (secs / n).max(1e-12),
-                done: px[slot_of(xs.start, ys.start)].done(),
-                xs,
-                ys,
-            });
-        }
-    }
-    let t2 = threshold * threshold;
-    let pixels: f64 = blocks.iter().map(|b| b.pixels).sum();
-    // A block's samples at multiplier k: k √(r / c) (the least time to a given relMSE: Lagrange), at least what
-    // brings it to (2T)², never fewer than it has nor more than the most.
-    let want = |b: &Block, k: f64| {
-        if b.done {
-            b.n
-        } else {
-            (k * (b.r / b.cost).sqrt())
-                .max(b.r / (4.0 * t2))
-                .clamp(b.n, spp as f64)
-        }
-    };
-    let rel_mse = |k: f64| {
-        blocks
-            .iter()
-            .map(|b| b.pixels * b.r / want(b, k).max(1.0))
-            .sum::<f64>()
-            / pixels
-    };
-    // The multiplier that meets T² (bisection on ln k; relMSE falls as k grows); none if even the most samples
-    // everywhere would not.
-    let (mut lo, mut hi) = (-80f64, 80f64);
-    if rel_mse(hi.exp()) > t2 {
-        return;
-    }
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if rel_mse(mid.exp()) > t2 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let k = hi.exp();
-    for b in blocks.iter().filter(|b| !b.done && want(b, k) <= b.n) {
-        for cy in b.ys.clone() {
-            for cx in b.xs.clone() {
-                px[slot_of(cx, cy)].n_done |= DONE;
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use super::sums::DONE;
     use super::*;
 
     #[test]
@@ -1004,83 +730,5 @@ mod tests {
         let want: Vec<usize> = chosen.into_iter().filter(|s| !tile4.contains(s)).collect();
         assert_eq!(seen, want);
         assert_eq!(rows.len(), 37 * 3 - TILE, "every rendered row but tile 4's");
-    }
-
-    /// A render one block high, a block per entry of `blocks` across (δ, cost): every pixel of luminance 1 with
-    /// `n` samples whose halves differ by 2δ (so e = δ², and r = n δ² / 1.01 with the image's mean 1) and which
-    /// took `cost` seconds per sample. The pixels, the render's size and its tiles across.
-    fn film(n: u32, blocks: &[(f64, f64)]) -> (Vec<Px>, (usize, usize), usize) {
-        let (w, h) = (BLOCK * blocks.len(), BLOCK);
-        let tw = w.div_ceil(TILE);
-        let mut px = vec![Px::default(); tw * TILE * TILE];
-        for cy in 0..h {
-            for cx in 0..w {
-                let (delta, cost) = blocks[cx / BLOCK];
-                let half = n as f64 / 2.0;
-                px[slot_of(cx, cy, tw)] = Px {
-                    sum: DVec3::new(0.0, n as f64, 0.0),
-                    weights: n as f64,
-                    even_y: (1.0 + delta) * half,
-                    even_w: half,
-                    n_done: n,
-                    seconds: (cost * n as f64) as f32,
-                };
-            }
-        }
-        (px, (w, h), tw)
-    }
-
-    /// δ for a block's r at n samples.
-    fn delta(r: f64, n: u32) -> f64 {
-        (r * 1.01 / n as f64).sqrt()
-    }
-
-    /// Which blocks stop at threshold `t`, gain `gain`, after `n` samples of `blocks`.
-    fn stops(n: u32, blocks: &[(f64, f64)], t: f64, gain: f64) -> Vec<bool> {
-        let (mut px, (w, h), tw) = film(n, blocks);
-        adapt(&mut px, (w, h), (0, 0), tw, (t, gain, 1 << 20), 1.0);
-        (0..blocks.len())
-            .map(|b| px[slot_of(b * BLOCK, 0, tw)].done())
-            .collect()
-    }
-
-    #[test]
-    fn a_block_takes_samples_by_its_noise_over_the_root_of_its_cost() {
-        // Both blocks r = 0.08; B's samples cost 4× A's. The least time to relMSE T² = 0.008 gives n ∝ √(r / c):
-        // n_A = 2 n_B. With both at 8 samples, B's are its share (the optimum's 7.5) and A needs (0.08/8 +
-        // 0.08/n_A)/2 = 0.008: n_A = 13.3 — A goes on.
-        let t = 0.008f64.sqrt();
-        let d = delta(0.08, 8);
-        assert_eq!(stops(8, &[(d, 1.0), (d, 4.0)], t, 1.0), [false, true]);
-        // Equal costs: each needs 10 (0.08/n = 0.008); at 8 neither has its share, at 12 both have.
-        assert_eq!(stops(8, &[(d, 1.0), (d, 1.0)], t, 1.0), [false, false]);
-        let d = delta(0.08, 12);
-        assert_eq!(stops(12, &[(d, 1.0), (d, 1.0)], t, 1.0), [true, true]);
-        // The sampler's gain scales r: at gain 2 the 12 samples are not enough (each needs 20).
-        assert_eq!(stops(12, &[(d, 1.0), (d, 1.0)], t, 2.0), [false, false]);
-    }
-
-    #[test]
-    fn a_noisy_block_is_never_left_above_twice_the_threshold() {
-        // Seven quiet cheap blocks (r = 0.001) and one noisy block (r = 0.5) whose samples cost 10⁴× more: the
-        // optimum would give the noisy one almost nothing, but its error at 8 samples, 0.5/8, is above (2T)² =
-        // 0.032, so it goes on whatever it costs; the quiet ones stop.
-        let t = 0.008f64.sqrt();
-        let mut blocks = vec![(delta(0.001, 8), 1.0); 7];
-        blocks.push((delta(0.5, 8), 1e4));
-        let want: Vec<bool> = (0..8).map(|b| b < 7).collect();
-        assert_eq!(stops(8, &blocks, t, 1.0), want);
-        // A block without noise (the sky) stops at the least samples; before them nothing stops.
-        assert!(stops(8, &[(0.0, 1.0), (delta(0.08, 8), 1.0)], 0.1, 1.0)[0]);
-        assert_eq!(
-            stops(4, &[(0.0, 1.0), (0.0, 1.0)], 0.1, 1.0),
-            [false, false]
-        );
-        // A block whose estimate is not a number counts as one without noise and does not stop the others
-        // early: seven blocks of r = 0.08 at 8 samples need 8.75 each to bring the mean to 0.008.
-        let mut blocks = vec![(delta(0.08, 8), 1.0); 7];
-        blocks.push((f64::NAN, 1.0));
-        let want: Vec<bool> = (0..8).map(|b| b == 7).collect();
-        assert_eq!(stops(8, &blocks, t, 1.0), want);
     }
 }
