@@ -8,11 +8,16 @@
 //!   528, class and type at 632/636), TreeData (node offsets, counts), root (64-byte header, 32-byte tiles),
 //!   upper 32³ nodes, lower 16³ nodes and 8³ leaves, children addressed by byte offsets from their parent.
 //!
-//! Every offset is checked to land on a node of the right level inside the buffer before it is followed.
+//! Every offset is checked to land on a node of the right level inside the buffer before it is followed. An
+//! uncompressed grid is not held whole: the nodes before its leaves are read, then its leaves' masks, and their
+//! values go from the file to the grid's bricks as it is filled (a 256-voxel fire's two grids, 38 MB of file,
+//! peaked at 102 MB read whole); a ZIP grid is decompressed whole.
 
 use super::compress::zlib;
 use super::cursor::{Bytes, Cursor};
-use super::sparse::{bit, densify, missing_grid, InLeaves, Leaf, Tile, Transform, Tree};
+use super::sparse::{
+    bit, densify, missing_grid, InLeaves, Leaf, LeafValues, Tile, Transform, Tree,
+};
 use super::Loaded;
 use crate::Error;
 use glam::DVec3;
@@ -195,8 +200,25 @@ fn map(c: &mut Cursor, file: &str, name: &str) -> Result<Transform, Error> {
     Ok(transform)
 }
 
-/// Parses one float grid's buffer into a tree.
-fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
+/// Where a grid's leaves are read from while its tree is parsed.
+enum LeafBytes<'a> {
+    /// The whole grid in memory (a ZIP grid, decompressed): masks and values from it.
+    Buffer,
+    /// The file, the grid starting at byte `at`: the masks are read now, the values as the grid is filled
+    /// ([`FileLeaves`]).
+    File { src: Bytes<'a>, at: usize },
+}
+
+/// Parses one float grid into a tree: `buf` holds the grid from its start, at least up to its leaves (all of it
+/// for [`LeafBytes::Buffer`]), `grid_len` is the grid's size. With the leaves in the file, their values stay
+/// there: the second value says where each leaf's start (in the tree's leaf order, file offsets).
+fn tree(
+    file: &str,
+    name: &str,
+    buf: &[u8],
+    grid_len: usize,
+    leaf_bytes: LeafBytes,
+) -> Result<(Tree, Vec<usize>), Error> {
     let mut c = Cursor::new(file, buf);
     let at_grid = |what: &str| format!("grid '{name}' {what}");
     let transform = map(&mut c, file, name)?;
@@ -216,14 +238,15 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
     for level in 0..3 {
         let end = base(level)
             .saturating_add((counts[level] as u64).saturating_mul(strides[level] as u64));
-        if end > buf.len() as u64 {
+        // (The leaves may lie beyond `buf`, in the file; the other nodes are read from it.)
+        let within = if level == 0 { grid_len } else { buf.len() };
+        if end > within as u64 {
             return Err(Error::format(
                 file,
                 at_grid("tree"),
                 format!(
-                    "{} level-{level} nodes within the {}-byte grid",
+                    "{} level-{level} nodes within the {within}-byte grid",
                     counts[level],
-                    buf.len()
                 ),
                 format!("nodes ending at byte {end}"),
             ));
@@ -362,24 +385,73 @@ fn tree(file: &str, name: &str, buf: &[u8]) -> Result<Tree, Error> {
     for (origin, idx) in lowers {
         internal(1, idx, origin, 4, 3, &mut leaves)?;
     }
+    // The leaves: from the buffer, or their masks from the file (a window reading ahead) and their values left
+    // there.
+    let (mut lc, shift, in_file) = match leaf_bytes {
+        LeafBytes::Buffer => (c, 0, false),
+        LeafBytes::File { src, at } => (Cursor::over(file, src), at, true),
+    };
+    let mut starts = Vec::new();
     for (origin, idx) in leaves {
-        let start = base(0) as usize + idx * LEAF_BYTES;
-        c.pos = start + 16;
+        let start = shift + base(0) as usize + idx * LEAF_BYTES;
+        lc.pos = start + 16;
         let mut mask = [0u64; 8];
         for w in mask.iter_mut() {
-            *w = c.u64("a leaf mask")?;
+            *w = lc.u64("a leaf mask")?;
         }
-        c.pos = start + 96;
-        let values = (0..512)
-            .map(|_| c.f32("a leaf value"))
-            .collect::<Result<Vec<_>, _>>()?;
+        let values = if in_file {
+            starts.try_reserve(1).map_err(|_| too_many(file, name))?;
+            starts.push(start + 96);
+            Vec::new()
+        } else {
+            lc.pos = start + 96;
+            (0..512)
+                .map(|_| lc.f32("a leaf value"))
+                .collect::<Result<Vec<_>, _>>()?
+        };
+        t.leaves.try_reserve(1).map_err(|_| too_many(file, name))?;
         t.leaves.push(Leaf {
             origin,
             values,
             mask,
         });
     }
-    Ok(t)
+    Ok((t, starts))
+}
+
+/// The refusal of a tree whose leaf list the allocator cannot hold.
+fn too_many(file: &str, name: &str) -> Error {
+    Error::Io {
+        file: file.to_string(),
+        message: format!("grid '{name}': more leaves than this machine can hold"),
+    }
+}
+
+/// A grid's leaf values read from the file as the grid is filled, leaf by leaf (an uncompressed grid's values go
+/// from the file to their bricks: the grid is never held twice).
+struct FileLeaves<'a> {
+    c: Cursor<'a>,
+    /// Each leaf's values' file offset, in the tree's leaf order.
+    starts: Vec<usize>,
+    next: usize,
+    scratch: Vec<f32>,
+}
+
+impl LeafValues for FileLeaves<'_> {
+    fn values<'s>(&'s mut self, _leaf: &'s Leaf) -> Result<&'s [f32], Error> {
+        let Some(&start) = self.starts.get(self.next) else {
+            return Err(self.c.err("as many leaves as the tree holds", "another"));
+        };
+        self.next += 1;
+        self.c.pos = start;
+        let raw = self.c.bytes(512 * 4, "a leaf's values")?;
+        self.scratch.clear();
+        self.scratch.extend(
+            raw.chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        );
+        Ok(&self.scratch)
+    }
 }
 
 /// Reads the float grids `names` and makes them dense over the union of their active boxes.
@@ -401,10 +473,81 @@ pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Ve
                 hint: "float grids (type 1) are read".into(),
             });
         }
-        let buf = buffer(file, &src, g, max_bytes)?;
-        trees.push((name, tree(file, name, &buf)?, InLeaves));
+        // An uncompressed grid's leaves are read from the file as the grid is filled; a ZIP grid is
+        // decompressed whole.
+        let streamed = match g.codec {
+            0 if g.grid_size == g.file_size => leaves_start(file, &src, g)?,
+            _ => None,
+        };
+        let (t, from) = match streamed {
+            Some(head) => {
+                let head = src.read(file, g.offset as u64, head)?;
+                let at = LeafBytes::File {
+                    src: src.clone(),
+                    at: g.offset,
+                };
+                let (t, starts) = tree(file, name, &head, g.grid_size as usize, at)?;
+                let leaves = FileLeaves {
+                    c: Cursor::over(file, src.clone()),
+                    starts,
+                    next: 0,
+                    scratch: Vec::with_capacity(512),
+                };
+                (t, Leaves::File(leaves))
+            }
+            None => {
+                let buf = buffer(file, &src, g, max_bytes)?;
+                let (t, _) = tree(file, name, &buf, buf.len(), LeafBytes::Buffer)?;
+                (t, Leaves::Tree(InLeaves))
+            }
+        };
+        trees.push((name, t, from));
     }
     densify(file, trees, max_bytes)
+}
+
+/// Where the leaves start in uncompressed grid `g`, when every other node lies before them (NanoVDB's layout:
+/// grid, tree, root, upper and lower nodes, leaves): what must be read before its values. `None` for another
+/// layout (the grid is then read whole).
+fn leaves_start(file: &str, src: &Bytes, g: &GridEntry) -> Result<Option<usize>, Error> {
+    let head = GRID_BYTES + 32 + 12;
+    if (g.grid_size as usize) < head {
+        return Ok(None);
+    }
+    let bytes = src.read(file, g.offset as u64, head)?;
+    let mut c = Cursor::new(file, &bytes);
+    c.pos = GRID_BYTES;
+    let mut off = [0u64; 4];
+    for o in off.iter_mut() {
+        *o = c.u64("a node offset")?;
+    }
+    let counts = [
+        c.u32("the leaf count")? as u64,
+        c.u32("the lower-node count")? as u64,
+        c.u32("the upper-node count")? as u64,
+    ];
+    let strides = [LOWER.0 + 8 * LOWER.1, UPPER.0 + 8 * UPPER.1].map(|s| s as u64);
+    let leaves = off[0];
+    let before = off[3] < leaves
+        && (1..3)
+            .all(|l| off[l].saturating_add(counts[l].saturating_mul(strides[l - 1])) <= leaves);
+    let start = (GRID_BYTES as u64).saturating_add(leaves);
+    Ok((before && counts[0] > 0 && start <= g.grid_size).then_some(start as usize))
+}
+
+/// A grid's leaf values: decoded with its tree, or read from the file as it is filled.
+enum Leaves<'a> {
+    Tree(InLeaves),
+    File(FileLeaves<'a>),
+}
+
+impl LeafValues for Leaves<'_> {
+    fn values<'s>(&'s mut self, leaf: &'s Leaf) -> Result<&'s [f32], Error> {
+        match self {
+            Leaves::Tree(t) => t.values(leaf),
+            Leaves::File(f) => f.values(leaf),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -413,6 +556,59 @@ mod tests {
 
     fn u64_at(b: &[u8], at: usize) -> u64 {
         u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+    }
+
+    #[test]
+    fn an_uncompressed_grids_values_come_from_the_file_as_they_are_read() {
+        // The plume's density: the nodes before its leaves are all that is read first, its leaves' values come
+        // leaf by leaf from the file, the same values as the whole buffer gives; a grid whose lower nodes lie
+        // after its leaves is read whole.
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/data/valid/nvdb/plume48.nvdb"
+        );
+        let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let src = Bytes::Slice(&bytes);
+        let grids = table(path, src.clone()).unwrap();
+        let g = grids.iter().find(|g| g.name == "density").unwrap();
+        let head = leaves_start(path, &src, g)
+            .unwrap()
+            .expect("NanoVDB's layout");
+        let leaves = GRID_BYTES + u64_at(&bytes, g.offset + GRID_BYTES) as usize;
+        assert_eq!(head, leaves);
+        let whole = &bytes[g.offset..g.offset + g.grid_size as usize];
+        let (buffered, _) = tree(path, "density", whole, whole.len(), LeafBytes::Buffer).unwrap();
+        let at = LeafBytes::File {
+            src: src.clone(),
+            at: g.offset,
+        };
+        let (streamed, starts) = tree(path, "density", &whole[..head], whole.len(), at).unwrap();
+        assert_eq!(streamed.leaves.len(), buffered.leaves.len());
+        // (The leaves, 2 KB of values each, are what is not read first: in a 256-voxel fire 19 of its 19.5 MB.)
+        assert!(head + buffered.leaves.len() * LEAF_BYTES <= g.grid_size as usize);
+        assert_eq!(starts.len(), buffered.leaves.len());
+        let mut from_file = FileLeaves {
+            c: Cursor::over(path, src.clone()),
+            starts,
+            next: 0,
+            scratch: Vec::new(),
+        };
+        for (a, b) in streamed.leaves.iter().zip(&buffered.leaves) {
+            assert!(a.values.is_empty() && a.origin == b.origin && a.mask == b.mask);
+            assert_eq!(from_file.values(a).unwrap(), &b.values[..]);
+        }
+        // One leaf too many is an error naming the file, not a read past the list.
+        let e = from_file
+            .values(&streamed.leaves[0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("plume48.nvdb"), "{e}");
+        // Lower nodes after the leaves: read whole.
+        let mut moved = bytes.clone();
+        let lower = g.offset + GRID_BYTES + 8;
+        let past = (u64_at(&bytes, g.offset + GRID_BYTES) + 64).to_le_bytes();
+        moved[lower..lower + 8].copy_from_slice(&past);
+        assert_eq!(leaves_start(path, &Bytes::Slice(&moved), g).unwrap(), None);
     }
 
     #[test]
@@ -429,7 +625,7 @@ mod tests {
         let g = grids.iter().find(|g| g.name == "density").unwrap();
         assert_eq!(g.codec, 0, "the plume is uncompressed");
         let mut buf = bytes[g.offset..g.offset + g.grid_size as usize].to_vec();
-        assert!(tree(path, "density", &buf).is_ok());
+        assert!(tree(path, "density", &buf, buf.len(), LeafBytes::Buffer).is_ok());
         let lower = GRID_BYTES + u64_at(&buf, GRID_BYTES + 8) as usize;
         let words = LOWER.1 / 64;
         let child_mask = lower + 32 + 8 * words;
@@ -441,7 +637,7 @@ mod tests {
         let entry = |i: usize| lower + LOWER.0 + 8 * i;
         let first = buf[entry(children[0])..entry(children[0]) + 8].to_vec();
         buf[entry(children[1])..entry(children[1]) + 8].copy_from_slice(&first);
-        let Err(e) = tree(path, "density", &buf) else {
+        let Err(e) = tree(path, "density", &buf, buf.len(), LeafBytes::Buffer) else {
             panic!("a leaf referenced twice was read");
         };
         let e = e.to_string();
