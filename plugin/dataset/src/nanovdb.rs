@@ -385,15 +385,35 @@ fn tree(
     for (origin, idx) in lowers {
         internal(1, idx, origin, 4, 3, &mut leaves)?;
     }
-    // The leaves: from the buffer, or their masks from the file (a window reading ahead) and their values left
-    // there.
+    let starts = read_leaves(
+        file,
+        name,
+        (c, leaf_bytes),
+        base(0) as usize,
+        leaves,
+        &mut t,
+    )?;
+    Ok((t, starts))
+}
+
+/// Reads the leaves `leaves` (origin, index among the grid's leaves, which start at byte `first`) into `t`: from
+/// the buffer `c` reads, or their masks from the file (a window reading ahead) with their values left there —
+/// then where each leaf's values start in the file, in order.
+fn read_leaves(
+    file: &str,
+    name: &str,
+    (c, leaf_bytes): (Cursor, LeafBytes),
+    first: usize,
+    leaves: Vec<([i32; 3], usize)>,
+    t: &mut Tree,
+) -> Result<Vec<usize>, Error> {
     let (mut lc, shift, in_file) = match leaf_bytes {
         LeafBytes::Buffer => (c, 0, false),
         LeafBytes::File { src, at } => (Cursor::over(file, src), at, true),
     };
     let mut starts = Vec::new();
     for (origin, idx) in leaves {
-        let start = shift + base(0) as usize + idx * LEAF_BYTES;
+        let start = shift + first + idx * LEAF_BYTES;
         lc.pos = start + 16;
         let mut mask = [0u64; 8];
         for w in mask.iter_mut() {
@@ -416,7 +436,7 @@ fn tree(
             mask,
         });
     }
-    Ok((t, starts))
+    Ok(starts)
 }
 
 /// The refusal of a tree whose leaf list the allocator cannot hold.
