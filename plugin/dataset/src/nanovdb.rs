@@ -578,16 +578,22 @@ mod tests {
         u64::from_le_bytes(b[at..at + 8].try_into().unwrap())
     }
 
-    #[test]
-    fn an_uncompressed_grids_values_come_from_the_file_as_they_are_read() {
-        // The plume's density: the nodes before its leaves are all that is read first, its leaves' values come
-        // leaf by leaf from the file, the same values as the whole buffer gives; a grid whose lower nodes lie
-        // after its leaves is read whole.
+    /// The repository's plume (NanoVDB's own tools wrote it, uncompressed): its path and bytes.
+    fn plume() -> (&'static str, Vec<u8>) {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../tests/data/valid/nvdb/plume48.nvdb"
         );
         let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        (path, bytes)
+    }
+
+    #[test]
+    fn an_uncompressed_grids_values_come_from_the_file_as_they_are_read() {
+        // The plume's density: the nodes before its leaves are all that is read first, its leaves' values come
+        // leaf by leaf from the file, the same values as the whole buffer gives; a grid whose lower nodes lie
+        // after its leaves is read whole.
+        let (path, bytes) = plume();
         let src = Bytes::Slice(&bytes);
         let grids = table(path, src.clone()).unwrap();
         let g = grids.iter().find(|g| g.name == "density").unwrap();
@@ -636,11 +642,7 @@ mod tests {
         // The repository's plume (NanoVDB's own tools wrote it) with one lower node's second child entry made a
         // copy of its first: two leaves of the tree become one leaf referenced twice — the shape of an 817-byte
         // file whose shared nodes claimed 134 M leaves and aborted its host through the C ABI.
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../tests/data/valid/nvdb/plume48.nvdb"
-        );
-        let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let (path, bytes) = plume();
         let grids = table(path, Bytes::Slice(&bytes)).unwrap();
         let g = grids.iter().find(|g| g.name == "density").unwrap();
         assert_eq!(g.codec, 0, "the plume is uncompressed");
