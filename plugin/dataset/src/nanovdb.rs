@@ -411,7 +411,17 @@ fn read_leaves(
         LeafBytes::Buffer => (c, 0, false),
         LeafBytes::File { src, at } => (Cursor::over(file, src), at, true),
     };
+    // (Sized once: the list's leaves are checked to lie in the grid, and doubling would hold up to twice them.)
     let mut starts = Vec::new();
+    let n = leaves.len();
+    t.leaves
+        .try_reserve_exact(n)
+        .map_err(|_| too_many(file, name))?;
+    if in_file {
+        starts
+            .try_reserve_exact(n)
+            .map_err(|_| too_many(file, name))?;
+    }
     for (origin, idx) in leaves {
         let start = shift + first + idx * LEAF_BYTES;
         lc.pos = start + 16;
@@ -420,7 +430,6 @@ fn read_leaves(
             *w = lc.u64("a leaf mask")?;
         }
         let values = if in_file {
-            starts.try_reserve(1).map_err(|_| too_many(file, name))?;
             starts.push(start + 96);
             Vec::new()
         } else {
@@ -429,7 +438,6 @@ fn read_leaves(
                 .map(|_| lc.f32("a leaf value"))
                 .collect::<Result<Vec<_>, _>>()?
         };
-        t.leaves.try_reserve(1).map_err(|_| too_many(file, name))?;
         t.leaves.push(Leaf {
             origin,
             values,
