@@ -235,14 +235,13 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
     let to_srgb = cie::xyz_to_srgb_matrix();
     let gain = DVec3::ONE / (m * white_xyz(o.white));
     let k = 2f64.powf(o.stops);
-    // Cone responses after von Kries, clipped at 0 (out-of-gamut negative lobes of M).
-    let lms: Vec<DVec3> = xyz
-        .iter()
-        .map(|&p| {
-            let p = if p.is_finite() { p } else { DVec3::ZERO };
-            (gain * (m * p)).max(DVec3::ZERO)
-        })
-        .collect();
+    // Cone responses after von Kries, clipped at 0 (out-of-gamut negative lobes of M), and back to XYZ:
+    // per pixel as it is mapped (an image of them beside the result would be the write's peak).
+    let lms = |p: DVec3| {
+        let p = if p.is_finite() { p } else { DVec3::ZERO };
+        (gain * (m * p)).max(DVec3::ZERO)
+    };
+    let adapted = |p: DVec3| m_inv * lms(p);
     let clamp = |c: DVec3| -> [f64; 3] {
         let c = c.clamp(DVec3::ZERO, DVec3::ONE);
         [c.x, c.y, c.z]
@@ -263,8 +262,9 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                     DVec3::splat(if mean > 0.0 { mean } else { 1.0 })
                 }
             } / k;
-            lms.iter()
-                .map(|&c| {
+            xyz.iter()
+                .map(|&p| {
+                    let c = lms(p);
                     let r = c / (c + sigma);
                     clamp(to_srgb * (m_inv * r))
                 })
@@ -274,8 +274,7 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
             // The adaptation luminance to mid-grey 0.18, or the image's 99th percentile to 2 — a stop above
             // diffuse white: a fire's core in the curve's shoulder with its structure, the scene it lights in
             // the curve's middle (chosen by looking at the gallery); then the curve per pixel.
-            let adapted: Vec<DVec3> = lms.iter().map(|&c| m_inv * c).collect();
-            let ys: Vec<f64> = adapted.iter().map(|v| v.y.max(0.0)).collect();
+            let ys: Vec<f64> = xyz.iter().map(|&p| adapted(p).y.max(0.0)).collect();
             let s = match o.adapt {
                 Adapt::Luminance(l) => 0.18 / l,
                 Adapt::Image => 2.0 / percentile(&ys, 0.99).unwrap_or(1.0),
@@ -285,15 +284,13 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
             } else {
                 aces
             };
-            adapted
-                .iter()
-                .map(|&c| clamp(curve(to_srgb * (c * s))))
+            xyz.iter()
+                .map(|&p| clamp(curve(to_srgb * (adapted(p) * s))))
                 .collect()
         }
         Operator::Exposure | Operator::Reinhard => {
             // Work on the adapted XYZ (von Kries applied), keeping colour ratios.
-            let adapted: Vec<DVec3> = lms.iter().map(|&c| m_inv * c).collect();
-            let ys: Vec<f64> = adapted.iter().map(|v| v.y.max(0.0)).collect();
+            let ys: Vec<f64> = xyz.iter().map(|&p| adapted(p).y.max(0.0)).collect();
             let scale_of: Box<dyn Fn(f64) -> f64> = if o.operator == Operator::Exposure {
                 let s = match o.adapt {
                     Adapt::Luminance(l) => 0.18 / l,
@@ -319,10 +316,9 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                     ld / y
                 })
             };
-            adapted
-                .iter()
+            xyz.iter()
                 .zip(&ys)
-                .map(|(&c, &y)| clamp(to_srgb * (c * scale_of(y))))
+                .map(|(&p, &y)| clamp(to_srgb * (adapted(p) * scale_of(y))))
                 .collect()
         }
     }
