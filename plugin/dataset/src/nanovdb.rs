@@ -224,15 +224,8 @@ fn tree(
     let transform = map(&mut c, file, name)?;
     let tree = GRID_BYTES;
     c.seek(tree as u64, &at_grid("tree"))?;
-    let mut off = [0u64; 4];
-    for o in off.iter_mut() {
-        *o = c.u64("a node offset")?;
-    }
-    let counts = [
-        c.u32("the leaf count")? as usize,
-        c.u32("the lower-node count")? as usize,
-        c.u32("the upper-node count")? as usize,
-    ];
+    let (off, counts) = tree_header(&mut c)?;
+    let counts = counts.map(|n| n as usize);
     let base = |level: usize| (tree as u64).saturating_add(off[level]);
     let strides = [LEAF_BYTES, LOWER.0 + 8 * LOWER.1, UPPER.0 + 8 * UPPER.1];
     for level in 0..3 {
@@ -534,6 +527,21 @@ pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Ve
     densify(file, trees, max_bytes)
 }
 
+/// The tree's header at `c`: its four levels' node offsets (from the tree; leaves first, root last) and the
+/// leaf, lower- and upper-node counts.
+fn tree_header(c: &mut Cursor) -> Result<([u64; 4], [u32; 3]), Error> {
+    let mut off = [0u64; 4];
+    for o in off.iter_mut() {
+        *o = c.u64("a node offset")?;
+    }
+    let counts = [
+        c.u32("the leaf count")?,
+        c.u32("the lower-node count")?,
+        c.u32("the upper-node count")?,
+    ];
+    Ok((off, counts))
+}
+
 /// Where the leaves start in uncompressed grid `g`, when every other node lies before them (NanoVDB's layout:
 /// grid, tree, root, upper and lower nodes, leaves): what must be read before its values. `None` for another
 /// layout (the grid is then read whole).
@@ -545,15 +553,8 @@ fn leaves_start(file: &str, src: &Bytes, g: &GridEntry) -> Result<Option<usize>,
     let bytes = src.read(file, g.offset as u64, head)?;
     let mut c = Cursor::new(file, &bytes);
     c.pos = GRID_BYTES;
-    let mut off = [0u64; 4];
-    for o in off.iter_mut() {
-        *o = c.u64("a node offset")?;
-    }
-    let counts = [
-        c.u32("the leaf count")? as u64,
-        c.u32("the lower-node count")? as u64,
-        c.u32("the upper-node count")? as u64,
-    ];
+    let (off, counts) = tree_header(&mut c)?;
+    let counts = counts.map(u64::from);
     let strides = [LOWER.0 + 8 * LOWER.1, UPPER.0 + 8 * UPPER.1].map(|s| s as u64);
     let leaves = off[0];
     let before = off[3] < leaves
