@@ -11,18 +11,21 @@
 //! | [`tonemap`] | visual adaptation (P&P §3.8): XYZ in cd/m² → display sRGB (von Kries + Naka–Rushton) |
 //! | [`metrics`] | DESIGN's error metrics (relative RMSE, relMSE) and luminance |
 //! | [`budget`] | the memory budget, checked before allocating what input sizes |
+//! | [`heap`] | the allocator's policy: glibc's thresholds held, a build's freed memory given back |
 //! | [`Error`] | the one error type: a scene statement's `file:line:col`, a file, the budget, the plugin, a value; its exit status |
 //!
 //! Arrows point one way: `render` → `imageio`; `imageio`, `tonemap`, `metrics` depend on no other module here but
 //! [`Error`];
 //! colour comes from `firemedium-core` and, for media, from the plugin the scene loaded.
 
-// One `unsafe` call, allowed where it is made: loading the plugin (`render::scene`).
+// `unsafe` calls, allowed where they are made: loading the plugin (`render::scene`) and the allocator's policy
+// (`heap`).
 #![deny(unsafe_code)]
 
 pub mod args;
 pub mod budget;
 mod error;
+pub mod heap;
 pub mod imageio;
 pub mod metrics;
 pub mod render;

@@ -75,6 +75,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    firemedium::heap::hold_thresholds();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

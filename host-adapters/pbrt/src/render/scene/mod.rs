@@ -294,21 +294,8 @@ pub fn load(path: &Path, ov: &Overrides) -> Result<Scene, Error> {
     desc.apply(ov);
     let scene = build::build(path, &desc, ov)?;
     drop(desc);
-    return_freed_memory();
+    crate::heap::give_back_freed();
     Ok(scene)
-}
-
-/// Gives the memory the build freed back to the system before the render takes its own. glibc's allocator keeps
-/// what a program frees for its next requests — the build's transients in each worker's arena, below the blocks
-/// that stay — so without this the render's film and tiles would come on top of them: 6–9 MB of the peak on the
-/// nanovdb fire-lit rooms (docs/results/log.md, "Memory: the film's twins apart, the light's copy in bricks").
-#[allow(unsafe_code)]
-fn return_freed_memory() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: glibc's `malloc_trim` takes the allocator's own lock and only returns free pages; 0 keeps no pad.
-    unsafe {
-        libc::malloc_trim(0);
-    }
 }
 
 #[cfg(test)]
