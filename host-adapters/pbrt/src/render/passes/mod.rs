@@ -338,9 +338,9 @@ pub fn render_progressive(
             len = len.min((fits as usize).max(1));
         }
     }
-    let (xyz, extra, camera_rays) = pixels(scene, &px, &ex, gspace.is_some(), (w, h), tw);
-    // (The sums are done with: gone before the image's second copy.)
-    drop((px, ex, twins));
+    drop(twins);
+    // (The sums are given back as they are read: gone before the image's second copy.)
+    let (xyz, extra, camera_rays) = pixels(scene, (px, ex), gspace.is_some(), (w, h), tw);
     let rgb = linear_srgb(&xyz);
     let stats = Stats {
         seconds: start.elapsed().as_secs_f64(),
@@ -429,16 +429,20 @@ fn rows_to_sample<'p>(
 
 /// The rendered pixels' values from their sums — Σ w L / Σ w, finished by the film's response —, the channels
 /// beside the beauty (spectral buckets, the gbuffer's, the AOVs') with their names, and the camera rays taken.
+///
+/// The sums are read a row of tiles at a time from the last, and each row's memory given back once read (a
+/// large film's sums are a mapping of their own, which shrinks in place), so the sums and the image they make
+/// are not held whole together: the image's pages are touched as its rows are written.
 #[allow(clippy::type_complexity)]
 fn pixels(
     scene: &scene::Scene,
-    px: &[Px],
-    ex: &[Extra],
+    (mut px, mut ex): (Vec<Px>, Vec<Extra>),
     gspace: bool,
     (w, h): (usize, usize),
     tw: usize,
 ) -> (Vec<DVec3>, Option<(Vec<String>, Vec<f32>)>, usize) {
-    let mut xyz = vec![DVec3::ZERO; w * h];
+    // Filled from the last pixel back and turned round at the end: its pages are touched as it grows.
+    let mut xyz = Vec::with_capacity(w * h);
     let mut names: Option<Vec<String>> = match (&scene.spectral, scene.gbuffer) {
         (Some(b), _) => Some(
             b.centres()
@@ -462,19 +466,23 @@ fn pixels(
     let nb = names.as_ref().map_or(0, |n| n.len());
     let mut buckets = vec![0f32; w * h * nb];
     let mut camera_rays = 0usize;
-    for cy in 0..h {
-        for cx in 0..w {
+    let tile_row = tw * TILE * TILE;
+    for ty in (0..h.div_ceil(TILE)).rev() {
+        for (cy, cx) in (ty * TILE..h.min((ty + 1) * TILE))
+            .rev()
+            .flat_map(|cy| (0..w).rev().map(move |cx| (cy, cx)))
+        {
             let i = slot_of(cx, cy, tw);
             let p = &px[i];
             let n = p.n() as f64;
             camera_rays += p.n() as usize;
             let weights = p.weights;
             // (n = spp for every pixel of a render that took them all: the value of a render in one pass.)
-            xyz[cx + w * cy] = if weights != 0.0 {
+            xyz.push(if weights != 0.0 {
                 scene.response.finish(p.sum * (n / weights)) / n
             } else {
                 DVec3::ZERO
-            };
+            });
             if nb == 0 {
                 continue;
             }
@@ -495,7 +503,14 @@ fn pixels(
             let j = cx + w * cy;
             buckets[j * nb..(j + 1) * nb].copy_from_slice(&b);
         }
+        px.truncate(ty * tile_row);
+        px.shrink_to_fit();
+        if !ex.is_empty() {
+            ex.truncate(ty * tile_row);
+            ex.shrink_to_fit();
+        }
     }
+    xyz.reverse();
     (xyz, names.map(|n| (n, buckets)), camera_rays)
 }
 
