@@ -831,17 +831,15 @@ pub fn write_png(
     path: &Path,
     w: usize,
     h: usize,
-    px: &[[f64; 3]],
+    px: impl Iterator<Item = [f64; 3]>,
     sixteen: bool,
 ) -> Result<(), crate::Error> {
     let data: Vec<u8> = if sixteen {
-        px.iter()
-            .flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
+        px.flat_map(|p| p.map(|c| (srgb_encode(c) * 65535.0 + 0.5) as u16))
             .flat_map(|v| v.to_be_bytes())
             .collect()
     } else {
-        px.iter()
-            .flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
+        px.flat_map(|p| p.map(|c| (srgb_encode(c) * 255.0 + 0.5) as u8))
             .collect()
     };
     write_png_bytes(path, w, h, &data, sixteen)

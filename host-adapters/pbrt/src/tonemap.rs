@@ -228,6 +228,14 @@ pub fn srgb_to_xyz(px: &[[f32; 3]]) -> Vec<DVec3> {
 
 /// Tone-maps XYZ pixels (cd/m²) to display-linear sRGB in [0, 1].
 pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
+    let f = mapper(xyz, o);
+    xyz.iter().map(|&p| f(p)).collect()
+}
+
+/// A pixel's display-linear sRGB in [0, 1] as [`map`] maps the pixels of `xyz`: what the operator takes from the
+/// whole image (its mean, key or percentile) is taken here, once; then each pixel is mapped alone, so a writer
+/// encodes it as it goes, with no image of mapped pixels beside its own bytes.
+pub fn mapper(xyz: &[DVec3], o: &Options) -> Box<dyn Fn(DVec3) -> [f64; 3]> {
     // HPE rescaled so that D65 is exactly (1, 1, 1) (its 4-digit entries give D65 → (1, 0.99997, 0.99976)).
     let hpe = cie::xyz_to_lms_matrix();
     let m = glam::DMat3::from_diagonal(DVec3::ONE / (hpe * cie_d65())) * hpe;
@@ -237,12 +245,12 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
     let k = 2f64.powf(o.stops);
     // Cone responses after von Kries, clipped at 0 (out-of-gamut negative lobes of M), and back to XYZ:
     // per pixel as it is mapped (an image of them beside the result would be the write's peak).
-    let lms = |p: DVec3| {
+    let lms = move |p: DVec3| {
         let p = if p.is_finite() { p } else { DVec3::ZERO };
         (gain * (m * p)).max(DVec3::ZERO)
     };
-    let adapted = |p: DVec3| m_inv * lms(p);
-    let clamp = |c: DVec3| -> [f64; 3] {
+    let adapted = move |p: DVec3| m_inv * lms(p);
+    let clamp = move |c: DVec3| -> [f64; 3] {
         let c = c.clamp(DVec3::ZERO, DVec3::ONE);
         [c.x, c.y, c.z]
     };
@@ -262,42 +270,38 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                     DVec3::splat(if mean > 0.0 { mean } else { 1.0 })
                 }
             } / k;
-            xyz.iter()
-                .map(|&p| {
-                    let c = lms(p);
-                    let r = c / (c + sigma);
-                    clamp(to_srgb * (m_inv * r))
-                })
-                .collect()
+            Box::new(move |p| {
+                let c = lms(p);
+                let r = c / (c + sigma);
+                clamp(to_srgb * (m_inv * r))
+            })
         }
         Operator::Agx | Operator::Aces => {
             // The adaptation luminance to mid-grey 0.18, or the image's 99th percentile to 2 — a stop above
             // diffuse white: a fire's core in the curve's shoulder with its structure, the scene it lights in
             // the curve's middle (chosen by looking at the gallery); then the curve per pixel.
-            let ys: Vec<f64> = xyz.iter().map(|&p| adapted(p).y.max(0.0)).collect();
             let s = match o.adapt {
                 Adapt::Luminance(l) => 0.18 / l,
-                Adapt::Image => 2.0 / percentile(&ys, 0.99).unwrap_or(1.0),
+                Adapt::Image => 2.0 / percentile(&luminances(xyz, adapted), 0.99).unwrap_or(1.0),
             } * k;
             let curve = if o.operator == Operator::Agx {
                 agx
             } else {
                 aces
             };
-            xyz.iter()
-                .map(|&p| clamp(curve(to_srgb * (adapted(p) * s))))
-                .collect()
+            Box::new(move |p| clamp(curve(to_srgb * (adapted(p) * s))))
         }
         Operator::Exposure | Operator::Reinhard => {
             // Work on the adapted XYZ (von Kries applied), keeping colour ratios.
-            let ys: Vec<f64> = xyz.iter().map(|&p| adapted(p).y.max(0.0)).collect();
+            let ys = || luminances(xyz, adapted);
             let scale_of: Box<dyn Fn(f64) -> f64> = if o.operator == Operator::Exposure {
                 let s = match o.adapt {
                     Adapt::Luminance(l) => 0.18 / l,
-                    Adapt::Image => 1.0 / percentile(&ys, 0.99).unwrap_or(1.0),
+                    Adapt::Image => 1.0 / percentile(&ys(), 0.99).unwrap_or(1.0),
                 } * k;
                 Box::new(move |_| s)
             } else {
+                let ys = ys();
                 let key = match o.adapt {
                     Adapt::Luminance(l) => l,
                     Adapt::Image => {
@@ -316,12 +320,17 @@ pub fn map(xyz: &[DVec3], o: &Options) -> Vec<[f64; 3]> {
                     ld / y
                 })
             };
-            xyz.iter()
-                .zip(&ys)
-                .map(|(&p, &y)| clamp(to_srgb * (adapted(p) * scale_of(y))))
-                .collect()
+            Box::new(move |p| {
+                let a = adapted(p);
+                clamp(to_srgb * (a * scale_of(a.y.max(0.0))))
+            })
         }
     }
+}
+
+/// The adapted luminance of every pixel, at least 0 (what the image-keyed operators take their key from).
+fn luminances(xyz: &[DVec3], adapted: impl Fn(DVec3) -> DVec3) -> Vec<f64> {
+    xyz.iter().map(|&p| adapted(p).y.max(0.0)).collect()
 }
 
 /// The `q` quantile of the positive values, if any.

@@ -837,8 +837,8 @@ pub fn write_preview(
     path: &Path,
     options: &tonemap::Options,
 ) -> firemedium::Result<()> {
-    let px = tonemap::map(&img.xyz, options);
-    imageio::write_png(path, img.w, img.h, &px, false)
+    let f = tonemap::mapper(&img.xyz, options);
+    imageio::write_png(path, img.w, img.h, img.xyz.iter().map(|&p| f(p)), false)
 }
 
 /// The output paths: `-o` or the film's filename (relative to the scene), and the PNG beside it.

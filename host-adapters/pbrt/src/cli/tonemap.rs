@@ -100,7 +100,7 @@ pub fn run(a: &TonemapArgs) -> firemedium::Result<String> {
     }
     let xyz = tonemap::srgb_to_xyz(&img.px);
     let px = tonemap::map(&xyz, &o);
-    imageio::write_png(&a.output, img.w, img.h, &px, a.bits == 16)?;
+    imageio::write_png(&a.output, img.w, img.h, px.iter().copied(), a.bits == 16)?;
     // How much of the flame the display flattens: of the pixels where the render's `fire` AOV (the fire seen from
     // the camera) is at least 5 % of its 99th percentile, those with a channel at the display's top (8-bit 250 and
     // above: clipped, or saturated so that steps of the input no longer show).
