@@ -39,7 +39,7 @@ impl FireVolume {
             r.finish()?;
             let loaded = request.load()?;
             let mut v = Self::build(set, loaded, budget, start)?;
-            v.report.threads = threads;
+            v.report.set_threads(threads);
             Ok(v)
         })
     }
@@ -168,57 +168,23 @@ impl FireVolume {
             ],
         );
         let mut vol = FireVolume {
-            grids: parts::Grids {
+            grids: parts::Grids::new(
                 ds,
-                density,
-                temperature,
-                lescale,
+                (density, temperature, lescale),
                 emission_grid,
-                species: co.species,
-            },
-            model: parts::Model {
-                basis,
-                mode: set.mode,
-                a: co.a,
-                a_t: co.a_t,
-                s: co.s,
-                j: co.j,
-                t_emit: co.t_emit,
-                physical_colour,
-                scatter_color,
-                g: set.g,
+                co.species,
+            ),
+            model: parts::Model::new(
+                (basis, set.mode),
+                (co.a, co.a_t, co.s, co.j, co.t_emit),
+                (physical_colour, scatter_color),
+                set.g,
                 point_model,
-            },
-            bounds: parts::Bounds {
-                majorant,
-                brick_sigma,
-                brick_empty,
-                clip_box,
-                margin,
-            },
-            layers: parts::Layers {
-                blur,
-                embers,
-                refraction,
-                diffusion: None,
-                lines: thick,
-            },
-            estimator: parts::Estimator {
-                integrator: set.integrator,
-                step,
-                step_tau: set.step_tau,
-                cutoff: set.cutoff,
-                lanes: None,
-                lattice: Default::default(),
-            },
-            report: parts::Report {
-                tables,
-                build_seconds: 0.0,
-                source: co.source,
-                spare: 0,
-                threads: 0,
-                notes,
-            },
+            ),
+            bounds: parts::Bounds::new(majorant, (brick_sigma, brick_empty), clip_box, margin),
+            layers: parts::Layers::new(blur, embers, refraction, thick),
+            estimator: parts::Estimator::new(set.integrator, step, set.step_tau, set.cutoff),
+            report: parts::Report::new(tables, co.source, notes),
             capped: CapCounter::default(),
             #[cfg(test)]
             fault: set.fault,
@@ -228,14 +194,13 @@ impl FireVolume {
         }
         if let Some(res) = set
             .diffusion
-            .filter(|_| vol.model.s.iter().any(|&v| v > 0.0))
+            .filter(|_| vol.model.s().iter().any(|&v| v > 0.0))
         {
             vol.attach_diffusion(res, spare)?;
         }
-        vol.report.spare = spare
-            .saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum())
-            .saturating_sub(vol.estimator.lattice.reserved());
-        vol.report.build_seconds = start.elapsed().as_secs_f64();
+        let reserved = vol.estimator.lattice().reserved();
+        vol.report
+            .finish(spare, reserved, start.elapsed().as_secs_f64());
         Ok(vol)
     }
 
@@ -251,15 +216,16 @@ impl FireVolume {
     ) {
         let vol = self;
         let t3 = Instant::now();
-        vol.estimator.lanes = lanes::LaneTables::build(vol, dmax, dlmax, nmax, step);
-        if let Some(lt) = &vol.estimator.lanes {
-            vol.report.tables.push(TableReport {
+        vol.estimator
+            .set_lanes(lanes::LaneTables::build(vol, dmax, dlmax, nmax, step));
+        if let Some(lt) = vol.estimator.lanes() {
+            vol.report.push(TableReport {
                 name: "march lanes (σ per unit density; the tables are shared)".into(),
                 bytes: lt.bytes(),
                 seconds: t3.elapsed().as_secs_f64(),
             });
             if let Some((lat, seconds)) = lattice {
-                vol.report.tables.push(TableReport {
+                vol.report.push(TableReport {
                     name: match lat.bricks() {
                         None => "march lattice (grids interleaved and padded; their brick ranges)"
                             .into(),
@@ -271,15 +237,15 @@ impl FireVolume {
                     bytes: lat.bytes(),
                     seconds,
                 });
-                vol.estimator.lattice = lattice::Slot::ready(lat);
+                vol.estimator.set_lattice(lattice::Slot::ready(lat));
             }
             if let Some(plan) = deferred {
-                vol.report.tables.push(TableReport {
+                vol.report.push(TableReport {
                     name: plan.describe(),
                     bytes: 0,
                     seconds: 0.0,
                 });
-                vol.estimator.lattice = lattice::Slot::deferred(plan);
+                vol.estimator.set_lattice(lattice::Slot::deferred(plan));
             }
         }
     }
@@ -291,7 +257,7 @@ impl FireVolume {
         let t5 = Instant::now();
         // The solve's peak: three cell arrays per channel, five per solving thread.
         let cells = {
-            let size = vol.bounds.clip_box[1] - vol.bounds.clip_box[0];
+            let size = vol.bounds.clip_box()[1] - vol.bounds.clip_box()[0];
             let h = size.max_element() / res.clamp(1, diffusion::MAX_RESOLUTION) as f64;
             [0, 1, 2]
                 .map(|k| ((size[k] / h).ceil() as u64).max(1))
@@ -299,7 +265,7 @@ impl FireVolume {
                 .product::<u64>()
         };
         let need = cells * (vol.channels() as u64 * 28 + 40 * crate::par::threads(16) as u64);
-        let left = spare.saturating_sub(vol.report.tables.iter().map(|t| t.bytes as u64).sum());
+        let left = spare.saturating_sub(vol.report.table_bytes());
         if need > left {
             return Err(Error::invalid(
                 "volume",
@@ -308,15 +274,15 @@ impl FireVolume {
                 format!("a grid within the memory budget's {left} bytes left"),
             ));
         }
-        let df = diffusion::Diffusion::build(vol, res, vol.model.g)?;
+        let df = diffusion::Diffusion::build(vol, res, vol.model.g())?;
         // The march samples the scattered light at least twice per diffusion cell.
-        vol.estimator.step = vol.estimator.step.min(0.5 * df.cell());
-        vol.report.tables.push(TableReport {
+        vol.estimator.shorten_step(0.5 * df.cell());
+        vol.report.push(TableReport {
             name: format!("diffusion ({} iterations)", df.iterations),
             bytes: df.bytes(),
             seconds: t5.elapsed().as_secs_f64(),
         });
-        vol.layers.diffusion = Some(df);
+        vol.layers.set_diffusion(df);
         Ok(())
     }
 }

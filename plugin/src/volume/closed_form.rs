@@ -40,42 +40,43 @@ pub struct ClosedForm<'a> {
 impl ClosedForm<'_> {
     /// σ_a per unit density at row `r`, channel `k`.
     pub fn absorption(&self, r: usize, k: usize) -> f32 {
-        match &self.model.a_t {
+        match self.model.a_t() {
             // (The rgb mode's table has the emission's rows: one build of both.)
             Some(tab) => tab.value(r.min(tab.rows - 1), k),
-            None => self.model.a[k] as f32,
+            None => self.model.a()[k] as f32,
         }
     }
     /// σ_s per unit density, channel `k`.
     pub fn scattering(&self, k: usize) -> f32 {
-        self.model.s[k] as f32
+        self.model.s()[k] as f32
     }
     /// j per unit of e at row `r`, channel `k`.
     pub fn emission(&self, r: usize, k: usize) -> f32 {
-        self.model.j.value(r, k)
+        self.model.j().value(r, k)
     }
 }
 
 impl FireVolume {
     /// The tables of the closed form (see the module), or why the volume is not of that form.
     pub fn closed_form(&self) -> Result<ClosedForm<'_>, Error> {
-        let refused = [
+        let species = (
+            !self.grids.species().is_empty(),
+            "atomic lines or the blue core",
+        );
+        let rest = [
             (
-                !self.grids.species.is_empty(),
-                "atomic lines or the blue core",
+                self.model.scatter_color().is_some(),
+                "a scatter colour grid",
             ),
-            (self.layers.lines.is_some(), "optically thick atomic lines"),
-            (self.model.scatter_color.is_some(), "a scatter colour grid"),
-            (self.layers.diffusion.is_some(), "diffusion"),
-            (self.layers.refraction.is_some(), "refraction"),
-            (self.layers.embers.is_some(), "embers"),
-            (self.layers.blur.is_some(), "motion blur"),
             (
-                self.grids.ds.interpolation() != Interpolation::Trilinear,
+                self.grids.ds().interpolation() != Interpolation::Trilinear,
                 "a dataset interpolated other than trilinearly",
             ),
         ];
-        if let Some((_, what)) = refused.iter().find(|(on, _)| *on) {
+        let mut refused = std::iter::once(species)
+            .chain(self.layers.present())
+            .chain(rest);
+        if let Some((_, what)) = refused.find(|(on, _)| *on) {
             return Err(Error::Unsupported {
                 file: "volume".into(),
                 what: format!("the closed form of a volume with {what}"),
@@ -85,14 +86,14 @@ impl FireVolume {
         }
         Ok(ClosedForm {
             channels: self.channels(),
-            rows: self.model.j.rows,
-            dt: self.model.j.dt,
-            t_emit: if self.grids.temperature.is_none() {
+            rows: self.model.j().rows,
+            dt: self.model.j().dt,
+            t_emit: if self.grids.temperature().is_none() {
                 f64::NEG_INFINITY
             } else {
-                self.model.t_emit
+                self.model.t_emit()
             },
-            emission_grid: self.grids.emission_grid,
+            emission_grid: self.grids.emission_grid(),
             model: &self.model,
         })
     }

@@ -46,7 +46,7 @@ impl Diffusion {
     /// Solves the diffusion equation over `v`'s box at `res` cells along its longest side (g: the phase
     /// function's asymmetry).
     pub(super) fn build(v: &FireVolume, res: usize, g: f64) -> Result<Diffusion, Error> {
-        let [lo, hi] = v.bounds.clip_box;
+        let [lo, hi] = v.bounds.clip_box();
         let size = hi - lo;
         let h = size.max_element() / res.clamp(1, MAX_RESOLUTION) as f64;
         if !(h > 0.0 && h.is_finite()) {

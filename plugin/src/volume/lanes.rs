@@ -71,32 +71,32 @@ impl LaneTables {
         nmax: &[f64],
         step: f64,
     ) -> Option<LaneTables> {
-        let c = v.model.a.len();
+        let c = v.model.a().len();
         let chunks = c.div_ceil(W);
         let mut sigma = vec![[0f32; W]; chunks];
         for ch in 0..c {
-            let x = if v.model.a_t.is_some() {
-                v.model.s[ch]
+            let x = if v.model.a_t().is_some() {
+                v.model.s()[ch]
             } else {
-                v.model.a[ch] + v.model.s[ch]
+                v.model.a()[ch] + v.model.s()[ch]
             };
             sigma[ch / W][ch % W] = x as f32;
         }
         // Largest σ_t·step and emission·step per sample: inside the range, or the f64 march.
         let step = step.max(1.0);
         let smax = sigma.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
-            + v.model.a_t.as_ref().map_or(0.0, TTable::max);
+            + v.model.a_t().map_or(0.0, TTable::max);
         let mut species_sigma_max = [0f32; MAX_SPECIES];
-        let mut checks = vec![dmax * smax * step, dlmax * v.model.j.max() * step];
-        for (sp, &n) in v.grids.species.iter().zip(nmax) {
+        let mut checks = vec![dmax * smax * step, dlmax * v.model.j().max() * step];
+        for (sp, &n) in v.grids.species().iter().zip(nmax) {
             let n = n * sp.scale;
             checks.extend([n, n * sp.sigma.max() * step, n * sp.j.max() * step]);
         }
-        for (m, sp) in species_sigma_max.iter_mut().zip(&v.grids.species) {
+        for (m, sp) in species_sigma_max.iter_mut().zip(v.grids.species()) {
             // (Rounded up, so that the bound stays a bound in f32.)
             *m = (sp.sigma.max() * (1.0 + 1e-6)) as f32;
         }
-        let ok = v.grids.species.len() <= MAX_SPECIES
+        let ok = v.grids.species().len() <= MAX_SPECIES
             && checks.iter().all(|x| x.is_finite() && *x < LIMIT);
         ok.then_some(LaneTables {
             chunks,
@@ -140,7 +140,7 @@ impl LaneTables {
         jj: &mut [Lane],
     ) {
         let Sample { d, t, dl } = x;
-        let (j0, j1, fr) = v.model.j.lane_rows(t);
+        let (j0, j1, fr) = v.model.j().lane_rows(t);
         for k in 0..self.chunks {
             let (s, a, b) = (&self.sigma[k], &j0[k], &j1[k]);
             for w in 0..W {
@@ -148,7 +148,7 @@ impl LaneTables {
                 jj[k][w] = dl * (a[w] + fr * (b[w] - a[w]));
             }
         }
-        if let Some(tab) = &v.model.a_t {
+        if let Some(tab) = v.model.a_t() {
             let (a0, a1, fr) = tab.lane_rows(t);
             for k in 0..self.chunks {
                 for w in 0..W {
@@ -156,7 +156,7 @@ impl LaneTables {
                 }
             }
         }
-        for (sp, &n) in v.grids.species.iter().zip(n) {
+        for (sp, &n) in v.grids.species().iter().zip(n) {
             if n > 0.0 {
                 let (s0, s1, fr) = sp.sigma.lane_rows(t);
                 let (e0, e1, _) = sp.j.lane_rows(t);

@@ -621,13 +621,13 @@ impl ThickLines {
                 .flat_map(|g| g.species.iter().map(|sp| sp.ch))
                 .collect();
             v.bounds
-                .majorant
+                .majorant()
                 .segments(ray.o, ray.d, a, b)
-                .filter(|sg| !v.bounds.brick_empty[sg.brick])
+                .filter(|sg| !v.bounds.brick_empty()[sg.brick])
                 .map(|sg| {
                     let lines = species
                         .iter()
-                        .any(|&c| v.bounds.majorant.max(sg.brick, c) > 0.0);
+                        .any(|&c| v.bounds.majorant().max(sg.brick, c) > 0.0);
                     (sg.t0, sg.t1, lines)
                 })
                 .collect()
@@ -637,25 +637,25 @@ impl ThickLines {
         if !spans.iter().any(|s| s.2) {
             return;
         }
-        let chs = v.grids.ds.channels();
+        let chs = v.grids.ds().channels();
         let mut state: Vec<State> = self.groups.iter().map(|g| State::new(g.k())).collect();
         let (mut row, mut ns) = (Vec::new(), Vec::new());
         let mut budget = super::MAX_STEPS as usize;
         for (s0, s1, lines_here) in spans {
-            let n = (((s1 - s0) * speed / v.estimator.step).ceil().max(1.0) as usize).min(budget);
+            let n = (((s1 - s0) * speed / v.estimator.step()).ceil().max(1.0) as usize).min(budget);
             budget -= n;
             let dt = (s1 - s0) / n as f64;
             let ds = dt * speed;
             for i in 0..n {
                 let p = at(ray.o + ray.d * (s0 + (i as f64 + 0.5) * dt));
-                let Some(st) = v.grids.ds.stencil_with_margin(p, v.bounds.margin) else {
+                let Some(st) = v.grids.ds().stencil_with_margin(p, v.bounds.margin()) else {
                     continue;
                 };
                 let value = |k: usize| chs[k].grid.eval(&st) as f64;
-                let d = value(v.grids.density).max(0.0);
-                let temp = v.grids.temperature.map_or(0.0, value);
-                let les = v.grids.lescale.map_or(1.0, |k| value(k).max(0.0));
-                let emits = temp > v.model.t_emit || v.grids.temperature.is_none();
+                let d = value(v.grids.density()).max(0.0);
+                let temp = v.grids.temperature().map_or(0.0, value);
+                let les = v.grids.lescale().map_or(1.0, |k| value(k).max(0.0));
+                let emits = temp > v.model.t_emit() || v.grids.temperature().is_none();
                 for (g, s) in self.groups.iter().zip(&mut state) {
                     let sc = d * (g.cont[0] + g.cont[1]);
                     let jc = if emits && g.cont[2] > 0.0 {

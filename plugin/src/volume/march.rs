@@ -12,17 +12,17 @@ use glam::DVec3;
 
 /// Radiance `l` and transmittance `t` along `ray` by the volume's fastest exact path; returns the exit parameter.
 pub(super) fn integrate(v: &FireVolume, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
-    if let Some(lt) = &v.estimator.lanes {
-        if let Some(b) = march_kernel(v, lt, None, ray, v.estimator.step, l, t) {
+    if let Some(lt) = v.estimator.lanes() {
+        if let Some(b) = march_kernel(v, lt, None, ray, v.estimator.step(), l, t) {
             return b;
         }
         // (The lane march over the dataset does not split thick steps: a volume that splits them takes f64.)
-        if v.estimator.step_tau.is_infinite() {
+        if v.estimator.step_tau().is_infinite() {
             return march_lanes(v, lt, ray, l, t);
         }
     }
     let mut sc = Scratch::new(v.channels());
-    integrate::integrate(v, ray, v.estimator.integrator, &mut sc, l, t)
+    integrate::integrate(v, ray, v.estimator.integrator(), &mut sc, l, t)
 }
 
 /// As [`integrate`] with the march's step `step` (metres) instead of the volume's, for a volume that marches
@@ -37,7 +37,7 @@ pub(super) fn integrate_stepped(
     t: &mut [f64],
 ) -> f64 {
     let stepped = Stepped { m, step };
-    match (&v.estimator.lanes, mapped) {
+    match (v.estimator.lanes(), mapped) {
         // (The fire light's line: an estimate checked against the volume's own march, its steps not split.)
         (Some(lt), None) => {
             let own = kernel::Tabs::own(v, lt, false);
@@ -104,26 +104,29 @@ impl FireVolume {
         delta: f64,
         ls: &mut LaneScratch,
     ) -> f32 {
-        let Some(st) = self.grids.ds.stencil_with_margin(p, self.bounds.margin) else {
+        let Some(st) = self.grids.ds().stencil_with_margin(p, self.bounds.margin()) else {
             return 1.0;
         };
-        let ch = self.grids.ds.channels();
-        let d = ch[self.grids.density].grid.eval(&st).max(0.0);
+        let ch = self.grids.ds().channels();
+        let d = ch[self.grids.density()].grid.eval(&st).max(0.0);
         let mut n = [0f32; lanes::MAX_SPECIES];
-        for (k, sp) in self.grids.species.iter().enumerate() {
+        for (k, sp) in self.grids.species().iter().enumerate() {
             n[k] = (ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale) as f32;
         }
         let les = self
             .grids
-            .lescale
+            .lescale()
             .map_or(1.0, |i| ch[i].grid.eval(&st).max(0.0));
         // No soot, no species and no emission grid here: σ = j = 0, the step would add +0 and multiply by e⁰ = 1
         // exactly, so it is skipped (bit for bit the same; the transmittance is unchanged, so the march goes on).
-        if d == 0.0 && n.iter().all(|&x| x == 0.0) && !(self.grids.emission_grid && les > 0.0) {
+        if d == 0.0 && n.iter().all(|&x| x == 0.0) && !(self.grids.emission_grid() && les > 0.0) {
             return 1.0;
         }
-        let t = self.grids.temperature.map_or(0.0, |i| ch[i].grid.eval(&st));
-        let emits = t as f64 > self.model.t_emit || self.grids.temperature.is_none();
+        let t = self
+            .grids
+            .temperature()
+            .map_or(0.0, |i| ch[i].grid.eval(&st));
+        let emits = t as f64 > self.model.t_emit() || self.grids.temperature().is_none();
         let LaneScratch { sig, jj, l, t: tr } = ls;
         let dl = if emits { self.emitting(d, les) } else { 0.0 };
         lt.coefficients(self, lanes::Sample { d, t, dl }, &n, sig, jj);
@@ -147,8 +150,7 @@ impl<'a> Stepper<'a> {
             v,
             lanes: v
                 .estimator
-                .lanes
-                .as_ref()
+                .lanes()
                 .filter(|_| lanes)
                 .map(|lt| (lt, LaneScratch::new(lt.chunks()))),
             sc: Scratch::new(v.channels()),
@@ -162,12 +164,12 @@ impl<'a> Stepper<'a> {
         match &mut self.lanes {
             Some((lt, ls)) => {
                 EVALUATIONS.with(|n| n.set(n.get() + 1));
-                v.lane_step(lt, p, h, ls) < v.estimator.cutoff as f32
+                v.lane_step(lt, p, h, ls) < v.estimator.cutoff() as f32
             }
             None => {
                 let sc = &mut self.sc;
                 Medium::eval(v, p, &mut sc.sa, &mut sc.ss, &mut sc.j);
-                integrate::march_step(&sc.sa, &sc.ss, &sc.j, h, l, t) < v.estimator.cutoff
+                integrate::march_step(&sc.sa, &sc.ss, &sc.j, h, l, t) < v.estimator.cutoff()
             }
         }
     }
@@ -211,7 +213,7 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
     let mut rng = ray.rng();
     let mut ls = LaneScratch::new(lt.chunks());
     let mut empty = Vec::new();
-    let cutoff = v.estimator.cutoff as f32;
+    let cutoff = v.estimator.cutoff() as f32;
     let mut samples = 0;
     integrate::march_steps(&span, &mut rng, &mut empty, l.len(), |p, delta| {
         samples += 1;
@@ -315,7 +317,7 @@ macro_rules! march_kernel_for {
             // work), spectral bins in lanes of 16 where the clone has AVX-512, else of 8. σ_a depends on T only
             // in rgb physical mode (3 channels).
             const WIDE: bool = multiversion::target::target_cfg_f!(target_feature = "avx512f");
-            let (s, a) = (!v.grids.species.is_empty(), v.model.a_t.is_some());
+            let (s, a) = (!v.grids.species().is_empty(), v.model.a_t().is_some());
             let tb = tabs.unwrap_or_else(|| kernel::Tabs::own(v, lt, true));
             match l.len() {
                 0..=4 => match (s, a) {
@@ -382,7 +384,10 @@ mod tests {
         // f32's 3.4e38 took the f64 march; an optical depth above 1e12 per voxel is now refused when the volume
         // is built, `an_optical_depth_beyond_any_fire_is_an_error_naming_where`.) The thickest slab allowed,
         // ~1e11 per voxel, is opaque: L = B.
-        assert!(slab_volume(1e-6, 1500.0, vec![]).estimator.lanes.is_some());
+        assert!(slab_volume(1e-6, 1500.0, vec![])
+            .estimator
+            .lanes()
+            .is_some());
         let huge = slab_volume(5e4, 1500.0, vec![Param::float("sootscale", 1.0)]);
         let (l, t) = run(&huge, &ray_x(1));
         let b = crate::blackbody::spectral_radiance(1500.0, 555.0);
@@ -392,9 +397,9 @@ mod tests {
             l[15]
         );
         let ratio = slab_volume(1e-6, 1500.0, vec![Param::string("integrator", "ratio")]);
-        assert!(ratio.estimator.lanes.is_none());
+        assert!(ratio.estimator.lanes().is_none());
         let f64_asked = slab_volume(1e-6, 1500.0, vec![Param::string("precision", "f64")]);
-        assert!(f64_asked.estimator.lanes.is_none());
+        assert!(f64_asked.estimator.lanes().is_none());
         // A 1e12 × intensity fire at 3000 K (emission per unit density ~1e23) still marches in lanes, 1e12 × the f64 one.
         let bright = slab_volume(
             1e-6,
@@ -404,7 +409,7 @@ mod tests {
                 Param::string("precision", "f32"),
             ],
         );
-        assert!(bright.estimator.lanes.is_some());
+        assert!(bright.estimator.lanes().is_some());
         let dim = slab_volume(1e-6, 3000.0, vec![Param::string("precision", "f64")]);
         let (lb, _) = run(&bright, &ray_x(1));
         let (ld, _) = run(&dim, &ray_x(1));
@@ -509,11 +514,7 @@ mod tests {
                 p.name == "steptau" && p.values == crate::params::Values::Numbers(vec![0.02])
             });
             let (v, v64) = blob_pair(&extra, species);
-            let lt = v
-                .estimator
-                .lanes
-                .as_ref()
-                .expect("the blob marches in lanes");
+            let lt = v.estimator.lanes().expect("the blob marches in lanes");
             let c = v.channels();
             let (mut worst, mut lit) = (0f64, 0);
             for ray in &rays {
@@ -559,18 +560,15 @@ mod tests {
             (vec![Param::int("bins", 12)], false),
         ] {
             let (v, _) = blob_pair(&extra, species);
-            let lt = v
-                .estimator
-                .lanes
-                .as_ref()
-                .expect("the blob marches in lanes");
+            let lt = v.estimator.lanes().expect("the blob marches in lanes");
             let c = v.channels();
             let mut lit = 0;
             for ray in &rays {
                 let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
                 let (mut l2, mut t2) = (vec![0.0; c], vec![0.0; c]);
-                let te = march_kernel_any(&v, lt, None, ray, v.estimator.step, &mut l, &mut t);
-                let te2 = march_kernel_avx2(&v, lt, None, ray, v.estimator.step, &mut l2, &mut t2);
+                let te = march_kernel_any(&v, lt, None, ray, v.estimator.step(), &mut l, &mut t);
+                let te2 =
+                    march_kernel_avx2(&v, lt, None, ray, v.estimator.step(), &mut l2, &mut t2);
                 assert!(te.is_some() && te == te2, "{ray:?}: {te:?} vs {te2:?}");
                 let peak = l.iter().fold(0f64, |m, &x| m.max(x));
                 lit += (peak > 0.0) as usize;
@@ -673,11 +671,7 @@ mod tests {
         ];
         for (extra, species, kernels) in cases {
             let (v, v64) = blob_pair(&extra, species);
-            let lt = v
-                .estimator
-                .lanes
-                .as_ref()
-                .expect("the blob marches in lanes");
+            let lt = v.estimator.lanes().expect("the blob marches in lanes");
             let c = v.channels();
             for (name, kernel) in kernels {
                 let mut lit = 0;
@@ -685,7 +679,7 @@ mod tests {
                     let (mut l, mut t) = (vec![0.0; c], vec![0.0; c]);
                     let (mut l3, mut t3) = (vec![0.0; c], vec![0.0; c]);
                     let tabs = kernel::Tabs::own(&v, lt, true);
-                    let te = kernel(&v, lt, tabs, ray, v.estimator.step, &mut l, &mut t)
+                    let te = kernel(&v, lt, tabs, ray, v.estimator.step(), &mut l, &mut t)
                         .expect("this shape fits");
                     let te3 = v64.integrate(ray, &mut l3, &mut t3);
                     assert_eq!(te, te3, "{name}");

@@ -24,69 +24,36 @@ impl FireVolume {
         let nb = majorant.counts().iter().product::<usize>();
         let sigma = self
             .model
-            .a
+            .a()
             .iter()
-            .zip(&self.model.s)
+            .zip(self.model.s())
             .map(|(a, s)| a + s)
             .fold(0.0, f64::max);
         let brick_sigma: Vec<f64> = (0..nb).map(|b| majorant.max(b, 0) as f64 * sigma).collect();
         let brick_empty: Vec<bool> = (0..nb).map(|b| majorant.max(b, 0) <= 0.0).collect();
         let dmax = (0..nb).map(|b| majorant.max(b, 0)).fold(0f32, f32::max) as f64;
-        let step = self.estimator.step * f;
+        let step = self.estimator.step() * f;
         let clip_box = ds.bounds();
         let mut v = FireVolume {
-            grids: parts::Grids {
-                ds,
-                density: 0,
-                temperature: Some(1),
-                lescale: None,
-                emission_grid: false,
-                species: Vec::new(),
-            },
-            model: parts::Model {
-                basis: self.model.basis.clone(),
-                mode: self.model.mode,
-                a: self.model.a.clone(),
-                a_t: None,
-                s: self.model.s.clone(),
-                j: self.model.j.clone(),
-                t_emit: self.model.t_emit,
-                physical_colour: self.model.physical_colour,
-                scatter_color: None,
-                g: self.model.g,
-                point_model: self.model.point_model.clone(),
-            },
-            bounds: parts::Bounds {
-                majorant,
-                brick_sigma,
-                brick_empty,
-                clip_box,
-                margin: 0.0,
-            },
+            grids: parts::Grids::density_and_temperature(ds),
+            model: self.model.soot_copy(),
+            bounds: parts::Bounds::new(majorant, (brick_sigma, brick_empty), clip_box, 0.0),
             layers: parts::Layers::default(),
-            estimator: parts::Estimator {
-                integrator: Integrator::March,
+            estimator: parts::Estimator::new(
+                Integrator::March,
                 step,
-                step_tau: self.estimator.step_tau,
-                cutoff: self.estimator.cutoff,
-                lanes: None,
-                lattice: Default::default(),
-            },
-            report: parts::Report {
-                tables: Vec::new(),
-                build_seconds: 0.0,
-                source: None,
-                spare: 0,
-                threads: self.report.threads,
-                notes: Vec::new(),
-            },
+                self.estimator.step_tau(),
+                self.estimator.cutoff(),
+            ),
+            report: parts::Report::of_copy(self.report.threads()),
             capped: CapCounter::default(),
             #[cfg(test)]
             fault: self.fault.clone(),
         };
-        v.estimator.lanes = Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?);
+        v.estimator
+            .set_lanes(Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?));
         if let Some(lat) = lat {
-            v.estimator.lattice = lattice::Slot::ready(lat);
+            v.estimator.set_lattice(lattice::Slot::ready(lat));
         }
         Some(v)
     }
@@ -95,11 +62,11 @@ impl FireVolume {
     /// trilinear, in its own box (not pbrt-v4's shifted nanovdb box), its grids reading 0 where they store nothing.
     pub(crate) fn coarse_copyable(&self) -> bool {
         self.soot_only()
-            && self.bounds.margin == 0.0
-            && self.grids.ds.interpolation() == Interpolation::Trilinear
+            && self.bounds.margin() == 0.0
+            && self.grids.ds().interpolation() == Interpolation::Trilinear
             && self
                 .grids
-                .ds
+                .ds()
                 .channels()
                 .iter()
                 .all(|c| c.grid.background() == 0.0)
@@ -109,7 +76,7 @@ impl FireVolume {
     /// table's 1/ΔT and ΔT (K).
     pub(crate) fn emission_per_density(&self) -> (Vec<f64>, f64, f64) {
         let c = self.channels();
-        let j = &self.model.j;
+        let j = self.model.j();
         let sum = (0..j.rows)
             .map(|r| (0..c).map(|ch| j.value(r, ch) as f64).sum())
             .collect();
@@ -119,26 +86,21 @@ impl FireVolume {
     /// Whether this volume's light is its soot's alone, marched by the lane kernel: no species, emission or
     /// `Lescale` grid, T-dependent absorption, motion blur, refraction, diffusion, thick lines or embers.
     pub(super) fn soot_only(&self) -> bool {
-        self.estimator.lanes.is_some()
-            && (self.estimator.lattice.is_some()
-                || self.grids.ds.interpolation() == crate::grid::Interpolation::Trilinear)
-            && self.estimator.integrator == Integrator::March
-            && self.grids.species.is_empty()
-            && self.grids.lescale.is_none()
-            && !self.grids.emission_grid
-            && self.model.a_t.is_none()
-            && self.layers.blur.is_none()
-            && self.layers.refraction.is_none()
-            && self.layers.diffusion.is_none()
-            && self.layers.lines.is_none()
-            && self.layers.embers.is_none()
+        self.estimator.lanes().is_some()
+            && (self.estimator.lattice().is_some()
+                || self.grids.ds().interpolation() == crate::grid::Interpolation::Trilinear)
+            && self.estimator.integrator() == Integrator::March
+            && self.grids.species().is_empty()
+            && self.grids.lescale().is_none()
+            && !self.grids.emission_grid()
+            && self.model.a_t().is_none()
+            && self.layers.none()
     }
 
     /// Bytes the copy of [`mip`](Self::mip) holds: its grids, lattice and majorants.
     pub(crate) fn mip_bytes(&self) -> usize {
-        self.grids.ds.bytes()
-            + self.estimator.lattice.built().map_or(0, |l| l.bytes())
-            + self.bounds.majorant.bytes()
-            + self.bounds.brick_sigma.len() * 9
+        self.grids.ds().bytes()
+            + self.estimator.lattice().built().map_or(0, |l| l.bytes())
+            + self.bounds.bytes()
     }
 }

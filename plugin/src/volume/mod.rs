@@ -183,12 +183,12 @@ impl Clone for CapCounter {
 impl FireVolume {
     /// The dataset.
     pub fn dataset(&self) -> &Dataset {
-        &self.grids.ds
+        self.grids.ds()
     }
     /// Calls `f` with the first sample (lattice indices, below 0 where the lattice starts inside the brick) of
     /// each 8³ brick the dataset's grids store, in the table's order.
     pub fn for_each_stored_brick(&self, mut f: impl FnMut([i64; 3])) {
-        let topo = self.grids.ds.topology();
+        let topo = self.grids.ds().topology();
         let off = topo.offset();
         topo.for_each_slot(|b, _| {
             f([0, 1, 2].map(|a| (crate::grid::BRICK * b[a]) as i64 - off[a] as i64))
@@ -196,66 +196,66 @@ impl FireVolume {
     }
     /// Medium-space bounds rays are clipped to (the dataset's, or pbrt-v4 nanovdb's world box in pbrt mode).
     pub fn bounds(&self) -> [DVec3; 2] {
-        self.bounds.clip_box
+        self.bounds.clip_box()
     }
     /// Number of channels.
     pub fn channels(&self) -> usize {
-        self.model.basis.channels()
+        self.model.basis().channels()
     }
     /// The colour mode.
     pub fn color_mode(&self) -> ColorMode {
-        self.model.basis.mode
+        self.model.basis().mode
     }
     /// The coefficient mode.
     pub fn mode(&self) -> Mode {
-        self.model.mode
+        self.model.mode()
     }
     /// XYZ (Y in cd/m², or pbrt's relative units in pbrt mode) per unit radiance in each channel.
     pub fn channel_xyz(&self) -> Vec<DVec3> {
-        self.model.basis.xyz()
+        self.model.basis().xyz()
     }
     /// The integrator in use.
     pub fn integrator(&self) -> Integrator {
-        self.estimator.integrator
+        self.estimator.integrator()
     }
     /// Henyey–Greenstein g.
     pub fn g(&self) -> f64 {
-        self.model.g
+        self.model.g()
     }
     /// Whether the host should sample scattering events: scattering is configured and not resolved by
     /// diffusion (where the smoke's scattered light is emission).
     pub fn scatters(&self) -> bool {
-        self.layers.diffusion.is_none() && self.model.s.iter().any(|&v| v > 0.0)
+        self.layers.diffusion().is_none() && self.model.s().iter().any(|&v| v > 0.0)
     }
     /// March step length, medium units.
     pub fn step_length(&self) -> f64 {
-        self.estimator.step
+        self.estimator.step()
     }
     /// The tables built (name, bytes, seconds).
     pub fn tables(&self) -> &[TableReport] {
-        &self.report.tables
+        self.report.tables()
     }
     /// Bytes held by the dataset and tables.
     pub fn bytes(&self) -> usize {
         // (The species line tables are among `tables`, reported as "species X (lines)".)
-        self.grids.ds.bytes() + self.report.tables.iter().map(|t| t.bytes).sum::<usize>()
+        self.grids.ds().bytes() + self.report.tables().iter().map(|t| t.bytes).sum::<usize>()
     }
     /// Seconds spent building.
     pub fn build_seconds(&self) -> f64 {
-        self.report.build_seconds
+        self.report.build_seconds()
     }
     pub(crate) fn source(&self) -> Option<&Source> {
-        self.report.source.as_ref()
+        self.report.source()
     }
     pub(crate) fn density_channel(&self) -> usize {
-        self.grids.density
+        self.grids.density()
     }
     pub(crate) fn temperature_channel(&self) -> Option<usize> {
-        self.grids.temperature
+        self.grids.temperature()
     }
     /// The lowest and highest temperature of the grid (K, after the mapping), if it has one.
     pub fn temperature_range(&self) -> Option<[f64; 2]> {
-        let s = self.grids.ds.channels()[self.grids.temperature?]
+        let s = self.grids.ds().channels()[self.grids.temperature()?]
             .grid
             .stats();
         Some([s.min as f64, s.max as f64])
@@ -264,25 +264,25 @@ impl FireVolume {
     /// What the build found that a user should hear (species whose lines fall outside the channels, flame colours
     /// the model cannot give), one line each.
     pub fn notes(&self) -> &[String] {
-        &self.report.notes
+        self.report.notes()
     }
 
     /// The build's thread budget (`threads`; 0: every core).
     pub(crate) fn threads(&self) -> usize {
-        self.report.threads
+        self.report.threads()
     }
     /// Bytes of the volume's memory budget (`maxbytes`) left after its grids and tables: what a fire light built
     /// from it may take.
     pub fn spare_bytes(&self) -> u64 {
-        self.report.spare
+        self.report.spare()
     }
     /// Whether anything in the volume can emit: some temperature (or constant `Le`) with a non-zero emission
     /// table, or species. A fire light of a volume that cannot emit is refused before it allocates per voxel.
     pub fn can_emit(&self) -> bool {
-        !self.grids.species.is_empty()
+        !self.grids.species().is_empty()
             || self
                 .model
-                .j
+                .j()
                 .v
                 .iter()
                 .any(|lane| lane.iter().any(|&x| x > 0.0))
@@ -302,7 +302,7 @@ impl FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        for seg in self.bounds.majorant.segments(o, d, t0, t1) {
+        for seg in self.bounds.majorant().segments(o, d, t0, t1) {
             if !f(seg.t0, seg.t1, sigma[seg.brick]) {
                 return;
             }
@@ -318,7 +318,7 @@ impl FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64),
     ) {
-        for seg in self.bounds.majorant.segments(o, d, t0, t1) {
+        for seg in self.bounds.majorant().segments(o, d, t0, t1) {
             if empty[seg.brick] {
                 f(seg.t0, seg.t1);
             }
@@ -327,7 +327,7 @@ impl FireVolume {
     /// The density that emits at a sample of soot density `d` and Lescale (or emission grid) value `les`.
     #[inline(always)]
     pub(super) fn emitting<T: std::ops::Mul<Output = T>>(&self, d: T, les: T) -> T {
-        if self.grids.emission_grid {
+        if self.grids.emission_grid() {
             les
         } else {
             d * les
@@ -336,12 +336,12 @@ impl FireVolume {
     /// Whether `p` can hold medium: inside the clip box and not in an empty brick.
     #[inline]
     pub(crate) fn holds_medium(&self, p: DVec3) -> bool {
-        let [m0, m1] = self.bounds.clip_box;
+        let [m0, m1] = self.bounds.clip_box();
         let empty = self
             .bounds
-            .majorant
+            .majorant()
             .brick_at(p)
-            .is_some_and(|b| self.bounds.brick_empty[b]);
+            .is_some_and(|b| self.bounds.brick_empty()[b]);
         !empty && p.cmpge(m0).all() && p.cmple(m1).all()
     }
 
@@ -356,14 +356,14 @@ impl FireVolume {
 
     /// The volume's embers, if it has any.
     pub(crate) fn embers(&self) -> Option<&crate::embers::Embers> {
-        self.layers.embers.as_ref()
+        self.layers.embers()
     }
     /// The temperature (K) whose blackbody a viewer adapts to: the hottest when the colour is the physics',
     /// `None` when it is art-directed (a tint or a colour ramp: meant for a D65 white) or there is no temperature.
     pub fn white_temperature(&self) -> Option<f64> {
         self.temperature_range()
             .map(|[_, hi]| hi)
-            .filter(|&t| self.model.physical_colour && t > 0.0)
+            .filter(|&t| self.model.physical_colour() && t > 0.0)
     }
 
     /// What the volume holds beyond absorption — what a host that tracks the medium itself (from its point
@@ -372,12 +372,12 @@ impl FireVolume {
         Features {
             emits: self.can_emit(),
             scatters: self.scatters(),
-            motion: self.layers.blur.is_some(),
-            refraction: self.layers.refraction.is_some(),
-            embers: self.layers.embers.is_some(),
-            thick_lines: self.layers.lines.is_some(),
-            diffusion: self.layers.diffusion.is_some(),
-            emits_without_absorption: self.grids.emission_grid,
+            motion: self.layers.blur().is_some(),
+            refraction: self.layers.refraction().is_some(),
+            embers: self.layers.embers().is_some(),
+            thick_lines: self.layers.lines().is_some(),
+            diffusion: self.layers.diffusion().is_some(),
+            emits_without_absorption: self.grids.emission_grid(),
         }
     }
     /// The majorant grid a host walks with its own DDA: the box its cells tile, a cell's edge, the cells per
@@ -386,30 +386,29 @@ impl FireVolume {
     /// takes the nearest cell's bound.
     pub fn majorant_cells(&self) -> MajorantCells<'_> {
         MajorantCells {
-            bounds: self.bounds.majorant.bounds(),
-            cell: self.bounds.majorant.cell(),
-            counts: self.bounds.majorant.counts(),
+            bounds: self.bounds.majorant().bounds(),
+            cell: self.bounds.majorant().cell(),
+            counts: self.bounds.majorant().counts(),
             sigma_t: self
                 .layers
-                .blur
-                .as_ref()
-                .map_or(&self.bounds.brick_sigma[..], |b| b.brick_sigma()),
+                .blur()
+                .map_or(self.bounds.brick_sigma(), |b| b.brick_sigma()),
         }
     }
     /// The volume's motion blur: the shutter (frames) and the largest displacement (medium units); `None`
     /// without a velocity grid or with the shutter closed.
     pub fn motion_blur(&self) -> Option<([f64; 2], f64)> {
-        self.layers.blur.as_ref().map(|b| (b.shutter(), b.reach()))
+        self.layers.blur().map(|b| (b.shutter(), b.reach()))
     }
     /// σ_a, σ_s and j per channel at medium-space point `p` (zeros outside).
     /// (Atomic lines as their bins' means, thick or not: what a channel's coefficient is.)
     pub fn coefficients(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         Medium::eval(self, p, sa, ss, j);
-        if let Some(tl) = &self.layers.lines {
-            if let Some(st) = self.grids.ds.stencil_with_margin(p, self.bounds.margin) {
-                let ch = self.grids.ds.channels();
+        if let Some(tl) = self.layers.lines() {
+            if let Some(st) = self.grids.ds().stencil_with_margin(p, self.bounds.margin()) {
+                let ch = self.grids.ds().channels();
                 let value = |k: usize| ch[k].grid.eval(&st) as f64;
-                let t = self.grids.temperature.map_or(0.0, value);
+                let t = self.grids.temperature().map_or(0.0, value);
                 tl.add_boxed(t, &value, sa, j);
             }
         }
@@ -434,26 +433,29 @@ impl FireVolume {
     /// coefficients and the point query read.
     #[inline(always)]
     pub(super) fn lookup(&self, p: DVec3) -> Option<(crate::grid::Stencil, Lookup)> {
-        let st = self.grids.ds.stencil_with_margin(p, self.bounds.margin)?;
-        let ch = self.grids.ds.channels();
-        let d = ch[self.grids.density].grid.eval(&st).max(0.0) as f64;
+        let st = self
+            .grids
+            .ds()
+            .stencil_with_margin(p, self.bounds.margin())?;
+        let ch = self.grids.ds().channels();
+        let d = ch[self.grids.density()].grid.eval(&st).max(0.0) as f64;
         let t = self
             .grids
-            .temperature
+            .temperature()
             .map(|i| ch[i].grid.eval(&st) as f64)
             .unwrap_or(0.0);
         let les = self
             .grids
-            .lescale
+            .lescale()
             .map(|i| ch[i].grid.eval(&st).max(0.0) as f64)
             .unwrap_or(1.0);
-        let emits = t > self.model.t_emit || self.grids.temperature.is_none();
+        let emits = t > self.model.t_emit() || self.grids.temperature().is_none();
         Some((st, Lookup { d, t, les, emits }))
     }
     /// Whether the march splits steps thicker than `steptau` (pbrt mode): its bias is bounded, and estimates
     /// made from it (the fire light's line) must stay within it.
     pub(crate) fn splits_thick_steps(&self) -> bool {
-        self.estimator.step_tau.is_finite()
+        self.estimator.step_tau().is_finite()
     }
 }
 
@@ -464,18 +466,18 @@ impl Medium for FireVolume {
             d,
             t0,
             t1,
-            self.bounds.clip_box[0],
-            self.bounds.clip_box[1],
+            self.bounds.clip_box()[0],
+            self.bounds.clip_box()[1],
         )
     }
     fn step(&self) -> f64 {
-        self.estimator.step
+        self.estimator.step()
     }
     fn cutoff(&self) -> f64 {
-        self.estimator.cutoff
+        self.estimator.cutoff()
     }
     fn step_tau(&self) -> f64 {
-        self.estimator.step_tau
+        self.estimator.step_tau()
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         EVALUATIONS.with(|n| n.set(n.get() + 1));
@@ -486,23 +488,23 @@ impl Medium for FireVolume {
                 .for_each(|v| *v = 0.0);
             return;
         };
-        let ch = self.grids.ds.channels();
-        let loc = self.model.j.locate(t);
-        let at = self.model.a_t.as_ref().map(|tab| (tab, tab.locate(t)));
+        let ch = self.grids.ds().channels();
+        let loc = self.model.j().locate(t);
+        let at = self.model.a_t().map(|tab| (tab, tab.locate(t)));
         for c in 0..sa.len() {
             sa[c] = d * at
                 .map(|(tab, l)| tab.at(l, c) as f64)
-                .unwrap_or(self.model.a[c]);
-            ss[c] = d * self.model.s[c];
+                .unwrap_or(self.model.a()[c]);
+            ss[c] = d * self.model.s()[c];
             j[c] = if emits {
-                self.emitting(d, les) * self.model.j.at(loc, c) as f64
+                self.emitting(d, les) * self.model.j().at(loc, c) as f64
             } else {
                 0.0
             };
         }
         // The scatter colour: what it does not scatter is absorbed (σ_t kept, so the majorants and the march
         // stand).
-        if let Some((k, w)) = &self.model.scatter_color {
+        if let Some((k, w)) = self.model.scatter_color() {
             let rgb = k.map(|i| (ch[i].grid.eval(&st) as f64).clamp(0.0, 1.0));
             for c in 0..sa.len() {
                 let albedo = w[c][0] * rgb[0] + w[c][1] * rgb[1] + w[c][2] * rgb[2];
@@ -510,7 +512,7 @@ impl Medium for FireVolume {
                 ss[c] *= albedo;
             }
         }
-        for sp in &self.grids.species {
+        for sp in self.grids.species() {
             let n = ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale;
             if n > 0.0 {
                 let l = sp.sigma.locate(t);
@@ -520,7 +522,7 @@ impl Medium for FireVolume {
                 }
             }
         }
-        if let Some(df) = &self.layers.diffusion {
+        if let Some(df) = self.layers.diffusion() {
             df.add(p, ss, j);
         }
     }
@@ -532,7 +534,7 @@ impl Medium for FireVolume {
         t1: f64,
         f: &mut dyn FnMut(f64, f64, f64) -> bool,
     ) {
-        self.majorants_over(&self.bounds.brick_sigma, o, d, t0, t1, f)
+        self.majorants_over(self.bounds.brick_sigma(), o, d, t0, t1, f)
     }
     fn collision_cap_hit(&self) {
         self.capped
@@ -540,7 +542,7 @@ impl Medium for FireVolume {
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
     fn empty_spans(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, f: &mut dyn FnMut(f64, f64)) {
-        self.empty_spans_over(&self.bounds.brick_empty, o, d, t0, t1, f)
+        self.empty_spans_over(self.bounds.brick_empty(), o, d, t0, t1, f)
     }
 }
 

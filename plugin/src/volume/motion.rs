@@ -140,10 +140,15 @@ impl Advected<'_> {
     /// Where a lookup at `p` reads the grids: p − v(p) · shift.
     #[inline]
     pub(super) fn displaced(&self, p: DVec3) -> DVec3 {
-        let Some(st) = self.v.grids.ds.stencil_with_margin(p, self.v.bounds.margin) else {
+        let Some(st) = self
+            .v
+            .grids
+            .ds()
+            .stencil_with_margin(p, self.v.bounds.margin())
+        else {
             return p;
         };
-        let ch = self.v.grids.ds.channels();
+        let ch = self.v.grids.ds().channels();
         let [x, y, z] = self
             .blur
             .motion
@@ -160,11 +165,11 @@ impl Advected<'_> {
     /// Radiance and transmittance along `ray` (the volume's integrator; the march in f32 lanes where the volume
     /// has them); returns the exit parameter.
     pub(super) fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
-        if self.v.estimator.integrator != integrate::Integrator::March {
+        if self.v.estimator.integrator() != integrate::Integrator::March {
             let mut sc = Scratch::new(self.v.channels());
-            return integrate::integrate(self, ray, self.v.estimator.integrator, &mut sc, l, t);
+            return integrate::integrate(self, ray, self.v.estimator.integrator(), &mut sc, l, t);
         }
-        if let Some(lt) = &self.v.estimator.lanes {
+        if let Some(lt) = self.v.estimator.lanes() {
             return march::march_lanes_mapped(self.v, lt, self, |p| self.displaced(p), ray, l, t);
         }
         let mut sc = Scratch::new(self.v.channels());
@@ -173,13 +178,13 @@ impl Advected<'_> {
 
     /// Transmittance only.
     pub(super) fn transmittance(&self, ray: &Ray, t: &mut [f64]) {
-        if self.v.estimator.integrator == integrate::Integrator::March {
+        if self.v.estimator.integrator() == integrate::Integrator::March {
             let mut l = vec![0.0; t.len()];
             self.integrate(ray, &mut l, t);
             return;
         }
         let mut sc = Scratch::new(self.v.channels());
-        integrate::transmittance(self, ray, self.v.estimator.integrator, &mut sc, t)
+        integrate::transmittance(self, ray, self.v.estimator.integrator(), &mut sc, t)
     }
 
     /// The first real scattering event.
@@ -199,13 +204,13 @@ impl Medium for Advected<'_> {
         Medium::clip(self.v, o, d, t0, t1)
     }
     fn step(&self) -> f64 {
-        self.v.estimator.step
+        self.v.estimator.step()
     }
     fn cutoff(&self) -> f64 {
-        self.v.estimator.cutoff
+        self.v.estimator.cutoff()
     }
     fn step_tau(&self) -> f64 {
-        self.v.estimator.step_tau
+        self.v.estimator.step_tau()
     }
     fn eval(&self, p: DVec3, sa: &mut [f64], ss: &mut [f64], j: &mut [f64]) {
         Medium::eval(self.v, self.displaced(p), sa, ss, j)

@@ -122,7 +122,7 @@ impl FireVolume {
             hint: "its whole-ray queries (integrate, transmittance, sample_scatter) render it"
                 .into(),
         };
-        let model = match &self.model.point_model {
+        let model = match self.model.point_model() {
             PointModel::Refused(why) => return Err(refuse(why.clone())),
             m => m,
         };

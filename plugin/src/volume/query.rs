@@ -27,8 +27,8 @@ impl FireVolume {
             Want::Radiance { step } => {
                 let te = match step {
                     Some(s)
-                        if self.estimator.integrator == Integrator::March
-                            && s > self.estimator.step =>
+                        if self.estimator.integrator() == Integrator::March
+                            && s > self.estimator.step() =>
                     {
                         self.stepped_fire(adv, &cut, s, l, t)
                     }
@@ -139,8 +139,7 @@ impl FireVolume {
     pub(super) fn ember_cut(&self, ray: &Ray, time: f64) -> (Ray, Option<(f64, usize)>) {
         let hit = self
             .layers
-            .embers
-            .as_ref()
+            .embers()
             .and_then(|e| e.hit(ray.o, ray.d, ray.t0, ray.t1, time));
         let mut cut = *ray;
         if let Some((th, _)) = hit {
@@ -157,7 +156,7 @@ impl FireVolume {
         l: Option<&mut [f64]>,
         t: &mut [f64],
     ) -> Option<f64> {
-        let (Some((th, i)), Some(em)) = (hit, &self.layers.embers) else {
+        let (Some((th, i)), Some(em)) = (hit, self.layers.embers()) else {
             return None;
         };
         if let Some(l) = l {
@@ -214,7 +213,7 @@ impl FireVolume {
         t: &mut [f64],
         fold: lines::Fold,
     ) {
-        if let Some(tl) = &self.layers.lines {
+        if let Some(tl) = self.layers.lines() {
             match adv {
                 Some(a) => tl.apply(self, ray, end, false, &|p| a.displaced(p), l, t, fold),
                 None => tl.apply(self, ray, end, true, &|p| p, l, t, fold),
@@ -250,7 +249,7 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> (DVec3, DVec3, f64) {
-        let Some(rf) = &self.layers.refraction else {
+        let Some(rf) = self.layers.refraction() else {
             let te = self.integrate_fire(adv, ray, l, t);
             return (ray.o + ray.d * te, ray.d.normalize_or_zero(), te);
         };
@@ -267,7 +266,7 @@ impl FireVolume {
             Some(a) => a.transmittance(ray, t),
             None => {
                 let mut sc = Scratch::new(self.channels());
-                integrate::transmittance(self, ray, self.estimator.integrator, &mut sc, t);
+                integrate::transmittance(self, ray, self.estimator.integrator(), &mut sc, t);
             }
         }
         self.thick_lines(adv, ray, ray.t1, None, t, lines::Fold::Add);
@@ -291,7 +290,7 @@ impl FireVolume {
         self.scatter_lines(adv, ray, ev, l, w)
     }
     pub(super) fn advected(&self, time: f64) -> Option<motion::Advected<'_>> {
-        self.layers.blur.as_ref().and_then(|b| b.at(self, time))
+        self.layers.blur().and_then(|b| b.at(self, time))
     }
 }
 

@@ -67,16 +67,16 @@ impl FireVolume {
     /// ([`soot_only`](Self::soot_only): species' lines, T-dependent absorption, …), in rgb, or where σ per
     /// unit density vanishes in some channels and not in others (the transmittance would not follow).
     pub(crate) fn line_channels(&self, k: usize) -> Option<LineChannels> {
-        let ColorMode::Spectral(grid) = self.model.basis.mode else {
+        let ColorMode::Spectral(grid) = self.model.basis().mode else {
             return None;
         };
         let c = self.channels();
         if !self.soot_only() || !(2..=MAX_NODES).contains(&k) || k >= c {
             return None;
         }
-        let full = self.estimator.lanes.as_ref()?.sigma().as_flattened();
+        let full = self.estimator.lanes()?.sigma().as_flattened();
         let sig: Vec<f64> = (0..c)
-            .map(|ch| self.model.a[ch] + self.model.s[ch])
+            .map(|ch| self.model.a()[ch] + self.model.s()[ch])
             .collect();
         if full.len() < c || !sig.iter().all(|x| x.is_finite() && *x >= 0.0) {
             return None;
@@ -95,11 +95,11 @@ impl FireVolume {
             nodes.sort_unstable();
         }
         let chunks = k.div_ceil(W);
-        let rows = self.model.j.rows;
+        let rows = self.model.j().rows;
         let mut v = vec![[0f32; W]; rows * chunks];
         for r in 0..rows {
             for (q, &n) in nodes.iter().enumerate() {
-                v[r * chunks + q / W][q % W] = self.model.j.value(r, n);
+                v[r * chunks + q / W][q % W] = self.model.j().value(r, n);
             }
         }
         let mut sigma = vec![[0f32; W]; chunks];
@@ -116,8 +116,8 @@ impl FireVolume {
         }
         // The reference: emission per unit density at the fire's hottest temperature (within the table).
         let hottest = self.temperature_range().map_or(0.0, |r| r[1]);
-        let row = ((hottest * self.model.j.inv_dt).round().max(0.0) as usize).min(rows - 1);
-        let reference: Vec<f32> = (0..c).map(|ch| self.model.j.value(row, ch)).collect();
+        let row = ((hottest * self.model.j().inv_dt).round().max(0.0) as usize).min(rows - 1);
+        let reference: Vec<f32> = (0..c).map(|ch| self.model.j().value(row, ch)).collect();
         if !reference.iter().all(|&x| x.is_finite() && x > 0.0) {
             return None;
         }
@@ -125,8 +125,8 @@ impl FireVolume {
         Some(LineChannels {
             nodes,
             j: TTable {
-                dt: self.model.j.dt,
-                inv_dt: self.model.j.inv_dt,
+                dt: self.model.j().dt,
+                inv_dt: self.model.j().inv_dt,
                 rows,
                 chunks,
                 v,
@@ -152,16 +152,16 @@ impl FireVolume {
         l: &mut [f64],
         t: &mut [f64],
     ) -> Option<f64> {
-        let lt = self.estimator.lanes.as_ref()?;
+        let lt = self.estimator.lanes()?;
         let (c, k) = (lc.below.len(), lc.nodes.len());
         if l.len() != c || t.len() != c {
             return None;
         }
         self.fault_check();
-        let step = if step > self.estimator.step {
+        let step = if step > self.estimator.step() {
             step
         } else {
-            self.estimator.step
+            self.estimator.step()
         };
         let (mut lk, mut tk) = ([0f64; MAX_NODES], [1f64; MAX_NODES]);
         let tabs = Tabs {

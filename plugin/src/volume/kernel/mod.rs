@@ -350,17 +350,17 @@ fn read<const F: bool>(
 #[cold]
 #[inline(never)]
 fn general(v: &FireVolume, p: glam::DVec3, b: usize, dt: &mut [[f32; 2]; BATCH], x: &mut Extras) {
-    let Some(st) = v.grids.ds.stencil_with_margin(p, v.bounds.margin) else {
+    let Some(st) = v.grids.ds().stencil_with_margin(p, v.bounds.margin()) else {
         dt[b] = [OUTSIDE, 0.0];
         return;
     };
-    let ch = v.grids.ds.channels();
+    let ch = v.grids.ds().channels();
     let at = |k: usize| ch[k].grid.eval(&st);
-    for (k, sp) in v.grids.species.iter().take(MAX_SPECIES).enumerate() {
+    for (k, sp) in v.grids.species().iter().take(MAX_SPECIES).enumerate() {
         x.n[k][b] = (at(sp.ch).max(0.0) as f64 * sp.scale) as f32;
     }
-    dt[b] = [at(v.grids.density), v.grids.temperature.map_or(0.0, at)];
-    x.les[b] = v.grids.lescale.map_or(1.0, |k| at(k).max(0.0));
+    dt[b] = [at(v.grids.density()), v.grids.temperature().map_or(0.0, at)];
+    x.les[b] = v.grids.lescale().map_or(1.0, |k| at(k).max(0.0));
 }
 
 /// The density that marks a sample outside the medium (not counted; real densities are ≥ 0, or a rounding
@@ -390,10 +390,10 @@ impl<'a> Tabs<'a> {
     /// The volume's own channels; `split`: its thick steps split as its own march splits them.
     pub(super) fn own(v: &'a FireVolume, lt: &'a LaneTables, split: bool) -> Tabs<'a> {
         Tabs {
-            j: &v.model.j,
+            j: v.model.j(),
             sigma: lt.sigma(),
             split_tau: if split {
-                v.estimator.step_tau as f32
+                v.estimator.step_tau() as f32
             } else {
                 f32::INFINITY
             },
@@ -425,11 +425,11 @@ pub(super) fn march<
     t: &mut [f64],
 ) -> Option<f64> {
     let c = l.len();
-    if CV > 4 || CV * V < c || S == v.grids.species.is_empty() || A != v.model.a_t.is_some() {
+    if CV > 4 || CV * V < c || S == v.grids.species().is_empty() || A != v.model.a_t().is_some() {
         return None; // (the lanes below are written out for up to four)
     }
     // The lattice, else the dataset's grids themselves (the same values, read in place).
-    let lat = v.estimator.lattice.get(&v.grids.ds);
+    let lat = v.estimator.lattice().get(v.grids.ds());
     let stored = match lat {
         Some(_) => None,
         None => Some(Stored::new(v)?),
@@ -458,16 +458,16 @@ pub(super) fn march<
     let mut gaps = Gaps {
         segs: v
             .bounds
-            .majorant
+            .majorant()
             .segments(ray.o, ray.d, span.a, span.b)
             .peekable(),
-        empty: &v.bounds.brick_empty,
+        empty: v.bounds.brick_empty(),
         a: span.a,
         speed: span.speed,
     };
     // The ray in lattice coordinates g = unit·n − 0.5 as a function of arc length s: g0 + s·gd.
-    let dims = v.grids.ds.dims().map(|n| n as f64);
-    let [b0, b1] = v.grids.ds.bounds();
+    let dims = v.grids.ds().dims().map(|n| n as f64);
+    let [b0, b1] = v.grids.ds().bounds();
     let size = b1 - b0;
     let entry = ray.o + ray.d * span.a;
     let dir = ray.d / span.speed;
@@ -479,21 +479,21 @@ pub(super) fn march<
     for ch in 0..c {
         tk[ch / V][ch % V] = 1.0;
     }
-    let cutoff = v.estimator.cutoff as f32;
+    let cutoff = v.estimator.cutoff() as f32;
     let split_tau = tabs.split_tau;
     let sigma_max = lt.sigma_max();
-    let ns = v.grids.species.len().min(MAX_SPECIES);
+    let ns = v.grids.species().len().min(MAX_SPECIES);
     let mut scales = [0f64; MAX_SPECIES];
-    for (s, sp) in scales.iter_mut().zip(&v.grids.species) {
+    for (s, sp) in scales.iter_mut().zip(v.grids.species()) {
         *s = sp.scale;
     }
-    let all = v.grids.temperature.is_none();
-    let t_emit = v.model.t_emit as f32;
-    let lay = lat.map(|lat| Layout::new(lat, v.grids.lescale.is_some(), v.grids.ds.dims()));
+    let all = v.grids.temperature().is_none();
+    let t_emit = v.model.t_emit() as f32;
+    let lay = lat.map(|lat| Layout::new(lat, v.grids.lescale().is_some(), v.grids.ds().dims()));
     let jt = Rows::<CV, V>::new(tabs.j)?;
     // σ_a(T) rows where they exist (else the emission rows, never read); located with the emission rows when
     // both tables share their temperatures (as every volume builds them).
-    let at = match &v.model.a_t {
+    let at = match v.model.a_t() {
         Some(tab) => Rows::<CV, V>::new(tab)?,
         None => jt,
     };
@@ -501,7 +501,7 @@ pub(super) fn march<
     // Each species' σ and j tables (the same temperature rows) and its largest σ per unit number density.
     let mut sp_tabs: [Option<(Rows<CV, V>, Rows<CV, V>, f32)>; MAX_SPECIES] = [None; MAX_SPECIES];
     if S {
-        for (tab, sp) in sp_tabs.iter_mut().zip(&v.grids.species) {
+        for (tab, sp) in sp_tabs.iter_mut().zip(v.grids.species()) {
             *tab = Some((Rows::new(&sp.sigma)?, Rows::new(&sp.j)?, 0.0));
         }
         for (tab, m) in sp_tabs.iter_mut().zip(lt.species_sigma_max()) {
@@ -780,7 +780,7 @@ fn split(
     for ch in 0..c {
         (ll[ch], tt[ch]) = (l[ch] as f64, t[ch] as f64);
     }
-    let n = super::integrate::split_count(tau, v.estimator.step_tau);
+    let n = super::integrate::split_count(tau, v.estimator.step_tau());
     super::integrate::split_step(
         v,
         mid,

@@ -28,7 +28,7 @@ pub(super) struct Stored<'a> {
 impl<'a> Stored<'a> {
     /// `None` for a dataset that is not trilinear (the kernel's lerps are its lookup only then).
     pub(super) fn new(v: &'a FireVolume) -> Option<Stored<'a>> {
-        let ds = &v.grids.ds;
+        let ds = v.grids.ds();
         if ds.interpolation() != crate::grid::Interpolation::Trilinear {
             return None;
         }
@@ -38,9 +38,9 @@ impl<'a> Stored<'a> {
         let mut n_extra = 0;
         let further = v
             .grids
-            .lescale
+            .lescale()
             .into_iter()
-            .chain(v.grids.species.iter().map(|sp| sp.ch));
+            .chain(v.grids.species().iter().map(|sp| sp.ch));
         for (slot, k) in extra.iter_mut().zip(further) {
             *slot = values(k);
             n_extra += 1;
@@ -49,11 +49,11 @@ impl<'a> Stored<'a> {
         let dims = ds.dims();
         Some(Stored {
             topo,
-            d: values(v.grids.density),
-            t: v.grids.temperature.map(values),
+            d: values(v.grids.density()),
+            t: v.grids.temperature().map(values),
             extra,
             n_extra,
-            lescale: v.grids.lescale.is_some(),
+            lescale: v.grids.lescale().is_some(),
             off: topo.offset(),
             dims,
             last: dims.map(|n| n as f64 - 1.0),

@@ -58,11 +58,11 @@ fn a_sparse_fire_marches_on_brick_copies_as_on_the_dense_lattice() {
     let (auto, dense, off) = (build("auto"), build("dense"), build("off"));
     std::fs::remove_dir_all(&dir).unwrap();
     let (a, d) = (
-        auto.estimator.lattice.built().unwrap(),
-        dense.estimator.lattice.built().unwrap(),
+        auto.estimator.lattice().built().unwrap(),
+        dense.estimator.lattice().built().unwrap(),
     );
     assert!(
-        a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice.built().is_none()
+        a.bricks().is_some() && d.bricks().is_none() && off.estimator.lattice().built().is_none()
     );
     // 54 stored bricks: their copies and those below them, not the box.
     let copies = a.bricks().unwrap().active_bricks();
@@ -172,7 +172,7 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
             blob_volume(e, species)
         };
         let (dense, off) = (build("dense"), build("off"));
-        assert!(dense.estimator.lattice.built().is_some() && !off.estimator.lattice.is_some());
+        assert!(dense.estimator.lattice().built().is_some() && !off.estimator.lattice().is_some());
         // A budget that holds the grids and tables and a kilobyte more (with a Lescale grid; the species' tables
         // follow the budget): no copy, the march on the grids, and a note saying so.
         let tight = (!species).then(|| {
@@ -184,7 +184,7 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
             blob_volume(e, species)
         });
         if let Some(tight) = &tight {
-            assert!(!tight.estimator.lattice.is_some());
+            assert!(!tight.estimator.lattice().is_some());
             assert!(
                 tight
                     .notes()
@@ -271,9 +271,10 @@ fn a_scattering_fire_builds_its_lattice_when_a_ray_first_marches() {
     };
     let (lazy, eager, absorbing) = (build("auto", 2e6), build("dense", 2e6), build("auto", 0.0));
     std::fs::remove_dir_all(&dir).unwrap();
-    assert!(lazy.estimator.lattice.built().is_none() && lazy.estimator.lattice.reserved() > 0);
+    assert!(lazy.estimator.lattice().built().is_none() && lazy.estimator.lattice().reserved() > 0);
     assert!(
-        eager.estimator.lattice.built().is_some() && absorbing.estimator.lattice.built().is_some()
+        eager.estimator.lattice().built().is_some()
+            && absorbing.estimator.lattice().built().is_some()
     );
     assert!(lazy.spare_bytes() < eager.spare_bytes() + 1);
     let ray = Ray {
@@ -288,7 +289,7 @@ fn a_scattering_fire_builds_its_lattice_when_a_ray_first_marches() {
     assert!(a.0.iter().sum::<f64>() > 0.0);
     assert_eq!(a, b);
     assert_eq!(
-        lazy.estimator.lattice.built().map(|l| l.bytes()),
-        eager.estimator.lattice.built().map(|l| l.bytes())
+        lazy.estimator.lattice().built().map(|l| l.bytes()),
+        eager.estimator.lattice().built().map(|l| l.bytes())
     );
 }

@@ -15,7 +15,7 @@ fn voxel_slab_matches_closed_form_across_optical_depth() {
             Param::string("precision", precision),
         ];
         let v = slab_volume(fv, 1800.0, extra);
-        assert_eq!(v.estimator.lanes.is_some(), precision == "f32");
+        assert_eq!(v.estimator.lanes().is_some(), precision == "f32");
         let ttol = if precision == "f32" { 4e-7 } else { 1e-9 };
         let c = v.channels();
         let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);

@@ -376,8 +376,10 @@ fn the_budget_covers_what_the_volume_derives() {
         "{e}"
     );
     let roomy = build(1e9);
-    let tight = build(roomy.grids.ds.bytes() as f64 + tables + 600.0);
-    assert!(tight.estimator.lattice.built().is_none() && roomy.estimator.lattice.built().is_some());
+    let tight = build(roomy.grids.ds().bytes() as f64 + tables + 600.0);
+    assert!(
+        tight.estimator.lattice().built().is_none() && roomy.estimator.lattice().built().is_some()
+    );
     let (a, b) = (run(&tight, &ray_x(3)).0, run(&roomy, &ray_x(3)).0);
     for k in 0..a.len() {
         assert!(
