@@ -2,13 +2,63 @@
 //! with probability proportional to its weight — the row by the marginal, the column by the row's conditional —
 //! and a uniform position within it. Used for pixel filters and environment maps.
 
-/// Cumulative weights: per row (nx + 1 entries each) and over the rows (ny + 1).
+/// Cumulative weights: per row (nx + 1 entries each) and over the rows (ny + 1), each with its [`Guide`].
 #[derive(Debug, Clone)]
 pub struct Distribution2D {
     nx: usize,
     ny: usize,
     cond: Vec<f64>,
     marg: Vec<f64>,
+    cond_guides: Vec<Guide>,
+    marg_guide: Guide,
+}
+
+/// Where in a cumulative table the search for a value starts and ends, by which of the table's equal parts of
+/// its total the value falls in (a guide table): a pixel filter's sample searched the whole table with a
+/// binary search whose branches mispredict, 6 % of a render's time. The search inside the guide's range is
+/// checked against the range's ends and falls back to the whole table, so it finds the index the whole-table
+/// search finds, always.
+#[derive(Debug, Clone)]
+struct Guide {
+    /// The parts per unit of the total (parts / total), and per part the first index whose value exceeds the
+    /// part's start (one more entry: the table's length).
+    scale: f64,
+    first: Vec<u32>,
+}
+
+impl Guide {
+    fn new(cdf: &[f64]) -> Guide {
+        let parts = cdf.len().saturating_sub(1).max(1);
+        let total = cdf.last().copied().unwrap_or(0.0);
+        if !(total > 0.0 && total.is_finite()) {
+            return Guide {
+                scale: 0.0,
+                first: Vec::new(),
+            };
+        }
+        let scale = parts as f64 / total;
+        let mut first: Vec<u32> = (0..parts)
+            .map(|b| cdf.partition_point(|&c| c <= b as f64 / scale) as u32)
+            .collect();
+        first.push(cdf.len() as u32);
+        Guide { scale, first }
+    }
+
+    /// `cdf.partition_point(|&c| c <= t)` (`cdf` the table the guide was made for).
+    #[inline]
+    fn partition_point(&self, cdf: &[f64], t: f64) -> usize {
+        let part = (t * self.scale) as usize;
+        if part < self.first.len().saturating_sub(1) {
+            let (lo, hi) = (self.first[part] as usize, self.first[part + 1] as usize);
+            // The answer lies in [lo, hi] when the entry below lo is at most t and the one at hi above it.
+            let below = lo == 0 || cdf[lo - 1] <= t;
+            let above = hi >= cdf.len() || cdf[hi] > t;
+            if below && above && lo <= hi {
+                return lo + cdf[lo..hi].partition_point(|&c| c <= t);
+            }
+        }
+        cdf.partition_point(|&c| c <= t)
+    }
 }
 
 /// A drawn cell: its column and row, the position within it (each in [0, 1)) and its probability.
@@ -37,7 +87,16 @@ impl Distribution2D {
             }
             marg.push(marg[y] + acc);
         }
-        Distribution2D { nx, ny, cond, marg }
+        let cond_guides = cond.chunks(nx + 1).map(Guide::new).collect();
+        let marg_guide = Guide::new(&marg);
+        Distribution2D {
+            nx,
+            ny,
+            cond,
+            marg,
+            cond_guides,
+            marg_guide,
+        }
     }
 
     /// The sum of the weights.
@@ -61,9 +120,9 @@ impl Distribution2D {
         if !(total > 0.0) {
             return None;
         }
-        let find = |cdf: &[f64], t: f64| -> (usize, f64) {
+        let find = |cdf: &[f64], guide: &Guide, t: f64| -> (usize, f64) {
             let n = cdf.len() - 1;
-            let k = cdf.partition_point(|&c| c <= t).clamp(1, n) - 1;
+            let k = guide.partition_point(cdf, t).clamp(1, n) - 1;
             let width = cdf[k + 1] - cdf[k];
             let f = if width > 0.0 {
                 (t - cdf[k]) / width
@@ -72,9 +131,9 @@ impl Distribution2D {
             };
             (k, f.clamp(0.0, 1.0 - 1e-7))
         };
-        let (y, fy) = find(&self.marg, u[1] * total);
+        let (y, fy) = find(&self.marg, &self.marg_guide, u[1] * total);
         let row = &self.cond[y * (self.nx + 1)..(y + 1) * (self.nx + 1)];
-        let (x, fx) = find(row, u[0] * row[self.nx]);
+        let (x, fx) = find(row, &self.cond_guides[y], u[0] * row[self.nx]);
         Some(Cell {
             x,
             y,
@@ -82,5 +141,54 @@ impl Distribution2D {
             fy,
             p: (row[x + 1] - row[x]) / total,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The guided search finds the whole table's index for every value: uniform ones, the table's own entries
+    /// (where `<=` decides), just either side of them, beyond the total, and NaN.
+    #[test]
+    fn the_guide_finds_what_the_whole_search_finds() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let gaussian: Vec<f64> = (0..48)
+            .map(|i| (-((i as f64 - 23.5) / 8.0).powi(2)).exp() - (-(24.0f64 / 8.0).powi(2)).exp())
+            .collect();
+        let spiky: Vec<f64> = (0..37)
+            .map(|i| match i % 9 {
+                0 => 1e6,
+                4 => 0.0,
+                _ => 1e-9 * i as f64,
+            })
+            .collect();
+        let zeros_between = [0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        for weights in [&gaussian[..], &spiky[..], &zeros_between[..], &[2.5][..]] {
+            let mut cdf = vec![0.0];
+            for w in weights {
+                cdf.push(cdf[cdf.len() - 1] + w);
+            }
+            let guide = Guide::new(&cdf);
+            let total = cdf[cdf.len() - 1];
+            let mut values: Vec<f64> = (0..20_000).map(|_| next() * total).collect();
+            for &c in &cdf {
+                values.extend([c, c.next_down(), c.next_up()]);
+            }
+            values.extend([-1.0, total * 2.0, f64::NAN, f64::INFINITY]);
+            for t in values {
+                assert_eq!(
+                    guide.partition_point(&cdf, t),
+                    cdf.partition_point(|&c| c <= t),
+                    "t = {t:e} over {cdf:?}"
+                );
+            }
+        }
     }
 }
