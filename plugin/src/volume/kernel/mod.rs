@@ -21,14 +21,18 @@
 //!
 //! Accuracy (tests, docs/results/log.md): the same image as the f64 march to the lanes' f32 rounding.
 
-use super::integrate::{Span, EVALUATIONS, MAX_STEPS};
+use super::integrate::{Span, EVALUATIONS};
 use super::lanes::{Lane, LaneTables, MAX_SPECIES, W};
 use super::lattice::Lattice;
 use super::tables::TTable;
 use super::{FireVolume, Ray};
-use stored::{Memo, Stored};
+use batch::{in_lanes, read_batch, species_rows, species_tables, OnRay};
+use stored::Stored;
+use walk::Walk;
 
+mod batch;
 mod stored;
+mod walk;
 
 /// a·b + c, fused when `F` (inlined into the FMA clone, a single instruction; without FMA `mul_add` would be a
 /// library call, so the plain product and sum).
@@ -65,42 +69,6 @@ fn index(x: f64) -> usize {
 #[inline(always)]
 fn lerp<const F: bool>(t: f32, a: f32, b: f32) -> f32 {
     fma::<F>(t, b - a, a)
-}
-
-/// A ray's empty stretches (arc length from its entry into the medium): the bricks `empty_spans` reports,
-/// pulled from the brick walk as the march reaches them, adjacent ones merged — no list per ray, and no walk
-/// past where the march stops.
-struct Gaps<'a> {
-    segs: std::iter::Peekable<crate::majorant::Segments>,
-    empty: &'a [bool],
-    /// The ray's entry parameter and |d| (arc length per unit of parameter).
-    a: f64,
-    speed: f64,
-}
-
-impl Gaps<'_> {
-    /// The next empty stretch, (∞, ∞) when none is left.
-    #[inline]
-    fn next(&mut self) -> (f64, f64) {
-        let empty = |g: &Gaps, b: usize| g.empty.get(b).copied().unwrap_or(false);
-        while let Some(seg) = self.segs.next() {
-            if !empty(self, seg.brick) {
-                continue;
-            }
-            let start = (seg.t0 - self.a) * self.speed;
-            let mut end = (seg.t1 - self.a) * self.speed;
-            // (The walk's pieces tile the ray: the next starts exactly where this one ends.)
-            while let Some(&next) = self.segs.peek() {
-                if !empty(self, next.brick) || (next.t0 - self.a) * self.speed != end {
-                    break;
-                }
-                end = (next.t1 - self.a) * self.speed;
-                self.segs.next();
-            }
-            return (start, end);
-        }
-        (f64::INFINITY, f64::INFINITY)
-    }
 }
 
 /// The values of the further grids (Lescale, species) at a batch of samples (after the clamps of
@@ -435,50 +403,18 @@ pub(super) fn march<
         None => Some(Stored::new(v)?),
     };
     // σ per unit density in the kernel's lanes (channels past `c` are zero).
-    let mut sigma = [[0f32; V]; CV];
-    for (ch, &x) in tabs.sigma.as_flattened().iter().enumerate().take(c) {
-        sigma[ch / V][ch % V] = x;
-    }
+    let sigma = in_lanes::<CV, V>(tabs.sigma.as_flattened().iter().copied().take(c));
     l.fill(0.0);
     t.fill(1.0);
     let Some(span) = Span::new(v, ray) else {
         return Some(ray.t1);
     };
-    let len = (span.b - span.a) * span.speed;
-    let mut ds = step;
-    if !(ds > 0.0) || len / ds > MAX_STEPS {
-        ds = len / MAX_STEPS;
-    }
-    let mut rng = ray.rng();
-    let mut first = rng.next_f64() * ds;
-    if first <= 0.0 {
-        first = ds;
-    }
-    // Empty stretches (arc length from the entry), pulled from the brick walk as the march reaches them.
-    let mut gaps = Gaps {
-        segs: v
-            .bounds
-            .majorant()
-            .segments(ray.o, ray.d, span.a, span.b)
-            .peekable(),
-        empty: v.bounds.brick_empty(),
-        a: span.a,
-        speed: span.speed,
-    };
-    // The ray in lattice coordinates g = unit·n − 0.5 as a function of arc length s: g0 + s·gd.
-    let dims = v.grids.ds().dims().map(|n| n as f64);
-    let [b0, b1] = v.grids.ds().bounds();
-    let size = b1 - b0;
-    let entry = ray.o + ray.d * span.a;
+    let mut walk = Walk::along(v, ray, &span, step);
+    let on_ray = OnRay::new(v, ray, &span);
     let dir = ray.d / span.speed;
-    let g0 = [0, 1, 2].map(|a| (entry[a] - b0[a]) / size[a] * dims[a] - 0.5);
-    let gd = [0, 1, 2].map(|a| dir[a] / size[a] * dims[a]);
     let mut lk = [[0f32; V]; CV];
     // (Padding lanes hold transmittance 0, so they never keep the early termination from stopping.)
-    let mut tk = [[0f32; V]; CV];
-    for ch in 0..c {
-        tk[ch / V][ch % V] = 1.0;
-    }
+    let mut tk = in_lanes::<CV, V>(std::iter::repeat_n(1.0, c));
     let cutoff = v.estimator.cutoff() as f32;
     let split_tau = tabs.split_tau;
     let sigma_max = lt.sigma_max();
@@ -498,155 +434,44 @@ pub(super) fn march<
         None => jt,
     };
     let shared = at.inv_dt == jt.inv_dt && at.last == jt.last;
-    // Each species' σ and j tables (the same temperature rows) and its largest σ per unit number density.
-    let mut sp_tabs: [Option<(Rows<CV, V>, Rows<CV, V>, f32)>; MAX_SPECIES] = [None; MAX_SPECIES];
-    if S {
-        for (tab, sp) in sp_tabs.iter_mut().zip(v.grids.species()) {
-            *tab = Some((Rows::new(&sp.sigma)?, Rows::new(&sp.j)?, 0.0));
-        }
-        for (tab, m) in sp_tabs.iter_mut().zip(lt.species_sigma_max()) {
-            if let Some(t) = tab {
-                t.2 = m;
-            }
-        }
-    }
+    let sp_tabs = species_tables::<CV, V, S>(v, lt)?;
     let mut samples = 0u64;
-    let mut k = 0f64;
-    let mut s0 = 0f64;
-    // The next empty stretch (infinitely far when there is none left).
-    let mut gap = gaps.next();
     let mut x = Extras {
         les: [1.0; BATCH],
         n: [[0.0; BATCH]; MAX_SPECIES],
     };
     'ray: loop {
         // 1. The next BATCH steps outside empty stretches.
-        let mut m = 0;
-        let mut end = false;
         let mut mids = [0f64; BATCH];
         let mut deltas = [0f32; BATCH];
-        // The common case at once: all BATCH steps whole and before the next empty stretch (the ends are
-        // increasing, so the last step decides), with the loop's arithmetic, bit for bit.
-        let mut ends = [0f64; BATCH + 1];
-        ends[0] = s0;
-        for b in 0..BATCH {
-            ends[b + 1] = first + (k + b as f64) * ds;
-        }
-        if ends[BATCH] < len && 0.5 * (ends[BATCH - 1] + ends[BATCH]) < gap.0 {
-            for b in 0..BATCH {
-                mids[b] = 0.5 * (ends[b] + ends[b + 1]);
-                deltas[b] = (ends[b + 1] - ends[b]) as f32;
-            }
-            k += BATCH as f64;
-            s0 = ends[BATCH];
-            m = BATCH;
-        }
-        while m < BATCH {
-            // Step k spans [first + (k − 1)·ds, first + k·ds] ∩ [0, len] (k counted in f64: exact below 2⁵³;
-            // the step's end is the next one's start, as computed here).
-            if !(s0 < len) {
-                end = true;
-                break;
-            }
-            let s1 = first + k * ds;
-            let s1 = if s1 < len { s1 } else { len };
-            let mid = 0.5 * (s0 + s1);
-            if mid >= gap.0 {
-                if mid < gap.1 {
-                    // The first step whose midpoint (first + (k − ½)·ds for a whole step) is past the stretch.
-                    let past = ((gap.1 - first) / ds + 0.5).ceil();
-                    k = if past > k + 1.0 { past } else { k + 1.0 };
-                    s0 = first + (k - 1.0) * ds;
-                } else {
-                    gap = gaps.next();
-                }
-                continue;
-            }
-            k += 1.0;
-            mids[m] = mid;
-            deltas[m] = (s1 - s0) as f32;
-            m += 1;
-            s0 = s1;
-        }
+        let (m, end) = walk.next_batch(&mut mids, &mut deltas);
         // 2. Their grid values, read before any is stepped through (independent reads, which the CPU
         // overlaps). A sample outside the medium gets d = −1 (skipped below, not counted).
         let mut dt = [[0f32; 2]; BATCH];
-        // (From the lattice: the cells and fractions first, then the reads; from the grids, each in turn.)
-        let mut ci = [0usize; BATCH];
-        let mut fx = [[0f32; BATCH]; 3];
-        match (&lay, &stored) {
-            (None, Some(st)) => {
-                // The cells' lower corners and fractions at once (a loop that vectorises), then the reads.
-                let mut cf = [[0f64; BATCH]; 3];
-                for b in 0..BATCH {
-                    for a in 0..3 {
-                        let g = g0[a] + mids[b] * gd[a];
-                        cf[a][b] = floor::<F>(g);
-                        fx[a][b] = (g - cf[a][b]) as f32;
-                    }
-                }
-                let mut memo = Memo::new();
-                for b in 0..m {
-                    let (c, f) = (
-                        [cf[0][b], cf[1][b], cf[2][b]],
-                        [fx[0][b], fx[1][b], fx[2][b]],
-                    );
-                    if !stored::read_stored::<F>(
-                        st,
-                        &mut memo,
-                        c,
-                        f,
-                        &scales[..ns],
-                        b,
-                        &mut dt,
-                        &mut x,
-                    ) {
-                        let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
-                        general(v, p, b, &mut dt, &mut x);
-                    }
-                }
-            }
-            (Some(lay), _) => march_cells::<F>(lay, g0, gd, &mids, m, &mut ci, &mut fx),
-            (None, None) => return None,
-        }
-        if let Some(lay) = &lay {
-            for b in 0..m {
-                let f = [fx[0][b], fx[1][b], fx[2][b]];
-                if !read::<F>(lay, ci[b], f, &scales[..ns], b, &mut dt, &mut x) {
-                    let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
-                    general(v, p, b, &mut dt, &mut x);
-                }
-            }
-        }
-        // Densities clamped at 0 (an interpolation of non-negative data may round below it) and the samples
-        // inside the medium, to count.
-        let mut d = [0f32; BATCH];
-        let mut tt = [0f32; BATCH];
-        let mut inside = [false; BATCH];
-        for b in 0..BATCH {
-            inside[b] = dt[b][0] > 0.5 * OUTSIDE;
-            d[b] = dt[b][0].max(0.0);
-            tt[b] = dt[b][1];
-        }
+        read_batch::<F>(
+            v,
+            (&lay, &stored),
+            &on_ray,
+            (&mids, m),
+            &scales[..ns],
+            &mut dt,
+            &mut x,
+        )?;
         // 3. For all of them at once: the table rows at T, the emitting density, the thin-step test (a bound on
         // the optical depth: the largest σ per unit density times d, plus the species').
+        let Batch {
+            d,
+            tt,
+            inside,
+            dl,
+            thin,
+        } = Batch::new(v, &dt, &x, &deltas, (all, t_emit, sigma_max));
         let (jr, jf) = jt.locate::<F, BATCH>(&tt);
         let (ar, af) = if A && !shared {
             at.locate::<F, BATCH>(&tt)
         } else {
             (jr, jf)
         };
-        let mut dl = [0f32; BATCH];
-        let mut thin = [false; BATCH];
-        for b in 0..BATCH {
-            let emits = all | (tt[b] > t_emit);
-            dl[b] = if emits && inside[b] {
-                v.emitting(d[b], x.les[b])
-            } else {
-                0.0
-            };
-            thin[b] = d[b] * sigma_max * deltas[b] < THIN;
-        }
         // 4. The steps, in order.
         for b in 0..m {
             // Whether the sample steps at all, and whether its step is thin; with species, their rows.
@@ -656,26 +481,18 @@ pub(super) fn march<
                     continue;
                 }
                 samples += 1;
-                let mut bound = d[b] * sigma_max * deltas[b];
-                let mut any = d[b] > 0.0 || dl[b] > 0.0;
-                for s in 0..ns {
-                    let n = x.n[s][b];
-                    if let (true, Some((st, et, smax))) = (n > 0.0, sp_tabs[s]) {
-                        any = true;
-                        bound += n * smax * deltas[b];
-                        let (r, f) = st.locate::<F, 1>(&[tt[b]]);
-                        if let (Some(sr), Some(jr)) = (st.pair(r[0]), et.pair(r[0])) {
-                            sp[s] = Some(SpeciesRows {
-                                n,
-                                f: f[0],
-                                s: sr,
-                                j: jr,
-                            });
-                        }
-                    }
-                }
+                let soot = d[b] > 0.0 || dl[b] > 0.0;
+                let bound = d[b] * sigma_max * deltas[b];
+                let n = x.n.map(|n| n[b]);
+                let (any, bound) = species_rows::<CV, V, F>(
+                    &sp_tabs[..ns],
+                    &n,
+                    (tt[b], deltas[b]),
+                    bound,
+                    &mut sp,
+                );
                 // (No soot and no species: σ = j = 0, as below.)
-                if !any {
+                if !(soot || any) {
                     continue;
                 }
                 (bound < THIN, bound)
@@ -758,6 +575,57 @@ pub(super) fn march<
         t[ch] = tk[ch / V][ch % V] as f64;
     }
     Some(span.b)
+}
+
+/// A batch's samples as its steps take them: the density clamped at 0 (an interpolation of non-negative data may
+/// round below it), the temperature, whether the sample is inside the medium (to count), the emitting density and
+/// whether the step is thin by the soot's bound on its optical depth.
+struct Batch {
+    d: [f32; BATCH],
+    tt: [f32; BATCH],
+    inside: [bool; BATCH],
+    dl: [f32; BATCH],
+    thin: [bool; BATCH],
+}
+
+impl Batch {
+    /// From the grid values `dt` and `x` of steps `deltas` long; `all`: every temperature emits, else those
+    /// above `t_emit`; `sigma_max`: the largest σ per unit density.
+    #[inline(always)]
+    fn new(
+        v: &FireVolume,
+        dt: &[[f32; 2]; BATCH],
+        x: &Extras,
+        deltas: &[f32; BATCH],
+        (all, t_emit, sigma_max): (bool, f32, f32),
+    ) -> Batch {
+        let mut d = [0f32; BATCH];
+        let mut tt = [0f32; BATCH];
+        let mut inside = [false; BATCH];
+        for b in 0..BATCH {
+            inside[b] = dt[b][0] > 0.5 * OUTSIDE;
+            d[b] = dt[b][0].max(0.0);
+            tt[b] = dt[b][1];
+        }
+        let mut dl = [0f32; BATCH];
+        let mut thin = [false; BATCH];
+        for b in 0..BATCH {
+            let emits = all | (tt[b] > t_emit);
+            dl[b] = if emits && inside[b] {
+                v.emitting(d[b], x.les[b])
+            } else {
+                0.0
+            };
+            thin[b] = d[b] * sigma_max * deltas[b] < THIN;
+        }
+        Batch {
+            d,
+            tt,
+            inside,
+            dl,
+            thin,
+        }
+    }
 }
 
 /// A thick step (optical depth bound `tau`) through `v`'s own channels in sub-steps
