@@ -265,6 +265,16 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
 }
 
 /// The report as the command prints it.
+/// A channel's statistic in a column of 12: six decimals where they show it (a temperature, a density of order
+/// one), else six significant digits (a soot volume fraction of 1e-7 read as 0.000000 before).
+fn value(x: f64) -> String {
+    if x == 0.0 || (x.abs() >= 1e-3 && x.abs() < 1e6) {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.5e}")
+    }
+}
+
 fn text(report: &Report) -> String {
     let [p0, p1] = report.bounds.map(DVec3::from);
     let dims = report.dims;
@@ -285,11 +295,11 @@ fn text(report: &Report) -> String {
     );
     for c in &report.channels {
         s += &format!(
-            "{:<14} {:>12.6} {:>12.6} {:>12.6} {:>7.2}% {:>12} {:>9.4}\n",
+            "{:<14} {:>12} {:>12} {:>12} {:>7.2}% {:>12} {:>9.4}\n",
             c.name,
-            c.min,
-            c.max,
-            c.mean,
+            value(c.min),
+            value(c.max),
+            value(c.mean),
             100.0 * c.active_fraction,
             c.bytes,
             c.load_seconds
@@ -367,4 +377,19 @@ fn source_of(
         None => n.tool.why.clone(),
     };
     Some((n.tool.value.name().to_string(), why))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::value;
+
+    /// Small and large statistics keep their digits; the usual ones read as before.
+    #[test]
+    fn a_statistic_keeps_six_significant_digits() {
+        assert_eq!(value(3.25e-7), "3.25000e-7");
+        assert_eq!(value(1390.72998), "1390.729980");
+        assert_eq!(value(0.0), "0.000000");
+        assert_eq!(value(-2.5e9), "-2.50000e9");
+        assert_eq!(value(0.5), "0.500000");
+    }
 }
