@@ -26,9 +26,14 @@ struct Guide {
     first: Vec<u32>,
 }
 
+/// The most parts a [`Guide`] divides its table's total into.
+const MAX_PARTS: usize = 64;
+
 impl Guide {
     fn new(cdf: &[f64]) -> Guide {
-        let parts = cdf.len().saturating_sub(1).max(1);
+        // As many parts as cells, up to 64: a filter's table is guided to the cell, an environment map's rows of
+        // thousands to a few dozen entries (with guides a quarter of the table's own size at most).
+        let parts = cdf.len().saturating_sub(1).clamp(1, MAX_PARTS);
         let total = cdf.last().copied().unwrap_or(0.0);
         if !(total > 0.0 && total.is_finite()) {
             return Guide {
@@ -170,7 +175,15 @@ mod tests {
             })
             .collect();
         let zeros_between = [0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        for weights in [&gaussian[..], &spiky[..], &zeros_between[..], &[2.5][..]] {
+        // (A row of an environment map: more cells than a guide has parts.)
+        let long: Vec<f64> = (0..2048).map(|i| 1.0 + (i as f64 * 0.37).sin()).collect();
+        for weights in [
+            &gaussian[..],
+            &spiky[..],
+            &zeros_between[..],
+            &[2.5][..],
+            &long[..],
+        ] {
             let mut cdf = vec![0.0];
             for w in weights {
                 cdf.push(cdf[cdf.len() - 1] + w);
