@@ -13,15 +13,33 @@ use glam::DVec3;
 /// Channel basis: projections of spectral functions onto the channels.
 #[derive(Debug, Clone)]
 pub(super) struct Basis {
-    pub(super) mode: ColorMode,
+    mode: ColorMode,
     /// Photometric factor: 683 lm/W (physical) or 1/∫ȳ (pbrt).
-    pub(super) k: f64,
+    k: f64,
     /// Spectral bins share each atomic line with a neighbour so the film sees its own wavelength's luminance
     /// (`linecolour "ownwavelength"`, [`LineSplit`]).
-    pub(super) line_split: bool,
+    line_split: bool,
 }
 
 impl Basis {
+    pub(super) fn new(mode: ColorMode, k: f64, line_split: bool) -> Basis {
+        Basis {
+            mode,
+            k,
+            line_split,
+        }
+    }
+    pub(super) fn mode(&self) -> ColorMode {
+        self.mode
+    }
+    /// Photometric factor: 683 lm/W (physical) or 1/∫ȳ (pbrt).
+    pub(super) fn k(&self) -> f64 {
+        self.k
+    }
+    /// Whether spectral bins share each atomic line with a neighbour (`linecolour "ownwavelength"`).
+    pub(super) fn line_split(&self) -> bool {
+        self.line_split
+    }
     pub(super) fn channels(&self) -> usize {
         match self.mode {
             ColorMode::Spectral(g) => g.count(),

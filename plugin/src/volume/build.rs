@@ -278,7 +278,7 @@ impl FireVolume {
         // The march samples the scattered light at least twice per diffusion cell.
         vol.estimator.shorten_step(0.5 * df.cell());
         vol.report.push(TableReport {
-            name: format!("diffusion ({} iterations)", df.iterations),
+            name: format!("diffusion ({} iterations)", df.iterations()),
             bytes: df.bytes(),
             seconds: t5.elapsed().as_secs_f64(),
         });
@@ -423,7 +423,7 @@ fn optics(
     }
     // ---- what a user should hear about its species (at its hottest; 2000 K without a temperature grid)
     if let Emission::Physical { species, .. } = &set.emission {
-        let range = match basis.mode {
+        let range = match basis.mode() {
             ColorMode::Spectral(g) => (g.min_nm(), g.max_nm()),
             ColorMode::Rgb => (380.0, 780.0),
         };
@@ -439,7 +439,7 @@ fn optics(
         Emission::Physical { species, .. } => species.len(),
         Emission::Pbrt { .. } => 0,
     };
-    let rgb = matches!(basis.mode, ColorMode::Rgb);
+    let rgb = matches!(basis.mode(), ColorMode::Rgb);
     let need = tables::bytes_for(t_max, c, n_species, rgb);
     if need > spare {
         return Err(Error::TooLarge {

@@ -70,7 +70,7 @@ pub(super) fn physical(
         .collect();
     let art = Art::new(basis, ramp);
     let (a_t, j);
-    if basis.mode == ColorMode::Rgb {
+    if basis.mode() == ColorMode::Rgb {
         // The Planck-mean absorption per band and the emission, from one table build.
         let f: Vec<f64> = (0..CMF.len())
             .map(|i| smokescale * sootscale * kappa(380.0 + i as f64))

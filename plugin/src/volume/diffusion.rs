@@ -36,13 +36,17 @@ pub(super) struct Diffusion {
     /// L_in per cell (channel fastest).
     l_in: Vec<f32>,
     /// The largest number of conjugate-gradient iterations a channel took.
-    pub(super) iterations: usize,
+    iterations: usize,
 }
 
 /// The most cells along the longest side.
 pub(super) const MAX_RESOLUTION: usize = 256;
 
 impl Diffusion {
+    /// The largest number of conjugate-gradient iterations a channel took.
+    pub(super) fn iterations(&self) -> usize {
+        self.iterations
+    }
     /// Solves the diffusion equation over `v`'s box at `res` cells along its longest side (g: the phase
     /// function's asymmetry).
     pub(super) fn build(v: &FireVolume, res: usize, g: f64) -> Result<Diffusion, Error> {

@@ -175,7 +175,7 @@ fn half_window(inp: &Input, species: usize, line: &Line) -> f64 {
 
 /// Whether a line at λ lands in the basis's channels (a bin, or the CMFs' 380–780 nm).
 fn inside(basis: &Basis, lambda: f64) -> bool {
-    match basis.mode {
+    match basis.mode() {
         ColorMode::Spectral(g) => g.bin_of(lambda).is_some(),
         ColorMode::Rgb => (380.0..780.0).contains(&lambda),
     }
@@ -341,7 +341,7 @@ impl ThickLines {
         all.sort_by(|a, b| a.1.lambda_nm.total_cmp(&b.1.lambda_nm));
         // Windows: each line's own half window around it (clipped to the channels' range: nodes beyond reach no
         // channel), overlapping ones merged.
-        let [lo, hi] = match inp.basis.mode {
+        let [lo, hi] = match inp.basis.mode() {
             ColorMode::Spectral(g) => [g.min_nm(), g.max_nm()],
             ColorMode::Rgb => [380.0, 780.0],
         };
@@ -449,7 +449,7 @@ impl ThickLines {
                 centres.push(l.lambda_nm);
             }
         }
-        let breaks: Vec<f64> = match inp.basis.mode {
+        let breaks: Vec<f64> = match inp.basis.mode() {
             ColorMode::Spectral(g) => (0..=g.count())
                 .map(|i| g.min_nm() + i as f64 * g.width_nm())
                 .collect(),
@@ -465,11 +465,14 @@ impl ThickLines {
             members.iter().map(|(_, l, _)| l.lambda_nm).sum::<f64>() / members.len() as f64;
         let cont = (inp.continuum)(lambda_c);
         let mut fold = Vec::new();
-        match inp.basis.mode {
+        match inp.basis.mode() {
             ColorMode::Spectral(g) => {
                 // Each node's light shared as a line at its wavelength would be (`LineSplit`: the film sees its
                 // own luminance), its transmittance in its own bin.
-                let split = inp.basis.line_split.then(|| crate::cie::LineSplit::new(&g));
+                let split = inp
+                    .basis
+                    .line_split()
+                    .then(|| crate::cie::LineSplit::new(&g));
                 for (k, (&l, &dw)) in lambda.iter().zip(&width).enumerate() {
                     let Some(b) = g.bin_of(l) else { continue };
                     let parts = match &split {
@@ -497,7 +500,7 @@ impl ThickLines {
                 for (k, (&l, &dw)) in lambda.iter().zip(&width).enumerate() {
                     let w = crate::cie::cmf(l);
                     for ch in 0..3 {
-                        fold.push((k, ch, inp.basis.k * w[ch] * dw, w[ch] * dw / total[ch]));
+                        fold.push((k, ch, inp.basis.k() * w[ch] * dw, w[ch] * dw / total[ch]));
                     }
                 }
             }

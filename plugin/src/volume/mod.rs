@@ -204,7 +204,7 @@ impl FireVolume {
     }
     /// The colour mode.
     pub fn color_mode(&self) -> ColorMode {
-        self.model.basis().mode
+        self.model.basis().mode()
     }
     /// The coefficient mode.
     pub fn mode(&self) -> Mode {
@@ -551,7 +551,7 @@ impl Medium for FireVolume {
 /// to 1 at every wavelength — so white is 1 in every bin and any colour in [0, 1]³ an albedo in [0, 1].
 fn scatter_weights(basis: &Basis) -> Vec<[f64; 3]> {
     use firemedium_core::rgb_spectrum::{RgbSpectrum, RgbUse};
-    if basis.mode == ColorMode::Rgb {
+    if basis.mode() == ColorMode::Rgb {
         return vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     }
     let prim = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]

@@ -271,11 +271,7 @@ fn read_basis(r: &ParamReader, mode: Mode, ctx: &HostContext) -> Result<Basis, E
         crate::constants::LUMINOUS_EFFICACY
     };
     let line_split = r.choice::<LineColour>("linecolour")? == LineColour::OwnWavelength;
-    Ok(Basis {
-        mode: mode_c,
-        k,
-        line_split,
-    })
+    Ok(Basis::new(mode_c, k, line_split))
 }
 
 /// Soot optics (a named fuel or a custom (λ, n, k) table), its scales, and the species.

@@ -67,7 +67,7 @@ impl FireVolume {
     /// ([`soot_only`](Self::soot_only): species' lines, T-dependent absorption, …), in rgb, or where σ per
     /// unit density vanishes in some channels and not in others (the transmittance would not follow).
     pub(crate) fn line_channels(&self, k: usize) -> Option<LineChannels> {
-        let ColorMode::Spectral(grid) = self.model.basis().mode else {
+        let ColorMode::Spectral(grid) = self.model.basis().mode() else {
             return None;
         };
         let c = self.channels();

@@ -54,11 +54,7 @@ fn voxel_slab_matches_closed_form_across_optical_depth() {
 fn rgb_soot_rows_in_one_pass_equal_two() {
     // The absorption (Planck-mean per band) and emission rows from one Planck evaluation per wavelength,
     // against each formula evaluated on its own, bit for bit; and the split table holds each.
-    let basis = Basis {
-        mode: ColorMode::Rgb,
-        k: 683.0,
-        line_split: false,
-    };
+    let basis = Basis::new(ColorMode::Rgb, 683.0, false);
     let optics = SootOptics::propane();
     let nodes = basis.nodes();
     let f: Vec<f64> = (0..CMF.len())
@@ -151,11 +147,7 @@ fn soot_bin_means_are_split_at_the_optical_constants_kinks() {
     // equal to rounding, while four panels across the 435.8 nm kink (bin 430–440 nm) are off by more than
     // 1e-6 — the rule the soot tables use, with a quarter of the nodes (the emission table's build time).
     let grid = SpectralGrid::default();
-    let basis = Basis {
-        mode: ColorMode::Spectral(grid),
-        k: 683.0,
-        line_split: false,
-    };
+    let basis = Basis::new(ColorMode::Spectral(grid), 683.0, false);
     for optics in [SootOptics::propane(), SootOptics::acetylene()] {
         let kinks: Vec<f64> = optics.rows().iter().map(|r| r[0]).collect();
         let nodes = basis.nodes_split(&kinks);
@@ -194,11 +186,7 @@ fn table_nodes_match_the_bin_means() {
             0 => ColorMode::Rgb,
             n => ColorMode::Spectral(SpectralGrid::new(400.0, 750.0, n).unwrap()),
         };
-        let basis = Basis {
-            mode,
-            k: 683.0,
-            line_split: false,
-        };
+        let basis = Basis::new(mode, 683.0, false);
         let bins = basis.channels();
         let nodes = basis.nodes();
         let optics = SootOptics::propane();
