@@ -3,8 +3,8 @@
 //!
 //! glibc slides its thresholds by default: once a block above 128 KiB it mapped on its own is freed, blocks up to
 //! that size come from the arenas and up to twice it stay there when freed. After a build whose transients reach
-//! megabytes, each render worker's arena so keeps a megabyte or more it no longer uses (1.2 MB of the scattering
-//! room's peak, 3–5 MB of the fire-lit room's: docs/results/log.md, "Memory: glibc's thresholds held").
+//! megabytes, each render worker's arena so keeps memory it no longer uses under the render's peak
+//! (docs/results/log.md, "Memory: glibc's thresholds held").
 
 /// Holds glibc's mapping threshold at its documented default (128 KiB), which turns its sliding off: a large
 /// block freed goes back to the system at once. Called by the command line first; a host embedding this library
@@ -20,8 +20,8 @@ pub fn hold_thresholds() {
 
 /// Gives the memory a build freed back to the system. glibc's allocator keeps what a program frees for its next
 /// requests — the build's transients in each worker's arena, below the blocks that stay — so without this the
-/// render's film and tiles would come on top of them: 6–9 MB of the peak on the nanovdb fire-lit rooms
-/// (docs/results/log.md, "Memory: the film's twins apart, the light's copy in bricks").
+/// render's film and tiles would come on top of them (docs/results/log.md, "Memory: the film's twins apart, the
+/// light's copy in bricks").
 #[allow(unsafe_code)]
 pub fn give_back_freed() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]

@@ -123,9 +123,17 @@ impl Model {
     /// colour grid.
     pub(super) fn soot_copy(&self) -> Model {
         Model {
+            basis: self.basis.clone(),
+            mode: self.mode,
+            a: self.a.clone(),
             a_t: None,
+            s: self.s.clone(),
+            j: self.j.clone(),
+            t_emit: self.t_emit,
+            physical_colour: self.physical_colour,
             scatter_color: None,
-            ..self.clone()
+            g: self.g,
+            point_model: self.point_model.clone(),
         }
     }
     pub(super) fn basis(&self) -> &Basis {

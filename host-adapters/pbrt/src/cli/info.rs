@@ -266,7 +266,7 @@ pub fn run(args: &InfoArgs) -> firemedium::Result<String> {
 
 /// The report as the command prints it.
 /// A channel's statistic in a column of 12: six decimals where they show it (a temperature, a density of order
-/// one), else six significant digits (a soot volume fraction of 1e-7 read as 0.000000 before).
+/// one), else six significant digits (a soot volume fraction of 1e-7 would read 0.000000).
 fn value(x: f64) -> String {
     if x == 0.0 || (x.abs() >= 1e-3 && x.abs() < 1e6) {
         format!("{x:.6}")

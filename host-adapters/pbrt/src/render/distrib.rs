@@ -14,10 +14,10 @@ pub struct Distribution2D {
 }
 
 /// Where in a cumulative table the search for a value starts and ends, by which of the table's equal parts of
-/// its total the value falls in (a guide table): a pixel filter's sample searched the whole table with a
-/// binary search whose branches mispredict, 6 % of a render's time. The search inside the guide's range is
-/// checked against the range's ends and falls back to the whole table, so it finds the index the whole-table
-/// search finds, always.
+/// its total the value falls in (a guide table): a pixel filter's sample searched the whole table with a binary
+/// search whose branches mispredict (docs/results/log.md, "The pixel filter's search guided"). The search inside
+/// the guide's range is checked against the range's ends and falls back to the whole table, so it finds the
+/// index the whole-table search finds, always.
 #[derive(Debug, Clone)]
 struct Guide {
     /// The parts per unit of the total (parts / total), and per part the first index whose value exceeds the
