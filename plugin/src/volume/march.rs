@@ -21,8 +21,9 @@ pub(super) fn integrate(v: &FireVolume, ray: &Ray, l: &mut [f64], t: &mut [f64])
             return march_lanes(v, lt, ray, l, t);
         }
     }
-    let mut sc = Scratch::new(v.channels());
-    integrate::integrate(v, ray, v.estimator.integrator(), &mut sc, l, t)
+    Scratch::with(v.channels(), |sc| {
+        integrate::integrate(v, ray, v.estimator.integrator(), sc, l, t)
+    })
 }
 
 /// As [`integrate`] with the march's step `step` (metres) instead of the volume's, for a volume that marches
@@ -45,10 +46,9 @@ pub(super) fn integrate_stepped(
                 .unwrap_or_else(|| march_lanes_mapped(v, lt, &stepped, |p| p, ray, l, t))
         }
         (Some(lt), Some(f)) => march_lanes_mapped(v, lt, &stepped, f, ray, l, t),
-        (None, _) => {
-            let mut sc = Scratch::new(v.channels());
-            integrate::integrate(&stepped, ray, integrate::Integrator::March, &mut sc, l, t)
-        }
+        (None, _) => Scratch::with(v.channels(), |sc| {
+            integrate::integrate(&stepped, ray, integrate::Integrator::March, sc, l, t)
+        }),
     }
 }
 

@@ -166,14 +166,16 @@ impl Advected<'_> {
     /// has them); returns the exit parameter.
     pub(super) fn integrate(&self, ray: &Ray, l: &mut [f64], t: &mut [f64]) -> f64 {
         if self.v.estimator.integrator() != integrate::Integrator::March {
-            let mut sc = Scratch::new(self.v.channels());
-            return integrate::integrate(self, ray, self.v.estimator.integrator(), &mut sc, l, t);
+            return Scratch::with(self.v.channels(), |sc| {
+                integrate::integrate(self, ray, self.v.estimator.integrator(), sc, l, t)
+            });
         }
         if let Some(lt) = self.v.estimator.lanes() {
             return march::march_lanes_mapped(self.v, lt, self, |p| self.displaced(p), ray, l, t);
         }
-        let mut sc = Scratch::new(self.v.channels());
-        integrate::integrate(self, ray, integrate::Integrator::March, &mut sc, l, t)
+        Scratch::with(self.v.channels(), |sc| {
+            integrate::integrate(self, ray, integrate::Integrator::March, sc, l, t)
+        })
     }
 
     /// Transmittance only.
@@ -183,8 +185,9 @@ impl Advected<'_> {
             self.integrate(ray, &mut l, t);
             return;
         }
-        let mut sc = Scratch::new(self.v.channels());
-        integrate::transmittance(self, ray, self.v.estimator.integrator(), &mut sc, t)
+        Scratch::with(self.v.channels(), |sc| {
+            integrate::transmittance(self, ray, self.v.estimator.integrator(), sc, t)
+        })
     }
 
     /// The first real scattering event.
@@ -194,8 +197,9 @@ impl Advected<'_> {
         l: &mut [f64],
         w: &mut [f64],
     ) -> integrate::Event {
-        let mut sc = Scratch::new(self.v.channels());
-        integrate::sample_scatter(self, ray, &mut sc, l, w)
+        Scratch::with(self.v.channels(), |sc| {
+            integrate::sample_scatter(self, ray, sc, l, w)
+        })
     }
 }
 

@@ -265,8 +265,9 @@ impl FireVolume {
         match adv {
             Some(a) => a.transmittance(ray, t),
             None => {
-                let mut sc = Scratch::new(self.channels());
-                integrate::transmittance(self, ray, self.estimator.integrator(), &mut sc, t);
+                Scratch::with(self.channels(), |sc| {
+                    integrate::transmittance(self, ray, self.estimator.integrator(), sc, t)
+                });
             }
         }
         self.thick_lines(adv, ray, ray.t1, None, t, lines::Fold::Add);
@@ -282,10 +283,9 @@ impl FireVolume {
     ) -> Event {
         let ev = match adv {
             Some(a) => a.sample_scatter(ray, l, w),
-            None => {
-                let mut sc = Scratch::new(self.channels());
-                integrate::sample_scatter(self, ray, &mut sc, l, w)
-            }
+            None => Scratch::with(self.channels(), |sc| {
+                integrate::sample_scatter(self, ray, sc, l, w)
+            }),
         };
         self.scatter_lines(adv, ray, ev, l, w)
     }
