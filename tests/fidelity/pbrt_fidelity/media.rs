@@ -577,3 +577,89 @@ AttributeEnd
         );
     }
 }
+
+#[test]
+fn a_scattering_fire_lights_a_floor_alike_whether_its_paths_aim_at_it_or_not() {
+    // A floor 2–3 m from a scattering (albedo 0.8), emitting unit box, seen from above with the fire out of view:
+    // the light on it is the fire's, unscattered and scattered out. Aiming a share of the floor's directions at the
+    // fire's box (by default where the fire's light is left out, as here) weighs each path by the mixture's
+    // density: the same mean as the BSDF's directions alone, and less noise.
+    let dir = out_dir("guide");
+    let ones = ["1"; 27].join(" ");
+    let temps = ["2000"; 27].join(" ");
+    let text = format!(
+        r#"LookAt 3 0.5 4   3 0.5 0   0 1 0
+Camera "perspective" "float fov" 14
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "g.exr"
+Sampler "independent" "integer pixelsamples" 64
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 5
+WorldBegin
+MakeNamedMedium "fire" "string type" "uniformgrid" "integer nx" 3 "integer ny" 3 "integer nz" 3
+  "float density" [ {ones} ] "float temperature" [ {temps} ]
+  "spectrum sigma_a" [200 1 900 1] "spectrum sigma_s" [200 4 900 4]
+  "point3 p0" [ 0 0 0 ] "point3 p1" [ 1 1 1 ]
+AttributeBegin
+  MediumInterface "fire" ""
+  Material "interface"
+  Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0  0 0 1  1 0 1  0 1 1  1 1 1 ]
+    "integer indices" [ 0 2 3 0 3 1  4 5 7 4 7 6  0 1 5 0 5 4  2 6 7 2 7 3  0 4 6 0 6 2  1 3 7 1 7 5 ]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+Shape "trianglemesh" "point3 P" [ -5 -5 -0.001  8 -5 -0.001  8 6 -0.001  -5 6 -0.001 ] "integer indices" [ 0 1 2 0 2 3 ]
+"#
+    );
+    let scene = dir.join("floor.pbrt");
+    std::fs::write(&scene, text).unwrap();
+    // Per pixel Y, and the render's own estimate of its relative RMSE (two interleaved halves of each pixel's
+    // samples).
+    let floor = |guide: &str| {
+        let out = dir.join(format!("{guide}.exr"));
+        let args = [
+            "--spp",
+            "8192",
+            "--seed",
+            "5",
+            "--stats",
+            "--fire-guide",
+            guide,
+        ];
+        let o = run_render(&scene, &out, &args);
+        let log =
+            String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{log}");
+        let rmse: f64 = log
+            .split("estimated relative RMSE ")
+            .nth(1)
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|r| r.parse().ok())
+            .unwrap_or_else(|| panic!("no estimated error in {log}"));
+        let img = read_exr(&out);
+        let ys: Vec<f64> = (0..16 * 16)
+            .map(|k| y_of(mean_rgb(&img, (k % 16, k % 16 + 1), (k / 16, k / 16 + 1))))
+            .collect();
+        (ys, rmse)
+    };
+    let (off, e_off) = floor("off");
+    let mean = off.iter().sum::<f64>() / off.len() as f64;
+    assert!(mean > 0.0, "the fire lights the floor");
+    for guide in ["auto", "0.9"] {
+        // The pixels' differences from the BSDF's alone (the floor's own gradient cancels): their mean and its
+        // standard error.
+        let (ys, e) = floor(guide);
+        let d: Vec<f64> = ys.iter().zip(&off).map(|(a, b)| a - b).collect();
+        let n = d.len() as f64;
+        let dm = d.iter().sum::<f64>() / n;
+        let se = (d.iter().map(|x| (x - dm).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        eprintln!("{guide}: floor Y {mean:.5e}, aimed − BSDF alone {dm:.3e} ± {se:.2e}; estimated rel. RMSE {e:.4} (BSDF alone {e_off:.4})");
+        assert!(
+            dm.abs() < 4.0 * se + 1e-3 * mean,
+            "{guide}: the floor's mean moved by {dm} ± {se} of {mean}"
+        );
+        // The aimed paths reach the fire more often: less noise.
+        assert!(
+            e < 0.8 * e_off,
+            "{guide}: estimated rel. RMSE {e}, BSDF alone {e_off}"
+        );
+    }
+}

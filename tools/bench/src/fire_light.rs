@@ -26,8 +26,9 @@ pub struct Estimator {
 /// that the light's build-time check keeps, in every bin; `coarse`: that in the 8 bins the check allows, the
 /// default — at the coarsest of 16, 32 or 64 steps across the fire that the check allows; `steps64`: at 64 steps
 /// through the 2³ copy, the default before that on the room at 256³; `corrected`: toward the volume's march with
-/// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (pbrt-v4's
-/// strategy: emission found only by paths that pass through the fire).
+/// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (emission found
+/// only by paths that pass through the fire; a scattering fire's surfaces aiming half their directions at it, as
+/// the renderer's default; `pbrt`: pbrt-v4's estimator, the BSDF's directions alone).
 pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "off",
@@ -305,6 +306,8 @@ pub fn ladder(
                     .unwrap_or_default(),
                 fire_light_inside: e.inside,
                 fire_light_forced: true,
+                // (pbrt-v4's estimator: its BSDF's directions alone, none aimed at a scattering fire.)
+                fire_guide: e.ratio.then_some(0.0),
                 res: Some(res),
                 ..Default::default()
             },

@@ -218,6 +218,17 @@ impl Bxdf {
         }
     }
 
+    /// Whether a path may leave this BxDF by a direction it did not sample ([`super::guide`]): it reflects only,
+    /// has no specular lobe, and its `pdf` and `f` are exact (not the layered BSDF's random-walk estimates).
+    pub fn guidable(&self) -> bool {
+        let fl = self.flags();
+        !matches!(self, Bxdf::Layered(_))
+            && fl.reflection
+            && !fl.transmission
+            && !fl.specular
+            && fl.non_specular()
+    }
+
     /// f(wo, wi), local directions; the layered BSDF's is an unbiased random-walk estimate drawn with `seed`.
     pub fn f(&self, wo: Vec3A, wi: Vec3A, mode: Mode, seed: u64) -> S {
         match self {

@@ -107,6 +107,73 @@ fn sample_bsdf(
     (wi.is_finite() && wi != Vec3A::ZERO).then_some((wi, bs))
 }
 
+/// A direction from a surface whose BxDF can be [guided](super::guide): the guide's with its share, else the
+/// BSDF's; the world direction, the path's gain f·|cos| over the mixture's density, and that density (for MIS).
+#[inline]
+fn sample_guided(
+    bxdf: &Bxdf,
+    guide: &super::guide::Guide,
+    (p, ns, wo_l): (Vec3A, Vec3A, Vec3A),
+    seed: u64,
+    rng: &mut Samples,
+) -> Option<(Vec3A, S, f32)> {
+    let wi = if (rng.next_f64() as f32) < guide.prob() {
+        let u = [0; 3].map(|_| rng.next_f64() as f32);
+        guide.sample(p, u)?
+    } else {
+        sample_bsdf(bxdf, wo_l, ns, seed, rng)?.0
+    };
+    let wi_l = to_local(ns, wi);
+    let f = bxdf.f(wo_l, wi_l, Mode::Radiance, seed);
+    let pdf = guide.mixed(
+        p,
+        wi,
+        bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed),
+    );
+    (pdf > 0.0 && !f.is_black()).then(|| (wi, f * (wi_l.z.abs() / pdf), pdf))
+}
+
+/// How a path leaves a surface: its direction, the gain f·|cos|/pdf, the origin and pdf for MIS (None after a
+/// specular bounce) and the η² a refraction crossed (1 for a reflection).
+struct Left {
+    wi: Vec3A,
+    gain: S,
+    mis: Option<(Vec3A, f32)>,
+    eta2: f32,
+}
+
+/// The direction a path leaves a surface by (world point `p`, shading normal `ns`, `wo_l` in its frame): the
+/// BSDF's sample, or — where the BxDF can be guided — the mixture's with `guide`; None when sampling failed.
+#[inline]
+fn leave(
+    bxdf: &Bxdf,
+    guide: Option<&super::guide::Guide>,
+    (p, ns, wo_l): (Vec3A, Vec3A, Vec3A),
+    seed: u64,
+    rng: &mut Samples,
+) -> Option<Left> {
+    if let Some(g) = guide {
+        let (wi, gain, pdf) = sample_guided(bxdf, g, (p, ns, wo_l), seed, rng)?;
+        return Some(Left {
+            wi,
+            gain,
+            mis: Some((p, pdf)),
+            eta2: 1.0,
+        });
+    }
+    let (wi, bs) = sample_bsdf(bxdf, wo_l, ns, seed, rng)?;
+    Some(Left {
+        wi,
+        gain: bs.f * (bs.wi.z.abs() / bs.pdf),
+        mis: (!bs.specular).then(|| (p, mis_pdf(bxdf, wo_l, &bs, seed))),
+        eta2: if bs.reflection {
+            1.0
+        } else {
+            bs.etap * bs.etap
+        },
+    })
+}
+
 /// A non-specular BSDF sample's solid-angle pdf for MIS (the BSDF's own when the sample's is only proportional).
 #[inline]
 fn mis_pdf(bxdf: &Bxdf, wo_l: Vec3A, bs: &super::bsdf::Sample, seed: u64) -> f32 {
@@ -417,6 +484,8 @@ impl Integrator<'_> {
                 break;
             }
             Split::mark(&mut split, depth, l);
+            // Where a share of the directions aims at a scattering fire ([`super::guide`]).
+            let guide = sc.guide.as_ref().filter(|_| bxdf.guidable());
             // Next-event estimation through the BSDF, weighted against BSDF sampling for lights paths can hit.
             if bxdf.flags().non_specular() && !sc.lights.is_empty() {
                 let li = (rng.next_f64() * sc.lights.len() as f64) as usize % sc.lights.len();
@@ -441,7 +510,8 @@ impl Integrator<'_> {
                     } * wi_l.z.abs();
                     if !f.is_black() {
                         let pb = if pl > 0.0 {
-                            bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed)
+                            let pb = bxdf.pdf(wo_l, wi_l, Mode::Radiance, Lobes::ALL, seed);
+                            guide.map_or(pb, |g| g.mixed(h.p, wi, pb))
                         } else {
                             0.0
                         };
@@ -452,18 +522,15 @@ impl Integrator<'_> {
                     light_sampled(&mut tally, true, &sc.lights[li], t0, &l, n_bins);
                 }
             }
-            // Sample the BSDF.
-            let Some((wi, bs)) = sample_bsdf(&bxdf, wo_l, h.ns, seed, rng) else {
+            let Some(left) = leave(&bxdf, guide, (h.p, h.ns, wo_l), seed, rng) else {
                 break;
             };
-            beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
+            beta *= left.gain;
             if !beta.max().is_finite() {
                 break;
             }
-            mis = (!bs.specular).then(|| (h.p, mis_pdf(&bxdf, wo_l, &bs, seed)));
-            if !bs.reflection {
-                eta_scale *= bs.etap * bs.etap;
-            }
+            (mis, eta_scale) = (left.mis, eta_scale * left.eta2);
+            let wi = left.wi;
             (o, medium) = spot.leave(wi);
             skipped = None;
             d = wi;

@@ -10,6 +10,7 @@ pub mod cloud;
 pub mod distrib;
 pub mod envmap;
 pub mod film;
+pub mod guide;
 pub mod integrator;
 pub mod layered;
 mod lights;

@@ -10,6 +10,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
+mod stats;
+use stats::stats;
+
 #[derive(Debug, Args)]
 // (Negative numbers are values: `--temperature -5` is refused by its range, not taken for a flag.)
 #[command(allow_negative_numbers = true)]
@@ -69,6 +72,12 @@ pub struct RenderArgs {
     /// a light sample's line through the fire costs more than it saves there).
     #[arg(long = "fire-light-inside")]
     fire_light_inside: bool,
+    /// Where the surfaces' paths go toward a fire that scatters and emits: `auto` (default: a share of them aims
+    /// at the fire's box wherever its own light is left out), `off` (the BSDF alone, pbrt-v4's way), or the
+    /// share aimed at it (0 < P < 1). The same image up to noise either way.
+    #[arg(long = "fire-guide", value_name = "auto|off|P", default_value = "auto",
+          value_parser = parse_guide)]
+    fire_guide: GuideArg,
     /// How the camera's rays (and their mirror images) gather a scattering fire's emission: `march` (the whole
     /// segment, deterministic, as for a fire that does not scatter; delta tracking then only picks where the path
     /// scatters), `track` (at delta tracking's tentative collisions, pbrt-v4's estimator: no march lattice), or
@@ -356,6 +365,10 @@ fn overrides(a: &RenderArgs, frame: Option<i64>) -> scene::Overrides {
         fire_light_forced: a.fire_light != "auto",
         fire_light_params: a.fire_light_param.clone(),
         fire_light_inside: a.fire_light_inside,
+        fire_guide: match a.fire_guide {
+            GuideArg::Auto => None,
+            GuideArg::Share(p) => Some(p),
+        },
         host_tracking: a.tracking == "host",
         camera_march: match a.camera_emission.as_str() {
             "march" => Some(true),
@@ -455,6 +468,13 @@ fn metadata(
                 .chain(a.fire_light_param.iter().map(|(n, v)| format!("{n}={v}")))
                 .collect::<Vec<_>>()
                 .join(" "),
+        ),
+        (
+            // Where the surfaces' paths aimed: `off`, or the share aimed at the box of the scattering fires.
+            "fire_guide".to_string(),
+            sc.guide
+                .as_ref()
+                .map_or_else(|| "off".to_string(), |g| format!("{}", g.prob())),
         ),
         (
             // The C ABI of the plugin that rendered the media (none without plugin media).
@@ -868,81 +888,35 @@ pub(crate) fn parse_noise_threshold(s: &str) -> Result<f64, String> {
     }
 }
 
-/// What `--stats` prints after a render: the scene, what the plugin built per medium and its fire light (or why
-/// it was left out), the render's time, rays, error estimate and light samples, failed plugin calls and the peak
-/// memory.
-fn stats(sc: &scene::Scene, st: &render::Stats, load_seconds: f64, threads: usize) -> String {
-    let mut out = String::new();
-    out += &format!("scene: {:.3} s to load and build, {} primitives, {} lights, {} media, {} bins over {}–{} nm\n", load_seconds, sc.bvh.prims.len(), sc.lights.len(), sc.media.len(), sc.bins.n(), sc.bins.grid.min_nm(), sc.bins.grid.max_nm());
-    for m in &sc.media_reports {
-        out += &format!(
-            "medium \"{}\": plugin built {:.1} MB in {:.3} s ({} channels)\n",
-            m.name,
-            m.bytes as f64 / 1e6,
-            m.seconds,
-            m.channels
-        );
-        if let Some(lr) = m.light {
-            let li = lr.info;
-            let line = match li.line_block {
-                1 => "its voxels".to_string(),
-                b => format!("blocks of {b}³ voxels"),
-            };
-            let bins = if lr.line_channels < m.channels {
-                format!(" in {} of its {} channels", lr.line_channels, m.channels)
-            } else {
-                String::new()
-            };
-            out += &format!(
-                "  fire light: {} emitting voxels, {:.4e} W, {:.4e} lm, {:.1} MB in {:.3} s; its line through {line}{bins}\n",
-                li.voxels,
-                li.power_w,
-                li.power_lm,
-                li.bytes as f64 / 1e6,
-                li.build_seconds
-            );
-        }
-        if let Some(why) = &m.light_left_out {
-            out += &format!("  fire light: left out ({why})\n");
-        }
-    }
-    out += &format!(
-        "render: {:.3} s on {} threads, {} camera rays, {:.0} camera rays/s, {} passes ({})\n",
-        st.seconds,
-        threads,
-        st.camera_rays,
-        st.camera_rays as f64 / st.seconds.max(1e-9),
-        st.passes,
-        st.stop.describe()
-    );
-    if let Some(e) = st.rel_rmse_estimate {
-        out += &format!("  estimated relative RMSE {e:.4} (from two interleaved halves of each pixel's samples: docs/guide/rendering.md)\n");
-    }
-    if st.fire_light_samples > 0 {
-        out += &format!(
-            "  fire light: {} samples, {:.2} per camera ray\n",
-            st.fire_light_samples,
-            st.fire_light_samples as f64 / st.camera_rays.max(1) as f64
-        );
-    }
-    if st.plugin_failures.0 > 0 {
-        out += &format!(
-            "  plugin calls that failed: {} (first: {})\n",
-            st.plugin_failures.0,
-            st.plugin_failures.1.as_deref().unwrap_or("no message")
-        );
-    }
-    if let Some(bytes) = firemedium::budget::peak_rss() {
-        out += &format!("peak memory: {:.1} MB\n", bytes as f64 / 1e6);
-    }
-    out
-}
-
 pub(crate) fn parse_time_limit(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(t) if t > 0.0 && t <= 1e9 => Ok(t),
         Ok(t) => Err(format!("{t}: expected seconds above 0, at most 1e9")),
         Err(e) => Err(format!("{s:?}: {e}")),
+    }
+}
+
+/// `--fire-guide`: `auto`, or the share of the surfaces' directions aimed at a scattering fire (`off`: 0).
+#[derive(Debug, Clone, Copy)]
+enum GuideArg {
+    Auto,
+    Share(f32),
+}
+
+fn parse_guide(s: &str) -> Result<GuideArg, Error> {
+    match s {
+        "auto" => Ok(GuideArg::Auto),
+        "off" => Ok(GuideArg::Share(0.0)),
+        _ => s
+            .parse::<f32>()
+            .ok()
+            .filter(|p| (0.0..1.0).contains(p))
+            .map(GuideArg::Share)
+            .ok_or_else(|| {
+                Error::value(format!(
+                    "{s:?}: expected auto, off or a share of the directions in [0, 1), e.g. 0.5"
+                ))
+            }),
     }
 }
 

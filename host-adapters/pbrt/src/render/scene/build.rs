@@ -50,16 +50,23 @@ fn no_light_sampling(b: &Builder) -> Option<String> {
 /// 0.16-0.17, their grounds lit by the fire, far smoother with it: docs/results/log.md).
 const LIGHT_ALBEDO: f64 = 0.25;
 
-/// A fire's single-scattering albedo where its light interacts: Σ σ_s / Σ σ_t over every channel at the centres
-/// of a 24³ lattice over its box (its extinction-weighted albedo; 0 where nothing is there). Asked a plane of the
-/// lattice at a time: the whole lattice's coefficients in 32 channels would be 5 MB on top of the fire's grids.
-fn extinction_albedo(vol: &firemedium_loader::Volume) -> Result<f64, firemedium_loader::Error> {
+/// What a scattering fire's light meets: its single-scattering albedo, Σ σ_s / Σ σ_t over every channel at the
+/// centres of a 24³ lattice over its box (its extinction-weighted albedo; 0 where nothing is there), and whether
+/// it emits at any of them. Asked a plane of the lattice at a time: the whole lattice's coefficients in 32 channels
+/// would be 5 MB on top of the fire's grids.
+#[derive(Debug, Clone, Copy)]
+struct Look {
+    albedo: f64,
+    emits: bool,
+}
+
+fn look(vol: &firemedium_loader::Volume) -> Result<Look, firemedium_loader::Error> {
     const N: usize = 24;
     let info = vol.info();
     let (lo, hi) = (info.bounds_min, info.bounds_max);
     let k = N * N * info.channels as usize;
     let (mut sa, mut ss, mut j) = (vec![0f32; k], vec![0f32; k], vec![0f32; k]);
-    let (mut s, mut a) = (0f64, 0f64);
+    let (mut s, mut a, mut emits) = (0f64, 0f64, false);
     for z in 0..N {
         let points: Vec<[f64; 3]> = (0..N * N)
             .map(|i| {
@@ -70,9 +77,13 @@ fn extinction_albedo(vol: &firemedium_loader::Volume) -> Result<f64, firemedium_
         vol.coefficients(&points, &mut sa, &mut ss, &mut j)?;
         s = ss.iter().fold(s, |acc, &v| acc + f64::from(v));
         a = sa.iter().fold(a, |acc, &v| acc + f64::from(v));
+        emits |= j.iter().any(|&v| v > 0.0);
     }
     let t = s + a;
-    Ok(if t > 0.0 { s / t } else { 0.0 })
+    Ok(Look {
+        albedo: if t > 0.0 { s / t } else { 0.0 },
+        emits,
+    })
 }
 
 /// The film's pixel bounds (pbrt-v4's `FilmBaseParameters`): a crop window (the command line's, else the scene's)
@@ -141,7 +152,33 @@ fn pixel_bounds(
 
 /// Fire lights: every plugin medium that emits gets one, unless switched off, no path can sample it, or it
 /// scatters much ([`LIGHT_ALBEDO`]); each medium's report says what its light built or why it was left out.
-fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error> {
+/// Returns the media that scatter and emit, each with whether it has a light.
+fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<Vec<(usize, bool)>, Error> {
+    // Every scattering plugin medium's look (what its light would meet, whether it emits).
+    let mut looks = vec![None; b.media.len()];
+    for (mi, m) in b.media.iter().enumerate() {
+        if let Medium::Plugin(crate::render::scene::Plugin {
+            vol,
+            scatters: true,
+            ..
+        }) = m
+        {
+            looks[mi] = Some(look(vol).map_err(|e| {
+                Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
+            })?);
+        }
+    }
+    let scattering_fires = |b: &Builder| -> Vec<(usize, bool)> {
+        let lit = |mi: usize| {
+            b.lights
+                .iter()
+                .any(|l| matches!(l, Light::Fire(f) if f.medium == mi))
+        };
+        (looks.iter().enumerate())
+            .filter(|(_, l)| l.is_some_and(|l| l.emits))
+            .map(|(mi, _)| (mi, lit(mi)))
+            .collect()
+    };
     // Fire lights: every plugin medium that emits gets one, unless switched off or no path can sample it.
     let left_out = if ov.no_fire_light {
         Some("--fire-light off".to_string())
@@ -155,14 +192,11 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error
     } else {
         let mut report = 0;
         for (mi, m) in b.media.iter().enumerate() {
-            if let Medium::Plugin(crate::render::scene::Plugin { vol, scatters, .. }) = m {
+            if let Medium::Plugin(crate::render::scene::Plugin { vol, .. }) = m {
                 let r = report;
                 report += 1;
                 // A fire that scatters much: its light is left out unless asked for by name ([`LIGHT_ALBEDO`]).
-                if *scatters && !ov.fire_light_forced {
-                    let albedo = extinction_albedo(vol).map_err(|e| {
-                        Error::file(path.display(), format!("medium {mi}: its albedo: {e}"))
-                    })?;
+                if let (Some(Look { albedo, .. }), false) = (looks[mi], ov.fire_light_forced) {
                     if albedo > LIGHT_ALBEDO {
                         if let Some(rep) = b.reports.media.get_mut(r) {
                             rep.light_left_out = Some(format!(
@@ -206,7 +240,59 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<(), Error
             }
         }
     }
-    Ok(())
+    Ok(scattering_fires(b))
+}
+
+/// The share of the surfaces' directions aimed at a scattering fire's box by default, where its light is left out
+/// (measured on the scattering room: docs/results/log.md, "Surfaces aiming at a scattering fire").
+const GUIDE_SHARE: f32 = 0.5;
+
+/// Where a share of the surfaces' directions aims ([`crate::render::guide`]): the world box around the fires that
+/// scatter and emit — by default those without a light, with `--fire-guide P` every one —, each fire's own box
+/// (its medium-space bounds in world space) within the shapes that name it.
+fn fire_guide(
+    media: &[Medium],
+    ov: &Overrides,
+    fires: &[(usize, bool)],
+    boxes: &[Option<obvhs::aabb::Aabb>],
+) -> Option<crate::render::guide::Guide> {
+    use crate::render::guide::Guide;
+    let share = ov.fire_guide.unwrap_or(GUIDE_SHARE);
+    let guided: Vec<(usize, &crate::render::scene::Plugin)> = fires
+        .iter()
+        .filter(|(_, lit)| !lit || ov.fire_guide.is_some())
+        .filter_map(|&(mi, _)| match &media[mi] {
+            Medium::Plugin(p) => Some((mi, p)),
+            _ => None,
+        })
+        .collect();
+    if guided.is_empty() || !(share > 0.0) {
+        return None;
+    }
+    let mut lo = glam::Vec3A::splat(f32::INFINITY);
+    let mut hi = -lo;
+    for &(mi, p) in &guided {
+        let info = p.vol.info();
+        let (a, c) = (info.bounds_min, info.bounds_max);
+        let mut flo = glam::Vec3A::splat(f32::INFINITY);
+        let mut fhi = -flo;
+        for k in 0..8 {
+            let corner = glam::DVec3::new(
+                if k & 1 == 0 { a[0] } else { c[0] },
+                if k & 2 == 0 { a[1] } else { c[1] },
+                if k & 4 == 0 { a[2] } else { c[2] },
+            );
+            let w = p.to_world.transform_point3(corner).as_vec3a();
+            (flo, fhi) = (flo.min(w), fhi.max(w));
+        }
+        if let Some(Some(s)) = boxes.get(mi) {
+            (flo, fhi) = (flo.max(s.min), fhi.min(s.max));
+        }
+        (lo, hi) = (lo.min(flo), hi.max(fhi));
+    }
+    // (Uniformly over the box: cells weighted by the fire's extinction, its square root or its presence
+    // all measured less efficient on the scattering room, their paths deeper in the fire for no less noise.)
+    Guide::new(lo, hi, share)
 }
 
 /// The plugin the scene's plugin media need (from `--plugin`, the first such medium's `"string plugin"` — relative
@@ -615,7 +701,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         &format!("{camera_type} camera"),
         cp,
     )?;
-    fire_lights(&mut b, ov, path)?;
+    let fires = fire_lights(&mut b, ov, path)?;
     let scale = b.prims.iter().map(|p| {
         let bb = obvhs::Boundable::aabb(p);
         (bb.max - bb.min).max_element().abs()
@@ -642,6 +728,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
     let mut warnings: Vec<String> = warnings.into_iter().map(|(_, w)| w).collect();
     let bvh = Bvh::new(b.prims);
     let media_boxes: Vec<_> = (0..b.media.len()).map(|m| bvh.media_box(m)).collect();
+    let guide = fire_guide(&b.media, ov, &fires, &media_boxes);
     for (m, (medium, loc)) in b.media.iter().zip(&b.media_locs).enumerate() {
         for w in boundary_warnings(medium, &bvh, m, media_boxes[m].as_ref(), &camera) {
             warnings.push(format!("{loc}: warning: {w}"));
@@ -669,6 +756,7 @@ pub(super) fn build(path: &Path, desc: &Description, ov: &Overrides) -> Result<S
         aovs: ov.aovs.clone(),
         maxdepth: b.maxdepth,
         fire_light_inside: ov.fire_light_inside,
+        guide,
         film_name: b.film_name,
         eps: (extent * 1e-5).max(1e-6),
         warnings,

@@ -212,6 +212,9 @@ pub struct Scene {
     /// Whether a scattering event inside a fire samples that fire's own light (`--fire-light-inside`); by
     /// default only surfaces and the events in other media do (docs/results/log.md measures both).
     pub fire_light_inside: bool,
+    /// Where a share of the surfaces' directions aims: the box of the fires that scatter and emit
+    /// ([`crate::render::guide`]).
+    pub guide: Option<crate::render::guide::Guide>,
     pub film_name: Option<String>,
     pub eps: f32,
     pub warnings: Vec<String>,
@@ -250,6 +253,8 @@ pub struct Overrides {
     pub fire_light_params: Vec<(String, String)>,
     /// Scattering events inside a fire sample its own light too ([`Scene::fire_light_inside`]).
     pub fire_light_inside: bool,
+    /// The share of the surfaces' directions aimed at a scattering fire (`--fire-guide`; `None`: auto, 0: off).
+    pub fire_guide: Option<f32>,
     /// Film resolution instead of the scene's.
     pub res: Option<(usize, usize)>,
     /// pbrt-v4's `--cropwindow x0 x1 y0 y1` and `--pixelbounds x0 x1 y0 y1`, instead of the film's.
