@@ -582,8 +582,9 @@ AttributeEnd
 fn a_scattering_fire_lights_a_floor_alike_whether_its_paths_aim_at_it_or_not() {
     // A floor 2–3 m from a scattering (albedo 0.8), emitting unit box, seen from above with the fire out of view:
     // the light on it is the fire's, unscattered and scattered out. Aiming a share of the floor's directions at the
-    // fire's box (by default where the fire's light is left out, as here) weighs each path by the mixture's
-    // density: the same mean as the BSDF's directions alone, and less noise.
+    // fire's box (by default for every fire that scatters) weighs each path by the mixture's density, and the fire
+    // light's samples (left out of this fire by default, built by name) by MIS against it: the same mean as the
+    // BSDF's directions alone, and less noise.
     let dir = out_dir("guide");
     let ones = ["1"; 27].join(" ");
     let temps = ["2000"; 27].join(" ");
@@ -613,16 +614,18 @@ Shape "trianglemesh" "point3 P" [ -5 -5 -0.001  8 -5 -0.001  8 6 -0.001  -5 6 -0
     std::fs::write(&scene, text).unwrap();
     // Per pixel Y, and the render's own estimate of its relative RMSE (two interleaved halves of each pixel's
     // samples).
-    let floor = |guide: &str| {
-        let out = dir.join(format!("{guide}.exr"));
+    let floor = |guide: &str, light: &str, spp: &str| {
+        let out = dir.join(format!("{guide}-{light}.exr"));
         let args = [
             "--spp",
-            "8192",
+            spp,
             "--seed",
             "5",
             "--stats",
             "--fire-guide",
             guide,
+            "--fire-light",
+            light,
         ];
         let o = run_render(&scene, &out, &args);
         let log =
@@ -640,26 +643,32 @@ Shape "trianglemesh" "point3 P" [ -5 -5 -0.001  8 -5 -0.001  8 6 -0.001  -5 6 -0
             .collect();
         (ys, rmse)
     };
-    let (off, e_off) = floor("off");
+    let (off, e_off) = floor("off", "auto", "8192");
     let mean = off.iter().sum::<f64>() / off.len() as f64;
     assert!(mean > 0.0, "the fire lights the floor");
-    for guide in ["auto", "0.9"] {
+    // (The light's samples cost most: a quarter of the samples, their error scaled to the others'.)
+    for (guide, light, spp) in [
+        ("auto", "auto", 8192),
+        ("0.9", "auto", 8192),
+        ("auto", "power", 2048),
+    ] {
         // The pixels' differences from the BSDF's alone (the floor's own gradient cancels): their mean and its
         // standard error.
-        let (ys, e) = floor(guide);
+        let (ys, e) = floor(guide, light, &spp.to_string());
+        let e = e * (spp as f64 / 8192.0).sqrt();
         let d: Vec<f64> = ys.iter().zip(&off).map(|(a, b)| a - b).collect();
         let n = d.len() as f64;
         let dm = d.iter().sum::<f64>() / n;
         let se = (d.iter().map(|x| (x - dm).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        eprintln!("{guide}: floor Y {mean:.5e}, aimed − BSDF alone {dm:.3e} ± {se:.2e}; estimated rel. RMSE {e:.4} (BSDF alone {e_off:.4})");
+        eprintln!("{guide}, light {light}: floor Y {mean:.5e}, aimed − BSDF alone {dm:.3e} ± {se:.2e}; estimated rel. RMSE {e:.4} (BSDF alone {e_off:.4})");
         assert!(
             dm.abs() < 4.0 * se + 1e-3 * mean,
-            "{guide}: the floor's mean moved by {dm} ± {se} of {mean}"
+            "{guide}, light {light}: the floor's mean moved by {dm} ± {se} of {mean}"
         );
         // The aimed paths reach the fire more often: less noise.
         assert!(
             e < 0.8 * e_off,
-            "{guide}: estimated rel. RMSE {e}, BSDF alone {e_off}"
+            "{guide}, light {light}: estimated rel. RMSE {e}, BSDF alone {e_off}"
         );
     }
 }

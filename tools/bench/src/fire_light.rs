@@ -27,8 +27,8 @@ pub struct Estimator {
 /// default — at the coarsest of 16, 32 or 64 steps across the fire that the check allows; `steps64`: at 64 steps
 /// through the 2³ copy, the default before that on the room at 256³; `corrected`: toward the volume's march with
 /// probability 0.25), the weightings (power unless named: luminance, escaping), and the light off (emission found
-/// only by paths that pass through the fire; a scattering fire's surfaces aiming half their directions at it, as
-/// the renderer's default; `pbrt`: pbrt-v4's estimator, the BSDF's directions alone).
+/// only by paths that pass through the fire). With a scattering fire every one but `pbrt` (pbrt-v4's estimator,
+/// the BSDF's directions alone) aims half of the surfaces' directions at it, as the renderer does by default.
 pub const ESTIMATORS: &[Estimator] = &[
     Estimator {
         key: "off",

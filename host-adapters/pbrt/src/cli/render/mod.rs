@@ -72,8 +72,8 @@ pub struct RenderArgs {
     /// a light sample's line through the fire costs more than it saves there).
     #[arg(long = "fire-light-inside")]
     fire_light_inside: bool,
-    /// Where the surfaces' paths go toward a fire that scatters and emits: `auto` (default: a share of them aims
-    /// at the fire's box wherever its own light is left out), `off` (the BSDF alone, pbrt-v4's way), or the
+    /// Where the surfaces' paths go toward a fire that scatters and emits: `auto` (default: half of the directions
+    /// leaving a diffuse or rough surface aim at the fire's box), `off` (the BSDF alone, pbrt-v4's way), or the
     /// share aimed at it (0 < P < 1). The same image up to noise either way.
     #[arg(long = "fire-guide", value_name = "auto|off|P", default_value = "auto",
           value_parser = parse_guide)]

@@ -152,8 +152,8 @@ fn pixel_bounds(
 
 /// Fire lights: every plugin medium that emits gets one, unless switched off, no path can sample it, or it
 /// scatters much ([`LIGHT_ALBEDO`]); each medium's report says what its light built or why it was left out.
-/// Returns the media that scatter and emit, each with whether it has a light.
-fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<Vec<(usize, bool)>, Error> {
+/// Returns the media that scatter and emit.
+fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<Vec<usize>, Error> {
     // Every scattering plugin medium's look (what its light would meet, whether it emits).
     let mut looks = vec![None; b.media.len()];
     for (mi, m) in b.media.iter().enumerate() {
@@ -168,17 +168,6 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<Vec<(usiz
             })?);
         }
     }
-    let scattering_fires = |b: &Builder| -> Vec<(usize, bool)> {
-        let lit = |mi: usize| {
-            b.lights
-                .iter()
-                .any(|l| matches!(l, Light::Fire(f) if f.medium == mi))
-        };
-        (looks.iter().enumerate())
-            .filter(|(_, l)| l.is_some_and(|l| l.emits))
-            .map(|(mi, _)| (mi, lit(mi)))
-            .collect()
-    };
     // Fire lights: every plugin medium that emits gets one, unless switched off or no path can sample it.
     let left_out = if ov.no_fire_light {
         Some("--fire-light off".to_string())
@@ -240,28 +229,27 @@ fn fire_lights(b: &mut Builder, ov: &Overrides, path: &Path) -> Result<Vec<(usiz
             }
         }
     }
-    Ok(scattering_fires(b))
+    Ok((looks.iter().enumerate())
+        .filter(|(_, l)| l.is_some_and(|l| l.emits))
+        .map(|(mi, _)| mi)
+        .collect())
 }
 
-/// The share of the surfaces' directions aimed at a scattering fire's box by default, where its light is left out
-/// (measured on the scattering room: docs/results/log.md, "Surfaces aiming at a scattering fire").
+/// The share of the surfaces' directions aimed at a scattering fire's box by default (measured on the scattering
+/// room and the smoky campfire look: docs/results/log.md, "Surfaces aiming at a scattering fire").
 const GUIDE_SHARE: f32 = 0.5;
 
 /// Where a share of the surfaces' directions aims ([`crate::render::guide`]): the world box around the fires that
-/// scatter and emit — by default those without a light, with `--fire-guide P` every one —, each fire's own box
-/// (its medium-space bounds in world space) within the shapes that name it.
+/// scatter and emit, each fire's own box (its medium-space bounds in world space) within the shapes that name it.
 fn fire_guide(
     media: &[Medium],
     ov: &Overrides,
-    fires: &[(usize, bool)],
+    fires: &[usize],
     boxes: &[Option<obvhs::aabb::Aabb>],
 ) -> Option<crate::render::guide::Guide> {
-    use crate::render::guide::Guide;
     let share = ov.fire_guide.unwrap_or(GUIDE_SHARE);
-    let guided: Vec<(usize, &crate::render::scene::Plugin)> = fires
-        .iter()
-        .filter(|(_, lit)| !lit || ov.fire_guide.is_some())
-        .filter_map(|&(mi, _)| match &media[mi] {
+    let guided: Vec<(usize, &crate::render::scene::Plugin)> = (fires.iter())
+        .filter_map(|&mi| match &media[mi] {
             Medium::Plugin(p) => Some((mi, p)),
             _ => None,
         })
@@ -292,7 +280,7 @@ fn fire_guide(
     }
     // (Uniformly over the box: cells weighted by the fire's extinction, its square root or its presence
     // all measured less efficient on the scattering room, their paths deeper in the fire for no less noise.)
-    Guide::new(lo, hi, share)
+    crate::render::guide::Guide::new(lo, hi, share)
 }
 
 /// The plugin the scene's plugin media need (from `--plugin`, the first such medium's `"string plugin"` — relative
