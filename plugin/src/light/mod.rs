@@ -300,7 +300,11 @@ impl FireLight {
                 if line.block == 0 && !within(&light, m) {
                     continue;
                 }
-                light.mip = copies.swap_remove(k).1.map(Box::new);
+                // (Its lattice now, for the copy kept: a copy dropped never held one.)
+                light.mip = copies.swap_remove(k).1.map(|m| {
+                    let held = m.mip_bytes() as u64;
+                    Box::new(m.with_lattice(budget.saturating_sub(held)))
+                });
                 break;
             }
             // No copy at this step: the fire's own voxels, checked unless this is the last step tried — where a

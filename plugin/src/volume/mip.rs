@@ -9,18 +9,13 @@ use crate::majorant::MajorantGrid;
 
 impl FireVolume {
     /// This volume's soot model over other grids `ds` (density, then temperature: a coarser copy of its own, the
-    /// fire light's), its step `f` times its own, with a dense lattice of its own within `budget` bytes, whatever
-    /// this volume's `lattice` (else it reads its grids in place). `None` when the lanes cannot be built.
-    pub(crate) fn over(&self, ds: Dataset, f: f64, budget: u64) -> Option<FireVolume> {
-        // (The copy is made to fit in the caches, at most 128³ blocks: its lattice is a few MB, and the light's
-        // line marches it at every sample. Without it, the fire-lit room's render took 1.3× as long.)
-        let ch = ds.channels();
-        let (lat, ranges) =
-            match lattice::Lattice::build(&ch[0].grid, Some(&ch[1].grid), &[], BRICK, budget) {
-                Some((lat, ranges)) => (Some(lat), ranges.into_iter().map(Some).collect()),
-                None => (None, vec![None; 2]),
-            };
-        let majorant = MajorantGrid::with_ranges(&ds, BRICK, ranges);
+    /// fire light's), its step `f` times its own, reading its grids in place (whatever this volume's `lattice`) until
+    /// it is given a lattice of its own ([`with_lattice`](Self::with_lattice)). `None` when the lanes cannot be
+    /// built.
+    pub(crate) fn over(&self, ds: Dataset, f: f64) -> Option<FireVolume> {
+        // (No lattice yet: a copy is built, checked against the fire and perhaps dropped, and its lattice — the
+        // same values, marched alike — is built only for the copy kept, [`with_lattice`](Self::with_lattice).)
+        let majorant = MajorantGrid::with_ranges(&ds, BRICK, vec![None; 2]);
         let nb = majorant.counts().iter().product::<usize>();
         let sigma = self
             .model
@@ -52,17 +47,27 @@ impl FireVolume {
         };
         v.estimator
             .set_lanes(Some(lanes::LaneTables::build(&v, dmax, dmax, &[], step)?));
-        if let Some(lat) = lat {
-            v.estimator.set_lattice(lattice::Slot::ready(lat));
-        }
         Some(v)
     }
 
+    /// A coarse copy ([`over`](Self::over)) with its march lattice, within `budget` bytes (without one if the
+    /// budget or the allocator refuses: the same line, slower). The copy is made to fit in the caches, at most
+    /// 128³ blocks: its lattice is a few MB, and the light's line marches it at every sample (without it the
+    /// fire-lit room's render took 1.3× as long).
+    pub(crate) fn with_lattice(mut self, budget: u64) -> FireVolume {
+        let ch = self.grids.ds().channels();
+        if let Some((lat, _)) =
+            lattice::Lattice::build(&ch[0].grid, Some(&ch[1].grid), &[], BRICK, budget)
+        {
+            self.estimator.set_lattice(lattice::Slot::ready(lat));
+        }
+        self
+    }
+
     /// Whether a coarse copy carries this volume's light: its soot's alone ([`soot_only`](Self::soot_only)),
-    /// trilinear, in its own box (not pbrt-v4's shifted nanovdb box), its grids reading 0 where they store nothing.
+    /// trilinear, its grids reading 0 where they store nothing.
     pub(crate) fn coarse_copyable(&self) -> bool {
         self.soot_only()
-            && self.bounds.margin() == 0.0
             && self.grids.ds().interpolation() == Interpolation::Trilinear
             && self
                 .grids
