@@ -293,8 +293,6 @@ fn an_rgbgrid_emits_and_attenuates_as_pbrt_v4_defines_it() {
 /// A constant 2000 K grid filling the unit box (σ_a = σ_s = 1, albedo ½, isotropic), seen face-on and filling a
 /// 16 × 16 film, with no other light, rendered at `maxdepth` with `extra` parameters for the medium.
 fn scattering_box(dir: &Path, maxdepth: usize, medium: &str) -> PathBuf {
-    let ones = ["1"; 27].join(" ");
-    let temps = ["2000"; 27].join(" ");
     let text = format!(
         r#"LookAt 0.5 -20 0.5   0.5 0 0.5   0 0 1
 Camera "perspective" "float fov" 2.8624
@@ -303,21 +301,37 @@ Sampler "independent" "integer pixelsamples" 64
 PixelFilter "box"
 Integrator "volpath" "integer maxdepth" {maxdepth}
 WorldBegin
-MakeNamedMedium "box" "string type" "uniformgrid" "integer nx" 3 "integer ny" 3 "integer nz" 3
+{}"#,
+        unit_box(
+            "box",
+            1.0,
+            r#""point3 p0" [ -1 -1 -1 ] "point3 p1" [ 2 2 2 ]"#,
+            medium
+        )
+    );
+    let p = dir.join(format!("box{maxdepth}{}.pbrt", medium.len()));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A 3³ `uniformgrid` medium `name` of density 1 at 2000 K (σ_a 1, σ_s `sigma_s` per metre, its grid's box `at`,
+/// `more` parameters) inside the unit cube's `interface` mesh.
+fn unit_box(name: &str, sigma_s: f64, at: &str, more: &str) -> String {
+    let ones = ["1"; 27].join(" ");
+    let temps = ["2000"; 27].join(" ");
+    format!(
+        r#"MakeNamedMedium "{name}" "string type" "uniformgrid" "integer nx" 3 "integer ny" 3 "integer nz" 3
   "float density" [ {ones} ] "float temperature" [ {temps} ]
-  "spectrum sigma_a" [200 1 900 1] "spectrum sigma_s" [200 1 900 1]
-  "point3 p0" [ -1 -1 -1 ] "point3 p1" [ 2 2 2 ] {medium}
+  "spectrum sigma_a" [200 1 900 1] "spectrum sigma_s" [200 {sigma_s} 900 {sigma_s}]
+  {at} {more}
 AttributeBegin
-  MediumInterface "box" ""
+  MediumInterface "{name}" ""
   Material "interface"
   Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0  0 0 1  1 0 1  0 1 1  1 1 1 ]
     "integer indices" [ 0 2 3 0 3 1  4 5 7 4 7 6  0 1 5 0 5 4  2 6 7 2 7 3  0 4 6 0 6 2  1 3 7 1 7 5 ]
 AttributeEnd
 "#
-    );
-    let p = dir.join(format!("box{maxdepth}{}.pbrt", medium.len()));
-    std::fs::write(&p, text).unwrap();
-    p
+    )
 }
 
 /// The mean Y over the film's central 8 × 8 pixels and its standard error (from the pixels' spread).
@@ -586,8 +600,6 @@ fn a_scattering_fire_lights_a_floor_alike_whether_its_paths_aim_at_it_or_not() {
     // light's samples (left out of this fire by default, built by name) by MIS against it: the same mean as the
     // BSDF's directions alone, and less noise.
     let dir = out_dir("guide");
-    let ones = ["1"; 27].join(" ");
-    let temps = ["2000"; 27].join(" ");
     let text = format!(
         r#"LookAt 3 0.5 4   3 0.5 0   0 1 0
 Camera "perspective" "float fov" 14
@@ -596,19 +608,15 @@ Sampler "independent" "integer pixelsamples" 64
 PixelFilter "box"
 Integrator "volpath" "integer maxdepth" 5
 WorldBegin
-MakeNamedMedium "fire" "string type" "uniformgrid" "integer nx" 3 "integer ny" 3 "integer nz" 3
-  "float density" [ {ones} ] "float temperature" [ {temps} ]
-  "spectrum sigma_a" [200 1 900 1] "spectrum sigma_s" [200 4 900 4]
-  "point3 p0" [ 0 0 0 ] "point3 p1" [ 1 1 1 ]
-AttributeBegin
-  MediumInterface "fire" ""
-  Material "interface"
-  Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0  1 1 0  0 0 1  1 0 1  0 1 1  1 1 1 ]
-    "integer indices" [ 0 2 3 0 3 1  4 5 7 4 7 6  0 1 5 0 5 4  2 6 7 2 7 3  0 4 6 0 6 2  1 3 7 1 7 5 ]
-AttributeEnd
-Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
+{}Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]
 Shape "trianglemesh" "point3 P" [ -5 -5 -0.001  8 -5 -0.001  8 6 -0.001  -5 6 -0.001 ] "integer indices" [ 0 1 2 0 2 3 ]
-"#
+"#,
+        unit_box(
+            "fire",
+            4.0,
+            r#""point3 p0" [ 0 0 0 ] "point3 p1" [ 1 1 1 ]"#,
+            ""
+        )
     );
     let scene = dir.join("floor.pbrt");
     std::fs::write(&scene, text).unwrap();
