@@ -258,13 +258,13 @@ impl Basis {
 pub(super) struct LineAux {
     fine: SpectralGrid,
     fine_w: Vec<DVec3>,
-    pub(super) split: Option<LineSplit>,
+    split: Option<LineSplit>,
 }
 
 /// Quadrature nodes of a basis (see [`Basis::nodes`]).
 pub(super) struct Nodes {
     pub(super) lambda: Vec<f64>,
-    pub(super) terms: Vec<(usize, usize, f64)>,
+    terms: Vec<(usize, usize, f64)>,
 }
 
 /// The 1 nm grid over the CMFs that rgb mode bins lines on, and each bin's ∫ x̄ȳz̄.

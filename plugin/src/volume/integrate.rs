@@ -546,10 +546,10 @@ pub(crate) mod tests {
         pub sa: Vec<f64>,
         pub ss: Vec<f64>,
         pub j: Vec<f64>,
-        pub sphere: Option<f64>,
+        sphere: Option<f64>,
         pub step: f64,
         /// Majorant floor, so tracking sees null collisions even in thin media.
-        pub maj: f64,
+        maj: f64,
     }
 
     impl Medium for Uniform {

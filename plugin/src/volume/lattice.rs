@@ -50,7 +50,7 @@ pub(crate) struct Slot {
 /// threads the volume's build had.
 #[derive(Debug, Clone)]
 pub(crate) struct Plan {
-    pub(crate) dense: bool,
+    dense: bool,
     pub(crate) density: usize,
     pub(crate) temperature: Option<usize>,
     pub(crate) extra: Vec<usize>,

@@ -42,7 +42,7 @@ pub(super) struct Settings {
     /// Majorant brick edge, voxels.
     pub brick: usize,
     /// `precision "f32"`: the march in f32 lanes where every product fits.
-    pub f32_lanes: bool,
+    f32_lanes: bool,
     /// `lattice`: auto, dense, bricks or off.
     pub lattice: Lattice,
     pub integrator: Integrator,
