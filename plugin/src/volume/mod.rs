@@ -100,7 +100,7 @@ pub struct TableReport {
     /// Bytes.
     pub bytes: usize,
     /// Seconds to build.
-    seconds: f64,
+    pub seconds: f64,
 }
 
 /// What the fire emits, kept for the light's full-spectrum power (physical mode).
