@@ -248,38 +248,22 @@ fn fire_guide(
     boxes: &[Option<obvhs::aabb::Aabb>],
 ) -> Option<crate::render::guide::Guide> {
     let share = ov.fire_guide.unwrap_or(GUIDE_SHARE);
-    let guided: Vec<(usize, &crate::render::scene::Plugin)> = (fires.iter())
-        .filter_map(|&mi| match &media[mi] {
-            Medium::Plugin(p) => Some((mi, p)),
-            _ => None,
-        })
-        .collect();
-    if guided.is_empty() || !(share > 0.0) {
-        return None;
-    }
     let mut lo = glam::Vec3A::splat(f32::INFINITY);
     let mut hi = -lo;
-    for &(mi, p) in &guided {
-        let info = p.vol.info();
-        let (a, c) = (info.bounds_min, info.bounds_max);
-        let mut flo = glam::Vec3A::splat(f32::INFINITY);
-        let mut fhi = -flo;
-        for k in 0..8 {
-            let corner = glam::DVec3::new(
-                if k & 1 == 0 { a[0] } else { c[0] },
-                if k & 2 == 0 { a[1] } else { c[1] },
-                if k & 4 == 0 { a[2] } else { c[2] },
-            );
-            let w = p.to_world.transform_point3(corner).as_vec3a();
-            (flo, fhi) = (flo.min(w), fhi.max(w));
-        }
-        if let Some(Some(s)) = boxes.get(mi) {
-            (flo, fhi) = (flo.max(s.min), fhi.min(s.max));
-        }
+    for &mi in fires {
+        let Medium::Plugin(p) = &media[mi] else {
+            continue;
+        };
+        let [flo, fhi] = p.world_box().map(|v| v.as_vec3a());
+        let (flo, fhi) = match boxes.get(mi) {
+            Some(Some(s)) => (flo.max(s.min), fhi.min(s.max)),
+            _ => (flo, fhi),
+        };
         (lo, hi) = (lo.min(flo), hi.max(fhi));
     }
     // (Uniformly over the box: cells weighted by the fire's extinction, its square root or its presence
-    // all measured less efficient on the scattering room, their paths deeper in the fire for no less noise.)
+    // all measured less efficient on the scattering room, their paths deeper in the fire for no less noise. No
+    // fire, or a share of 0: an empty box or share, no guide.)
     crate::render::guide::Guide::new(lo, hi, share)
 }
 

@@ -29,6 +29,25 @@ pub struct Plugin {
     pub camera_march: bool,
 }
 
+impl Plugin {
+    /// The data's box in the world: its medium-space bounds' corners placed (low and high corners).
+    pub fn world_box(&self) -> [glam::DVec3; 2] {
+        let info = self.vol.info();
+        let (a, c) = (info.bounds_min, info.bounds_max);
+        let mut b = [glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY];
+        for k in 0..8 {
+            let corner = glam::DVec3::new(
+                if k & 1 == 0 { a[0] } else { c[0] },
+                if k & 2 == 0 { a[1] } else { c[1] },
+                if k & 4 == 0 { a[2] } else { c[2] },
+            );
+            let w = self.to_world.transform_point3(corner);
+            b = [b[0].min(w), b[1].max(w)];
+        }
+        b
+    }
+}
+
 /// Constant σ_a, σ_s, Le per bin and the phase function's g.
 #[derive(Debug, Clone)]
 pub struct Homogeneous {

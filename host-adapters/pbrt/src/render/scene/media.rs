@@ -617,43 +617,12 @@ pub(super) fn boundary_warnings(
     shapes: Option<&obvhs::aabb::Aabb>,
     camera: &Camera,
 ) -> Vec<String> {
-    let (
-        Medium::Plugin(super::Plugin {
-            vol,
-            to_world,
-            name,
-            ..
-        }),
-        Some(shapes),
-    ) = (medium, shapes)
-    else {
+    let (Medium::Plugin(plugin), Some(shapes)) = (medium, shapes) else {
         return Vec::new();
     };
-    let info = vol.info();
-    // The data's box in the world: its medium-space bounds' corners placed.
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for c in 0..8 {
-        let corner = DVec3::new(
-            if c & 1 == 0 {
-                info.bounds_min[0]
-            } else {
-                info.bounds_max[0]
-            },
-            if c & 2 == 0 {
-                info.bounds_min[1]
-            } else {
-                info.bounds_max[1]
-            },
-            if c & 4 == 0 {
-                info.bounds_min[2]
-            } else {
-                info.bounds_max[2]
-            },
-        );
-        let w = to_world.transform_point3(corner);
-        lo = lo.min(w);
-        hi = hi.max(w);
-    }
+    let name = &plugin.name;
+    // The data's box in the world.
+    let [lo, hi] = plugin.world_box();
     let (slo, shi) = (shapes.min.as_dvec3(), shapes.max.as_dvec3());
     let mut out = Vec::new();
     let (inside, outside) =
