@@ -2,8 +2,8 @@
 //! trilinear emission, their CDF, the embers' share; the line estimate's copy of the fire and its channels,
 //! each checked against the volume's march.
 
+use super::weigh::Weigher;
 use super::*;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 impl FireLight {
     /// The bins the coarse line marches (`linechannels`; `None`: all of them).
@@ -79,7 +79,6 @@ impl FireLight {
         let ds = vol.dataset();
         let dims = ds.dims();
         let voxel = ds.voxel_size();
-        let [p0, _] = ds.bounds();
         let c = vol.channels();
         let xyz = vol.channel_xyz();
         let widths: Vec<f64> = match vol.color_mode() {
@@ -144,20 +143,7 @@ impl FireLight {
         // Per brick (independent: each writes its own slot of the weights), in parallel chunks of bricks under the
         // build's thread budget; the power sums are added brick by brick in the bricks' order, so the light is the
         // same on any number of threads.
-        let weigher = Weigher {
-            vol: &vol,
-            topo: &topo,
-            weighting,
-            p0,
-            voxel,
-            xyz: &xyz,
-            widths: &widths,
-            src: src.as_ref(),
-            density: vol.density_channel(),
-            temperature: vol.temperature_channel(),
-            known: (0..=20_000).map(|_| AtomicU64::new(EMPTY)).collect(),
-            beyond: std::sync::Mutex::new(std::collections::HashMap::new()),
-        };
+        let weigher = Weigher::new(&vol, &topo, weighting, (&xyz, &widths), src.as_ref());
         let run = |part: &[usize]| {
             let (mut sa, mut ss, mut j) = (vec![0.0; c], vec![0.0; c], vec![0.0; c]);
             part.iter()
@@ -381,28 +367,6 @@ fn dilate_brick(
     }
 }
 
-/// Full line and band emission per unit number density, W·sr⁻¹ (all shipped lines of `e`, and its molecular bands,
-/// at T).
-fn line_power(e: &crate::species::Element, t: f64) -> f64 {
-    use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
-    if !(t > 0.0) {
-        return 0.0;
-    }
-    let kt = BOLTZMANN * t;
-    let z = e.partition_function(t);
-    e.bands().iter().map(|b| b.power(t)).sum::<f64>()
-        + e.lines()
-            .iter()
-            .map(|l| {
-                PLANCK * SPEED_OF_LIGHT / (4.0 * std::f64::consts::PI * l.lambda_nm * 1e-9)
-                    * l.a_ki
-                    * l.g_k as f64
-                    * (-l.e_k / kt).exp()
-                    / z
-            })
-            .sum::<f64>()
-}
-
 /// The bricks (by their slots, in the bricks' order) whose cells (`per` weights each, at the slot's place in `w`)
 /// hold weight, and the CDF over them, with its total.
 fn brick_cdf(
@@ -460,129 +424,6 @@ fn ember_weights(
             intensity * firemedium_core::ember::radiated_power(eps, r, em.temperature(i, 0.0));
     }
     Some((ember_w, ember_cdf))
-}
-
-/// What weighs a brick's voxels for the light: each voxel's luminance or power in the bins, and the sums the
-/// light's power (W: the soot's over the whole spectrum, the lines', the reaction's), luminous flux and, for
-/// `escaping`, mean extinction take from them.
-struct Weigher<'a> {
-    vol: &'a FireVolume,
-    topo: &'a crate::grid::Topology,
-    weighting: Weighting,
-    /// The lattice's corner and voxel size.
-    p0: DVec3,
-    voxel: DVec3,
-    /// Per channel its XYZ per unit radiance and its width (nm, or 1 per band).
-    xyz: &'a [DVec3],
-    widths: &'a [f64],
-    /// The physical fire's emitters (none in pbrt-v4's mode: the power is the bins').
-    src: Option<&'a crate::volume::Source>,
-    density: usize,
-    temperature: Option<usize>,
-    /// The soot's power depends on T only (an integral over the spectrum): found once per 0.5 K for the whole
-    /// build, in a table to 10 000 K that the workers fill as they meet a temperature (a race computes the same
-    /// value twice; [`EMPTY`] until then), in a shared map beyond it.
-    known: Vec<AtomicU64>,
-    beyond: std::sync::Mutex<std::collections::HashMap<i64, f64>>,
-}
-
-/// A [`Weigher::known`] entry not found yet.
-const EMPTY: u64 = u64::MAX;
-
-impl Weigher<'_> {
-    /// The soot's full-spectrum power per unit density at `t`.
-    fn soot_power(&self, t: f64) -> f64 {
-        let Some(s) = self.src else { return 0.0 };
-        let (lo, hi) = (10e-9f64.ln(), 1e-3f64.ln());
-        crate::quadrature::gauss_legendre(
-            |u| {
-                let l = u.exp();
-                s.soot.kappa(l * 1e9, 1.0, s.alpha) * spectral_radiance_si(t, l) * l
-            },
-            lo,
-            hi,
-            60,
-        )
-    }
-
-    /// Brick `b`'s voxel weights into `out` (allocated when one emits; `sa`, `ss`, `j` a channel's scratch), and
-    /// its sums: power, luminance, mean extinction over the bins' widths.
-    fn brick(
-        &self,
-        b: &[usize; 3],
-        sa: &mut [f64],
-        ss: &mut [f64],
-        j: &mut [f64],
-        out: &mut Option<Box<[f32; 512]>>,
-    ) -> (f64, f64, f64) {
-        let (mut pw, mut plm, mut ext) = (0.0, 0.0, 0.0);
-        let span = [0, 1, 2].map(|a| self.topo.brick_span(b[a], a));
-        for k in span[2].0..span[2].1 {
-            for jy in span[1].0..span[1].1 {
-                for i in span[0].0..span[0].1 {
-                    let p =
-                        self.p0 + (DVec3::new(i as f64, jy as f64, k as f64) + 0.5) * self.voxel;
-                    self.vol.coefficients(p, sa, ss, j);
-                    if self.weighting == Weighting::Escaping {
-                        ext += (0..self.widths.len())
-                            .map(|q| (sa[q] + ss[q]) * self.widths[q])
-                            .sum::<f64>();
-                    }
-                    let lum: f64 = (0..self.widths.len()).map(|q| j[q] * self.xyz[q].y).sum();
-                    let band: f64 = (0..self.widths.len()).map(|q| j[q] * self.widths[q]).sum();
-                    if !(lum > 0.0 || band > 0.0) {
-                        continue;
-                    }
-                    out.get_or_insert_with(|| Box::new([0.0; 512]))
-                        [self.topo.index(i, jy, k) % 512] = match self.weighting {
-                        Weighting::Luminance => lum,
-                        Weighting::Power | Weighting::Escaping => band,
-                    } as f32;
-                    plm += lum;
-                    pw += match self.src {
-                        None => band,
-                        Some(s) => {
-                            let chs = self.vol.dataset().channels();
-                            let at = |q: usize| chs[q].grid.at(i as i64, jy as i64, k as i64);
-                            let d = at(self.density).max(0.0) as f64;
-                            let t = self.temperature.map(|q| at(q) as f64).unwrap_or(0.0);
-                            let key = (t * 2.0).round() as i64;
-                            let soot =
-                                match usize::try_from(key).ok().and_then(|k| self.known.get(k)) {
-                                    Some(slot) => match slot.load(Relaxed) {
-                                        EMPTY => {
-                                            let p = self.soot_power(key as f64 / 2.0);
-                                            slot.store(p.to_bits(), Relaxed);
-                                            p
-                                        }
-                                        bits => f64::from_bits(bits),
-                                    },
-                                    None => *self
-                                        .beyond
-                                        .lock()
-                                        .unwrap_or_else(|e| e.into_inner())
-                                        .entry(key)
-                                        .or_insert_with(|| self.soot_power(key as f64 / 2.0)),
-                                };
-                            let mut v = d * s.soot_scale * soot;
-                            for (e, ch, scale) in &s.species {
-                                let nn = at(*ch).max(0.0) as f64 * scale;
-                                if nn > 0.0 {
-                                    v += nn * s.intensity * line_power(e, t);
-                                }
-                            }
-                            if let Some((ch, per_unit)) = s.reaction {
-                                v += at(ch).max(0.0) as f64 * per_unit;
-                            }
-                            v
-                        }
-                    };
-                }
-            }
-        }
-        let n = span.iter().map(|s| s.1 - s.0).product::<usize>().max(1) as f64;
-        (pw, plm, ext / (n * self.widths.iter().sum::<f64>()))
-    }
 }
 
 /// The cells' weights (`cell`³ voxels each, a brick's in its slot), from the voxels' weights `w` (a block per

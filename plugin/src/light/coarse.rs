@@ -18,6 +18,9 @@ use crate::grid::{Grid, Topology, BRICK};
 use crate::volume::FireVolume;
 use glam::DVec3;
 
+/// Samples per brick.
+const BV: usize = BRICK * BRICK * BRICK;
+
 /// The most voxels the copy holds (128³, 16 bytes each with its lattice): it exists to fit in the caches.
 const MAX_VOXELS: usize = 1 << 21;
 
@@ -68,15 +71,45 @@ pub(super) fn coarse(vol: &FireVolume, f: usize, budget: u64) -> Option<FireVolu
             return (0.0, 0.0);
         }
         let mut s = [0f64; 3];
+        // Row by row, each row's brick found once where the row lies in one brick of each grid (f divides the
+        // bricks' side: unless the grids' bricks are offset in x), else voxel by voxel: the same values in the
+        // same order either way.
+        let row_start = |g: &Grid, j: usize, k: usize| -> Option<(usize, usize)> {
+            let t = g.topology();
+            let o = t.offset();
+            let (x0, x1) = (lo[0] + o[0], hi[0] - 1 + o[0]);
+            let (y, z) = (j + o[1], k + o[2]);
+            (x0 / BRICK == x1 / BRICK).then(|| {
+                let slot = t.slot([x0 / BRICK, y / BRICK, z / BRICK]);
+                (
+                    slot * BV + BRICK * ((y % BRICK) + BRICK * (z % BRICK)),
+                    o[0],
+                )
+            })
+        };
+        let (dv, tv) = (dg.values(), tg.values());
         for k in lo[2]..hi[2] {
             for j in lo[1]..hi[1] {
-                for i in lo[0]..hi[0] {
-                    let (ii, jj, kk) = (i as i64, j as i64, k as i64);
-                    let d = dg.at(ii, jj, kk).max(0.0);
-                    let t = tg.at(ii, jj, kk);
-                    s[0] += d as f64;
-                    s[1] += d as f64 * emission(t);
-                    s[2] += t as f64;
+                match row_start(dg, j, k).zip(row_start(tg, j, k)) {
+                    Some(((db, dx), (tb, tx))) => {
+                        for i in lo[0]..hi[0] {
+                            let d = dv[db + (i + dx) % BRICK].max(0.0);
+                            let t = tv[tb + (i + tx) % BRICK];
+                            s[0] += d as f64;
+                            s[1] += d as f64 * emission(t);
+                            s[2] += t as f64;
+                        }
+                    }
+                    None => {
+                        for i in lo[0]..hi[0] {
+                            let (ii, jj, kk) = (i as i64, j as i64, k as i64);
+                            let d = dg.at(ii, jj, kk).max(0.0);
+                            let t = tg.at(ii, jj, kk);
+                            s[0] += d as f64;
+                            s[1] += d as f64 * emission(t);
+                            s[2] += t as f64;
+                        }
+                    }
                 }
             }
         }
@@ -121,7 +154,6 @@ fn bricked(
     cd: [usize; 3],
     block: impl Fn([usize; 3]) -> (f32, f32) + Sync,
 ) -> Option<Vec<(&'static str, Grid)>> {
-    const BV: usize = BRICK * BRICK * BRICK;
     let nb = cd.map(|n| n.div_ceil(BRICK));
     // A slab of bricks per task (a fire fills its box unevenly); each keeps its bricks that hold data.
     let slabs: Vec<usize> = (0..nb[2]).collect();

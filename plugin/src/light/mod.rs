@@ -18,7 +18,6 @@
 //!   the fire by themselves through MIS on directions: weight pdf_direction / (pdf_direction + pdf_bsdf) for the
 //!   light sample and pdf_bsdf / (pdf_bsdf + pdf_direction) for the emission those paths collect.
 
-use crate::blackbody::spectral_radiance_si;
 use crate::majorant::walk;
 use crate::params::choice;
 use crate::volume::FireVolume;
@@ -367,3 +366,4 @@ pub mod params;
 mod pdf;
 #[cfg(test)]
 mod tests;
+mod weigh;

@@ -80,12 +80,38 @@ impl FireVolume {
     /// The emission per unit density summed over the channels, per row of the temperature table, with the
     /// table's 1/ΔT and ΔT (K).
     pub(crate) fn emission_per_density(&self) -> (Vec<f64>, f64, f64) {
-        let c = self.channels();
         let j = self.model.j();
-        let sum = (0..j.rows)
-            .map(|r| (0..c).map(|ch| j.value(r, ch) as f64).sum())
-            .collect();
+        let sum = (0..j.rows).map(|r| self.weighed_row(r, None)).collect();
         (sum, j.inv_dt, j.dt)
+    }
+
+    /// Row `r` of the emission table summed over the channels, each weighed by `w` (1 without).
+    fn weighed_row(&self, r: usize, w: Option<&[f64]>) -> f64 {
+        let j = self.model.j();
+        (0..self.channels())
+            .map(|ch| j.value(r, ch) as f64 * w.map_or(1.0, |w| w[ch]))
+            .sum()
+    }
+
+    /// A voxel's emission weighed per channel twice over (`a`, `b`: the fire light's ȳ and the bins' widths),
+    /// as one table lookup per voxel, where this volume's emission is its soot's alone
+    /// ([`soot_only`](Self::soot_only)): the density times the emission table's rows, weighed once. `None`
+    /// elsewhere (species, lines, a `Lescale` or emission grid, diffusion: the point's coefficients then).
+    pub(crate) fn voxel_emission(&self, a: &[f64], b: &[f64]) -> Option<VoxelEmission> {
+        let c = self.channels();
+        if !self.soot_only() || a.len() < c || b.len() < c {
+            return None;
+        }
+        let j = self.model.j();
+        let rows = (0..j.rows)
+            .map(|r| [self.weighed_row(r, Some(a)), self.weighed_row(r, Some(b))])
+            .collect();
+        Some(VoxelEmission {
+            rows,
+            inv_dt: j.inv_dt,
+            t_emit: self.model.t_emit(),
+            has_temperature: self.grids.temperature().is_some(),
+        })
     }
 
     /// Whether this volume's light is its soot's alone, marched by the lane kernel: no species, emission or
@@ -107,5 +133,32 @@ impl FireVolume {
         self.grids.ds().bytes()
             + self.estimator.lattice().built().map_or(0, |l| l.bytes())
             + self.bounds.bytes()
+    }
+}
+
+/// A voxel's weighed emission from its density and temperature ([`FireVolume::voxel_emission`]).
+pub(crate) struct VoxelEmission {
+    /// Per row of the emission table (ΔT apart from 0 K): its channels weighed by the two weights.
+    rows: Vec<[f64; 2]>,
+    inv_dt: f64,
+    /// The temperature at and below which the gas does not emit, and whether there is a temperature grid.
+    t_emit: f64,
+    has_temperature: bool,
+}
+
+impl VoxelEmission {
+    /// The two weighed sums of the emission of density `d` at temperature `t` (K): the point's coefficients'
+    /// `j` summed against the weights, to rounding (the rows interpolated linearly in T, as each channel is).
+    #[inline]
+    pub(crate) fn at(&self, d: f64, t: f64) -> [f64; 2] {
+        // (As the point's: a NaN temperature does not emit.)
+        let emits = t > self.t_emit || !self.has_temperature;
+        if !emits {
+            return [0.0; 2];
+        }
+        let x = (t * self.inv_dt).clamp(0.0, (self.rows.len() - 1) as f64);
+        let i = (x as usize).min(self.rows.len() - 2);
+        let (r0, r1, f) = (self.rows[i], self.rows[i + 1], x - i as f64);
+        [0, 1].map(|k| d * (r0[k] + f * (r1[k] - r0[k])))
     }
 }

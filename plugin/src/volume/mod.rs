@@ -62,6 +62,7 @@ pub(crate) use integrate::MAX_STEPS;
 pub use integrate::{Event, Integrator, Ray};
 use integrate::{Medium, Scratch};
 pub(crate) use march::Stepper;
+pub(crate) use mip::VoxelEmission;
 pub use point::PointCoefficients;
 pub use query::{Answer, Want};
 use settings::{Emission, Settings};
