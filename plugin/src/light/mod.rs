@@ -245,7 +245,8 @@ impl FireLight {
         let start = Instant::now();
         // The step and the copy: given, or (both 0) the coarsest of the tried steps whose line — through a copy
         // of blocks no larger than about the step, or the fire's own voxels — stays within BLOCK_BIAS of the
-        // volume's march on the light's own rays; the finest is taken unchecked if none does.
+        // volume's march on the light's own rays (a step where the fire's own voxels are not tries no copy); the
+        // finest is taken unchecked if none does.
         let auto = line.step_voxels == 0.0 && line.block == 0;
         let tried: &[f64] = if auto {
             &LINE_STEPS_TRIED
@@ -278,6 +279,13 @@ impl FireLight {
                 let f = *fine.get_or_insert_with(|| light.line_sum(&light.vol, None));
                 light.block_bias(m, f).abs() <= BLOCK_BIAS
             };
+            // A copy is not asked to do better than the fire's own voxels at the same step: where those are
+            // already beyond the bound (the step's own bias), no copy is built or checked at it (but at the last,
+            // where one may be taken unchecked).
+            let own = (line.block == 0 && !last).then(|| within(&light, v));
+            if own == Some(false) {
+                continue;
+            }
             for &f in sizes {
                 if line.block == 0 && (f as f64 > ratio * std::f64::consts::SQRT_2) {
                     continue;
@@ -310,7 +318,8 @@ impl FireLight {
             // volume that bounds its march's bias (pbrt-v4's grids) takes its own march instead of an unchecked
             // line.
             let strict = auto && v.splits_thick_steps();
-            if light.mip.is_some() || (last && !strict) || within(&light, v) {
+            if light.mip.is_some() || (last && !strict) || own.unwrap_or_else(|| within(&light, v))
+            {
                 break;
             }
             if last {
