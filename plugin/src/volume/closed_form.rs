@@ -42,7 +42,7 @@ impl ClosedForm<'_> {
     pub fn absorption(&self, r: usize, k: usize) -> f32 {
         match self.model.a_t() {
             // (The rgb mode's table has the emission's rows: one build of both.)
-            Some(tab) => tab.value(r.min(tab.rows - 1), k),
+            Some(tab) => tab.value(r.min(tab.rows() - 1), k),
             None => self.model.a()[k] as f32,
         }
     }
@@ -86,8 +86,8 @@ impl FireVolume {
         }
         Ok(ClosedForm {
             channels: self.channels(),
-            rows: self.model.j().rows,
-            dt: self.model.j().dt,
+            rows: self.model.j().rows(),
+            dt: self.model.j().dt(),
             t_emit: if self.grids.temperature().is_none() {
                 f64::NEG_INFINITY
             } else {

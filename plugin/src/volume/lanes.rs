@@ -17,22 +17,6 @@ use super::tables::TTable;
 pub(crate) use super::tables::{Lane, W};
 use super::FireVolume;
 
-impl TTable {
-    /// The two rows around T and the fraction between them, as lanes.
-    #[inline(always)]
-    pub(super) fn lane_rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
-        let f = (t as f64 / self.dt).clamp(0.0, (self.rows - 1) as f64);
-        let i = (f as usize).min(self.rows - 2);
-        let a = &self.v[i * self.chunks..(i + 1) * self.chunks];
-        let b = &self.v[(i + 1) * self.chunks..(i + 2) * self.chunks];
-        (a, b, (f - i as f64) as f32)
-    }
-    /// The largest value in the table.
-    pub(super) fn max(&self) -> f64 {
-        self.v.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
-    }
-}
-
 /// The most species the lane march handles (the line data has seven elements).
 pub(crate) const MAX_SPECIES: usize = 8;
 

@@ -194,7 +194,7 @@ struct GroupSpecies {
 
 impl GroupSpecies {
     fn new(ch: usize, scale: f64, tab: TTable, width: usize) -> GroupSpecies {
-        let rows = (0..tab.rows)
+        let rows = (0..tab.rows())
             .flat_map(|r| (0..width).map(move |c| (r, c)))
             .map(|(r, c)| tab.value(r, c))
             .collect();

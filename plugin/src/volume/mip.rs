@@ -81,8 +81,8 @@ impl FireVolume {
     /// table's 1/ΔT and ΔT (K).
     pub(crate) fn emission_per_density(&self) -> (Vec<f64>, f64, f64) {
         let j = self.model.j();
-        let sum = (0..j.rows).map(|r| self.weighed_row(r, None)).collect();
-        (sum, j.inv_dt, j.dt)
+        let sum = (0..j.rows()).map(|r| self.weighed_row(r, None)).collect();
+        (sum, j.inv_dt(), j.dt())
     }
 
     /// Row `r` of the emission table summed over the channels, each weighed by `w` (1 without).
@@ -103,12 +103,12 @@ impl FireVolume {
             return None;
         }
         let j = self.model.j();
-        let rows = (0..j.rows)
+        let rows = (0..j.rows())
             .map(|r| [self.weighed_row(r, Some(a)), self.weighed_row(r, Some(b))])
             .collect();
         Some(VoxelEmission {
             rows,
-            inv_dt: j.inv_dt,
+            inv_dt: j.inv_dt(),
             t_emit: self.model.t_emit(),
             has_temperature: self.grids.temperature().is_some(),
         })

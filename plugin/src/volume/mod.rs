@@ -284,7 +284,7 @@ impl FireVolume {
             || self
                 .model
                 .j()
-                .v
+                .lanes()
                 .iter()
                 .any(|lane| lane.iter().any(|&x| x > 0.0))
     }

@@ -95,7 +95,7 @@ impl FireVolume {
             nodes.sort_unstable();
         }
         let chunks = k.div_ceil(W);
-        let rows = self.model.j().rows;
+        let rows = self.model.j().rows();
         let mut v = vec![[0f32; W]; rows * chunks];
         for r in 0..rows {
             for (q, &n) in nodes.iter().enumerate() {
@@ -116,7 +116,7 @@ impl FireVolume {
         }
         // The reference: emission per unit density at the fire's hottest temperature (within the table).
         let hottest = self.temperature_range().map_or(0.0, |r| r[1]);
-        let row = ((hottest * self.model.j().inv_dt).round().max(0.0) as usize).min(rows - 1);
+        let row = ((hottest * self.model.j().inv_dt()).round().max(0.0) as usize).min(rows - 1);
         let reference: Vec<f32> = (0..c).map(|ch| self.model.j().value(row, ch)).collect();
         if !reference.iter().all(|&x| x.is_finite() && x > 0.0) {
             return None;
@@ -124,13 +124,7 @@ impl FireVolume {
         let least = nodes.iter().position(|&n| n == least)?;
         Some(LineChannels {
             nodes,
-            j: TTable {
-                dt: self.model.j().dt,
-                inv_dt: self.model.j().inv_dt,
-                rows,
-                chunks,
-                v,
-            },
+            j: TTable::from_lanes(self.model.j().dt(), chunks, v),
             sigma,
             sig32: sig.iter().map(|&x| x as f32).collect(),
             sig,

@@ -41,13 +41,13 @@ pub(super) fn bytes_for(t_max: f64, c: usize, species: usize, t_absorption: bool
 /// (zero-padded), which the f32 march reads directly.
 #[derive(Debug, Clone, Default)]
 pub(super) struct TTable {
-    pub(super) dt: f64,
+    dt: f64,
     /// 1 / dt (the kernel multiplies).
-    pub(super) inv_dt: f64,
-    pub(super) rows: usize,
+    inv_dt: f64,
+    rows: usize,
     /// Lanes per row.
-    pub(super) chunks: usize,
-    pub(super) v: Vec<Lane>,
+    chunks: usize,
+    v: Vec<Lane>,
 }
 
 impl TTable {
@@ -90,6 +90,46 @@ impl TTable {
             chunks,
             v,
         }
+    }
+    /// The table of rows of `chunks` lanes each in `v`, `dt` K apart from 0 K (at least two rows).
+    pub(super) fn from_lanes(dt: f64, chunks: usize, v: Vec<Lane>) -> TTable {
+        TTable {
+            dt,
+            inv_dt: 1.0 / dt,
+            rows: v.len() / chunks.max(1),
+            chunks,
+            v,
+        }
+    }
+    /// The rows, ΔT between them (K) and 1/ΔT.
+    pub(super) fn rows(&self) -> usize {
+        self.rows
+    }
+    pub(super) fn dt(&self) -> f64 {
+        self.dt
+    }
+    pub(super) fn inv_dt(&self) -> f64 {
+        self.inv_dt
+    }
+    /// Lanes per row, and the rows' lanes one after another.
+    pub(super) fn chunks(&self) -> usize {
+        self.chunks
+    }
+    pub(super) fn lanes(&self) -> &[Lane] {
+        &self.v
+    }
+    /// The two rows around T and the fraction between them, as lanes.
+    #[inline(always)]
+    pub(super) fn lane_rows(&self, t: f32) -> (&[Lane], &[Lane], f32) {
+        let f = (t as f64 / self.dt).clamp(0.0, (self.rows - 1) as f64);
+        let i = (f as usize).min(self.rows - 2);
+        let a = &self.v[i * self.chunks..(i + 1) * self.chunks];
+        let b = &self.v[(i + 1) * self.chunks..(i + 2) * self.chunks];
+        (a, b, (f - i as f64) as f32)
+    }
+    /// The largest value in the table.
+    pub(super) fn max(&self) -> f64 {
+        self.v.iter().flatten().fold(0f32, |m, &x| m.max(x)) as f64
     }
     /// The table of channels 0..c and the table of the rest (one build that computes both, split).
     pub(super) fn split(&self, c: usize) -> (TTable, TTable) {
@@ -143,8 +183,8 @@ impl TTable {
 /// ranges cost two reads each instead of a scan of their rows (the rgb volume's bricks: 60 → 25 ms at 256³).
 /// The same values as a scan of the rows, bit for bit (tested).
 pub(super) struct RangeMax {
-    pub(super) dt: f64,
-    pub(super) rows: usize,
+    dt: f64,
+    rows: usize,
     c: usize,
     levels: Vec<Vec<f32>>,
 }

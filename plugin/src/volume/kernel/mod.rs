@@ -687,13 +687,14 @@ impl<'a, const CV: usize, const V: usize> Rows<'a, CV, V> {
     /// `None` if the table's rows hold fewer than CV·V channels.
     #[inline(always)]
     fn new(tab: &'a TTable) -> Option<Rows<'a, CV, V>> {
-        let ok = tab.chunks >= Self::LANES && tab.rows >= 2 && tab.v.len() == tab.rows * tab.chunks;
+        let (v, chunks, rows) = (tab.lanes(), tab.chunks(), tab.rows());
+        let ok = chunks >= Self::LANES && rows >= 2 && v.len() == rows * chunks;
         ok.then_some(Rows {
-            v: &tab.v,
-            chunks: tab.chunks,
-            inv_dt: tab.inv_dt,
-            last: (tab.rows - 1) as f64,
-            below: (tab.rows - 2) as f64,
+            v,
+            chunks,
+            inv_dt: tab.inv_dt(),
+            last: (rows - 1) as f64,
+            below: (rows - 2) as f64,
         })
     }
     /// The lower row index and the fraction toward the next of each temperature (as `TTable::lane_rows`, one

@@ -89,7 +89,7 @@ fn rgb_soot_rows_in_one_pass_equal_two() {
         basis.soot_rgb_rows(&nodes, &g, &f, &fallback, t)
     });
     let (a, j) = both.split(3);
-    for r in [0, 1, 1000, both.rows - 1] {
+    for r in [0, 1, 1000, both.rows() - 1] {
         for c in 0..3 {
             assert_eq!(a.value(r, c), both.value(r, c));
             assert_eq!(j.value(r, c), both.value(r, c + 3));
@@ -125,8 +125,8 @@ fn range_maxima_equal_the_row_scan() {
         ranges.push((x.min(y), x.max(y)));
     }
     let scan = |lo: f64, hi: f64, c: usize| {
-        let a = (lo / tab.dt).floor().clamp(0.0, (tab.rows - 1) as f64) as usize;
-        let b = (hi / tab.dt).ceil().clamp(0.0, (tab.rows - 1) as f64) as usize;
+        let a = (lo / tab.dt()).floor().clamp(0.0, (tab.rows() - 1) as f64) as usize;
+        let b = (hi / tab.dt()).ceil().clamp(0.0, (tab.rows() - 1) as f64) as usize;
         (a..=b).map(|r| tab.value(r, c)).fold(0.0, f32::max)
     };
     for (lo, hi) in ranges {
