@@ -206,6 +206,188 @@ pub fn zlib(src: &[u8], expected: usize) -> Result<Vec<u8>, DecodeError> {
     }
 }
 
+/// A zlib stream inflated as it is read: `len` compressed bytes at byte `pos` of `src`, read a window at a time,
+/// holding `expected` bytes — neither the stream nor what it holds is ever in memory whole (a NanoVDB ZIP
+/// grid's leaves go from it to the grid's bricks).
+#[cfg(feature = "zip")]
+pub struct Inflater<'a> {
+    file: &'a str,
+    /// What the stream holds, for errors ("grid 'density'").
+    what: String,
+    src: crate::cursor::Bytes<'a>,
+    /// Where the stream starts in `src`, the next compressed byte to read, and the stream's end.
+    start: u64,
+    next: u64,
+    end: u64,
+    /// Compressed bytes read and not yet inflated: `input[at..]`.
+    input: Vec<u8>,
+    at: usize,
+    state: Box<miniz_oxide::inflate::stream::InflateState>,
+    /// Bytes inflated so far, and the most the stream may hold.
+    out: u64,
+    expected: u64,
+    scratch: Vec<u8>,
+}
+
+/// Compressed bytes an [`Inflater`] reads from its source at a time.
+#[cfg(feature = "zip")]
+const INFLATE_WINDOW: usize = 1 << 18;
+
+#[cfg(feature = "zip")]
+impl<'a> Inflater<'a> {
+    pub fn new(
+        file: &'a str,
+        what: String,
+        src: crate::cursor::Bytes<'a>,
+        (pos, len): (u64, u64),
+        expected: u64,
+    ) -> Inflater<'a> {
+        use miniz_oxide::DataFormat;
+        Inflater {
+            file,
+            what,
+            src,
+            start: pos,
+            next: pos,
+            end: pos.saturating_add(len),
+            input: Vec::new(),
+            at: 0,
+            state: miniz_oxide::inflate::stream::InflateState::new_boxed(DataFormat::Zlib),
+            out: 0,
+            expected,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// Bytes inflated so far.
+    pub fn position(&self) -> u64 {
+        self.out
+    }
+
+    /// The file the stream is read from.
+    pub fn file(&self) -> &'a str {
+        self.file
+    }
+
+    /// Fills `buf` with the stream's next bytes: an error naming the stream's byte where it is corrupt, ends
+    /// short, or would hold more than expected.
+    pub fn read(&mut self, buf: &mut [u8]) -> Result<(), Error> {
+        use miniz_oxide::inflate::stream::inflate;
+        use miniz_oxide::{MZFlush, MZStatus};
+        let bad = |this: &Self, found: String| {
+            DecodeError::bad(format!("a zlib stream of {} bytes", this.expected), found).at(
+                this.file,
+                format!(
+                    "{}: byte {} of its zlib stream at byte {}",
+                    this.what, this.out, this.start
+                ),
+            )
+        };
+        if self.out.saturating_add(buf.len() as u64) > self.expected {
+            return Err(bad(
+                self,
+                format!("{} bytes asked of it", self.out + buf.len() as u64),
+            ));
+        }
+        let mut filled = 0;
+        let mut stalled = false;
+        while filled < buf.len() {
+            // More compressed bytes when those held are spent (or hold no whole code: kept in front).
+            if (self.at == self.input.len() || stalled) && self.next < self.end {
+                let n = (self.end - self.next).min(INFLATE_WINDOW as u64) as usize;
+                let fresh = self.src.read(self.file, self.next, n)?;
+                self.input.drain(..self.at);
+                self.input.extend_from_slice(&fresh);
+                (self.at, self.next) = (0, self.next + n as u64);
+            }
+            let more = self.next < self.end;
+            let r = inflate(
+                &mut self.state,
+                &self.input[self.at..],
+                &mut buf[filled..],
+                MZFlush::None,
+            );
+            self.at += r.bytes_consumed;
+            filled += r.bytes_written;
+            self.out += r.bytes_written as u64;
+            match r.status {
+                Ok(MZStatus::StreamEnd) if filled < buf.len() => {
+                    return Err(bad(self, format!("one of {} (it ends)", self.out)));
+                }
+                Ok(_) => {}
+                // (No progress for want of room or input: room is checked by the loop, input below.)
+                Err(miniz_oxide::MZError::Buf) => {}
+                Err(e) => {
+                    return Err(bad(
+                        self,
+                        format!("corrupt data or a wrong checksum ({e:?})"),
+                    ))
+                }
+            }
+            stalled = r.bytes_consumed == 0 && r.bytes_written == 0;
+            if stalled && !more && filled < buf.len() {
+                return Err(bad(self, format!("one of {} (truncated)", self.out)));
+            }
+        }
+        Ok(())
+    }
+
+    /// Inflates the rest of the stream (all `expected` bytes) and its end: an error unless it ends there with
+    /// its checksum (Adler-32) right — what proves values already read from it were the stream's.
+    pub fn finish(&mut self) -> Result<(), Error> {
+        use miniz_oxide::inflate::stream::inflate;
+        use miniz_oxide::{MZFlush, MZStatus};
+        self.skip(self.expected - self.out)?;
+        let mut spare = [0u8; 1];
+        loop {
+            if self.at == self.input.len() && self.next < self.end {
+                let n = (self.end - self.next).min(INFLATE_WINDOW as u64) as usize;
+                self.input = self.src.read(self.file, self.next, n)?.into_owned();
+                (self.at, self.next) = (0, self.next + n as u64);
+            }
+            let more = self.next < self.end;
+            let r = inflate(
+                &mut self.state,
+                &self.input[self.at..],
+                &mut spare,
+                MZFlush::None,
+            );
+            self.at += r.bytes_consumed;
+            let found = match r.status {
+                _ if r.bytes_written > 0 => "more data than that",
+                Ok(MZStatus::StreamEnd) => return Ok(()),
+                Err(miniz_oxide::MZError::Data) => "a wrong checksum or corrupt data",
+                _ if r.bytes_consumed == 0 && !more => "no end (truncated)",
+                _ => continue,
+            };
+            return Err(DecodeError::bad(
+                format!("a zlib stream of {} bytes and its end", self.expected),
+                found,
+            )
+            .at(
+                self.file,
+                format!(
+                    "{}: byte {} of its zlib stream at byte {}",
+                    self.what, self.out, self.start
+                ),
+            ));
+        }
+    }
+
+    /// Inflates and drops the stream's next `n` bytes.
+    pub fn skip(&mut self, mut n: u64) -> Result<(), Error> {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.resize(INFLATE_WINDOW, 0);
+        while n > 0 {
+            let k = n.min(scratch.len() as u64) as usize;
+            self.read(&mut scratch[..k])?;
+            n -= k as u64;
+        }
+        self.scratch = scratch;
+        Ok(())
+    }
+}
+
 #[cfg(not(feature = "zip"))]
 pub fn zlib(_src: &[u8], _expected: usize) -> Result<Vec<u8>, DecodeError> {
     Err(DecodeError::Feature("zip"))

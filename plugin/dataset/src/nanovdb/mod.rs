@@ -11,9 +11,12 @@
 //! Every offset is checked to land on a node of the right level inside the buffer before it is followed. An
 //! uncompressed grid is not held whole: the nodes before its leaves are read, then its leaves' masks, and their
 //! values go from the file to the grid's bricks as it is filled (a 256-voxel fire's two grids, 38 MB of file,
-//! peaked at 102 MB read whole); a ZIP grid is decompressed whole.
+//! peaked at 102 MB read whole); a ZIP grid is inflated twice as it is read, its values going from the stream to
+//! the bricks ([`zip`]).
 
 use super::compress::zlib;
+#[cfg(feature = "zip")]
+mod zip;
 use super::cursor::{Bytes, Cursor};
 use super::sparse::{
     bit, densify, missing_grid, InLeaves, Leaf, LeafValues, Tile, Transform, Tree,
@@ -207,6 +210,10 @@ enum LeafBytes<'a> {
     /// The file, the grid starting at byte `at`: the masks are read now, the values as the grid is filled
     /// ([`FileLeaves`]).
     File { src: Bytes<'a>, at: usize },
+    /// Each leaf's mask by its index among the grid's leaves (a ZIP grid's, found as it was inflated): the values
+    /// are read as the grid is filled.
+    #[cfg_attr(not(feature = "zip"), allow(dead_code))]
+    Masks(&'a [[u64; 8]]),
 }
 
 /// Parses one float grid into a tree: `buf` holds the grid from its start, at least up to its leaves (all of it
@@ -400,9 +407,10 @@ fn read_leaves(
     leaves: Vec<([i32; 3], usize)>,
     t: &mut Tree,
 ) -> Result<Vec<usize>, Error> {
-    let (mut lc, shift, in_file) = match leaf_bytes {
-        LeafBytes::Buffer => (c, 0, false),
-        LeafBytes::File { src, at } => (Cursor::over(file, src), at, true),
+    let (mut lc, shift, in_file, masks) = match leaf_bytes {
+        LeafBytes::Buffer => (c, 0, false, None),
+        LeafBytes::File { src, at } => (Cursor::over(file, src), at, true, None),
+        LeafBytes::Masks(m) => (c, 0, true, Some(m)),
     };
     // (Sized once: the list's leaves are checked to lie in the grid, and doubling would hold up to twice them.)
     let mut starts = Vec::new();
@@ -417,11 +425,19 @@ fn read_leaves(
     }
     for (origin, idx) in leaves {
         let start = shift + first + idx * LEAF_BYTES;
-        lc.pos = start + 16;
-        let mut mask = [0u64; 8];
-        for w in mask.iter_mut() {
-            *w = lc.u64("a leaf mask")?;
-        }
+        let mask = match masks {
+            Some(m) => *m
+                .get(idx)
+                .ok_or_else(|| lc.err("a leaf among those counted", format!("leaf {idx}")))?,
+            None => {
+                lc.pos = start + 16;
+                let mut mask = [0u64; 8];
+                for w in mask.iter_mut() {
+                    *w = lc.u64("a leaf mask")?;
+                }
+                mask
+            }
+        };
         let values = if in_file {
             starts.push(start + 96);
             Vec::new()
@@ -500,6 +516,13 @@ pub fn read(file: &str, src: Bytes, names: &[&str], max_bytes: u64) -> Result<Ve
             0 if g.grid_size == g.file_size => leaves_start(file, &src, g)?,
             _ => None,
         };
+        #[cfg(feature = "zip")]
+        if streamed.is_none() && g.codec == 1 {
+            if let Some((t, z)) = zip::tree_and_leaves(file, &src, g, name, max_bytes)? {
+                trees.push((name, t, Leaves::Zip(z)));
+                continue;
+            }
+        }
         let (t, from) = match streamed {
             Some(head) => {
                 let head = src.read(file, g.offset as u64, head)?;
@@ -546,12 +569,18 @@ fn tree_header(c: &mut Cursor) -> Result<([u64; 4], [u32; 3]), Error> {
 /// grid, tree, root, upper and lower nodes, leaves): what must be read before its values. `None` for another
 /// layout (the grid is then read whole).
 fn leaves_start(file: &str, src: &Bytes, g: &GridEntry) -> Result<Option<usize>, Error> {
-    let head = GRID_BYTES + 32 + 12;
-    if (g.grid_size as usize) < head {
+    if (g.grid_size as usize) < HEAD {
         return Ok(None);
     }
-    let bytes = src.read(file, g.offset as u64, head)?;
-    let mut c = Cursor::new(file, &bytes);
+    leaves_start_in(file, &src.read(file, g.offset as u64, HEAD)?, g.grid_size)
+}
+
+/// The grid's bytes up to its tree's node counts (its first [`HEAD`]).
+const HEAD: usize = GRID_BYTES + 32 + 12;
+
+/// [`leaves_start`] from the grid's first [`HEAD`] bytes, `bytes`, for a grid of `grid_size` bytes.
+fn leaves_start_in(file: &str, bytes: &[u8], grid_size: u64) -> Result<Option<usize>, Error> {
+    let mut c = Cursor::new(file, bytes);
     c.pos = GRID_BYTES;
     let (off, counts) = tree_header(&mut c)?;
     let counts = counts.map(u64::from);
@@ -561,13 +590,15 @@ fn leaves_start(file: &str, src: &Bytes, g: &GridEntry) -> Result<Option<usize>,
         && (1..3)
             .all(|l| off[l].saturating_add(counts[l].saturating_mul(strides[l - 1])) <= leaves);
     let start = (GRID_BYTES as u64).saturating_add(leaves);
-    Ok((before && counts[0] > 0 && start <= g.grid_size).then_some(start as usize))
+    Ok((before && counts[0] > 0 && start <= grid_size).then_some(start as usize))
 }
 
 /// A grid's leaf values: decoded with its tree, or read from the file as it is filled.
 enum Leaves<'a> {
     Tree(InLeaves),
     File(FileLeaves<'a>),
+    #[cfg(feature = "zip")]
+    Zip(zip::ZipLeaves<'a>),
 }
 
 impl LeafValues for Leaves<'_> {
@@ -575,6 +606,8 @@ impl LeafValues for Leaves<'_> {
         match self {
             Leaves::Tree(t) => t.values(leaf),
             Leaves::File(f) => f.values(leaf),
+            #[cfg(feature = "zip")]
+            Leaves::Zip(z) => z.values(leaf),
         }
     }
 }
