@@ -101,11 +101,11 @@ pub(crate) trait Medium {
 /// Per-call scratch: coefficient buffers sized to the channel count.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Scratch {
-    pub(crate) sa: Vec<f64>,
-    pub(crate) ss: Vec<f64>,
-    pub(crate) j: Vec<f64>,
+    sa: Vec<f64>,
+    ss: Vec<f64>,
+    j: Vec<f64>,
     /// Empty stretches of the current ray (march).
-    pub(crate) empty: Vec<(f64, f64)>,
+    empty: Vec<(f64, f64)>,
 }
 
 impl Scratch {
@@ -116,6 +116,21 @@ impl Scratch {
             j: vec![0.0; c],
             empty: Vec::new(),
         }
+    }
+
+    /// One step of the f64 march ([`march_step`]) of length `h` at `p` of `m`, its coefficients in these buffers:
+    /// the step's largest transmittance left.
+    #[inline(always)]
+    pub(crate) fn march_at(
+        &mut self,
+        m: &impl Medium,
+        p: DVec3,
+        h: f64,
+        l: &mut [f64],
+        t: &mut [f64],
+    ) -> f64 {
+        m.eval(p, &mut self.sa, &mut self.ss, &mut self.j);
+        march_step(&self.sa, &self.ss, &self.j, h, l, t)
     }
 
     /// `f` with this thread's scratch, as [`Scratch::new`] would make it for `c` channels (a fresh one when the

@@ -166,11 +166,7 @@ impl<'a> Stepper<'a> {
                 EVALUATIONS.with(|n| n.set(n.get() + 1));
                 v.lane_step(lt, p, h, ls) < v.estimator.cutoff() as f32
             }
-            None => {
-                let sc = &mut self.sc;
-                Medium::eval(v, p, &mut sc.sa, &mut sc.ss, &mut sc.j);
-                integrate::march_step(&sc.sa, &sc.ss, &sc.j, h, l, t) < v.estimator.cutoff()
-            }
+            None => self.sc.march_at(v, p, h, l, t) < v.estimator.cutoff(),
         }
     }
     /// Writes the lanes' radiance and transmittance to `l` and `t` (the f64 path wrote them as it went).
