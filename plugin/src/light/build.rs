@@ -509,29 +509,54 @@ fn cell_weights(
                 .collect();
         }
         let weight = |n: usize| w[n / 512].as_ref().map_or(0.0, |b| b[n % 512]);
-        for &i in &layers[z] {
-            let b = &bricks[i];
-            let slot = slot_of(b);
-            let mut ws = [0f32; 512];
-            if trilinear {
-                dilate_brick(weight, topo, *b, 0.125, &mut ws);
-            } else if let Some(block) = &w[slot] {
-                ws = **block;
-            }
-            if let Some(&k) = keep.get(i) {
-                ws.iter_mut().for_each(|v| *v *= k);
-            }
-            let mut sums = [0f64; 512];
-            for (l, &v) in ws.iter().enumerate() {
-                if v > 0.0 {
-                    emitting += 1;
-                    let c = (l % 8) / cell + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
-                    sums[c] += v as f64;
-                }
-            }
-            for (c, &v) in sums[..per].iter().enumerate() {
-                cw[slot * per + c] = v as f32;
-            }
+        // Each brick of the layer dilated and summed per cell on its own (the workers take a share of the layer
+        // each), then placed: its slot, its cells' weights and its emitting voxels.
+        let dilated = |part: &[usize]| -> Vec<(usize, Vec<f32>, usize)> {
+            part.iter()
+                .map(|&i| {
+                    let b = &bricks[i];
+                    let slot = slot_of(b);
+                    let mut ws = [0f32; 512];
+                    if trilinear {
+                        dilate_brick(weight, topo, *b, 0.125, &mut ws);
+                    } else if let Some(block) = &w[slot] {
+                        ws = **block;
+                    }
+                    if let Some(&k) = keep.get(i) {
+                        ws.iter_mut().for_each(|v| *v *= k);
+                    }
+                    let (mut sums, mut count) = ([0f64; 512], 0);
+                    for (l, &v) in ws.iter().enumerate() {
+                        if v > 0.0 {
+                            count += 1;
+                            let c = (l % 8) / cell
+                                + side * ((l / 8 % 8) / cell + side * ((l / 64) / cell));
+                            sums[c] += v as f64;
+                        }
+                    }
+                    (slot, sums[..per].iter().map(|&v| v as f32).collect(), count)
+                })
+                .collect()
+        };
+        let layer = &layers[z];
+        let parts: Vec<Vec<(usize, Vec<f32>, usize)>> = if workers <= 1 || layer.len() < 64 {
+            vec![dilated(layer)]
+        } else {
+            let chunk = layer.len().div_ceil(workers);
+            crate::par::scope(|sc| {
+                let handles: Vec<_> = layer
+                    .chunks(chunk)
+                    .map(|part| sc.spawn(move || dilated(part)))
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        for (slot, cells, count) in parts.into_iter().flatten() {
+            cw[slot * per..(slot + 1) * per].copy_from_slice(&cells);
+            emitting += count;
         }
         if !escaping && z > 0 {
             for &i in &layers[z - 1] {
