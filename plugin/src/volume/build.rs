@@ -153,7 +153,7 @@ impl FireVolume {
         let (dmax, lesmax) = (max(density), lescale.map_or(1.0, max));
         // The largest emitting density: d · Lescale, or the emission grid itself.
         let dlmax = if emission_grid { lesmax } else { dmax * lesmax };
-        let nmax: Vec<f64> = co.species.iter().map(|sp| max(sp.ch)).collect();
+        let nmax: Vec<f64> = co.species.iter().map(|sp| max(sp.ch())).collect();
         let (clip_box, margin) = clip_box(set.mode, &ds);
         let scatter_color = scatter_color.map(|k| (k, scatter_weights(&basis)));
         let (physical_colour, point_model) = point_model(
@@ -321,7 +321,7 @@ fn march_lattice(
         let extra: Vec<usize> = lescale
             .iter()
             .copied()
-            .chain(co.species.iter().map(|sp| sp.ch))
+            .chain(co.species.iter().map(|sp| sp.ch()))
             .collect();
         let grids: Vec<&crate::grid::Grid> = extra.iter().map(|&k| &ch[k].grid).collect();
         // Dense over the box while it costs at most four times what its grids store (512 values per block:
@@ -565,12 +565,12 @@ fn optics(
     if let Some(ch) = reaction {
         let shape = basis.emit(&firemedium_core::chemiluminescence::spectrum);
         let zeros = vec![0.0; c];
-        co.species.push(SpeciesChannel {
+        co.species.push(SpeciesChannel::new(
             ch,
-            scale: set.chemiluminescence / (4.0 * std::f64::consts::PI),
-            sigma: tables::TTable::build(0.0, c, &|_| zeros.clone()),
-            j: tables::TTable::build(0.0, c, &|_| shape.clone()),
-        });
+            set.chemiluminescence / (4.0 * std::f64::consts::PI),
+            tables::TTable::build(0.0, c, &|_| zeros.clone()),
+            tables::TTable::build(0.0, c, &|_| shape.clone()),
+        ));
         // (The light's full-spectrum power: the soot's and atoms' over the spectrum, the blue core's over the
         // bins, which hold its bands whole.)
         if let Some(src) = co.source.as_mut() {
@@ -719,7 +719,7 @@ fn majorants(
     let brick_empty: Vec<bool> = (0..nb)
         .map(|b| {
             majorant.max(b, density) <= 0.0
-                && co.species.iter().all(|sp| majorant.max(b, sp.ch) <= 0.0)
+                && co.species.iter().all(|sp| majorant.max(b, sp.ch()) <= 0.0)
                 && emitter.is_none_or(|e| majorant.max(b, e) <= 0.0)
         })
         .collect();

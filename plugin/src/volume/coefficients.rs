@@ -121,7 +121,7 @@ pub(super) fn physical(
         species: species_settings
             .iter()
             .zip(&species)
-            .map(|((_, e, _), sp)| (e.clone(), sp.ch, sp.scale))
+            .map(|((_, e, _), sp)| (e.clone(), sp.ch(), sp.scale()))
             .collect(),
         reaction: None,
     });
@@ -243,12 +243,7 @@ fn species_tables(
             bytes: sigma.bytes() + j.bytes(),
             seconds: t0.elapsed().as_secs_f64(),
         });
-        out.push(SpeciesChannel {
-            ch,
-            scale: *scale,
-            sigma,
-            j,
-        });
+        out.push(SpeciesChannel::new(ch, *scale, sigma, j));
     }
     out
 }
@@ -270,7 +265,7 @@ pub(super) fn brick_majorants(
     let a_max = co.a_t.as_ref().map(|tab| RangeMax::new(tab, c));
     let sp_max: Vec<RangeMax> = species
         .iter()
-        .map(|sp| RangeMax::new(&sp.sigma, c))
+        .map(|sp| RangeMax::new(sp.sigma(), c))
         .collect();
     (0..nb)
         .map(|b| {
@@ -286,8 +281,8 @@ pub(super) fn brick_majorants(
                         .unwrap_or(a[ch]);
                     let mut v = dmax * (ach + s[ch]);
                     for (sp, m) in species.iter().zip(&sp_max) {
-                        v += majorant.max(b, sp.ch).max(0.0) as f64
-                            * sp.scale
+                        v += majorant.max(b, sp.ch()).max(0.0) as f64
+                            * sp.scale()
                             * m.max_over(tlo, thi, ch) as f64;
                     }
                     v

@@ -73,12 +73,12 @@ impl LaneTables {
         let mut species_sigma_max = [0f32; MAX_SPECIES];
         let mut checks = vec![dmax * smax * step, dlmax * v.model.j().max() * step];
         for (sp, &n) in v.grids.species().iter().zip(nmax) {
-            let n = n * sp.scale;
-            checks.extend([n, n * sp.sigma.max() * step, n * sp.j.max() * step]);
+            let n = n * sp.scale();
+            checks.extend([n, n * sp.sigma().max() * step, n * sp.j().max() * step]);
         }
         for (m, sp) in species_sigma_max.iter_mut().zip(v.grids.species()) {
             // (Rounded up, so that the bound stays a bound in f32.)
-            *m = (sp.sigma.max() * (1.0 + 1e-6)) as f32;
+            *m = (sp.sigma().max() * (1.0 + 1e-6)) as f32;
         }
         let ok = v.grids.species().len() <= MAX_SPECIES
             && checks.iter().all(|x| x.is_finite() && *x < LIMIT);
@@ -142,8 +142,8 @@ impl LaneTables {
         }
         for (sp, &n) in v.grids.species().iter().zip(n) {
             if n > 0.0 {
-                let (s0, s1, fr) = sp.sigma.lane_rows(t);
-                let (e0, e1, _) = sp.j.lane_rows(t);
+                let (s0, s1, fr) = sp.sigma().lane_rows(t);
+                let (e0, e1, _) = sp.j().lane_rows(t);
                 for k in 0..self.chunks {
                     for w in 0..W {
                         sig[k][w] += n * (s0[k][w] + fr * (s1[k][w] - s0[k][w]));

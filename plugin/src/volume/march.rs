@@ -111,7 +111,7 @@ impl FireVolume {
         let d = ch[self.grids.density()].grid.eval(&st).max(0.0);
         let mut n = [0f32; lanes::MAX_SPECIES];
         for (k, sp) in self.grids.species().iter().enumerate() {
-            n[k] = (ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale) as f32;
+            n[k] = (ch[sp.ch()].grid.eval(&st).max(0.0) as f64 * sp.scale()) as f32;
         }
         let les = self
             .grids

@@ -514,12 +514,12 @@ impl Medium for FireVolume {
             }
         }
         for sp in self.grids.species() {
-            let n = ch[sp.ch].grid.eval(&st).max(0.0) as f64 * sp.scale;
+            let n = ch[sp.ch()].grid.eval(&st).max(0.0) as f64 * sp.scale();
             if n > 0.0 {
-                let l = sp.sigma.locate(t);
+                let l = sp.sigma().locate(t);
                 for c in 0..sa.len() {
-                    sa[c] += n * sp.sigma.at(l, c) as f64;
-                    j[c] += n * sp.j.at(l, c) as f64;
+                    sa[c] += n * sp.sigma().at(l, c) as f64;
+                    j[c] += n * sp.j().at(l, c) as f64;
                 }
             }
         }

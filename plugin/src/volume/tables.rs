@@ -230,8 +230,35 @@ impl RangeMax {
 
 #[derive(Debug, Clone)]
 pub(super) struct SpeciesChannel {
-    pub(super) ch: usize,
-    pub(super) scale: f64,
-    pub(super) sigma: TTable,
-    pub(super) j: TTable,
+    ch: usize,
+    scale: f64,
+    sigma: TTable,
+    j: TTable,
+}
+
+impl SpeciesChannel {
+    /// A species read from grid channel `ch`, its values times `scale` its number density (m⁻³), with its
+    /// cross-section and emission per unit number density over T.
+    pub(super) fn new(ch: usize, scale: f64, sigma: TTable, j: TTable) -> SpeciesChannel {
+        SpeciesChannel {
+            ch,
+            scale,
+            sigma,
+            j,
+        }
+    }
+    /// Its grid channel, and the scale from the grid's values to number density.
+    pub(super) fn ch(&self) -> usize {
+        self.ch
+    }
+    pub(super) fn scale(&self) -> f64 {
+        self.scale
+    }
+    /// Its cross-section and emission per unit number density over T.
+    pub(super) fn sigma(&self) -> &TTable {
+        &self.sigma
+    }
+    pub(super) fn j(&self) -> &TTable {
+        &self.j
+    }
 }

@@ -101,7 +101,7 @@ pub(super) fn species_tables<'a, const CV: usize, const V: usize, const S: bool>
     let mut sp_tabs: SpeciesTables<'a, CV, V> = [None; MAX_SPECIES];
     if S {
         for (tab, sp) in sp_tabs.iter_mut().zip(v.grids.species()) {
-            *tab = Some((Rows::new(&sp.sigma)?, Rows::new(&sp.j)?, 0.0));
+            *tab = Some((Rows::new(sp.sigma())?, Rows::new(sp.j())?, 0.0));
         }
         for (tab, m) in sp_tabs.iter_mut().zip(lt.species_sigma_max()) {
             if let Some(t) = tab {

@@ -325,7 +325,7 @@ fn general(v: &FireVolume, p: glam::DVec3, b: usize, dt: &mut [[f32; 2]; BATCH],
     let ch = v.grids.ds().channels();
     let at = |k: usize| ch[k].grid.eval(&st);
     for (k, sp) in v.grids.species().iter().take(MAX_SPECIES).enumerate() {
-        x.n[k][b] = (at(sp.ch).max(0.0) as f64 * sp.scale) as f32;
+        x.n[k][b] = (at(sp.ch()).max(0.0) as f64 * sp.scale()) as f32;
     }
     dt[b] = [at(v.grids.density()), v.grids.temperature().map_or(0.0, at)];
     x.les[b] = v.grids.lescale().map_or(1.0, |k| at(k).max(0.0));
@@ -421,7 +421,7 @@ pub(super) fn march<
     let ns = v.grids.species().len().min(MAX_SPECIES);
     let mut scales = [0f64; MAX_SPECIES];
     for (s, sp) in scales.iter_mut().zip(v.grids.species()) {
-        *s = sp.scale;
+        *s = sp.scale();
     }
     let all = v.grids.temperature().is_none();
     let t_emit = v.model.t_emit() as f32;

@@ -40,7 +40,7 @@ impl<'a> Stored<'a> {
             .grids
             .lescale()
             .into_iter()
-            .chain(v.grids.species().iter().map(|sp| sp.ch));
+            .chain(v.grids.species().iter().map(|sp| sp.ch()));
         for (slot, k) in extra.iter_mut().zip(further) {
             *slot = values(k);
             n_extra += 1;
