@@ -186,7 +186,7 @@ impl FireLight {
         let (mut power_w, mut power_lm) = (power_w, power_lm);
         let (mut ember_w, mut ember_cdf) = (Vec::new(), Vec::new());
         if let Some(em) = vol.embers() {
-            let intensity = src.as_ref().map_or(1.0, |s| s.intensity);
+            let intensity = src.as_ref().map_or(1.0, |s| s.intensity());
             (ember_w, ember_cdf) = ember_weights(
                 em,
                 intensity,

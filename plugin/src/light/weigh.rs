@@ -2,7 +2,6 @@
 //! and the sums its power, luminous flux and mean extinction take from them.
 
 use super::Weighting;
-use crate::blackbody::spectral_radiance_si;
 use crate::volume::{FireVolume, VoxelEmission};
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -70,17 +69,7 @@ impl<'a> Weigher<'a> {
 
     /// The soot's full-spectrum power per unit density at `t`.
     fn soot_power(&self, t: f64) -> f64 {
-        let Some(s) = self.src else { return 0.0 };
-        let (lo, hi) = (10e-9f64.ln(), 1e-3f64.ln());
-        crate::quadrature::gauss_legendre(
-            |u| {
-                let l = u.exp();
-                s.soot.kappa(l * 1e9, 1.0, s.alpha) * spectral_radiance_si(t, l) * l
-            },
-            lo,
-            hi,
-            60,
-        )
+        self.src.map_or(0.0, |s| s.soot_power(t))
     }
 
     /// Brick `b`'s voxel weights into `out` (allocated when one emits; `sa`, `ss`, `j` a channel's scratch), and
@@ -185,42 +174,10 @@ impl<'a> Weigher<'a> {
                         .entry(key)
                         .or_insert_with(|| self.soot_power(key as f64 / 2.0)),
                 };
-                let mut v = d * s.soot_scale * soot;
-                for (e, ch, scale) in &s.species {
-                    let nn = at(*ch).max(0.0) as f64 * scale;
-                    if nn > 0.0 {
-                        v += nn * s.intensity * line_power(e, t);
-                    }
-                }
-                if let Some((ch, per_unit)) = s.reaction {
-                    v += at(ch).max(0.0) as f64 * per_unit;
-                }
-                v
+                s.voxel_power(d, t, soot, at)
             }
         };
     }
-}
-
-/// Full line and band emission per unit number density, W·sr⁻¹ (all shipped lines of `e`, and its molecular bands,
-/// at T).
-fn line_power(e: &crate::species::Element, t: f64) -> f64 {
-    use crate::constants::{BOLTZMANN, PLANCK, SPEED_OF_LIGHT};
-    if !(t > 0.0) {
-        return 0.0;
-    }
-    let kt = BOLTZMANN * t;
-    let z = e.partition_function(t);
-    e.bands().iter().map(|b| b.power(t)).sum::<f64>()
-        + e.lines()
-            .iter()
-            .map(|l| {
-                PLANCK * SPEED_OF_LIGHT / (4.0 * std::f64::consts::PI * l.lambda_nm * 1e-9)
-                    * l.a_ki
-                    * l.g_k as f64
-                    * (-l.e_k / kt).exp()
-                    / z
-            })
-            .sum::<f64>()
 }
 
 #[cfg(test)]

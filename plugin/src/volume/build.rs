@@ -531,9 +531,7 @@ fn optics(
             );
             // (The light's power counts every line.)
             if let Some(src) = &mut co.source {
-                for ((e, _, _), (_, full, _)) in src.species.iter_mut().zip(species) {
-                    *e = full.clone();
-                }
+                src.set_elements(species.iter().map(|(_, full, _)| full.clone()));
             }
             co
         }
@@ -575,7 +573,7 @@ fn optics(
         // bins, which hold its bands whole.)
         if let Some(src) = co.source.as_mut() {
             // (Its spectrum integrates to 1: one unit emits the channel's scale, W m⁻³ sr⁻¹.)
-            src.reaction = Some((ch, set.chemiluminescence / (4.0 * std::f64::consts::PI)));
+            src.set_reaction(ch, set.chemiluminescence / (4.0 * std::f64::consts::PI));
         }
     }
     if co.a.iter().chain(&co.s).any(|v| !v.is_finite() || *v < 0.0) {

@@ -113,17 +113,13 @@ pub(super) fn physical(
     // (The fire light's full-spectrum power follows the physics: with a tint or a ramp, it reports its power over
     // the bins instead.)
     let physical_colour = tint.is_none() && ramp.is_none_or(|r| r.physical >= 1.0);
-    let source = physical_colour.then(|| Source {
-        soot: optics.clone(),
-        alpha,
-        soot_scale: sootscale * intensity,
-        intensity,
-        species: species_settings
+    let source = physical_colour.then(|| {
+        let species = species_settings
             .iter()
             .zip(&species)
             .map(|((_, e, _), sp)| (e.clone(), sp.ch(), sp.scale()))
-            .collect(),
-        reaction: None,
+            .collect();
+        Source::new(optics.clone(), alpha, (sootscale, intensity), species)
     });
     let s = match sigma_s {
         Some(f) => basis.absorb(&|l| smokescale * f(l)),

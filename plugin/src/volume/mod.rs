@@ -51,6 +51,7 @@ mod parts;
 mod point;
 mod query;
 mod settings;
+mod source;
 mod subset;
 mod tables;
 
@@ -66,14 +67,13 @@ pub(crate) use mip::VoxelEmission;
 pub use point::PointCoefficients;
 pub use query::{Answer, Want};
 use settings::{Emission, Settings};
+pub(crate) use source::Source;
 pub(crate) use subset::LineChannels;
 use tables::SpeciesChannel;
 
 use crate::dataset::{Dataset, Format};
 use crate::majorant::MajorantGrid;
 use crate::params::{Param, ParamReader};
-use crate::soot::SootOptics;
-use crate::species::Element;
 use crate::spectrum::SpectralGrid;
 use crate::Error;
 use basis::Basis;
@@ -102,21 +102,6 @@ pub struct TableReport {
     pub bytes: usize,
     /// Seconds to build.
     pub seconds: f64,
-}
-
-/// What the fire emits, kept for the light's full-spectrum power (physical mode).
-#[derive(Debug, Clone)]
-pub(crate) struct Source {
-    pub soot: SootOptics,
-    pub alpha: f64,
-    /// sootscale × intensity.
-    pub soot_scale: f64,
-    pub intensity: f64,
-    /// (element, channel index, m⁻³ per unit).
-    pub species: Vec<(Element, usize, f64)>,
-    /// The blue core (a reaction grid): its channel and the power one unit of it emits per unit volume and
-    /// solid angle, W m⁻³ sr⁻¹ — over the bins, which hold its CH* and C₂* bands whole.
-    pub reaction: Option<(usize, f64)>,
 }
 
 /// What a volume holds beyond absorption ([`FireVolume::features`]).

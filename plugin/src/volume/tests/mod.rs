@@ -9,6 +9,8 @@ use super::*;
 use crate::blackbody::{spectral_radiance, WIEN};
 use crate::cie::cmf_table::CMF;
 use crate::params::Param;
+use crate::soot::SootOptics;
+use crate::species::Element;
 
 pub(crate) fn slab_volume(d: f64, t: f64, extra: Vec<Param>) -> FireVolume {
     // A 4×4×4 constant grid over [0, 1]³, nearest lookup: exactly homogeneous inside the box.
