@@ -65,10 +65,15 @@ pub(super) fn tree_and_leaves<'a>(
     if start as u64 > max_bytes {
         return Err(too_large(start as u64));
     }
-    head.try_reserve_exact(start - HEAD)
-        .map_err(|_| too_large(start as u64))?;
-    head.resize(start, 0);
-    z.read(&mut head[HEAD..])?;
+    // (Grown as the stream delivers it: a header claiming more nodes than the stream holds allocates no more
+    // than the stream gives.)
+    while head.len() < start {
+        let (from, n) = (head.len(), (start - head.len()).min(1 << 20));
+        head.try_reserve_exact(n)
+            .map_err(|_| too_large(start as u64))?;
+        head.resize(from + n, 0);
+        z.read(&mut head[from..])?;
+    }
     // The leaves' masks, by index, as the stream passes them (64 bytes a leaf).
     let mut c = Cursor::new(file, &head);
     c.pos = GRID_BYTES + 32;
