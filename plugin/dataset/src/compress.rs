@@ -227,6 +227,8 @@ pub struct Inflater<'a> {
     out: u64,
     expected: u64,
     scratch: Vec<u8>,
+    /// Compressed bytes read at a time ([`INFLATE_WINDOW`]).
+    window: usize,
 }
 
 /// Compressed bytes an [`Inflater`] reads from its source at a time.
@@ -256,6 +258,7 @@ impl<'a> Inflater<'a> {
             out: 0,
             expected,
             scratch: Vec::new(),
+            window: INFLATE_WINDOW,
         }
     }
 
@@ -292,13 +295,8 @@ impl<'a> Inflater<'a> {
         let mut filled = 0;
         let mut stalled = false;
         while filled < buf.len() {
-            // More compressed bytes when those held are spent (or hold no whole code: kept in front).
-            if (self.at == self.input.len() || stalled) && self.next < self.end {
-                let n = (self.end - self.next).min(INFLATE_WINDOW as u64) as usize;
-                let fresh = self.src.read(self.file, self.next, n)?;
-                self.input.drain(..self.at);
-                self.input.extend_from_slice(&fresh);
-                (self.at, self.next) = (0, self.next + n as u64);
+            if self.at == self.input.len() || stalled {
+                self.refill()?;
             }
             let more = self.next < self.end;
             let r = inflate(
@@ -339,11 +337,10 @@ impl<'a> Inflater<'a> {
         use miniz_oxide::{MZFlush, MZStatus};
         self.skip(self.expected - self.out)?;
         let mut spare = [0u8; 1];
+        let mut stalled = false;
         loop {
-            if self.at == self.input.len() && self.next < self.end {
-                let n = (self.end - self.next).min(INFLATE_WINDOW as u64) as usize;
-                self.input = self.src.read(self.file, self.next, n)?.into_owned();
-                (self.at, self.next) = (0, self.next + n as u64);
+            if self.at == self.input.len() || stalled {
+                self.refill()?;
             }
             let more = self.next < self.end;
             let r = inflate(
@@ -353,6 +350,7 @@ impl<'a> Inflater<'a> {
                 MZFlush::None,
             );
             self.at += r.bytes_consumed;
+            stalled = r.bytes_consumed == 0;
             let found = match r.status {
                 _ if r.bytes_written > 0 => "more data than that",
                 Ok(MZStatus::StreamEnd) => return Ok(()),
@@ -372,6 +370,19 @@ impl<'a> Inflater<'a> {
                 ),
             ));
         }
+    }
+
+    /// More compressed bytes, after those not yet inflated (a window's end may cut a code: it is kept in
+    /// front); none once the stream's bytes are all read.
+    fn refill(&mut self) -> Result<(), Error> {
+        if self.next < self.end {
+            let n = (self.end - self.next).min(self.window as u64) as usize;
+            let fresh = self.src.read(self.file, self.next, n)?;
+            self.input.drain(..self.at);
+            self.input.extend_from_slice(&fresh);
+            (self.at, self.next) = (0, self.next + n as u64);
+        }
+        Ok(())
     }
 
     /// Inflates and drops the stream's next `n` bytes.
@@ -415,6 +426,55 @@ pub fn half_to_f32(h: u16) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(feature = "zip")]
+    #[test]
+    fn a_stream_inflated_a_few_bytes_at_a_time_is_the_stream() {
+        // 200 000 bytes of a noisy ramp, zlib-compressed, read through windows of 7 compressed bytes (every code
+        // cut somewhere) in pieces of 1 to 4 096 bytes, with skips: the same bytes, and its end and checksum
+        // accepted; with the checksum's last byte changed, refused by name; asked for more than it holds, refused.
+        let data: Vec<u8> = (0..200_000u32)
+            .map(|i| ((i / 7) as u8).wrapping_add((i.wrapping_mul(2_654_435_761) >> 29) as u8))
+            .collect();
+        let packed = miniz_oxide::deflate::compress_to_vec_zlib(&data, 6);
+        /// The stream in `bytes`, read 7 compressed bytes at a time.
+        fn open(bytes: &[u8], expected: usize) -> Inflater<'_> {
+            let mut z = Inflater::new(
+                "f.nvdb",
+                "grid 'density'".into(),
+                crate::cursor::Bytes::Slice(bytes),
+                (0, bytes.len() as u64),
+                expected as u64,
+            );
+            z.window = 7;
+            z
+        }
+        let mut z = open(&packed, data.len());
+        let (mut at, mut k) = (0usize, 1usize);
+        while at < data.len() {
+            let n = (k * k % 4096 + 1).min(data.len() - at);
+            if k % 5 == 0 {
+                z.skip(n as u64).unwrap();
+            } else {
+                let mut buf = vec![0u8; n];
+                z.read(&mut buf).unwrap();
+                assert_eq!(buf, data[at..at + n], "at {at}");
+            }
+            at += n;
+            k += 1;
+        }
+        z.finish().unwrap();
+        let mut wrong = packed.to_vec();
+        *wrong.last_mut().unwrap() ^= 1;
+        let mut z = open(&wrong, data.len());
+        let e = z
+            .skip(data.len() as u64)
+            .and_then(|_| z.finish())
+            .unwrap_err();
+        assert!(e.to_string().contains("grid 'density'"), "{e}");
+        let mut z = open(&packed, data.len());
+        assert!(z.read(&mut vec![0u8; data.len() + 1]).is_err());
+    }
 
     #[test]
     fn half_values() {
