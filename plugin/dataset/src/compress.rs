@@ -275,57 +275,31 @@ impl<'a> Inflater<'a> {
     /// Fills `buf` with the stream's next bytes: an error naming the stream's byte where it is corrupt, ends
     /// short, or would hold more than expected.
     pub fn read(&mut self, buf: &mut [u8]) -> Result<(), Error> {
-        use miniz_oxide::inflate::stream::inflate;
-        use miniz_oxide::{MZFlush, MZStatus};
-        let bad = |this: &Self, found: String| {
-            DecodeError::bad(format!("a zlib stream of {} bytes", this.expected), found).at(
-                this.file,
-                format!(
-                    "{}: byte {} of its zlib stream at byte {}",
-                    this.what, this.out, this.start
-                ),
-            )
-        };
+        use miniz_oxide::MZStatus;
+        let expected = format!("a zlib stream of {} bytes", self.expected);
         if self.out.saturating_add(buf.len() as u64) > self.expected {
-            return Err(bad(
-                self,
-                format!("{} bytes asked of it", self.out + buf.len() as u64),
-            ));
+            let asked = self.out + buf.len() as u64;
+            return Err(self.fail(expected, format!("{asked} bytes asked of it")));
         }
-        let mut filled = 0;
-        let mut stalled = false;
+        let (mut filled, mut stalled) = (0, false);
         while filled < buf.len() {
-            if self.at == self.input.len() || stalled {
-                self.refill()?;
-            }
-            let more = self.next < self.end;
-            let r = inflate(
-                &mut self.state,
-                &self.input[self.at..],
-                &mut buf[filled..],
-                MZFlush::None,
-            );
-            self.at += r.bytes_consumed;
-            filled += r.bytes_written;
-            self.out += r.bytes_written as u64;
-            match r.status {
+            let (written, status, more);
+            (written, stalled, status, more) = self.step(&mut buf[filled..], stalled)?;
+            filled += written;
+            let found = match status {
                 Ok(MZStatus::StreamEnd) if filled < buf.len() => {
-                    return Err(bad(self, format!("one of {} (it ends)", self.out)));
+                    format!("one of {} (it ends)", self.out)
                 }
-                Ok(_) => {}
                 // (No progress for want of room or input: room is checked by the loop, input below.)
-                Err(miniz_oxide::MZError::Buf) => {}
-                Err(e) => {
-                    return Err(bad(
-                        self,
-                        format!("corrupt data or a wrong checksum ({e:?})"),
-                    ))
+                Ok(_) | Err(miniz_oxide::MZError::Buf)
+                    if stalled && !more && filled < buf.len() =>
+                {
+                    format!("one of {} (truncated)", self.out)
                 }
-            }
-            stalled = r.bytes_consumed == 0 && r.bytes_written == 0;
-            if stalled && !more && filled < buf.len() {
-                return Err(bad(self, format!("one of {} (truncated)", self.out)));
-            }
+                Ok(_) | Err(miniz_oxide::MZError::Buf) => continue,
+                Err(e) => format!("corrupt data or a wrong checksum ({e:?})"),
+            };
+            return Err(self.fail(expected, found));
         }
         Ok(())
     }
@@ -333,43 +307,58 @@ impl<'a> Inflater<'a> {
     /// Inflates the rest of the stream (all `expected` bytes) and its end: an error unless it ends there with
     /// its checksum (Adler-32) right — what proves values already read from it were the stream's.
     pub fn finish(&mut self) -> Result<(), Error> {
-        use miniz_oxide::inflate::stream::inflate;
-        use miniz_oxide::{MZFlush, MZStatus};
+        use miniz_oxide::MZStatus;
         self.skip(self.expected - self.out)?;
-        let mut spare = [0u8; 1];
-        let mut stalled = false;
+        let (mut spare, mut stalled) = ([0u8; 1], false);
         loop {
-            if self.at == self.input.len() || stalled {
-                self.refill()?;
-            }
-            let more = self.next < self.end;
-            let r = inflate(
-                &mut self.state,
-                &self.input[self.at..],
-                &mut spare,
-                MZFlush::None,
-            );
-            self.at += r.bytes_consumed;
-            stalled = r.bytes_consumed == 0;
-            let found = match r.status {
-                _ if r.bytes_written > 0 => "more data than that",
+            let (written, status, more);
+            (written, stalled, status, more) = self.step(&mut spare, stalled)?;
+            let found = match status {
+                _ if written > 0 => "more data than that",
                 Ok(MZStatus::StreamEnd) => return Ok(()),
                 Err(miniz_oxide::MZError::Data) => "a wrong checksum or corrupt data",
-                _ if r.bytes_consumed == 0 && !more => "no end (truncated)",
+                _ if stalled && !more => "no end (truncated)",
                 _ => continue,
             };
-            return Err(DecodeError::bad(
-                format!("a zlib stream of {} bytes and its end", self.expected),
-                found,
-            )
-            .at(
-                self.file,
-                format!(
-                    "{}: byte {} of its zlib stream at byte {}",
-                    self.what, self.out, self.start
-                ),
-            ));
+            let expected = format!("a zlib stream of {} bytes and its end", self.expected);
+            return Err(self.fail(expected, found));
         }
+    }
+
+    /// One call of the inflater into `out`, after a refill where the input is spent or the last call `stalled`:
+    /// the bytes it wrote, whether it stalled (nothing read or written), its status, and whether compressed
+    /// bytes remain unread.
+    fn step(
+        &mut self,
+        out: &mut [u8],
+        stalled: bool,
+    ) -> Result<(usize, bool, miniz_oxide::MZResult, bool), Error> {
+        use miniz_oxide::inflate::stream::inflate;
+        if self.at == self.input.len() || stalled {
+            self.refill()?;
+        }
+        let more = self.next < self.end;
+        let r = inflate(
+            &mut self.state,
+            &self.input[self.at..],
+            out,
+            miniz_oxide::MZFlush::None,
+        );
+        self.at += r.bytes_consumed;
+        self.out += r.bytes_written as u64;
+        let stalled = r.bytes_consumed == 0 && r.bytes_written == 0;
+        Ok((r.bytes_written, stalled, r.status, more))
+    }
+
+    /// The error of a stream that is not `expected`, at the byte inflated so far.
+    fn fail(&self, expected: String, found: impl std::fmt::Display) -> Error {
+        DecodeError::bad(expected, found).at(
+            self.file,
+            format!(
+                "{}: byte {} of its zlib stream at byte {}",
+                self.what, self.out, self.start
+            ),
+        )
     }
 
     /// More compressed bytes, after those not yet inflated (a window's end may cut a code: it is kept in

@@ -367,6 +367,30 @@ fn dilate_brick(
     }
 }
 
+/// `f` over `items` in `workers` contiguous parts at once (on this thread for one), its results in the items'
+/// order whatever the threads.
+fn in_parts<T: Send>(
+    items: &[usize],
+    workers: usize,
+    f: &(dyn Fn(&[usize]) -> Vec<T> + Sync),
+) -> Vec<T> {
+    if workers <= 1 {
+        return f(items);
+    }
+    let chunk = items.len().div_ceil(workers).max(1);
+    let parts: Vec<Vec<T>> = crate::par::scope(|sc| {
+        let handles: Vec<_> = items
+            .chunks(chunk)
+            .map(|part| sc.spawn(move || f(part)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    });
+    parts.into_iter().flatten().collect()
+}
+
 /// The bricks (by their slots, in the bricks' order) whose cells (`per` weights each, at the slot's place in `w`)
 /// hold weight, and the CDF over them, with its total.
 fn brick_cdf(
@@ -480,22 +504,7 @@ fn cell_weights(
         }
         // In rounds of 512 bricks per worker (a worker's blocks held until its round is placed).
         for round in batch.chunks(workers * 512) {
-            let chunk = round.len().div_ceil(workers).max(1);
-            let parts: Vec<Vec<BrickWeights>> = if workers <= 1 {
-                vec![run(round)]
-            } else {
-                crate::par::scope(|sc| {
-                    let handles: Vec<_> = round
-                        .chunks(chunk)
-                        .map(|part| sc.spawn(move || run(part)))
-                        .collect();
-                    handles
-                        .into_iter()
-                        .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                        .collect()
-                })
-            };
-            for (&i, (sums, block)) in round.iter().zip(parts.into_iter().flatten()) {
+            for (&i, (sums, block)) in round.iter().zip(in_parts(round, workers, run)) {
                 found[i] = sums;
                 w[slot_of(&bricks[i])] = block;
             }
@@ -539,22 +548,8 @@ fn cell_weights(
                 .collect()
         };
         let layer = &layers[z];
-        let parts: Vec<Vec<(usize, Vec<f32>, usize)>> = if workers <= 1 || layer.len() < 64 {
-            vec![dilated(layer)]
-        } else {
-            let chunk = layer.len().div_ceil(workers);
-            crate::par::scope(|sc| {
-                let handles: Vec<_> = layer
-                    .chunks(chunk)
-                    .map(|part| sc.spawn(move || dilated(part)))
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect()
-            })
-        };
-        for (slot, cells, count) in parts.into_iter().flatten() {
+        let shared = if layer.len() < 64 { 1 } else { workers };
+        for (slot, cells, count) in in_parts(layer, shared, &dilated) {
             cw[slot * per..(slot + 1) * per].copy_from_slice(&cells);
             emitting += count;
         }
