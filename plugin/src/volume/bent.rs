@@ -12,13 +12,18 @@ use glam::DVec3;
 /// The refraction state of a volume: the baked index field and how rays are stepped through it.
 #[derive(Debug, Clone)]
 pub(crate) struct Refraction {
-    pub field: IndexGrid,
-    pub steps: Steps,
+    field: IndexGrid,
+    steps: Steps,
     /// The RK4 reference integrator instead of the Verlet march.
-    pub rk4: bool,
+    rk4: bool,
 }
 
 impl Refraction {
+    /// Bytes the baked index field holds.
+    pub(crate) fn bytes(&self) -> usize {
+        self.field.bytes()
+    }
+
     /// Bakes the index field of `air` heated to the `temperature` grid over `bounds`, at `wavelength` nm with
     /// (n − 1) exaggerated by `scale`, for a march of `step` over voxels of edge `voxel` (medium units), within
     /// `budget` bytes (else `Err` with the bytes the field would need).

@@ -347,7 +347,7 @@ fn march_lattice(
         let plan = dense.map(|d| lattice::Plan::new(d, channels, ds, brick, spare));
         if let Some(bytes) = plan
             .as_ref()
-            .map(|p| p.bytes)
+            .map(lattice::Plan::bytes)
             .filter(|&b| b > spare && b < u64::MAX)
         {
             refused = Some(format!(
@@ -804,7 +804,7 @@ fn refraction_layer(
     })?;
     tables.push(TableReport {
         name: "refraction index field".into(),
-        bytes: rf.field.bytes(),
+        bytes: rf.bytes(),
         seconds: t2.elapsed().as_secs_f64(),
     });
     Ok(rf)

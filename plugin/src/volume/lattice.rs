@@ -51,15 +51,15 @@ pub(crate) struct Slot {
 #[derive(Debug, Clone)]
 pub(crate) struct Plan {
     dense: bool,
-    pub(crate) density: usize,
-    pub(crate) temperature: Option<usize>,
-    pub(crate) extra: Vec<usize>,
-    pub(crate) brick: usize,
-    pub(crate) budget: u64,
-    pub(crate) threads: usize,
+    density: usize,
+    temperature: Option<usize>,
+    extra: Vec<usize>,
+    brick: usize,
+    budget: u64,
+    threads: usize,
     /// What it will hold (for bricks, an estimate: a copy per stored brick), kept from the budget the volume
     /// leaves to its fire light.
-    pub(crate) bytes: u64,
+    bytes: u64,
 }
 
 impl Plan {
@@ -90,6 +90,11 @@ impl Plan {
             threads: crate::par::threads(usize::MAX),
             bytes,
         }
+    }
+
+    /// The bytes the lattice will hold (for bricks, an estimate; `u64::MAX` for a dense box past any memory).
+    pub(crate) fn bytes(&self) -> u64 {
+        self.bytes
     }
 
     /// What the build reports of it.
