@@ -333,10 +333,13 @@ fn march_lattice(
             let voxels = p.iter().map(|&n| n as u64).product::<u64>();
             voxels.saturating_mul(4 * (2 + grids.len() as u64)) <= copied.saturating_mul(4)
         });
+        // pbrt-v4's own grid media read their grids in place, as pbrt-v4 does: a scene written for pbrt-v4
+        // renders in about pbrt-v4's memory unless it asks for the copy.
         let mut dense = match set.lattice {
             params::Lattice::Dense => Some(true),
             params::Lattice::Bricks => Some(false),
             params::Lattice::Off => None,
+            params::Lattice::Auto if set.mode == Mode::Pbrt => None,
             params::Lattice::Auto => Some(dense_fits),
         };
         let (d, t) = (&ch[density].grid, temperature.map(|k| &ch[k].grid));

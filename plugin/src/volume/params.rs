@@ -94,7 +94,7 @@ pub static VOLUME: Component = Component {
         p("integrator", T::String, "", "", Range::Choices(<Option<Integrator> as Choice>::NAMES), "march: fixed steps, eq. 3 (a step thicker than steptau split in sub-steps); ratio/delta: unbiased tracking over the majorant bricks (ratio: pbrt-v4's own estimator). Unset: march."),
         p("steptau", T::Float, "", "", Range::Between(1e-6, 1e30), "march: the largest optical depth of one step, at its midpoint; a thicker step is split into sub-steps of at most this depth (at most 4096). Unset: 0.1 in pbrt mode; 1 with multiplescattering diffusion (whose scattered light rises over a diffusion length from the smoke's surface); otherwise never."),
         p("brick", T::Integer, "8", "voxels", Range::Between(1.0, 4096.0), "Majorant brick edge (the march jumps over bricks holding nothing; the tracking integrators sample against each brick's bound)."),
-        p("lattice", T::String, "auto", "", Range::Choices(<Lattice as Choice>::NAMES), "The copy of the grids the f32 march reads: dense over the box, or a padded copy per brick holding data (memory follows the data); auto: dense while it costs at most 4× the grids' storage, else bricks, and for a fire that scatters (its host tracks it) built when a ray first marches; off: no copy, the march reads the grids' stored bricks in place (the same image to the bit, a slower march, least memory; also what a volume does when the budget leaves no room for the copy). The fire light's coarse copy keeps a lattice of its own whatever this says: it is made to fit in the caches."),
+        p("lattice", T::String, "auto", "", Range::Choices(<Lattice as Choice>::NAMES), "The copy of the grids the f32 march reads: dense over the box, or a padded copy per brick holding data (memory follows the data); auto: for a `fire`, dense while it costs at most 4× the grids' storage, else bricks, and for a fire that scatters (its host tracks it) built when a ray first marches; for pbrt-v4's own grid media (`nanovdb`, `uniformgrid`), none: they read their grids in place, as pbrt-v4 does, in about its memory; off: no copy, the march reads the grids' stored bricks in place (the same image to the bit, a slower march, least memory; also what a volume does when the budget leaves no room for the copy). The fire light's coarse copy keeps a lattice of its own whatever this says: it is made to fit in the caches."),
         p("precision", T::String, "f32", "", Range::Choices(<Precision as Choice>::NAMES), "Per-sample arithmetic of the march: f32 in vector lanes (about 2× faster; within 1e-6 of f64 on the campfire), falling back to f64 when a product could leave f32's range; f64: always f64."),
         p("threads", T::Integer, "0", "", Range::Between(0.0, 4096.0), "Threads the build may use (tables, lattice, reading and densifying grids); 0: every core. A host passes its own thread count."),
         p("cutoff", T::Float, "1e-6", "", Range::Between(0.0, 1.0), "march: stop when every channel's transmittance is below this."),
@@ -140,7 +140,7 @@ choice!(Precision { Precision::F32 => "f32", Precision::F64 => "f64" });
 /// `lattice`: the copy of the grids the f32 march reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Lattice {
-    /// Dense while it costs at most 4× the grids' storage, else bricks.
+    /// For a `fire`, dense while it costs at most 4× the grids' storage, else bricks; none for pbrt-v4's media.
     Auto,
     Dense,
     Bricks,

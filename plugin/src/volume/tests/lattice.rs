@@ -165,6 +165,7 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
     // padding) and lerps them as it lerps the lattice's. The same radiance and transmittance to the bit, on a
     // 40 × 36 × 44 box (no side whole bricks) with a Lescale grid (pbrt mode) or a species grid, for rays from
     // every side, some grazing the faces; a budget with no room for the copy marches the same way, and says so.
+    // Under pbrt mode `auto` is `off`.
     for (extra, species) in [(vec![Param::string("mode", "pbrt")], false), (vec![], true)] {
         let build = |lattice: &str| {
             let mut e = extra.clone();
@@ -173,10 +174,17 @@ fn without_a_lattice_the_march_reads_the_grids_in_place_to_the_bit() {
         };
         let (dense, off) = (build("dense"), build("off"));
         assert!(dense.estimator.lattice().built().is_some() && !off.estimator.lattice().is_some());
+        // `auto`: pbrt-v4's own media read their grids in place, as pbrt-v4 does; a `fire` keeps its copy.
+        assert_eq!(
+            build("auto").estimator.lattice().is_some(),
+            species,
+            "auto in {extra:?}"
+        );
         // A budget that holds the grids and tables and a kilobyte more (with a Lescale grid; the species' tables
-        // follow the budget): no copy, the march on the grids, and a note saying so.
+        // follow the budget), the copy asked for: no copy, the march on the grids, and a note saying so.
         let tight = (!species).then(|| {
             let mut e = extra.clone();
+            e.push(Param::string("lattice", "dense"));
             e.push(Param::float(
                 "maxbytes",
                 (8_589_935_592 - off.spare_bytes()) as f64,
