@@ -402,8 +402,8 @@ impl Builder {
             None
         };
         // The camera's view of a scattering fire by the march: its pixels' variance falls 10-30-fold for
-        // 2-6× their time (docs/results); for pbrt-v4's grids pbrt-v4's own estimator and memory unless asked
-        // (the march builds the lattice a scattering fire otherwise never needs).
+        // 2-6× their time (docs/results); for pbrt-v4's grids pbrt-v4's own estimator unless asked (where the
+        // surfaces hold the error the march's time is not repaid: the scattering room's surfaces lose 1.2-1.3×).
         let camera_march = info.scatters != 0 && self.ctx.camera_march.unwrap_or(ty == "fire");
         Ok(Medium::Plugin(super::Plugin {
             vol,
