@@ -39,9 +39,16 @@ const LIMIT: f64 = 1e30;
 /// A sample's soot: density, temperature, and the density times the emission scale (0 where it does not emit).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Sample {
-    pub d: f32,
-    pub t: f32,
-    pub dl: f32,
+    d: f32,
+    t: f32,
+    dl: f32,
+}
+
+impl Sample {
+    /// Density `d`, temperature `t` (K) and the emitting density `dl`.
+    pub(crate) fn new(d: f32, t: f32, dl: f32) -> Sample {
+        Sample { d, t, dl }
+    }
 }
 
 impl LaneTables {

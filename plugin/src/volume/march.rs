@@ -129,7 +129,7 @@ impl FireVolume {
         let emits = t as f64 > self.model.t_emit() || self.grids.temperature().is_none();
         let LaneScratch { sig, jj, l, t: tr } = ls;
         let dl = if emits { self.emitting(d, les) } else { 0.0 };
-        lt.coefficients(self, lanes::Sample { d, t, dl }, &n, sig, jj);
+        lt.coefficients(self, lanes::Sample::new(d, t, dl), &n, sig, jj);
         lanes::step(sig, jj, delta as f32, l, tr)
     }
 }

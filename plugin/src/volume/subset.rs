@@ -158,11 +158,7 @@ impl FireVolume {
             self.estimator.step()
         };
         let (mut lk, mut tk) = ([0f64; MAX_NODES], [1f64; MAX_NODES]);
-        let tabs = Tabs {
-            j: &lc.j,
-            sigma: &lc.sigma,
-            split_tau: f32::INFINITY,
-        };
+        let tabs = Tabs::subset(&lc.j, &lc.sigma);
         let te = march_kernel(self, lt, Some(tabs), ray, step, &mut lk[..k], &mut tk[..k])?;
         // The column density from the node of least σ; where its light is gone (every σ > 0 then), one at
         // which the least σ's optical depth is 88, past which e^{−τ} is 0 in f32 and the slab opaque.

@@ -347,14 +347,24 @@ const THIN: f32 = 0.1;
 /// (`LaneTables`), or a few of them (the fire light's line in fewer channels, [`super::subset`]).
 #[derive(Clone, Copy)]
 pub(super) struct Tabs<'a> {
-    pub(super) j: &'a TTable,
-    pub(super) sigma: &'a [Lane],
+    j: &'a TTable,
+    sigma: &'a [Lane],
     /// A step thicker than this is split ([`super::integrate::split_step`]): the volume's `steptau` for its own
     /// march, ∞ for estimates checked against it (the fire light's line, its channel subsets).
-    pub(super) split_tau: f32,
+    split_tau: f32,
 }
 
 impl<'a> Tabs<'a> {
+    /// A few of the channels (`j`'s columns and their σ per unit density), their steps never split: an estimate
+    /// checked against the volume's own march (the fire light's line in a subset of the bins).
+    pub(super) fn subset(j: &'a TTable, sigma: &'a [Lane]) -> Tabs<'a> {
+        Tabs {
+            j,
+            sigma,
+            split_tau: f32::INFINITY,
+        }
+    }
+
     /// The volume's own channels; `split`: its thick steps split as its own march splits them.
     pub(super) fn own(v: &'a FireVolume, lt: &'a LaneTables, split: bool) -> Tabs<'a> {
         Tabs {
