@@ -247,3 +247,42 @@ fn perf_and_components_run_small() {
     let text = ok(&run(&["components", "--dataset", torch.to_str().unwrap()]));
     assert_eq!(text.matches("**total**").count(), 4, "{text}");
 }
+
+#[test]
+fn memory_renders_pbrt_v4s_rooms_beside_its_figures() {
+    // The two rooms over the campfire as pbrt-v4's `nanovdb` medium, at a tiny film: every room with the medium's
+    // default (no copy for pbrt-v4's media) and with the march's dense copy, each row's ratio its peak over
+    // pbrt-v4's figure, and the copy costing what it holds (62 × 68 × 98 padded voxels of 8 bytes: 3.3 MB).
+    let vdb = scenes().join("campfire/campfire.vdb");
+    let text = ok(&run(&[
+        "memory",
+        "--dataset",
+        vdb.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--rounds",
+        "1",
+        "--resolution",
+        "16x9",
+    ]));
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with("| a") && l.contains("fire"))
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{text}");
+    let mut peaks = Vec::new();
+    for (k, r) in rows.iter().enumerate() {
+        let num = |i: usize| -> f64 { r[i].trim_end_matches('×').parse().unwrap() };
+        let (peak, pbrt, ratio) = (num(3), num(4), num(5));
+        assert_eq!(pbrt, if k < 2 { 43.0 } else { 45.1 }, "{text}");
+        assert!(peak > 1.0 && peak < 1000.0, "{text}");
+        assert!((ratio - peak / pbrt).abs() < 0.006, "{text}");
+        assert_eq!(r[2] == "dense", k % 2 == 1, "{text}");
+        peaks.push(peak);
+    }
+    for room in [0, 2] {
+        let copy = peaks[room + 1] - peaks[room];
+        assert!((2.0..8.0).contains(&copy), "the copy: {copy} MB\n{text}");
+    }
+}

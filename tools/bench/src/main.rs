@@ -5,6 +5,7 @@
 mod components;
 mod error;
 mod fire_light;
+mod memory;
 mod noise;
 mod perf;
 mod stability;
@@ -49,6 +50,10 @@ enum What {
     /// at a ladder of samples per pixel), and adaptive sampling (`--noise-threshold`) against uniform at equal
     /// true error, on the campfire scene and the fire-lit room (the campfire at 128³).
     Noise(noise::NoiseArgs),
+    /// Peak RSS on the two rooms pbrt-v4's memory was measured on (a scattering fire, and an absorbing one lit by
+    /// the fire light, as pbrt-v4's `nanovdb` medium) through `firemedium render`, beside pbrt-v4's figures, with
+    /// the medium's default lattice and with the march's copy (`dense`), alternating rounds.
+    Memory(memory::MemoryArgs),
     /// Redraws a ladder's plot (SVG, PNG) from its CSV, as `error-vs-time` and `fire-light` write it: the plots
     /// of committed measurements, without measuring again.
     Plot(PlotArgs),
@@ -199,6 +204,7 @@ pub fn run(a: &BenchArgs) -> Result<String, (u8, String)> {
         What::FireLight(f) => fire_light_report(f).map_err(|m| (1, m)),
         What::Plot(p) => plot_report(p).map_err(|m| (1, m)),
         What::Noise(n) => noise::report(n).map_err(|m| (1, m)),
+        What::Memory(m) => memory::report(m).map_err(|e| (1, e)),
         What::Stability => {
             let start = std::time::Instant::now();
             let cases = stability::cases();
