@@ -231,7 +231,7 @@ fn the_fire_volumes_fields_stay_inside_their_modules() {
     // A field other modules can reach is a seam nobody owns: the volume's parts are read through their methods.
     // The fields its modules show beyond themselves today are the ceiling, to be lowered as parts are
     // encapsulated, never raised.
-    const CEILING: usize = 80;
+    const CEILING: usize = 75;
     let mut shown = Vec::new();
     for f in rust_files(&root().join("plugin/src/volume")) {
         if f.components().any(|c| c.as_os_str() == "tests") || f.ends_with("tests.rs") {

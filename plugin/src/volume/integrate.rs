@@ -234,11 +234,11 @@ pub(crate) fn split_step(
 
 /// A ray clipped to a medium: parameters [a, b] inside it, and |d| (arc length per unit of parameter).
 pub(crate) struct Span<'a> {
-    pub m: &'a dyn Medium,
-    pub ray: &'a Ray,
-    pub a: f64,
-    pub b: f64,
-    pub speed: f64,
+    m: &'a dyn Medium,
+    ray: &'a Ray,
+    a: f64,
+    b: f64,
+    speed: f64,
 }
 
 impl<'a> Span<'a> {
@@ -253,6 +253,21 @@ impl<'a> Span<'a> {
             b,
             speed,
         })
+    }
+    /// The ray's parameter where it enters the medium.
+    #[inline(always)]
+    pub(crate) fn a(&self) -> f64 {
+        self.a
+    }
+    /// The ray's parameter where it leaves the medium.
+    #[inline(always)]
+    pub(crate) fn b(&self) -> f64 {
+        self.b
+    }
+    /// Arc length per unit of the ray's parameter (|d|).
+    #[inline(always)]
+    pub(crate) fn speed(&self) -> f64 {
+        self.speed
     }
 }
 

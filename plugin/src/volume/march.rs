@@ -217,7 +217,7 @@ pub(super) fn march_lanes_mapped<M: Fn(DVec3) -> DVec3>(
     });
     EVALUATIONS.with(|n| n.set(n.get() + samples));
     ls.finish(l, t);
-    span.b
+    span.b()
 }
 
 /// The straight march's kernel (`kernel::march`) for 1–4 lanes of channels (`None` for more: `march_lanes`

@@ -23,8 +23,8 @@ impl<'r> OnRay<'r> {
         let dims = v.grids.ds().dims().map(|n| n as f64);
         let [b0, b1] = v.grids.ds().bounds();
         let size = b1 - b0;
-        let entry = ray.o + ray.d * span.a;
-        let dir = ray.d / span.speed;
+        let entry = ray.o + ray.d * span.a();
+        let dir = ray.d / span.speed();
         OnRay {
             ray,
             span,
@@ -68,7 +68,7 @@ pub(super) fn read_batch<const F: bool>(
                     [fx[0][b], fx[1][b], fx[2][b]],
                 );
                 if !stored::read_stored::<F>(st, &mut memo, c, f, scales, b, dt, x) {
-                    let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                    let p = ray.o + ray.d * (span.a() + mids[b] / span.speed());
                     general(v, p, b, dt, x);
                 }
             }
@@ -80,7 +80,7 @@ pub(super) fn read_batch<const F: bool>(
         for b in 0..m {
             let f = [fx[0][b], fx[1][b], fx[2][b]];
             if !read::<F>(lay, ci[b], f, scales, b, dt, x) {
-                let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                let p = ray.o + ray.d * (span.a() + mids[b] / span.speed());
                 general(v, p, b, dt, x);
             }
         }

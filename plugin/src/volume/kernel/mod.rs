@@ -421,7 +421,7 @@ pub(super) fn march<
     };
     let mut walk = Walk::along(v, ray, &span, step);
     let on_ray = OnRay::new(v, ray, &span);
-    let dir = ray.d / span.speed;
+    let dir = ray.d / span.speed();
     let mut lk = [[0f32; V]; CV];
     // (Padding lanes hold transmittance 0, so they never keep the early termination from stopping.)
     let mut tk = in_lanes::<CV, V>(std::iter::repeat_n(1.0, c));
@@ -519,7 +519,7 @@ pub(super) fn march<
             // in sub-steps through the f64 path (never for the fire light's channel subsets, whose columns are
             // not the volume's).
             if bound > split_tau && c == v.channels() {
-                let p = ray.o + ray.d * (span.a + mids[b] / span.speed);
+                let p = ray.o + ray.d * (span.a() + mids[b] / span.speed());
                 let tmax = split(
                     v,
                     p,
@@ -584,7 +584,7 @@ pub(super) fn march<
         l[ch] = lk[ch / V][ch % V] as f64;
         t[ch] = tk[ch / V][ch % V] as f64;
     }
-    Some(span.b)
+    Some(span.b())
 }
 
 /// A batch's samples as its steps take them: the density clamped at 0 (an interpolation of non-negative data may

@@ -59,7 +59,7 @@ impl<'a> Walk<'a> {
     /// first a random fraction of a step from the entry.
     #[inline(always)]
     pub(super) fn along(v: &'a FireVolume, ray: &Ray, span: &Span, step: f64) -> Walk<'a> {
-        let len = (span.b - span.a) * span.speed;
+        let len = (span.b() - span.a()) * span.speed();
         let mut ds = step;
         if !(ds > 0.0) || len / ds > MAX_STEPS {
             ds = len / MAX_STEPS;
@@ -74,11 +74,11 @@ impl<'a> Walk<'a> {
             segs: v
                 .bounds
                 .majorant()
-                .segments(ray.o, ray.d, span.a, span.b)
+                .segments(ray.o, ray.d, span.a(), span.b())
                 .peekable(),
             empty: v.bounds.brick_empty(),
-            a: span.a,
-            speed: span.speed,
+            a: span.a(),
+            speed: span.speed(),
         };
         Walk::new(gaps, first, ds, len)
     }
